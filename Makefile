@@ -1,0 +1,41 @@
+# liftoff: `make test` and `make run` set everything up on first use (Debian bookworm).
+SYSPY   := /usr/bin/python3
+VENV    := .venv
+PY      := $(VENV)/bin/python
+SYSDEPS := python3-dolfinx-real python3-gmsh python3-meshio python3-venv python3-h5py python3-numba \
+           libopenblas0-pthread
+SUDO    := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+OUT     ?= out/run
+STAMP   := $(VENV)/.installed
+
+.PHONY: setup test run bench clean
+
+setup: $(STAMP)
+
+# 1) Debian packages for the FE stack (system Python 3.11), only if something is missing.
+# 2) A venv that sees them (--system-site-packages), pip for the rest, numpy pinned.
+$(STAMP): pyproject.toml constraints.txt
+	@if ! $(SYSPY) -c "import dolfinx, gmsh, meshio, h5py, numba, venv, ensurepip" >/dev/null 2>&1 \
+	    || ! dpkg -s libopenblas0-pthread >/dev/null 2>&1; then \
+	  echo "liftoff setup: installing Debian packages: $(SYSDEPS)"; \
+	  $(SUDO) apt-get update -qq && \
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq $(SYSDEPS) >/dev/null; \
+	fi
+	@test -x $(PY) || $(SYSPY) -m venv --system-site-packages $(VENV)
+	@echo "liftoff setup: pip install into $(VENV) (numpy pinned to Debian's build)"
+	@$(PY) -m pip install -q --disable-pip-version-check -c constraints.txt -e '.[viz,test]'
+	@$(PY) -m pip install -q --disable-pip-version-check -c constraints.txt --no-deps pyyeti
+	@$(PY) -c "import numpy, dolfinx, numba, h5py, pyvista; assert numpy.__version__.startswith('1.24'), numpy.__version__"
+	@touch $(STAMP)
+
+test: $(STAMP)
+	$(PY) -m pytest -q tests
+
+run: $(STAMP)
+	$(VENV)/bin/liftoff run --out $(OUT)
+
+bench: $(STAMP)
+	$(PY) -m benchmarks
+
+clean:
+	rm -rf $(VENV) out .pytest_cache
