@@ -1,0 +1,147 @@
+"""Assembly of Craig-Bampton components by overlaying common boundary DOFs (section 3.0).
+
+Same label = same DOF. The system coordinate vector is the modal coordinates of each
+component in turn, then the physical boundary DOFs in ``boundary_labels`` order.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from transient.body import split_label
+from transient.errors import InputError
+
+from .craig_bampton import CBModel, validate_cb
+
+COORD_TOL = 1e-6      # shared points must agree to 1e-6 x max(1 m, model size)
+
+
+@dataclass
+class Assembly:
+    """Assembled CB components: dense M, K over [q_1, q_2, ..., x_b] (SI units)."""
+
+    name: str
+    components: tuple[CBModel, ...]
+    boundary_labels: tuple[str, ...]
+    M: np.ndarray
+    K: np.ndarray
+    modal_slices: dict
+    boundary_index: dict
+    points: tuple[str, ...]
+    point_coords: np.ndarray
+
+    @property
+    def n_dof(self) -> int:
+        return self.M.shape[0]
+
+    @property
+    def n_modal(self) -> int:
+        return self.n_dof - len(self.boundary_labels)
+
+    @property
+    def dof_names(self) -> tuple[str, ...]:
+        """Names of the system DOFs: ``component:q<j>`` for modal ones, then boundary labels."""
+        names = []
+        for cb in self.components:
+            names += [f"{cb.name}:q{j}" for j in range(cb.n_modes)]
+        return tuple(names) + self.boundary_labels
+
+    def component(self, name: str) -> CBModel:
+        for cb in self.components:
+            if cb.name == name:
+                return cb
+        raise InputError(f"no component {name!r} in assembly {self.name!r} "
+                         f"(has {', '.join(c.name for c in self.components)})")
+
+    def cb_index(self, name: str) -> np.ndarray:
+        """System DOF index of each DOF [q; x_b] of component ``name``."""
+        cb = self.component(name)
+        s = self.modal_slices[name]
+        return np.concatenate([np.arange(s.start, s.stop), self.n_modal + self.boundary_index[name]])
+
+    def boundary_dof(self, label: str) -> int:
+        try:
+            return self.n_modal + self.boundary_labels.index(label)
+        except ValueError:
+            raise InputError(f"label {label!r} is not a boundary DOF of assembly {self.name!r}") from None
+
+    def point_coord(self, point: str) -> np.ndarray:
+        try:
+            return self.point_coords[self.points.index(point)]
+        except ValueError:
+            raise InputError(f"unknown point {point!r} in assembly {self.name!r}") from None
+
+    def scatter(self, name: str, cb_vector) -> np.ndarray:
+        """A vector over component ``name``'s CB DOFs [q; x_b] (e.g. a generalised load)
+        placed into a zero system vector."""
+        v = np.asarray(cb_vector, dtype=float)
+        out = np.zeros((self.n_dof,) + v.shape[1:])
+        idx = self.cb_index(name)
+        if v.shape[0] != idx.size:
+            raise InputError(f"vector for component {name!r} has {v.shape[0]} rows, expected {idx.size}")
+        out[idx] += v
+        return out
+
+
+def assemble(cb_models, name: str) -> Assembly:
+    """Overlay the CB models' boundary DOFs by label. Shared points must have the same
+    coordinates (InputError otherwise: mismatched units or wrong geometry)."""
+    cbs = tuple(cb_models)
+    if not cbs:
+        raise InputError(f"assembly {name!r}: no components")
+    names = [cb.name for cb in cbs]
+    for nm in names:
+        if names.count(nm) > 1:
+            raise InputError(f"assembly {name!r}: component name {nm!r} used twice")
+    for cb in cbs:
+        validate_cb(cb)
+    # points: one coordinate per name, checked across components
+    coords: dict[str, np.ndarray] = {}
+    owner: dict[str, str] = {}
+    all_xyz = np.vstack([cb.point_coords for cb in cbs if cb.point_coords.size] or [np.zeros((1, 3))])
+    tol = COORD_TOL * max(1.0, float(np.max(np.ptp(all_xyz, axis=0))))
+    for cb in cbs:
+        for p, x in zip(cb.points, cb.point_coords):
+            if p in coords:
+                if np.linalg.norm(coords[p] - x) > tol:
+                    raise InputError(
+                        f"assembly {name!r}: point {p!r} is at {np.round(coords[p], 6).tolist()} m in "
+                        f"{owner[p]!r} but at {np.round(x, 6).tolist()} m in {cb.name!r} "
+                        "(mismatched units or geometry?)")
+            else:
+                coords[p], owner[p] = np.asarray(x, float), cb.name
+    # boundary labels: union in order of first appearance; a label may not be interior elsewhere
+    boundary: list[str] = []
+    for cb in cbs:
+        for lab in cb.boundary_labels:
+            if lab not in boundary:
+                boundary.append(lab)
+    bset = set(boundary)
+    for cb in cbs:
+        interior = set(cb.dof_labels) - set(cb.boundary_labels)
+        clash = sorted(interior & bset)
+        if clash:
+            other = next(c.name for c in cbs if clash[0] in c.boundary_labels)
+            raise InputError(f"assembly {name!r}: {clash[0]!r} is a boundary DOF of {other!r} but an "
+                             f"interior DOF of {cb.name!r}; make it a boundary DOF of both")
+    n_modal = sum(cb.n_modes for cb in cbs)
+    n = n_modal + len(boundary)
+    M, K = np.zeros((n, n)), np.zeros((n, n))
+    modal_slices, boundary_index = {}, {}
+    pos = {lab: k for k, lab in enumerate(boundary)}
+    start = 0
+    for cb in cbs:
+        modal_slices[cb.name] = slice(start, start + cb.n_modes)
+        bidx = np.array([pos[lab] for lab in cb.boundary_labels], dtype=np.int64)
+        boundary_index[cb.name] = bidx
+        idx = np.concatenate([np.arange(start, start + cb.n_modes), n_modal + bidx])
+        M[np.ix_(idx, idx)] += cb.M
+        K[np.ix_(idx, idx)] += cb.K
+        start += cb.n_modes
+    points = tuple(coords)
+    for lab in boundary:
+        split_label(lab)
+    return Assembly(name=name, components=cbs, boundary_labels=tuple(boundary), M=M, K=K,
+                    modal_slices=modal_slices, boundary_index=boundary_index, points=points,
+                    point_coords=np.array([coords[p] for p in points]).reshape(-1, 3))

@@ -1,0 +1,324 @@
+"""Craig-Bampton reduction of one component (section 3.0, eq. 13 of Prabhakar & Palermo).
+
+The component's DOFs split into boundary b (kept physically, by label) and interior i.
+Constraint modes Psi = -K_ii^-1 K_ib and fixed-interface modes Phi (K_ii Phi = M_ii Phi
+omega^2, Phi^T M_ii Phi = I) come from ONE sparse factorisation of K_ii: it solves for the
+constraint modes and is the shift-invert operator (shift 0) of the eigensolve. With
+u = [[Phi, Psi], [0, I]] [q; x_b] the reduced matrices are eq. 13:
+
+    M = [[I, C_M], [C_M^T, M_B]]      K = [[diag(omega^2), 0], [0, K_B]]
+
+C_M = Phi^T (M_ii Psi + M_ib), M_B = T_c^T M T_c, K_B = K_bb + K_bi Psi (T_c the
+constraint modes on all DOFs). Units SI: omega rad/s, M kg (kg m, kg m^2), K N/m ...
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from transient.body import split_label
+from transient.errors import InputError
+
+from .component import Component
+
+FORMAT = "liftoff-cb-model"
+VERSION = 1
+DENSE_LIMIT = 600          # interior size below which the fixed-interface eigensolve is dense
+
+
+@dataclass
+class CBModel:
+    """Craig-Bampton model of one component: eq. 13 matrices plus recovery data.
+
+    DOF order of ``M`` and ``K``: n_modes modal coordinates q, then the boundary DOFs in
+    the order of ``boundary_labels``. ``label_transform`` (n_labelled x (n_modes + n_b))
+    gives the physical displacement of every labelled DOF of the component (``dof_labels``)
+    from [q; x_b]; ``fixed_interface_modes`` (n x n_modes) and ``constraint_modes``
+    (n x n_b, identity on the boundary rows) do the same for all n DOFs (optional: they
+    may be dropped from files to save space)."""
+
+    name: str
+    boundary_labels: tuple[str, ...]
+    fixed_omega: np.ndarray
+    M: np.ndarray
+    K: np.ndarray
+    points: tuple[str, ...]
+    point_coords: np.ndarray
+    dof_labels: tuple[str, ...]
+    label_transform: np.ndarray
+    n_dof: int
+    constraint_modes: np.ndarray | None = None
+    fixed_interface_modes: np.ndarray | None = None
+    timings: dict = field(default_factory=dict)
+
+    @property
+    def n_modes(self) -> int:
+        return self.fixed_omega.size
+
+    @property
+    def n_boundary(self) -> int:
+        return len(self.boundary_labels)
+
+    @property
+    def C_M(self) -> np.ndarray:
+        """Modal-boundary mass coupling (n_modes x n_b), eq. 13."""
+        return self.M[: self.n_modes, self.n_modes:]
+
+    @property
+    def M_B(self) -> np.ndarray:
+        return self.M[self.n_modes:, self.n_modes:]
+
+    @property
+    def K_B(self) -> np.ndarray:
+        return self.K[self.n_modes:, self.n_modes:]
+
+    @property
+    def fixed_freq_hz(self) -> np.ndarray:
+        return self.fixed_omega / (2 * np.pi)
+
+    def point_coord(self, point: str) -> np.ndarray:
+        try:
+            return self.point_coords[self.points.index(point)]
+        except ValueError:
+            raise InputError(f"unknown point {point!r} in CB model {self.name!r}") from None
+
+    def _need_recovery(self, what: str) -> None:
+        if self.constraint_modes is None or self.fixed_interface_modes is None:
+            raise InputError(f"CB model {self.name!r}: {what} needs the recovery arrays, "
+                             "which were not saved (save with recovery=True)")
+
+    def _full_vector(self, f) -> np.ndarray:
+        f = np.asarray(f, dtype=float)
+        if f.shape[0] != self.n_dof:
+            raise InputError(f"CB model {self.name!r}: load has {f.shape[0]} rows, component has {self.n_dof} DOFs")
+        return f
+
+    def boundary_load(self, f) -> np.ndarray:
+        """Static reduction of a component load (all n DOFs, N) to the boundary DOFs:
+        f_b + Psi^T f_i = T_c^T f, with no modal part (the cryo loads of section 4.3)."""
+        self._need_recovery("boundary_load")
+        return self.constraint_modes.T @ self._full_vector(f)
+
+    def generalized_load(self, f) -> np.ndarray:
+        """Full CB generalised force [Phi^T f; T_c^T f] of a component load (all n DOFs)."""
+        self._need_recovery("generalized_load")
+        f = self._full_vector(f)
+        return np.concatenate([self.fixed_interface_modes.T @ f, self.constraint_modes.T @ f])
+
+    def save(self, path, recovery: bool = True) -> Path:
+        return save_cb(self, path, recovery)
+
+    @classmethod
+    def load(cls, path) -> "CBModel":
+        return load_cb(path)
+
+
+# ------------------------------------------------------------------------ reduction
+def craig_bampton(component: Component, boundary_labels, n_modes: int | None = None,
+                  f_max: float | None = None) -> CBModel:
+    """Craig-Bampton model of ``component`` with the given boundary DOF labels, keeping
+    fixed-interface modes by count (``n_modes``), by band (below ``f_max`` Hz), or both
+    (the first n_modes below f_max). n_modes=0 gives a Guyan (static) reduction."""
+    who = f"component {component.name!r}"
+    boundary_labels = tuple(str(s) for s in boundary_labels)
+    if not boundary_labels:
+        raise InputError(f"{who}: no boundary labels given")
+    dup = [s for s in boundary_labels if boundary_labels.count(s) > 1]
+    if dup:
+        raise InputError(f"{who}: boundary label {dup[0]!r} given twice")
+    if n_modes is None and f_max is None:
+        raise InputError(f"{who}: give n_modes or f_max (Hz) to select fixed-interface modes")
+    if n_modes is not None and n_modes < 0:
+        raise InputError(f"{who}: n_modes must be >= 0, got {n_modes}")
+    if f_max is not None and not f_max > 0:
+        raise InputError(f"{who}: f_max must be > 0 Hz, got {f_max}")
+    b = component.dofs_of(boundary_labels)
+    n = component.n_dof
+    is_b = np.zeros(n, bool)
+    is_b[b] = True
+    i = np.flatnonzero(~is_b)
+    K, M = component.K.tocsc(), component.M.tocsc()
+    Kii, Kib = K[i][:, i].tocsc(), K[i][:, b]
+    Mii, Mib = M[i][:, i].tocsc(), M[i][:, b]
+    timings = {}
+
+    t0 = time.perf_counter()
+    lu = _factor(Kii, component, i)
+    timings["factor_s"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    psi = -lu.solve(np.asarray(Kib.todense()))                       # constraint modes, interior rows
+    timings["constraint_solve_s"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    lam, phi = fixed_interface_eig(Kii, Mii, lu, n_modes, f_max, who)
+    timings["eigensolve_s"] = time.perf_counter() - t0
+    _check_not_floating(lam, Kii, Mii, who)
+
+    t0 = time.perf_counter()
+    Kbb = np.asarray(K[b][:, b].todense())
+    Mbb = np.asarray(M[b][:, b].todense())
+    Mii_psi = np.asarray(Mii @ psi)
+    Mib_d = np.asarray(Mib.todense())
+    K_B = Kbb + np.asarray(Kib.T @ psi)
+    M_B = Mbb + Mib_d.T @ psi + psi.T @ Mib_d + psi.T @ Mii_psi
+    C_M = phi.T @ (Mii_psi + Mib_d)
+    nq, nb = lam.size, b.size
+    Mcb = np.block([[np.eye(nq), C_M], [C_M.T, M_B]])
+    Kcb = np.zeros((nq + nb, nq + nb))
+    Kcb[:nq, :nq] = np.diag(lam)
+    Kcb[nq:, nq:] = K_B
+    fim = np.zeros((n, nq))
+    fim[i] = phi
+    cm = np.zeros((n, nb))
+    cm[i] = psi
+    cm[b, np.arange(nb)] = 1.0
+    timings["matrices_s"] = time.perf_counter() - t0
+    return CBModel(name=component.name, boundary_labels=boundary_labels,
+                   fixed_omega=np.sqrt(lam), M=0.5 * (Mcb + Mcb.T), K=0.5 * (Kcb + Kcb.T),
+                   points=component.points, point_coords=component.point_coords.copy(),
+                   dof_labels=component.dof_labels,
+                   label_transform=np.hstack([fim[component.label_dofs], cm[component.label_dofs]]),
+                   n_dof=n, constraint_modes=cm, fixed_interface_modes=fim, timings=timings)
+
+
+def _dof_name(component: Component, dof: int) -> str:
+    hit = np.flatnonzero(component.label_dofs == dof)
+    return component.dof_labels[hit[0]] if hit.size else f"DOF {dof}"
+
+
+def _factor(Kii: sp.csc_matrix, component: Component, interior: np.ndarray):
+    """Sparse LU of K_ii (SuperLU, symmetric ordering); singular K_ii -> InputError."""
+    who = f"component {component.name!r}"
+    if Kii.shape[0] == 0:
+        raise InputError(f"{who}: every DOF is a boundary DOF; nothing to reduce")
+    try:
+        lu = spla.splu(Kii, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                       options={"SymmetricMode": True})
+    except RuntimeError as exc:   # "Factor is exactly singular"
+        raise InputError(f"{who} floats (or has a mechanism) once its boundary DOFs are fixed: "
+                         f"K_ii is singular ({exc}); add boundary DOFs that restrain it") from None
+    # a floating part or mechanism leaves a pivot at round-off level relative to the
+    # diagonal entry it came from (a well-posed but ill-conditioned model does not)
+    pivots = np.abs(lu.U.diagonal())
+    diag = np.abs(Kii.diagonal())[lu.perm_c]
+    ratio = pivots / np.maximum(diag, 1e-300)
+    if ratio.size and ratio.min() < 1e-10:
+        worst = interior[lu.perm_c[np.argmin(ratio)]]
+        raise InputError(f"{who} floats (or has a mechanism) once its boundary DOFs are fixed: "
+                         f"K_ii is singular near {_dof_name(component, worst)} (pivot/diagonal "
+                         f"{ratio.min():.1e}); add boundary DOFs that restrain it")
+    return lu
+
+
+def fixed_interface_eig(Kii, Mii, lu, n_modes, f_max, who="component"):
+    """Lowest fixed-interface eigenpairs (omega^2, M_ii-normalised modes), by count and/or
+    band, from shift-invert at zero shift with the factor ``lu`` of K_ii."""
+    n_i = Kii.shape[0]
+    lam_max = None if f_max is None else (2 * np.pi * f_max) ** 2
+    want = n_i if n_modes is None else min(n_modes, n_i)
+    if want == 0:
+        return np.zeros(0), np.zeros((n_i, 0))
+    if n_i <= DENSE_LIMIT or want >= n_i - 1:
+        lam, phi = sla.eigh(Kii.toarray(), Mii.toarray())
+    else:
+        op = spla.LinearOperator(Kii.shape, matvec=lu.solve, dtype=float)
+        k = want if lam_max is None else min(want, 20)
+        while True:
+            lam, phi = spla.eigsh(Kii, k=k, M=Mii, sigma=0.0, which="LM", OPinv=op)
+            order = np.argsort(lam)
+            lam, phi = lam[order], phi[:, order]
+            if k >= want or lam_max is None or lam[-1] > lam_max or k >= n_i - 2:
+                break
+            k = min(2 * k, want, n_i - 2)
+    keep = np.arange(lam.size) < want
+    if lam_max is not None:
+        keep &= lam <= lam_max
+    lam, phi = lam[keep], phi[:, keep]
+    norms = np.sqrt(np.einsum("ij,ij->j", phi, Mii @ phi))
+    phi = phi / norms
+    return lam, phi
+
+
+def _check_not_floating(lam, Kii, Mii, who):
+    if lam.size == 0:
+        return
+    scale = Kii.diagonal().sum() / max(Mii.diagonal().sum(), 1e-300)
+    if lam[0] < 1e-10 * abs(scale):
+        raise InputError(f"{who} floats (or has a mechanism) once its boundary DOFs are fixed: "
+                         f"lowest fixed-interface eigenvalue {lam[0]:.3e} is zero; add boundary DOFs")
+
+
+# ---------------------------------------------------------------------------- file
+def save_cb(cb: CBModel, path, recovery: bool = True) -> Path:
+    """Write a CB model atomically as .npz (no pickle). Format in docs/reduction.md."""
+    path = Path(path)
+    if path.suffix != ".npz":
+        raise InputError(f"CB model file {str(path)!r}: use the .npz extension")
+    rec = {"format": np.array(FORMAT), "version": np.array(VERSION), "units": np.array("SI"),
+           "name": np.array(cb.name), "boundary_labels": np.array(cb.boundary_labels, dtype="U"),
+           "fixed_omega": cb.fixed_omega, "M": cb.M, "K": cb.K,
+           "points": np.array(cb.points, dtype="U"), "point_coords": cb.point_coords,
+           "dof_labels": np.array(cb.dof_labels, dtype="U"), "label_transform": cb.label_transform,
+           "n_dof": np.array(cb.n_dof)}
+    if recovery and cb.constraint_modes is not None and cb.fixed_interface_modes is not None:
+        rec["constraint_modes"] = cb.constraint_modes
+        rec["fixed_interface_modes"] = cb.fixed_interface_modes
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            np.savez(fh, **rec)
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return path
+
+
+def load_cb(path) -> CBModel:
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"CB model file not found: {str(path)!r}")
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            if "format" not in z.files or z["format"].item() != FORMAT:
+                raise InputError(f"CB model file {str(path)!r}: not a {FORMAT!r} file")
+            cb = CBModel(name=z["name"].item(), boundary_labels=tuple(z["boundary_labels"]),
+                         fixed_omega=z["fixed_omega"], M=z["M"], K=z["K"], points=tuple(z["points"]),
+                         point_coords=z["point_coords"], dof_labels=tuple(z["dof_labels"]),
+                         label_transform=z["label_transform"], n_dof=int(z["n_dof"]),
+                         constraint_modes=z["constraint_modes"] if "constraint_modes" in z.files else None,
+                         fixed_interface_modes=(z["fixed_interface_modes"]
+                                                if "fixed_interface_modes" in z.files else None))
+    except InputError:
+        raise
+    except Exception as exc:
+        raise InputError(f"CB model file {str(path)!r} cannot be read: {exc}") from None
+    validate_cb(cb, str(path))
+    return cb
+
+
+def validate_cb(cb: CBModel, where: str = "") -> None:
+    """Shapes and labels of a CB model (e.g. one from outside this project)."""
+    who = f"CB model {cb.name!r}" + (f" ({where})" if where else "")
+    nq, nb = cb.fixed_omega.size, len(cb.boundary_labels)
+    if cb.M.shape != (nq + nb, nq + nb) or cb.K.shape != (nq + nb, nq + nb):
+        raise InputError(f"{who}: M {cb.M.shape} and K {cb.K.shape} must be ({nq + nb}, {nq + nb})")
+    for lab in cb.boundary_labels:
+        pt, _ = split_label(lab)
+        if pt not in cb.points:
+            raise InputError(f"{who}: boundary label {lab!r} names a point without coordinates")
+    if cb.point_coords.shape != (len(cb.points), 3):
+        raise InputError(f"{who}: point_coords has shape {cb.point_coords.shape}, expected ({len(cb.points)}, 3)")
+    if cb.label_transform.shape != (len(cb.dof_labels), nq + nb):
+        raise InputError(f"{who}: label_transform has shape {cb.label_transform.shape}")
+    for nm in ("M", "K", "fixed_omega", "point_coords", "label_transform"):
+        if not np.all(np.isfinite(getattr(cb, nm))):
+            raise InputError(f"{who}: {nm} contains NaN or inf")

@@ -1,0 +1,168 @@
+"""Small reference FE models written with numpy/scipy only: a 3-D Euler-Bernoulli frame
+and a trilinear hexahedral solid block with rigid spiders (RBE2). They give the tests and
+benchmarks of reduction/ structures whose physics is known in closed form, without
+dolfinx. SI units (m, kg, N, Pa).
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from transient.body import COMPONENTS
+from transient.errors import InputError
+
+from .component import Component
+
+
+# ----------------------------------------------------------------------------- frame
+def frame_element(x1, x2, E, G, A, Iy, Iz, J, rho, vref=(0.0, 0.0, 1.0)):
+    """Global 12 x 12 stiffness and consistent mass of a straight 3-D Euler-Bernoulli beam
+    (DOFs ux uy uz rx ry rz at each end; Przemieniecki's matrices)."""
+    x1, x2 = np.asarray(x1, float), np.asarray(x2, float)
+    L = float(np.linalg.norm(x2 - x1))
+    ex = (x2 - x1) / L
+    v = np.asarray(vref, float)
+    if np.linalg.norm(np.cross(ex, v)) < 1e-8:
+        v = np.array([0.0, 1.0, 0.0])
+    ez = np.cross(ex, v)
+    ez /= np.linalg.norm(ez)
+    ey = np.cross(ez, ex)
+    k = np.zeros((12, 12))
+    m = np.zeros((12, 12))
+    for a, b, val in ((0, 6, E * A / L), (3, 9, G * J / L)):
+        k[np.ix_([a, b], [a, b])] = val * np.array([[1, -1], [-1, 1]])
+    m[np.ix_([0, 6], [0, 6])] = rho * A * L / 6 * np.array([[2, 1], [1, 2]])
+    m[np.ix_([3, 9], [3, 9])] = rho * (Iy + Iz) * L / 6 * np.array([[2, 1], [1, 2]])
+    kb = np.array([[12, 6 * L, -12, 6 * L], [6 * L, 4 * L**2, -6 * L, 2 * L**2],
+                   [-12, -6 * L, 12, -6 * L], [6 * L, 2 * L**2, -6 * L, 4 * L**2]]) / L**3
+    mb = rho * A * L / 420 * np.array([[156, 22 * L, 54, -13 * L], [22 * L, 4 * L**2, 13 * L, -3 * L**2],
+                                       [54, 13 * L, 156, -22 * L], [-13 * L, -3 * L**2, -22 * L, 4 * L**2]])
+    flip = np.diag([1, -1, 1, -1])                   # x-z plane: theta_y = -dw/dx
+    k[np.ix_([1, 5, 7, 11], [1, 5, 7, 11])] = E * Iz * kb
+    k[np.ix_([2, 4, 8, 10], [2, 4, 8, 10])] = E * Iy * flip @ kb @ flip
+    m[np.ix_([1, 5, 7, 11], [1, 5, 7, 11])] = mb
+    m[np.ix_([2, 4, 8, 10], [2, 4, 8, 10])] = flip @ mb @ flip
+    lam = np.vstack([ex, ey, ez])
+    T = np.kron(np.eye(4), lam)
+    return T.T @ k @ T, T.T @ m @ T
+
+
+def frame_matrices(nodes, elements, E, G, A, Iy, Iz, J, rho, vref=(0.0, 0.0, 1.0)):
+    """Assembled sparse K, M (6 DOFs per node, node-major) of a frame of identical beams."""
+    nodes = np.asarray(nodes, float)
+    n = 6 * nodes.shape[0]
+    rows, cols, kv, mv = [], [], [], []
+    for a, b in elements:
+        ke, me = frame_element(nodes[a], nodes[b], E, G, A, Iy, Iz, J, rho, vref)
+        dofs = np.r_[6 * a:6 * a + 6, 6 * b:6 * b + 6]
+        rows.append(np.repeat(dofs, 12))
+        cols.append(np.tile(dofs, 12))
+        kv.append(ke.ravel())
+        mv.append(me.ravel())
+    r, c = np.concatenate(rows), np.concatenate(cols)
+    K = sp.csr_matrix((np.concatenate(kv), (r, c)), shape=(n, n))
+    M = sp.csr_matrix((np.concatenate(mv), (r, c)), shape=(n, n))
+    return K, M
+
+
+def frame_component(name, nodes, elements, point_names, E=70e9, nu=0.3, A=1e-3, Iy=1e-6,
+                    Iz=1e-6, J=2e-6, rho=2700.0, vref=(0.0, 0.0, 1.0)) -> Component:
+    """A frame as a Component: every node is a labelled 6-DOF point ``point_names[i]``."""
+    nodes = np.asarray(nodes, float)
+    K, M = frame_matrices(nodes, elements, E, E / (2 * (1 + nu)), A, Iy, Iz, J, rho, vref)
+    labels = [f"{p}:{c}" for p in point_names for c in COMPONENTS]
+    return Component(name=name, K=K, M=M, dof_labels=labels, label_dofs=np.arange(len(labels)),
+                     points=tuple(point_names), point_coords=nodes)
+
+
+# ----------------------------------------------------------------------------- solid
+def hex8_element(hx, hy, hz, E, nu, rho):
+    """24 x 24 stiffness and consistent mass of a trilinear brick hx x hy x hz (2x2x2 Gauss)."""
+    lam, mu = E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
+    D = np.zeros((6, 6))
+    D[:3, :3] = lam
+    D[np.arange(3), np.arange(3)] += 2 * mu
+    D[np.arange(3, 6), np.arange(3, 6)] = mu
+    corners = np.array([[i, j, k] for k in (0, 1) for j in (0, 1) for i in (0, 1)], float) * 2 - 1
+    g = 1 / np.sqrt(3.0)
+    h = np.array([hx, hy, hz])
+    detJ = np.prod(h) / 8
+    ke, me = np.zeros((24, 24)), np.zeros((24, 24))
+    for xi in corners * g:
+        N = np.prod(1 + corners * xi, axis=1) / 8
+        dN = np.empty((8, 3))
+        for d in range(3):
+            others = [e for e in range(3) if e != d]
+            dN[:, d] = corners[:, d] * np.prod(1 + corners[:, others] * xi[others], axis=1) / 8 / (h[d] / 2)
+        B = np.zeros((6, 24))
+        for a in range(8):
+            bx, by, bz = dN[a]
+            B[:, 3 * a:3 * a + 3] = [[bx, 0, 0], [0, by, 0], [0, 0, bz], [by, bx, 0], [0, bz, by], [bz, 0, bx]]
+        ke += B.T @ D @ B * detJ
+        me += rho * np.kron(np.outer(N, N), np.eye(3)) * detJ
+    return ke, me
+
+
+def hex_block(n_cells, size, E=70e9, nu=0.3, rho=2700.0):
+    """Structured block [0, Lx] x [0, Ly] x [0, Lz] of n_cells = (nx, ny, nz) bricks.
+    Returns sparse K, M over nodal translations (3 per node, node-major) and the nodes."""
+    nx, ny, nz = n_cells
+    Lx, Ly, Lz = size
+    ke, me = hex8_element(Lx / nx, Ly / ny, Lz / nz, E, nu, rho)
+    gx, gy, gz = (np.linspace(0, L, m + 1) for L, m in ((Lx, nx), (Ly, ny), (Lz, nz)))
+    nodes = np.stack(np.meshgrid(gx, gy, gz, indexing="ij"), axis=-1).reshape(-1, 3)
+    nid = np.arange(nodes.shape[0]).reshape(nx + 1, ny + 1, nz + 1)
+    base = nid[:-1, :-1, :-1].ravel()
+    offs = np.array([nid[i, j, k] - nid[0, 0, 0] for k in (0, 1) for j in (0, 1) for i in (0, 1)])
+    conn = base[:, None] + offs[None, :]                        # (n_el, 8) same order as hex8_element
+    dofs = (3 * conn[:, :, None] + np.arange(3)).reshape(-1, 24)
+    r = np.repeat(dofs, 24, axis=1).ravel()
+    c = np.tile(dofs, (1, 24)).ravel()
+    n = 3 * nodes.shape[0]
+    K = sp.csr_matrix((np.tile(ke.ravel(), conn.shape[0]), (r, c)), shape=(n, n))
+    M = sp.csr_matrix((np.tile(me.ravel(), conn.shape[0]), (r, c)), shape=(n, n))
+    return K, M, nodes
+
+
+def spider_component(name, K, M, nodes, spiders: dict) -> Component:
+    """Tie node groups rigidly to 6-DOF reference points (Nastran RBE2, by elimination):
+    ``spiders = {point_name: (node_ids, ref_coord)}``. Returns a Component whose DOFs are
+    the free nodal translations followed by 6 DOFs per reference point, with a field_map
+    back to all nodal translations."""
+    nodes = np.asarray(nodes, float)
+    n_nodes = nodes.shape[0]
+    owner = -np.ones(n_nodes, dtype=int)
+    for s, (ids, _) in enumerate(spiders.values()):
+        ids = np.asarray(ids)
+        if np.any(owner[ids] >= 0):
+            raise InputError(f"spider {list(spiders)[s]!r}: node already tied to another spider")
+        owner[ids] = s
+    free = np.flatnonzero(owner < 0)
+    n_free = 3 * free.size
+    rows, cols, vals = [], [], []
+    fdofs = (3 * free[:, None] + np.arange(3)).ravel()
+    rows.append(fdofs)
+    cols.append(np.arange(n_free))
+    vals.append(np.ones(n_free))
+    for s, (ids, ref) in enumerate(spiders.values()):
+        col0 = n_free + 6 * s
+        for node in np.asarray(ids):
+            d = nodes[node] - np.asarray(ref, float)
+            rb = np.eye(3, 6)
+            rb[0, 4], rb[0, 5] = d[2], -d[1]
+            rb[1, 3], rb[1, 5] = -d[2], d[0]
+            rb[2, 3], rb[2, 4] = d[1], -d[0]
+            rr, cc = np.nonzero(rb)
+            rows.append(3 * node + rr)
+            cols.append(col0 + cc)
+            vals.append(rb[rr, cc])
+    n_red = n_free + 6 * len(spiders)
+    T = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(3 * n_nodes, n_red))
+    Kr = (T.T @ K @ T).tocsr()
+    Mr = (T.T @ M @ T).tocsr()
+    labels = [f"{p}:{c}" for p in spiders for c in COMPONENTS]
+    return Component(name=name, K=Kr, M=Mr, dof_labels=labels,
+                     label_dofs=n_free + np.arange(len(labels)), points=tuple(spiders),
+                     point_coords=np.array([ref for _, ref in spiders.values()], float),
+                     nodes=nodes, field_map=T)

@@ -1,0 +1,79 @@
+"""Data-recovery matrices in system modal coordinates q (y = D q + V qdot + A qddot).
+
+- displacement / acceleration at labelled DOFs (boundary DOFs of the assembly, or
+  labelled interior DOFs of a component through its CB transformation);
+- interface forces: the force the rest of the vehicle applies to a component at its
+  boundary DOFs, F_b = [C_M^T M_B] [qdd_cb; xdd_b] + K_B x_b (eq. 13, lower rows), which
+  is what the component carries there. It excludes loads applied to the component
+  itself (subtract its ``boundary_load``) and damping;
+- full-field nodal displacement of a component through its ``field_map``.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from transient.errors import InputError
+
+from .assembly import Assembly
+from .component import Component
+from .system import SystemModes
+
+
+def label_transform(assembly: Assembly, labels) -> np.ndarray:
+    """(len(labels) x n_sys_dof) map from system DOFs to physical labelled DOFs."""
+    out = np.zeros((len(labels), assembly.n_dof))
+    bpos = {lab: k for k, lab in enumerate(assembly.boundary_labels)}
+    for r, lab in enumerate(labels):
+        if lab in bpos:
+            out[r, assembly.n_modal + bpos[lab]] = 1.0
+            continue
+        hits = [cb for cb in assembly.components if lab in cb.dof_labels]
+        if not hits:
+            raise InputError(f"label {lab!r} is not a labelled DOF of assembly {assembly.name!r}")
+        if len(hits) > 1:
+            raise InputError(f"label {lab!r} is an interior DOF of both {hits[0].name!r} and "
+                             f"{hits[1].name!r}: ambiguous (make it a boundary DOF of both)")
+        cb = hits[0]
+        out[r, assembly.cb_index(cb.name)] = cb.label_transform[cb.dof_labels.index(lab)]
+    return out
+
+
+def displacement_recovery(sysm: SystemModes, labels) -> np.ndarray:
+    """D (len(labels) x n_modes): displacement (m, rad) at labelled DOFs = D q."""
+    return label_transform(sysm.assembly, tuple(labels)) @ sysm.phi
+
+
+def acceleration_recovery(sysm: SystemModes, labels) -> np.ndarray:
+    """A (len(labels) x n_modes): acceleration (m/s^2, rad/s^2) at labelled DOFs = A qddot."""
+    return displacement_recovery(sysm, labels)
+
+
+def interface_force_recovery(assembly: Assembly, sysm: SystemModes, component_name: str,
+                             labels=None) -> tuple[np.ndarray, np.ndarray]:
+    """(D, A) with F_b = D q + A qddot (N, N m): the force the rest of the structure applies
+    to ``component_name`` at its boundary DOFs ``labels`` (default all of them)."""
+    cb = assembly.component(component_name)
+    labels = cb.boundary_labels if labels is None else tuple(labels)
+    rows = []
+    for lab in labels:
+        if lab not in cb.boundary_labels:
+            raise InputError(f"label {lab!r} is not a boundary DOF of component {cb.name!r}")
+        rows.append(cb.n_modes + cb.boundary_labels.index(lab))
+    T = sysm.phi[assembly.cb_index(cb.name)]           # [q_cb; x_b] = T q
+    return cb.K[rows] @ T, cb.M[rows] @ T
+
+
+def field_recovery(assembly: Assembly, sysm: SystemModes, component_name: str,
+                   component: Component) -> np.ndarray:
+    """(3 n_nodes x n_modes): nodal displacement (m) of ``component`` (the FE component that
+    was reduced) per unit system modal coordinate, through its field_map."""
+    cb = assembly.component(component_name)
+    if component.field_map is None:
+        raise InputError(f"component {component.name!r} has no field_map: no full-field recovery")
+    if component.n_dof != cb.n_dof:
+        raise InputError(f"component {component.name!r} has {component.n_dof} DOFs but CB model "
+                         f"{cb.name!r} was reduced from {cb.n_dof}")
+    cb._need_recovery("field_recovery")
+    T = sysm.phi[assembly.cb_index(cb.name)]
+    physical = cb.fixed_interface_modes @ T[: cb.n_modes] + cb.constraint_modes @ T[cb.n_modes:]
+    return np.asarray(component.field_map @ physical)

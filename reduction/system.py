@@ -1,0 +1,116 @@
+"""System modes of an assembled CB model and the modal body they make (eq. 4, 13, 14).
+
+Free-free (n_rigid=6): the six rigid-body modes are built explicitly from the geometric
+rigid-body shape RB of the boundary DOFs (modal DOFs have zero RB rows, section 4.2),
+mass-orthonormalised; the elastic modes are the eigenvectors of the deflated pencil
+(K + a (M R)(M R)^T, M), a = -1 s^-2, which moves the rigid modes to -1 rad^2/s^2 and leaves
+every elastic eigenpair exact and M-orthogonal to them. Grounded (n_rigid=0): plain
+dense eigh; a zero-frequency mode is an error. All modes are kept unless f_max is given.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+
+from transient.body import ModalBody
+from transient.errors import InputError
+
+from .assembly import Assembly
+from .rigid import rb_rows
+
+RB_TOL = 1e-6         # relative K RB residual above which an assembly is not free-free
+
+
+@dataclass
+class SystemModes:
+    """Mass-normalised modes of an assembly: phi (n_sys_dof x n_modes), omega (rad/s)."""
+
+    assembly: Assembly
+    omega: np.ndarray
+    phi: np.ndarray
+    n_rigid: int
+
+    @property
+    def freq_hz(self) -> np.ndarray:
+        return self.omega / (2 * np.pi)
+
+    @property
+    def n_modes(self) -> int:
+        return self.omega.size
+
+    def rb_shape(self, ref_point=(0.0, 0.0, 0.0)) -> np.ndarray:
+        return system_rb(self.assembly, ref_point)
+
+    def to_body(self, labels=None, ref_point=(0.0, 0.0, 0.0), zeta=0.0, name: str | None = None) -> ModalBody:
+        """The transient core's modal body: phi rows at ``labels`` (default: every boundary
+        DOF), participation Phi^T M RB about ref_point (eq. 14), rigid_body_mass RB^T M RB,
+        all labelled points. A scalar ``zeta`` applies to the elastic modes (rigid modes get
+        0); an array gives one ratio per mode."""
+        from .recovery import label_transform
+
+        a = self.assembly
+        labels = a.boundary_labels if labels is None else tuple(labels)
+        rows = label_transform(a, labels) @ self.phi
+        rb = system_rb(a, ref_point)
+        zeta = np.asarray(zeta, dtype=float)
+        if zeta.ndim == 0:
+            z = np.full(self.n_modes, float(zeta))
+            z[: self.n_rigid] = 0.0
+        elif zeta.shape == (self.n_modes,):
+            z = zeta.copy()
+        else:
+            raise InputError(f"zeta has shape {zeta.shape}: give a scalar or one ratio per mode ({self.n_modes})")
+        return ModalBody(name=name or a.name, omega=self.omega, zeta=z, dof_labels=labels, phi=rows,
+                         participation=self.phi.T @ a.M @ rb, ref_point=np.asarray(ref_point, float),
+                         points=a.points, point_coords=a.point_coords, rigid_body_mass=rb.T @ a.M @ rb)
+
+
+def system_rb(assembly: Assembly, ref_point=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """Geometric rigid-body shape of the system DOFs (zero on modal DOFs, eq. 14)."""
+    rb = np.zeros((assembly.n_dof, 6))
+    rb[assembly.n_modal:] = rb_rows(assembly.boundary_labels, assembly.points, assembly.point_coords, ref_point)
+    return rb
+
+
+def system_modes(assembly: Assembly, n_rigid: int = 6, f_max: float | None = None) -> SystemModes:
+    """Eigensolution of the assembled model (dense; CB sizes are a few hundred)."""
+    who = f"assembly {assembly.name!r}"
+    K = 0.5 * (assembly.K + assembly.K.T)
+    M = 0.5 * (assembly.M + assembly.M.T)
+    scale = np.trace(K) / max(np.trace(M), 1e-300)
+    if n_rigid == 6:
+        center = assembly.point_coords.mean(axis=0) if assembly.point_coords.size else np.zeros(3)
+        rb = system_rb(assembly, center)
+        m6 = rb.T @ M @ rb
+        try:
+            L = np.linalg.cholesky(0.5 * (m6 + m6.T))
+        except np.linalg.LinAlgError:
+            raise InputError(f"{who}: the boundary DOFs cannot describe all six rigid-body motions "
+                             "(rigid-body mass RB^T M RB is singular)") from None
+        R = sla.solve_triangular(L, rb.T, lower=True).T       # R^T M R = I
+        res = np.linalg.norm(K @ R, axis=0) / (np.linalg.norm(K, 2) * np.linalg.norm(R, axis=0))
+        if res.max() > RB_TOL:
+            raise InputError(f"{who} is not free-free: K RB / (|K| |RB|) = {res.max():.1e} for rigid "
+                             f"motion {int(np.argmax(res))} (constrained or non-geometric stiffness)")
+        MR = M @ R
+        lam, vec = sla.eigh(K - MR @ MR.T, M)
+        elastic = lam[6:]
+        if elastic.size and elastic[0] < 1e-10 * abs(scale):
+            raise InputError(f"{who}: more than six zero-frequency modes (a mechanism or an "
+                             f"unconnected part); lowest elastic eigenvalue {elastic[0]:.2e}")
+        omega = np.concatenate([np.zeros(6), np.sqrt(elastic)])
+        phi = np.hstack([R, vec[:, 6:]])
+    elif n_rigid == 0:
+        lam, phi = sla.eigh(K, M)
+        if lam[0] < 1e-10 * abs(scale):
+            raise InputError(f"{who}: zero-frequency mode in a grounded model (eigenvalue {lam[0]:.2e}); "
+                             "is it really grounded?")
+        omega = np.sqrt(lam)
+    else:
+        raise InputError(f"{who}: n_rigid must be 6 (free-free) or 0 (grounded), got {n_rigid}")
+    if f_max is not None:
+        keep = omega <= 2 * np.pi * f_max
+        omega, phi = omega[keep], phi[:, keep]
+    return SystemModes(assembly=assembly, omega=omega, phi=phi, n_rigid=n_rigid)
