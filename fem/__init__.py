@@ -1,0 +1,24 @@
+"""dolfinx finite-element models of liftoff components (issue 3; DESIGN.md).
+
+Public API (SI units throughout)::
+
+    build_model(geometry, degree=1, comm=MPI.COMM_WORLD, lumped_smeared_mass=False) -> FEModel
+    FEModel.component_fields() -> dict   # Component(name=..., **fields)
+    eigenmodes(model, n_modes=None, band_hz=None, shift_hz=1.0, rigid_tol_hz=0.01) -> Modes
+    static_solve(model, f, supports=()) -> x
+    point_load(model, point, force, moment) -> f
+    thermal_load(model, volumes, delta_T, alpha) -> f
+    mass_properties(model, about=(0, 0, 0)) -> MassProperties
+    write_vtu(path, nodes, cells, cell_type, point_data) / write_modes_vtu(model, modes, path)
+    fem.snapshot.snapshot_png(path, nodes, cells, cell_type, displacement, title, scale=None)
+
+Import pyvista (fem.snapshot) before dolfinx when both are used (FENICSX-NOTES.md).
+Only this package and meshes/ import gmsh or dolfinx; PETSc/SLEPc live in petsc_backend.
+"""
+from .model import FEModel, build_model
+from .modes import Modes, eigenmodes
+from .output import write_modes_vtu, write_vtu
+from .static import MassProperties, mass_properties, point_load, static_solve, thermal_load
+
+__all__ = ["FEModel", "build_model", "Modes", "eigenmodes", "static_solve", "point_load",
+           "thermal_load", "MassProperties", "mass_properties", "write_vtu", "write_modes_vtu"]

@@ -1,0 +1,96 @@
+"""Linear isotropic elasticity on a tagged mesh: material fields and UFL forms.
+
+Stiffness a(u, v) = int sigma(u) : eps(v) dx, sigma = lambda tr(eps) I + 2 mu eps;
+mass m(u, v) = int rho u . v dx (+ non-structural mass per unit area on surfaces);
+thermal load L(v) = int (3 lambda + 2 mu) alpha dT div(v) dx (the equivalent nodal forces of a
+free thermal strain alpha dT I). SI units: Pa, kg/m^3, 1/K, K.
+"""
+from __future__ import annotations
+
+import numpy as np
+import ufl
+
+from transient.errors import InputError
+
+from .mesh import TaggedMesh
+
+
+def check_material(volume: str, mat) -> None:
+    """InputError naming the volume and the value if E, rho or nu is not physical."""
+    E, nu, rho = float(mat.E), float(mat.nu), float(mat.rho)
+    who = f"material {getattr(mat, 'name', '?')!r} of volume {volume!r}"
+    if not np.isfinite(E) or E <= 0.0:
+        raise InputError(f"{who}: Young's modulus E = {E!r} Pa must be > 0")
+    if not np.isfinite(rho) or rho <= 0.0:
+        raise InputError(f"{who}: density rho = {rho!r} kg/m^3 must be > 0")
+    if not np.isfinite(nu) or not (-1.0 < nu < 0.5):
+        raise InputError(f"{who}: Poisson's ratio nu = {nu!r} must lie in (-1, 0.5)")
+
+
+def material_fields(tm: TaggedMesh, volumes: dict) -> tuple:
+    """Cell-wise (DG0) E, nu, rho from {volume group name: Material}; every group of the
+    mesh needs a material and every named volume must exist in the mesh."""
+    from dolfinx import fem
+
+    for name in volumes:
+        if name not in tm.volume_ids:
+            raise InputError(f"volume group {name!r} is not a physical volume of mesh {tm.path!r} "
+                             f"(it has: {', '.join(sorted(tm.volume_ids)) or 'none'})")
+    for name in tm.volume_ids:
+        if name not in volumes:
+            raise InputError(f"physical volume {name!r} of mesh {tm.path!r} has no material")
+    for name, mat in volumes.items():
+        check_material(name, mat)
+    Q = fem.FunctionSpace(tm.mesh, ("DG", 0))
+    fields = {k: fem.Function(Q, name=k) for k in ("E", "nu", "rho")}
+    for name, mat in volumes.items():
+        dofs = Q.dofmap.list.array[tm.cell_tags.find(tm.volume_ids[name])]  # one DG0 DOF per cell
+        for k in fields:
+            fields[k].x.array[dofs] = float(getattr(mat, k))
+    for f in fields.values():
+        f.x.scatter_forward()
+    return fields["E"], fields["nu"], fields["rho"]
+
+
+def lame(E, nu):
+    return E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
+
+
+def epsilon(u):
+    return ufl.sym(ufl.grad(u))
+
+
+def stiffness_form(V, E, nu):
+    lmbda, mu = lame(E, nu)
+    u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+    eu = epsilon(u)
+    return ufl.inner(lmbda * ufl.tr(eu) * ufl.Identity(3) + 2 * mu * eu, epsilon(v)) * ufl.dx
+
+
+def mass_form(V, rho):
+    u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+    return rho * ufl.inner(u, v) * ufl.dx
+
+
+def surface_mass_form(V, facet_tags, mass_per_area: float, lumped: bool):
+    """Non-structural mass on the facets tagged 1 in ``facet_tags``. ``lumped`` uses the
+    vertex quadrature rule (row-sum-like diagonal mass; P1 only)."""
+    u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+    md = {"quadrature_rule": "vertex", "quadrature_degree": 1} if lumped else {}
+    ds = ufl.Measure("ds", domain=V.mesh, subdomain_data=facet_tags, metadata=md)
+    return mass_per_area * ufl.inner(u, v) * ds(1)
+
+
+def area_form(mesh, facet_tags):
+    from dolfinx import fem
+
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)
+    return fem.Constant(mesh, 1.0) * ds(1)
+
+
+def thermal_load_form(V, E, nu, cell_tags, strain_by_id: dict[int, float]):
+    """L(v) = sum_vol int (3 lambda + 2 mu) * (alpha dT)_vol * div(v) dx(vol)."""
+    lmbda, mu = lame(E, nu)
+    v = ufl.TestFunction(V)
+    dx = ufl.Measure("dx", domain=V.mesh, subdomain_data=cell_tags)
+    return sum((3 * lmbda + 2 * mu) * float(s) * ufl.div(v) * dx(int(i)) for i, s in strain_by_id.items())

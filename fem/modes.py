@@ -1,0 +1,92 @@
+"""Normal modes of an FE model: K phi = omega^2 M phi, mass-normalised (Phi^T M Phi = I).
+
+Shift-and-invert about a small *negative* shift sigma = -(2 pi shift_hz)^2 so that
+K - sigma M is positive definite for a free-free body as for a clamped one (a shift of 0
+relies on round-off in the factorisation of a singular K; FENICSX-NOTES.md). The modes
+nearest sigma are then the lowest ones. A mode below ``rigid_tol_hz`` is "near-zero":
+a free-free body must have exactly six (its rigid-body modes, reported with omega = 0),
+a clamped body none; anything else is a floating part or a missing tie and is an error.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from transient.errors import InputError
+
+from . import petsc_backend as pb
+from .model import FEModel
+
+
+@dataclass
+class Modes:
+    """Eigenvalues omega^2 (rad^2/s^2, raw, rigid ones ~ round-off) and shapes (n_dof, n)."""
+
+    eigenvalues: np.ndarray
+    shapes: np.ndarray
+    n_rigid: int
+
+    @property
+    def omega(self) -> np.ndarray:
+        """Circular frequencies (rad/s); exactly 0 for the rigid-body modes."""
+        w = np.sqrt(np.clip(self.eigenvalues, 0.0, None))
+        w[: self.n_rigid] = 0.0
+        return w
+
+    @property
+    def freq_hz(self) -> np.ndarray:
+        return self.omega / (2 * np.pi)
+
+    def __len__(self) -> int:
+        return self.eigenvalues.size
+
+
+def _check_singular(model: FEModel, lam: np.ndarray, rigid_tol_hz: float) -> int:
+    f = np.sqrt(np.abs(lam)) / (2 * np.pi)
+    n_zero = int(np.sum(f < rigid_tol_hz))
+    if model.grounded and n_zero:
+        raise InputError(f"model {model.name!r} (clamped on {', '.join(model.clamped)}) has {n_zero} "
+                         f"near-zero modes (< {rigid_tol_hz:g} Hz): a floating part, a missing tie or clamp")
+    if not model.grounded and n_zero > 6:
+        raise InputError(f"free-free model {model.name!r} has {n_zero} near-zero modes (< {rigid_tol_hz:g} Hz), "
+                         "more than its 6 rigid-body modes: a floating part or a missing tie")
+    if not model.grounded and n_zero < 6 and lam.size >= 6:
+        raise InputError(f"free-free model {model.name!r} shows only {n_zero} rigid-body modes below "
+                         f"{rigid_tol_hz:g} Hz (lowest frequencies {np.round(f[:7], 4)} Hz): "
+                         "rigid-body modes not clean; raise rigid_tol_hz or check the model")
+    return n_zero
+
+
+def eigenmodes(model: FEModel, n_modes: int | None = None, band_hz: tuple[float, float] | None = None,
+               shift_hz: float = 1.0, rigid_tol_hz: float = 0.01, tol: float = 1e-10) -> Modes:
+    """Lowest ``n_modes`` modes (rigid-body modes included for a free-free model), or all
+    modes with frequency in ``band_hz`` = (f_lo, f_hi) Hz. Exactly one of the two."""
+    if (n_modes is None) == (band_hz is None):
+        raise InputError("eigenmodes: give either n_modes or band_hz")
+    if shift_hz <= 0:
+        raise InputError(f"eigenmodes: shift_hz = {shift_hz!r} must be > 0 (the shift is -(2 pi shift_hz)^2)")
+    sigma = -(2 * np.pi * shift_hz) ** 2
+    n_check = 1 if model.grounded else 7     # enough modes to see an extra near-zero mode
+    n_max = model.n_dof - 1
+    if n_modes is not None:
+        if n_modes < 1:
+            raise InputError(f"eigenmodes: n_modes = {n_modes!r} must be >= 1")
+        nev = min(max(n_modes, n_check), n_max)
+        lam, Phi = pb.eigensolve(model.K, model.M, nev, sigma, tol=tol, what=f"model {model.name!r}")
+        n_rigid = _check_singular(model, lam, rigid_tol_hz)
+        return Modes(lam[:n_modes], Phi[:, :n_modes], min(n_rigid, n_modes))
+    f_lo, f_hi = map(float, band_hz)
+    if not (0 <= f_lo < f_hi):
+        raise InputError(f"eigenmodes: band {band_hz!r} Hz must satisfy 0 <= f_lo < f_hi")
+    nev = min(max(12, n_check), n_max)
+    while True:
+        lam, Phi = pb.eigensolve(model.K, model.M, nev, sigma, tol=tol, what=f"model {model.name!r}")
+        if np.sqrt(max(lam[-1], 0)) / (2 * np.pi) > f_hi or nev >= n_max:
+            break
+        nev = min(2 * nev, n_max)
+    n_rigid = _check_singular(model, lam, rigid_tol_hz)
+    f = np.sqrt(np.clip(lam, 0, None)) / (2 * np.pi)
+    f[:n_rigid] = 0.0
+    keep = (f >= f_lo) & (f <= f_hi)
+    return Modes(lam[keep], Phi[:, keep], int(np.sum(keep[:n_rigid])))

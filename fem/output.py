@@ -1,0 +1,53 @@
+"""Full-field output readable by ParaView: VTU (VTK XML unstructured grid) via meshio.
+
+Takes plain arrays (nodes, cells, nodal fields), so it also writes fields recovered from a
+Craig-Bampton model (reduction's field_map). Atomic: temporary file + os.replace.
+Coordinates in m, displacements in m (mass-normalised mode shapes in m/sqrt(kg)).
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from transient.errors import InputError
+
+
+def write_vtu(path, nodes: np.ndarray, cells: np.ndarray, cell_type: str,
+              point_data: dict[str, np.ndarray], field_data: dict | None = None) -> Path:
+    """Write a .vtu with nodal fields ``point_data`` (each (n_nodes,) or (n_nodes, k))."""
+    import meshio
+
+    path = Path(path)
+    if path.suffix != ".vtu":
+        raise InputError(f"write_vtu: {str(path)!r} must end in .vtu")
+    nodes = np.asarray(nodes, float)
+    for k, v in point_data.items():
+        if np.asarray(v).shape[0] != nodes.shape[0]:
+            raise InputError(f"write_vtu: field {k!r} has {np.asarray(v).shape[0]} rows, mesh has {nodes.shape[0]} nodes")
+    mesh = meshio.Mesh(nodes, [(cell_type, np.asarray(cells, np.int64))],
+                       point_data={k: np.asarray(v, float) for k, v in point_data.items()},
+                       field_data=field_data or {})
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.stem, suffix=".tmp.vtu")
+    os.close(fd)
+    try:
+        meshio.write(tmp, mesh, file_format="vtu")
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return path
+
+
+def write_modes_vtu(model, modes, path) -> Path | None:
+    """All mode shapes of ``modes`` as vector fields ``mode_001_<f>Hz`` (written by rank 0)."""
+    T = model.field_map()
+    fields = {}
+    for j, f in enumerate(modes.freq_hz):
+        fields[f"mode_{j + 1:03d}_{f:.4g}Hz"] = (T @ modes.shapes[:, j]).reshape(-1, 3)
+    if model.comm.rank != 0:
+        return None
+    return write_vtu(path, model.nodes, model.cells, model.cell_type, fields)

@@ -1,0 +1,98 @@
+"""Static solves, loads and mass properties on an FE model's independent DOFs (SI units)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from transient.errors import ConvergenceError, InputError
+
+from . import petsc_backend as pb
+from .elasticity import thermal_load_form
+from .model import FEModel
+from .spiders import rigid_body_shape
+
+
+def static_solve(model: FEModel, f: np.ndarray, supports=()) -> np.ndarray:
+    """Displacements x (n_dof,) with K x = f and x[supports] = 0.
+
+    ``supports``: DOF indices or ``point:Tx`` labels held at zero (e.g. a 3-2-1 set for a
+    free-free body). A free-free model needs at least 6 supports; a singular system is
+    reported (InputError), never returned as a result.
+    """
+    f = np.asarray(f, float).reshape(-1)
+    if f.size != model.n_dof:
+        raise InputError(f"static_solve: load has {f.size} entries, model {model.name!r} has {model.n_dof} DOFs")
+    fixed = np.array([model.dof_index(s) if isinstance(s, str) else int(s) for s in supports], dtype=np.int64)
+    if fixed.size and (fixed.min() < 0 or fixed.max() >= model.n_dof):
+        raise InputError(f"static_solve: support DOF out of range 0..{model.n_dof - 1}")
+    if not model.grounded and np.unique(fixed).size < 6:
+        raise InputError(f"static_solve: model {model.name!r} is free-free (no clamped surface); "
+                         f"give >= 6 supports that stop rigid-body motion (got {np.unique(fixed).size})")
+    x = pb.solve(model.K, f, fixed, what=f"model {model.name!r}")
+    K, _ = model.matrices()
+    free = np.ones(model.n_dof, bool)
+    free[fixed] = False
+    r = (K @ x - f)[free]
+    # a direct solve leaves a residual ~ eps * cond; 1e-6 of the load flags a singular K
+    if not np.all(np.isfinite(x)) or np.linalg.norm(r) > 1e-6 * np.linalg.norm(f[free]):
+        raise ConvergenceError(f"static_solve: model {model.name!r}: residual {np.linalg.norm(r):.3g} vs load "
+                               f"{np.linalg.norm(f[free]):.3g}: K is singular for these supports (mechanism)")
+    return x
+
+
+def point_load(model: FEModel, point: str, force=(0.0, 0.0, 0.0), moment=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """Load vector (n_dof,) with a force (N) and moment (N m) at a reference point."""
+    f = np.zeros(model.n_dof)
+    i = model.dof_index(f"{point}:Tx")
+    f[i:i + 3] = force
+    f[i + 3:i + 6] = moment
+    return f
+
+
+def thermal_load(model: FEModel, volumes, delta_T: float, alpha) -> np.ndarray:
+    """Equivalent nodal forces (n_dof,) of a uniform free thermal strain alpha * delta_T in
+    the named volume groups (the cryogenic preload: delta_T < 0 shrinks).
+
+    ``alpha``: expansion coefficient (1/K), one number or {volume: alpha}; ``delta_T`` in K.
+    """
+    tm = model.tagged
+    volumes = [volumes] if isinstance(volumes, str) else list(volumes)
+    strains = {}
+    for v in volumes:
+        if v not in tm.volume_ids:
+            raise InputError(f"thermal_load: volume {v!r} is not in model {model.name!r} "
+                             f"(has: {', '.join(sorted(tm.volume_ids))})")
+        a = alpha[v] if isinstance(alpha, dict) else alpha
+        if not np.isfinite(a) or not np.isfinite(delta_T):
+            raise InputError(f"thermal_load: alpha {a!r} or delta_T {delta_T!r} of {v!r} is not finite")
+        strains[tm.volume_ids[v]] = float(a) * float(delta_T)
+    if not strains:
+        raise InputError("thermal_load: no volume given")
+    b = pb.assemble_vector(thermal_load_form(model.V, model.E, model.nu, tm.cell_tags, strains))
+    return pb.gather_vec(pb.mult_transpose(model.T, b))
+
+
+@dataclass
+class MassProperties:
+    """Mass (kg), centre of gravity (m), inertia tensor about the c.g. (kg m^2), and the
+    6 x 6 rigid-body mass RB^T M RB about ``about`` (kg, kg m, kg m^2)."""
+
+    mass: float
+    cg: np.ndarray
+    inertia: np.ndarray
+    rigid_mass: np.ndarray
+    about: np.ndarray
+
+
+def mass_properties(model: FEModel, about=(0.0, 0.0, 0.0)) -> MassProperties:
+    """Mass properties from M and the geometric rigid-body shape: M6 = RB^T M RB."""
+    _, M = model.matrices()
+    about = np.asarray(about, float)
+    RB = rigid_body_shape(model.dof_coords, model.dof_comp, about)
+    M6 = RB.T @ (M @ RB)
+    m = M6[0, 0]
+    c = np.array([-M6[2, 4], -M6[0, 5], -M6[1, 3]]) / m      # M6[:3, 3:] = -m [c]x
+    I0 = M6[3:, 3:]
+    I_cg = I0 - m * (np.dot(c, c) * np.eye(3) - np.outer(c, c))
+    return MassProperties(float(m), about + c, I_cg, M6, about)
