@@ -1,0 +1,127 @@
+"""Turn a problem description into the small dense arrays the kernel marches on.
+
+Contact rows: one row per coupled direction (``contact/label_a``), with the mode-shape
+rows Phi_ca, Phi_cb (zero row for ground), the compliance 1/K_C (0 for a rigid bolt)
+and the offset c (normal_sign * gap on the axial row), so that while coupled the force
+on A is f = -K_C (c + x_a - x_b) (eq. 3).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .body import ModalBody
+from .errors import InputError
+from .model import Forcing
+
+
+@dataclass
+class ContactRows:
+    labels: tuple
+    names: tuple
+    Phi_a: np.ndarray      # (n_c, n_a)
+    Phi_b: np.ndarray      # (n_c, n_b)
+    compliance: np.ndarray  # (n_c,) 1/K_C, 0 for rigid
+    offset: np.ndarray     # (n_c,) c
+    contact: np.ndarray    # (n_c,) index of the contact point
+    axial: np.ndarray      # (n_c,) bool
+    sign: np.ndarray       # (n_c,) normal_sign of the contact
+    release: np.ndarray    # (n_contacts,)
+    axial_column: np.ndarray  # (n_contacts,)
+    normal_sign: np.ndarray   # (n_contacts,)
+
+    @property
+    def n(self) -> int:
+        return self.compliance.size
+
+
+def contact_rows(body_a: ModalBody, body_b: ModalBody, contacts) -> ContactRows:
+    na, nb = body_a.n_modes, body_b.n_modes
+    labels, Pa, Pb, comp, off, cidx, ax, sgn, axcol = [], [], [], [], [], [], [], [], []
+    for ci, c in enumerate(contacts):
+        for d, (la, lb) in enumerate(zip(c.labels_a, c.labels_b)):
+            if d == c.axial:
+                axcol.append(len(labels))
+            labels.append(f"{c.name}/{la}")
+            Pa.append(body_a.phi[body_a.dof_index(la)])
+            Pb.append(np.zeros(nb) if lb is None else body_b.phi[body_b.dof_index(lb)])
+            comp.append(0.0 if c.rigid else 1.0 / c.stiffness[d])
+            off.append(c.normal_sign * c.gap if d == c.axial else 0.0)
+            cidx.append(ci)
+            ax.append(d == c.axial)
+            sgn.append(c.normal_sign)
+    return ContactRows(labels=tuple(labels), names=tuple(c.name for c in contacts),
+                       Phi_a=np.array(Pa).reshape(len(labels), na), Phi_b=np.array(Pb).reshape(len(labels), nb),
+                       compliance=np.array(comp), offset=np.array(off), contact=np.array(cidx, dtype=np.int64),
+                       axial=np.array(ax, dtype=np.bool_), sign=np.array(sgn),
+                       release=np.array([c.release_time for c in contacts]),
+                       axial_column=np.array(axcol, dtype=np.int64),
+                       normal_sign=np.array([c.normal_sign for c in contacts]))
+
+
+@dataclass
+class ModalLoad:
+    """Modal force of one body: const + piecewise-linear table on a merged time grid."""
+
+    const: np.ndarray   # (n,)
+    times: np.ndarray   # (n_k,)
+    table: np.ndarray   # (n_k, n)
+
+    def at(self, t: float) -> np.ndarray:
+        if self.times.size == 0:
+            return self.const.copy()
+        return self.const + np.array([np.interp(t, self.times, self.table[:, m]) for m in range(self.const.size)])
+
+
+def modal_load(body: ModalBody, key: str, forcing: Forcing) -> ModalLoad:
+    """Constant point forces + gravity (eq. 14) + tabulated point and modal forces, in modal form."""
+    n = body.n_modes
+    const = np.zeros(n)
+    if n == 0:
+        return ModalLoad(const, np.zeros(0), np.zeros((0, 0)))
+    const += body.modal_gravity(forcing.gravity)
+    for p in forcing.constant:
+        if p.body == key:
+            const += body.phi[body.dof_index(p.label)] * p.value
+    tables = [t for t in forcing.tables if t.body == key]
+    modal = [m for m in forcing.modal if m.body == key]
+    if not tables and not modal:
+        return ModalLoad(const, np.zeros(0), np.zeros((0, n)))
+    grid = np.unique(np.concatenate([t.time for t in tables] + [m.time for m in modal]))
+    if grid.size * n > 5e8:
+        raise InputError(f"body {body.name!r}: merged force tables need {grid.size} x {n} values; "
+                         "resample the tables on a common, coarser grid")
+    table = np.zeros((grid.size, n))
+    for t in tables:  # exact: every table is linear between its own breakpoints, a subset of grid
+        table += np.outer(np.interp(grid, t.time, t.value), body.phi[body.dof_index(t.label)])
+    for m in modal:
+        for k in range(n):
+            table[:, k] += np.interp(grid, m.time, m.values[:, k])
+    return ModalLoad(const, grid, table)
+
+
+def feedback_factors(n: int, key: str, forcing: Forcing, t0: float):
+    """Sum of the feedback matrices of a body as rank-factored U @ V (exact to rounding) and its 'until'.
+
+    All feedback terms of one body must share the same 'until' (one switch-off time)."""
+    fbs = [fb for fb in forcing.feedback if fb.body == key]
+    if not fbs or n == 0:
+        return np.zeros((n, 0)), np.zeros((0, n)), -np.inf
+    untils = {fb.until for fb in fbs}
+    if len(untils) > 1:
+        raise InputError(f"body {key!r}: modal feedback terms with different 'until' times {sorted(untils)} "
+                         "are not supported; combine them")
+    M = sum(fb.matrix for fb in fbs)
+    U, s, Vt = np.linalg.svd(M)
+    r = int(np.sum(s > 1e-14 * max(s[0], 1e-300))) if s.size else 0
+    return U[:, :r] * s[:r], Vt[:r].copy(), float(untils.pop())
+
+
+def feedback_matrix(n: int, key: str, forcing: Forcing, t: float) -> np.ndarray:
+    """Sum of the feedback matrices active at time t (for static equilibrium)."""
+    M = np.zeros((n, n))
+    for fb in forcing.feedback:
+        if fb.body == key and t < fb.until:
+            M += fb.matrix
+    return M

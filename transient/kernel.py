@@ -1,0 +1,319 @@
+"""Compiled time-marching kernel (numba): exact modal steps + contact solve, one chunk of steps.
+
+Per step (section 2.3, DESIGN.md): both bodies are advanced with the contact force at
+the end of the step set to zero (x_free), the end-of-step relative contact displacement
+is affine in the contact force, e = e_free + W f (W the step flexibility), and
+
+* ``direct``: (C + W_SS) f_S = -(c + e_free)_S on the active set S (C = diag(1/K_C),
+  0 for rigid bolts), the active set iterated until consistent (released axial rows in
+  tension open, open rows that penetrate close); the inverse per active-set pattern is
+  cached. Cycling switches to one flip per iteration (least-index rule), then fails.
+* ``fixed-point``: the reference's iteration f <- -K_C (c + e_free + W f) with its
+  convergence test |f_j - f_i| < tol (eq. 11).
+
+No Python objects, no I/O: arrays in, arrays out; status codes report failures.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+OK, NO_CONVERGENCE, CYCLING, SINGULAR = 0, 1, 2, 3
+BOLTED, CLOSED, OPEN = 0, 1, 2
+
+
+@njit(cache=True)
+def _load(t, const, tk, Pk, ptr, out):
+    """Modal load at time t: const + piecewise-linear table (held outside), pointer advanced."""
+    n = const.size
+    nk = tk.size
+    if nk == 0:
+        for m in range(n):
+            out[m] = const[m]
+        return ptr
+    if t <= tk[0]:
+        for m in range(n):
+            out[m] = const[m] + Pk[0, m]
+        return 0
+    if t >= tk[nk - 1]:
+        for m in range(n):
+            out[m] = const[m] + Pk[nk - 1, m]
+        return nk - 1
+    while ptr + 1 < nk and tk[ptr + 1] <= t:
+        ptr += 1
+    while ptr > 0 and tk[ptr] > t:
+        ptr -= 1
+    w = (t - tk[ptr]) / (tk[ptr + 1] - tk[ptr])
+    for m in range(n):
+        out[m] = const[m] + (1.0 - w) * Pk[ptr, m] + w * Pk[ptr + 1, m]
+    return ptr
+
+
+@njit(cache=True)
+def _feedback(q, U, V, on, out):
+    """out = U @ (V @ q) (rank-factored feedback matrix, eq. 26) or 0 when off."""
+    n = q.size
+    for m in range(n):
+        out[m] = 0.0
+    if not on:
+        return
+    r = V.shape[0]
+    for k in range(r):
+        s = 0.0
+        for m in range(n):
+            s += V[k, m] * q[m]
+        for m in range(n):
+            out[m] += U[m, k] * s
+
+
+@njit(cache=True)
+def _free_step(coef, q, v, P0, P1, qf, vf):
+    n = q.size
+    for m in range(n):
+        qf[m] = coef[0, m] * q[m] + coef[1, m] * v[m] + coef[2, m] * P0[m] + coef[3, m] * P1[m]
+        vf[m] = coef[4, m] * q[m] + coef[5, m] * v[m] + coef[6, m] * P0[m] + coef[7, m] * P1[m]
+
+
+@njit(cache=True)
+def _pattern_inverse(active, Cdiag, W, keys, invs, nkeys, last):
+    """Cached inverse of (C + W)_SS embedded in an (n_c, n_c) matrix; returns (slot, nkeys, ok)."""
+    nc = active.size
+    cap = keys.shape[0]
+    # most recently used first, then the others
+    for trial in range(nkeys + 1):
+        if trial == 0:
+            k = last
+        else:
+            k = trial - 1
+            if k == last:
+                continue
+        if k < 0 or k >= nkeys:
+            continue
+        same = True
+        for j in range(nc):
+            if keys[k, j] != active[j]:
+                same = False
+                break
+        if same:
+            return k, nkeys, True
+    idx = np.empty(nc, dtype=np.int64)
+    ns = 0
+    for j in range(nc):
+        if active[j]:
+            idx[ns] = j
+            ns += 1
+    slot = nkeys if nkeys < cap else (last + 1) % cap
+    if nkeys < cap:
+        nkeys += 1
+    for j in range(nc):
+        keys[slot, j] = active[j]
+        for l in range(nc):
+            invs[slot, j, l] = 0.0
+    if ns > 0:
+        A = np.empty((ns, ns))
+        for a in range(ns):
+            for b in range(ns):
+                A[a, b] = W[idx[a], idx[b]]
+            A[a, a] += Cdiag[idx[a]]
+        ok = True
+        try:
+            Ainv = np.linalg.inv(A)
+        except Exception:  # noqa: BLE001 - numba: singular matrix
+            ok = False
+            Ainv = np.zeros((ns, ns))
+        if not ok or not np.all(np.isfinite(Ainv)):
+            for j in range(nc):
+                keys[slot, j] = False
+            return slot, nkeys, False
+        for a in range(ns):
+            for b in range(ns):
+                invs[slot, idx[a], idx[b]] = Ainv[a, b]
+    return slot, nkeys, True
+
+
+@njit(cache=True)
+def march(i0, i1, t0, h, method, tol, max_iter,
+          # body a
+          coef_a, w2_a, zw2_a, const_a, tk_a, Pk_a, U_a, V_a, fb_until_a, L_a, kind_a, targ_a,
+          # body b
+          coef_b, w2_b, zw2_b, const_b, tk_b, Pk_b, U_b, V_b, fb_until_b, L_b, kind_b, targ_b,
+          # contact
+          Phi_ca, Phi_cb, Cdiag, coff, dcontact, axial, nsign, release, W,
+          # state (mutated)
+          q_a, v_a, q_b, v_b, f, active, Pc_a, Pc_b, ptr,
+          keys, invs, ncache, last,
+          # outputs (mutated)
+          Y_a, Y_b, Fc, state, iters, keep, Qa, Va, Aa, Qb, Vb, Ab):
+    """March steps i0 -> i1 (time t0 + i h). Returns (status, step, info1, info2)."""
+    na, nb, nc, ncon = q_a.size, q_b.size, f.size, release.size
+    P0a = np.empty(na); P1a = np.empty(na); fba = np.empty(na); qfa = np.empty(na); vfa = np.empty(na)
+    P0b = np.empty(nb); P1b = np.empty(nb); fbb = np.empty(nb); qfb = np.empty(nb); vfb = np.empty(nb)
+    acc_a = np.empty(na); acc_b = np.empty(nb)
+    u = np.empty(nc); fn = np.empty(nc); Wf = np.empty(nc)
+    cand = np.empty(nc, dtype=np.bool_)
+    bolted = np.empty(ncon, dtype=np.bool_)
+    Kc = np.empty(nc)
+    for j in range(nc):
+        Kc[j] = 1.0 / Cdiag[j] if Cdiag[j] > 0 else 0.0
+    for i in range(i0, i1):
+        ta = t0 + i * h
+        tb = t0 + (i + 1) * h
+        # ---------------- free step of both bodies (contact force at t1 = 0)
+        ptr[0] = _load(ta, const_a, tk_a, Pk_a, ptr[0], P0a)
+        ptr[0] = _load(tb, const_a, tk_a, Pk_a, ptr[0], P1a)
+        _feedback(q_a, U_a, V_a, ta < fb_until_a, fba)
+        for m in range(na):
+            P0a[m] += fba[m] + Pc_a[m]
+            P1a[m] += fba[m]
+        _free_step(coef_a, q_a, v_a, P0a, P1a, qfa, vfa)
+        if nb > 0:
+            ptr[1] = _load(ta, const_b, tk_b, Pk_b, ptr[1], P0b)
+            ptr[1] = _load(tb, const_b, tk_b, Pk_b, ptr[1], P1b)
+            _feedback(q_b, U_b, V_b, ta < fb_until_b, fbb)
+            for m in range(nb):
+                P0b[m] += fbb[m] + Pc_b[m]
+                P1b[m] += fbb[m]
+            _free_step(coef_b, q_b, v_b, P0b, P1b, qfb, vfb)
+        # ---------------- candidate rows and free relative displacement
+        for c in range(ncon):
+            bolted[c] = tb < release[c]
+        for j in range(nc):
+            cand[j] = bolted[dcontact[j]] or axial[j]
+            if not bolted[dcontact[j]] and not axial[j]:
+                active[j] = False
+            elif bolted[dcontact[j]]:
+                active[j] = True
+            if cand[j]:
+                s = coff[j]
+                for m in range(na):
+                    s += Phi_ca[j, m] * qfa[m]
+                for m in range(nb):
+                    s -= Phi_cb[j, m] * qfb[m]
+                u[j] = s
+            else:
+                u[j] = 0.0
+        # ---------------- contact solve
+        it = 0
+        status = OK
+        if method == 0:
+            single = False
+            while True:
+                it += 1
+                slot, ncache[0], ok = _pattern_inverse(active, Cdiag, W, keys, invs, ncache[0], last[0])
+                if not ok:
+                    return SINGULAR, i + 1, 0.0, 0.0
+                last[0] = slot
+                for j in range(nc):
+                    s = 0.0
+                    if active[j]:
+                        for l in range(nc):
+                            if active[l]:
+                                s -= invs[slot, j, l] * u[l]
+                    fn[j] = s
+                changed = False
+                for j in range(nc):
+                    if not cand[j] or bolted[dcontact[j]]:
+                        continue
+                    flip = False
+                    if active[j]:
+                        flip = nsign[j] * fn[j] < 0.0
+                    else:
+                        s = u[j]
+                        for l in range(nc):
+                            s += W[j, l] * fn[l]
+                        flip = nsign[j] * s < 0.0
+                    if flip:
+                        active[j] = not active[j]
+                        changed = True
+                        if single:
+                            break
+                if not changed:
+                    break
+                if it > nc + 2:
+                    single = True
+                if it > max_iter + 4 * nc:
+                    return CYCLING, i + 1, float(it), 0.0
+        else:
+            for j in range(nc):
+                fn[j] = f[j] if active[j] else 0.0
+            dmax = 0.0
+            while True:
+                it += 1
+                for j in range(nc):
+                    s = u[j]
+                    for l in range(nc):
+                        s += W[j, l] * fn[l]
+                    Wf[j] = s  # constraint residual with the current estimate
+                changed = False
+                dmax = 0.0
+                for j in range(nc):
+                    if cand[j] and not bolted[dcontact[j]]:
+                        if active[j] and nsign[j] * fn[j] < 0.0:
+                            active[j] = False
+                            changed = True
+                        elif not active[j] and nsign[j] * Wf[j] < 0.0:
+                            active[j] = True
+                            changed = True
+                    new = -Kc[j] * Wf[j] if active[j] else 0.0
+                    d = abs(new - fn[j])
+                    if d > dmax:
+                        dmax = d
+                    fn[j] = new
+                if not changed and dmax < tol:
+                    break
+                if it >= max_iter or not np.isfinite(dmax):
+                    return NO_CONVERGENCE, i + 1, dmax, float(it)
+        # ---------------- end-of-step state with the contact force
+        for j in range(nc):
+            f[j] = fn[j]
+        for m in range(na):
+            Pc_a[m] = 0.0
+        for m in range(nb):
+            Pc_b[m] = 0.0
+        for j in range(nc):
+            if fn[j] != 0.0:
+                for m in range(na):
+                    Pc_a[m] += Phi_ca[j, m] * fn[j]
+                for m in range(nb):
+                    Pc_b[m] -= Phi_cb[j, m] * fn[j]
+        for m in range(na):
+            q_a[m] = qfa[m] + coef_a[3, m] * Pc_a[m]
+            v_a[m] = vfa[m] + coef_a[7, m] * Pc_a[m]
+            acc_a[m] = P1a[m] + Pc_a[m] - zw2_a[m] * v_a[m] - w2_a[m] * q_a[m]
+        for m in range(nb):
+            q_b[m] = qfb[m] + coef_b[3, m] * Pc_b[m]
+            v_b[m] = vfb[m] + coef_b[7, m] * Pc_b[m]
+            acc_b[m] = P1b[m] + Pc_b[m] - zw2_b[m] * v_b[m] - w2_b[m] * q_b[m]
+        # ---------------- outputs at t1
+        r = i + 1
+        for j in range(nc):
+            Fc[r, j] = fn[j]
+        for c in range(ncon):
+            state[r, c] = BOLTED if bolted[c] else OPEN
+        for j in range(nc):
+            if axial[j] and not bolted[dcontact[j]] and active[j]:
+                state[r, dcontact[j]] = CLOSED
+        iters[r] = it
+        _outputs(L_a, kind_a, targ_a, q_a, v_a, acc_a, Y_a, r)
+        _outputs(L_b, kind_b, targ_b, q_b, v_b, acc_b, Y_b, r)
+        if keep:
+            for m in range(na):
+                Qa[r, m] = q_a[m]; Va[r, m] = v_a[m]; Aa[r, m] = acc_a[m]
+            for m in range(nb):
+                Qb[r, m] = q_b[m]; Vb[r, m] = v_b[m]; Ab[r, m] = acc_b[m]
+    return OK, i1, 0.0, 0.0
+
+
+@njit(cache=True)
+def _outputs(L, kind, targ, q, v, acc, Y, r):
+    if Y.shape[1] == 0:
+        return
+    for k in range(Y.shape[1]):
+        Y[r, k] = 0.0
+    n = q.size
+    for row in range(L.shape[0]):
+        x = q if kind[row] == 0 else (v if kind[row] == 1 else acc)
+        s = 0.0
+        for m in range(n):
+            s += L[row, m] * x[m]
+        Y[r, targ[row]] += s

@@ -1,0 +1,327 @@
+"""Problem description of a two-body transient: contact points, forcing, outputs, initial state.
+
+Plain dataclasses; each validates itself at construction and raises InputError with a
+one-line message naming the culprit. Units are SI (N, N m, m, rad, s).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+
+from .body import ModalBody
+from .errors import InputError
+
+INF = math.inf
+
+
+def _finite(name: str, value) -> np.ndarray:
+    arr = np.asarray(value, dtype=float)
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"{name} contains NaN or inf")
+    return arr
+
+
+def _body_key(who: str, body: str) -> str:
+    if body not in ("a", "b"):
+        raise InputError(f"{who}: body must be 'a' or 'b', got {body!r}")
+    return body
+
+
+@dataclass
+class ContactPoint:
+    """One contact point coupling ``len(labels_a)`` directions (eq. 2-3, section 2.7).
+
+    ``labels_b[i]`` is the matching DOF on body B (None: B is ground at that point).
+    ``stiffness`` K_C per direction (N/m or N m/rad), ignored when ``rigid`` (Lagrange bolt).
+    ``axial`` indexes the normal direction; ``normal_sign = +1`` means A lies on the + side
+    of B, so the separation is ``s = gap + normal_sign (x_a - x_b)`` on that direction.
+    Bolted (all directions, tension and compression) while ``t < release_time``; after
+    release compression-only on the axial direction, lateral directions free; recontact
+    re-closes the axial direction only. While coupled, the force on A in direction i is
+    ``-K_C (c_i + x_a - x_b)`` with ``c_axial = normal_sign gap`` and 0 laterally (a bolted
+    point with a gap therefore starts preloaded).
+    """
+
+    name: str
+    labels_a: Sequence[str]
+    labels_b: Sequence[str | None]
+    stiffness: float | Sequence[float] = 0.0
+    axial: int = 0
+    normal_sign: float = 1.0
+    gap: float = 0.0
+    release_time: float = INF
+    rigid: bool = False
+
+    def __post_init__(self) -> None:
+        who = f"contact {self.name!r}"
+        self.labels_a = tuple(self.labels_a)
+        self.labels_b = tuple(None if b is None else str(b) for b in self.labels_b)
+        n = len(self.labels_a)
+        if n == 0:
+            raise InputError(f"{who}: no directions (labels_a is empty)")
+        if len(self.labels_b) != n:
+            raise InputError(f"{who}: {n} labels_a but {len(self.labels_b)} labels_b")
+        if not 0 <= int(self.axial) < n:
+            raise InputError(f"{who}: axial index {self.axial} out of range 0..{n - 1}")
+        self.axial = int(self.axial)
+        if self.normal_sign not in (1, -1, 1.0, -1.0):
+            raise InputError(f"{who}: normal_sign must be +1 or -1, got {self.normal_sign!r}")
+        self.normal_sign = float(self.normal_sign)
+        if not math.isfinite(float(self.gap)):
+            raise InputError(f"{who}: gap must be finite, got {self.gap!r}")
+        self.gap = float(self.gap)
+        if math.isnan(float(self.release_time)):
+            raise InputError(f"{who}: release_time is NaN")
+        self.release_time = float(self.release_time)
+        k = np.broadcast_to(np.asarray(self.stiffness, dtype=float), (n,)).copy() \
+            if np.ndim(self.stiffness) == 0 else np.asarray(self.stiffness, dtype=float).reshape(-1)
+        if k.shape != (n,):
+            raise InputError(f"{who}: {k.size} stiffness values for {n} directions")
+        if not self.rigid:
+            if not np.all(np.isfinite(k)):
+                raise InputError(f"{who}: stiffness contains NaN or inf (use rigid=True for a rigid bolt)")
+            if np.any(k <= 0):
+                raise InputError(f"{who}: stiffness must be positive, got {k.tolist()}")
+        self.stiffness = k
+        self.rigid = bool(self.rigid)
+
+    @property
+    def n_dirs(self) -> int:
+        return len(self.labels_a)
+
+
+@dataclass
+class PointForce:
+    """Constant force (N) or moment (N m) at a labelled DOF of body 'a' or 'b'."""
+
+    body: str
+    label: str
+    value: float
+
+    def __post_init__(self) -> None:
+        _body_key(f"force at {self.label!r}", self.body)
+        self.value = float(_finite(f"force at {self.label!r}", self.value))
+
+
+@dataclass
+class TabulatedForce:
+    """Force at a labelled DOF, piecewise linear in time, held at the end values outside."""
+
+    body: str
+    label: str
+    time: np.ndarray
+    value: np.ndarray
+
+    def __post_init__(self) -> None:
+        who = f"force table at {self.label!r}"
+        _body_key(who, self.body)
+        self.time = _finite(f"{who}: time", self.time).reshape(-1)
+        self.value = _finite(f"{who}: value", self.value).reshape(-1)
+        if self.time.size == 0 or self.time.size != self.value.size:
+            raise InputError(f"{who}: {self.time.size} times but {self.value.size} values")
+        if np.any(np.diff(self.time) <= 0):
+            raise InputError(f"{who}: times must be strictly increasing")
+
+
+@dataclass
+class ModalForce:
+    """Generalised forcing table (section 4.1): values (n_t, n_modes), piecewise linear in time."""
+
+    body: str
+    time: np.ndarray
+    values: np.ndarray
+
+    def __post_init__(self) -> None:
+        who = f"modal force table on body {self.body!r}"
+        _body_key(who, self.body)
+        self.time = _finite(f"{who}: time", self.time).reshape(-1)
+        self.values = _finite(f"{who}: values", self.values)
+        if self.values.ndim != 2 or self.values.shape[0] != self.time.size or self.time.size == 0:
+            raise InputError(f"{who}: values have shape {self.values.shape}, expected ({self.time.size}, n_modes)")
+        if np.any(np.diff(self.time) <= 0):
+            raise InputError(f"{who}: times must be strictly increasing")
+
+
+@dataclass
+class ModalFeedback:
+    """Modal force ``matrix @ q`` taken at the start of each step and held over it (eq. 26).
+
+    Active while ``t < until``; in :func:`static_equilibrium` it enters as ``-matrix`` in
+    the stiffness (the 'softening stiffness' KSOF of eq. 27)."""
+
+    body: str
+    matrix: np.ndarray
+    until: float = INF
+
+    def __post_init__(self) -> None:
+        who = f"modal feedback on body {self.body!r}"
+        _body_key(who, self.body)
+        self.matrix = _finite(f"{who}: matrix", self.matrix)
+        if self.matrix.ndim != 2 or self.matrix.shape[0] != self.matrix.shape[1]:
+            raise InputError(f"{who}: matrix has shape {self.matrix.shape}, expected (n_modes, n_modes)")
+        self.until = float(self.until)
+
+
+@dataclass
+class Forcing:
+    """All applied loads. ``gravity``: uniform acceleration (m/s^2) on both bodies (eq. 14)."""
+
+    constant: list = field(default_factory=list)
+    tables: list = field(default_factory=list)
+    modal: list = field(default_factory=list)
+    feedback: list = field(default_factory=list)
+    gravity: Sequence[float] = (0.0, 0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        self.constant, self.tables = list(self.constant), list(self.tables)
+        self.modal, self.feedback = list(self.modal), list(self.feedback)
+        g = _finite("gravity", self.gravity).reshape(-1)
+        if g.shape != (3,):
+            raise InputError(f"gravity must be a 3-vector (m/s^2), got shape {g.shape}")
+        self.gravity = g
+
+
+@dataclass
+class Recovery:
+    """Linear output y = disp @ q + vel @ qdot + acc @ qddot of one body (k rows each)."""
+
+    name: str
+    body: str
+    labels: Sequence[str]
+    disp: np.ndarray | None = None
+    vel: np.ndarray | None = None
+    acc: np.ndarray | None = None
+    units: str = "SI"
+
+    def __post_init__(self) -> None:
+        who = f"recovery {self.name!r}"
+        _body_key(who, self.body)
+        self.labels = tuple(str(s) for s in self.labels)
+        if self.disp is None and self.vel is None and self.acc is None:
+            raise InputError(f"{who}: needs at least one of disp, vel, acc")
+        for key in ("disp", "vel", "acc"):
+            m = getattr(self, key)
+            if m is not None:
+                m = _finite(f"{who}: {key}", m)
+                if m.ndim != 2 or m.shape[0] != len(self.labels):
+                    raise InputError(f"{who}: {key} has shape {m.shape}, expected ({len(self.labels)}, n_modes)")
+                setattr(self, key, m)
+
+
+@dataclass
+class InitialState:
+    """Modal displacements and velocities of both bodies at t0."""
+
+    q_a: np.ndarray
+    v_a: np.ndarray
+    q_b: np.ndarray
+    v_b: np.ndarray
+
+    def __post_init__(self) -> None:
+        for key in ("q_a", "v_a", "q_b", "v_b"):
+            setattr(self, key, _finite(f"initial {key}", getattr(self, key)).reshape(-1))
+
+    def check(self, body_a: ModalBody, body_b: ModalBody) -> None:
+        for key, body in (("q_a", body_a), ("v_a", body_a), ("q_b", body_b), ("v_b", body_b)):
+            if getattr(self, key).size != body.n_modes:
+                raise InputError(f"initial {key} has {getattr(self, key).size} entries, "
+                                 f"body {body.name!r} has {body.n_modes} modes")
+
+
+METHODS = ("direct", "fixed-point")
+
+
+@dataclass
+class TransientProblem:
+    """Everything :func:`transient.solve` needs. ``h=None``: 0.25/f_h (eq. 12)."""
+
+    body_a: ModalBody
+    body_b: ModalBody
+    contacts: list
+    forcing: Forcing
+    t_end: float
+    h: float | None = None
+    t0: float = 0.0
+    method: str = "direct"
+    tol: float = 1.0
+    max_iter: int = 100
+    initial: object = "static"
+    outputs: dict = field(default_factory=dict)
+    recoveries: list = field(default_factory=list)
+    keep_modal: bool = False
+    progress: bool = True
+
+    def __post_init__(self) -> None:
+        self.contacts = list(self.contacts)
+        self.recoveries = list(self.recoveries)
+        if self.body_a.is_ground:
+            raise InputError("body a must have modes (only body b may be ground)")
+        if not (math.isfinite(self.t0) and math.isfinite(self.t_end) and self.t_end > self.t0):
+            raise InputError(f"t_end = {self.t_end!r} s must be finite and greater than t0 = {self.t0!r} s")
+        if self.h is not None and not (math.isfinite(self.h) and self.h > 0):
+            raise InputError(f"time step h = {self.h!r} s must be positive and finite")
+        if self.method not in METHODS:
+            raise InputError(f"method must be one of {', '.join(METHODS)}, got {self.method!r}")
+        if not (self.tol > 0 and math.isfinite(self.tol)):
+            raise InputError(f"tol = {self.tol!r} N must be positive")
+        if int(self.max_iter) < 1:
+            raise InputError(f"max_iter = {self.max_iter!r} must be at least 1")
+        self.max_iter = int(self.max_iter)
+        if isinstance(self.initial, str):
+            if self.initial not in ("static", "zero"):
+                raise InputError(f"initial must be 'static', 'zero' or an InitialState, got {self.initial!r}")
+        elif isinstance(self.initial, InitialState):
+            self.initial.check(self.body_a, self.body_b)
+        else:
+            raise InputError(f"initial must be 'static', 'zero' or an InitialState, got {type(self.initial).__name__}")
+        self.outputs = {k: list(self.outputs.get(k, [])) for k in ("a", "b")}
+        for k in self.outputs:
+            body = self.body(k)
+            for lab in self.outputs[k]:
+                body.dof_index(lab)
+        names = set()
+        for c in self.contacts:
+            if not isinstance(c, ContactPoint):
+                raise InputError(f"contacts must be ContactPoint objects, got {type(c).__name__}")
+            if c.name in names:
+                raise InputError(f"duplicate contact name {c.name!r}")
+            names.add(c.name)
+            for lab in c.labels_a:
+                self.body_a.dof_index(lab)
+            for lab in c.labels_b:
+                if lab is not None:
+                    if self.body_b.is_ground:
+                        raise InputError(f"contact {c.name!r}: body b is ground, labels_b must be None, got {lab!r}")
+                    self.body_b.dof_index(lab)
+            if self.method == "fixed-point" and c.rigid:
+                raise InputError(f"contact {c.name!r}: rigid contacts need method 'direct' "
+                                 "(the fixed-point iteration needs a finite K_C)")
+        if len(self.contacts) == 0:
+            raise InputError("no contact points")
+        f = self.forcing
+        for p in f.constant + f.tables:
+            self.body(p.body).dof_index(p.label)
+        for m in f.modal:
+            if m.values.shape[1] != self.body(m.body).n_modes:
+                raise InputError(f"modal force table on body {m.body!r} has {m.values.shape[1]} columns, "
+                                 f"body has {self.body(m.body).n_modes} modes")
+        for fb in f.feedback:
+            n = self.body(fb.body).n_modes
+            if fb.matrix.shape != (n, n):
+                raise InputError(f"modal feedback on body {fb.body!r}: matrix {fb.matrix.shape}, expected ({n}, {n})")
+        rnames = set()
+        for r in self.recoveries:
+            if r.name in rnames:
+                raise InputError(f"duplicate recovery name {r.name!r}")
+            rnames.add(r.name)
+            n = self.body(r.body).n_modes
+            for key in ("disp", "vel", "acc"):
+                m = getattr(r, key)
+                if m is not None and m.shape[1] != n:
+                    raise InputError(f"recovery {r.name!r}: {key} has {m.shape[1]} columns, body has {n} modes")
+
+    def body(self, key: str) -> ModalBody:
+        return self.body_a if key == "a" else self.body_b
