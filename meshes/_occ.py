@@ -1,0 +1,242 @@
+"""Small gmsh/OCC helpers shared by the builders (gmsh 4.8 API; no dolfinx).
+
+Conventions: axisymmetric parts are drawn as a meridian profile in the gmsh xy plane
+(x = radius >= 0, y = axial coordinate) and revolved about the y axis, then rotated so
+that the axis becomes the global z axis and translated to the part's axis position.
+Patches are imprinted by ``occ.fragment`` of the structural volumes with small tool
+solids (boxes, cylinders); the tool parts outside the structure are removed again.
+"""
+from __future__ import annotations
+
+import math
+import os
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+import gmsh
+import numpy as np
+
+from transient.errors import InputError
+
+occ = gmsh.model.occ
+
+
+def require_positive(owner: str, **values: float) -> None:
+    """InputError naming the first parameter that is not a finite number > 0."""
+    for name, v in values.items():
+        try:
+            ok = math.isfinite(float(v)) and float(v) > 0
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
+            raise InputError(f"{owner}.{name} must be a finite number > 0 (got {v!r})")
+
+
+@contextmanager
+def gmsh_session(model_name: str):
+    """Initialise gmsh quietly, add a model, and always finalise (builders are re-entrant
+    one after another in one process; do not call a builder inside an open gmsh session)."""
+    gmsh.initialize([], False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add(model_name)
+        yield gmsh.model
+    finally:
+        gmsh.finalize()
+
+
+# ---- 2D meridian profiles (x = radius, y = axial) ---------------------------------------
+def _half_ellipse_disk(yc: float, r: float, a: float) -> int:
+    """Elliptic disk centred on the axis at y = yc, radial semi-axis r, axial semi-axis a."""
+    if r >= a:
+        return occ.addDisk(0, yc, 0, r, a)
+    d = occ.addDisk(0, yc, 0, a, r)
+    occ.rotate([(2, d)], 0, yc, 0, 0, 0, 1, math.pi / 2)
+    return d
+
+
+def capsule_profile(r: float, a_bottom: float, a_top: float, y0: float, length: float) -> list:
+    """Full (both-sided) section of a cylinder of radius r from y0 to y0+length closed by
+    half-ellipsoid domes of axial heights a_bottom, a_top (0 = flat end). Returns dimTags."""
+    parts = [(2, occ.addRectangle(-r, y0, 0, 2 * r, length))]
+    if a_bottom > 0:
+        parts.append((2, _half_ellipse_disk(y0, r, a_bottom)))
+    if a_top > 0:
+        parts.append((2, _half_ellipse_disk(y0 + length, r, a_top)))
+    if len(parts) == 1:
+        return parts
+    out, _ = occ.fuse(parts[:1], parts[1:])
+    return out
+
+
+def shell_profile(r: float, t: float, a_bottom: float, a_top: float, y0: float, length: float) -> list:
+    """Section of a thick-walled capsule: outer (r, a) minus inner (r - t, a - t) capsule.
+    A flat end (a = 0) becomes a flat bulkhead of thickness t."""
+    outer = capsule_profile(r, a_bottom, a_top, y0, length)
+    ab_i = a_bottom - t if a_bottom > 0 else 0.0
+    at_i = a_top - t if a_top > 0 else 0.0
+    y0_i = y0 if a_bottom > 0 else y0 + t
+    len_i = length - (0 if a_bottom > 0 else t) - (0 if a_top > 0 else t)
+    inner = capsule_profile(r - t, ab_i, at_i, y0_i, len_i)
+    out, _ = occ.cut(outer, inner)
+    return out
+
+
+def polygon(points) -> list:
+    """Plane surface through the given (x, y) points (closed automatically)."""
+    pts = [occ.addPoint(x, y, 0) for x, y in points]
+    lines = [occ.addLine(pts[i], pts[(i + 1) % len(pts)]) for i in range(len(pts))]
+    return [(2, occ.addPlaneSurface([occ.addCurveLoop(lines)]))]
+
+
+def half(profile: list) -> list:
+    """Keep the x >= 0 half of a profile (the meridian section to revolve)."""
+    big = 1e4
+    out, _ = occ.intersect(profile, [(2, occ.addRectangle(0, -big, 0, big, 2 * big))])
+    return out
+
+
+def revolve_to_z(profile: list, axis_xy=(0.0, 0.0), z_shift: float = 0.0) -> list:
+    """Revolve a meridian profile (xy plane, axis = y) by 2 pi, map y -> z, move the axis to
+    axis_xy and shift by z_shift. Returns the volume dimTags."""
+    out = occ.revolve(profile, 0, 0, 0, 0, 1, 0, 2 * math.pi)
+    vols = [d for d in out if d[0] == 3]
+    occ.remove(profile, recursive=True)  # the leftover generating faces
+    occ.rotate(vols, 0, 0, 0, 1, 0, 0, math.pi / 2)
+    occ.translate(vols, axis_xy[0], axis_xy[1], z_shift)
+    return vols
+
+
+# ---- patch tools ---------------------------------------------------------------------------
+@dataclass
+class Tool:
+    """A tool solid imprinting a patch; faces of the structure's boundary whose bounding
+    box lies inside ``bbox`` become the patch ``name`` (``name=None``: a split only)."""
+
+    name: str | None
+    dimtag: tuple
+    bbox: tuple
+
+
+def radial_box(name, axis_xy, phi: float, rho0: float, rho1: float, z0: float, z1: float, w: float) -> Tool:
+    """Box spanning radii [rho0, rho1] along azimuth phi (rad) about a vertical axis at
+    axis_xy, tangential half-width w, heights [z0, z1]."""
+    b = occ.addBox(rho0, -w, z0, rho1 - rho0, 2 * w, z1 - z0)
+    occ.rotate([(3, b)], 0, 0, 0, 0, 0, 1, phi)
+    occ.translate([(3, b)], axis_xy[0], axis_xy[1], 0)
+    return Tool(name, (3, b), occ.getBoundingBox(3, b))
+
+
+def wall_patch(name, axis_xy, phi: float, z: float, r_surface: float, r_other: float, w: float, h: float) -> Tool:
+    """Tool imprinting a (2w x 2h) patch on the cylindrical wall surface of radius r_surface
+    (r_other = radius of the wall's other surface) at azimuth phi and height z, cutting only
+    into the wall (never through it)."""
+    if r_surface > r_other:  # outer surface: cut from inside the wall outwards
+        lo, hi = r_other, math.sqrt(r_surface ** 2 - w ** 2)
+        if hi <= lo:
+            raise InputError(f"patch {name}: half-width {w} m too wide for a wall of radius {r_surface} m")
+        return radial_box(name, axis_xy, phi, 0.5 * (lo + hi), r_surface + 1.0, z - h, z + h, w)
+    lo, hi = r_surface, math.sqrt(r_other ** 2 - w ** 2)  # inner surface
+    if hi <= lo:
+        raise InputError(f"patch {name}: half-width {w} m too wide for a wall of radius {r_surface} m")
+    return radial_box(name, axis_xy, phi, max(r_surface - 1.0, 0.0), 0.5 * (lo + hi), z - h, z + h, w)
+
+
+def cylinder_tool(name, center, radius: float, z0: float, z1: float) -> Tool:
+    """Vertical cylinder (disk patches on horizontal faces)."""
+    c = occ.addCylinder(center[0], center[1], z0, 0, 0, z1 - z0, radius)
+    return Tool(name, (3, c), occ.getBoundingBox(3, c))
+
+
+def box_tool(name, lo, hi) -> Tool:
+    b = occ.addBox(lo[0], lo[1], lo[2], hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2])
+    return Tool(name, (3, b), occ.getBoundingBox(3, b))
+
+
+def plane_cut(z: float, half_size: float = 1e3) -> Tool:
+    """Horizontal plane at height z (splits walls, e.g. at a fill level)."""
+    s = occ.addRectangle(-half_size, -half_size, z, 2 * half_size, 2 * half_size)
+    return Tool(None, (2, s), occ.getBoundingBox(2, s))
+
+
+def imprint(groups: dict[str, list], tools: list[Tool]) -> dict[str, list]:
+    """Fragment the structural volumes (group name -> volume dimTags) with the tools;
+    return the new volume dimTags per group, all tool remnants outside removed."""
+    order = [(g, d) for g, ds in groups.items() for d in ds]
+    obj = [d for _, d in order]
+    out, outmap = occ.fragment(obj, [t.dimtag for t in tools])
+    new: dict[str, list] = {g: [] for g in groups}
+    for (g, _), children in zip(order, outmap[: len(order)]):
+        new[g].extend(c for c in children if c not in new[g])
+    occ.synchronize()
+    keep = {d for ds in new.values() for d in ds}
+    extra = [d for d in gmsh.model.getEntities(3) if d not in keep]
+    if extra:
+        occ.remove(extra, recursive=True)
+        occ.synchronize()
+    faces = set(gmsh.model.getBoundary(list(keep), combined=False, oriented=False))
+    loose = [d for d in gmsh.model.getEntities(2) if d not in faces]
+    if loose:
+        occ.remove(loose, recursive=True)
+    occ.synchronize()
+    return new
+
+
+def boundary_faces(vols: list) -> list[int]:
+    """Tags of the faces on the outer boundary of the union of the volumes."""
+    return sorted({abs(t) for d, t in gmsh.model.getBoundary(vols, combined=True, oriented=False) if d == 2})
+
+
+def faces_inside(faces: list[int], bbox, tol: float = 1e-3) -> list[int]:
+    """Faces whose bounding box lies inside bbox (xmin, ymin, zmin, xmax, ymax, zmax) +- tol."""
+    lo, hi = np.array(bbox[:3]) - tol, np.array(bbox[3:]) + tol
+    sel = []
+    for f in faces:
+        b = np.array(gmsh.model.getBoundingBox(2, f))
+        if np.all(b[:3] >= lo) and np.all(b[3:] <= hi):
+            sel.append(f)
+    return sel
+
+
+def surface_area(faces: list[int]) -> float:
+    return float(sum(occ.getMass(2, f) for f in faces))
+
+
+def refine_faces(faces: list[int], size: float) -> None:
+    """Impose a mesh size at the points bounding the given faces."""
+    pts = gmsh.model.getBoundary([(2, f) for f in faces], combined=False, oriented=False, recursive=True)
+    gmsh.model.mesh.setSize(list({(0, abs(t)) for d, t in pts if d == 0}), size)
+
+
+def add_physical(dim: int, name: str, tags: list[int]) -> int:
+    if not tags:
+        raise InputError(f"physical group {name!r}: no entities selected (geometry parameters?)")
+    tag = gmsh.model.addPhysicalGroup(dim, sorted(set(tags)))
+    gmsh.model.setPhysicalName(dim, tag, name)
+    return tag
+
+
+def mesh_and_write(path: Path, mesh_size: float) -> int:
+    """Mesh in 3D (P1 tets, sizes <= mesh_size) and write ``path`` atomically. Returns node count."""
+    gmsh.option.setNumber("Mesh.MeshSizeMax", mesh_size)
+    gmsh.option.setNumber("Mesh.MeshSizeMin", 0.0)
+    gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 1)
+    gmsh.option.setNumber("Mesh.Optimize", 1)
+    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+    gmsh.model.mesh.generate(3)
+    n_nodes = len(gmsh.model.mesh.getNodes()[0])
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp.msh")
+    try:
+        gmsh.write(str(tmp))
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+    return n_nodes
+
+
+def group_volume(vols: list) -> float:
+    return float(sum(occ.getMass(3, t) for _, t in vols))

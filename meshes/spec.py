@@ -1,0 +1,219 @@
+"""What a geometry builder hands to fem/: a gmsh ``.msh`` plus a JSON sidecar (this module).
+
+Contract (DESIGN.md, issue 3). Units SI throughout: m, kg, Pa, kg/m^3, kg m^2.
+
+- ``volumes``: physical VOLUME group name -> :class:`Material`.
+- ``patches``: a physical SURFACE group (dim 2) named ``Patch.name``, tied by a rigid
+  spider (Nastran RBE2) to one 6-DOF reference point at ``Patch.ref_point``; the point's
+  DOFs are labelled ``"<name>:Tx" ... "<name>:Rz"``. Interfaces, hold-downs, engine
+  mounts and load-recovery stations are all patches.
+- ``point_masses``: lumped mass (with inertia about the patch reference point) at the
+  reference point of a patch.
+- ``smeared_masses``: non-structural mass spread uniformly (per unit area) over a
+  physical surface group (propellant on the wetted wall).
+- ``clamped``: surface groups fixed to ground (pad pedestal bottoms); empty for free-free.
+
+JSON sidecar layout (``format = "liftoff-geometry"``, ``version = 1``, ``units = "SI"``):
+the fields above as plain JSON; ``msh_path`` is stored relative to the sidecar's folder
+when the mesh lies in or below it, and is returned absolute by :meth:`Geometry.load`.
+Optional extras: ``group_volumes`` (CAD volume of each physical volume group, m^3, from
+``gmsh.model.occ.getMass``) and ``mesh_nodes`` (node count of the written mesh).
+"""
+from __future__ import annotations
+
+import json
+import os
+import re
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from transient.errors import InputError
+
+FORMAT = "liftoff-geometry"
+VERSION = 1
+_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_.\-]*$")
+
+
+def _check_name(kind: str, name) -> None:
+    if not isinstance(name, str) or not _NAME.match(name):
+        raise InputError(f"{kind} name {name!r} is not a plain identifier (letters, digits, _ . -)")
+
+
+@dataclass
+class Material:
+    """Linear isotropic elastic material: E (Pa), nu (-), rho (kg/m^3)."""
+
+    name: str
+    E: float
+    nu: float
+    rho: float
+
+    def __post_init__(self) -> None:
+        self.E, self.nu, self.rho = float(self.E), float(self.nu), float(self.rho)
+        if not (np.isfinite(self.E) and self.E > 0):
+            raise InputError(f"material {self.name!r}: E must be > 0 Pa (got {self.E})")
+        if not (np.isfinite(self.nu) and -1.0 < self.nu < 0.5):
+            raise InputError(f"material {self.name!r}: nu must be in (-1, 0.5) (got {self.nu})")
+        if not (np.isfinite(self.rho) and self.rho > 0):
+            raise InputError(f"material {self.name!r}: rho must be > 0 kg/m^3 (got {self.rho})")
+
+
+@dataclass
+class Patch:
+    """Surface group ``name`` tied rigidly to one 6-DOF reference point ``ref_point`` (m)."""
+
+    name: str
+    ref_point: np.ndarray
+
+    def __post_init__(self) -> None:
+        _check_name("patch", self.name)
+        self.ref_point = np.asarray(self.ref_point, dtype=float).reshape(-1)
+        if self.ref_point.shape != (3,) or not np.all(np.isfinite(self.ref_point)):
+            raise InputError(f"patch {self.name!r}: ref_point must be 3 finite coordinates (m)")
+
+
+@dataclass
+class PointMass:
+    """Lumped mass (kg) and inertia (kg m^2, about the reference point of ``patch``)."""
+
+    name: str
+    patch: str
+    mass: float
+    inertia: np.ndarray = field(default_factory=lambda: np.zeros((3, 3)))
+
+    def __post_init__(self) -> None:
+        self.mass = float(self.mass)
+        self.inertia = np.asarray(self.inertia, dtype=float)
+        if not (np.isfinite(self.mass) and self.mass > 0):
+            raise InputError(f"point mass {self.name!r}: mass must be > 0 kg (got {self.mass})")
+        if self.inertia.shape != (3, 3) or not np.allclose(self.inertia, self.inertia.T):
+            raise InputError(f"point mass {self.name!r}: inertia must be a symmetric 3x3 (kg m^2)")
+        if np.linalg.eigvalsh(self.inertia).min() < -1e-9 * max(1.0, np.abs(self.inertia).max()):
+            raise InputError(f"point mass {self.name!r}: inertia is not positive semi-definite")
+
+
+@dataclass
+class SmearedMass:
+    """Non-structural mass (kg) spread uniformly over the surface group ``surface``."""
+
+    surface: str
+    mass: float
+
+    def __post_init__(self) -> None:
+        self.mass = float(self.mass)
+        if not (np.isfinite(self.mass) and self.mass >= 0):
+            raise InputError(f"smeared mass on {self.surface!r}: mass must be >= 0 kg (got {self.mass})")
+
+
+@dataclass
+class Geometry:
+    """A meshed component: ``.msh`` path, materials per volume group, patches and masses (SI)."""
+
+    name: str
+    msh_path: str
+    volumes: dict[str, Material]
+    patches: list[Patch] = field(default_factory=list)
+    point_masses: list[PointMass] = field(default_factory=list)
+    smeared_masses: list[SmearedMass] = field(default_factory=list)
+    clamped: list[str] = field(default_factory=list)
+    group_volumes: dict[str, float] = field(default_factory=dict)  # CAD volumes (m^3)
+    mesh_nodes: int = 0
+
+    def __post_init__(self) -> None:
+        self.msh_path = str(self.msh_path)
+        if not self.volumes:
+            raise InputError(f"geometry {self.name!r}: no volume groups")
+        names = [p.name for p in self.patches]
+        dup = {n for n in names if names.count(n) > 1}
+        if dup:
+            raise InputError(f"geometry {self.name!r}: duplicate patch names {sorted(dup)}")
+        for pm in self.point_masses:
+            if pm.patch not in names:
+                raise InputError(f"point mass {pm.name!r}: patch {pm.patch!r} not in geometry {self.name!r}")
+
+    def patch(self, name: str) -> Patch:
+        """The patch called ``name`` (InputError if absent)."""
+        for p in self.patches:
+            if p.name == name:
+                return p
+        raise InputError(f"geometry {self.name!r} has no patch {name!r}")
+
+    def nominal_mass(self) -> float:
+        """Sum of rho * CAD volume over volume groups + smeared + point masses (kg)."""
+        missing = [g for g in self.volumes if g not in self.group_volumes]
+        if missing:
+            raise InputError(f"geometry {self.name!r}: no CAD volume recorded for groups {missing}")
+        structural = sum(m.rho * self.group_volumes[g] for g, m in self.volumes.items())
+        return structural + sum(s.mass for s in self.smeared_masses) + sum(p.mass for p in self.point_masses)
+
+    # ---- JSON sidecar ----------------------------------------------------------------
+    def to_dict(self, base: Path | None = None) -> dict:
+        msh = Path(self.msh_path)
+        if base is not None:
+            try:
+                msh = Path(os.path.relpath(msh.resolve(), base.resolve()))
+                if msh.parts and msh.parts[0] == "..":
+                    msh = Path(self.msh_path).resolve()
+            except ValueError:  # different drive
+                msh = Path(self.msh_path).resolve()
+        return {
+            "format": FORMAT, "version": VERSION, "units": "SI (m, kg, Pa, kg/m^3, kg m^2)",
+            "name": self.name, "msh_path": str(msh),
+            "volumes": {g: {"name": m.name, "E": m.E, "nu": m.nu, "rho": m.rho} for g, m in self.volumes.items()},
+            "patches": [{"name": p.name, "ref_point": p.ref_point.tolist()} for p in self.patches],
+            "point_masses": [{"name": p.name, "patch": p.patch, "mass": p.mass, "inertia": p.inertia.tolist()}
+                             for p in self.point_masses],
+            "smeared_masses": [{"surface": s.surface, "mass": s.mass} for s in self.smeared_masses],
+            "clamped": list(self.clamped),
+            "group_volumes": dict(self.group_volumes),
+            "mesh_nodes": int(self.mesh_nodes),
+        }
+
+    def save(self, path) -> Path:
+        """Write the JSON sidecar atomically (temp file + os.replace); returns the path."""
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        text = json.dumps(self.to_dict(path.parent), indent=1)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
+        try:
+            with os.fdopen(fd, "w") as f:
+                f.write(text)
+            os.replace(tmp, path)
+        except BaseException:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+            raise
+        return path
+
+    @classmethod
+    def load(cls, path) -> "Geometry":
+        """Read a JSON sidecar written by :meth:`save` (``msh_path`` returned absolute)."""
+        path = Path(path)
+        try:
+            d = json.loads(path.read_text())
+        except (OSError, json.JSONDecodeError) as e:
+            raise InputError(f"cannot read geometry sidecar {path}: {e}") from None
+        if not isinstance(d, dict) or d.get("format") != FORMAT:
+            raise InputError(f"{path}: not a {FORMAT} file")
+        if d.get("version") != VERSION:
+            raise InputError(f"{path}: unsupported {FORMAT} version {d.get('version')!r}")
+        try:
+            msh = Path(d["msh_path"])
+            if not msh.is_absolute():
+                msh = (path.parent / msh).resolve()
+            return cls(
+                name=d["name"], msh_path=str(msh),
+                volumes={g: Material(**m) for g, m in d["volumes"].items()},
+                patches=[Patch(p["name"], np.array(p["ref_point"])) for p in d["patches"]],
+                point_masses=[PointMass(p["name"], p["patch"], p["mass"], np.array(p["inertia"]))
+                              for p in d["point_masses"]],
+                smeared_masses=[SmearedMass(s["surface"], s["mass"]) for s in d["smeared_masses"]],
+                clamped=list(d["clamped"]),
+                group_volumes={g: float(v) for g, v in d.get("group_volumes", {}).items()},
+                mesh_nodes=int(d.get("mesh_nodes", 0)),
+            )
+        except (KeyError, TypeError) as e:
+            raise InputError(f"{path}: malformed {FORMAT} file ({e!r})") from None
