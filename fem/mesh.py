@@ -32,11 +32,29 @@ class TaggedMesh:
     path: str
 
 
+def _gmsh_is_initialized(gmsh) -> bool:
+    """gmsh 4.8 has no isInitialized(): before initialize() model.list() is empty, after
+    finalize() it raises."""
+    import os
+
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "w") as null:   # hide gmsh's "not initialized" message
+            os.dup2(null.fileno(), 2)
+            try:
+                return len(gmsh.model.list()) > 0
+            except Exception:
+                return False
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
 def _read_rank0(path: str):
     """On the reading rank: nodes, cells per volume group, facets per surface group."""
     import gmsh
 
-    was_initialized = len(gmsh.model.list()) > 0   # gmsh 4.8 has no isInitialized()
+    was_initialized = _gmsh_is_initialized(gmsh)
     if not was_initialized:
         gmsh.initialize(["-nopopup"])
     gmsh.option.setNumber("General.Terminal", 0)

@@ -1,0 +1,98 @@
+"""Off-screen PNG pictures of deformed shapes (mode shapes, static or recovered fields).
+
+Plain arrays in (nodes (n, 3) m, cells, meshio cell type, displacement (n, 3)), so the
+workflow can draw Craig-Bampton-recovered fields too. The undeformed outline (feature
+edges) is drawn in grey, the deformed surface coloured by |u|, with the title and the
+displacement scale factor written on the picture. Works without a display.
+
+Import this module (it imports pyvista) before dolfinx: the other order aborts the
+process when a scalar bar is drawn (FENICSX-NOTES.md).
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
+import pyvista  # noqa: E402
+
+pyvista.OFF_SCREEN = True
+
+from transient.errors import InputError  # noqa: E402
+
+_VTK_TYPES = {"tetra": 10, "tetra10": 24, "triangle": 5, "triangle6": 22, "hexahedron": 12,
+              "quad": 9, "line": 3, "wedge": 13}
+
+
+def auto_scale(nodes: np.ndarray, displacement: np.ndarray, fraction: float = 0.1) -> float:
+    """Scale factor that makes the largest displacement ``fraction`` of the model size."""
+    size = float(np.linalg.norm(nodes.max(axis=0) - nodes.min(axis=0)))
+    umax = float(np.linalg.norm(displacement, axis=1).max())
+    return fraction * size / umax if umax > 0 else 1.0
+
+
+def grid(nodes: np.ndarray, cells: np.ndarray, cell_type: str) -> "pyvista.UnstructuredGrid":
+    if cell_type not in _VTK_TYPES:
+        raise InputError(f"snapshot: cell type {cell_type!r} not supported ({', '.join(_VTK_TYPES)})")
+    cells = np.asarray(cells, np.int64)
+    k = cells.shape[1]
+    conn = np.hstack([np.full((cells.shape[0], 1), k), cells]).ravel()
+    types = np.full(cells.shape[0], _VTK_TYPES[cell_type], dtype=np.uint8)
+    return pyvista.UnstructuredGrid(conn, types, np.asarray(nodes, float))
+
+
+def snapshot_png(path, nodes: np.ndarray, cells: np.ndarray, cell_type: str, displacement: np.ndarray,
+                 title: str = "", scale: float | None = None, window_size=(1024, 768),
+                 view: str = "iso") -> Path:
+    """Write a PNG of the deformed shape; returns the path. ``scale=None``: auto (10 % of size)."""
+    path = Path(path)
+    if path.suffix.lower() != ".png":
+        raise InputError(f"snapshot: {str(path)!r} must end in .png")
+    nodes = np.asarray(nodes, float)
+    u = np.asarray(displacement, float).reshape(-1, 3)
+    if u.shape[0] != nodes.shape[0]:
+        raise InputError(f"snapshot: displacement has {u.shape[0]} rows, mesh has {nodes.shape[0]} nodes")
+    if not np.all(np.isfinite(u)):
+        raise InputError("snapshot: displacement contains NaN or inf")
+    if scale is None:
+        scale = auto_scale(nodes, u)
+    base = grid(nodes, cells, cell_type)
+    deformed = base.copy()
+    deformed.points = nodes + scale * u
+    deformed.point_data["|u| (m)"] = np.linalg.norm(u, axis=1)
+    pl = pyvista.Plotter(off_screen=True, window_size=list(window_size))
+    pl.set_background("white")
+    pl.add_mesh(base.extract_feature_edges(), color="grey", line_width=1)
+    pl.add_mesh(deformed, scalars="|u| (m)", cmap="viridis", show_edges=False,
+                scalar_bar_args={"title": "|u| (m)", "color": "black"})
+    pl.add_text(title, position="upper_left", font_size=12, color="black")
+    pl.add_text(f"displacement scale x {scale:.3g}", position="lower_left", font_size=10, color="black")
+    if view == "iso":
+        pl.view_isometric()
+    elif view in ("xy", "xz", "yz"):
+        getattr(pl, f"view_{view}")()
+    else:
+        raise InputError(f"snapshot: view {view!r} must be iso, xy, xz or yz")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.stem, suffix=".tmp.png")
+    os.close(fd)
+    try:
+        pl.screenshot(tmp)
+        os.replace(tmp, path)
+    finally:
+        pl.close()
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return path
+
+
+def snapshot_mode(path, model, modes, j: int, scale: float | None = None) -> Path | None:
+    """Picture of mode ``j`` of an FE model (rank 0 draws; other ranks return None)."""
+    u = model.nodal_displacement(modes.shapes[:, j])
+    if model.comm.rank != 0:
+        return None
+    title = f"{model.name}: mode {j + 1}, {modes.freq_hz[j]:.4g} Hz"
+    return snapshot_png(path, model.nodes, model.cells, model.cell_type, u, title, scale)
