@@ -166,3 +166,17 @@ def spider_component(name, K, M, nodes, spiders: dict) -> Component:
                      label_dofs=n_free + np.arange(len(labels)), points=tuple(spiders),
                      point_coords=np.array([ref for _, ref in spiders.values()], float),
                      nodes=nodes, field_map=T)
+
+
+# ----------------------------------------------------------------------------- helpers
+def six_labels(point: str) -> list[str]:
+    """The six DOF labels ``point:Tx`` ... ``point:Rz`` of a point."""
+    return [f"{point}:{c}" for c in COMPONENTS]
+
+
+def chain_component(name, nodes, first_index=0, **section) -> Component:
+    """A frame of beams between consecutive ``nodes``, points named n<first_index + i>."""
+    nodes = np.asarray(nodes, float)
+    n = nodes.shape[0]
+    return frame_component(name, nodes, [(i, i + 1) for i in range(n - 1)],
+                           [f"n{first_index + i}" for i in range(n)], **section)
