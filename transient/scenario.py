@@ -27,7 +27,7 @@ INITIAL_MODES = ("static", "zero", "given")
 
 # keys allowed in each table; anything else is an InputError (a typo must not be ignored)
 _TOP = {"title", "description", "bodies", "time", "gravity", "contact", "force",
-        "modal_force", "initial", "output"}
+        "modal_force", "initial", "output", "recovery"}
 _BODIES = {"a", "b"}
 _TIME = {"t_end", "h", "t0", "method", "tol", "max_iter"}
 _GRAVITY = {"accel"}
@@ -37,6 +37,7 @@ _FORCE = {"body", "label", "value", "time", "csv", "scale"}
 _MODAL_FORCE = {"body", "time", "values", "csv", "scale"}
 _INITIAL = {"mode", "q_a", "v_a", "q_b", "v_b"}
 _OUTPUT = {"a", "b", "keep_modal"}
+_RECOVERY = {"name", "body", "file"}
 
 
 @dataclass
@@ -234,7 +235,7 @@ def _contacts(where: _Where, spec: Any, body_a: ModalBody, body_b: ModalBody) ->
         if body_b.is_ground:
             if c.get("labels_b"):
                 raise (w / "labels_b").error("body b is ground: omit labels_b (ground DOFs are fixed at zero)")
-            labels_b: tuple[str, ...] = ()
+            labels_b: tuple = (None,) * len(labels_a)  # ground: fixed at zero
         else:
             if "labels_b" not in c:
                 raise w.error("missing required key 'labels_b'")
@@ -388,6 +389,55 @@ def _outputs(where: _Where, spec: Any, body_a: ModalBody, body_b: ModalBody) -> 
     return outputs, keep
 
 
+def _recoveries(where: _Where, spec: Any, bodies: dict[str, ModalBody], base: Path) -> list:
+    """[[recovery]]: linear output matrices from an .npz file (labels, disp/vel/acc, optional units)."""
+    from . import Recovery
+
+    if not isinstance(spec, list):
+        raise where.error("expected [[recovery]] tables")
+    out, names = [], set()
+    for i, raw in enumerate(spec):
+        w = where / f"[{i}]"
+        r = _table(w, raw, _RECOVERY, required=("name", "body", "file"))
+        name = _string(w / "name", r["name"])
+        if name in names:
+            raise (w / "name").error(f"duplicate recovery name {name!r}")
+        names.add(name)
+        key = _body_key(w / "body", r["body"], bodies)
+        path = base / _string(w / "file", r["file"])
+        wf = w / "file"
+        if not path.is_file():
+            raise wf.error(f"recovery file not found: {str(path)!r}")
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                data = {k: z[k] for k in z.files}
+        except Exception as exc:  # not an npz, pickled content ...
+            raise wf.error(f"{path.name} cannot be read as .npz: {exc}") from None
+        unknown = sorted(set(data) - {"labels", "disp", "vel", "acc", "units"})
+        if unknown:
+            raise wf.error(f"{path.name}: unknown array {unknown[0]!r} (allowed: labels, disp, vel, acc, units)")
+        if "labels" not in data:
+            raise wf.error(f"{path.name}: missing array 'labels'")
+        labels = [str(x) for x in np.atleast_1d(data["labels"])]
+        n = bodies[key].n_modes
+        mats = {}
+        for kind in ("disp", "vel", "acc"):
+            if kind in data:
+                m = np.asarray(data[kind], dtype=float)
+                if m.shape != (len(labels), n):
+                    raise wf.error(f"{path.name}: {kind} has shape {m.shape}, expected ({len(labels)}, {n}) "
+                                   f"(labels x modes of body {key})")
+                if not np.all(np.isfinite(m)):
+                    raise wf.error(f"{path.name}: {kind} contains NaN or inf")
+                mats[kind] = m
+        units = str(data["units"]) if "units" in data else "SI"
+        try:
+            out.append(Recovery(name, key, labels, units=units, **mats))
+        except InputError as exc:
+            raise wf.error(str(exc)) from None
+    return out
+
+
 # ---------------------------------------------------------------- entry points
 def parse_scenario(data: dict, base: Path, source: str = "scenario", *, method: str | None = None,
                    progress: bool = True) -> Scenario:
@@ -429,10 +479,11 @@ def parse_scenario(data: dict, base: Path, source: str = "scenario", *, method: 
 
     initial = _initial(top / "initial", data.get("initial", {}), body_a, body_b)
     outputs, keep_modal = _outputs(top / "output", data.get("output", {}), body_a, body_b)
+    recoveries = _recoveries(top / "recovery", data.get("recovery", []), bodies, base)
     try:
         problem = TransientProblem(body_a, body_b, contacts, forcing, t_end, h=h, t0=t0, method=meth,
                                    tol=tol, max_iter=max_iter, initial=initial, outputs=outputs,
-                                   keep_modal=keep_modal, progress=progress)
+                                   recoveries=recoveries, keep_modal=keep_modal, progress=progress)
     except InputError as exc:
         raise top.error(str(exc)) from None
     return Scenario(path=base / source, title=title, problem=problem, body_files=files)

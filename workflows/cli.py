@@ -60,10 +60,11 @@ def _add_transient(sub: argparse._SubParsersAction) -> None:
 
 
 def _run_transient(args: argparse.Namespace) -> int:
-    from transient import solve
     from transient.scenario import load_scenario
 
     scenario = load_scenario(args.scenario, method=args.method, progress=not args.no_progress)
+    from transient import solve
+
     out = _prepare_out(args.out)
     started = time.perf_counter()
     result = solve(scenario.problem)
@@ -86,8 +87,8 @@ def summary(scenario, result, path: Path, wall: float) -> str:
     for c in result.contact_summary():
         sep = "-" if c["separation_time"] is None else f"{c['separation_time']:.6g}"
         rel = "never" if c["release_time"] == float("inf") else f"{c['release_time']:.6g}"
-        lines.append(f"  {c['name']:<16}{rel:>12}{sep:>16}{c['peak_compression']:>22.6g}"
-                     f"{c['peak_tension']:>18.6g}")
+        lines.append(f"  {c['name']:<16}{rel:>12}{sep:>16}{c['peak_compression'] + 0.0:>22.6g}"
+                     f"{c['peak_tension'] + 0.0:>18.6g}")
     lines.append(f"  results  {path}")
     return "\n".join(lines)
 

@@ -1,0 +1,197 @@
+"""Bad scenario input: exit status 2, one line naming the culprit, no results file, no traceback.
+
+Each case starts from the valid fixture scenario (conftest.base_scenario, which is shown to
+run in test_cli_runs.py) and breaks exactly one thing.
+"""
+from __future__ import annotations
+
+import copy
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from workflows.cli import main
+
+from .conftest import base_scenario, write_scenario
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def _set(path: str, value):
+    """Mutation: set a key given as 'table.key' or 'array[i].key' (value None deletes it)."""
+    def mutate(d: dict) -> None:
+        node = d
+        parts = path.split(".")
+        for part in parts[:-1]:
+            if "[" in part:
+                name, idx = part[:-1].split("[")
+                node = node[name][int(idx)]
+            else:
+                node = node.setdefault(part, {})
+        last = parts[-1]
+        if "[" in last:
+            name, idx = last[:-1].split("[")
+            node[name][int(idx)] = value
+        elif value is None:
+            node.pop(last)
+        else:
+            node[last] = value
+    return mutate
+
+
+def _files(write: dict[str, str]):
+    def mutate(d: dict, directory: Path) -> None:
+        for name, text in write.items():
+            (directory / name).write_text(text)
+    return mutate
+
+
+NAN = float("nan")
+
+# (id, mutation of the scenario dict, extra files to write, substring the message must contain)
+CASES = [
+    ("unknown-top-key", _set("contacts", [1]), None, "unknown key 'contacts'"),
+    ("unknown-contact-key", _set("contact[0].stifness", 1.0), None, "contact[0]: unknown key 'stifness'"),
+    ("unknown-time-key", _set("time.dt", 1e-4), None, "time: unknown key 'dt'"),
+    ("missing-t_end", _set("time.t_end", None), None, "missing required key 't_end'"),
+    ("t_end-string", _set("time.t_end", "0.02"), None, "time.t_end: expected a number, got str"),
+    ("t_end-negative", _set("time.t_end", -1.0), None, "time.t_end: must be greater than t0"),
+    ("h-negative", _set("time.h", -1e-4), None, "time.h: must be positive"),
+    ("h-nan", _set("time.h", NAN), None, "time.h: value is NaN"),
+    ("method-unknown", _set("time.method", "newmark"), None, "time.method: must be one of"),
+    ("body-file-missing", _set("bodies.a", "nowhere.npz"), None, "bodies.a: body file not found"),
+    ("body-a-ground", _set("bodies.a", "ground"), None, "bodies.a: body a cannot be 'ground'"),
+    ("body-file-corrupt", _set("bodies.b", "corrupt.npz"), {"corrupt.npz": "not a zip"}, "cannot be read"),
+    ("unknown-label-contact", _set("contact[0].labels_a", ["base:Tx", "base:Ty"]), None,
+     "contact[0] 'post'.labels_a[1]: unknown DOF label 'base:Ty' on body 'vehicle'"),
+    ("unknown-label-pad", _set("contact[0].labels_b", ["post:Tx", "foot:Tz"]), None,
+     "unknown DOF label 'foot:Tz' on body 'pad'"),
+    ("malformed-label", _set("contact[0].labels_a", ["base:Tx", "base_Tz"]), None, "malformed DOF label 'base_Tz'"),
+    ("unknown-label-force", _set("force[1].label", "tip:Tx"), None, "force[1].label[0]: unknown DOF label 'tip:Tx'"),
+    ("unknown-label-output", _set("output.a", ["top:Tz", "top:Rz"]), None, "output.a[1]: unknown DOF label 'top:Rz'"),
+    ("labels-unequal", _set("contact[0].labels_b", ["post:Tz"]), None, "has 1 labels but labels_a has 2"),
+    ("stiffness-negative", _set("contact[0].stiffness", [1e8, -1e8]), None, "stiffness[1]: negative value -1e+08"),
+    ("stiffness-scalar-negative", _set("contact[0].stiffness", -5.0), None, "stiffness: negative value -5"),
+    ("stiffness-nan", _set("contact[0].stiffness", [1e8, NAN]), None, "stiffness[1]: value is NaN"),
+    ("stiffness-shape", _set("contact[0].stiffness", [1e8, 1e8, 1e8]), None, "stiffness: has 3 entries, expected 2"),
+    ("stiffness-missing", _set("contact[0].stiffness", None), None, "missing required key 'stiffness'"),
+    ("stiffness-and-rigid", _set("contact[0].rigid", True), None, "a rigid contact takes no stiffness"),
+    ("gap-negative", _set("contact[0].gap", -0.001), None, "gap: negative value"),
+    ("release-nan", _set("contact[0].release_time", NAN), None, "release_time: value is NaN"),
+    ("axial-out-of-range", _set("contact[0].axial", 2), None, "axial: 2 out of range"),
+    ("normal-sign", _set("contact[0].normal_sign", 0.5), None, "normal_sign: must be 1 or -1"),
+    ("gravity-nan", _set("gravity.accel", [0.0, NAN, -9.81]), None, "gravity.accel[1]: value is NaN"),
+    ("gravity-shape", _set("gravity.accel", [0.0, -9.81]), None, "gravity.accel: has 2 entries, expected 3"),
+    ("force-value-nan", _set("force[1].value", NAN), None, "force[1] 'top:Tx'.value: value is NaN"),
+    ("force-body", _set("force[1].body", "c"), None, "force[1].body: must be 'a' or 'b'"),
+    ("csv-missing", _set("force[0].csv", "nothrust.csv"), None, "CSV file not found"),
+    ("csv-nan", None, {"thrust.csv": "time,force\n0,0\n0.01,nan\n"}, "thrust.csv line 3: NaN or inf"),
+    ("csv-text", None, {"thrust.csv": "time,force\n0,0\n0.01,lots\n"}, "thrust.csv line 3: not a number"),
+    ("csv-columns", None, {"thrust.csv": "0,0,1\n0.01,5,1\n"}, "thrust.csv: 3 columns, expected 2"),
+    ("csv-ragged", None, {"thrust.csv": "0,0\n0.01,5,1\n"}, "thrust.csv line 2: 3 columns, expected 2"),
+    ("csv-time-decreasing", None, {"thrust.csv": "0,0\n0.01,5\n0.005,7\n"}, "time is not strictly increasing at entry 2"),
+    ("table-unequal", _set("force[1]", {"body": "a", "label": "top:Tx", "time": [0.0, 0.01, 0.02],
+                                        "value": [0.0, 1.0]}), None, "unequal lengths"),
+    ("table-time-repeated", _set("force[1]", {"body": "a", "label": "top:Tx", "time": [0.0, 0.01, 0.01],
+                                              "value": [0.0, 1.0, 2.0]}), None, "not strictly increasing"),
+    ("table-value-nan", _set("force[1]", {"body": "a", "label": "top:Tx", "time": [0.0, 0.01],
+                                          "value": [0.0, NAN]}), None, "value[1]: value is NaN"),
+    ("initial-mode", _set("initial.mode", "restart"), None, "initial.mode: must be one of"),
+    ("initial-shape", _set("initial", {"mode": "given", "q_a": [0.0, 0.0]}), None,
+     "initial.q_a: has 2 entries, expected 3"),
+    ("initial-nan", _set("initial", {"mode": "given", "v_b": [0.0, NAN]}), None, "initial.v_b[1]: value is NaN"),
+    ("keep-modal-type", _set("output.keep_modal", "yes"), None, "output.keep_modal: expected true or false"),
+]
+
+
+def _break(directory: Path, mutate, files) -> Path:
+    data = copy.deepcopy(base_scenario())
+    if mutate is not None:
+        mutate(data)
+    if files:
+        _files(files)(data, directory)
+    return write_scenario(directory, data)
+
+
+def _assert_clean_failure(code: int, err: str, expect: str, out_dir: Path) -> None:
+    """Exit 2, exactly one error line (warnings, one line each, may precede it), nothing in out_dir."""
+    assert code == 2, err
+    lines = [ln for ln in err.strip().splitlines() if not ln.startswith("liftoff: warning: ")]
+    assert len(lines) == 1, f"expected one line on stderr, got:\n{err}"
+    assert lines[0].startswith("liftoff: error: "), lines[0]
+    assert expect in lines[0], f"{expect!r} not in {lines[0]!r}"
+    assert "Traceback" not in err
+    assert not (out_dir / "results.h5").exists()
+    assert not out_dir.exists() or not any(out_dir.iterdir()), list(out_dir.iterdir())
+
+
+@pytest.mark.parametrize("mutate, files, expect", [c[1:] for c in CASES], ids=[c[0] for c in CASES])
+def test_bad_scenario(case_dir: Path, capsys, mutate, files, expect):
+    scenario = _break(case_dir, mutate, files)
+    out_dir = case_dir / "out"
+    code = main(["transient", str(scenario), "--out", str(out_dir), "--no-progress"])
+    _assert_clean_failure(code, capsys.readouterr().err, expect, out_dir)
+
+
+def test_missing_scenario_file(tmp_path: Path, capsys):
+    code = main(["transient", str(tmp_path / "none.toml"), "--out", str(tmp_path / "out")])
+    _assert_clean_failure(code, capsys.readouterr().err, "scenario file not found", tmp_path / "out")
+
+
+def test_toml_syntax_error(case_dir: Path, capsys):
+    (case_dir / "bad.toml").write_text("[time]\nt_end = = 1\n")
+    code = main(["transient", str(case_dir / "bad.toml"), "--out", str(case_dir / "out")])
+    _assert_clean_failure(code, capsys.readouterr().err, "bad.toml: TOML syntax error", case_dir / "out")
+
+
+def test_body_file_with_nan(case_dir: Path, capsys):
+    """A body file written by another tool with a NaN frequency is refused when loaded."""
+    with np.load(case_dir / "pad.npz") as z:
+        data = {k: z[k] for k in z.files}
+    data["omega"] = np.array([np.nan, 1000.0])
+    np.savez(case_dir / "pad.npz", **data)
+    code = main(["transient", str(_break(case_dir, None, None)), "--out", str(case_dir / "out")])
+    _assert_clean_failure(code, capsys.readouterr().err, "omega contains NaN", case_dir / "out")
+
+
+def test_body_file_wrong_shape(case_dir: Path, capsys):
+    with np.load(case_dir / "vehicle.npz") as z:
+        data = {k: z[k] for k in z.files}
+    data["phi"] = data["phi"][:, :2]          # 3 modes but 2 mode-shape columns
+    np.savez(case_dir / "vehicle.npz", **data)
+    code = main(["transient", str(_break(case_dir, None, None)), "--out", str(case_dir / "out")])
+    _assert_clean_failure(code, capsys.readouterr().err, "vehicle.npz", case_dir / "out")
+
+
+def test_out_is_a_file(case_dir: Path, capsys):
+    (case_dir / "taken").write_text("")
+    code = main(["transient", str(_break(case_dir, None, None)), "--out", str(case_dir / "taken")])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and "not a directory" in err, err
+
+
+def _subprocess(args: list[str], cwd: Path) -> subprocess.CompletedProcess:
+    exe = Path(sys.executable).with_name("liftoff")
+    cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "workflows.cli"]
+    return subprocess.run(cmd + args, cwd=cwd, capture_output=True, text=True, timeout=300)
+
+
+def test_console_script_bad_label(case_dir: Path):
+    """The installed console script itself exits with status 2 and one line (no traceback)."""
+    scenario = _break(case_dir, _set("output.b", ["post:Ty"]), None)
+    proc = _subprocess(["transient", str(scenario), "--out", "out", "--no-progress"], case_dir)
+    _assert_clean_failure(proc.returncode, proc.stderr, "output.b[0]: unknown DOF label 'post:Ty'",
+                          case_dir / "out")
+
+
+def test_fixed_point_divergence_is_an_error(case_dir: Path):
+    """Fixed-point iteration with rho(K_C W) >> 1 (K_C = 1e12 N/m, h = 1e-4 s, 40 kg: K_C h^2/(6 m) ~ 40)
+    must stop with an error naming the time, not write a result."""
+    scenario = _break(case_dir, _set("contact[0].stiffness", [1e12, 1e12]), None)
+    proc = _subprocess(["transient", str(scenario), "--out", "out", "--no-progress",
+                        "--method", "fixed-point"], case_dir)
+    _assert_clean_failure(proc.returncode, proc.stderr, "", case_dir / "out")
+    assert "converge" in proc.stderr.lower(), proc.stderr
