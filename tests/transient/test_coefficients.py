@@ -1,0 +1,96 @@
+"""Exact step coefficients (eq. 7-10) against scipy.signal.lsim (first-order hold = force linear
+over the step) for every mode kind, and against 50-digit mpmath where lsim itself loses digits."""
+import numpy as np
+import pytest
+import scipy.signal as sig
+
+from transient.coefficients import step_coefficients
+
+RTOL = 1e-10  # issue 2; the closed forms are exact, both sides carry only rounding (~1e-14)
+
+
+def lsim_step(w, z, h, q0, v0, P0, P1):
+    A = np.array([[0.0, 1.0], [-w * w, -2.0 * z * w]])
+    B = np.array([[0.0], [1.0]])
+    _, _, x = sig.lsim((A, B, np.eye(2), np.zeros((2, 1))), U=np.array([P0, P1]), T=np.array([0.0, h]),
+                       X0=[q0, v0], interp=True)
+    return x[-1]
+
+
+CASES = {
+    "rigid": [(0.0, 0.0)],
+    "zeta=0": [(1.0, 0.0), (300.0, 0.0), (2e4, 0.0)],
+    "underdamped": [(5.0, 0.02), (800.0, 0.3), (3e4, 0.7)],
+    "near-critical below": [(50.0, 1 - 1e-9), (2e3, 1 - 1e-6), (50.0, 1 - 1e-14)],
+    "critical": [(10.0, 1.0), (5e3, 1.0)],
+    "near-critical above": [(50.0, 1 + 1e-12), (2e3, 1 + 1e-7), (7e3, 1 + 1e-4)],
+    "overdamped": [(20.0, 1.5), (500.0, 5.0), (100.0, 100.0), (4e3, 30.0)],
+}
+
+
+@pytest.mark.parametrize("kind", list(CASES))
+def test_coefficients_against_lsim(kind):
+    rng = np.random.default_rng(7)
+    worst = 0.0
+    for w, z in CASES[kind]:
+        for h in (1e-4, 1e-3, 1e-2):  # omega h from 1e-4 (Taylor branch) to 300 (closed forms)
+            c = step_coefficients([w], [z], h)
+            for _ in range(3):
+                q0, v0, P0, P1 = rng.normal(size=4) * np.array([1e-3, 1e-1, 1e2, 1e2])
+                q1, v1 = (x[0] for x in c.step(q0, v0, P0, P1))
+                ref = lsim_step(w, z, h, q0, v0, P0, P1)
+                # relative to the size of the terms being combined, so that a result that is
+                # legitimately ~0 (a cancellation inside the exact solution) is not over-demanded
+                scale_q = abs(ref[0]) + 1e-3 * (abs(q0) + abs(v0) * h + (abs(P0) + abs(P1)) * h * h)
+                scale_v = abs(ref[1]) + 1e-3 * (abs(q0) * w * w * h + abs(v0) + (abs(P0) + abs(P1)) * h)
+                err = max(abs(q1 - ref[0]) / scale_q, abs(v1 - ref[1]) / scale_v)
+                worst = max(worst, err)
+    print(f"{kind}: worst relative error vs lsim {worst:.2e}")
+    assert worst < RTOL
+
+
+def test_coefficients_extreme_overdamped_against_mpmath():
+    """omega h up to 1e4 with zeta = 1e4: lsim's expm loses ~1e-8 here, so the reference is the
+    two-root closed form evaluated with 50 digits (no overflow: exp of negative arguments only)."""
+    mp = pytest.importorskip("mpmath")
+    mp.mp.dps = 50
+    for w, z, h in [(1e6, 1e4, 1e-2), (1e5, 1e4, 1e-3), (1e6, 3.0, 1e-2), (1e7, 0.5, 1e-2)]:
+        c = step_coefficients([w], [z], h)
+        W, Z, H = mp.mpf(w), mp.mpf(z), mp.mpf(h)
+        if z > 1:
+            s = W * mp.sqrt(Z * Z - 1)
+        else:
+            s = 1j * W * mp.sqrt(1 - Z * Z)
+        r1, r2 = -Z * W + s, -Z * W - s
+
+        def g(t):
+            return (mp.exp(r1 * t) - mp.exp(r2 * t)) / (r1 - r2)
+
+        def I(k):  # int_0^h u^k g(u) du in closed form: int u^k e^{r u} = derivative formulas
+            def one(r):
+                e = mp.exp(r * H)
+                return (e - 1) / r if k == 0 else (e * (r * H - 1) + 1) / r ** 2
+            return (one(r1) - one(r2)) / (r1 - r2)
+
+        ref = {"G": g(H), "Ac": I(1) / H, "Bc": I(0) - I(1) / H, "Bcd": I(0) / H}
+        for key, val in ref.items():
+            val = float(mp.re(val))
+            got = getattr(c, key)[0]
+            assert abs(got - val) <= 1e-12 * abs(val), (w, z, h, key, got, val)
+
+
+def test_rigid_coefficients_are_polynomials():
+    """omega = 0 (eq. 9): q1 = q0 + v0 h + P0 h^2/3 + P1 h^2/6, v1 = v0 + (P0 + P1) h/2 exactly."""
+    h = 0.01
+    c = step_coefficients([0.0], [0.0], h)
+    assert c.F[0] == 1 and c.G[0] == h and c.Fd[0] == 0 and c.Gd[0] == 1
+    assert np.isclose(c.Ac[0], h * h / 3, rtol=1e-15) and np.isclose(c.Bc[0], h * h / 6, rtol=1e-15)
+    assert np.isclose(c.Acd[0], h / 2, rtol=1e-15) and np.isclose(c.Bcd[0], h / 2, rtol=1e-15)
+
+
+def test_no_overflow_for_huge_omega_h():
+    c = step_coefficients([1e9, 1e9, 1e9], [0.0, 1.0, 50.0], 1.0)
+    for key in ("F", "G", "Ac", "Bc", "Fd", "Gd", "Acd", "Bcd"):
+        assert np.all(np.isfinite(getattr(c, key))), key
+    # static limit: a constant force P gives q -> P/omega^2 (Ac + Bc -> 1/omega^2)
+    assert np.allclose(c.Ac + c.Bc, 1e-18, rtol=1e-9)
