@@ -72,12 +72,10 @@ def mass_form(V, rho):
     return rho * ufl.inner(u, v) * ufl.dx
 
 
-def surface_mass_form(V, facet_tags, mass_per_area: float, lumped: bool):
-    """Non-structural mass on the facets tagged 1 in ``facet_tags``. ``lumped`` uses the
-    vertex quadrature rule (row-sum-like diagonal mass; P1 only)."""
+def surface_mass_form(V, facet_tags, mass_per_area: float):
+    """Consistent non-structural mass on the facets tagged 1 in ``facet_tags``."""
     u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
-    md = {"quadrature_rule": "vertex", "quadrature_degree": 1} if lumped else {}
-    ds = ufl.Measure("ds", domain=V.mesh, subdomain_data=facet_tags, metadata=md)
+    ds = ufl.Measure("ds", domain=V.mesh, subdomain_data=facet_tags)
     return mass_per_area * ufl.inner(u, v) * ds(1)
 
 

@@ -134,8 +134,9 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
                 lumped_smeared_mass: bool = False) -> FEModel:
     """FE model of a ``meshes.spec.Geometry`` (or the path of its JSON file).
 
-    ``degree``: 1 or 2 (Lagrange). ``lumped_smeared_mass``: non-structural surface mass by
-    vertex quadrature (P1 only) instead of the consistent surface mass.
+    ``degree``: 1 or 2 (Lagrange). ``lumped_smeared_mass``: non-structural surface mass
+    lumped to the nodes by row sums (P1 only: P2 row sums vanish at vertices) instead of
+    the consistent surface mass.
     """
     from dolfinx import fem
 
@@ -161,7 +162,11 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
         if area <= 0.0:
             raise InputError(f"smeared mass surface {sm.surface!r}: zero exterior area "
                              "(an interior surface cannot carry surface mass here)")
-        pb.add_subset(M, pb.assemble_matrix(surface_mass_form(V, tags, sm.mass / area, lumped_smeared_mass)))
+        Ms = pb.assemble_matrix(surface_mass_form(V, tags, sm.mass / area))
+        if lumped_smeared_mass:
+            pb.add_row_sums_to_diagonal(M, Ms)     # P1 row sums = mass/3 per triangle vertex
+        else:
+            pb.add_subset(M, Ms)
 
     imap = V.dofmap.index_map
     n_own = imap.size_local

@@ -39,6 +39,13 @@ def add_subset(A: PETSc.Mat, B: PETSc.Mat, alpha: float = 1.0) -> None:
     A.axpy(alpha, B, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
 
 
+def add_row_sums_to_diagonal(A: PETSc.Mat, B: PETSc.Mat) -> None:
+    """A += diag(row sums of B) (row-sum mass lumping)."""
+    d = B.getRowSum()
+    A.setDiagonal(d, addv=PETSc.InsertMode.ADD_VALUES)
+    A.assemble()
+
+
 def csr_matrix(comm, local_rows: int, n_cols_local: int, n_cols: int, csr: sp.csr_matrix) -> PETSc.Mat:
     """Distributed AIJ matrix from this rank's rows (CSR with *global* column indices)."""
     csr = sp.csr_matrix(csr)
