@@ -1,0 +1,111 @@
+"""Stage cache: each stage's products stored under a hash of everything they depend on.
+
+The key of a stage is the SHA-256 of (stage name, its parameters as canonical JSON, the
+keys of the stages it consumes, and the source code of the packages that compute it), so
+a changed parameter or a changed line of code gives a new key: a cached product is never
+stale, only unused. Products are plain files (npz/h5, no pickle) written atomically by
+their own save functions; deleting the cache directory at any time is safe.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+_CODE_CACHE: dict[tuple[str, ...], str] = {}
+
+
+def code_version(*parts: str) -> str:
+    """SHA-256 of the .py files under the given package dirs / files (relative to the repo)."""
+    parts = tuple(sorted(parts))
+    if parts not in _CODE_CACHE:
+        h = hashlib.sha256()
+        for part in parts:
+            p = ROOT / part
+            files = sorted(p.rglob("*.py")) if p.is_dir() else [p]
+            for f in files:
+                if f.is_file():
+                    h.update(str(f.relative_to(ROOT)).encode())
+                    h.update(f.read_bytes())
+        _CODE_CACHE[parts] = h.hexdigest()
+    return _CODE_CACHE[parts]
+
+
+def _canonical(obj: Any) -> Any:
+    if isinstance(obj, dict):
+        return {str(k): _canonical(v) for k, v in sorted(obj.items(), key=lambda kv: str(kv[0]))}
+    if isinstance(obj, (list, tuple)):
+        return [_canonical(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _canonical(obj.tolist())
+    if isinstance(obj, (np.floating, float)):
+        return repr(float(obj))
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    return obj
+
+
+def stage_key(stage: str, params: dict, code: tuple[str, ...] = (), inputs: tuple[str, ...] = ()) -> str:
+    payload = json.dumps({"stage": stage, "params": _canonical(params), "inputs": list(inputs),
+                          "code": code_version(*code) if code else ""}, sort_keys=True)
+    return hashlib.sha256(payload.encode()).hexdigest()[:24]
+
+
+@dataclass
+class StageCache:
+    """Cache directory (None: no caching) plus a record of hits, misses and wall times."""
+
+    root: Path | None
+    log: list = field(default_factory=list)
+
+    def path(self, stage: str, key: str, suffix: str) -> Path | None:
+        if self.root is None:
+            return None
+        return Path(self.root) / stage / f"{key}{suffix}"
+
+    def get_or_build(self, stage: str, key: str, suffix: str, build: Callable[[], Any],
+                     save: Callable[[Any, Path], Any], load: Callable[[Path], Any], label: str = "") -> Any:
+        """Load the product of ``stage`` under ``key`` if present, else build and save it."""
+        p = self.path(stage, key, suffix)
+        t0 = time.perf_counter()
+        if p is not None and p.is_file():
+            try:
+                out = load(p)
+                self.log.append((stage, label, "hit", time.perf_counter() - t0))
+                return out
+            except Exception:  # unreadable (e.g. interrupted write by an older version): rebuild
+                p.unlink(missing_ok=True)
+        out = build()
+        if p is not None:
+            p.parent.mkdir(parents=True, exist_ok=True)
+            save(out, p)
+        self.log.append((stage, label, "built", time.perf_counter() - t0))
+        return out
+
+
+def default_cache_dir(out_dir: Path) -> Path:
+    """``$LIFTOFF_CACHE`` if set, else DIR/../.liftoff-cache next to the output directory."""
+    env = os.environ.get("LIFTOFF_CACHE")
+    if env:
+        return Path(env)
+    return Path(out_dir).resolve().parent / ".liftoff-cache"
+
+
+def save_arrays(arrays: dict, path: Path) -> None:
+    """Atomic npz write of plain arrays (no pickle)."""
+    tmp = path.with_name(path.name + f".{os.getpid()}.tmp")
+    with open(tmp, "wb") as fh:
+        np.savez(fh, **arrays)
+    os.replace(tmp, path)
+
+
+def load_arrays(path: Path) -> dict:
+    with np.load(path, allow_pickle=False) as z:
+        return {k: z[k] for k in z.files}

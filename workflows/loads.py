@@ -1,0 +1,189 @@
+"""Loads and vehicle effects of one case -> the transient problem (section 4, 2.6).
+
+* gravity through the rigid-body participation (eq. 14, in the transient core);
+* cryo preload of the core tank at boundary DOFs only (section 4.3), constant;
+* engine thrust tables at the engine mounts; other tabulated forces (winds);
+* control system (eq. 15-21): lateral forces at the booster gimbals that cancel the
+  moment of the applied forces about the c.g.; the applied forces are known tables,
+  so the corrective forces are tables too, on the union of their time points (exact for
+  piecewise-linear forcing: the correction is linear in the applied forces);
+* gravity softening (eq. 22-27): KSOF as a modal feedback held over each step, until
+  booster ignition; in the static initial conditions as -KSOF in the stiffness.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from transient import (ContactPoint, Forcing, ModalFeedback, PointForce, Recovery, TabulatedForce,
+                       TransientProblem)
+from transient.effects import (center_of_gravity, cg_motion_matrix, control_forces, softening_matrix)
+from transient.errors import InputError
+
+from .pipeline import StackModel, cryo_loads
+from .scenario import Case
+
+XYZ = ("Tx", "Ty", "Tz")
+SIX = ("Tx", "Ty", "Tz", "Rx", "Ry", "Rz")
+
+
+@dataclass
+class CaseProblem:
+    """The transient problem of one case plus what the reports need to read it back."""
+
+    case: Case
+    problem: TransientProblem
+    cryo: dict[str, float]
+    control_table: tuple[np.ndarray, np.ndarray, list[str]] | None
+    softening: ModalFeedback | None
+    attach: dict[str, tuple[str, str]] = field(default_factory=dict)  # recovery name -> (point, component)
+    gravity_only: Forcing | None = None
+
+
+def _check_point(body, point: str, where: str) -> None:
+    if point not in body.points:
+        raise InputError(f"{where}: point {point!r} is not on the {body.name} model "
+                         f"(named points: {', '.join(p for p in body.points if '_n' not in p)[:300]})")
+
+
+def contacts(case: Case, stack: StackModel) -> list[ContactPoint]:
+    out = []
+    for i, p in enumerate(case.posts):
+        _check_point(stack.vehicle, p.vehicle, f"post[{i}].vehicle")
+        _check_point(stack.pad, p.pad, f"post[{i}].pad")
+        out.append(ContactPoint(p.name, [f"{p.vehicle}:{c}" for c in XYZ], [f"{p.pad}:{c}" for c in XYZ],
+                                stiffness=p.stiffness, axial=2, normal_sign=1.0, gap=p.gap,
+                                release_time=p.release_time, rigid=p.rigid))
+    return out
+
+
+def applied_tables(case: Case, stack: StackModel) -> list[TabulatedForce]:
+    """Engine thrust (per direction component) and tabulated forces, all on the vehicle."""
+    out = []
+    for i, e in enumerate(case.engines):
+        _check_point(stack.vehicle, e.mount, f"engine[{i}].mount")
+        t, v = e.table()
+        for c, d in zip(XYZ, e.direction):
+            if d != 0.0:
+                out.append(TabulatedForce("a", f"{e.mount}:{c}", t, d * v))
+    for i, f in enumerate(case.forces):
+        stack.vehicle.dof_index(f.label)
+        out.append(TabulatedForce("a", f.label, f.time, f.value))
+    return out
+
+
+def control_table(case: Case, stack: StackModel, tables: list[TabulatedForce],
+                  constant: list[PointForce]) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """(time, FSL (n_t, n_gimbal), gimbal labels): eq. 19 on the union time grid of all
+    applied tables, switched on at ``control.start`` over ``control.ramp`` seconds."""
+    ctl = case.control
+    body = stack.vehicle
+    for lab in ctl["gimbals"]:
+        body.dof_index(lab)
+    t0, t1 = case.time["t0"], case.time["t_end"]
+    pts = [np.array([t0, t1])] + [tb.time for tb in tables]
+    start, ramp = ctl["start"], ctl["ramp"]
+    if np.isfinite(start):
+        pts.append(np.array([start, start + max(ramp, 1e-6)]))
+    grid = np.unique(np.concatenate(pts))
+    grid = grid[(grid >= t0) & (grid <= t1)]
+    labels = sorted({tb.label for tb in tables} | {pf.label for pf in constant})
+    P = np.zeros((grid.size, len(labels)))
+    for tb in tables:
+        P[:, labels.index(tb.label)] += np.interp(grid, tb.time, tb.value)
+    for pf in constant:
+        P[:, labels.index(pf.label)] += pf.value
+    F = control_forces(body, ctl["gimbals"], labels, P) if labels else np.zeros((grid.size, len(ctl["gimbals"])))
+    if np.isfinite(start):
+        on = np.clip((grid - start) / max(ramp, 1e-6), 0.0, 1.0)
+        F = F * on[:, None]
+    return grid, F, list(ctl["gimbals"])
+
+
+def _attach_component(stack: StackModel, point: str) -> str:
+    owners = [n for n, cb in stack.cbs.items() if n != "pad" and f"{point}:Tx" in cb.boundary_labels]
+    if not owners:
+        raise InputError(f"recovery.attach: point {point!r} is not a boundary point of any vehicle component")
+    non_core = [n for n in owners if n != "core"]
+    return (non_core or owners)[0]
+
+
+def recoveries(case: Case, stack: StackModel) -> tuple[list[Recovery], dict, dict]:
+    """Interface forces at attach points, c.g. motion (eq. 23), top/payload/stations motion."""
+    from reduction import interface_force_recovery
+
+    body = stack.vehicle
+    out, attach = [], {}
+    for spec in case.recovery["attach"]:
+        point, _, comp = spec.partition("@")
+        comp = comp or _attach_component(stack, point)
+        labels = [f"{point}:{c}" for c in SIX]
+        D, A = interface_force_recovery(stack.vehicle_asm, stack.vehicle_modes, comp, labels)
+        name = f"attach_{point}"
+        out.append(Recovery(name, "a", labels, disp=D, acc=A, units="N (N m for rotations), on " + comp))
+        attach[name] = (point, comp)
+    out.append(Recovery("cg_motion", "a", [f"cg:{c}" for c in SIX], disp=cg_motion_matrix(body),
+                        units="m (Tx Ty Tz), rad (Rx Ry Rz)"))
+    n_a, n_b = body.n_modes, stack.pad.n_modes
+    out.append(Recovery("modal_q_a", "a", [f"q{j}" for j in range(n_a)], disp=np.eye(n_a), units="sqrt(kg) m"))
+    if n_b:
+        out.append(Recovery("modal_q_b", "b", [f"q{j}" for j in range(n_b)], disp=np.eye(n_b),
+                            units="sqrt(kg) m"))
+    outputs = []
+    for key in ("top", "payload"):
+        pt = case.recovery[key]
+        if pt:
+            _check_point(body, pt, f"recovery.{key}")
+            outputs += [f"{pt}:{c}" for c in XYZ]
+    for i, pt in enumerate(case.recovery["stations"]):
+        _check_point(body, pt, f"recovery.stations[{i}]")
+        outputs += [f"{pt}:{c}" for c in XYZ if f"{pt}:{c}" not in outputs]
+    return out, attach, {"a": outputs, "b": []}
+
+
+def build_problem(case: Case, stack: StackModel, progress: bool = True) -> CaseProblem:
+    body = stack.vehicle
+    cps = contacts(case, stack)
+    cryo = cryo_loads(stack, case.cryo)
+    constant = [PointForce("a", lab, val) for lab, val in cryo.items()]
+    tables = applied_tables(case, stack)
+    ctab = None
+    if case.control["enabled"]:
+        ctab = control_table(case, stack, tables, constant)
+        grid, F, labels = ctab
+        tables = tables + [TabulatedForce("a", lab, grid, F[:, j]) for j, lab in enumerate(labels)]
+    feedback = []
+    soft = None
+    if case.softening["enabled"]:
+        soft = ModalFeedback("a", softening_matrix(body, case.gravity), until=case.softening["until"])
+        feedback.append(soft)
+    forcing = Forcing(constant=constant, tables=tables, feedback=feedback, gravity=case.gravity)
+    recs, attach, outputs = recoveries(case, stack)
+    t = case.time
+    problem = TransientProblem(body, stack.pad, cps, forcing, t_end=t["t_end"], h=t["h"], t0=t["t0"],
+                               method=t["method"], initial="static", outputs=outputs, recoveries=recs,
+                               progress=progress and case.output["progress"])
+    return CaseProblem(case, problem, cryo, ctab, soft, attach,
+                       gravity_only=Forcing(gravity=case.gravity))
+
+
+def table1(stack: StackModel, cp: CaseProblem, case: Case):
+    """Table 1 of the reference for this stack on its pad: c.g. motion under static loads
+    (gravity only; + softening; + cryo; + both). Cryo and softening are taken from the
+    case's settings when enabled there, else from their defaults (they are switched on for
+    the table so that every row exists)."""
+    from transient.effects import cg_static_report
+
+    soft = cp.softening or ModalFeedback("a", softening_matrix(stack.vehicle, case.gravity))
+    cryo = [PointForce("a", k, v) for k, v in cp.cryo.items()]
+    cps = [c for c in cp.problem.contacts]
+    return cg_static_report(stack.vehicle, stack.pad, cps, cp.gravity_only, cryo, soft)
+
+
+def stack_mass_summary(stack: StackModel) -> str:
+    m, cg = center_of_gravity(stack.vehicle)
+    return (f"vehicle: {stack.vehicle.n_modes} modes ({np.sum(stack.vehicle.omega > 0)} elastic, first "
+            f"{stack.vehicle.omega[6] / 2 / np.pi if stack.vehicle.n_modes > 6 else float('nan'):.2f} Hz), "
+            f"mass {m / 1e3:.1f} t, c.g. {np.round(cg, 2).tolist()} m; pad: {stack.pad.n_modes} modes "
+            f"(first {stack.pad.omega[0] / 2 / np.pi:.2f} Hz)")
