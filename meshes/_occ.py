@@ -20,6 +20,7 @@ import numpy as np
 from transient.errors import InputError
 
 occ = gmsh.model.occ
+SEAM_AZIMUTH = math.radians(-20.0)  # azimuth of the seam of revolved surfaces
 
 
 def require_positive(owner: str, **values: float) -> None:
@@ -104,6 +105,7 @@ def revolve_to_z(profile: list, axis_xy=(0.0, 0.0), z_shift: float = 0.0) -> lis
     vols = [d for d in out if d[0] == 3]
     occ.remove(profile, recursive=True)  # the leftover generating faces
     occ.rotate(vols, 0, 0, 0, 1, 0, 0, math.pi / 2)
+    occ.rotate(vols, 0, 0, 0, 0, 0, 1, SEAM_AZIMUTH)  # keep the seam away from patches
     occ.translate(vols, axis_xy[0], axis_xy[1], z_shift)
     return vols
 

@@ -1,0 +1,91 @@
+"""The global frame and the one shared source of interface positions for vehicle and pad.
+
+Global frame (SI, m), shared by every vehicle component and the pad:
+- origin on the core-stage axis at the level of the booster aft-skirt bottoms, which is
+  also the level of the pad's hold-down post tops (z = 0);
+- z up (along the vehicle axes);
+- x along the booster-booster line: ``srb_left`` at x < 0, ``srb_right`` at x > 0;
+- y from the core-stage axis towards the orbiter (the orbiter sits at y > 0).
+The frame is right-handed. Interface points are defined here once, so that an attach
+patch on the core stage and the matching one on a booster (same name) have the same
+reference point, and pad post tops coincide with the booster hold-down points.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from transient.errors import InputError
+
+from ._occ import require_positive
+
+SIDES = ("left", "right")
+
+
+@dataclass(frozen=True)
+class StackLayout:
+    """Shuttle-like stack arrangement (m). Defaults and sources: docs/meshes.md."""
+
+    core_radius: float = 4.2          # external tank, 8.4 m diameter
+    core_bottom_z: float = 9.2        # ET aft apex; top at ~56.1 m = stack height
+    srb_radius: float = 1.855         # SRB 3.71 m diameter
+    srb_axis_x: float = 6.36          # booster axes at x = -/+ this (ET-SRB gap ~0.3 m)
+    srb_skirt_radius: float = 2.7     # outer radius of the aft-skirt bottom
+    srb_skirt_thickness: float = 0.5  # skirt wall at the bottom (thickened, see docs)
+    holddown_azimuths_deg: tuple = (45.0, 135.0, 225.0, 315.0)
+    srb_fwd_attach_z: float = 40.5    # ET intertank / SRB forward skirt
+    srb_aft_attach_z: float = 13.2    # ET aft ring / SRB aft attach ring
+    orbiter_radius: float = 2.6       # fuselage modelled as a 5.2 m cylinder
+    orbiter_axis_y: float = 7.8       # orbiter axis at (0, this)
+    orbiter_bottom_z: float = 8.0     # aft bulkhead (SSME gimbal plane)
+    orbiter_fwd_attach_z: float = 37.0   # forward bipod
+    orbiter_aft_attach_z: float = 13.2   # aft attach (left/right)
+    orbiter_aft_attach_x: float = 1.5    # aft attach points at x = -/+ this
+
+    def check(self) -> None:
+        require_positive("StackLayout", **{k: getattr(self, k) for k in (
+            "core_radius", "srb_radius", "srb_axis_x", "srb_skirt_radius", "srb_skirt_thickness",
+            "orbiter_radius", "orbiter_axis_y", "orbiter_aft_attach_x")})
+        if self.srb_axis_x <= self.core_radius + self.srb_radius:
+            raise InputError("StackLayout.srb_axis_x: boosters overlap the core stage")
+        if self.orbiter_axis_y <= self.core_radius + self.orbiter_radius:
+            raise InputError("StackLayout.orbiter_axis_y: orbiter overlaps the core stage")
+        if self.srb_skirt_radius - self.srb_skirt_thickness <= 0:
+            raise InputError("StackLayout.srb_skirt_thickness must be < srb_skirt_radius")
+        if len(self.holddown_azimuths_deg) < 1:
+            raise InputError("StackLayout.holddown_azimuths_deg is empty")
+
+    def srb_axis(self, side: str) -> np.ndarray:
+        if side not in SIDES:
+            raise InputError(f"booster side must be one of {SIDES} (got {side!r})")
+        return np.array([-self.srb_axis_x if side == "left" else self.srb_axis_x, 0.0])
+
+    @property
+    def holddown_radius(self) -> float:
+        """Radius of the hold-down points about the booster axis: mid-wall of the skirt bottom."""
+        return self.srb_skirt_radius - 0.5 * self.srb_skirt_thickness
+
+    def holddown_points(self, side: str) -> dict[str, np.ndarray]:
+        """``{"srb_<side>_hd_<k>": (x, y, 0)}``, k = 1.. in azimuth order (about the booster axis)."""
+        ax, r = self.srb_axis(side), self.holddown_radius
+        return {f"srb_{side}_hd_{k + 1}": np.array([ax[0] + r * math.cos(math.radians(a)),
+                                                   ax[1] + r * math.sin(math.radians(a)), 0.0])
+                for k, a in enumerate(self.holddown_azimuths_deg)}
+
+    def srb_attach_points(self, side: str) -> dict[str, np.ndarray]:
+        """Core-booster attach reference points, midway between the two outer walls."""
+        sgn = -1.0 if side == "left" else 1.0
+        xm = sgn * 0.5 * (self.core_radius + self.srb_axis_x - self.srb_radius)
+        self.srb_axis(side)
+        return {f"att_srb_{side}_fwd": np.array([xm, 0.0, self.srb_fwd_attach_z]),
+                f"att_srb_{side}_aft": np.array([xm, 0.0, self.srb_aft_attach_z])}
+
+    def orbiter_attach_points(self) -> dict[str, np.ndarray]:
+        """Core-orbiter attach reference points, midway between the two outer walls."""
+        ym = 0.5 * (self.core_radius + self.orbiter_axis_y - self.orbiter_radius)
+        xa = self.orbiter_aft_attach_x
+        return {"att_orb_fwd": np.array([0.0, ym, self.orbiter_fwd_attach_z]),
+                "att_orb_aft_left": np.array([-xa, ym, self.orbiter_aft_attach_z]),
+                "att_orb_aft_right": np.array([xa, ym, self.orbiter_aft_attach_z])}

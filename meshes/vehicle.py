@@ -1,0 +1,354 @@
+"""Twin-booster stack like the Space Shuttle: core stage, two boosters, orbiter-like body.
+
+Each component is its own gmsh model / ``.msh`` + JSON sidecar (reduced on its own by
+Craig-Bampton), all in the global frame of :mod:`meshes.layout`. Attach patches of two
+components that connect carry the SAME name and the SAME reference point (from the
+shared :class:`StackLayout`), so assembly overlays them by label. Thin walls are
+thickened to keep meshes small; density and E are then scaled so that mass and membrane
+(beam) stiffness stay right (E/rho kept). Defaults and sources: docs/meshes.md.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from transient.errors import InputError
+
+from . import _occ
+from ._occ import occ, require_positive
+from .layout import StackLayout
+from .spec import Geometry, Material, Patch, PointMass, SmearedMass
+from .tank import AL2219, Compartment, TankParams, build_tank, tank_height
+
+#: D6AC steel (SRB case): E 205 GPa, nu 0.29, 7850 kg/m^3
+STEEL_D6AC = Material("D6AC", 205e9, 0.29, 7850.0)
+
+
+def equivalent(base: Material, mass: float, volume: float, name: str | None = None) -> Material:
+    """Material of a thickened part: density so that rho * volume = mass, E scaled with it
+    (E/rho of ``base`` kept: membrane/beam stiffness and wave speeds of the real wall)."""
+    rho = mass / volume
+    return Material(name or f"{base.name}-equivalent", base.E * rho / base.rho, base.nu, rho)
+
+
+def _cylinder_inertia(m: float, r: float, length: float) -> np.ndarray:
+    """Solid cylinder (axis z) about its centre (kg m^2)."""
+    t = m * (3 * r * r + length * length) / 12.0
+    return np.diag([t, t, 0.5 * m * r * r])
+
+
+def _point_inertia(m: float, offsets) -> np.ndarray:
+    """Point masses m at offsets (n, 3) about the origin: sum m (|r|^2 I - r r^T)."""
+    J = np.zeros((3, 3))
+    for r in np.asarray(offsets, float):
+        J += m * (r @ r * np.eye(3) - np.outer(r, r))
+    return J
+
+
+# ---- core stage ---------------------------------------------------------------------------
+def core_stage_params(layout: StackLayout | None = None, mesh_size: float = 0.9) -> TankParams:
+    """External-tank-like core stage: LH2 tank (aft), intertank skirt, LOX tank (forward),
+    Al 2219 wall thickened to 0.15 m, dry mass 26.5 t, propellants as wetted-wall mass."""
+    lay = layout or StackLayout()
+    lay.check()
+    patches = {}
+    for side in ("left", "right"):
+        patches.update(lay.srb_attach_points(side))
+    patches.update(lay.orbiter_attach_points())
+    p = TankParams(
+        name="core", radius=lay.core_radius, wall_thickness=0.15,
+        compartments=(Compartment("lh2", 25.6, 0.72, 0.72, 0.97, 70.85),
+                      Compartment("lox", 4.65, 0.72, 1.6, 0.90, 1141.0)),
+        intertank_length=6.9, z_bottom=lay.core_bottom_z, axis_xy=(0.0, 0.0),
+        material=replace(AL2219), dry_mass=26_500.0, patches=patches, patch_half_width=0.5,
+        mesh_size=mesh_size)
+    p.patches["stack_top"] = np.array([0.0, 0.0, lay.core_bottom_z + tank_height(p)])
+    return p
+
+
+# ---- booster ----------------------------------------------------------------------------------
+@dataclass
+class BoosterParams:
+    """Solid-rocket-booster-like component (SI). The case is a thick-walled cylinder with an
+    oblate aft dome and a prolate nose (the real nose cone/frustum); the conical aft skirt
+    carries the hold-down points at its bottom (z = 0). Propellant: non-structural mass
+    smeared over the case inner wall (``srb_<side>_case_inner``); the grain's stiffness is
+    neglected. Nozzle + TVC: a point mass at the gimbal (aft dome apex)."""
+
+    side: str = "left"
+    layout: StackLayout = field(default_factory=StackLayout)
+    length: float = 45.46               # skirt bottom to nose tip
+    case_thickness: float = 0.15        # thickened (real case ~13 mm)
+    case_bottom_z: float = 2.6          # case cylinder bottom (aft dome equator)
+    aft_dome_ratio: float = 0.7
+    nose_ratio: float = 1.9
+    skirt_joint_height: float = 0.5     # skirt outer surface meets the case this far above case_bottom_z
+    case_mass: float = 75_000.0         # case, nose, forward skirt, attach rings, SRB avionics (kg)
+    skirt_mass: float = 5_000.0
+    propellant_mass: float = 499_000.0
+    nozzle_mass: float = 11_000.0
+    nozzle_cg_below_gimbal: float = 1.8
+    holddown_patch_radius: float = 0.2
+    attach_patch_half_width: float = 0.45
+    mesh_size: float = 0.6
+
+    @property
+    def name(self) -> str:
+        return f"srb_{self.side}"
+
+    def check(self) -> None:
+        o = f"BoosterParams({self.side})"
+        require_positive(o, length=self.length, case_thickness=self.case_thickness,
+                         case_bottom_z=self.case_bottom_z, aft_dome_ratio=self.aft_dome_ratio,
+                         nose_ratio=self.nose_ratio, skirt_joint_height=self.skirt_joint_height,
+                         case_mass=self.case_mass, skirt_mass=self.skirt_mass,
+                         propellant_mass=self.propellant_mass, nozzle_mass=self.nozzle_mass,
+                         nozzle_cg_below_gimbal=self.nozzle_cg_below_gimbal,
+                         holddown_patch_radius=self.holddown_patch_radius,
+                         attach_patch_half_width=self.attach_patch_half_width, mesh_size=self.mesh_size)
+        self.layout.check()
+        self.layout.srb_axis(self.side)
+        R, t = self.layout.srb_radius, self.case_thickness
+        if t >= 0.5 * R:
+            raise InputError(f"{o}.case_thickness must be < srb_radius/2")
+        if self.aft_dome_ratio * R <= 2 * t or self.nose_ratio * R <= 2 * t:
+            raise InputError(f"{o}: dome heights must exceed 2 x case_thickness")
+        if self.case_bottom_z - self.aft_dome_ratio * R <= 0.2:
+            raise InputError(f"{o}.case_bottom_z: the aft dome reaches below the skirt bottom")
+        if self.cyl_top_z <= max(self.layout.srb_fwd_attach_z, self.case_bottom_z) + 1.0:
+            raise InputError(f"{o}.length: case too short for the forward attach at z = {self.layout.srb_fwd_attach_z}")
+        if self.layout.srb_skirt_radius - self.layout.srb_skirt_thickness <= R:
+            raise InputError(f"{o}: skirt bottom inner radius must exceed the case radius")
+        if 2 * self.holddown_patch_radius >= self.layout.srb_skirt_thickness:
+            raise InputError(f"{o}.holddown_patch_radius must be < skirt thickness / 2")
+
+    @property
+    def cyl_top_z(self) -> float:
+        return self.length - self.nose_ratio * self.layout.srb_radius
+
+
+def booster_closed_form_volumes(p: BoosterParams) -> dict[str, float]:
+    """Closed-form volumes (m^3) of the case shell and of the skirt's part outside the case."""
+    from .tank import capsule_volume
+    from scipy.integrate import quad
+    R, t = p.layout.srb_radius, p.case_thickness
+    L = p.cyl_top_z - p.case_bottom_z
+    a_b, a_t = p.aft_dome_ratio * R, p.nose_ratio * R
+    case = capsule_volume(R, a_b, a_t, L) - capsule_volume(R - t, a_b - t, a_t - t, L)
+    (x1, _), (x2, _), (x3, z3), (x4, z4) = _skirt_quad(p)
+    zc = p.case_bottom_z
+
+    def skirt_area(z: float) -> float:  # skirt cross-section outside the case solid at height z
+        ro = x2 + (x3 - x2) * z / z3
+        ri = x1 + (x4 - x1) * z / z4 if z <= z4 else x4 + (x3 - x4) * (z - z4) / (z3 - z4)
+        s = zc - z
+        case_o = R if s <= 0 else (R * math.sqrt(1 - (s / a_b) ** 2) if s < a_b else 0.0)
+        lo = max(ri, case_o)
+        return math.pi * (ro * ro - lo * lo) if ro > lo else 0.0
+
+    skirt = quad(skirt_area, 0.0, z3, limit=400, points=[z4, zc - a_b, zc])[0]
+    return {f"{p.name}_case": case, f"{p.name}_skirt": skirt}
+
+
+def _skirt_quad(p: BoosterParams):
+    R, t = p.layout.srb_radius, p.case_thickness
+    Rb, ts = p.layout.srb_skirt_radius, p.layout.srb_skirt_thickness
+    return [(Rb - ts, 0.0), (Rb, 0.0), (R, p.case_bottom_z + p.skirt_joint_height), (R - 0.5 * t, p.case_bottom_z)]
+
+
+def build_booster(p: BoosterParams, out_dir) -> Geometry:
+    """Booster ``srb_<side>``: volumes ``srb_<side>_case``, ``srb_<side>_skirt``; surfaces
+    ``srb_<side>_case_inner`` (propellant), hold-down patches ``srb_<side>_hd_<k>`` (skirt
+    bottom), ``srb_<side>_gimbal`` (aft dome apex), ``att_srb_<side>_fwd/aft``."""
+    if not isinstance(p, BoosterParams):
+        raise InputError(f"build_booster expects BoosterParams, got {type(p).__name__}")
+    p.check()
+    lay, out_dir = p.layout, Path(out_dir)
+    R, t = lay.srb_radius, p.case_thickness
+    a_b, a_t = p.aft_dome_ratio * R, p.nose_ratio * R
+    axis = lay.srb_axis(p.side)
+    case_g, skirt_g = f"{p.name}_case", f"{p.name}_skirt"
+    gimbal = np.array([axis[0], axis[1], p.case_bottom_z - a_b])
+    with _occ.gmsh_session(p.name):
+        case2d = _occ.shell_profile(R, t, a_b, a_t, p.case_bottom_z, p.cyl_top_z - p.case_bottom_z)
+        case2d = _occ.half(case2d)
+        skirt2d = _occ.polygon(_skirt_quad(p))
+        out, omap = occ.fragment(case2d, skirt2d)
+        case_f = sorted({d for ch in omap[: len(case2d)] for d in ch})
+        skirt_f = sorted({d for ch in omap[len(case2d):] for d in ch} - set(case_f))
+        occ.synchronize()
+        vol_case = _occ.revolve_to_z(case_f, axis)
+        vol_skirt = _occ.revolve_to_z(skirt_f, axis)
+        occ.synchronize()
+        tools, refs = [], {}
+        for name, pt in lay.holddown_points(p.side).items():
+            tools.append(_occ.cylinder_tool(name, pt[:2], p.holddown_patch_radius, -1.0, 0.15))
+            refs[name] = pt
+        w = p.attach_patch_half_width
+        drop = a_b * (1 - math.sqrt(1 - (w / R) ** 2))
+        tools.append(_occ.cylinder_tool(f"{p.name}_gimbal", axis, w, gimbal[2] - 1.0, gimbal[2] + 0.5 * (drop + t)))
+        refs[f"{p.name}_gimbal"] = gimbal
+        for name, pt in lay.srb_attach_points(p.side).items():
+            d = pt[:2] - axis
+            tools.append(_occ.wall_patch(name, axis, math.atan2(d[1], d[0]), pt[2], R, R - t, w, w))
+            refs[name] = pt
+        groups = _occ.imprint({case_g: vol_case, skirt_g: vol_skirt}, tools)
+        allv = groups[case_g] + groups[skirt_g]
+        bfaces = _occ.boundary_faces(allv)
+        patches = []
+        for tl in tools:
+            faces = _occ.faces_inside(bfaces, tl.bbox)
+            _occ.add_physical(2, tl.name, faces)
+            _occ.refine_faces(faces, min(p.mesh_size, 0.6 * (p.holddown_patch_radius if "_hd_" in tl.name else w)))
+            patches.append(Patch(tl.name, refs[tl.name]))
+        ri = R - t
+        inner = _occ.faces_inside(bfaces, (axis[0] - ri, axis[1] - ri, p.case_bottom_z - (a_b - t),
+                                           axis[0] + ri, axis[1] + ri, p.cyl_top_z + a_t - t), tol=1e-3 * R)
+        _occ.add_physical(2, f"{p.name}_case_inner", inner)
+        _occ.add_physical(3, case_g, [tg for _, tg in groups[case_g]])
+        _occ.add_physical(3, skirt_g, [tg for _, tg in groups[skirt_g]])
+        vols = {case_g: _occ.group_volume(groups[case_g]), skirt_g: _occ.group_volume(groups[skirt_g])}
+        n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size)
+    mats = {case_g: equivalent(STEEL_D6AC, p.case_mass, vols[case_g], "D6AC-equivalent-case"),
+            skirt_g: equivalent(AL2219, p.skirt_mass, vols[skirt_g], "Al2219-equivalent-skirt")}
+    d = np.array([0.0, 0.0, -p.nozzle_cg_below_gimbal])
+    nozzle_inertia = _cylinder_inertia(p.nozzle_mass, 1.5, 4.0) + _point_inertia(p.nozzle_mass, [d])
+    geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), mats, patches,
+                   [PointMass(f"{p.name}_nozzle", f"{p.name}_gimbal", p.nozzle_mass, nozzle_inertia)],
+                   [SmearedMass(f"{p.name}_case_inner", p.propellant_mass)], [], vols, n_nodes)
+    geo.save(out_dir / f"{p.name}.json")
+    return geo
+
+
+# ---- orbiter ------------------------------------------------------------------------------------
+@dataclass
+class OrbiterParams:
+    """Orbiter-like body (SI): thick-walled cylindrical fuselage with a prolate nose and a
+    flat aft bulkhead (SSME thrust structure), plus a flat wing slab. Lumped: SSME cluster at
+    ``ssme_mount`` (its c.g., below the bulkhead), payload at ``payload_station`` (on the
+    axis, tied to two trunnion patches on the inner wall)."""
+
+    layout: StackLayout = field(default_factory=StackLayout)
+    length: float = 37.24
+    wall_thickness: float = 0.15
+    nose_ratio: float = 2.0
+    wing_span: float = 23.79
+    wing_root_chord: float = 12.0
+    wing_thickness: float = 0.5
+    wing_bottom_offset: float = 0.5     # wing trailing edge above the aft bulkhead
+    structure_mass: float = 84_460.0    # airframe, TPS, OMS/RCS, consumables (kg)
+    ssme_mass: float = 3_180.0          # each of 3
+    ssme_cg_below_bulkhead: float = 1.8
+    payload_mass: float = 16_000.0
+    payload_z: float = 25.0
+    attach_patch_half_width: float = 0.45
+    mesh_size: float = 0.7
+
+    name = "orbiter"
+
+    def check(self) -> None:
+        o = "OrbiterParams"
+        require_positive(o, length=self.length, wall_thickness=self.wall_thickness, nose_ratio=self.nose_ratio,
+                         wing_span=self.wing_span, wing_root_chord=self.wing_root_chord,
+                         wing_thickness=self.wing_thickness, wing_bottom_offset=self.wing_bottom_offset,
+                         structure_mass=self.structure_mass, ssme_mass=self.ssme_mass,
+                         ssme_cg_below_bulkhead=self.ssme_cg_below_bulkhead, payload_mass=self.payload_mass,
+                         attach_patch_half_width=self.attach_patch_half_width, mesh_size=self.mesh_size)
+        self.layout.check()
+        R = self.layout.orbiter_radius
+        if self.wall_thickness >= 0.5 * R:
+            raise InputError(f"{o}.wall_thickness must be < orbiter_radius/2")
+        if self.cyl_length <= 2.0:
+            raise InputError(f"{o}.length too short for nose_ratio {self.nose_ratio}")
+        if self.wing_span <= 2 * R:
+            raise InputError(f"{o}.wing_span must exceed the fuselage diameter {2 * R} m")
+        z0 = self.layout.orbiter_bottom_z
+        for nm, z in (("payload_z", self.payload_z), ("layout.orbiter_fwd_attach_z", self.layout.orbiter_fwd_attach_z),
+                      ("layout.orbiter_aft_attach_z", self.layout.orbiter_aft_attach_z)):
+            if not z0 + 1.0 < z < z0 + self.cyl_length - 1.0:
+                raise InputError(f"{o}.{nm} = {z} m is not on the fuselage cylinder")
+
+    @property
+    def cyl_length(self) -> float:
+        return self.length - self.nose_ratio * self.layout.orbiter_radius
+
+
+def build_orbiter(p: OrbiterParams, out_dir) -> Geometry:
+    """Orbiter: volume ``orbiter_structure`` (fuselage + wings); patches ``ssme_mount``,
+    ``payload_station`` (two faces), ``att_orb_fwd``, ``att_orb_aft_left/right``."""
+    if not isinstance(p, OrbiterParams):
+        raise InputError(f"build_orbiter expects OrbiterParams, got {type(p).__name__}")
+    p.check()
+    lay, out_dir = p.layout, Path(out_dir)
+    R, t, z0 = lay.orbiter_radius, p.wall_thickness, lay.orbiter_bottom_z
+    axis = np.array([0.0, lay.orbiter_axis_y])
+    g = "orbiter_structure"
+    a_n = p.nose_ratio * R
+    with _occ.gmsh_session(p.name):
+        fus = _occ.revolve_to_z(_occ.half(_occ.shell_profile(R, t, 0.0, a_n, z0, p.cyl_length)), axis)
+        solid = _occ.revolve_to_z(_occ.half(_occ.capsule_profile(R, 0.0, a_n, z0, p.cyl_length)), axis)
+        wing = occ.addBox(-0.5 * p.wing_span, axis[1] - 0.5 * p.wing_thickness, z0 + p.wing_bottom_offset,
+                          p.wing_span, p.wing_thickness, p.wing_root_chord)
+        wings, _ = occ.cut([(3, wing)], solid)
+        occ.synchronize()
+        w = p.attach_patch_half_width
+        tools, refs = [], {}
+        ssme_ref = np.array([axis[0], axis[1], z0 - p.ssme_cg_below_bulkhead])
+        tools.append(_occ.cylinder_tool("ssme_mount", axis, 1.0, z0 - 1.0, z0 + 0.5 * t))
+        refs["ssme_mount"] = ssme_ref
+        for phi in (0.0, math.pi):  # payload trunnions, inner wall at +-x
+            tools.append(_occ.wall_patch("payload_station", axis, phi, p.payload_z, R - t, R, 0.5, 0.5))
+        refs["payload_station"] = np.array([axis[0], axis[1], p.payload_z])
+        for name, pt in lay.orbiter_attach_points().items():
+            d = pt[:2] - axis
+            tools.append(_occ.wall_patch(name, axis, math.atan2(d[1], d[0]), pt[2], R, R - t, w, w))
+            refs[name] = pt
+        groups = _occ.imprint({g: fus + wings}, tools)
+        bfaces = _occ.boundary_faces(groups[g])
+        faces_of: dict[str, list] = {}
+        for tl in tools:
+            faces_of.setdefault(tl.name, []).extend(_occ.faces_inside(bfaces, tl.bbox))
+        patches = []
+        for name, faces in faces_of.items():
+            _occ.add_physical(2, name, faces)
+            _occ.refine_faces(faces, min(p.mesh_size, 0.6 * w))
+            patches.append(Patch(name, refs[name]))
+        _occ.add_physical(3, g, [tg for _, tg in groups[g]])
+        vols = {g: _occ.group_volume(groups[g])}
+        n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size)
+    mat = equivalent(AL2219, p.structure_mass, vols[g], "Al2219-equivalent-orbiter")
+    # three engines in a triangle about the cluster c.g. (upper one at +y, lower two at -/+x)
+    offs = [(0.0, 1.2, 0.0), (-1.3, -0.6, 0.0), (1.3, -0.6, 0.0)]
+    J_ssme = 3 * _cylinder_inertia(p.ssme_mass, 1.1, 4.3) + _point_inertia(p.ssme_mass, offs)
+    J_pl = _cylinder_inertia(p.payload_mass, 2.0, 10.0)
+    geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), {g: mat}, patches,
+                   [PointMass("ssme_cluster", "ssme_mount", 3 * p.ssme_mass, J_ssme),
+                    PointMass("payload", "payload_station", p.payload_mass, J_pl)],
+                   [], [], vols, n_nodes)
+    geo.save(out_dir / f"{p.name}.json")
+    return geo
+
+
+# ---- the stack --------------------------------------------------------------------------------
+def build_core_stage(out_dir, layout: StackLayout | None = None, mesh_size: float = 0.9) -> Geometry:
+    """Core stage ``core`` built with the tank builder (see :func:`core_stage_params`)."""
+    return build_tank(core_stage_params(layout, mesh_size), out_dir)
+
+
+def default_stack(mesh_size: float | None = None, out_dir="out/meshes",
+                  layout: StackLayout | None = None) -> dict[str, Geometry]:
+    """Build all four components (``core``, ``srb_left``, ``srb_right``, ``orbiter``) with
+    their default parameters (``mesh_size`` overrides every component's default)."""
+    lay = layout or StackLayout()
+    if mesh_size is not None:
+        require_positive("default_stack", mesh_size=mesh_size)
+    kw = {} if mesh_size is None else {"mesh_size": mesh_size}
+    out = {"core": build_core_stage(out_dir, lay, **kw)}
+    for side in ("left", "right"):
+        b = build_booster(BoosterParams(side=side, layout=lay, **kw), out_dir)
+        out[b.name] = b
+    out["orbiter"] = build_orbiter(OrbiterParams(layout=lay, **kw), out_dir)
+    return out
