@@ -45,11 +45,12 @@ class Modes:
 def _check_singular(model: FEModel, lam: np.ndarray, rigid_tol_hz: float) -> int:
     f = np.sqrt(np.abs(lam)) / (2 * np.pi)
     n_zero = int(np.sum(f < rigid_tol_hz))
+    count = f"at least {n_zero}" if n_zero == lam.size else str(n_zero)
     if model.grounded and n_zero:
-        raise InputError(f"model {model.name!r} (clamped on {', '.join(model.clamped)}) has {n_zero} "
+        raise InputError(f"model {model.name!r} (clamped on {', '.join(model.clamped)}) has {count} "
                          f"near-zero modes (< {rigid_tol_hz:g} Hz): a floating part, a missing tie or clamp")
     if not model.grounded and n_zero > 6:
-        raise InputError(f"free-free model {model.name!r} has {n_zero} near-zero modes (< {rigid_tol_hz:g} Hz), "
+        raise InputError(f"free-free model {model.name!r} has {count} near-zero modes (< {rigid_tol_hz:g} Hz), "
                          "more than its 6 rigid-body modes: a floating part or a missing tie")
     if not model.grounded and n_zero < 6 and lam.size >= 6:
         raise InputError(f"free-free model {model.name!r} shows only {n_zero} rigid-body modes below "
