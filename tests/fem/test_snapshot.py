@@ -1,0 +1,42 @@
+"""Off-screen PNG snapshots: produced without a display and not blank."""
+import numpy as np
+import pytest
+
+from fem.snapshot import snapshot_mode, snapshot_png  # pyvista first (before dolfinx)
+from fem import build_model, eigenmodes
+from meshes.spec import Geometry, Material
+from transient.errors import InputError
+
+pytestmark = pytest.mark.fem
+
+
+def _image_stats(path):
+    import matplotlib.image as mpimg
+
+    img = mpimg.imread(str(path))[..., :3]
+    non_white = np.mean(np.any(img < 0.95, axis=2))
+    return img.shape, float(img.std()), float(non_white), len(np.unique(img.reshape(-1, 3), axis=0))
+
+
+def test_mode_snapshot_png_is_not_blank(msh, tmp_path):
+    model = build_model(Geometry("box", msh("box", L=1.0, W=0.1, H=0.1, n=(10, 2, 2)),
+                                 {"solid": Material("steel", 2e11, 0.3, 7800.0)}), degree=2)
+    modes = eigenmodes(model, n_modes=8)
+    path = snapshot_mode(tmp_path / "mode7.png", model, modes, 6)
+    shape, std, non_white, n_colours = _image_stats(path)
+    print(f"snapshot {shape}, pixel std {std:.3f}, non-white fraction {non_white:.3f}, {n_colours} colours")
+    assert shape[:2] == (768, 1024)
+    assert std > 0.05 and non_white > 0.02 and n_colours > 50     # drawn, coloured by |u|
+
+
+def test_snapshot_from_plain_arrays_and_bad_input(tmp_path):
+    """Plain arrays (as the workflow passes CB-recovered fields): one tetrahedron."""
+    nodes = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]])
+    cells = np.array([[0, 1, 2, 3]])
+    u = np.array([[0, 0, 0], [0, 0, 0.1], [0, 0, 0.05], [0.02, 0, 0]])
+    p = snapshot_png(tmp_path / "tet.png", nodes, cells, "tetra", u, title="one tet", scale=2.0)
+    assert _image_stats(p)[1] > 0.02
+    with pytest.raises(InputError, match="displacement has 3 rows"):
+        snapshot_png(tmp_path / "x.png", nodes, cells, "tetra", u[:3])
+    with pytest.raises(InputError, match="must end in .png"):
+        snapshot_png(tmp_path / "x.jpg", nodes, cells, "tetra", u)
