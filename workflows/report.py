@@ -1,0 +1,333 @@
+"""Reports of a lift-off run: max/min tables (per case and envelope), time-history plots,
+deformed-shape snapshots of stack and pad, and the printed summary. SI units.
+
+Sign conventions: post forces are the forces the pad applies to the vehicle at the
+hold-down points (Tz > 0: compression); attach forces are the forces the rest of the
+vehicle applies to the named component at the attach point (reduction.recovery).
+"""
+from __future__ import annotations
+
+import csv
+import io
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from transient.effects import center_of_gravity
+
+
+@dataclass
+class Item:
+    """One recovered time history (one column) of one case."""
+
+    name: str
+    unit: str
+    values: np.ndarray
+
+
+def _unit(label: str, kind: str) -> str:
+    rot = label.split(":")[-1].startswith("R")
+    return {"force": ("N m" if rot else "N"), "disp": ("rad" if rot else "m"),
+            "acc": ("rad/s^2" if rot else "m/s^2")}[kind]
+
+
+def items(result, attach: dict) -> list[Item]:
+    """Every reported history: post forces, attach forces, c.g. motion, output points."""
+    out = []
+    for j, lab in enumerate(result.contact_labels):
+        name, _, dof = lab.partition("/")
+        out.append(Item(f"post {name} {dof.split(':')[-1]}", _unit(dof, "force"), result.contact_force[:, j]))
+    for rname, arr in result.recovered.items():
+        if rname.startswith("modal_q"):
+            continue
+        labels = _recovery_labels(rname, arr.shape[1])
+        for j in range(arr.shape[1]):
+            if rname in attach:
+                point, comp = attach[rname]
+                out.append(Item(f"attach {point} on {comp} {labels[j]}", _unit(labels[j], "force"), arr[:, j]))
+            else:
+                out.append(Item(f"{rname} {labels[j]}", _unit(labels[j], "disp"), arr[:, j]))
+    for j, lab in enumerate(result.output_labels["a"]):
+        out.append(Item(f"disp {lab}", _unit(lab, "disp"), result.displacement["a"][:, j]))
+        out.append(Item(f"acc {lab}", _unit(lab, "acc"), result.acceleration["a"][:, j]))
+    return out
+
+
+def _recovery_labels(name: str, k: int) -> list[str]:
+    six = ["Tx", "Ty", "Tz", "Rx", "Ry", "Rz"]
+    return six[:k] if k <= 6 else [f"c{j}" for j in range(k)]
+
+
+def maxmin(time: np.ndarray, its: list[Item], case: str) -> list[dict]:
+    rows = []
+    for it in its:
+        i, k = int(np.argmax(it.values)), int(np.argmin(it.values))
+        rows.append({"item": it.name, "unit": it.unit, "max": float(it.values[i]), "t_max": float(time[i]),
+                     "case_max": case, "min": float(it.values[k]), "t_min": float(time[k]), "case_min": case})
+    return rows
+
+
+def envelope(per_case: dict[str, list[dict]]) -> list[dict]:
+    """Max of the maxima and min of the minima over cases, with the case of each."""
+    env: dict[str, dict] = {}
+    for rows in per_case.values():
+        for r in rows:
+            e = env.get(r["item"])
+            if e is None:
+                env[r["item"]] = dict(r)
+                continue
+            if r["max"] > e["max"]:
+                e.update(max=r["max"], t_max=r["t_max"], case_max=r["case_max"])
+            if r["min"] < e["min"]:
+                e.update(min=r["min"], t_min=r["t_min"], case_min=r["case_min"])
+    return list(env.values())
+
+
+FIELDS = ("item", "unit", "max", "t_max", "case_max", "min", "t_min", "case_min")
+
+
+def write_csv(rows: list[dict], path: Path) -> Path:
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=FIELDS)
+    w.writeheader()
+    for r in rows:
+        w.writerow({k: (f"{r[k]:.6e}" if isinstance(r[k], float) else r[k]) for k in FIELDS})
+    _atomic_text(path, "# liftoff max/min table; SI units (column 'unit'); times in s\n" + buf.getvalue())
+    return path
+
+
+def format_table(rows: list[dict], select=None, limit: int = 60) -> str:
+    sel = [r for r in rows if select is None or select(r["item"])][:limit]
+    w = max([len(r["item"]) for r in sel] + [10])
+    lines = [f"{'item':<{w}} {'unit':>7} {'max':>12} {'t (s)':>8} {'case':>12} {'min':>12} {'t (s)':>8} {'case':>12}"]
+    for r in sel:
+        lines.append(f"{r['item']:<{w}} {r['unit']:>7} {r['max']:12.4e} {r['t_max']:8.4f} {r['case_max']:>12} "
+                     f"{r['min']:12.4e} {r['t_min']:8.4f} {r['case_min']:>12}")
+    return "\n".join(lines)
+
+
+def _atomic_text(path: Path, text: str) -> None:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
+    with os.fdopen(fd, "w") as fh:
+        fh.write(text)
+    os.replace(tmp, path)
+
+
+# ------------------------------------------------------------------ plots
+def plots(result, cp, out: Path, case: str) -> list[Path]:
+    """PNG time histories: post forces, attach forces, c.g./top motion, payload acceleration."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = result.time
+    rel = [p.release_time for p in cp.case.posts if np.isfinite(p.release_time)]
+    t_rel = min(rel) if rel else None
+    paths = []
+
+    def finish(fig, ax_list, name, title):
+        for ax in ax_list:
+            if t_rel is not None:
+                ax.axvline(t_rel, color="red", ls="--", lw=1, label="release" if ax is ax_list[0] else None)
+            ax.grid(True, alpha=0.3)
+        ax_list[-1].set_xlabel("time (s)")
+        ax_list[0].legend(fontsize=7, ncol=4, loc="best")
+        fig.suptitle(f"{title} — case {case}")
+        fig.tight_layout()
+        p = out / f"{name}_{case}.png"
+        fig.savefig(p, dpi=110)
+        plt.close(fig)
+        paths.append(p)
+
+    # post forces: axial and lateral
+    fig, axs = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
+    for c, name in enumerate(result.contact_names):
+        cols = [j for j, lab in enumerate(result.contact_labels) if lab.split("/")[0] == name]
+        axs[0].plot(t, result.contact_force[:, cols[2]] / 1e6, lw=0.8, label=name)
+        axs[1].plot(t, np.hypot(result.contact_force[:, cols[0]], result.contact_force[:, cols[1]]) / 1e6, lw=0.8)
+    axs[0].set_ylabel("axial force on vehicle (MN)\n(+ compression)")
+    axs[1].set_ylabel("lateral force |Fx, Fy| (MN)")
+    finish(fig, list(axs), "post_forces", "Hold-down post forces")
+
+    att = {k: v for k, v in result.recovered.items() if k in cp.attach}
+    if att:
+        fig, axs = plt.subplots(3, 1, figsize=(10, 8), sharex=True)
+        for k, arr in att.items():
+            point, comp = cp.attach[k]
+            for j, ax in enumerate(axs):
+                ax.plot(t, arr[:, j] / 1e6, lw=0.8, label=f"{point} ({comp})")
+        for j, ax in enumerate(axs):
+            ax.set_ylabel(f"F{'xyz'[j]} (MN)")
+        finish(fig, list(axs), "attach_forces", "Attach forces (on the named component)")
+
+    fig, axs = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
+    cg = result.recovered["cg_motion"]
+    for j in range(3):
+        axs[0].plot(t, cg[:, j], lw=0.9, label=f"c.g. {'xyz'[j]} (m)")
+    labels = result.output_labels["a"]
+    top = cp.case.recovery["top"]
+    if top:
+        for j, c in enumerate("xy"):
+            col = labels.index(f"{top}:T{c}")
+            axs[1].plot(t, result.displacement["a"][:, col] - cg[:, j], lw=0.9, label=f"{top} {c} rel. to c.g. (m)")
+    axs[0].set_ylabel("c.g. motion (m)")
+    axs[1].set_ylabel("top-of-stack lateral (m)")
+    axs[1].legend(fontsize=7)
+    finish(fig, list(axs), "motion", "C.g. and top-of-stack motion")
+
+    pay = cp.case.recovery["payload"]
+    if pay:
+        fig, axs = plt.subplots(1, 1, figsize=(10, 4))
+        for c in "xyz":
+            col = labels.index(f"{pay}:T{c}")
+            axs.plot(t, result.acceleration["a"][:, col], lw=0.8, label=f"a{c}")
+        axs.set_ylabel(f"{pay} acceleration (m/s^2)")
+        finish(fig, [axs], "payload_acc", "Payload-station acceleration")
+    return paths
+
+
+# ------------------------------------------------------------------ snapshots
+def snapshot_times(result, cp) -> dict[str, int]:
+    """Step indices: maximum twang (largest top lateral deflection relative to the c.g.
+    before release), release, and the peak of the largest post or attach load."""
+    t = result.time
+    rel = [p.release_time for p in cp.case.posts if np.isfinite(p.release_time)]
+    t_rel = min(rel) if rel else t[-1]
+    i_rel = int(np.searchsorted(t, t_rel))
+    i_rel = min(i_rel, t.size - 1)
+    out = {"release": i_rel}
+    top = cp.case.recovery["top"]
+    if top:
+        labels = result.output_labels["a"]
+        cg = result.recovered["cg_motion"]
+        dx = result.displacement["a"][:, labels.index(f"{top}:Tx")] - cg[:, 0]
+        dy = result.displacement["a"][:, labels.index(f"{top}:Ty")] - cg[:, 1]
+        lat = np.hypot(dx, dy)[: max(i_rel, 1)]
+        out["max_twang"] = int(np.argmax(lat))
+    best, idx = -1.0, 0
+    for j, lab in enumerate(result.contact_labels):
+        if lab.endswith(":Tz"):
+            v = np.abs(result.contact_force[:, j])
+            if v.max() > best:
+                best, idx = float(v.max()), int(np.argmax(v))
+    for k in cp.attach:
+        v = np.linalg.norm(result.recovered[k][:, :3], axis=1)
+        if v.max() > best:
+            best, idx = float(v.max()), int(np.argmax(v))
+    out["peak_load"] = idx
+    return out
+
+
+def deformed_fields(stack, result, i: int) -> list[tuple[np.ndarray, np.ndarray, str, np.ndarray]]:
+    """(nodes, cells, cell_type, displacement) of every component at step i, elastic part
+    of the vehicle only (its rigid-body motion removed, so the picture stays on the pad)."""
+    from reduction import field_recovery
+
+    out = []
+    qa = result.recovered["modal_q_a"][i].copy()
+    qa[: np.sum(stack.vehicle.omega == 0)] = 0.0            # elastic deformation only
+    qb = result.recovered["modal_q_b"][i] if "modal_q_b" in result.recovered else np.zeros(0)
+    for name, comp in stack.components.items():
+        if comp.field_map is None or comp.nodes is None:
+            continue
+        if name == "pad":
+            u = field_recovery(stack.pad_asm, stack.pad_modes, name, comp) @ qb
+        else:
+            u = field_recovery(stack.vehicle_asm, stack.vehicle_modes, name, comp) @ qa
+        out.append((comp.nodes, comp.cells, comp.cell_type, u.reshape(-1, 3)))
+    return out
+
+
+def snapshot(path: Path, parts, title: str, scale: float | None = None) -> tuple[Path, float]:
+    """Off-screen PNG of the deformed stack and pad (pyvista), undeformed outline in grey."""
+    import pyvista
+
+    pyvista.OFF_SCREEN = True
+    vtk_type = {"tetra": 10, "tetra10": 24, "line": 3, "triangle": 5, "hexahedron": 12}
+    size = max(float(np.ptp(np.vstack([p[0] for p in parts]), axis=0).max()), 1e-9)
+    umax = max(float(np.linalg.norm(p[3], axis=1).max()) for p in parts)
+    if scale is None:
+        scale = 0.05 * size / umax if umax > 0 else 1.0
+    pl = pyvista.Plotter(off_screen=True, window_size=[900, 1100])
+    pl.set_background("white")
+    for nodes, cells, ctype, u in parts:
+        cells = np.asarray(cells, np.int64)
+        conn = np.hstack([np.full((cells.shape[0], 1), cells.shape[1]), cells]).ravel()
+        g = pyvista.UnstructuredGrid(conn, np.full(cells.shape[0], vtk_type[ctype], np.uint8), nodes)
+        d = g.copy()
+        d.points = nodes + scale * u
+        d.point_data["|u| (m)"] = np.linalg.norm(u, axis=1)
+        if ctype == "line":
+            pl.add_mesh(g, color="lightgrey", line_width=2)
+            pl.add_mesh(d, scalars="|u| (m)", cmap="viridis", line_width=6, clim=[0, umax or 1],
+                        scalar_bar_args={"title": "|u| (m)", "color": "black"})
+        else:
+            pl.add_mesh(g.extract_feature_edges(), color="lightgrey", line_width=1)
+            pl.add_mesh(d, scalars="|u| (m)", cmap="viridis", clim=[0, umax or 1],
+                        scalar_bar_args={"title": "|u| (m)", "color": "black"})
+    pl.add_text(title, position="upper_left", font_size=11, color="black")
+    pl.add_text(f"displacement scale x {scale:.3g} (elastic part; max |u| = {umax:.3g} m)",
+                position="lower_left", font_size=9, color="black")
+    pl.view_xz()
+    pl.camera.azimuth = 30
+    pl.camera.elevation = 10
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.stem, suffix=".tmp.png")
+    os.close(fd)
+    try:
+        pl.screenshot(tmp)
+        os.replace(tmp, path)
+    finally:
+        pl.close()
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+    return path, scale
+
+
+def snapshots(stack, result, cp, out: Path, case: str) -> list[Path]:
+    paths = []
+    for what, i in snapshot_times(result, cp).items():
+        parts = deformed_fields(stack, result, i)
+        if not parts:
+            break
+        p, _ = snapshot(out / f"snapshot_{what}_{case}.png", parts,
+                        f"{case}: {what.replace('_', ' ')} at t = {result.time[i]:.3f} s")
+        paths.append(p)
+    return paths
+
+
+# ------------------------------------------------------------------ summary
+def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[dict], wall: float) -> str:
+    m, cg = center_of_gravity(stack.vehicle)
+    lines = [f"liftoff run: {scenario.title}",
+             f"  vehicle  {stack.vehicle.n_modes} modes, mass {m / 1e3:.1f} t, c.g. {np.round(cg, 2).tolist()} m; "
+             f"pad {stack.pad.n_modes} modes"]
+    for case, (res, cp) in results.items():
+        lines.append(f"  case {case!r}: {res.time.size - 1} steps of h = {res.h:.3g} s "
+                     f"({res.time[0]:g} .. {res.time[-1]:g} s)")
+        lines.append(f"    {'post':<10}{'release (s)':>12}{'separation (s)':>16}{'recontacts':>12}"
+                     f"{'peak compr. (MN)':>18}{'peak tension (MN)':>19}")
+        for c in res.contact_summary():
+            sep = "-" if c["separation_time"] is None else f"{c['separation_time']:.4f}"
+            rel = "never" if not np.isfinite(c["release_time"]) else f"{c['release_time']:.3f}"
+            lines.append(f"    {c['name']:<10}{rel:>12}{sep:>16}{c['recontacts']:>12}"
+                         f"{c['peak_compression'] / 1e6:>18.3f}{c['peak_tension'] / 1e6:>19.3f}")
+    peaks = sorted((r for r in rows_env if r["item"].startswith(("attach", "post")) and r["unit"] == "N"),
+                   key=lambda r: -max(abs(r["max"]), abs(r["min"])))[:5]
+    if peaks:
+        lines.append("  largest loads (envelope over cases):")
+        for r in peaks:
+            big, t, c = (r["max"], r["t_max"], r["case_max"]) if abs(r["max"]) >= abs(r["min"]) else \
+                (r["min"], r["t_min"], r["case_min"])
+            lines.append(f"    {r['item']:<40} {big / 1e6:10.3f} MN at t = {t:.4f} s ({c})")
+    lines.append("  wall time per stage:")
+    for name, secs in stage_times:
+        lines.append(f"    {name:<38}{secs:8.2f} s")
+    lines.append(f"    {'total':<38}{wall:8.2f} s")
+    return "\n".join(lines)

@@ -1,0 +1,132 @@
+"""``liftoff run [SCENARIO.toml] --out DIR``: geometry to lift-off loads in one command.
+
+Stages: scenario -> components (gmsh + dolfinx, or stick) -> Craig-Bampton -> system
+modes -> per case: loads and vehicle effects -> static initial state -> two-body
+transient -> results HDF5, max/min tables, plots, snapshots; Table 1 and a summary.
+Without a scenario the embedded default (workflows/default_scenario.toml) runs.
+Outputs are listed in docs/workflow.md.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .cache import StageCache, default_cache_dir
+
+
+@dataclass
+class RunOutput:
+    out: Path
+    scenario: object
+    stacks: dict
+    results: dict                       # case -> (TransientResult, CaseProblem)
+    table1: object
+    envelope: list
+    stage_times: list
+    files: list = field(default_factory=list)
+    summary: str = ""
+
+
+def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None | bool = None,
+        progress: bool = True, plots: bool = True, snapshots: bool = True, echo=print) -> RunOutput:
+    """Run a scenario (path, parsed Scenario, or None for the default) into ``out``.
+
+    ``cache_dir``: None -> default (``$LIFTOFF_CACHE`` or DIR/../.liftoff-cache),
+    False -> no cache, else that directory."""
+    from transient import solve
+
+    from . import report
+    from .loads import build_problem, stack_mass_summary, table1
+    from .pipeline import build_stack
+    from .scenario import Scenario, load_scenario
+
+    t_start = time.perf_counter()
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
+    want_pics = snapshots and any(c.output["snapshots"] for c in sc.cases)
+    if want_pics:  # pyvista before dolfinx (FENICSX-NOTES.md)
+        import pyvista  # noqa: F401
+    cache = StageCache(None if cache_dir is False else Path(cache_dir) if cache_dir else default_cache_dir(out))
+    stage_times: list[tuple[str, float]] = []
+    stacks: dict[str, object] = {}
+    results: dict[str, tuple] = {}
+    files: list[Path] = []
+    per_case_rows: dict[str, list] = {}
+    tab1 = None
+    for case in sc.cases:
+        mkey = json.dumps(case.model, sort_keys=True, default=str)
+        if mkey not in stacks:
+            n0 = len(cache.log)
+            t0 = time.perf_counter()
+            stacks[mkey] = build_stack(case.model, cache, progress=progress)
+            for stage, label, how, secs in cache.log[n0:]:
+                stage_times.append((f"{stage} {label} ({how})", secs))
+            stage_times.append((f"model stages total", time.perf_counter() - t0))
+            echo(stack_mass_summary(stacks[mkey]))
+        stack = stacks[mkey]
+        t0 = time.perf_counter()
+        cp = build_problem(case, stack, progress=progress)
+        if tab1 is None:
+            tab1 = table1(stack, cp, case)
+            report._atomic_text(out / "table1.txt", tab1.table() + "\n")
+            report._atomic_text(out / "table1.csv", "# c.g. motion under static loads; m and rad\n" + tab1.csv())
+            files += [out / "table1.txt", out / "table1.csv"]
+            echo(tab1.table())
+        stage_times.append((f"loads + Table 1 [{case.name}]", time.perf_counter() - t0))
+        t0 = time.perf_counter()
+        res = solve(cp.problem)
+        stage_times.append((f"transient [{case.name}]", time.perf_counter() - t0))
+        t0 = time.perf_counter()
+        p = res.save(out / f"results_{case.name}.h5")
+        files.append(Path(p))
+        results[case.name] = (res, cp)
+        rows = report.maxmin(res.time, report.items(res, cp.attach), case.name)
+        per_case_rows[case.name] = rows
+        files.append(report.write_csv(rows, out / f"maxmin_{case.name}.csv"))
+        if plots and case.output["plots"]:
+            files += report.plots(res, cp, out, case.name)
+        if want_pics and case.output["snapshots"]:
+            files += report.snapshots(stack, res, cp, out, case.name)
+        stage_times.append((f"reports [{case.name}]", time.perf_counter() - t0))
+    env = report.envelope(per_case_rows)
+    files.append(report.write_csv(env, out / "maxmin_envelope.csv"))
+    echo("Max/min envelope over cases (posts: force on vehicle, Tz > 0 compression; full table in "
+         "maxmin_envelope.csv):")
+    echo(report.format_table(env, select=lambda s: s.startswith(("post", "attach")) and s[-2:] in
+                             ("Tx", "Ty", "Tz"), limit=40))
+    first = next(iter(stacks.values()))
+    text = report.summary(sc, first, results, stage_times, env, time.perf_counter() - t_start)
+    report._atomic_text(out / "summary.txt", text + "\n")
+    files.append(out / "summary.txt")
+    echo(text)
+    echo(f"  outputs in {out}/ ({len(files)} files); cache {cache.root}")
+    return RunOutput(out, sc, stacks, results, tab1, env, stage_times, files, text)
+
+
+# ------------------------------------------------------------------ command line
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    """Register ``liftoff run`` on the CLI's subparsers (workflows/cli.py)."""
+    p = sub.add_parser(
+        "run", help="geometry-to-loads lift-off run (default: the embedded Shuttle-like scenario)",
+        description="Run a lift-off scenario from geometry to loads: FE (or stick) models, "
+                    "Craig-Bampton, system modes, vehicle effects, two-body transient, tables, "
+                    "plots and snapshots. Without SCENARIO the embedded default runs "
+                    "(docs/workflow.md).")
+    p.add_argument("scenario", type=Path, nargs="?", default=None, help="scenario file (TOML)")
+    p.add_argument("--out", type=Path, required=True, metavar="DIR", help="output directory (created)")
+    p.add_argument("--cache", type=Path, default=None, metavar="DIR",
+                   help="stage cache directory (default $LIFTOFF_CACHE or DIR/../.liftoff-cache)")
+    p.add_argument("--no-cache", action="store_true", help="do not read or write the stage cache")
+    p.add_argument("--no-snapshots", action="store_true", help="skip the pyvista pictures")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.set_defaults(func=_cli)
+
+
+def _cli(args: argparse.Namespace) -> int:
+    run(args.scenario, args.out, cache_dir=False if args.no_cache else args.cache,
+        progress=not args.no_progress, snapshots=not args.no_snapshots)
+    return 0
