@@ -1,0 +1,40 @@
+"""The same model under `mpirun -n 2` gives the serial frequencies, mass and static answer."""
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.fem
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
+
+
+def _run(n, path, degree):
+    mpirun = shutil.which("mpirun")
+    if mpirun is None:
+        pytest.skip("mpirun not installed (Debian package openmpi-bin comes with python3-dolfinx-real)")
+    env = dict(os.environ, PYTHONPATH=str(ROOT), OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1", PYVISTA_OFF_SCREEN="true")
+    cmd = [mpirun, "-n", str(n), sys.executable, str(HERE / "mpi_modes_script.py"), path, str(degree)]
+    res = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=300, cwd=ROOT)
+    lines = [ln for ln in res.stdout.splitlines() if ln.startswith("RESULT ")]
+    assert res.returncode == 0 and lines, f"mpirun failed ({res.returncode}): {res.stderr[-2000:]}"
+    return json.loads(lines[0][7:])
+
+
+def test_two_ranks_match_serial(msh):
+    path = msh("box", L=1.0, W=0.1, H=0.1, n=(16, 2, 2))
+    serial, parallel = _run(1, path, 2), _run(2, path, 2)
+    assert parallel["size"] == 2 and serial["n_dof"] == parallel["n_dof"]
+    print(f"serial {np.round(serial['freq'][6:], 3)} Hz\n2 ranks {np.round(parallel['freq'][6:], 3)} Hz")
+    # same matrices up to DOF ordering; the eigensolver tolerance is 1e-10
+    assert parallel["n_rigid"] == serial["n_rigid"] == 6
+    assert np.allclose(parallel["freq"][6:], serial["freq"][6:], rtol=1e-8)
+    assert np.allclose(parallel["clamped_freq"], serial["clamped_freq"], rtol=1e-8)
+    assert parallel["mass"] == pytest.approx(serial["mass"], rel=1e-12)
+    assert np.allclose(parallel["tip"], serial["tip"], rtol=1e-8, atol=1e-14)
