@@ -94,7 +94,9 @@ def summary(scenario, result, path: Path, wall: float) -> str:
 
 
 # ------------------------------------------------------------------ entry point
-COMMANDS: list[Callable[[argparse._SubParsersAction], None]] = [_add_transient]
+from workflows.run import add_parser as _add_run  # noqa: E402  `liftoff run` (workflows/run.py)
+
+COMMANDS: list[Callable[[argparse._SubParsersAction], None]] = [_add_transient, _add_run]
 
 
 def build_parser() -> argparse.ArgumentParser:
