@@ -35,7 +35,8 @@ _CONTACT = {"name", "labels_a", "labels_b", "stiffness", "rigid", "axial", "norm
             "gap", "release_time"}
 _FORCE = {"body", "label", "value", "time", "csv", "scale"}
 _MODAL_FORCE = {"body", "time", "values", "csv", "scale"}
-_INITIAL = {"mode", "q_a", "v_a", "q_b", "v_b"}
+_INITIAL = {"mode", "q_a", "v_a", "q_b", "v_b", "rigid_displacement_a", "rigid_velocity_a",
+            "rigid_displacement_b", "rigid_velocity_b"}
 _OUTPUT = {"a", "b", "keep_modal"}
 _RECOVERY = {"name", "body", "file"}
 
@@ -357,21 +358,37 @@ def _modal_forces(where: _Where, spec: Any, bodies: dict[str, ModalBody], base: 
 
 
 def _initial(where: _Where, spec: Any, body_a: ModalBody, body_b: ModalBody):
+    """mode static|zero, or given: modal q/v (full length) plus rigid-body motion about ref_point.
+
+    A rigid-body motion u (Tx Ty Tz m, Rx Ry Rz rad; 3 or 6 entries) of a body adds the modal
+    coordinates Phi^T M RB u = participation @ u (exact for a rigid motion, eq. 14 quantities).
+    """
     from . import InitialState
 
     spec = _table(where, spec, _INITIAL)
     mode = _string(where / "mode", spec.get("mode", "static"))
     if mode not in INITIAL_MODES:
         raise (where / "mode").error(f"must be one of {', '.join(INITIAL_MODES)}, got {mode!r}")
-    given = [k for k in ("q_a", "v_a", "q_b", "v_b") if k in spec]
+    given = [k for k in sorted(_INITIAL - {"mode"}) if k in spec]
     if mode != "given":
         if given:
-            raise (where / given[0]).error(f"modal initial values need mode = \"given\" (mode is {mode!r})")
+            raise (where / given[0]).error(f"initial values need mode = \"given\" (mode is {mode!r})")
         return mode
     vec = {}
     for key, body in (("q_a", body_a), ("v_a", body_a), ("q_b", body_b), ("v_b", body_b)):
         vec[key] = (_vector(where / key, spec[key], length=body.n_modes) if key in spec
                     else np.zeros(body.n_modes))
+    for kind, target in (("displacement", "q"), ("velocity", "v")):
+        for b, body in (("a", body_a), ("b", body_b)):
+            key = f"rigid_{kind}_{b}"
+            if key not in spec:
+                continue
+            if body.is_ground:
+                raise (where / key).error("body b is ground: it has no rigid-body motion")
+            u = _vector(where / key, spec[key])
+            if u.size not in (3, 6):
+                raise (where / key).error(f"has {u.size} entries, expected 3 (Tx Ty Tz) or 6 (+ Rx Ry Rz)")
+            vec[f"{target}_{b}"] = vec[f"{target}_{b}"] + body.participation[:, :u.size] @ u
     return InitialState(vec["q_a"], vec["v_a"], vec["q_b"], vec["v_b"])
 
 

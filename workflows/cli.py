@@ -69,8 +69,11 @@ def _run_transient(args: argparse.Namespace) -> int:
     started = time.perf_counter()
     result = solve(scenario.problem)
     wall = time.perf_counter() - started
-    path = result.save(out / RESULTS_NAME)
-    print(summary(scenario, result, Path(path), wall))
+    path = Path(result.save(out / RESULTS_NAME))
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(path, 0o666 & ~umask)  # the atomic temp file is created 0600; give it normal permissions
+    print(summary(scenario, result, path, wall))
     return EXIT_OK
 
 
@@ -82,13 +85,13 @@ def summary(scenario, result, path: Path, wall: float) -> str:
              f"b = {p.body_b.name} ({p.body_b.n_modes} modes)",
              f"  time     {result.time[0]:g} .. {result.time[-1]:g} s, {result.time.size - 1} steps of "
              f"h = {result.h:.4g} s, method {p.method}, {wall:.2f} s wall"]
-    lines.append(f"  {'contact':<16}{'release (s)':>12}{'separation (s)':>16}"
+    lines.append(f"  {'contact':<16}{'release (s)':>12}{'separation (s)':>16}{'recontacts':>12}"
                  f"{'peak compression (N)':>22}{'peak tension (N)':>18}")
     for c in result.contact_summary():
-        sep = "-" if c["separation_time"] is None else f"{c['separation_time']:.6g}"
-        rel = "never" if c["release_time"] == float("inf") else f"{c['release_time']:.6g}"
-        lines.append(f"  {c['name']:<16}{rel:>12}{sep:>16}{c['peak_compression'] + 0.0:>22.6g}"
-                     f"{c['peak_tension'] + 0.0:>18.6g}")
+        sep = "never" if c["separation_time"] is None else f"{c['separation_time']:.6g}"
+        rel = {float("inf"): "never", float("-inf"): "unbolted"}.get(c["release_time"], f"{c['release_time']:.6g}")
+        lines.append(f"  {c['name']:<16}{rel:>12}{sep:>16}{c['recontacts']:>12d}"
+                     f"{c['peak_compression'] + 0.0:>22.6g}{c['peak_tension'] + 0.0:>18.6g}")
     lines.append(f"  results  {path}")
     return "\n".join(lines)
 
