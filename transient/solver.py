@@ -34,14 +34,27 @@ def _coupled_operator(body_a: ModalBody, body_b: ModalBody, rows, active):
 def static_solution(body_a: ModalBody, body_b: ModalBody, contacts, forcing: Forcing, t: float = 0.0):
     """Static equilibrium (section 2.6) with contacts closed/bolted; returns (InitialState, f).
 
-    f (n_dirs,) is the contact force on A (N) on every coupled direction (0 on rows not
-    coupled). Feedback matrices enter the stiffness as -matrix (eq. 27)."""
+    Bolted points (t < release_time) couple all directions; released points couple their
+    axial direction while it is in compression (a released point found in tension is opened
+    and the problem solved again). f (n_dirs,) is the contact force on A (N) on every
+    direction (0 where not coupled). Feedback matrices enter the stiffness as -matrix (eq. 27)."""
     if not isinstance(forcing, Forcing):
         raise InputError("forcing must be a Forcing object")
     rows = contact_rows(body_a, body_b, contacts)
+    act = _active_rows(rows, t)
+    released = ~(t < rows.release[rows.contact])
+    for _ in range(rows.n + 1):
+        state, f = _static_solve(body_a, body_b, rows, forcing, t, act)
+        tension = act & released & (rows.sign * f < 0)
+        if not tension.any():
+            return state, f
+        act = act & ~tension
+    raise ConvergenceError(f"static equilibrium at t = {t:g} s: the released contact set did not settle")
+
+
+def _static_solve(body_a, body_b, rows, forcing, t, act):
     na, nb = body_a.n_modes, body_b.n_modes
     n = na + nb
-    act = _active_rows(rows, t)
     D = _coupled_operator(body_a, body_b, rows, act)
     comp = rows.compliance[act]
     off = rows.offset[act]

@@ -1,0 +1,75 @@
+"""Result file: HDF5 round trip, units on every dataset, atomic write; outputs recovered on the fly
+agree with the same quantities recomputed from the kept modal histories."""
+import math
+
+import h5py
+import numpy as np
+import pytest
+
+from transient import Forcing, InputError, Recovery, TabulatedForce, TransientProblem, load_result, solve
+from transient.examples import holddown_contacts, toy_pad, toy_vehicle
+
+
+@pytest.fixture(scope="module")
+def run():
+    v, p = toy_vehicle(3), toy_pad(3)
+    contacts = holddown_contacts(3, 1e10, release_time=0.02)
+    fo = Forcing(tables=[TabulatedForce("a", "top:Tz", [0.0, 0.05], [0.0, 1e6])], gravity=(0, 0, -9.81))
+    loads = Recovery("post_1_forces", "a", ["post_1:Tz", "post_1:Tx"],
+                     disp=2.0 * v.rows(["post_1:Tz", "post_1:Tx"]), acc=v.rows(["post_1:Tz", "post_1:Tx"]),
+                     units="mixed test units")
+    prob = TransientProblem(v, p, contacts, fo, t_end=0.06, outputs={"a": ["top:Tz", "post_1:Tx"], "b": ["pad_2:Tz"]},
+                            recoveries=[loads], keep_modal=True, progress=False)
+    return v, p, solve(prob)
+
+
+def test_outputs_match_modal_histories(run):
+    v, p, r = run
+    rows = v.rows(["top:Tz", "post_1:Tx"])
+    assert np.allclose(r.displacement["a"], r.modal["q_a"] @ rows.T, rtol=1e-12, atol=1e-15)
+    assert np.allclose(r.velocity["a"], r.modal["v_a"] @ rows.T, rtol=1e-12, atol=1e-15)
+    assert np.allclose(r.acceleration["a"], r.modal["acc_a"] @ rows.T, rtol=1e-12, atol=1e-12)
+    rec = r.modal["q_a"] @ (2.0 * v.rows(["post_1:Tz", "post_1:Tx"])).T + r.modal["acc_a"] @ v.rows(
+        ["post_1:Tz", "post_1:Tx"]).T
+    assert np.allclose(r.recovered["post_1_forces"], rec, rtol=1e-12, atol=1e-12)
+    rb = r.modal["q_a"] @ np.linalg.solve(v.rigid_body_mass, v.participation.T).T
+    assert np.allclose(r.rigid_body_motion_a, rb, rtol=1e-10, atol=1e-14)
+    # the vehicle lifts off: all three hold-downs open after the release
+    assert np.all(np.isfinite(r.separation_time)) and np.all(r.separation_time >= 0.02)
+
+
+def test_round_trip_units_and_atomic_write(run, tmp_path):
+    _, _, r = run
+    path = r.save(tmp_path / "res.h5")
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["res.h5"]  # no temporary left behind
+    with h5py.File(path, "r") as f:
+        missing = []
+        f.visititems(lambda name, obj: missing.append(name)
+                     if isinstance(obj, h5py.Dataset) and "units" not in obj.attrs else None)
+        assert missing == []
+        assert f["contact/force"].attrs["units"].startswith("N")
+        assert f["time"].attrs["units"] == "s"
+    back = load_result(path)
+    assert np.array_equal(back.time, r.time)
+    assert np.array_equal(back.contact_force, r.contact_force)
+    assert np.array_equal(back.contact_state, r.contact_state)
+    assert back.contact_labels == r.contact_labels
+    assert np.array_equal(back.separation_time, r.separation_time, equal_nan=True)
+    assert np.array_equal(back.displacement["a"], r.displacement["a"])
+    assert np.array_equal(back.recovered["post_1_forces"], r.recovered["post_1_forces"])
+    assert back.recovered_units["post_1_forces"] == "mixed test units"
+    assert np.array_equal(back.modal["q_b"], r.modal["q_b"])
+    assert back.h == r.h and back.method == "direct"
+    s = back.contact_summary()
+    assert [c["name"] for c in s] == ["holddown_1", "holddown_2", "holddown_3"]
+    assert all(c["separation_time"] is not None and c["peak_compression"] > 0 for c in s)
+
+
+def test_load_result_rejects_other_files(tmp_path):
+    with pytest.raises(InputError, match="result file not found"):
+        load_result(tmp_path / "nope.h5")
+    bad = tmp_path / "other.h5"
+    with h5py.File(bad, "w") as f:
+        f.attrs["format"] = "something-else"
+    with pytest.raises(InputError, match="format is"):
+        load_result(bad)
