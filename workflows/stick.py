@@ -29,43 +29,59 @@ LINK = dict(E=2.0e11, A=0.5, I=0.05, mass_per_length=500.0, link=True)   # stiff
 
 @dataclass
 class StackParams:
-    """Shuttle-like dimensions (m), masses (kg), moduli (Pa). Defaults: see docs/workflow.md."""
+    """Shuttle-like stack (m, kg, Pa) in the frame of meshes.layout.StackLayout: z up, origin
+    on the core axis at the hold-down level, x along the booster-booster line (left at
+    x < 0), y towards the orbiter. Positions equal the StackLayout defaults (checked by a
+    test); masses follow the meshes/ defaults; see docs/workflow.md."""
 
-    core_length: float = 47.0
     core_radius: float = 4.2
-    core_base: float = 3.0
-    core_mass: float = 756.0e3
-    core_wall: float = 0.012
+    core_bottom_z: float = 9.2
+    core_top_z: float = 56.1
+    core_wall: float = 0.012           # equivalent skin for EA, EI (thin-walled tube)
     core_E: float = 7.0e10
-    srb_length: float = 45.5
-    srb_radius: float = 1.85
-    srb_offset: float = 6.35          # booster axis from the core axis (y)
-    srb_mass: float = 590.0e3
+    lox_bottom_z: float = 42.0         # LOX tank (forward) carries most of the propellant
+    core_mass_lox: float = 630.0e3
+    core_mass_aft: float = 126.0e3     # LH2, intertank, dry structure below lox_bottom_z
+    srb_radius: float = 1.855
+    srb_axis_x: float = 6.36
+    srb_length: float = 45.46
     srb_wall: float = 0.0127
     srb_E: float = 2.0e11
-    skirt_radius: float = 2.6         # hold-down points around the booster axis
-    orbiter_length: float = 37.0
-    orbiter_offset: float = 8.0       # orbiter axis from the core axis (x)
-    orbiter_base: float = 6.0
-    orbiter_mass: float = 110.0e3
-    orbiter_I: float = 3.0            # m^4, fuselage bending
+    srb_mass: float = 590.0e3
+    holddown_radius: float = 2.45      # StackLayout: skirt radius 2.7 - thickness 0.5 / 2
+    holddown_azimuths_deg: tuple = (45.0, 135.0, 225.0, 315.0)
+    gimbal_z: float = 1.30             # aft dome apex
+    srb_fwd_attach_z: float = 40.5
+    srb_aft_attach_z: float = 13.2
+    orbiter_radius: float = 2.6
+    orbiter_axis_y: float = 7.8
+    orbiter_bottom_z: float = 8.0
+    orbiter_length: float = 37.24
+    orbiter_fwd_attach_z: float = 37.0
+    orbiter_aft_attach_z: float = 13.2
+    orbiter_aft_attach_x: float = 1.5
+    orbiter_mass: float = 84.46e3      # structure (smeared on the fuselage beam)
+    orbiter_I: float = 3.0             # m^4, fuselage bending
     orbiter_A: float = 0.4
     orbiter_E: float = 7.0e10
-    attach_aft_z: float = 9.0
-    attach_fwd_z: float = 38.0
-    orbiter_fwd_z: float = 35.0
-    gimbal_z: float = 1.5
+    ssme_mass: float = 3 * 3180.0
+    ssme_cg_below_bulkhead: float = 1.8
+    payload_mass: float = 16.0e3
     payload_z: float = 25.0
     pad_mass: float = 3.73e6
-    pad_depth: float = -3.8           # deck girder plane (z)
-    pad_I: float = 4.0
-    pad_A: float = 1.0
-    pad_E: float = 2.0e11
-    post_height: float = 3.8          # hold-down posts from the deck to z = 0
-    post_A: float = 0.3
-    post_I: float = 0.02
-    post_mass: float = 20.0e3          # kg per hold-down post
-    pedestal_height: float = 8.0
+    deck_top_z: float = -2.0           # post tops at z = 0, posts 2 m tall
+    deck_thickness: float = 7.6
+    deck_I: float = 10.0               # m^4 per girder (0.05 m flanges, 7.6 m deep, ~10 m strips)
+    deck_A: float = 1.0
+    steel_E: float = 2.0e11
+    pedestal_height: float = 6.7
+    pedestal_I: float = 2.0
+    pedestal_A: float = 0.4
+    pedestal_xy: tuple = ((-20.0, -16.5), (0.0, -16.5), (20.0, -16.5),
+                          (-20.0, 18.5), (0.0, 18.5), (20.0, 18.5))
+    post_A: float = 1.0                # 1 m square steel posts
+    post_I: float = 0.083
+    post_mass: float = 15.7e3          # kg per post (1 x 1 x 2 m steel)
 
 
 def _tube(R: float, t: float) -> tuple[float, float]:
@@ -79,6 +95,11 @@ class _Frame:
         self.name, self.nodes, self.names, self.elems = name, [], [], []
         self.named: dict[str, int] = {}
         self.clamped: list[int] = []
+        self.masses: dict[int, float] = {}
+
+    def rename(self, i: int, name: str) -> None:
+        self.names[i] = name
+        self.named[name] = i
 
     def node(self, xyz, name: str | None = None) -> int:
         self.nodes.append(np.asarray(xyz, float))
@@ -123,6 +144,12 @@ class _Frame:
         r, c = np.concatenate(rows), np.concatenate(cols)
         K = sp.csr_matrix((np.concatenate(kv), (r, c)), shape=(n, n))
         M = sp.csr_matrix((np.concatenate(mv), (r, c)), shape=(n, n))
+        if self.masses:                  # lumped masses (translations; small rotary inertia)
+            d = np.zeros(n)
+            for i, m in self.masses.items():
+                d[6 * i:6 * i + 3] += m
+                d[6 * i + 3:6 * i + 6] += m * 1.0
+            M = M + sp.diags(d)
         keep_nodes = [i for i in range(len(nodes)) if i not in set(clamped)]
         keep = np.concatenate([np.arange(6 * i, 6 * i + 6) for i in keep_nodes])
         K, M = K[keep][:, keep].tocsr(), M[keep][:, keep].tocsr()
@@ -141,109 +168,114 @@ class _Frame:
 
 
 def _side(side: str) -> float:
-    return 1.0 if side == "left" else -1.0
+    return -1.0 if side == "left" else 1.0
 
 
-def _attach_y(p: StackParams, side: str) -> float:
-    return _side(side) * 0.5 * (p.core_radius + p.srb_offset - p.srb_radius)
+def holddown_points(p: StackParams, side: str) -> dict[str, np.ndarray]:
+    x0 = _side(side) * p.srb_axis_x
+    return {f"srb_{side}_hd_{k + 1}": np.array([x0 + p.holddown_radius * math.cos(math.radians(a)),
+                                               p.holddown_radius * math.sin(math.radians(a)), 0.0])
+            for k, a in enumerate(p.holddown_azimuths_deg)}
 
 
-def core(p: StackParams, h: float) -> Component:
+def attach_points(p: StackParams) -> dict[str, np.ndarray]:
+    out = {}
+    for side in ("left", "right"):
+        xm = _side(side) * 0.5 * (p.core_radius + p.srb_axis_x - p.srb_radius)
+        out[f"att_srb_{side}_fwd"] = np.array([xm, 0.0, p.srb_fwd_attach_z])
+        out[f"att_srb_{side}_aft"] = np.array([xm, 0.0, p.srb_aft_attach_z])
+    ym = 0.5 * (p.core_radius + p.orbiter_axis_y - p.orbiter_radius)
+    out["att_orb_fwd"] = np.array([0.0, ym, p.orbiter_fwd_attach_z])
+    out["att_orb_aft_left"] = np.array([-p.orbiter_aft_attach_x, ym, p.orbiter_aft_attach_z])
+    out["att_orb_aft_right"] = np.array([p.orbiter_aft_attach_x, ym, p.orbiter_aft_attach_z])
+    return out
+
+
+def core(p: StackParams, h: float) -> _Frame:
     f = _Frame("core")
     A, I = _tube(p.core_radius, p.core_wall)
-    z0, z1 = p.core_base, p.core_base + p.core_length
-    ids, zs = f.axis(0, 0, z0, z1, h, (p.attach_aft_z, p.attach_fwd_z, p.orbiter_fwd_z))
-    mpl = p.core_mass / p.core_length
-    for a, b in zip(ids, ids[1:]):
+    att = {k: v for k, v in attach_points(p).items()}
+    ids, zs = f.axis(0, 0, p.core_bottom_z, p.core_top_z, h,
+                     [v[2] for v in att.values()] + [p.lox_bottom_z])
+    for a, b, za, zb in zip(ids, ids[1:], zs, zs[1:]):
+        lox = za >= p.lox_bottom_z - 1e-9
+        mpl = p.core_mass_lox / (p.core_top_z - p.lox_bottom_z) if lox else \
+            p.core_mass_aft / (p.lox_bottom_z - p.core_bottom_z)
         f.beam(a, b, p.core_E, A, I, mpl)
-    f.names[ids[-1]] = "core_nose"
-    f.named["core_nose"] = ids[-1]
+    f.rename(ids[-1], "stack_top")
     at = dict(zip(zs, ids))
-    for side in ("left", "right"):
-        for tag, z in (("aft", p.attach_aft_z), ("fwd", p.attach_fwd_z)):
-            q = f.node((0, _attach_y(p, side), z), f"et_srb_{tag}_{side}")
-            f.beam(at[round(z, 6)], q, **LINK)
-    for tag, z in (("aft", p.attach_aft_z), ("fwd", p.orbiter_fwd_z)):
-        q = f.node((0.5 * (p.core_radius + p.orbiter_offset - 1.5), 0, z), f"et_orb_{tag}")
-        f.beam(at[round(z, 6)], q, **LINK)
+    for name, xyz in att.items():
+        f.beam(at[round(xyz[2], 6)], f.node(xyz, name), **LINK)
     return f
 
 
-def srb(p: StackParams, h: float, side: str) -> Component:
+def srb(p: StackParams, h: float, side: str) -> _Frame:
     f = _Frame(f"srb_{side}")
-    y = _side(side) * p.srb_offset
+    x = _side(side) * p.srb_axis_x
     A, I = _tube(p.srb_radius, p.srb_wall)
-    ids, zs = f.axis(0, y, 0.0, p.srb_length, h, (p.attach_aft_z, p.attach_fwd_z, p.gimbal_z))
+    ids, zs = f.axis(x, 0, 0.0, p.srb_length, h, (p.srb_aft_attach_z, p.srb_fwd_attach_z, p.gimbal_z))
     for a, b in zip(ids, ids[1:]):
         f.beam(a, b, p.srb_E, A, I, p.srb_mass / p.srb_length)
     at = dict(zip(zs, ids))
-    for tag, z in (("aft", p.attach_aft_z), ("fwd", p.attach_fwd_z)):
-        q = f.node((0, _attach_y(p, side), z), f"et_srb_{tag}_{side}")
-        f.beam(at[round(z, 6)], q, **LINK)
-    f.names[at[round(p.gimbal_z, 6)]] = f"srb_{side}_gimbal"       # nozzle gimbal on the axis
-    for k in range(4):
-        ang = math.pi / 4 + k * math.pi / 2
-        q = f.node((p.skirt_radius * math.cos(ang), y + p.skirt_radius * math.sin(ang), 0.0),
-                   f"srb_{side}_hd_{k + 1}")
-        f.beam(ids[0], q, **LINK)
+    f.rename(at[round(p.gimbal_z, 6)], f"srb_{side}_gimbal")       # nozzle gimbal on the axis
+    for name, xyz in attach_points(p).items():
+        if name.startswith(f"att_srb_{side}_"):
+            f.beam(at[round(xyz[2], 6)], f.node(xyz, name), **LINK)
+    for name, xyz in holddown_points(p, side).items():                # aft skirt
+        f.beam(ids[0], f.node(xyz, name), **LINK)
     return f
 
 
-def orbiter(p: StackParams, h: float) -> Component:
+def orbiter(p: StackParams, h: float) -> _Frame:
     f = _Frame("orbiter")
-    x = p.orbiter_offset
-    z0, z1 = p.orbiter_base, p.orbiter_base + p.orbiter_length
-    ids, zs = f.axis(x, 0, z0, z1, h, (p.attach_aft_z, p.orbiter_fwd_z, p.payload_z))
+    y = p.orbiter_axis_y
+    z0, z1 = p.orbiter_bottom_z, p.orbiter_bottom_z + p.orbiter_length
+    att = {k: v for k, v in attach_points(p).items() if k.startswith("att_orb")}
+    ids, zs = f.axis(0, y, z0, z1, h, [v[2] for v in att.values()] + [p.payload_z])
     for a, b in zip(ids, ids[1:]):
         f.beam(a, b, p.orbiter_E, p.orbiter_A, p.orbiter_I, p.orbiter_mass / p.orbiter_length)
     at = dict(zip(zs, ids))
-    f.names[at[round(p.payload_z, 6)]] = "orbiter_payload"
-    f.named["orbiter_payload"] = at[round(p.payload_z, 6)]
-    for tag, z in (("aft", p.attach_aft_z), ("fwd", p.orbiter_fwd_z)):
-        q = f.node((0.5 * (p.core_radius + p.orbiter_offset - 1.5), 0, z), f"et_orb_{tag}")
-        f.beam(at[round(z, 6)], q, **LINK)
-    for k, (dx, dy, dz) in enumerate(((1.5, 0.0, 1.0), (0.0, 1.4, -0.5), (0.0, -1.4, -0.5))):
-        q = f.node((x + dx, dy, z0 + dz), f"ssme_{k + 1}")
-        f.beam(ids[0] if dz < 0.5 else ids[1], q, **LINK)
+    f.rename(at[round(p.payload_z, 6)], "payload_station")
+    f.masses[at[round(p.payload_z, 6)]] = p.payload_mass
+    for name, xyz in att.items():
+        f.beam(at[round(xyz[2], 6)], f.node(xyz, name), **LINK)
+    m = f.node((0, y, z0 - p.ssme_cg_below_bulkhead), "ssme_mount")  # SSME cluster c.g.
+    f.masses[m] = p.ssme_mass
+    f.beam(ids[0], m, **LINK)
     return f
 
 
 def post_points(p: StackParams) -> dict[str, np.ndarray]:
-    out = {}
-    for side in ("left", "right"):
-        y = _side(side) * p.srb_offset
-        for k in range(4):
-            ang = math.pi / 4 + k * math.pi / 2
-            out[f"pad_post_{side}_{k + 1}"] = np.array(
-                [p.skirt_radius * math.cos(ang), y + p.skirt_radius * math.sin(ang), 0.0])
-    return out
+    return {k.replace(f"srb_{side}_hd_", f"pad_post_{side}_"): v
+            for side in ("left", "right") for k, v in holddown_points(p, side).items()}
 
 
-def pad(p: StackParams, h: float) -> Component:
-    """Deck girder grillage at z = pad_depth on six clamped pedestals; posts up to z = 0."""
+def pad(p: StackParams, h: float) -> _Frame:
+    """Deck girder grillage (mid-depth) on six clamped pedestals; hold-down posts up to z = 0."""
     f = _Frame("pad")
-    xs = np.array([-12.0, -2.6, 2.6, 12.0])
-    ys = np.array([-15.0, -p.srb_offset, 0.0, p.srb_offset, 15.0])
-    grid = {(i, j): f.node((x, y, p.pad_depth)) for i, x in enumerate(xs) for j, y in enumerate(ys)}
-    length = (xs.ptp() * len(ys) + ys.ptp() * len(xs))
-    mpl = p.pad_mass / length
-    for (i, j), a in grid.items():
-        if (i + 1, j) in grid:
-            f.beam(a, grid[(i + 1, j)], p.pad_E, p.pad_A, p.pad_I, mpl)
-        if (i, j + 1) in grid:
-            f.beam(a, grid[(i, j + 1)], p.pad_E, p.pad_A, p.pad_I, mpl)
-    clamped = []
-    for i in (0, len(xs) - 1):
-        for j in (0, 2, len(ys) - 1):
-            g = f.node((xs[i], ys[j], p.pad_depth - p.pedestal_height))
-            f.beam(g, grid[(i, j)], p.pad_E, 2 * p.pad_A, 2 * p.pad_I, 0.0)
-            clamped.append(g)
-    for name, xyz in post_points(p).items():
-        i = 1 if xyz[0] < 0 else 2
-        j = 3 if xyz[1] > 0 else 1
-        q = f.node(xyz, name)
-        f.beam(grid[(i, j)], q, p.pad_E, p.post_A, p.post_I, p.post_mass / p.post_height)
-    f.clamped = clamped
+    posts = post_points(p)
+    zd = p.deck_top_z - 0.5 * p.deck_thickness
+    xs = sorted({round(v, 6) for v in [-24.5, 24.5] + [xy[0] for xy in p.pedestal_xy]
+                 + [v[0] for v in posts.values()]})
+    ys = sorted({round(v, 6) for v in [-18.5, 22.5] + [xy[1] for xy in p.pedestal_xy]
+                 + [v[1] for v in posts.values()]})
+    grid = {(x, y): f.node((x, y, zd)) for x in xs for y in ys}
+    length = (xs[-1] - xs[0]) * len(ys) + (ys[-1] - ys[0]) * len(xs)
+    mpl = (p.pad_mass - len(posts) * p.post_mass) / length
+    for i, x in enumerate(xs):
+        for j, y in enumerate(ys):
+            if i + 1 < len(xs):
+                f.beam(grid[(x, y)], grid[(xs[i + 1], y)], p.steel_E, p.deck_A, p.deck_I, mpl)
+            if j + 1 < len(ys):
+                f.beam(grid[(x, y)], grid[(x, ys[j + 1])], p.steel_E, p.deck_A, p.deck_I, mpl)
+    for x, y in p.pedestal_xy:
+        g = f.node((x, y, p.deck_top_z - p.deck_thickness - p.pedestal_height))
+        f.beam(g, grid[(round(x, 6), round(y, 6))], p.steel_E, p.pedestal_A, p.pedestal_I, 0.0)
+        f.clamped.append(g)
+    for name, xyz in posts.items():
+        top = f.node(xyz, name)
+        f.beam(grid[(round(xyz[0], 6), round(xyz[1], 6))], top, p.steel_E, p.post_A, p.post_I,
+               p.post_mass / (xyz[2] - zd))
     return f
 
 
@@ -254,8 +286,8 @@ def stack_components(params: dict | None = None, element_length: float = 4.0) ->
 
 def stack_thermal(params: dict | None = None, element_length: float = 4.0) -> dict[str, dict[str, np.ndarray]]:
     """Per component, {volume: nodal load of a unit free axial strain}; the stick model's
-    only 'volume' of a component is the component itself."""
-    return {k: {k: f.thermal(f.clamped)} for k, f in _frames(params, element_length).items()}
+    only 'volume' of a component is its wall, ``<component>_wall`` (as the FE core's)."""
+    return {k: {f"{k}_wall": f.thermal(f.clamped)} for k, f in _frames(params, element_length).items()}
 
 
 def _frames(params: dict | None, element_length: float) -> dict[str, _Frame]:
