@@ -103,6 +103,13 @@ CASES = [
     ("initial-shape", _set("initial", {"mode": "given", "q_a": [0.0, 0.0]}), None,
      "initial.q_a: has 2 entries, expected 3"),
     ("initial-nan", _set("initial", {"mode": "given", "v_b": [0.0, NAN]}), None, "initial.v_b[1]: value is NaN"),
+    ("modal-force-columns", _set("modal_force", [{"body": "a", "time": [0.0, 1.0], "values": [[0.0, 0.0], [1.0, 1.0]]}]),
+     None, "modal_force[0].values[0]: has 2 entries, expected 3"),
+    ("modal-force-body", _set("modal_force", [{"body": "c", "time": [0.0, 1.0], "values": [[0.0], [1.0]]}]),
+     None, "modal_force[0].body: must be 'a' or 'b'"),
+    ("recovery-missing", _set("recovery", [{"name": "r", "body": "a", "file": "none.npz"}]), None,
+     "recovery[0].file: recovery file not found"),
+    ("ground-labels_b", _set("bodies.b", "ground"), None, "body b is ground: omit labels_b"),
     ("keep-modal-type", _set("output.keep_modal", "yes"), None, "output.keep_modal: expected true or false"),
 ]
 

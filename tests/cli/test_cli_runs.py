@@ -64,8 +64,8 @@ def test_fixture_scenario_runs(case_dir: Path, capsys):
         assert np.all(f["contact/force"][state == 2] == 0.0)  # no force while open
 
 
-def test_python_m_entry_point_and_no_run_stub(tmp_path: Path):
-    """`python -m workflows.cli` works; commands not built yet are absent (argparse: exit 2), not stubs."""
+def test_python_m_entry_point(tmp_path: Path):
+    """`python -m workflows.cli` works; a missing required option is an argparse error (exit 2)."""
     proc = subprocess.run([sys.executable, "-m", "workflows.cli", "--help"], capture_output=True, text=True)
     assert proc.returncode == 0 and "transient" in proc.stdout
     proc = subprocess.run([sys.executable, "-m", "workflows.cli", "transient"], capture_output=True, text=True)
@@ -128,3 +128,44 @@ def test_example_vehicle_on_pad(tmp_path: Path):
         # rigid-body motion is exact for forces linear over a step: quadratic in t, a = 0.3 g
         acc = 2 * np.polyfit(t[late], z[late], 2)[0]
         assert acc == pytest.approx(0.3 * G, rel=1e-6)
+
+
+def test_ground_rigid_bolt_modal_force_and_recovery(case_dir: Path, capsys):
+    """Body b = ground with a rigid (Lagrange) bolt; a [[modal_force]] CSV equal to Phi_row^T F(t) must act
+    exactly like the [[force]] table it replaces; a [[recovery]] row equal to the phi row of top:Tz must
+    reproduce the top:Tz displacement output."""
+    from .conftest import vehicle_body
+
+    veh = vehicle_body()
+    row = veh.rows(["top:Tz"])[0]
+    table = np.array([[0.0, 0.0], [0.004, 0.0], [0.006, 2000.0], [0.02, 2000.0]])
+    with open(case_dir / "modal.csv", "w") as fh:
+        fh.write("time," + ",".join(f"q{i}" for i in range(veh.n_modes)) + "\n")
+        for t, F in table:
+            fh.write(f"{t!r}," + ",".join(repr(x) for x in row * F) + "\n")
+    np.savez(case_dir / "rec.npz", labels=np.array(["top_z"]), disp=row[None, :], units=np.array("m"))
+    runs = {}
+    for variant in ("force", "modal"):
+        data = base_scenario()
+        data["bodies"]["b"] = "ground"
+        data["contact"][0].pop("labels_b")
+        data["contact"][0].pop("stiffness")
+        data["contact"][0]["rigid"] = True
+        data["output"].pop("b")
+        data["recovery"] = [{"name": "top_z", "body": "a", "file": "rec.npz"}]
+        if variant == "modal":
+            data["force"] = data["force"][1:]
+            data["modal_force"] = [{"body": "a", "csv": "modal.csv"}]
+        out = case_dir / variant
+        assert main(["transient", str(write_scenario(case_dir, data, f"{variant}.toml")), "--out", str(out),
+                     "--no-progress"]) == 0, capsys.readouterr().err
+        with _check_layout(out / "results.h5") as f:
+            runs[variant] = {k: f[k][()] for k in ("contact/force", "body_a/displacement", "recovered/top_z")}
+            assert f["recovered/top_z"].attrs["units"] == "m"
+    for k in runs["force"]:
+        # the same modal load, summed in a different order: agreement to round-off
+        np.testing.assert_allclose(runs["modal"][k], runs["force"][k], rtol=1e-9, atol=1e-12 * np.abs(runs["force"][k]).max())
+    # rigid bolt on ground: static preload = weight (exact Lagrange multiplier)
+    assert runs["force"]["contact/force"][0, 1] == pytest.approx((M1 + M2) * G, rel=1e-9)
+    np.testing.assert_allclose(runs["force"]["recovered/top_z"][:, 0], runs["force"]["body_a/displacement"][:, 0],
+                               rtol=1e-12, atol=1e-15)

@@ -1,0 +1,180 @@
+"""Benchmark: a lift-off-sized two-body contact transient against pyyeti's linear modal solve.
+
+Problem (issue 2): vehicle 200 modes (6 rigid), pad 100 modes (grounded), 8 hold-down
+points x 3 directions (24 contact DOF pairs, penalty coupling), h = 1e-4 s, 100,000
+steps, static initial conditions, gravity + thrust, bolts released half-way (t = 5 s),
+the vehicle lifting off under thrust > weight.
+
+Reference, in the same process: ``pyyeti.ode.SolveUnc(m, b, k, h).tsolve(force)`` on the
+same 300 uncoupled modes (unit modal mass, b = 2 zeta omega, k = omega^2) with the same
+applied modal forces and no contact: the linear modal integration that every loads
+engineer runs, with pyyeti's own exact (matrix-exponential) coefficients.
+
+Timed: liftoff's ``solve(problem)`` (set-up, static solve, time loop, output recovery)
+after a short warm-up run that triggers the numba compilation (compile time reported on
+its own line), and pyyeti's ``tsolve``; each the best of ``--repeat`` runs.
+
+    .venv/bin/python benchmarks/bench_transient.py [--steps 100000] [--repeat 1] [--profile]
+"""
+from __future__ import annotations
+
+import argparse
+import cProfile
+import math
+import os
+import platform
+import pstats
+import time
+
+import numpy as np
+
+from transient import (ContactPoint, Forcing, ModalBody, PointForce, TabulatedForce,
+                       TransientProblem, solve)
+
+N_VEH, N_RIGID, N_PAD, N_POINTS = 200, 6, 100, 8
+H = 1.0e-4
+MASS_VEH, MASS_PAD = 5.0e5, 2.0e6          # kg
+RADIUS, HEIGHT_CG = 5.0, 20.0              # m: hold-down circle, c.g. above it
+K_CONTACT = 5.0e9                          # N/m per direction
+THRUST = 1.3 * MASS_VEH * 9.81             # N, total, reached at t = 4 s (T/W = 1.3)
+
+
+def _points() -> tuple[list[str], np.ndarray]:
+    ang = 2 * np.pi * np.arange(N_POINTS) / N_POINTS
+    coords = np.c_[RADIUS * np.cos(ang), RADIUS * np.sin(ang), np.zeros(N_POINTS)]
+    return [f"hd{i + 1}" for i in range(N_POINTS)], coords
+
+
+def _labels(points: list[str], extra: tuple[str, ...] = ()) -> tuple[str, ...]:
+    return tuple(f"{p}:{c}" for p in points for c in ("Tx", "Ty", "Tz")) + extra
+
+
+def vehicle(rng: np.random.Generator) -> ModalBody:
+    """Free-free vehicle: 6 exact rigid-body modes about its c.g. plus 194 elastic modes
+    (1-150 Hz, 1 % damping) whose rows at the hold-down points are random but mass-normalised
+    in scale (|phi| ~ 1/sqrt(modal mass share)); an engine point at the c.g. axis carries thrust."""
+    points, coords = _points()
+    cg = np.array([0.0, 0.0, HEIGHT_CG])
+    inertia = MASS_VEH * np.array([HEIGHT_CG**2 / 3 + RADIUS**2 / 4] * 2 + [RADIUS**2 / 2])
+    mrb = np.diag(np.r_[[MASS_VEH] * 3, inertia])               # about the c.g.
+    allc = np.vstack([coords, [[0.0, 0.0, 0.0]]])
+    labels = _labels(points, ("engine:Tx", "engine:Ty", "engine:Tz"))
+    rb = np.zeros((len(labels), 6))
+    for i, r in enumerate(np.repeat(allc - cg, 3, axis=0)):
+        comp = i % 3
+        rb[i, comp] = 1.0
+        skew = np.array([[0, -r[2], r[1]], [r[2], 0, -r[0]], [-r[1], r[0], 0]])
+        rb[i, 3:] = -skew[comp]
+    phi = np.zeros((len(labels), N_VEH))
+    phi[:, :N_RIGID] = rb @ np.diag(1 / np.sqrt(np.diag(mrb)))
+    phi[:, N_RIGID:] = rng.standard_normal((len(labels), N_VEH - N_RIGID)) / math.sqrt(MASS_VEH / 20)
+    omega = np.r_[np.zeros(N_RIGID), 2 * np.pi * np.geomspace(1.0, 150.0, N_VEH - N_RIGID)]
+    part = np.zeros((N_VEH, 6))
+    part[:N_RIGID] = np.diag(np.sqrt(np.diag(mrb)))             # Phi^T M RB for the rigid modes
+    return ModalBody("vehicle", omega=omega, zeta=np.r_[np.zeros(N_RIGID), np.full(N_VEH - N_RIGID, 0.01)],
+                     dof_labels=labels, phi=phi, participation=part, ref_point=cg,
+                     points=tuple(points) + ("engine",), point_coords=allc, rigid_body_mass=mrb)
+
+
+def pad(rng: np.random.Generator) -> ModalBody:
+    """Grounded pad: 100 elastic modes (5-400 Hz, 2 % damping), random rows of mass-normalised scale."""
+    points, coords = _points()
+    labels = _labels(points)
+    omega = 2 * np.pi * np.geomspace(5.0, 400.0, N_PAD)
+    phi = rng.standard_normal((len(labels), N_PAD)) / math.sqrt(MASS_PAD / 10)
+    part = np.zeros((N_PAD, 6))
+    part[:, 2] = phi[2::3].mean(axis=0) * MASS_PAD / 10       # some vertical participation
+    return ModalBody("pad", omega=omega, zeta=0.02, dof_labels=labels, phi=phi, participation=part,
+                     points=tuple(points), point_coords=coords)
+
+
+def problem(n_steps: int, progress: bool = False) -> TransientProblem:
+    rng = np.random.default_rng(20260521)
+    veh, pd = vehicle(rng), pad(rng)
+    t_end = n_steps * H
+    points, _ = _points()
+    contacts = [ContactPoint(p, [f"{p}:Tx", f"{p}:Ty", f"{p}:Tz"], [f"{p}:Tx", f"{p}:Ty", f"{p}:Tz"],
+                             K_CONTACT, axial=2, release_time=0.5 * t_end) for p in points]
+    ramp = np.array([0.0, 0.4 * t_end, t_end])
+    forcing = Forcing(constant=[PointForce("a", "engine:Tx", 1.0e4)],
+                      tables=[TabulatedForce("a", "engine:Tz", ramp, np.array([0.0, THRUST, THRUST]))],
+                      gravity=(0.0, 0.0, -9.81))
+    return TransientProblem(veh, pd, contacts, forcing, t_end, h=H, initial="static",
+                            outputs={"a": ["engine:Tz", "hd1:Tz"], "b": ["hd1:Tz"]}, progress=progress)
+
+
+def modal_forces(prob: TransientProblem, n_steps: int) -> tuple[np.ndarray, ...]:
+    """Uncoupled (m, b, k) and the applied modal force history (300, n_steps + 1) for pyyeti."""
+    t = np.arange(n_steps + 1) * H
+    bodies = (prob.body_a, prob.body_b)
+    blocks = []
+    for key, body in zip("ab", bodies):
+        f = np.zeros((body.n_modes, t.size))
+        f += body.modal_gravity(prob.forcing.gravity)[:, None]
+        for pf in prob.forcing.constant:
+            if pf.body == key:
+                f += body.rows([pf.label])[0][:, None] * pf.value
+        for tf in prob.forcing.tables:
+            if tf.body == key:
+                f += np.outer(body.rows([tf.label])[0], np.interp(t, tf.time, tf.value))
+        blocks.append(f)
+    omega = np.r_[bodies[0].omega, bodies[1].omega]
+    zeta = np.r_[bodies[0].zeta, bodies[1].zeta]
+    return np.ones(omega.size), 2 * zeta * omega, omega**2, np.vstack(blocks)
+
+
+def best_of(fn, repeat: int) -> tuple[float, object]:
+    best, out = math.inf, None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t0)
+    return best, out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--steps", type=int, default=100_000)
+    ap.add_argument("--repeat", type=int, default=3, help="runs of each (interleaved); best is reported")
+    ap.add_argument("--profile", action="store_true", help="cProfile one liftoff run")
+    args = ap.parse_args()
+    from pyyeti import ode
+
+    t0 = time.perf_counter()
+    solve(problem(200))                                        # numba compilation
+    compile_s = time.perf_counter() - t0
+
+    prob = problem(args.steps)
+    m, b, k, force = modal_forces(prob, args.steps)
+    t_lift, t_yeti, res = math.inf, math.inf, None
+    for _ in range(args.repeat):  # interleaved, so that a busy machine affects both alike
+        dt, res = best_of(lambda: solve(prob), 1)
+        t_lift = min(t_lift, dt)
+        t_yeti = min(t_yeti, best_of(lambda: ode.SolveUnc(m, b, k, H).tsolve(force), 1)[0])
+
+    ratio = t_lift / t_yeti
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    print(f"bench_transient: {platform.machine()}, {os.cpu_count()} cores, load average {load:.1f}, "
+          f"numpy {np.__version__}, best of {args.repeat}")
+    print(f"  problem: vehicle {N_VEH} modes ({N_RIGID} rigid), pad {N_PAD} modes, {N_POINTS} points x 3 "
+          f"directions, h = {H:g} s, {args.steps} steps, release at t = {0.5 * args.steps * H:g} s")
+    print(f"  {'run':<44}{'wall (s)':>10}")
+    print(f"  {'liftoff first call (numba compile, 200 steps)':<44}{compile_s:>10.2f}")
+    print(f"  {'liftoff solve, contact transient':<44}{t_lift:>10.2f}")
+    print(f"  {'pyyeti SolveUnc.tsolve, 300 modes, no contact':<44}{t_yeti:>10.2f}")
+    print(f"  {'ratio liftoff / pyyeti (target <= 0.5)':<44}{ratio:>10.3f}  "
+          f"{'MET' if ratio <= 0.5 else 'NOT MET'}")
+    summary = getattr(res, "contact_summary", None)
+    if callable(summary):
+        seps = [c["separation_time"] for c in summary() if c["separation_time"] is not None]
+        if seps:
+            print(f"  separation: {len(seps)}/{N_POINTS} points, first at {min(seps):.4f} s, "
+                  f"last at {max(seps):.4f} s")
+    if args.profile:
+        prof = cProfile.Profile()
+        prof.runcall(solve, prob)
+        pstats.Stats(prof).sort_stats("cumulative").print_stats(15)
+
+
+if __name__ == "__main__":
+    main()
