@@ -17,6 +17,7 @@ from transient.errors import InputError
 
 from . import petsc_backend as pb
 from .model import FEModel
+from .spiders import rigid_body_shape
 
 
 @dataclass
@@ -59,6 +60,37 @@ def _check_singular(model: FEModel, lam: np.ndarray, rigid_tol_hz: float) -> int
     return n_zero
 
 
+def _rigid_modes(model: FEModel) -> tuple[np.ndarray, np.ndarray]:
+    """Geometric rigid-body modes, M-orthonormalised (eigenvalues = Rayleigh quotients)."""
+    K, M = model.matrices()
+    RB = rigid_body_shape(model.dof_coords, model.dof_comp, model.dof_coords.mean(axis=0))
+    Mr = RB.T @ (M @ RB)
+    w, V = np.linalg.eigh(0.5 * (Mr + Mr.T))
+    if w.min() <= 1e-12 * w.max():
+        raise InputError(f"model {model.name!r}: rigid-body mass matrix is singular (massless model?)")
+    Phi = RB @ (V / np.sqrt(w))
+    lam = np.einsum("ij,ij->j", Phi, K @ Phi)
+    return lam, Phi
+
+
+def _solve(model: FEModel, nev: int, sigma: float, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """Lowest ``nev`` modes. Free-free: the six rigid-body modes are the geometric ones and
+    SLEPc works in their M-orthogonal complement (deflation), so none can be missed."""
+    what = f"model {model.name!r}"
+    if model.grounded:
+        return pb.eigensolve(model.K, model.M, nev, sigma, tol=tol, what=what)
+    lam_r, Phi_r = _rigid_modes(model)
+    lam_f, Phi_f = pb.eigensolve(model.K, model.M, max(nev - 6, 1), sigma, tol=tol, what=what, deflation=Phi_r)
+    # SLEPc keeps them M-orthogonal to ~1e-8 (K RB = 0 only to round-off): one exact
+    # Gram-Schmidt step against the rigid modes, then renormalise
+    _, M = model.matrices()
+    Phi_f = Phi_f - Phi_r @ (Phi_r.T @ (M @ Phi_f))
+    Phi_f /= np.sqrt(np.einsum("ij,ij->j", Phi_f, M @ Phi_f))
+    lam, Phi = np.concatenate([lam_r, lam_f]), np.hstack([Phi_r, Phi_f])
+    order = np.argsort(lam, kind="stable")[:nev]
+    return lam[order], Phi[:, order]
+
+
 def eigenmodes(model: FEModel, n_modes: int | None = None, band_hz: tuple[float, float] | None = None,
                shift_hz: float = 1.0, rigid_tol_hz: float = 0.01, tol: float = 1e-10) -> Modes:
     """Lowest ``n_modes`` modes (rigid-body modes included for a free-free model), or all
@@ -74,7 +106,7 @@ def eigenmodes(model: FEModel, n_modes: int | None = None, band_hz: tuple[float,
         if n_modes < 1:
             raise InputError(f"eigenmodes: n_modes = {n_modes!r} must be >= 1")
         nev = min(max(n_modes, n_check), n_max)
-        lam, Phi = pb.eigensolve(model.K, model.M, nev, sigma, tol=tol, what=f"model {model.name!r}")
+        lam, Phi = _solve(model, nev, sigma, tol)
         n_rigid = _check_singular(model, lam, rigid_tol_hz)
         return Modes(lam[:n_modes], Phi[:, :n_modes], min(n_rigid, n_modes))
     f_lo, f_hi = map(float, band_hz)
@@ -82,7 +114,7 @@ def eigenmodes(model: FEModel, n_modes: int | None = None, band_hz: tuple[float,
         raise InputError(f"eigenmodes: band {band_hz!r} Hz must satisfy 0 <= f_lo < f_hi")
     nev = min(max(12, n_check), n_max)
     while True:
-        lam, Phi = pb.eigensolve(model.K, model.M, nev, sigma, tol=tol, what=f"model {model.name!r}")
+        lam, Phi = _solve(model, nev, sigma, tol)
         if np.sqrt(max(lam[-1], 0)) / (2 * np.pi) > f_hi or nev >= n_max:
             break
         nev = min(2 * nev, n_max)

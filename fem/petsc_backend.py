@@ -120,9 +120,12 @@ def _mumps_ksp(comm, A: PETSc.Mat, cholesky: bool = True) -> PETSc.KSP:
 
 
 def eigensolve(K: PETSc.Mat, M: PETSc.Mat, n_modes: int, sigma: float, tol: float = 1e-10,
-               max_it: int = 500, what: str = "model") -> tuple[np.ndarray, np.ndarray]:
+               max_it: int = 500, what: str = "model",
+               deflation: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The ``n_modes`` eigenpairs of K phi = lambda M phi nearest ``sigma`` (shift-and-invert
-    with a MUMPS Cholesky factor of K - sigma M, SLEPc Krylov-Schur, GHEP).
+    with a MUMPS Cholesky factor of K - sigma M, SLEPc Krylov-Schur, GHEP), M-orthogonal
+    to the columns of ``deflation`` (global array (n, k), e.g. the rigid-body modes:
+    a Krylov method can miss members of an exactly 6-fold cluster).
 
     Returns (lambda ascending, Phi (n, n_modes) M-orthonormal), gathered on every rank.
     Raises ConvergenceError if fewer than ``n_modes`` pairs converge and InputError if the
@@ -134,7 +137,12 @@ def eigensolve(K: PETSc.Mat, M: PETSc.Mat, n_modes: int, sigma: float, tol: floa
     eps = SLEPc.EPS().create(comm)
     eps.setOperators(K, M)
     eps.setProblemType(SLEPc.EPS.ProblemType.GHEP)
-    eps.setDimensions(n_modes, PETSc.DECIDE, PETSc.DECIDE)
+    n = K.getSize()[0]
+    ncv = min(n, max(2 * n_modes + 1, n_modes + 24))    # roomy subspace: near-double modes
+    eps.setDimensions(n_modes, ncv, PETSc.DECIDE)
+    if deflation is not None and deflation.shape[1]:
+        space = [vec_from_global(K, deflation[:, j]) for j in range(deflation.shape[1])]
+        eps.setDeflationSpace(space)
     eps.setType(SLEPc.EPS.Type.KRYLOVSCHUR)
     st = eps.getST()
     st.setType(SLEPc.ST.Type.SINVERT)
