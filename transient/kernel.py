@@ -4,10 +4,19 @@ Per step (section 2.3, DESIGN.md): both bodies are advanced with the contact for
 the end of the step set to zero (x_free), the end-of-step relative contact displacement
 is affine in the contact force, e = e_free + W f (W the step flexibility), and
 
-* ``direct``: (C + W_SS) f_S = -(c + e_free)_S on the active set S (C = diag(1/K_C),
-  0 for rigid bolts), the active set iterated until consistent (released axial rows in
-  tension open, open rows that penetrate close); the inverse per active-set pattern is
-  cached. Cycling switches to one flip per iteration (least-index rule), then fails.
+* ``direct``: (C + W_SS) f_S = -(c + e_free)_S on the active set S (C = diag(1/K_C)),
+  the active set iterated until consistent (released axial rows in tension open, open
+  rows that penetrate close); the inverse per active-set pattern is cached. Cycling
+  switches to one flip per iteration (least-index rule), then fails.
+  Rigid (Lagrange) rows: a force linear from the previous end value and closing the gap
+  at the step end is unstable (amplification -2 - sqrt(3) for a rigid mass), so a rigid
+  row carries its own start value g over the step, f(tau) = g + (f1 - g) tau / h, with
+  two conditions: relative displacement and velocity both zero at the step end. The
+  unknowns are x = [f1; g] and the step matrix is [[C + W_B, W_A], [Wd_B, Wd_A]] with
+  W_* = Phi diag(coefficient) Phi^T (B: end value, A: start value, d: velocity).
+  A released rigid row found in tension at the step end is 'opening': f1 = 0 and g
+  chosen so that the gap just closes at the step end (the force ramps down to zero over
+  the step); it is open from the next step on (or at once if g itself is tensile).
 * ``fixed-point``: the reference's iteration f <- -K_C (c + e_free + W f) with its
   convergence test |f_j - f_i| < tol (eq. 11).
 
@@ -75,12 +84,12 @@ def _free_step(coef, q, v, P0, P1, qf, vf):
 
 
 @njit(cache=True)
-def _pattern_inverse(active, Cdiag, W, keys, invs, nkeys, last):
-    """Cached inverse of (C + W)_SS embedded in an (n_c, n_c) matrix; returns (slot, nkeys, ok)."""
-    nc = active.size
+def _pattern_inverse(rows, cols, Cdiag, W, keys, invs, nkeys, last):
+    """Cached inverse of (diag(C) + W)[rows, cols] embedded at [cols, rows] of an (n, n) matrix,
+    so that x[cols] = -inv @ u[rows]. Returns (slot, nkeys, ok)."""
+    n = rows.size
     cap = keys.shape[0]
-    # most recently used first, then the others
-    for trial in range(nkeys + 1):
+    for trial in range(nkeys + 1):  # most recently used first, then the others
         if trial == 0:
             k = last
         else:
@@ -90,44 +99,53 @@ def _pattern_inverse(active, Cdiag, W, keys, invs, nkeys, last):
         if k < 0 or k >= nkeys:
             continue
         same = True
-        for j in range(nc):
-            if keys[k, j] != active[j]:
+        for j in range(n):
+            if keys[k, j] != rows[j] or keys[k, n + j] != cols[j]:
                 same = False
                 break
         if same:
             return k, nkeys, True
-    idx = np.empty(nc, dtype=np.int64)
-    ns = 0
-    for j in range(nc):
-        if active[j]:
-            idx[ns] = j
-            ns += 1
+    ir = np.empty(n, dtype=np.int64)
+    ic = np.empty(n, dtype=np.int64)
+    nr = 0
+    ncol = 0
+    for j in range(n):
+        if rows[j]:
+            ir[nr] = j
+            nr += 1
+        if cols[j]:
+            ic[ncol] = j
+            ncol += 1
     slot = nkeys if nkeys < cap else (last + 1) % cap
     if nkeys < cap:
         nkeys += 1
-    for j in range(nc):
-        keys[slot, j] = active[j]
-        for l in range(nc):
+    for j in range(n):
+        keys[slot, j] = rows[j]
+        keys[slot, n + j] = cols[j]
+        for l in range(n):
             invs[slot, j, l] = 0.0
-    if ns > 0:
-        A = np.empty((ns, ns))
-        for a in range(ns):
-            for b in range(ns):
-                A[a, b] = W[idx[a], idx[b]]
-            A[a, a] += Cdiag[idx[a]]
+    if nr != ncol:
+        return slot, nkeys, False
+    if nr > 0:
+        A = np.empty((nr, nr))
+        for a in range(nr):
+            for b in range(nr):
+                A[a, b] = W[ir[a], ic[b]]
+                if ir[a] == ic[b]:
+                    A[a, b] += Cdiag[ir[a]]
         ok = True
         try:
             Ainv = np.linalg.inv(A)
         except Exception:  # noqa: BLE001 - numba: singular matrix
             ok = False
-            Ainv = np.zeros((ns, ns))
+            Ainv = np.zeros((nr, nr))
         if not ok or not np.all(np.isfinite(Ainv)):
-            for j in range(nc):
+            for j in range(2 * n):
                 keys[slot, j] = False
             return slot, nkeys, False
-        for a in range(ns):
-            for b in range(ns):
-                invs[slot, idx[a], idx[b]] = Ainv[a, b]
+        for a in range(nr):
+            for b in range(nr):
+                invs[slot, ic[a], ir[b]] = Ainv[a, b]
     return slot, nkeys, True
 
 
@@ -138,7 +156,7 @@ def march(i0, i1, t0, h, method, tol, max_iter,
           # body b
           coef_b, w2_b, zw2_b, const_b, tk_b, Pk_b, U_b, V_b, fb_until_b, L_b, kind_b, targ_b,
           # contact
-          Phi_ca, Phi_cb, Cdiag, coff, dcontact, axial, nsign, release, W,
+          Phi_ca, Phi_cb, Cdiag, coff, dcontact, axial, nsign, release, W, C2,
           # state (mutated)
           q_a, v_a, q_b, v_b, f, active, Pc_a, Pc_b, ptr,
           keys, invs, ncache, last,
@@ -149,7 +167,16 @@ def march(i0, i1, t0, h, method, tol, max_iter,
     P0a = np.empty(na); P1a = np.empty(na); fba = np.empty(na); qfa = np.empty(na); vfa = np.empty(na)
     P0b = np.empty(nb); P1b = np.empty(nb); fbb = np.empty(nb); qfb = np.empty(nb); vfb = np.empty(nb)
     acc_a = np.empty(na); acc_b = np.empty(nb)
-    u = np.empty(nc); fn = np.empty(nc); Wf = np.empty(nc)
+    u = np.zeros(2 * nc); fn = np.empty(nc); Wf = np.empty(nc); g = np.zeros(nc); x2 = np.zeros(2 * nc)
+    rows2 = np.zeros(2 * nc, dtype=np.bool_)
+    cols2 = np.zeros(2 * nc, dtype=np.bool_)
+    opening = np.zeros(nc, dtype=np.bool_)
+    Pg_a = np.zeros(na); Pg_b = np.zeros(nb); Pf_a = np.zeros(na); Pf_b = np.zeros(nb)
+    rigid = np.empty(nc, dtype=np.bool_)
+    any_rigid = False
+    for j in range(nc):
+        rigid[j] = Cdiag[j] == 0.0
+        any_rigid = any_rigid or rigid[j]
     cand = np.empty(nc, dtype=np.bool_)
     bolted = np.empty(ncon, dtype=np.bool_)
     Kc = np.empty(nc)
@@ -178,6 +205,9 @@ def march(i0, i1, t0, h, method, tol, max_iter,
         for c in range(ncon):
             bolted[c] = tb < release[c]
         for j in range(nc):
+            if opening[j]:  # a rigid row that opened during the last step starts this one open
+                active[j] = False
+                opening[j] = False
             cand[j] = bolted[dcontact[j]] or axial[j]
             if not bolted[dcontact[j]] and not axial[j]:
                 active[j] = False
@@ -190,8 +220,17 @@ def march(i0, i1, t0, h, method, tol, max_iter,
                 for m in range(nb):
                     s -= Phi_cb[j, m] * qfb[m]
                 u[j] = s
+                if rigid[j]:
+                    s = 0.0
+                    for m in range(na):
+                        s += Phi_ca[j, m] * vfa[m]
+                    for m in range(nb):
+                        s -= Phi_cb[j, m] * vfb[m]
+                    u[nc + j] = s
             else:
                 u[j] = 0.0
+            if not (cand[j] and rigid[j]):
+                u[nc + j] = 0.0
         # ---------------- contact solve
         it = 0
         status = OK
@@ -199,28 +238,55 @@ def march(i0, i1, t0, h, method, tol, max_iter,
             single = False
             while True:
                 it += 1
-                slot, ncache[0], ok = _pattern_inverse(active, Cdiag, W, keys, invs, ncache[0], last[0])
+                # equations (rows2) and unknowns (cols2): penalty row j: eq j, unknown f1_j;
+                # rigid closed: eqs j (gap) and nc+j (velocity), unknowns f1_j and g_j;
+                # rigid opening: eq j (gap closes at the step end), unknown g_j (f1_j = 0)
+                for j in range(nc):
+                    rows2[j] = active[j]
+                    cols2[j] = active[j] and not opening[j]
+                    rows2[nc + j] = active[j] and rigid[j] and not opening[j]
+                    cols2[nc + j] = active[j] and rigid[j]
+                slot, ncache[0], ok = _pattern_inverse(rows2, cols2, C2, W, keys, invs, ncache[0], last[0])
                 if not ok:
                     return SINGULAR, i + 1, 0.0, 0.0
                 last[0] = slot
-                for j in range(nc):
+                n2 = nc if not any_rigid else 2 * nc
+                for j in range(n2):
                     s = 0.0
-                    if active[j]:
-                        for l in range(nc):
-                            if active[l]:
+                    if cols2[j]:
+                        for l in range(n2):
+                            if rows2[l]:
                                 s -= invs[slot, j, l] * u[l]
-                    fn[j] = s
+                    x2[j] = s
+                for j in range(nc):
+                    fn[j] = x2[j]
+                    g[j] = x2[nc + j] if any_rigid else 0.0
                 changed = False
                 for j in range(nc):
                     if not cand[j] or bolted[dcontact[j]]:
                         continue
                     flip = False
+                    if active[j] and rigid[j]:
+                        if not opening[j] and nsign[j] * fn[j] < 0.0:  # closed -> opening
+                            opening[j] = True
+                            changed = True
+                            if single:
+                                break
+                        elif opening[j] and nsign[j] * g[j] < 0.0:  # opening -> open
+                            opening[j] = False
+                            active[j] = False
+                            changed = True
+                            if single:
+                                break
+                        continue
                     if active[j]:
                         flip = nsign[j] * fn[j] < 0.0
                     else:
                         s = u[j]
                         for l in range(nc):
                             s += W[j, l] * fn[l]
+                            if any_rigid:
+                                s += W[j, nc + l] * g[l]
                         flip = nsign[j] * s < 0.0
                     if flip:
                         active[j] = not active[j]
@@ -267,23 +333,40 @@ def march(i0, i1, t0, h, method, tol, max_iter,
         for j in range(nc):
             f[j] = fn[j]
         for m in range(na):
-            Pc_a[m] = 0.0
+            Pc_a[m] = 0.0; Pf_a[m] = 0.0; Pg_a[m] = 0.0
         for m in range(nb):
-            Pc_b[m] = 0.0
+            Pc_b[m] = 0.0; Pf_b[m] = 0.0; Pg_b[m] = 0.0
         for j in range(nc):
             if fn[j] != 0.0:
                 for m in range(na):
-                    Pc_a[m] += Phi_ca[j, m] * fn[j]
+                    Pf_a[m] += Phi_ca[j, m] * fn[j]
                 for m in range(nb):
-                    Pc_b[m] -= Phi_cb[j, m] * fn[j]
+                    Pf_b[m] -= Phi_cb[j, m] * fn[j]
+            if g[j] != 0.0:
+                for m in range(na):
+                    Pg_a[m] += Phi_ca[j, m] * g[j]
+                for m in range(nb):
+                    Pg_b[m] -= Phi_cb[j, m] * g[j]
+        if any_rigid:  # the next step starts from the end values of the penalty rows only
+            for j in range(nc):
+                if fn[j] != 0.0 and not rigid[j]:
+                    for m in range(na):
+                        Pc_a[m] += Phi_ca[j, m] * fn[j]
+                    for m in range(nb):
+                        Pc_b[m] -= Phi_cb[j, m] * fn[j]
+        else:
+            for m in range(na):
+                Pc_a[m] = Pf_a[m]
+            for m in range(nb):
+                Pc_b[m] = Pf_b[m]
         for m in range(na):
-            q_a[m] = qfa[m] + coef_a[3, m] * Pc_a[m]
-            v_a[m] = vfa[m] + coef_a[7, m] * Pc_a[m]
-            acc_a[m] = P1a[m] + Pc_a[m] - zw2_a[m] * v_a[m] - w2_a[m] * q_a[m]
+            q_a[m] = qfa[m] + coef_a[3, m] * Pf_a[m] + coef_a[2, m] * Pg_a[m]
+            v_a[m] = vfa[m] + coef_a[7, m] * Pf_a[m] + coef_a[6, m] * Pg_a[m]
+            acc_a[m] = P1a[m] + Pf_a[m] - zw2_a[m] * v_a[m] - w2_a[m] * q_a[m]
         for m in range(nb):
-            q_b[m] = qfb[m] + coef_b[3, m] * Pc_b[m]
-            v_b[m] = vfb[m] + coef_b[7, m] * Pc_b[m]
-            acc_b[m] = P1b[m] + Pc_b[m] - zw2_b[m] * v_b[m] - w2_b[m] * q_b[m]
+            q_b[m] = qfb[m] + coef_b[3, m] * Pf_b[m] + coef_b[2, m] * Pg_b[m]
+            v_b[m] = vfb[m] + coef_b[7, m] * Pf_b[m] + coef_b[6, m] * Pg_b[m]
+            acc_b[m] = P1b[m] + Pf_b[m] - zw2_b[m] * v_b[m] - w2_b[m] * q_b[m]
         # ---------------- outputs at t1
         r = i + 1
         for j in range(nc):
@@ -291,7 +374,7 @@ def march(i0, i1, t0, h, method, tol, max_iter,
         for c in range(ncon):
             state[r, c] = BOLTED if bolted[c] else OPEN
         for j in range(nc):
-            if axial[j] and not bolted[dcontact[j]] and active[j]:
+            if axial[j] and not bolted[dcontact[j]] and active[j] and not opening[j]:
                 state[r, dcontact[j]] = CLOSED
         iters[r] = it
         _outputs(L_a, kind_a, targ_a, q_a, v_a, acc_a, Y_a, r)

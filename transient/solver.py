@@ -272,7 +272,13 @@ def solve(problem: TransientProblem) -> TransientResult:
 
     ca, coef_a, load_a, U_a, V_a, until_a = body_arrays(pa, "a")
     cb, coef_b, load_b, U_b, V_b, until_b = body_arrays(pb, "b")
-    W = (rows.Phi_a * ca.Bc) @ rows.Phi_a.T + (rows.Phi_b * cb.Bc) @ rows.Phi_b.T
+    def flex(ka, kb):  # Phi diag(coefficient) Phi^T summed over both bodies
+        return (rows.Phi_a * getattr(ca, ka)) @ rows.Phi_a.T + (rows.Phi_b * getattr(cb, kb)) @ rows.Phi_b.T
+
+    W = flex("Bc", "Bc")  # step flexibility (end-of-step force -> end-of-step displacement)
+    # kernel matrix for x = [f1; g] (g: start values of rigid rows, see kernel.py)
+    W2 = np.block([[W, flex("Ac", "Ac")], [flex("Bcd", "Bcd"), flex("Acd", "Acd")]])
+    C2 = np.concatenate([rows.compliance, np.zeros(rows.n)])
     out_a, out_b = _output_matrices(problem, "a"), _output_matrices(problem, "b")
 
     # outputs
@@ -290,6 +296,7 @@ def solve(problem: TransientProblem) -> TransientResult:
     # state at t0
     q_a, v_a, q_b, v_b = (np.array(x, dtype=float) for x in (init.q_a, init.v_a, init.q_b, init.v_b))
     Pc_a, Pc_b = rows.Phi_a.T @ f0, -(rows.Phi_b.T @ f0)
+    pen0 = np.where(rows.compliance > 0, f0, 0.0)  # rigid rows start each step from their own g
 
     def acc0(body, key, q, v, Pc, load):
         if body.n_modes == 0:
@@ -312,8 +319,9 @@ def solve(problem: TransientProblem) -> TransientResult:
     f = f0.copy()
     active = active0.copy()
     cap = 64
-    keys = np.zeros((cap, nc), dtype=np.bool_)
-    invs = np.zeros((cap, nc, nc))
+    keys = np.zeros((cap, 4 * nc), dtype=np.bool_)
+    invs = np.zeros((cap, 2 * nc, 2 * nc))
+    Pc_a, Pc_b = rows.Phi_a.T @ pen0, -(rows.Phi_b.T @ pen0)
     ncache = np.zeros(1, dtype=np.int64)
     last = np.zeros(1, dtype=np.int64)
     ptr = np.zeros(2, dtype=np.int64)
@@ -326,10 +334,10 @@ def solve(problem: TransientProblem) -> TransientResult:
     args_b = (coef_b, w2_b, zw2_b, load_b.const, load_b.times, C(load_b.table.reshape(load_b.times.size, pb.n_modes)),
               C(U_b), C(V_b), until_b, out_b["L"], out_b["kind"], out_b["targ"])
     args_c = (C(rows.Phi_a), C(rows.Phi_b), rows.compliance, rows.offset, rows.contact, rows.axial, rows.sign,
-              rows.release, C(W))
+              rows.release, C(W2), C2)
 
     bar = None
-    if problem.progress and n_steps > 20 * CHUNK:
+    if problem.progress and n_steps > 4 * CHUNK:
         from tqdm import tqdm
 
         bar = tqdm(total=n_steps, unit="step", desc="transient", leave=False)
