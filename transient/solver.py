@@ -329,10 +329,10 @@ def solve(problem: TransientProblem) -> TransientResult:
     w2_a, zw2_a = pa.omega ** 2, 2 * pa.zeta * pa.omega
     w2_b, zw2_b = pb.omega ** 2, 2 * pb.zeta * pb.omega
     C = np.ascontiguousarray
-    args_a = (coef_a, w2_a, zw2_a, load_a.const, load_a.times, C(load_a.table), C(U_a), C(V_a), until_a,
+    args_a = (coef_a, w2_a, zw2_a, load_a.const, load_a.times, C(load_a.table), C(U_a), C(V_a), float(until_a),
               out_a["L"], out_a["kind"], out_a["targ"])
     args_b = (coef_b, w2_b, zw2_b, load_b.const, load_b.times, C(load_b.table.reshape(load_b.times.size, pb.n_modes)),
-              C(U_b), C(V_b), until_b, out_b["L"], out_b["kind"], out_b["targ"])
+              C(U_b), C(V_b), float(until_b), out_b["L"], out_b["kind"], out_b["targ"])
     args_c = (C(rows.Phi_a), C(rows.Phi_b), rows.compliance, rows.offset, rows.contact, rows.axial, rows.sign,
               rows.release, C(W2), C2)
 
@@ -346,7 +346,8 @@ def solve(problem: TransientProblem) -> TransientResult:
         while i < n_steps:
             i1 = min(i + CHUNK, n_steps)
             st, step, info1, info2 = march(
-                i, i1, problem.t0, h, method, problem.tol, problem.max_iter, *args_a, *args_b, *args_c,
+                i, i1, float(problem.t0), float(h), method, float(problem.tol), int(problem.max_iter),
+                *args_a, *args_b, *args_c,
                 q_a, v_a, q_b, v_b, f, active, Pc_a, Pc_b, ptr, keys, invs, ncache, last,
                 Y_a, Y_b, Fc, state, iters, keep, Qa, Va, Aa, Qb, Vb, Ab)
             if st != 0:
