@@ -12,18 +12,19 @@ engineer runs, with pyyeti's own exact (matrix-exponential) coefficients.
 
 Timed: liftoff's ``solve(problem)`` (set-up, static solve, time loop, output recovery)
 after a short warm-up run that triggers the numba compilation (compile time reported on
-its own line), and pyyeti's ``tsolve``; each the best of ``--repeat`` runs.
+its own line), and pyyeti's ``tsolve``; each the best of ``--repeat`` interleaved runs,
+wall time and the CPU time of this process (less sensitive to other load on the machine).
+``--profile`` adds the per-step cost of the phases (numba code is opaque to cProfile, so
+the phases are timed as variants of the problem).
 
     .venv/bin/python benchmarks/bench_transient.py [--steps 100000] [--repeat 1] [--profile]
 """
 from __future__ import annotations
 
 import argparse
-import cProfile
 import math
 import os
 import platform
-import pstats
 import time
 
 import numpy as np
@@ -123,57 +124,75 @@ def modal_forces(prob: TransientProblem, n_steps: int) -> tuple[np.ndarray, ...]
     return np.ones(omega.size), 2 * zeta * omega, omega**2, np.vstack(blocks)
 
 
-def best_of(fn, repeat: int) -> tuple[float, object]:
-    best, out = math.inf, None
+def timed(fn) -> tuple[float, float, object]:
+    """(wall s, CPU s of this process, result) of one call."""
+    w0, c0 = time.perf_counter(), time.process_time()
+    out = fn()
+    return time.perf_counter() - w0, time.process_time() - c0, out
+
+
+def breakdown(n_steps: int, repeat: int) -> None:
+    """Where the time goes: per-step cost of the phases of the liftoff run (best of ``repeat``)."""
+    variants = {}
+    p = problem(n_steps)
+    variants["as benchmarked (bolted half, free half)"] = p
+    p = problem(n_steps)
+    for c in p.contacts:
+        c.release_time = math.inf
+    variants["bolted throughout (24 coupled rows)"] = p
+    p = problem(n_steps)
+    for c in p.contacts:
+        c.release_time = -math.inf
+    p.initial = "zero"
+    variants["released from t0 (free flight, 8 open rows)"] = p
+    p = problem(n_steps)
+    p.outputs = {"a": [], "b": []}
+    variants["as benchmarked, no labelled outputs"] = p
+    best = {k: math.inf for k in variants}
     for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
+        for k, p in variants.items():
+            best[k] = min(best[k], timed(lambda: solve(p))[1])
+    print(f"  breakdown ({n_steps} steps, CPU time per step):")
+    for k, v in best.items():
+        print(f"    {k:<46}{1e6 * v / n_steps:>8.1f} us")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--steps", type=int, default=100_000)
     ap.add_argument("--repeat", type=int, default=3, help="runs of each (interleaved); best is reported")
-    ap.add_argument("--profile", action="store_true", help="cProfile one liftoff run")
+    ap.add_argument("--profile", action="store_true", help="also time the phases of the liftoff run")
     args = ap.parse_args()
     from pyyeti import ode
 
-    t0 = time.perf_counter()
-    solve(problem(200))                                        # numba compilation
-    compile_s = time.perf_counter() - t0
+    compile_s = timed(lambda: solve(problem(200)))[0]            # numba compilation (or cache load)
 
     prob = problem(args.steps)
     m, b, k, force = modal_forces(prob, args.steps)
-    t_lift, t_yeti, res = math.inf, math.inf, None
+    lift, yeti, res = [math.inf, math.inf], [math.inf, math.inf], None
     for _ in range(args.repeat):  # interleaved, so that a busy machine affects both alike
-        dt, res = best_of(lambda: solve(prob), 1)
-        t_lift = min(t_lift, dt)
-        t_yeti = min(t_yeti, best_of(lambda: ode.SolveUnc(m, b, k, H).tsolve(force), 1)[0])
+        w, c, res = timed(lambda: solve(prob))
+        lift = [min(lift[0], w), min(lift[1], c)]
+        w, c, _ = timed(lambda: ode.SolveUnc(m, b, k, H).tsolve(force))
+        yeti = [min(yeti[0], w), min(yeti[1], c)]
 
-    ratio = t_lift / t_yeti
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"bench_transient: {platform.machine()}, {os.cpu_count()} cores, load average {load:.1f}, "
           f"numpy {np.__version__}, best of {args.repeat}")
     print(f"  problem: vehicle {N_VEH} modes ({N_RIGID} rigid), pad {N_PAD} modes, {N_POINTS} points x 3 "
           f"directions, h = {H:g} s, {args.steps} steps, release at t = {0.5 * args.steps * H:g} s")
-    print(f"  {'run':<44}{'wall (s)':>10}")
-    print(f"  {'liftoff first call (numba compile, 200 steps)':<44}{compile_s:>10.2f}")
-    print(f"  {'liftoff solve, contact transient':<44}{t_lift:>10.2f}")
-    print(f"  {'pyyeti SolveUnc.tsolve, 300 modes, no contact':<44}{t_yeti:>10.2f}")
-    print(f"  {'ratio liftoff / pyyeti (target <= 0.5)':<44}{ratio:>10.3f}  "
-          f"{'MET' if ratio <= 0.5 else 'NOT MET'}")
-    summary = getattr(res, "contact_summary", None)
-    if callable(summary):
-        seps = [c["separation_time"] for c in summary() if c["separation_time"] is not None]
-        if seps:
-            print(f"  separation: {len(seps)}/{N_POINTS} points, first at {min(seps):.4f} s, "
-                  f"last at {max(seps):.4f} s")
+    print(f"  {'run':<48}{'wall (s)':>10}{'CPU (s)':>10}")
+    print(f"  {'liftoff first call (numba compile/cache, 200 steps)':<48}{compile_s:>10.2f}")
+    print(f"  {'liftoff solve, contact transient':<48}{lift[0]:>10.2f}{lift[1]:>10.2f}")
+    print(f"  {'pyyeti SolveUnc.tsolve, 300 modes, no contact':<48}{yeti[0]:>10.2f}{yeti[1]:>10.2f}")
+    rw, rc = lift[0] / yeti[0], lift[1] / yeti[1]
+    print(f"  {'ratio liftoff / pyyeti (target <= 0.5)':<48}{rw:>10.3f}{rc:>10.3f}  "
+          f"{'MET' if rw <= 0.5 else 'NOT MET'} (wall)")
+    seps = [c["separation_time"] for c in res.contact_summary() if c["separation_time"] is not None]
+    if seps:
+        print(f"  separation: {len(seps)}/{N_POINTS} points, first at {min(seps):.4f} s, last at {max(seps):.4f} s")
     if args.profile:
-        prof = cProfile.Profile()
-        prof.runcall(solve, prob)
-        pstats.Stats(prof).sort_stats("cumulative").print_stats(15)
+        breakdown(min(args.steps, 20_000), args.repeat)
 
 
 if __name__ == "__main__":
