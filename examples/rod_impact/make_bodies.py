@@ -6,8 +6,9 @@ closed-form axial modes of a free-free rod (transient.examples.free_free_rod: ri
 rest. 1-D wave theory: force plateau rho c A v0 / 2 = 13.75 kN for 2 L / c = 0.39 ms,
 then the rods part with their velocities exchanged.
 
-    .venv/bin/python examples/rod_impact/make_bodies.py
+    .venv/bin/python examples/rod_impact/make_bodies.py [OUT_DIR]   (default: this directory)
 """
+import sys
 from pathlib import Path
 
 from transient import save_body
@@ -17,15 +18,16 @@ HERE = Path(__file__).resolve().parent
 L, E, RHO, A, N_MODES = 1.0, 70e9, 2700.0, 1e-3, 100
 
 
-def main() -> None:
+def main(out: Path = HERE) -> None:
+    out.mkdir(parents=True, exist_ok=True)
     rod_a = free_free_rod(L, E, RHO, A, N_MODES, name="rod_a", end_labels=("a0", "a1"), component="Tx",
                           origin=-L, stations=1)
     rod_b = free_free_rod(L, E, RHO, A, N_MODES, name="rod_b", end_labels=("b0", "b1"), component="Tx",
                           origin=0.0, stations=1)
-    save_body(rod_a, HERE / "rod_a.npz")
-    save_body(rod_b, HERE / "rod_b.npz")
+    save_body(rod_a, out / "rod_a.npz")
+    save_body(rod_b, out / "rod_b.npz")
     print(f"wrote rod_a.npz and rod_b.npz ({N_MODES} modes each)")
 
 
 if __name__ == "__main__":
-    main()
+    main(Path(sys.argv[1]) if len(sys.argv) > 1 else HERE)

@@ -7,8 +7,9 @@ post on three bars to anchors, 12 modes, 5 % damping).
 thrust.csv: total engine thrust (N) against time (s): ignition ramp to 1.3 x the vehicle
 weight while bolted, held; the bolts are released at 0.5 s (scenario.toml).
 
-    .venv/bin/python examples/vehicle_on_pad/make_bodies.py
+    .venv/bin/python examples/vehicle_on_pad/make_bodies.py [OUT_DIR]   (default: this directory)
 """
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -20,14 +21,15 @@ HERE = Path(__file__).resolve().parent
 N_POSTS, G = 4, 9.81
 
 
-def main() -> None:
+def main(out: Path = HERE) -> None:
+    out.mkdir(parents=True, exist_ok=True)
     vehicle, pad = toy_vehicle(N_POSTS), toy_pad(N_POSTS)
-    save_body(vehicle, HERE / "vehicle.npz")
-    save_body(pad, HERE / "pad.npz")
+    save_body(vehicle, out / "vehicle.npz")
+    save_body(pad, out / "pad.npz")
     weight = vehicle.mass * G
     t = np.array([0.0, 0.1, 0.4, 2.0])
     thrust = np.array([0.0, 0.0, 1.3 * weight, 1.3 * weight])
-    with open(HERE / "thrust.csv", "w") as fh:
+    with open(out / "thrust.csv", "w") as fh:
         fh.write("time_s,thrust_N\n")
         for ti, fi in zip(t, thrust):
             fh.write(f"{ti:.4f},{fi:.1f}\n")
@@ -36,4 +38,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    main(Path(sys.argv[1]) if len(sys.argv) > 1 else HERE)
