@@ -219,8 +219,17 @@ def add_physical(dim: int, name: str, tags: list[int]) -> int:
     return tag
 
 
-def mesh_and_write(path: Path, mesh_size: float) -> int:
-    """Mesh in 3D (P1 tets, sizes <= mesh_size) and write ``path`` atomically. Returns node count."""
+def curvature_elements(thickness: float, max_curvature_radius: float) -> int:
+    """Elements per 2 pi of curvature so that the facet sag rho (1 - cos(pi/n)) of a curved
+    wall stays below thickness/2 (else the inner and outer surface meshes of a thin wall can
+    cross and the 3D mesher fails): n >= pi sqrt(rho / t)."""
+    return int(math.ceil(math.pi * math.sqrt(max_curvature_radius / thickness)))
+
+
+def mesh_and_write(path: Path, mesh_size: float, curvature_n: int = 0) -> int:
+    """Mesh in 3D (P1 tets, sizes <= mesh_size, and <= 2 pi rho / curvature_n on walls of
+    curvature radius rho when curvature_n > 0) and write ``path`` atomically. Returns node count."""
+    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", int(curvature_n))
     gmsh.option.setNumber("Mesh.MeshSizeMax", mesh_size)
     gmsh.option.setNumber("Mesh.MeshSizeMin", 0.0)
     gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 1)
@@ -238,6 +247,15 @@ def mesh_and_write(path: Path, mesh_size: float) -> int:
         if tmp.exists():
             tmp.unlink()
     return n_nodes
+
+
+def physical_measures(dim: int) -> dict[str, float]:
+    """CAD measure (area for dim 2, volume for dim 3; m^2, m^3) of every physical group of dim."""
+    out = {}
+    for d, tag in gmsh.model.getPhysicalGroups(dim):
+        ents = gmsh.model.getEntitiesForPhysicalGroup(d, tag)
+        out[gmsh.model.getPhysicalName(d, tag)] = float(sum(occ.getMass(d, e) for e in ents))
+    return out
 
 
 def group_volume(vols: list) -> float:

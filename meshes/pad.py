@@ -149,6 +149,7 @@ def build_pad(p: PadParams, out_dir) -> Geometry:
         for g, ds in groups.items():
             _occ.add_physical(3, g, [tg for _, tg in ds])
         vols = {g: _occ.group_volume(ds) for g, ds in groups.items()}
+        areas = _occ.physical_measures(2)
         n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size)
     post_mass = STEEL.rho * vols["pad_posts"]
     if p.mlp_mass <= post_mass:
@@ -158,7 +159,7 @@ def build_pad(p: PadParams, out_dir) -> Geometry:
     fill = 1 - (1 - 2 * p.pedestal_wall_thickness / ps) ** 2  # steel area / box area
     mats = {"pad_deck": Material("MLP-deck-equivalent", E_eq, 0.3, rho), "pad_posts": STEEL,
             "pad_pedestals": Material("steel-column-equivalent", STEEL.E * fill, STEEL.nu, STEEL.rho * fill)}
-    geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), mats, patches, [], [], clamped, vols, n_nodes)
+    geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), mats, patches, [], [], clamped, vols, n_nodes, areas)
     geo.save(out_dir / f"{p.name}.json")
     return geo
 

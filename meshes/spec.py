@@ -17,7 +17,8 @@ JSON sidecar layout (``format = "liftoff-geometry"``, ``version = 1``, ``units =
 the fields above as plain JSON; ``msh_path`` is stored relative to the sidecar's folder
 when the mesh lies in or below it, and is returned absolute by :meth:`Geometry.load`.
 Optional extras: ``group_volumes`` (CAD volume of each physical volume group, m^3, from
-``gmsh.model.occ.getMass``) and ``mesh_nodes`` (node count of the written mesh).
+``gmsh.model.occ.getMass``), ``surface_areas`` (CAD area of each physical surface group,
+m^2) and ``mesh_nodes`` (node count of the written mesh).
 """
 from __future__ import annotations
 
@@ -121,6 +122,7 @@ class Geometry:
     clamped: list[str] = field(default_factory=list)
     group_volumes: dict[str, float] = field(default_factory=dict)  # CAD volumes (m^3)
     mesh_nodes: int = 0
+    surface_areas: dict[str, float] = field(default_factory=dict)  # CAD areas of surface groups (m^2)
 
     def __post_init__(self) -> None:
         self.msh_path = str(self.msh_path)
@@ -170,6 +172,7 @@ class Geometry:
             "clamped": list(self.clamped),
             "group_volumes": dict(self.group_volumes),
             "mesh_nodes": int(self.mesh_nodes),
+            "surface_areas": dict(self.surface_areas),
         }
 
     def save(self, path) -> Path:
@@ -214,6 +217,7 @@ class Geometry:
                 clamped=list(d["clamped"]),
                 group_volumes={g: float(v) for g, v in d.get("group_volumes", {}).items()},
                 mesh_nodes=int(d.get("mesh_nodes", 0)),
+                surface_areas={g: float(v) for g, v in d.get("surface_areas", {}).items()},
             )
         except (KeyError, TypeError) as e:
             raise InputError(f"{path}: malformed {FORMAT} file ({e!r})") from None

@@ -308,9 +308,13 @@ def build_tank(p: TankParams, out_dir) -> Geometry:
         if p.dry_mass is not None:
             rho = p.dry_mass / volume
             mat = Material(f"{p.material.name}-equivalent", p.material.E * rho / p.material.rho, p.material.nu, rho)
-        n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size)
+        areas = _occ.physical_measures(2)
+        rho_max = max([R] + [R * R / c.a_bottom for c in lay] + [R * R / c.a_top for c in lay]
+                      + [c.a_bottom ** 2 / R for c in lay] + [c.a_top ** 2 / R for c in lay])
+        n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size,
+                                      _occ.curvature_elements(t, rho_max))
     geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), {wall: mat}, patches, [], smeared, [],
-                   {wall: volume}, n_nodes)
+                   {wall: volume}, n_nodes, areas)
     geo.save(out_dir / f"{p.name}.json")
     return geo
 

@@ -86,6 +86,7 @@ class BoosterParams:
     aft_dome_ratio: float = 0.7
     nose_ratio: float = 1.9
     skirt_joint_height: float = 0.5     # skirt outer surface meets the case this far above case_bottom_z
+    skirt_foot_height: float = 0.4      # vertical foot ring at the skirt bottom (hold-down pads)
     case_mass: float = 75_000.0         # case, nose, forward skirt, attach rings, SRB avionics (kg)
     skirt_mass: float = 5_000.0
     propellant_mass: float = 499_000.0
@@ -104,6 +105,7 @@ class BoosterParams:
         require_positive(o, length=self.length, case_thickness=self.case_thickness,
                          case_bottom_z=self.case_bottom_z, aft_dome_ratio=self.aft_dome_ratio,
                          nose_ratio=self.nose_ratio, skirt_joint_height=self.skirt_joint_height,
+                         skirt_foot_height=self.skirt_foot_height,
                          case_mass=self.case_mass, skirt_mass=self.skirt_mass,
                          propellant_mass=self.propellant_mass, nozzle_mass=self.nozzle_mass,
                          nozzle_cg_below_gimbal=self.nozzle_cg_below_gimbal,
@@ -120,6 +122,8 @@ class BoosterParams:
             raise InputError(f"{o}.case_bottom_z: the aft dome reaches below the skirt bottom")
         if self.cyl_top_z <= max(self.layout.srb_fwd_attach_z, self.case_bottom_z) + 1.0:
             raise InputError(f"{o}.length: case too short for the forward attach at z = {self.layout.srb_fwd_attach_z}")
+        if self.skirt_foot_height >= self.case_bottom_z - self.aft_dome_ratio * R:
+            raise InputError(f"{o}.skirt_foot_height must be below the aft dome apex")
         if self.layout.srb_skirt_radius - self.layout.srb_skirt_thickness <= R:
             raise InputError(f"{o}: skirt bottom inner radius must exceed the case radius")
         if 2 * self.holddown_patch_radius >= self.layout.srb_skirt_thickness:
@@ -138,25 +142,27 @@ def booster_closed_form_volumes(p: BoosterParams) -> dict[str, float]:
     L = p.cyl_top_z - p.case_bottom_z
     a_b, a_t = p.aft_dome_ratio * R, p.nose_ratio * R
     case = capsule_volume(R, a_b, a_t, L) - capsule_volume(R - t, a_b - t, a_t - t, L)
-    (x1, _), (x2, _), (x3, z3), (x4, z4) = _skirt_quad(p)
-    zc = p.case_bottom_z
+    zc, z3 = p.case_bottom_z, p.case_bottom_z + p.skirt_joint_height
+    hf, Rb, ts = p.skirt_foot_height, p.layout.srb_skirt_radius, p.layout.srb_skirt_thickness
 
     def skirt_area(z: float) -> float:  # skirt cross-section outside the case solid at height z
-        ro = x2 + (x3 - x2) * z / z3
-        ri = x1 + (x4 - x1) * z / z4 if z <= z4 else x4 + (x3 - x4) * (z - z4) / (z3 - z4)
+        ro = np.interp(z, [0.0, hf, z3], [Rb, Rb, R])
+        ri = np.interp(z, [0.0, hf, zc, z3], [Rb - ts, Rb - ts, R - 0.5 * t, R])
         s = zc - z
         case_o = R if s <= 0 else (R * math.sqrt(1 - (s / a_b) ** 2) if s < a_b else 0.0)
         lo = max(ri, case_o)
         return math.pi * (ro * ro - lo * lo) if ro > lo else 0.0
 
-    skirt = quad(skirt_area, 0.0, z3, limit=400, points=[z4, zc - a_b, zc])[0]
+    skirt = quad(skirt_area, 0.0, z3, limit=400, points=[hf, zc - a_b, zc])[0]
     return {f"{p.name}_case": case, f"{p.name}_skirt": skirt}
 
 
 def _skirt_quad(p: BoosterParams):
     R, t = p.layout.srb_radius, p.case_thickness
     Rb, ts = p.layout.srb_skirt_radius, p.layout.srb_skirt_thickness
-    return [(Rb - ts, 0.0), (Rb, 0.0), (R, p.case_bottom_z + p.skirt_joint_height), (R - 0.5 * t, p.case_bottom_z)]
+    hf = p.skirt_foot_height
+    return [(Rb - ts, 0.0), (Rb, 0.0), (Rb, hf), (R, p.case_bottom_z + p.skirt_joint_height),
+            (R - 0.5 * t, p.case_bottom_z), (Rb - ts, hf)]
 
 
 def build_booster(p: BoosterParams, out_dir) -> Geometry:
@@ -185,7 +191,7 @@ def build_booster(p: BoosterParams, out_dir) -> Geometry:
         occ.synchronize()
         tools, refs = [], {}
         for name, pt in lay.holddown_points(p.side).items():
-            tools.append(_occ.cylinder_tool(name, pt[:2], p.holddown_patch_radius, -1.0, 0.15))
+            tools.append(_occ.cylinder_tool(name, pt[:2], p.holddown_patch_radius, -1.0, 0.5 * p.skirt_foot_height))
             refs[name] = pt
         w = p.attach_patch_half_width
         drop = a_b * (1 - math.sqrt(1 - (w / R) ** 2))
@@ -211,14 +217,16 @@ def build_booster(p: BoosterParams, out_dir) -> Geometry:
         _occ.add_physical(3, case_g, [tg for _, tg in groups[case_g]])
         _occ.add_physical(3, skirt_g, [tg for _, tg in groups[skirt_g]])
         vols = {case_g: _occ.group_volume(groups[case_g]), skirt_g: _occ.group_volume(groups[skirt_g])}
-        n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size)
+        areas = _occ.physical_measures(2)
+        rho_max = max(R, R * R / a_b, a_b ** 2 / R, R * R / a_t, a_t ** 2 / R)
+        n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size, _occ.curvature_elements(t, rho_max))
     mats = {case_g: equivalent(STEEL_D6AC, p.case_mass, vols[case_g], "D6AC-equivalent-case"),
             skirt_g: equivalent(AL2219, p.skirt_mass, vols[skirt_g], "Al2219-equivalent-skirt")}
     d = np.array([0.0, 0.0, -p.nozzle_cg_below_gimbal])
     nozzle_inertia = _cylinder_inertia(p.nozzle_mass, 1.5, 4.0) + _point_inertia(p.nozzle_mass, [d])
     geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), mats, patches,
                    [PointMass(f"{p.name}_nozzle", f"{p.name}_gimbal", p.nozzle_mass, nozzle_inertia)],
-                   [SmearedMass(f"{p.name}_case_inner", p.propellant_mass)], [], vols, n_nodes)
+                   [SmearedMass(f"{p.name}_case_inner", p.propellant_mass)], [], vols, n_nodes, areas)
     geo.save(out_dir / f"{p.name}.json")
     return geo
 
@@ -276,6 +284,17 @@ class OrbiterParams:
         return self.length - self.nose_ratio * self.layout.orbiter_radius
 
 
+def orbiter_closed_form_volumes(p: OrbiterParams) -> dict[str, float]:
+    """Closed-form volume (m^3): fuselage shell + wing slab outside the fuselage cylinder."""
+    from .tank import capsule_volume
+    R, t, L, a = p.layout.orbiter_radius, p.wall_thickness, p.cyl_length, p.nose_ratio * p.layout.orbiter_radius
+    shell = capsule_volume(R, 0.0, a, L) - capsule_volume(R - t, 0.0, a - t, L - t)
+    y = 0.5 * p.wing_thickness
+    strip = 2 * (y * math.sqrt(R * R - y * y) + R * R * math.asin(y / R))  # slab x circle area
+    wing = (p.wing_span * p.wing_thickness - strip) * p.wing_root_chord
+    return {"orbiter_structure": shell + wing}
+
+
 def build_orbiter(p: OrbiterParams, out_dir) -> Geometry:
     """Orbiter: volume ``orbiter_structure`` (fuselage + wings); patches ``ssme_mount``,
     ``payload_station`` (two faces), ``att_orb_fwd``, ``att_orb_aft_left/right``."""
@@ -318,7 +337,9 @@ def build_orbiter(p: OrbiterParams, out_dir) -> Geometry:
             patches.append(Patch(name, refs[name]))
         _occ.add_physical(3, g, [tg for _, tg in groups[g]])
         vols = {g: _occ.group_volume(groups[g])}
-        n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size)
+        areas = _occ.physical_measures(2)
+        rho_max = max(R, R * R / a_n, a_n ** 2 / R)
+        n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size, _occ.curvature_elements(t, rho_max))
     mat = equivalent(AL2219, p.structure_mass, vols[g], "Al2219-equivalent-orbiter")
     # three engines in a triangle about the cluster c.g. (upper one at +y, lower two at -/+x)
     offs = [(0.0, 1.2, 0.0), (-1.3, -0.6, 0.0), (1.3, -0.6, 0.0)]
@@ -327,7 +348,7 @@ def build_orbiter(p: OrbiterParams, out_dir) -> Geometry:
     geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), {g: mat}, patches,
                    [PointMass("ssme_cluster", "ssme_mount", 3 * p.ssme_mass, J_ssme),
                     PointMass("payload", "payload_station", p.payload_mass, J_pl)],
-                   [], [], vols, n_nodes)
+                   [], [], vols, n_nodes, areas)
     geo.save(out_dir / f"{p.name}.json")
     return geo
 
