@@ -167,6 +167,9 @@ def imprint(groups: dict[str, list], tools: list[Tool]) -> dict[str, list]:
     return the new volume dimTags per group, all tool remnants outside removed."""
     order = [(g, d) for g, ds in groups.items() for d in ds]
     obj = [d for _, d in order]
+    if not tools and len(obj) == 1:  # nothing to make conforming
+        occ.synchronize()
+        return {g: list(ds) for g, ds in groups.items()}
     out, outmap = occ.fragment(obj, [t.dimtag for t in tools])
     new: dict[str, list] = {g: [] for g in groups}
     for (g, _), children in zip(order, outmap[: len(order)]):
