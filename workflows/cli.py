@@ -124,6 +124,10 @@ def main(argv: list[str] | None = None) -> int:
     except (InputError, ConvergenceError, OSError) as exc:
         print(f"liftoff: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_INPUT
+    except MemoryError:
+        print("liftoff: error: out of memory: use fewer steps or outputs (keep_modal = false keeps memory "
+              "independent of the number of modes)", file=sys.stderr)
+        return EXIT_INPUT
     except KeyboardInterrupt:
         print("liftoff: interrupted, no results written", file=sys.stderr)
         return 130
