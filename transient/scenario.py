@@ -21,6 +21,8 @@ import numpy as np
 
 from .body import ModalBody, ground, load_body
 from .errors import InputError
+from .model import (ContactPoint, Forcing, InitialState, ModalForce, PointForce, Recovery, TabulatedForce,
+                    TransientProblem)
 
 METHODS = ("direct", "fixed-point")
 INITIAL_MODES = ("static", "zero", "given")
@@ -47,7 +49,7 @@ class Scenario:
 
     path: Path
     title: str
-    problem: Any  # transient.TransientProblem
+    problem: TransientProblem
     body_files: dict[str, str] = field(default_factory=dict)
 
 
@@ -160,37 +162,35 @@ def read_csv_table(path: Path, where: _Where, columns: int | None = None) -> np.
     if not path.is_file():
         raise where.error(f"CSV file not found: {str(path)!r}")
     rows: list[list[float]] = []
-    with open(path, encoding="utf-8") as fh:
-        for lineno, line in enumerate(fh, start=1):
-            text = line.split("#", 1)[0].strip()
-            if not text:
-                continue
-            cells = [c.strip() for c in text.split(",")]
-            try:
-                row = [float(c) for c in cells]
-            except ValueError:
-                if not rows and lineno == _first_data_line(path):
-                    continue  # header line
-                raise where.error(f"{path.name} line {lineno}: not a number in {text!r}") from None
-            if not all(math.isfinite(x) for x in row):
-                raise where.error(f"{path.name} line {lineno}: NaN or inf in {text!r}")
-            if rows and len(row) != len(rows[0]):
-                raise where.error(f"{path.name} line {lineno}: {len(row)} columns, expected {len(rows[0])}")
-            rows.append(row)
+    header_allowed = True
+    try:
+        with open(path, encoding="utf-8") as fh:
+            for lineno, line in enumerate(fh, start=1):
+                text = line.split("#", 1)[0].strip()
+                if not text:
+                    continue
+                try:
+                    row = [float(c) for c in text.split(",")]
+                except ValueError:
+                    if header_allowed:  # the first non-comment line may be a header
+                        header_allowed = False
+                        continue
+                    raise where.error(f"{path.name} line {lineno}: not a number in {text!r}") from None
+                header_allowed = False
+                if not all(math.isfinite(x) for x in row):
+                    raise where.error(f"{path.name} line {lineno}: NaN or inf in {text!r}")
+                if rows and len(row) != len(rows[0]):
+                    raise where.error(f"{path.name} line {lineno}: {len(row)} columns, expected {len(rows[0])}")
+                rows.append(row)
+    except UnicodeDecodeError as exc:
+        raise where.error(f"{path.name} is not a UTF-8 text file ({exc.reason})") from None
     if not rows:
         raise where.error(f"{path.name}: no data rows")
     table = np.array(rows, dtype=float)
     if columns is not None and table.shape[1] != columns:
-        raise where.error(f"{path.name}: {table.shape[1]} columns, expected {columns} (time, value)")
+        what = " (time, value)" if columns == 2 else " (time, then one per mode)"
+        raise where.error(f"{path.name}: {table.shape[1]} columns, expected {columns}{what}")
     return table
-
-
-def _first_data_line(path: Path) -> int:
-    with open(path, encoding="utf-8") as fh:
-        for lineno, line in enumerate(fh, start=1):
-            if line.split("#", 1)[0].strip():
-                return lineno
-    return 0
 
 
 # ---------------------------------------------------------------- sections
@@ -219,8 +219,6 @@ def _load_bodies(where: _Where, spec: Any, base: Path) -> tuple[ModalBody, Modal
 
 
 def _contacts(where: _Where, spec: Any, body_a: ModalBody, body_b: ModalBody) -> list:
-    from . import ContactPoint
-
     if not isinstance(spec, list) or not spec:
         raise where.error("expected at least one [[contact]] table")
     out, names = [], set()
@@ -287,8 +285,6 @@ def _body_key(where: _Where, value: Any, bodies: dict[str, ModalBody]) -> str:
 
 
 def _forces(where: _Where, spec: Any, bodies: dict[str, ModalBody], base: Path):
-    from . import PointForce, TabulatedForce
-
     if not isinstance(spec, list):
         raise where.error("expected [[force]] tables")
     constant, tables = [], []
@@ -328,8 +324,6 @@ def _forces(where: _Where, spec: Any, bodies: dict[str, ModalBody], base: Path):
 
 
 def _modal_forces(where: _Where, spec: Any, bodies: dict[str, ModalBody], base: Path):
-    from . import ModalForce
-
     if not isinstance(spec, list):
         raise where.error("expected [[modal_force]] tables")
     out = []
@@ -363,8 +357,6 @@ def _initial(where: _Where, spec: Any, body_a: ModalBody, body_b: ModalBody):
     A rigid-body motion u (Tx Ty Tz m, Rx Ry Rz rad; 3 or 6 entries) of a body adds the modal
     coordinates Phi^T M RB u = participation @ u (exact for a rigid motion, eq. 14 quantities).
     """
-    from . import InitialState
-
     spec = _table(where, spec, _INITIAL)
     mode = _string(where / "mode", spec.get("mode", "static"))
     if mode not in INITIAL_MODES:
@@ -408,8 +400,6 @@ def _outputs(where: _Where, spec: Any, body_a: ModalBody, body_b: ModalBody) -> 
 
 def _recoveries(where: _Where, spec: Any, bodies: dict[str, ModalBody], base: Path) -> list:
     """[[recovery]]: linear output matrices from an .npz file (labels, disp/vel/acc, optional units)."""
-    from . import Recovery
-
     if not isinstance(spec, list):
         raise where.error("expected [[recovery]] tables")
     out, names = [], set()
@@ -459,8 +449,6 @@ def _recoveries(where: _Where, spec: Any, bodies: dict[str, ModalBody], base: Pa
 def parse_scenario(data: dict, base: Path, source: str = "scenario", *, method: str | None = None,
                    progress: bool = True) -> Scenario:
     """Build a :class:`Scenario` from an already-parsed TOML mapping; paths relative to ``base``."""
-    from . import Forcing, TransientProblem
-
     top = _Where(source)
     _table(top, data, _TOP, required=("bodies", "time", "contact"))
     title = _string(top / "title", data.get("title", Path(source).stem))

@@ -44,8 +44,11 @@ def _set(path: str, value):
 
 def _files(write: dict[str, str]):
     def mutate(d: dict, directory: Path) -> None:
-        for name, text in write.items():
-            (directory / name).write_text(text)
+        for name, content in write.items():
+            if isinstance(content, bytes):
+                (directory / name).write_bytes(content)
+            else:
+                (directory / name).write_text(content)
     return mutate
 
 
@@ -90,6 +93,9 @@ CASES = [
     ("csv-missing", _set("force[0].csv", "nothrust.csv"), None, "CSV file not found"),
     ("csv-nan", None, {"thrust.csv": "time,force\n0,0\n0.01,nan\n"}, "thrust.csv line 3: NaN or inf"),
     ("csv-text", None, {"thrust.csv": "time,force\n0,0\n0.01,lots\n"}, "thrust.csv line 3: not a number"),
+    ("csv-binary", None, {"thrust.csv": b"\xff\xfe\x00\x01,\x80\n"}, "thrust.csv is not a UTF-8 text file"),
+    ("csv-header-only", None, {"thrust.csv": "time,force\n# nothing\n"}, "thrust.csv: no data rows"),
+    ("csv-one-row", None, {"thrust.csv": "time,force\n0,5\n"}, "a table needs at least 2 time points"),
     ("csv-columns", None, {"thrust.csv": "0,0,1\n0.01,5,1\n"}, "thrust.csv: 3 columns, expected 2"),
     ("csv-ragged", None, {"thrust.csv": "0,0\n0.01,5,1\n"}, "thrust.csv line 2: 3 columns, expected 2"),
     ("csv-time-decreasing", None, {"thrust.csv": "0,0\n0.01,5\n0.005,7\n"}, "time is not strictly increasing at entry 2"),
