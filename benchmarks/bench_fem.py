@@ -67,6 +67,9 @@ def main() -> None:
     ap.add_argument("--out", default="out/bench_fem", help="output folder (meshes + JSON)")
     ap.add_argument("--meshes", default=None,
                     help="folder of already built geometries (core, srb_left, srb_right, orbiter, pad .json)")
+    ap.add_argument("--only", nargs="*", default=None, help="component names to run (default: all)")
+    ap.add_argument("--repeat", type=int, default=1,
+                    help="MPI runs per rank count; the minimum time is kept (a shared machine is noisy)")
     ap.add_argument("--child", default=None, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
@@ -82,6 +85,8 @@ def main() -> None:
     from meshes.spec import Geometry
 
     out = Path(args.out)
+    load0 = os.getloadavg()
+    print(f"load average at start {load0} on {os.cpu_count()} cores (timings are noisy under load)")
     t = time.perf_counter()
     if args.meshes:
         mdir = Path(args.meshes)
@@ -91,6 +96,8 @@ def main() -> None:
         geos = dict(default_stack(out_dir=mdir))
         geos["pad"] = default_pad(out_dir=mdir)
         print(f"meshes built in {time.perf_counter() - t:.1f} s", flush=True)
+    if args.only:
+        geos = {n: geos[n] for n in args.only}
     rows = []
     for name, g in tqdm(geos.items(), desc="components", file=sys.stdout):
         t0 = time.perf_counter()
@@ -106,12 +113,17 @@ def main() -> None:
         f_scipy = np.sqrt(np.clip(w2, 0, None)) / (2 * np.pi)
         flex = modes.freq_hz > 0
         diff = float(np.max(np.abs(modes.freq_hz[flex] / f_scipy[flex] - 1)))
-        mpi = {n: _mpirun(n, mdir / f"{g.name}.json", args.modes) for n in (1, 2)}
+        mpi = {}
+        for _ in range(max(1, args.repeat)):
+            for n in (1, 2):
+                r = _mpirun(n, mdir / f"{g.name}.json", args.modes)
+                if r and (n not in mpi or r["eig_s"] < mpi[n]["eig_s"]):
+                    mpi[n] = r
         row = {"component": name, "dofs": model.n_dof, "modes": args.modes, "n_rigid": modes.n_rigid,
                "f_first_flexible_hz": float(modes.freq_hz[modes.n_rigid]), "f_last_hz": float(modes.freq_hz[-1]),
                "build_s": t1 - t0, "slepc_s": t2 - t1, "scipy_eigsh_s": t3 - t2,
                "eigsh_over_slepc": (t3 - t2) / (t2 - t1), "max_rel_freq_diff": diff}
-        if mpi[1] and mpi[2]:
+        if mpi.get(1) and mpi.get(2):
             row.update({"mpi1_eig_s": mpi[1]["eig_s"], "mpi2_eig_s": mpi[2]["eig_s"],
                         "mpi1_build_s": mpi[1]["build_s"], "mpi2_build_s": mpi[2]["build_s"],
                         "speedup_2_ranks": mpi[1]["eig_s"] / mpi[2]["eig_s"],
@@ -121,8 +133,10 @@ def main() -> None:
     out.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=out, suffix=".tmp")
     with os.fdopen(fd, "w") as fh:
-        json.dump({"units": "s, Hz", "rows": rows}, fh, indent=1)
+        json.dump({"units": "s, Hz", "cpu_count": os.cpu_count(), "loadavg_start": load0,
+                   "loadavg_end": os.getloadavg(), "rows": rows}, fh, indent=1)
     os.replace(tmp, out / "bench_fem.json")
+    print(f"load average at end {os.getloadavg()}")
     print("\n| component | DOFs | modes | 1st flex (Hz) | build (s) | SLEPc (s) | scipy eigsh (s) | "
           "eigsh/SLEPc | max rel diff | 1 rank (s) | 2 ranks (s) | speed-up |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
