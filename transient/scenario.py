@@ -21,8 +21,9 @@ import numpy as np
 
 from .body import ModalBody, ground, load_body
 from .errors import InputError
-from .model import (ContactPoint, Forcing, InitialState, ModalForce, PointForce, Recovery, TabulatedForce,
-                    TransientProblem)
+from .effects import softening_matrix
+from .model import (ContactPoint, Forcing, InitialState, ModalFeedback, ModalForce, PointForce, Recovery,
+                    TabulatedForce, TransientProblem)
 
 METHODS = ("direct", "fixed-point")
 INITIAL_MODES = ("static", "zero", "given")
@@ -32,7 +33,7 @@ _TOP = {"title", "description", "bodies", "time", "gravity", "contact", "force",
         "modal_force", "initial", "output", "recovery"}
 _BODIES = {"a", "b"}
 _TIME = {"t_end", "h", "t0", "method", "tol", "max_iter"}
-_GRAVITY = {"accel"}
+_GRAVITY = {"accel", "softening", "softening_until", "softening_labels"}
 _CONTACT = {"name", "labels_a", "labels_b", "stiffness", "rigid", "axial", "normal_sign",
             "gap", "release_time"}
 _FORCE = {"body", "label", "value", "time", "csv", "scale"}
@@ -216,6 +217,29 @@ def _load_bodies(where: _Where, spec: Any, base: Path) -> tuple[ModalBody, Modal
         if bodies[key].is_ground:
             raise w.error(f"body file {name!r} has no modes; write b = \"ground\" for a fixed support")
     return bodies["a"], bodies["b"], files
+
+
+def _gravity(where: _Where, spec: Any, body_a: ModalBody) -> tuple[tuple, list]:
+    """[gravity]: uniform acceleration (eq. 14) and, optionally, gravity softening of body a
+    (section 4.5: KSOF of eq. 27 as a modal feedback force held over each step, eq. 26)."""
+    g = _table(where, spec, _GRAVITY, required=("accel",))
+    accel = tuple(_vector(where / "accel", g["accel"], length=3))
+    feedback = []
+    if _bool(where / "softening", g.get("softening", False)):
+        until = _number(where / "softening_until", g.get("softening_until", math.inf), allow_inf=True)
+        labels = None
+        if "softening_labels" in g:
+            labels = list(_labels(where / "softening_labels", g["softening_labels"], body_a))
+        try:
+            ksof = softening_matrix(body_a, accel, boundary_labels=labels)
+            feedback.append(ModalFeedback("a", ksof, until=until))
+        except InputError as exc:
+            raise (where / "softening").error(str(exc)) from None
+    else:
+        for key in ("softening_until", "softening_labels"):
+            if key in g:
+                raise (where / key).error("given without softening = true")
+    return accel, feedback
 
 
 def _contacts(where: _Where, spec: Any, body_a: ModalBody, body_b: ModalBody) -> list:
@@ -474,13 +498,12 @@ def parse_scenario(data: dict, base: Path, source: str = "scenario", *, method: 
 
     contacts = _contacts(top / "contact", data["contact"], body_a, body_b)
 
-    gravity = (0.0, 0.0, 0.0)
+    gravity, feedback = (0.0, 0.0, 0.0), []
     if "gravity" in data:
-        g = _table(top / "gravity", data["gravity"], _GRAVITY, required=("accel",))
-        gravity = tuple(_vector(top / "gravity" / "accel", g["accel"], length=3))
+        gravity, feedback = _gravity(top / "gravity", data["gravity"], body_a)
     constant, tables = _forces(top / "force", data.get("force", []), bodies, base)
     modal = _modal_forces(top / "modal_force", data.get("modal_force", []), bodies, base)
-    forcing = Forcing(constant=constant, tables=tables, modal=modal, feedback=[], gravity=gravity)
+    forcing = Forcing(constant=constant, tables=tables, modal=modal, feedback=feedback, gravity=gravity)
 
     initial = _initial(top / "initial", data.get("initial", {}), body_a, body_b)
     outputs, keep_modal = _outputs(top / "output", data.get("output", {}), body_a, body_b)

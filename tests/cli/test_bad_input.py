@@ -88,6 +88,8 @@ CASES = [
     ("normal-sign", _set("contact[0].normal_sign", 0.5), None, "normal_sign: must be 1 or -1"),
     ("gravity-nan", _set("gravity.accel", [0.0, NAN, -9.81]), None, "gravity.accel[1]: value is NaN"),
     ("gravity-shape", _set("gravity.accel", [0.0, -9.81]), None, "gravity.accel: has 2 entries, expected 3"),
+    ("softening-orphan", _set("gravity.softening_until", 0.3), None, "gravity.softening_until: given without softening"),
+    ("softening-type", _set("gravity.softening", 1), None, "gravity.softening: expected true or false"),
     ("force-value-nan", _set("force[1].value", NAN), None, "force[1] 'top:Tx'.value: value is NaN"),
     ("force-body", _set("force[1].body", "c"), None, "force[1].body: must be 'a' or 'b'"),
     ("csv-missing", _set("force[0].csv", "nothrust.csv"), None, "CSV file not found"),

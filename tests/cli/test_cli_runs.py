@@ -169,3 +169,34 @@ def test_ground_rigid_bolt_modal_force_and_recovery(case_dir: Path, capsys):
     assert runs["force"]["contact/force"][0, 1] == pytest.approx((M1 + M2) * G, rel=1e-9)
     np.testing.assert_allclose(runs["force"]["recovered/top_z"][:, 0], runs["force"]["body_a/displacement"][:, 0],
                                rtol=1e-12, atol=1e-15)
+
+
+def test_gravity_softening_is_wired_and_softens():
+    """[gravity] softening = true adds KSOF (transient.effects.softening_matrix, eq. 27) as a feedback on
+    body a until softening_until; in statics under a side load it increases the lateral c.g. deflection
+    (the reference's Table 1: gravity softening adds deflection)."""
+    import copy
+    import tomllib
+
+    from transient import static_equilibrium
+    from transient.effects import cg_motion_matrix, softening_matrix
+    from transient.scenario import parse_scenario
+
+    base = EXAMPLES / "vehicle_on_pad"
+    data = tomllib.loads((base / "scenario.toml").read_text())
+    data["force"] = [{"body": "a", "label": "top:Tx", "value": 2.0e4}]
+    cg_x = {}
+    for soft in (False, True):
+        d = copy.deepcopy(data)
+        if soft:
+            d["gravity"].update(softening=True, softening_until=0.5)
+        p = parse_scenario(d, base, "scenario.toml").problem
+        if soft:
+            (fb,) = p.forcing.feedback
+            assert fb.body == "a" and fb.until == 0.5
+            np.testing.assert_array_equal(fb.matrix, softening_matrix(p.body_a, [0.0, 0.0, -G]))
+        else:
+            assert p.forcing.feedback == []
+        st = static_equilibrium(p.body_a, p.body_b, p.contacts, p.forcing)
+        cg_x[soft] = (cg_motion_matrix(p.body_a) @ st.q_a)[0]
+    assert cg_x[False] > 0 and cg_x[True] > cg_x[False]
