@@ -38,3 +38,6 @@ def test_two_ranks_match_serial(msh):
     assert np.allclose(parallel["clamped_freq"], serial["clamped_freq"], rtol=1e-8)
     assert parallel["mass"] == pytest.approx(serial["mass"], rel=1e-12)
     assert np.allclose(parallel["tip"], serial["tip"], rtol=1e-8, atol=1e-14)
+    for run in (serial, parallel):      # gathered nodes, cells and field_map are consistent
+        assert run["rot_err"] < 1e-12 and run["volume"] == pytest.approx(1.0 * 0.1 * 0.1, rel=1e-12)
+    assert parallel["n_cells"] == serial["n_cells"]
