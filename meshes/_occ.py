@@ -204,6 +204,33 @@ def faces_inside(faces: list[int], bbox, tol: float = 1e-3) -> list[int]:
     return sel
 
 
+def faces_on(faces: list[int], distance, tol: float, n: int = 4) -> list[int]:
+    """Faces whose sample points (an n x n grid inside the parametric domain) all satisfy
+    |distance(x, y, z)| <= tol, e.g. lie on a given analytic surface."""
+    sel = []
+    u = (np.arange(n) + 0.5) / n
+    for f in faces:
+        lo, hi = gmsh.model.getParametrizationBounds(2, f)
+        uv = np.array([[lo[0] + a * (hi[0] - lo[0]), lo[1] + b * (hi[1] - lo[1])] for a in u for b in u])
+        pts = np.asarray(gmsh.model.getValue(2, f, uv.ravel())).reshape(-1, 3)
+        if all(abs(distance(*p)) <= tol for p in pts):
+            sel.append(f)
+    return sel
+
+
+def capsule_distance(axis_xy, r: float, z_cb: float, z_ct: float, a_b: float, a_t: float):
+    """Signed level-set function (~distance, m) of a capsule surface about a vertical axis:
+    cylinder of radius r from z_cb to z_ct, half-ellipsoid domes of heights a_b, a_t."""
+    def d(x, y, z):
+        rho = math.hypot(x - axis_xy[0], y - axis_xy[1])
+        if z < z_cb:
+            return r * (math.hypot(rho / r, (z - z_cb) / a_b) - 1)
+        if z > z_ct:
+            return r * (math.hypot(rho / r, (z - z_ct) / a_t) - 1)
+        return rho - r
+    return d
+
+
 def surface_area(faces: list[int]) -> float:
     return float(sum(occ.getMass(2, f) for f in faces))
 

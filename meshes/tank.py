@@ -299,6 +299,9 @@ def build_tank(p: TankParams, out_dir) -> Geometry:
         for c in lay:
             box = (ax - c.r_inner, ay - c.r_inner, c.z_inner_bottom, ax + c.r_inner, ay + c.r_inner, c.z_fill)
             wet = _occ.faces_inside(bfaces, box, tol=1e-3 * R)
+            on_cavity = _occ.capsule_distance(p.axis_xy, c.r_inner, c.z_cyl_bottom, c.z_cyl_top,
+                                              c.a_bottom_inner, c.a_top_inner)
+            wet = _occ.faces_on(wet, on_cavity, tol=1e-4 * R)
             _occ.add_physical(2, f"{p.name}_{c.name}_wetted", wet)
             liquid = next(k for k in p.compartments if k.name == c.name)
             smeared.append(SmearedMass(f"{p.name}_{c.name}_wetted", liquid.liquid_density * c.liquid_volume()))

@@ -213,6 +213,8 @@ def build_booster(p: BoosterParams, out_dir) -> Geometry:
         ri = R - t
         inner = _occ.faces_inside(bfaces, (axis[0] - ri, axis[1] - ri, p.case_bottom_z - (a_b - t),
                                            axis[0] + ri, axis[1] + ri, p.cyl_top_z + a_t - t), tol=1e-3 * R)
+        inner = _occ.faces_on(inner, _occ.capsule_distance(axis, ri, p.case_bottom_z, p.cyl_top_z, a_b - t, a_t - t),
+                              tol=1e-4 * R)
         _occ.add_physical(2, f"{p.name}_case_inner", inner)
         _occ.add_physical(3, case_g, [tg for _, tg in groups[case_g]])
         _occ.add_physical(3, skirt_g, [tg for _, tg in groups[skirt_g]])

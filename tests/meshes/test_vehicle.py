@@ -1,0 +1,129 @@
+"""Default twin-booster stack: physical groups, patches, shared interface points, CAD
+volumes vs closed forms, and component masses vs the documented totals (docs/meshes.md)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from meshes import BoosterParams, OrbiterParams, StackLayout, core_stage_params
+from meshes.tank import tank_layout, wall_volume
+from meshes.vehicle import booster_closed_form_volumes, orbiter_closed_form_volumes
+
+CAD_RTOL = 1e-5  # occ.getMass numerical integration (~1e-6), see test_tank.py
+
+# Documented default masses (docs/meshes.md, public Shuttle figures), kg.
+CORE_MASS = 760_000.0       # ET gross lift-off mass ~760 t (dry 26.5 t + LOX ~629 t + LH2 ~106 t)
+SRB_MASS = 590_000.0        # each SRB at ignition
+ORBITER_MASS = 110_000.0
+STACK_MASS = CORE_MASS + 2 * SRB_MASS + ORBITER_MASS   # ~2,050 t ("about 2,000 t")
+
+GROUPS = {
+    "core": {(3, "core_wall"), (2, "core_lh2_wetted"), (2, "core_lox_wetted"), (2, "stack_top"),
+             (2, "att_srb_left_fwd"), (2, "att_srb_left_aft"), (2, "att_srb_right_fwd"),
+             (2, "att_srb_right_aft"), (2, "att_orb_fwd"), (2, "att_orb_aft_left"), (2, "att_orb_aft_right")},
+    "orbiter": {(3, "orbiter_structure"), (2, "ssme_mount"), (2, "payload_station"), (2, "att_orb_fwd"),
+                (2, "att_orb_aft_left"), (2, "att_orb_aft_right")},
+}
+for _s in ("left", "right"):
+    GROUPS[f"srb_{_s}"] = {(3, f"srb_{_s}_case"), (3, f"srb_{_s}_skirt"), (2, f"srb_{_s}_case_inner"),
+                           (2, f"srb_{_s}_gimbal"), (2, f"att_srb_{_s}_fwd"), (2, f"att_srb_{_s}_aft")} | {
+        (2, f"srb_{_s}_hd_{k}") for k in range(1, 5)}
+
+
+@pytest.mark.parametrize("comp", sorted(GROUPS))
+def test_physical_groups_and_patches(stack, msh_groups, comp):
+    g = stack[comp]
+    groups = msh_groups(g)
+    assert set(groups) == GROUPS[comp]
+    assert set(g.volumes) == {n for d, n in GROUPS[comp] if d == 3}
+    assert g.clamped == []  # vehicle components are free-free
+    for p in g.patches:
+        nodes = groups[(2, p.name)]["nodes"]
+        assert len(nodes) >= 6, f"{p.name}: {len(nodes)} nodes"
+        assert groups[(2, p.name)]["measure"] > 0
+        # every patch is near its reference point (patches are <= 1 m across; attach
+        # points lie mid-gap, <= 0.5 m off the wall; payload trunnions 2.6 m off the axis)
+        reach = {"payload_station": 3.0, "ssme_mount": 2.5}.get(p.name, 2.0)  # SSME c.g. 1.8 m aft
+        assert np.linalg.norm(nodes - p.ref_point, axis=1).max() < reach, p.name
+    for sm in g.smeared_masses:
+        assert (2, sm.surface) in groups
+    # a default component stays small (pipeline on 2 cores in minutes)
+    assert 2_000 < g.mesh_nodes < 20_000
+
+
+def test_attach_points_are_shared(stack):
+    """Same name, same reference point on both sides of every interface."""
+    core = {p.name: p.ref_point for p in stack["core"].patches}
+    seen = 0
+    for comp in ("srb_left", "srb_right", "orbiter"):
+        for p in stack[comp].patches:
+            if p.name.startswith("att_"):
+                np.testing.assert_array_equal(p.ref_point, core[p.name])
+                seen += 1
+    assert seen == 7 and sum(n.startswith("att_") for n in core) == 7
+
+
+def test_patches_sit_on_the_right_surfaces(stack, msh_groups):
+    lay = StackLayout()
+    core = msh_groups(stack["core"])
+    for name in ("att_srb_left_fwd", "att_orb_aft_right"):
+        n = core[(2, name)]["nodes"]
+        np.testing.assert_allclose(np.hypot(n[:, 0], n[:, 1]), lay.core_radius, rtol=1e-6)
+    for side in ("left", "right"):
+        srb = msh_groups(stack[f"srb_{side}"])
+        axis = lay.srb_axis(side)
+        for k in range(1, 5):
+            n = srb[(2, f"srb_{side}_hd_{k}")]["nodes"]
+            assert np.abs(n[:, 2]).max() < 1e-9  # hold-downs on the skirt bottom, z = 0
+            r = np.hypot(n[:, 0] - axis[0], n[:, 1] - axis[1])
+            assert np.all(np.abs(r - lay.holddown_radius) <= 0.2 + 1e-6)
+        n = srb[(2, f"att_srb_{side}_aft")]["nodes"]
+        np.testing.assert_allclose(np.hypot(n[:, 0] - axis[0], n[:, 1] - axis[1]), lay.srb_radius, rtol=1e-6)
+        # the core-facing side
+        assert np.all(np.sign(n[:, 0] - axis[0]) == (1 if side == "left" else -1))
+
+
+def test_volumes_match_closed_forms(stack, msh_groups):
+    expect = {"core_wall": wall_volume(core_stage_params())}
+    for side in ("left", "right"):
+        expect.update(booster_closed_form_volumes(BoosterParams(side=side)))
+    expect.update(orbiter_closed_form_volumes(OrbiterParams()))
+    for comp, g in stack.items():
+        for name, v in g.group_volumes.items():
+            assert v > 0
+            assert v == pytest.approx(expect[name], rel=CAD_RTOL), name
+            # mesh faceting of the thickened walls: opposite-sign inner/outer errors, < 2 %
+            assert msh_groups(g)[(3, name)]["measure"] == pytest.approx(v, rel=0.02), name
+
+
+def test_masses_add_up_to_documented_totals(stack):
+    # the core's mass follows from geometry + liquid densities + fill levels: within 0.5 %
+    # of the published 760 t; boosters and orbiter are set by construction (exact)
+    assert stack["core"].nominal_mass() == pytest.approx(CORE_MASS, rel=5e-3)
+    for side in ("left", "right"):
+        assert stack[f"srb_{side}"].nominal_mass() == pytest.approx(SRB_MASS, rel=1e-9)
+    assert stack["orbiter"].nominal_mass() == pytest.approx(ORBITER_MASS, rel=1e-9)
+    total = sum(g.nominal_mass() for g in stack.values())
+    assert total == pytest.approx(STACK_MASS, rel=5e-3)
+    # the propellant loads: LOX ~629 t, LH2 ~106 t (public figures) within 2 %
+    sm = {s.surface: s.mass for s in stack["core"].smeared_masses}
+    assert sm["core_lox_wetted"] == pytest.approx(629_000.0, rel=0.02)
+    assert sm["core_lh2_wetted"] == pytest.approx(106_000.0, rel=0.02)
+
+
+def test_core_smeared_mass_is_liquid_volume_times_density(stack):
+    p = core_stage_params()
+    sm = {s.surface: s.mass for s in stack["core"].smeared_masses}
+    for c, comp in zip(tank_layout(p), p.compartments):
+        assert sm[f"core_{c.name}_wetted"] == pytest.approx(comp.liquid_density * c.liquid_volume(), rel=1e-12)
+        assert stack["core"].surface_areas[f"core_{c.name}_wetted"] == pytest.approx(c.wetted_area(), rel=CAD_RTOL)
+
+
+def test_equivalent_materials_keep_specific_stiffness(stack):
+    """Thickened walls: rho = mass / volume and E/rho of the real alloy kept."""
+    g = stack["srb_left"]
+    case = g.volumes["srb_left_case"]
+    assert case.rho * g.group_volumes["srb_left_case"] == pytest.approx(BoosterParams().case_mass, rel=1e-12)
+    assert case.E / case.rho == pytest.approx(205e9 / 7850.0, rel=1e-12)
+    core = stack["core"].volumes["core_wall"]
+    assert core.E / core.rho == pytest.approx(73.8e9 / 2840.0, rel=1e-12)
