@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-pytestmark = pytest.mark.fem
+pytestmark = [pytest.mark.fem, pytest.mark.slow]   # ~9 s idle, >20 s on a loaded machine
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 
