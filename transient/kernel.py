@@ -211,9 +211,6 @@ def march(i0, i1, t0, h, method, tol, max_iter,
             va_ = np.dot(Phi_ca, vfa)
             vb_ = np.dot(Phi_cb, vfb) if nb > 0 else np.zeros(nc)
         for j in range(nc):
-            if opening[j]:  # a rigid row that opened during the last step starts this one open
-                active[j] = False
-                opening[j] = False
             cand[j] = bolted[dcontact[j]] or axial[j]
             if not bolted[dcontact[j]] and not axial[j]:
                 active[j] = False
@@ -372,6 +369,10 @@ def march(i0, i1, t0, h, method, tol, max_iter,
             if axial[j] and not bolted[dcontact[j]] and active[j] and not opening[j]:
                 state[r, dcontact[j]] = CLOSED
         iters[r] = it
+        for j in range(nc):
+            if opening[j]:  # a rigid row that opened during this step starts the next one open
+                active[j] = False
+                opening[j] = False
         _outputs(L_a, kind_a, targ_a, q_a, v_a, acc_a, Y_a, r)
         _outputs(L_b, kind_b, targ_b, q_b, v_b, acc_b, Y_b, r)
         if keep:
