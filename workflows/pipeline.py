@@ -65,7 +65,7 @@ def _labels(points) -> list[str]:
 def _component_params(model: dict, name: str) -> dict:
     comp = model["component"].get(name, {}) if name != "pad" else model.get("pad", {})
     size = comp.get("mesh_size", model.get("vehicle", {}).get("mesh_size") if name != "pad" else None)
-    size = size or model.get("mesh_size") or (4.0 if model["source"] == "stick" else 3.0)
+    size = size or model.get("mesh_size") or (4.0 if model["source"] == "stick" else None)  # fe: builder default
     return {"source": model["source"], "name": name, "mesh_size": size, "degree": model["degree"],
             "stack": model.get("vehicle", {}).get("params", {}),
             "params": comp.get("params", {}), "materials": model.get("materials", {})}
