@@ -16,6 +16,7 @@ from .model import Forcing, InitialState, TransientProblem
 from .result import TransientResult
 
 CHUNK = 5000  # steps per compiled call (progress updated between chunks)
+STABILITY = math.sqrt(3) / math.pi  # 2 pi f_h h < 2 sqrt(3): stability of penalty coupling (0.551/f_h)
 
 
 # --------------------------------------------------------------------- statics
@@ -242,8 +243,13 @@ def solve(problem: TransientProblem) -> TransientResult:
     else:
         h = float(problem.h)
         if h > h_default * (1 + 1e-9):
+            extra = ""
+            if (rows.compliance > 0).any() and h > STABILITY * h_default / 0.25:
+                extra = (f"; it also exceeds about {STABILITY:.2f}/f_h = {STABILITY / f_h:.4g} s, the stability limit "
+                         "of the penalty coupling (linear-acceleration scheme), so the run may diverge")
             warnings.warn(f"time step h = {h:.4g} s is larger than 0.25/f_h = {h_default:.4g} s "
-                          f"(f_h = {f_h:.4g} Hz, eq. 12): the contact force may be under-resolved", stacklevel=2)
+                          f"(f_h = {f_h:.4g} Hz, eq. 12): the contact force may be under-resolved{extra}",
+                          stacklevel=2)
     span = problem.t_end - problem.t0
     n_steps = int(math.ceil(span / h - 1e-9))
     if n_steps < 1:
@@ -363,6 +369,12 @@ def solve(problem: TransientProblem) -> TransientResult:
                 if st == SINGULAR:
                     raise InputError(f"singular contact system at t = {t_fail:.6g} s: rigid contact directions "
                                      "are redundant or act on DOFs with no flexibility")
+            if not (np.all(np.isfinite(q_a)) and np.all(np.isfinite(q_b))):
+                bad = np.flatnonzero(~np.all(np.isfinite(Fc[i + 1:i1 + 1]), axis=1))
+                t_bad = time[i + 1 + (bad[0] if bad.size else 0)]
+                raise ConvergenceError(
+                    f"the solution diverged (non-finite contact force) at t = {t_bad:.6g} s: h = {h:.4g} s; the "
+                    f"penalty coupling is stable only for h below about {STABILITY / f_h:.4g} s ({STABILITY:.2f}/f_h)")
             if bar is not None:
                 bar.update(i1 - i)
             i = i1

@@ -5,7 +5,7 @@ import warnings
 import numpy as np
 import pytest
 
-from transient import (ContactPoint, Forcing, InputError, ModalForce, TabulatedForce, TransientProblem,
+from transient import (ContactPoint, ConvergenceError, Forcing, InputError, ModalForce, TabulatedForce, TransientProblem,
                        estimate_step, ground, solve)
 from transient.examples import free_free_rod, spring_block
 
@@ -65,3 +65,23 @@ def test_large_step_warns():
         warnings.simplefilter("always")
         solve(p)
     assert any("larger than 0.25/f_h" in str(x.message) for x in w)
+
+
+def test_divergence_beyond_the_penalty_stability_limit_is_an_error():
+    """A rigid mass on a bolted penalty spring is Newmark's linear-acceleration scheme:
+    stable for omega h < 2 sqrt(3). At omega h = 5 it diverges; that must be an error, not a result."""
+    m, k = 1.0, 1e6
+    mass = free_free_rod(1.0, 1e9, 1000.0, 1e-3, 1, name="m")  # rigid mode only, 1 kg
+    c = [ContactPoint("bolt", ["end0:Tz"], [None], k)]
+    h = 5.0 / math.sqrt(k / m)
+    p = TransientProblem(mass, ground(), c, Forcing(gravity=(0, 0, -9.81)), t_end=3000 * h, h=h, initial="zero",
+                         progress=False)
+    with pytest.warns(UserWarning, match="stability limit"):
+        with pytest.raises(ConvergenceError, match=r"diverged .* at t = .* stable only for h below"):
+            solve(p)
+    # just inside the limit (omega h = 3.4) the same run is bounded
+    p.h = 3.4 / math.sqrt(k / m)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        r = solve(p)
+    assert np.abs(r.contact_force).max() < 3 * m * 9.81
