@@ -226,7 +226,7 @@ def march(i0, i1, t0, h, method, tol, max_iter,
                 u[nc + j] = 0.0
         # ---------------- contact solve
         it = 0
-        status = OK
+
         if method == 0:
             single = False
             while True:

@@ -1,6 +1,5 @@
 """Result file: HDF5 round trip, units on every dataset, atomic write; outputs recovered on the fly
 agree with the same quantities recomputed from the kept modal histories."""
-import math
 
 import h5py
 import numpy as np

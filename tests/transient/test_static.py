@@ -7,7 +7,7 @@ import pytest
 
 from transient import (ContactPoint, Forcing, InitialState, InputError, ModalFeedback, PointForce, Recovery,
                        TransientProblem, ground, solve, static_solution)
-from transient.examples import holddown_contacts, pad_truss, spring_block, toy_pad, truss_body, vehicle_truss
+from transient.examples import holddown_contacts, spring_block, toy_pad, truss_body, vehicle_truss
 
 G = 9.81
 
