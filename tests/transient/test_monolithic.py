@@ -197,6 +197,10 @@ def test_bolted_phase_release_and_separation(model):
     assert np.all(sep >= ref - 0.05 * h) and np.all(sep <= ref + 1.05 * h)
     # after all posts opened both models carry zero contact force
     assert np.all(r.contact_force[-1] == 0) and np.all(F_ref[-1] == 0)
+    # section 2.7: lateral directions are released with the bolt (columns Tx, Ty of each post)
+    lateral = np.array([j % 3 != 0 for j in range(3 * N_POSTS)])
+    assert np.all(r.contact_force[r.time > T_RELEASE + 1e-12][:, lateral] == 0)
+    assert set(np.unique(r.contact_state[r.time > T_RELEASE + 1e-12])) <= {1, 2}
 
 
 def test_second_order_convergence(model):
