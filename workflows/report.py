@@ -253,7 +253,7 @@ def snapshot(path: Path, parts, title: str, scale: float | None = None) -> tuple
     size = max(float(np.ptp(np.vstack([p[0] for p in parts]), axis=0).max()), 1e-9)
     umax = max(float(np.linalg.norm(p[3], axis=1).max()) for p in parts)
     if scale is None:
-        scale = 0.05 * size / umax if umax > 0 else 1.0
+        scale = 0.03 * size / umax if umax > 0 else 1.0
     pl = pyvista.Plotter(off_screen=True, window_size=[900, 1100])
     pl.set_background("white")
     for nodes, cells, ctype, u in parts:
@@ -274,9 +274,9 @@ def snapshot(path: Path, parts, title: str, scale: float | None = None) -> tuple
     pl.add_text(title, position="upper_left", font_size=11, color="black")
     pl.add_text(f"displacement scale x {scale:.3g} (elastic part; max |u| = {umax:.3g} m)",
                 position="lower_left", font_size=9, color="black")
-    pl.view_xz()
-    pl.camera.azimuth = 30
-    pl.camera.elevation = 10
+    pl.view_yz()                   # looking along -x: the orbiter (+y) and the twang plane in view
+    pl.camera.azimuth = 35
+    pl.camera.elevation = 12
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.stem, suffix=".tmp.png")
     os.close(fd)

@@ -17,9 +17,14 @@ from workflows.pipeline import build_stack
 from workflows.scenario import default_text, parse_scenario
 
 
+# the default scenario on a coarse stick model (6 m beam elements): fast, no dolfinx
+STICK = {"source": "stick", "mesh_size": 6.0, "zeta": 0.01, "system": {"f_max": 60.0, "pad_f_max": 100.0},
+         "pad": {"f_max": 100.0}}
+
+
 def scenario(**over):
     d = tomllib.loads(default_text())
-    d["model"]["mesh_size"] = 6.0           # coarse stick: fast
+    d["model"] = STICK
     d.pop("case")
     for k, v in over.items():
         d[k] = v if not isinstance(v, dict) else {**d.get(k, {}), **v}

@@ -1,0 +1,146 @@
+"""Whole scenarios end to end: stick model (always), FE on a coarse mesh (dolfinx), the
+stage cache (a loads-only change skips the model stages; a model change does not), the
+`liftoff run` command line (bad input: exit 2, one line, naming the key)."""
+import csv
+import importlib.util
+import tomllib
+
+import numpy as np
+import pytest
+
+from transient import load_result
+from workflows.cli import main
+from workflows.scenario import default_text
+
+HAVE_FE = all(importlib.util.find_spec(m) is not None for m in ("dolfinx", "gmsh"))
+
+
+def _toml(d: dict) -> str:
+    """Minimal TOML writer for the scenario dictionaries used here."""
+    def val(v):
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if isinstance(v, float):
+            return "inf" if v == float("inf") else repr(v)
+        if isinstance(v, (int,)):
+            return str(v)
+        if isinstance(v, str):
+            return '"' + v + '"'
+        if isinstance(v, list):
+            return "[" + ", ".join(val(x) for x in v) + "]"
+        if isinstance(v, dict):
+            return "{" + ", ".join(f'"{k}" = {val(x)}' for k, x in v.items()) + "}"
+        raise TypeError(type(v))
+
+    out = []
+    for k, v in d.items():
+        if not isinstance(v, (dict, list)) or (isinstance(v, list) and not (v and isinstance(v[0], dict))):
+            out.append(f"{k} = {val(v)}")
+    for k, v in d.items():
+        if isinstance(v, dict):
+            out.append(f"[{k}]")
+            out += [f'"{kk}" = {val(x)}' for kk, x in v.items()]
+        elif isinstance(v, list) and v and isinstance(v[0], dict):
+            for item in v:
+                out.append(f"[[{k}]]")
+                out += [f'"{kk}" = {val(x)}' for kk, x in item.items()]
+    return "\n".join(out) + "\n"
+
+
+def _scenario(tmp_path, model: dict, t_end=8.0, cases=None, name="s.toml", **over):
+    d = tomllib.loads(default_text())
+    d["model"] = model
+    d["time"]["t_end"] = t_end
+    if cases is not None:
+        d["case"] = cases
+    d.update(over)
+    p = tmp_path / name
+    p.write_text(_toml(d))
+    assert tomllib.loads(p.read_text())["model"] == model
+    return p
+
+
+STICK = {"source": "stick", "mesh_size": 6.0, "zeta": 0.01, "system": {"f_max": 60.0, "pad_f_max": 100.0},
+         "pad": {"f_max": 100.0}}
+
+
+def _check_outputs(out, cases):
+    for c in cases:
+        res = load_result(out / f"results_{c}.h5")
+        assert res.time[-1] > 7.9 and len(res.contact_names) == 8
+        assert "cg_motion" in res.recovered and "attach_att_srb_left_fwd" in res.recovered
+        # every post separates after the 6.6 s release; the vehicle rises
+        assert np.all(np.isfinite(res.separation_time)) and np.all(res.separation_time >= 6.6)
+        assert res.rigid_body_motion_a[-1, 2] > 0.5
+        for stem in ("post_forces", "attach_forces", "motion", "payload_acc"):
+            assert (out / f"{stem}_{c}.png").stat().st_size > 10_000
+        rows = list(csv.DictReader(line for line in (out / f"maxmin_{c}.csv").read_text().splitlines()
+                                   if not line.startswith("#")))
+        assert {r["case_max"] for r in rows} == {c}
+        assert any(r["item"] == "post left_1 Tz" for r in rows)
+    env = list(csv.DictReader(line for line in (out / "maxmin_envelope.csv").read_text().splitlines()
+                              if not line.startswith("#")))
+    assert {r["case_max"] for r in env} <= set(cases)
+    t1 = (out / "table1.txt").read_text()
+    assert "gravity + softening + cryo" in t1
+    assert "wall time per stage" in (out / "summary.txt").read_text()
+
+
+def test_stick_scenario_end_to_end_and_cache(tmp_path, capsys):
+    cache = tmp_path / "cache"
+    cases = [{"name": "nominal"}, {"name": "late-release", "post_defaults": {"release_time": 6.7}}]
+    p = _scenario(tmp_path, STICK, cases=cases)
+    assert main(["run", str(p), "--out", str(tmp_path / "a"), "--cache", str(cache), "--no-progress"]) == 0
+    text = capsys.readouterr().out
+    assert "separation (s)" in text and "Vehicle c.g. motion under static loads" in text
+    _check_outputs(tmp_path / "a", ["nominal", "late-release"])
+    assert (tmp_path / "a" / "snapshot_max_twang_nominal.png").stat().st_size > 10_000
+    # loads-only change: every model stage comes from the cache
+    p2 = _scenario(tmp_path, STICK, cases=[{"name": "nominal"}], name="s2.toml",
+                   engine=tomllib.loads(default_text())["engine"][:3])
+    assert main(["run", str(p2), "--out", str(tmp_path / "b"), "--cache", str(cache), "--no-progress",
+                 "--no-snapshots"]) == 0
+    text = capsys.readouterr().out
+    assert "(built)" not in text and text.count("(hit)") == 12     # 5 components, 5 CB, 2 system
+    # a model change rebuilds (never a stale model)
+    p3 = _scenario(tmp_path, {**STICK, "mesh_size": 7.0}, cases=[{"name": "nominal"}], name="s3.toml")
+    assert main(["run", str(p3), "--out", str(tmp_path / "c"), "--cache", str(cache), "--no-progress",
+                 "--no-snapshots"]) == 0
+    assert capsys.readouterr().out.count("(built)") == 12
+
+
+def test_cli_bad_scenario_one_line(tmp_path, capsys):
+    d = tomllib.loads(default_text())
+    d["model"] = STICK
+    d["post"][2]["vehicle"] = "srb_left_hd_9"
+    p = tmp_path / "bad.toml"
+    p.write_text(_toml(d))
+    assert main(["run", str(p), "--out", str(tmp_path / "o"), "--no-cache", "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "post[2].vehicle" in err and "srb_left_hd_9" in err
+    assert not list((tmp_path / "o").glob("results_*.h5"))
+    p.write_text("[model]\nsource = 'nastran'\n")
+    assert main(["run", str(p), "--out", str(tmp_path / "o")]) == 2
+    assert "bad.toml: model.source" in capsys.readouterr().err
+
+
+@pytest.mark.fem
+@pytest.mark.slow
+@pytest.mark.skipif(not HAVE_FE, reason="needs dolfinx and gmsh")
+def test_fe_scenario_end_to_end_coarse(tmp_path, capsys):
+    """The default stack in 3-D solids on coarse meshes, few modes: geometry -> FE -> CB ->
+    system modes -> transient -> reports, in one go (about 2 minutes on 2 cores)."""
+    model = {"source": "fe", "zeta": 0.01,
+             "component": {"core": {"mesh_size": 1.2, "n_modes": 8, "f_max": 40.0},
+                           "srb_left": {"n_modes": 6, "f_max": 40.0}, "srb_right": {"n_modes": 6, "f_max": 40.0},
+                           "orbiter": {"n_modes": 6, "f_max": 40.0}},
+             "pad": {"mesh_size": 2.4, "n_modes": 8, "f_max": 60.0},
+             "system": {"f_max": 40.0, "pad_f_max": 60.0}}
+    p = _scenario(tmp_path, model, cases=[{"name": "nominal"}])
+    assert main(["run", str(p), "--out", str(tmp_path / "fe"), "--cache", str(tmp_path / "cache"),
+                 "--no-progress"]) == 0
+    text = capsys.readouterr().out
+    print(text[-3000:])
+    _check_outputs(tmp_path / "fe", ["nominal"])
+    for what in ("max_twang", "release", "peak_load"):
+        assert (tmp_path / "fe" / f"snapshot_{what}_nominal.png").stat().st_size > 20_000
