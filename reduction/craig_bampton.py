@@ -84,6 +84,16 @@ class CBModel:
         return self.K[self.n_modes:, self.n_modes:]
 
     @property
+    def boundary_points(self) -> tuple[str, ...]:
+        """Points of the boundary DOFs, in order of first appearance."""
+        return tuple(dict.fromkeys(lab.split(":")[0] for lab in self.boundary_labels))
+
+    @property
+    def boundary_point_coords(self) -> np.ndarray:
+        """(n_boundary_points, 3) coordinates (m) of ``boundary_points``."""
+        return np.array([self.point_coord(p) for p in self.boundary_points]).reshape(-1, 3)
+
+    @property
     def fixed_freq_hz(self) -> np.ndarray:
         return self.fixed_omega / (2 * np.pi)
 
@@ -241,8 +251,11 @@ def fixed_interface_eig(Kii, Mii, lu, n_modes, f_max, who="component"):
             lam, phi = spla.eigsh(Kii, k=k, M=Mii, sigma=0.0, which="LM", OPinv=op)
             order = np.argsort(lam)
             lam, phi = lam[order], phi[:, order]
-            if k >= want or lam_max is None or lam[-1] > lam_max or k >= n_i - 2:
+            if k >= want or lam_max is None or lam[-1] > lam_max:
                 break
+            if k >= n_i - 2:
+                raise InputError(f"{who}: f_max covers (nearly) all {n_i} fixed-interface modes; "
+                                 "give n_modes instead")
             k = min(2 * k, want, n_i - 2)
     keep = np.arange(lam.size) < want
     if lam_max is not None:
