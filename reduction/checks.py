@@ -17,6 +17,7 @@ from .rigid import mass_properties, nodal_rb, rb_rows
 
 RB_TOL = 1e-6       # relative residual |K RB| / (|K| |RB|) accepted as rigid (round-off ~1e-12)
 DIRS = ("Tx", "Ty", "Tz", "Rx", "Ry", "Rz")
+DENSE_FE_LIMIT = 2000   # full FE models up to this size are eigensolved densely, else eigsh
 
 
 @dataclass
@@ -120,7 +121,7 @@ def cb_check(cb: CBModel, component: Component | None = None, ref_point=None,
             s["rigid_body_mass_rel_error"] = float(np.abs(m6 - m6f).max() / np.abs(m6f).max())
         ncmp = min(ncmp, component.n_dof - 2)
         shift = -(0.01 * cb.fixed_omega[0]) ** 2 if nq else -1.0
-        if component.n_dof <= 2000:
+        if component.n_dof <= DENSE_FE_LIMIT:
             lf = sla.eigvalsh(component.K.toarray(), component.M.toarray())[:ncmp]
         else:
             lf = np.sort(spla.eigsh(component.K.tocsc(), k=ncmp, M=component.M.tocsc(), sigma=shift,

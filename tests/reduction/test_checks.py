@@ -69,3 +69,15 @@ def test_flags_a_grounded_component_and_asymmetry(frame):
     assert "FAIL" in cb_check(cb).text
     cb.K[0, -1] += 1.0
     assert cb_check(cb).summary["K_asymmetry"] > 0
+
+
+def test_sparse_fe_eigensolve_matches_dense(frame, monkeypatch):
+    import reduction.checks as checks
+
+    comp, cb = frame
+    dense = cb_check(cb, comp).summary
+    monkeypatch.setattr(checks, "DENSE_FE_LIMIT", 0)      # eigsh with a small negative shift
+    sparse = cb_check(cb, comp).summary
+    # converged ARPACK eigenvalues: 1e-8 relative on the elastic frequencies
+    assert np.allclose(sparse["freefree_freq_hz_fe"][6:], dense["freefree_freq_hz_fe"][6:], rtol=1e-8)
+    assert np.all(np.array(sparse["freefree_freq_hz_fe"][:6]) < 1e-3 * sparse["freefree_freq_hz_fe"][6])

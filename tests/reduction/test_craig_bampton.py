@@ -152,3 +152,13 @@ def test_save_load_roundtrip(tmp_path, frame):
     assert [p.name for p in tmp_path.iterdir() if p.suffix == ".tmp"] == []
     with pytest.raises(Exception, match="recovery arrays"):
         small.boundary_load(np.zeros(comp.n_dof))
+
+
+def test_orderings_agree(frame):
+    comp, bl, _ = frame
+    a = craig_bampton(comp, bl, n_modes=6)
+    b = craig_bampton(comp, bl, n_modes=6, ordering="MMD_AT_PLUS_A")
+    # same matrices, different elimination order: round-off only
+    assert np.allclose(a.fixed_omega, b.fixed_omega, rtol=1e-12)
+    assert np.allclose(a.K_B, b.K_B, atol=1e-9 * np.abs(a.K_B).max())
+    assert np.allclose(a.M_B, b.M_B, atol=1e-12 * np.abs(a.M_B).max())

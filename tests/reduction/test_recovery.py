@@ -110,6 +110,11 @@ def test_interface_force_all_modes_equals_monolithic(frame, Omega_hz):
     assert np.allclose(u, u_ref, rtol=0, atol=1e-8 * np.abs(u_ref).max())
     assert np.allclose(acceleration_recovery(sysm, labs) @ qdd, -Omega**2 * u_ref,
                        rtol=0, atol=1e-8 * max(Omega**2, 1) * np.abs(u_ref).max())
+    # the matrices plug into the transient core's Recovery (y = disp q + acc qddot)
+    from transient.model import Recovery
+
+    rec = Recovery("joint_A", "a", six_labels(f"n{N}"), disp=D, acc=Acc)
+    assert np.allclose(rec.disp @ q + rec.acc @ qdd, F)
 
 
 def test_interface_force_truncated_models(frame):
