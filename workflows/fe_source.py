@@ -35,15 +35,16 @@ def geometry(params: dict, workdir: Path):
     name = params["name"]
     lay = _dataclass(StackLayout, dict(params["stack"]), "model.vehicle.params")
     lay.check()
-    extra = dict(params["params"])
+    given = dict(params["params"])
     size = params["mesh_size"]
+    extra = dict(given)
     if size is not None:
         extra.setdefault("mesh_size", size)
     where = f"model.{'pad' if name == 'pad' else 'component.' + name}.params"
     if name == "core":
-        if extra:
+        if given:
             raise InputError(f"{where}: the core stage takes no builder parameters in the FE source "
-                             f"(got {', '.join(extra)}); change [model.vehicle.params] (StackLayout)")
+                             f"(got {', '.join(given)}); change [model.vehicle.params] (StackLayout)")
         geo = build_core_stage(workdir, lay, **({} if size is None else {"mesh_size": size}))
     elif name in ("srb_left", "srb_right"):
         geo = build_booster(_dataclass(BoosterParams, {"side": name[4:], "layout": lay, **extra},

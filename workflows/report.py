@@ -166,7 +166,7 @@ def plots(result, cp, out: Path, case: str) -> list[Path]:
             ax.set_ylabel(f"F{'xyz'[j]} (MN)")
         finish(fig, list(axs), "attach_forces", "Attach forces (on the named component)")
 
-    fig, axs = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
+    fig, axs = plt.subplots(3, 1, figsize=(10, 9), sharex=True)
     cg = result.recovered["cg_motion"]
     for j in range(3):
         axs[0].plot(t, cg[:, j], lw=0.9, label=f"c.g. {'xyz'[j]} (m)")
@@ -176,10 +176,15 @@ def plots(result, cp, out: Path, case: str) -> list[Path]:
         for j, c in enumerate("xy"):
             col = labels.index(f"{top}:T{c}")
             axs[1].plot(t, result.displacement["a"][:, col] - cg[:, j], lw=0.9, label=f"{top} {c} rel. to c.g. (m)")
+    if result.rigid_body_motion_a is not None:
+        for j in range(3):
+            axs[2].plot(t, np.degrees(result.rigid_body_motion_a[:, 3 + j]), lw=0.9, label=f"R{'xyz'[j]}")
+        axs[2].legend(fontsize=7)
     axs[0].set_ylabel("c.g. motion (m)")
     axs[1].set_ylabel("top-of-stack lateral (m)")
+    axs[2].set_ylabel("attitude, rigid-body\nrotation (deg)")
     axs[1].legend(fontsize=7)
-    finish(fig, list(axs), "motion", "C.g. and top-of-stack motion")
+    finish(fig, list(axs), "motion", "C.g. motion, top-of-stack deflection, attitude")
 
     pay = cp.case.recovery["payload"]
     if pay:
