@@ -32,33 +32,6 @@ BOLTED, CLOSED, OPEN = 0, 1, 2
 
 
 @njit(cache=True)
-def _load(t, const, tk, Pk, ptr, out):
-    """Modal load at time t: const + piecewise-linear table (held outside), pointer advanced."""
-    n = const.size
-    nk = tk.size
-    if nk == 0:
-        for m in range(n):
-            out[m] = const[m]
-        return ptr
-    if t <= tk[0]:
-        for m in range(n):
-            out[m] = const[m] + Pk[0, m]
-        return 0
-    if t >= tk[nk - 1]:
-        for m in range(n):
-            out[m] = const[m] + Pk[nk - 1, m]
-        return nk - 1
-    while ptr + 1 < nk and tk[ptr + 1] <= t:
-        ptr += 1
-    while ptr > 0 and tk[ptr] > t:
-        ptr -= 1
-    w = (t - tk[ptr]) / (tk[ptr + 1] - tk[ptr])
-    for m in range(n):
-        out[m] = const[m] + (1.0 - w) * Pk[ptr, m] + w * Pk[ptr + 1, m]
-    return ptr
-
-
-@njit(cache=True)
 def _feedback(q, U, V, on, out):
     """out = U @ (V @ q) (rank-factored feedback matrix, eq. 26) or 0 when off."""
     n = q.size
@@ -73,14 +46,6 @@ def _feedback(q, U, V, on, out):
             s += V[k, m] * q[m]
         for m in range(n):
             out[m] += U[m, k] * s
-
-
-@njit(cache=True)
-def _free_step(coef, q, v, P0, P1, qf, vf):
-    n = q.size
-    for m in range(n):
-        qf[m] = coef[0, m] * q[m] + coef[1, m] * v[m] + coef[2, m] * P0[m] + coef[3, m] * P1[m]
-        vf[m] = coef[4, m] * q[m] + coef[5, m] * v[m] + coef[6, m] * P0[m] + coef[7, m] * P1[m]
 
 
 @njit(cache=True)
@@ -150,6 +115,75 @@ def _pattern_inverse(rows, cols, Cdiag, W, keys, invs, nkeys, last):
 
 
 @njit(cache=True)
+def _pre_step(coef, q, v, Pext, Pc, U, V, fb_on, const, tk, Pk, ptr, tb, fb, P0, P1, qf, vf):
+    """One fused pass per body: load at tb (table interpolation), feedback held over the step
+    (eq. 26), P0 = load(ta) + feedback + contact(ta), P1 = load(tb) + feedback, and the free
+    step (end-of-step contact force 0). Pext holds load(ta) on entry and load(tb) on exit."""
+    n = q.size
+    nk = tk.size
+    k0 = 0
+    w = 0.0
+    if nk > 0:
+        if tb <= tk[0]:
+            k0, w = 0, 0.0
+            ptr = 0
+        elif tb >= tk[nk - 1]:
+            k0, w = nk - 1, 0.0
+            ptr = nk - 1
+        else:
+            while ptr + 1 < nk and tk[ptr + 1] <= tb:
+                ptr += 1
+            while ptr > 0 and tk[ptr] > tb:
+                ptr -= 1
+            k0 = ptr
+            w = (tb - tk[ptr]) / (tk[ptr + 1] - tk[ptr])
+    k1 = k0 + 1 if (nk > 0 and w > 0.0) else k0
+    if nk > 0:
+        a = 1.0 - w
+        for m in range(n):
+            P1[m] = const[m] + a * Pk[k0, m] + w * Pk[k1, m]
+    else:
+        for m in range(n):
+            P1[m] = const[m]
+    if fb_on and V.shape[0] > 0:
+        _feedback(q, U, V, True, fb)
+        for m in range(n):
+            P0[m] = Pext[m] + fb[m] + Pc[m]
+            Pext[m] = P1[m]
+            P1[m] += fb[m]
+    else:
+        for m in range(n):
+            p0 = Pext[m] + Pc[m]
+            Pext[m] = P1[m]
+            P0[m] = p0
+    for m in range(n):
+        qf[m] = coef[0, m] * q[m] + coef[1, m] * v[m] + coef[2, m] * P0[m] + coef[3, m] * P1[m]
+        vf[m] = coef[4, m] * q[m] + coef[5, m] * v[m] + coef[6, m] * P0[m] + coef[7, m] * P1[m]
+    return ptr
+
+
+@njit(cache=True)
+def _post_step(coef, qf, vf, P1, Pf, Pg, anyf, anyg, zw2, w2, q, v, acc):
+    """End-of-step state with the contact force (f1 end values Pf, rigid start values Pg)."""
+    n = q.size
+    if anyg:
+        for m in range(n):
+            q[m] = qf[m] + coef[3, m] * Pf[m] + coef[2, m] * Pg[m]
+            v[m] = vf[m] + coef[7, m] * Pf[m] + coef[6, m] * Pg[m]
+            acc[m] = P1[m] + Pf[m] - zw2[m] * v[m] - w2[m] * q[m]
+    elif anyf:
+        for m in range(n):
+            q[m] = qf[m] + coef[3, m] * Pf[m]
+            v[m] = vf[m] + coef[7, m] * Pf[m]
+            acc[m] = P1[m] + Pf[m] - zw2[m] * v[m] - w2[m] * q[m]
+    else:
+        for m in range(n):
+            q[m] = qf[m]
+            v[m] = vf[m]
+            acc[m] = P1[m] - zw2[m] * v[m] - w2[m] * q[m]
+
+
+@njit(cache=True)
 def march(i0, i1, t0, h, method, tol, max_iter,
           # body a
           coef_a, w2_a, zw2_a, const_a, tk_a, Pk_a, U_a, V_a, fb_until_a, L_a, kind_a, targ_a,
@@ -158,20 +192,21 @@ def march(i0, i1, t0, h, method, tol, max_iter,
           # contact
           Phi_ca, Phi_cb, Cdiag, coff, dcontact, axial, nsign, release, W, C2,
           # state (mutated)
-          q_a, v_a, q_b, v_b, f, active, Pc_a, Pc_b, ptr,
+          q_a, v_a, q_b, v_b, f, active, Pc_a, Pc_b, Pext_a, Pext_b, ptr,
           keys, invs, ncache, last,
           # outputs (mutated)
           Y_a, Y_b, Fc, state, iters, keep, Qa, Va, Aa, Qb, Vb, Ab):
     """March steps i0 -> i1 (time t0 + i h). Returns (status, step, info1, info2)."""
     na, nb, nc, ncon = q_a.size, q_b.size, f.size, release.size
-    P0a = np.empty(na); P1a = np.empty(na); fba = np.empty(na); qfa = np.empty(na); vfa = np.empty(na)
-    P0b = np.empty(nb); P1b = np.empty(nb); fbb = np.empty(nb); qfb = np.empty(nb); vfb = np.empty(nb)
+    P0a = np.empty(na); P1a = np.empty(na); fba = np.zeros(na); qfa = np.empty(na); vfa = np.empty(na)
+    P0b = np.empty(nb); P1b = np.empty(nb); fbb = np.zeros(nb); qfb = np.empty(nb); vfb = np.empty(nb)
     acc_a = np.empty(na); acc_b = np.empty(nb)
     u = np.zeros(2 * nc); fn = np.empty(nc); Wf = np.empty(nc); g = np.zeros(nc); x2 = np.zeros(2 * nc)
     rows2 = np.zeros(2 * nc, dtype=np.bool_)
     cols2 = np.zeros(2 * nc, dtype=np.bool_)
     opening = np.zeros(nc, dtype=np.bool_)
     fpen = np.zeros(nc)
+    Pf_a = np.zeros(na); Pf_b = np.zeros(nb); Pg_a = np.zeros(na); Pg_b = np.zeros(nb)
     rigid = np.empty(nc, dtype=np.bool_)
     any_rigid = False
     for j in range(nc):
@@ -186,21 +221,11 @@ def march(i0, i1, t0, h, method, tol, max_iter,
         ta = t0 + i * h
         tb = t0 + (i + 1) * h
         # ---------------- free step of both bodies (contact force at t1 = 0)
-        ptr[0] = _load(ta, const_a, tk_a, Pk_a, ptr[0], P0a)
-        ptr[0] = _load(tb, const_a, tk_a, Pk_a, ptr[0], P1a)
-        _feedback(q_a, U_a, V_a, ta < fb_until_a, fba)
-        for m in range(na):
-            P0a[m] += fba[m] + Pc_a[m]
-            P1a[m] += fba[m]
-        _free_step(coef_a, q_a, v_a, P0a, P1a, qfa, vfa)
+        ptr[0] = _pre_step(coef_a, q_a, v_a, Pext_a, Pc_a, U_a, V_a, ta < fb_until_a, const_a, tk_a, Pk_a,
+                           ptr[0], tb, fba, P0a, P1a, qfa, vfa)
         if nb > 0:
-            ptr[1] = _load(ta, const_b, tk_b, Pk_b, ptr[1], P0b)
-            ptr[1] = _load(tb, const_b, tk_b, Pk_b, ptr[1], P1b)
-            _feedback(q_b, U_b, V_b, ta < fb_until_b, fbb)
-            for m in range(nb):
-                P0b[m] += fbb[m] + Pc_b[m]
-                P1b[m] += fbb[m]
-            _free_step(coef_b, q_b, v_b, P0b, P1b, qfb, vfb)
+            ptr[1] = _pre_step(coef_b, q_b, v_b, Pext_b, Pc_b, U_b, V_b, ta < fb_until_b, const_b, tk_b, Pk_b,
+                               ptr[1], tb, fbb, P0b, P1b, qfb, vfb)
         # ---------------- candidate rows and free relative displacement
         for c in range(ncon):
             bolted[c] = tb < release[c]
@@ -331,17 +356,16 @@ def march(i0, i1, t0, h, method, tol, max_iter,
             anyf = anyf or fn[j] != 0.0
             anyg = anyg or g[j] != 0.0
         if anyf:
-            Pf_a = np.dot(fn, Phi_ca)
-            Pf_b = -np.dot(fn, Phi_cb) if nb > 0 else np.zeros(0)
+            Pf_a[:] = np.dot(fn, Phi_ca)
+            if nb > 0:
+                Pf_b[:] = -np.dot(fn, Phi_cb)
         else:
-            Pf_a = np.zeros(na)
-            Pf_b = np.zeros(nb)
+            Pf_a[:] = 0.0
+            Pf_b[:] = 0.0
         if anyg:
-            Pg_a = np.dot(g, Phi_ca)
-            Pg_b = -np.dot(g, Phi_cb) if nb > 0 else np.zeros(0)
-        else:
-            Pg_a = np.zeros(na)
-            Pg_b = np.zeros(nb)
+            Pg_a[:] = np.dot(g, Phi_ca)
+            if nb > 0:
+                Pg_b[:] = -np.dot(g, Phi_cb)
         if any_rigid:  # the next step starts from the end values of the penalty rows only
             for j in range(nc):
                 fpen[j] = 0.0 if rigid[j] else fn[j]
@@ -351,14 +375,9 @@ def march(i0, i1, t0, h, method, tol, max_iter,
         else:
             Pc_a[:] = Pf_a
             Pc_b[:] = Pf_b
-        for m in range(na):
-            q_a[m] = qfa[m] + coef_a[3, m] * Pf_a[m] + coef_a[2, m] * Pg_a[m]
-            v_a[m] = vfa[m] + coef_a[7, m] * Pf_a[m] + coef_a[6, m] * Pg_a[m]
-            acc_a[m] = P1a[m] + Pf_a[m] - zw2_a[m] * v_a[m] - w2_a[m] * q_a[m]
-        for m in range(nb):
-            q_b[m] = qfb[m] + coef_b[3, m] * Pf_b[m] + coef_b[2, m] * Pg_b[m]
-            v_b[m] = vfb[m] + coef_b[7, m] * Pf_b[m] + coef_b[6, m] * Pg_b[m]
-            acc_b[m] = P1b[m] + Pf_b[m] - zw2_b[m] * v_b[m] - w2_b[m] * q_b[m]
+        _post_step(coef_a, qfa, vfa, P1a, Pf_a, Pg_a, anyf, anyg, zw2_a, w2_a, q_a, v_a, acc_a)
+        if nb > 0:
+            _post_step(coef_b, qfb, vfb, P1b, Pf_b, Pg_b, anyf, anyg, zw2_b, w2_b, q_b, v_b, acc_b)
         # ---------------- outputs at t1
         r = i + 1
         for j in range(nc):

@@ -331,6 +331,8 @@ def solve(problem: TransientProblem) -> TransientResult:
     ncache = np.zeros(1, dtype=np.int64)
     last = np.zeros(1, dtype=np.int64)
     ptr = np.zeros(2, dtype=np.int64)
+    Pext_a = np.array(load_a.at(problem.t0), dtype=float)  # applied modal load at the step start
+    Pext_b = np.array(load_b.at(problem.t0), dtype=float)
     method = 0 if problem.method == "direct" else 1
     w2_a, zw2_a = pa.omega ** 2, 2 * pa.zeta * pa.omega
     w2_b, zw2_b = pb.omega ** 2, 2 * pb.zeta * pb.omega
@@ -354,7 +356,7 @@ def solve(problem: TransientProblem) -> TransientResult:
             st, step, info1, info2 = march(
                 i, i1, float(problem.t0), float(h), method, float(problem.tol), int(problem.max_iter),
                 *args_a, *args_b, *args_c,
-                q_a, v_a, q_b, v_b, f, active, Pc_a, Pc_b, ptr, keys, invs, ncache, last,
+                q_a, v_a, q_b, v_b, f, active, Pc_a, Pc_b, Pext_a, Pext_b, ptr, keys, invs, ncache, last,
                 Y_a, Y_b, Fc, state, iters, keep, Qa, Va, Aa, Qb, Vb, Ab)
             if st != 0:
                 t_fail = problem.t0 + step * h
