@@ -404,15 +404,21 @@ def march(i0, i1, t0, h, method, tol, max_iter,
 
 @njit(cache=True)
 def _outputs(L, kind, targ, q, v, acc, Y, r):
-    """Y[r, targ] = sum over rows of L_row . x_kind (x = q, v or acc), by BLAS per kind."""
+    """Y[r, targ] = sum over rows of L_row . x_kind (x = q, v or acc); rows sorted by kind,
+    one BLAS product per kind."""
     if Y.shape[1] == 0:
         return
     for k in range(Y.shape[1]):
         Y[r, k] = 0.0
-    if L.shape[0] == 0:
-        return
-    yq = np.dot(L, q)
-    yv = np.dot(L, v)
-    ya = np.dot(L, acc)
-    for row in range(L.shape[0]):
-        Y[r, targ[row]] += yq[row] if kind[row] == 0 else (yv[row] if kind[row] == 1 else ya[row])
+    nrow = L.shape[0]
+    s0 = 0
+    while s0 < nrow:
+        kd = kind[s0]
+        s1 = s0
+        while s1 < nrow and kind[s1] == kd:
+            s1 += 1
+        x = q if kd == 0 else (v if kd == 1 else acc)
+        y = np.dot(L[s0:s1], x)
+        for row in range(s0, s1):
+            Y[r, targ[row]] += y[row - s0]
+        s0 = s1

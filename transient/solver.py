@@ -218,7 +218,9 @@ def _output_matrices(problem: TransientProblem, key: str):
         rec_slices[r.name] = (ntarg, ntarg + m)
         ntarg += m
     L = np.array(L).reshape(len(kind), n) if kind else np.zeros((0, n))
-    out = dict(L=np.ascontiguousarray(L), kind=np.array(kind, dtype=np.int64), targ=np.array(targ, dtype=np.int64),
+    order = np.argsort(np.array(kind, dtype=np.int64), kind="stable")  # the kernel wants rows grouped by kind
+    L, kind, targ = L[order], np.array(kind, dtype=np.int64)[order], np.array(targ, dtype=np.int64)[order]
+    out = dict(L=np.ascontiguousarray(L), kind=kind, targ=targ,
                ntarg=ntarg, k=k, rb=rb_slice, rec=rec_slices)
     out["rb_sel"] = rb_sel if rb_slice is not None else None
     return out
