@@ -1,0 +1,71 @@
+"""Cold and warm wall time of `liftoff run` (the embedded default scenario), per stage.
+
+    python benchmarks/bench_workflow.py [--scenario FILE] [--keep DIR]
+
+Cold: a fresh, empty stage cache (meshing, FE assembly, Craig-Bampton, system modes all
+computed). Warm: the same command again on that cache (a second run that changes only
+loads or cases costs this much). Each run is a separate `liftoff run` process, so the
+totals include interpreter start-up, imports and numba compilation. Per-stage times come
+from the run's own summary.txt. Figures are reported in docs/workflow.md.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+LIFTOFF = Path(sys.executable).with_name("liftoff")
+
+
+def stage_times(summary: Path) -> dict[str, float]:
+    out, on = {}, False
+    for line in summary.read_text().splitlines():
+        if "wall time per stage" in line:
+            on = True
+            continue
+        m = re.match(r"\s{4}(.+?)\s+([0-9.]+) s$", line) if on else None
+        if m:
+            out[m.group(1).strip()] = float(m.group(2))
+    return out
+
+
+def run_once(scenario, out: Path, cache: Path) -> tuple[float, dict]:
+    cmd = [str(LIFTOFF), "run", *([str(scenario)] if scenario else []), "--out", str(out),
+           "--cache", str(cache), "--no-progress"]
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, "PYVISTA_OFF_SCREEN": "true"})
+    wall = time.perf_counter() - t0
+    if proc.returncode != 0:
+        sys.exit(f"bench_workflow: `{' '.join(cmd)}` failed:\n{proc.stderr[-2000:]}")
+    return wall, stage_times(out / "summary.txt")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--scenario", type=Path, default=None, help="scenario file (default: embedded)")
+    ap.add_argument("--keep", type=Path, default=None, help="keep outputs and cache in this directory")
+    args = ap.parse_args()
+    with tempfile.TemporaryDirectory(prefix="liftoff-bench-") as tmp:
+        base = args.keep or Path(tmp)
+        cache = base / "cache"
+        cold_wall, cold = run_once(args.scenario, base / "cold", cache)
+        warm_wall, warm = run_once(args.scenario, base / "warm", cache)
+    print(f"liftoff run {args.scenario or '(embedded default)'}: {platform.processor() or platform.machine()}, "
+          f"{os.cpu_count()} CPUs, Python {platform.python_version()}")
+    print(f"{'stage':<40}{'cold (s)':>10}{'warm (s)':>10}")
+    for name in cold:
+        w = warm.get(name, warm.get(name.replace("(built)", "(hit)"), float("nan")))
+        print(f"{name:<40}{cold[name]:>10.2f}{w:>10.2f}")
+    print(f"{'process wall time (incl. start-up)':<40}{cold_wall:>10.2f}{warm_wall:>10.2f}")
+    print(f"warm / cold = {warm_wall / cold_wall:.2f}")
+
+
+if __name__ == "__main__":
+    main()
