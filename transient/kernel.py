@@ -268,14 +268,10 @@ def march(i0, i1, t0, h, method, tol, max_iter,
                 if not ok:
                     return SINGULAR, i + 1, 0.0, 0.0
                 last[0] = slot
-                n2 = nc if not any_rigid else 2 * nc
-                for j in range(n2):
-                    s = 0.0
-                    if cols2[j]:
-                        for l in range(n2):
-                            if rows2[l]:
-                                s -= invs[slot, j, l] * u[l]
-                    x2[j] = s
+                # the cached inverse is zero outside [cols, rows]: one BLAS product does the masking
+                x2[:] = np.dot(invs[slot], u)
+                for j in range(2 * nc):
+                    x2[j] = -x2[j]
                 for j in range(nc):
                     fn[j] = x2[j]
                     g[j] = x2[nc + j] if any_rigid else 0.0
