@@ -32,19 +32,17 @@ BOLTED, CLOSED, OPEN = 0, 1, 2
 
 
 @njit(cache=True)
-def _feedback(q, U, V, on, out):
-    """out = U @ (V @ q) (rank-factored feedback matrix, eq. 26) or 0 when off."""
-    n = q.size
-    for m in range(n):
+def _feedback(q, U, V, until, ta, out):
+    """out = sum_k U[:, k] (V[k] . q) over the rank-one terms still on (ta < until[k]) (eq. 26)."""
+    for m in range(q.size):
         out[m] = 0.0
-    if not on:
-        return
-    r = V.shape[0]
-    for k in range(r):
+    for k in range(V.shape[0]):
+        if not ta < until[k]:
+            continue
         s = 0.0
-        for m in range(n):
+        for m in range(q.size):
             s += V[k, m] * q[m]
-        for m in range(n):
+        for m in range(q.size):
             out[m] += U[m, k] * s
 
 
@@ -115,20 +113,20 @@ def _pattern_inverse(rows, cols, Cdiag, W, keys, invs, nkeys, last):
 
 
 @njit(cache=True)
-def _pre_step(coef, q, v, Pext, Pc, U, V, fb_on, const, tk, Pk, ptr, tb, fb, P0, P1, qf, vf):
-    """One fused pass per body: load at tb (table interpolation), feedback held over the step
-    (eq. 26), P0 = load(ta) + feedback + contact(ta), P1 = load(tb) + feedback, and the free
-    step (end-of-step contact force 0). Pext holds load(ta) on entry and load(tb) on exit."""
+def _pre_step(coef, q, v, Pext, Pc, U, V, until, ta, const, tk, Pk, ptr, tb, fb, P0, P1, qf, vf):
+    """One pass over all modes of both bodies: load at tb (table interpolation), feedback held
+    over the step (eq. 26), P0 = load(ta) + feedback + contact(ta), P1 = load(tb) + feedback,
+    and the free step (end-of-step contact force 0). Pext holds load(ta) on entry, load(tb)
+    on exit."""
     n = q.size
     nk = tk.size
     k0 = 0
     w = 0.0
     if nk > 0:
         if tb <= tk[0]:
-            k0, w = 0, 0.0
             ptr = 0
         elif tb >= tk[nk - 1]:
-            k0, w = nk - 1, 0.0
+            k0 = nk - 1
             ptr = nk - 1
         else:
             while ptr + 1 < nk and tk[ptr + 1] <= tb:
@@ -145,8 +143,8 @@ def _pre_step(coef, q, v, Pext, Pc, U, V, fb_on, const, tk, Pk, ptr, tb, fb, P0,
     else:
         for m in range(n):
             P1[m] = const[m]
-    if fb_on and V.shape[0] > 0:
-        _feedback(q, U, V, True, fb)
+    if V.shape[0] > 0:
+        _feedback(q, U, V, until, ta, fb)
         for m in range(n):
             P0[m] = Pext[m] + fb[m] + Pc[m]
             Pext[m] = P1[m]
@@ -185,28 +183,25 @@ def _post_step(coef, qf, vf, P1, Pf, Pg, anyf, anyg, zw2, w2, q, v, acc):
 
 @njit(cache=True)
 def march(i0, i1, t0, h, method, tol, max_iter,
-          # body a
-          coef_a, w2_a, zw2_a, const_a, tk_a, Pk_a, U_a, V_a, fb_until_a, L_a, kind_a, targ_a,
-          # body b
-          coef_b, w2_b, zw2_b, const_b, tk_b, Pk_b, U_b, V_b, fb_until_b, L_b, kind_b, targ_b,
-          # contact
-          Phi_ca, Phi_cb, Cdiag, coff, dcontact, axial, nsign, release, W, C2,
+          # both bodies as one modal set: modes 0..na-1 of body a, then those of body b
+          na, coef, w2, zw2, const, tk, Pk, U, V, fb_until,
+          L_a, kind_a, targ_a, L_b, kind_b, targ_b,
+          # contact rows: Phi_c = [Phi_ca, -Phi_cb], so e = Phi_c q = x_a - x_b, Phi_c^T f on A and B
+          Phi_c, Cdiag, coff, dcontact, axial, nsign, release, W, C2,
           # state (mutated)
-          q_a, v_a, q_b, v_b, f, active, Pc_a, Pc_b, Pext_a, Pext_b, ptr,
-          keys, invs, ncache, last,
+          q, v, f, active, Pc, Pext, ptr, keys, invs, ncache, last,
           # outputs (mutated)
           Y_a, Y_b, Fc, state, iters, keep, Qa, Va, Aa, Qb, Vb, Ab):
     """March steps i0 -> i1 (time t0 + i h). Returns (status, step, info1, info2)."""
-    na, nb, nc, ncon = q_a.size, q_b.size, f.size, release.size
-    P0a = np.empty(na); P1a = np.empty(na); fba = np.zeros(na); qfa = np.empty(na); vfa = np.empty(na)
-    P0b = np.empty(nb); P1b = np.empty(nb); fbb = np.zeros(nb); qfb = np.empty(nb); vfb = np.empty(nb)
-    acc_a = np.empty(na); acc_b = np.empty(nb)
+    n, nc, ncon = q.size, f.size, release.size
+    nb = n - na
+    P0 = np.empty(n); P1 = np.empty(n); fb = np.zeros(n); qf = np.empty(n); vf = np.empty(n)
+    acc = np.empty(n); Pf = np.zeros(n); Pg = np.zeros(n)
     u = np.zeros(2 * nc); fn = np.empty(nc); Wf = np.empty(nc); g = np.zeros(nc); x2 = np.zeros(2 * nc)
     rows2 = np.zeros(2 * nc, dtype=np.bool_)
     cols2 = np.zeros(2 * nc, dtype=np.bool_)
     opening = np.zeros(nc, dtype=np.bool_)
     fpen = np.zeros(nc)
-    Pf_a = np.zeros(na); Pf_b = np.zeros(nb); Pg_a = np.zeros(na); Pg_b = np.zeros(nb)
     rigid = np.empty(nc, dtype=np.bool_)
     any_rigid = False
     for j in range(nc):
@@ -221,37 +216,22 @@ def march(i0, i1, t0, h, method, tol, max_iter,
         ta = t0 + i * h
         tb = t0 + (i + 1) * h
         # ---------------- free step of both bodies (contact force at t1 = 0)
-        ptr[0] = _pre_step(coef_a, q_a, v_a, Pext_a, Pc_a, U_a, V_a, ta < fb_until_a, const_a, tk_a, Pk_a,
-                           ptr[0], tb, fba, P0a, P1a, qfa, vfa)
-        if nb > 0:
-            ptr[1] = _pre_step(coef_b, q_b, v_b, Pext_b, Pc_b, U_b, V_b, ta < fb_until_b, const_b, tk_b, Pk_b,
-                               ptr[1], tb, fbb, P0b, P1b, qfb, vfb)
-        # ---------------- candidate rows and free relative displacement
+        ptr[0] = _pre_step(coef, q, v, Pext, Pc, U, V, fb_until, ta, const, tk, Pk, ptr[0], tb, fb, P0, P1, qf, vf)
+        # ---------------- candidate rows and free relative displacement (one BLAS product)
+        e = np.dot(Phi_c, qf)
+        ed = np.dot(Phi_c, vf) if any_rigid else e
         for c in range(ncon):
             bolted[c] = tb < release[c]
-        # contact-space projections by BLAS (np.dot): 5-10x faster than loops at these sizes
-        ea = np.dot(Phi_ca, qfa)
-        eb = np.dot(Phi_cb, qfb) if nb > 0 else np.zeros(nc)
-        if any_rigid:
-            va_ = np.dot(Phi_ca, vfa)
-            vb_ = np.dot(Phi_cb, vfb) if nb > 0 else np.zeros(nc)
         for j in range(nc):
             cand[j] = bolted[dcontact[j]] or axial[j]
             if not bolted[dcontact[j]] and not axial[j]:
                 active[j] = False
             elif bolted[dcontact[j]]:
                 active[j] = True
-            if cand[j]:
-                u[j] = coff[j] + ea[j] - eb[j]
-                if rigid[j]:
-                    u[nc + j] = va_[j] - vb_[j]
-            else:
-                u[j] = 0.0
-            if not (cand[j] and rigid[j]):
-                u[nc + j] = 0.0
+            u[j] = coff[j] + e[j] if cand[j] else 0.0
+            u[nc + j] = ed[j] if (any_rigid and cand[j] and rigid[j]) else 0.0
         # ---------------- contact solve
         it = 0
-
         if method == 0:
             single = False
             while True:
@@ -270,11 +250,9 @@ def march(i0, i1, t0, h, method, tol, max_iter,
                 last[0] = slot
                 # the cached inverse is zero outside [cols, rows]: one BLAS product does the masking
                 x2[:] = np.dot(invs[slot], u)
-                for j in range(2 * nc):
-                    x2[j] = -x2[j]
                 for j in range(nc):
-                    fn[j] = x2[j]
-                    g[j] = x2[nc + j] if any_rigid else 0.0
+                    fn[j] = -x2[j]
+                    g[j] = -x2[nc + j] if any_rigid else 0.0
                 changed = False
                 for j in range(nc):
                     if not cand[j] or bolted[dcontact[j]]:
@@ -344,36 +322,25 @@ def march(i0, i1, t0, h, method, tol, max_iter,
                 if it >= max_iter or not np.isfinite(dmax):
                     return NO_CONVERGENCE, i + 1, dmax, float(it)
         # ---------------- end-of-step state with the contact force
-        for j in range(nc):
-            f[j] = fn[j]
         anyf = False
         anyg = False
         for j in range(nc):
+            f[j] = fn[j]
             anyf = anyf or fn[j] != 0.0
             anyg = anyg or g[j] != 0.0
         if anyf:
-            Pf_a[:] = np.dot(fn, Phi_ca)
-            if nb > 0:
-                Pf_b[:] = -np.dot(fn, Phi_cb)
+            Pf[:] = np.dot(fn, Phi_c)
         else:
-            Pf_a[:] = 0.0
-            Pf_b[:] = 0.0
+            Pf[:] = 0.0
         if anyg:
-            Pg_a[:] = np.dot(g, Phi_ca)
-            if nb > 0:
-                Pg_b[:] = -np.dot(g, Phi_cb)
+            Pg[:] = np.dot(g, Phi_c)
         if any_rigid:  # the next step starts from the end values of the penalty rows only
             for j in range(nc):
                 fpen[j] = 0.0 if rigid[j] else fn[j]
-            Pc_a[:] = np.dot(fpen, Phi_ca)
-            if nb > 0:
-                Pc_b[:] = -np.dot(fpen, Phi_cb)
+            Pc[:] = np.dot(fpen, Phi_c)
         else:
-            Pc_a[:] = Pf_a
-            Pc_b[:] = Pf_b
-        _post_step(coef_a, qfa, vfa, P1a, Pf_a, Pg_a, anyf, anyg, zw2_a, w2_a, q_a, v_a, acc_a)
-        if nb > 0:
-            _post_step(coef_b, qfb, vfb, P1b, Pf_b, Pg_b, anyf, anyg, zw2_b, w2_b, q_b, v_b, acc_b)
+            Pc[:] = Pf
+        _post_step(coef, qf, vf, P1, Pf, Pg, anyf, anyg, zw2, w2, q, v, acc)
         # ---------------- outputs at t1
         r = i + 1
         for j in range(nc):
@@ -388,13 +355,14 @@ def march(i0, i1, t0, h, method, tol, max_iter,
             if opening[j]:  # a rigid row that opened during this step starts the next one open
                 active[j] = False
                 opening[j] = False
-        _outputs(L_a, kind_a, targ_a, q_a, v_a, acc_a, Y_a, r)
-        _outputs(L_b, kind_b, targ_b, q_b, v_b, acc_b, Y_b, r)
+        _outputs(L_a, kind_a, targ_a, q[:na], v[:na], acc[:na], Y_a, r)
+        if nb > 0:
+            _outputs(L_b, kind_b, targ_b, q[na:], v[na:], acc[na:], Y_b, r)
         if keep:
             for m in range(na):
-                Qa[r, m] = q_a[m]; Va[r, m] = v_a[m]; Aa[r, m] = acc_a[m]
+                Qa[r, m] = q[m]; Va[r, m] = v[m]; Aa[r, m] = acc[m]
             for m in range(nb):
-                Qb[r, m] = q_b[m]; Vb[r, m] = v_b[m]; Ab[r, m] = acc_b[m]
+                Qb[r, m] = q[na + m]; Vb[r, m] = v[na + m]; Ab[r, m] = acc[na + m]
     return OK, i1, 0.0, 0.0
 
 

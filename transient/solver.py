@@ -329,22 +329,35 @@ def solve(problem: TransientProblem) -> TransientResult:
     cap = 64
     keys = np.zeros((cap, 4 * nc), dtype=np.bool_)
     invs = np.zeros((cap, 2 * nc, 2 * nc))
-    Pc_a, Pc_b = rows.Phi_a.T @ pen0, -(rows.Phi_b.T @ pen0)
     ncache = np.zeros(1, dtype=np.int64)
     last = np.zeros(1, dtype=np.int64)
-    ptr = np.zeros(2, dtype=np.int64)
-    Pext_a = np.array(load_a.at(problem.t0), dtype=float)  # applied modal load at the step start
-    Pext_b = np.array(load_b.at(problem.t0), dtype=float)
+    ptr = np.zeros(1, dtype=np.int64)
     method = 0 if problem.method == "direct" else 1
-    w2_a, zw2_a = pa.omega ** 2, 2 * pa.zeta * pa.omega
-    w2_b, zw2_b = pb.omega ** 2, 2 * pb.zeta * pb.omega
     C = np.ascontiguousarray
-    args_a = (coef_a, w2_a, zw2_a, load_a.const, load_a.times, C(load_a.table), C(U_a), C(V_a), float(until_a),
-              out_a["L"], out_a["kind"], out_a["targ"])
-    args_b = (coef_b, w2_b, zw2_b, load_b.const, load_b.times, C(load_b.table.reshape(load_b.times.size, pb.n_modes)),
-              C(U_b), C(V_b), float(until_b), out_b["L"], out_b["kind"], out_b["targ"])
-    args_c = (C(rows.Phi_a), C(rows.Phi_b), rows.compliance, rows.offset, rows.contact, rows.axial, rows.sign,
-              rows.release, C(W2), C2)
+    # both bodies as one modal set (a then b): one BLAS product per contact projection
+    na = pa.n_modes
+    Phi_c = C(np.hstack([rows.Phi_a, -rows.Phi_b]))
+    q = np.concatenate([q_a, q_b])
+    v = np.concatenate([v_a, v_b])
+    Pc = Phi_c.T @ pen0  # contact force of the penalty rows at t0 (rigid rows start from their own g)
+    Pext = np.concatenate([load_a.at(problem.t0), load_b.at(problem.t0)])  # applied load at the step start
+    coef = C(np.hstack([coef_a, coef_b]))
+    w2 = np.concatenate([pa.omega, pb.omega]) ** 2
+    zw2 = 2 * np.concatenate([pa.zeta * pa.omega, pb.zeta * pb.omega])
+    const = np.concatenate([load_a.const, load_b.const])
+    tk = np.union1d(load_a.times, load_b.times)
+    Pk = np.zeros((tk.size, na + pb.n_modes))
+    for ld, cols in ((load_a, slice(0, na)), (load_b, slice(na, None))):
+        if ld.times.size:  # exact: each body's table is linear between its own breakpoints
+            Pk[:, cols] = np.column_stack([np.interp(tk, ld.times, ld.table[:, m]) for m in range(ld.table.shape[1])])
+    U = np.zeros((na + pb.n_modes, U_a.shape[1] + U_b.shape[1]))
+    V = np.zeros((U.shape[1], na + pb.n_modes))
+    U[:na, :U_a.shape[1]], V[:U_a.shape[1], :na] = U_a, V_a
+    U[na:, U_a.shape[1]:], V[U_a.shape[1]:, na:] = U_b, V_b
+    fb_until = np.concatenate([np.full(U_a.shape[1], float(until_a)), np.full(U_b.shape[1], float(until_b))])
+    args = (na, coef, w2, zw2, const, tk, C(Pk), C(U), C(V), fb_until,
+            out_a["L"], out_a["kind"], out_a["targ"], out_b["L"], out_b["kind"], out_b["targ"],
+            Phi_c, rows.compliance, rows.offset, rows.contact, rows.axial, rows.sign, rows.release, C(W2), C2)
 
     bar = None
     if problem.progress and n_steps > 4 * CHUNK:
@@ -357,8 +370,7 @@ def solve(problem: TransientProblem) -> TransientResult:
             i1 = min(i + CHUNK, n_steps)
             st, step, info1, info2 = march(
                 i, i1, float(problem.t0), float(h), method, float(problem.tol), int(problem.max_iter),
-                *args_a, *args_b, *args_c,
-                q_a, v_a, q_b, v_b, f, active, Pc_a, Pc_b, Pext_a, Pext_b, ptr, keys, invs, ncache, last,
+                *args, q, v, f, active, Pc, Pext, ptr, keys, invs, ncache, last,
                 Y_a, Y_b, Fc, state, iters, keep, Qa, Va, Aa, Qb, Vb, Ab)
             if st != 0:
                 t_fail = problem.t0 + step * h
@@ -373,7 +385,7 @@ def solve(problem: TransientProblem) -> TransientResult:
                 if st == SINGULAR:
                     raise InputError(f"singular contact system at t = {t_fail:.6g} s: rigid contact directions "
                                      "are redundant or act on DOFs with no flexibility")
-            if not (np.all(np.isfinite(q_a)) and np.all(np.isfinite(q_b))):
+            if not np.all(np.isfinite(q)):
                 bad = np.flatnonzero(~np.all(np.isfinite(Fc[i + 1:i1 + 1]), axis=1))
                 t_bad = time[i + 1 + (bad[0] if bad.size else 0)]
                 raise ConvergenceError(
