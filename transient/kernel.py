@@ -113,7 +113,7 @@ def _pattern_inverse(rows, cols, Cdiag, W, keys, invs, nkeys, last):
 
 
 @njit(cache=True)
-def _pre_step(coef, q, v, Pext, Pc, U, V, until, ta, const, tk, Pk, ptr, tb, fb, P0, P1, qf, vf):
+def _pre_step(coef, q, v, Pext, Pc, U, V, until, ta, const, tk, Pk, ptr, tb, fb, P1, qf, vf):
     """One pass over all modes of both bodies: load at tb (table interpolation), feedback held
     over the step (eq. 26), P0 = load(ta) + feedback + contact(ta), P1 = load(tb) + feedback,
     and the free step (end-of-step contact force 0). Pext holds load(ta) on entry, load(tb)
@@ -136,27 +136,30 @@ def _pre_step(coef, q, v, Pext, Pc, U, V, until, ta, const, tk, Pk, ptr, tb, fb,
             k0 = ptr
             w = (tb - tk[ptr]) / (tk[ptr + 1] - tk[ptr])
     k1 = k0 + 1 if (nk > 0 and w > 0.0) else k0
-    if nk > 0:
-        a = 1.0 - w
-        for m in range(n):
-            P1[m] = const[m] + a * Pk[k0, m] + w * Pk[k1, m]
-    else:
-        for m in range(n):
-            P1[m] = const[m]
-    if V.shape[0] > 0:
+    has_fb = V.shape[0] > 0
+    if has_fb:
         _feedback(q, U, V, until, ta, fb)
+    a = 1.0 - w
+    if nk > 0 and not has_fb:  # the common case in one pass
         for m in range(n):
-            P0[m] = Pext[m] + fb[m] + Pc[m]
-            Pext[m] = P1[m]
-            P1[m] += fb[m]
-    else:
-        for m in range(n):
+            p1 = const[m] + a * Pk[k0, m] + w * Pk[k1, m]
             p0 = Pext[m] + Pc[m]
-            Pext[m] = P1[m]
-            P0[m] = p0
+            Pext[m] = p1
+            P1[m] = p1
+            qf[m] = coef[0, m] * q[m] + coef[1, m] * v[m] + coef[2, m] * p0 + coef[3, m] * p1
+            vf[m] = coef[4, m] * q[m] + coef[5, m] * v[m] + coef[6, m] * p0 + coef[7, m] * p1
+        return ptr
     for m in range(n):
-        qf[m] = coef[0, m] * q[m] + coef[1, m] * v[m] + coef[2, m] * P0[m] + coef[3, m] * P1[m]
-        vf[m] = coef[4, m] * q[m] + coef[5, m] * v[m] + coef[6, m] * P0[m] + coef[7, m] * P1[m]
+        p1 = const[m]
+        if nk > 0:
+            p1 += a * Pk[k0, m] + w * Pk[k1, m]
+        fbm = fb[m] if has_fb else 0.0
+        p0 = Pext[m] + fbm + Pc[m]
+        Pext[m] = p1
+        p1 += fbm
+        P1[m] = p1
+        qf[m] = coef[0, m] * q[m] + coef[1, m] * v[m] + coef[2, m] * p0 + coef[3, m] * p1
+        vf[m] = coef[4, m] * q[m] + coef[5, m] * v[m] + coef[6, m] * p0 + coef[7, m] * p1
     return ptr
 
 
@@ -195,11 +198,12 @@ def march(i0, i1, t0, h, method, tol, max_iter,
     """March steps i0 -> i1 (time t0 + i h). Returns (status, step, info1, info2)."""
     n, nc, ncon = q.size, f.size, release.size
     nb = n - na
-    P0 = np.empty(n); P1 = np.empty(n); fb = np.zeros(n); qf = np.empty(n); vf = np.empty(n)
+    P1 = np.empty(n); fb = np.zeros(n); qf = np.empty(n); vf = np.empty(n)
     acc = np.empty(n); Pf = np.zeros(n); Pg = np.zeros(n)
-    u = np.zeros(2 * nc); fn = np.empty(nc); Wf = np.empty(nc); g = np.zeros(nc); x2 = np.zeros(2 * nc)
-    rows2 = np.zeros(2 * nc, dtype=np.bool_)
-    cols2 = np.zeros(2 * nc, dtype=np.bool_)
+    n2 = W.shape[0]  # nc, or 2 nc when there are rigid rows (unknowns [f1; g])
+    u = np.zeros(n2); fn = np.empty(nc); Wf = np.empty(nc); g = np.zeros(nc); x2 = np.zeros(n2)
+    rows2 = np.zeros(n2, dtype=np.bool_)
+    cols2 = np.zeros(n2, dtype=np.bool_)
     opening = np.zeros(nc, dtype=np.bool_)
     fpen = np.zeros(nc)
     rigid = np.empty(nc, dtype=np.bool_)
@@ -216,7 +220,7 @@ def march(i0, i1, t0, h, method, tol, max_iter,
         ta = t0 + i * h
         tb = t0 + (i + 1) * h
         # ---------------- free step of both bodies (contact force at t1 = 0)
-        ptr[0] = _pre_step(coef, q, v, Pext, Pc, U, V, fb_until, ta, const, tk, Pk, ptr[0], tb, fb, P0, P1, qf, vf)
+        ptr[0] = _pre_step(coef, q, v, Pext, Pc, U, V, fb_until, ta, const, tk, Pk, ptr[0], tb, fb, P1, qf, vf)
         # ---------------- candidate rows and free relative displacement (one BLAS product)
         e = np.dot(Phi_c, qf)
         ed = np.dot(Phi_c, vf) if any_rigid else e
@@ -229,7 +233,8 @@ def march(i0, i1, t0, h, method, tol, max_iter,
             elif bolted[dcontact[j]]:
                 active[j] = True
             u[j] = coff[j] + e[j] if cand[j] else 0.0
-            u[nc + j] = ed[j] if (any_rigid and cand[j] and rigid[j]) else 0.0
+            if any_rigid:
+                u[nc + j] = ed[j] if (cand[j] and rigid[j]) else 0.0
         # ---------------- contact solve
         it = 0
         if method == 0:
@@ -242,8 +247,9 @@ def march(i0, i1, t0, h, method, tol, max_iter,
                 for j in range(nc):
                     rows2[j] = active[j]
                     cols2[j] = active[j] and not opening[j]
-                    rows2[nc + j] = active[j] and rigid[j] and not opening[j]
-                    cols2[nc + j] = active[j] and rigid[j]
+                    if any_rigid:
+                        rows2[nc + j] = active[j] and rigid[j] and not opening[j]
+                        cols2[nc + j] = active[j] and rigid[j]
                 slot, ncache[0], ok = _pattern_inverse(rows2, cols2, C2, W, keys, invs, ncache[0], last[0])
                 if not ok:
                     return SINGULAR, i + 1, 0.0, 0.0

@@ -285,8 +285,11 @@ def solve(problem: TransientProblem) -> TransientResult:
 
     W = flex("Bc", "Bc")  # step flexibility (end-of-step force -> end-of-step displacement)
     # kernel matrix for x = [f1; g] (g: start values of rigid rows, see kernel.py)
-    W2 = np.block([[W, flex("Ac", "Ac")], [flex("Bcd", "Bcd"), flex("Acd", "Acd")]])
-    C2 = np.concatenate([rows.compliance, np.zeros(rows.n)])
+    if (rows.compliance == 0).any():
+        W2 = np.block([[W, flex("Ac", "Ac")], [flex("Bcd", "Bcd"), flex("Acd", "Acd")]])
+        C2 = np.concatenate([rows.compliance, np.zeros(rows.n)])
+    else:  # penalty only: unknowns f1 alone
+        W2, C2 = W, rows.compliance.copy()
     out_a, out_b = _output_matrices(problem, "a"), _output_matrices(problem, "b")
 
     # outputs
@@ -327,8 +330,9 @@ def solve(problem: TransientProblem) -> TransientResult:
     f = f0.copy()
     active = active0.copy()
     cap = 64
-    keys = np.zeros((cap, 4 * nc), dtype=np.bool_)
-    invs = np.zeros((cap, 2 * nc, 2 * nc))
+    n2 = W2.shape[0]
+    keys = np.zeros((cap, 2 * n2), dtype=np.bool_)
+    invs = np.zeros((cap, n2, n2))
     ncache = np.zeros(1, dtype=np.int64)
     last = np.zeros(1, dtype=np.int64)
     ptr = np.zeros(1, dtype=np.int64)
