@@ -170,15 +170,18 @@ def build_problem(case: Case, stack: StackModel, progress: bool = True) -> CaseP
 
 def table1(stack: StackModel, cp: CaseProblem, case: Case):
     """Table 1 of the reference for this stack on its pad: c.g. motion under static loads
-    (gravity only; + softening; + cryo; + both). Cryo and softening are taken from the
-    case's settings when enabled there, else from their defaults (they are switched on for
-    the table so that every row exists)."""
+    (gravity only; + softening; + cryo; + both). Softening is always evaluated (KSOF of
+    this stack and gravity); the cryo rows use the case's cryo preload and are marked
+    when the case has cryo switched off (they then repeat rows 1-2)."""
     from transient.effects import cg_static_report
 
     soft = cp.softening or ModalFeedback("a", softening_matrix(stack.vehicle, case.gravity))
     cryo = [PointForce("a", k, v) for k, v in cp.cryo.items()]
     cps = [c for c in cp.problem.contacts]
-    return cg_static_report(stack.vehicle, stack.pad, cps, cp.gravity_only, cryo, soft)
+    rep = cg_static_report(stack.vehicle, stack.pad, cps, cp.gravity_only, cryo, soft)
+    if not cryo:
+        rep.rows[2:] = [r + " (cryo off)" for r in rep.rows[2:]]
+    return rep
 
 
 def stack_mass_summary(stack: StackModel) -> str:
