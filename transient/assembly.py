@@ -102,20 +102,20 @@ def modal_load(body: ModalBody, key: str, forcing: Forcing) -> ModalLoad:
 
 
 def feedback_factors(n: int, key: str, forcing: Forcing, t0: float):
-    """Sum of the feedback matrices of a body as rank-factored U @ V (exact to rounding) and its 'until'.
+    """Feedback matrices of a body as rank-factored terms: (U (n, r), V (r, n), until (r,)).
 
-    All feedback terms of one body must share the same 'until' (one switch-off time)."""
-    fbs = [fb for fb in forcing.feedback if fb.body == key]
-    if not fbs or n == 0:
-        return np.zeros((n, 0)), np.zeros((0, n)), -np.inf
-    untils = {fb.until for fb in fbs}
-    if len(untils) > 1:
-        raise InputError(f"body {key!r}: modal feedback terms with different 'until' times {sorted(untils)} "
-                         "are not supported; combine them")
-    M = sum(fb.matrix for fb in fbs)
-    U, s, Vt = np.linalg.svd(M)
-    r = int(np.sum(s > 1e-14 * max(s[0], 1e-300))) if s.size else 0
-    return U[:, :r] * s[:r], Vt[:r].copy(), float(untils.pop())
+    Each matrix is factored by SVD (singular values below 1e-14 of the largest dropped:
+    exact to rounding), so force = sum_k U[:, k] (V[k] . q) over the terms with t < until[k]."""
+    Us, Vs, untils = [np.zeros((n, 0))], [np.zeros((0, n))], [np.zeros(0)]
+    for fb in forcing.feedback:
+        if fb.body != key or n == 0:
+            continue
+        U, s, Vt = np.linalg.svd(fb.matrix)
+        r = int(np.sum(s > 1e-14 * max(s[0], 1e-300))) if s.size else 0
+        Us.append(U[:, :r] * s[:r])
+        Vs.append(Vt[:r])
+        untils.append(np.full(r, fb.until))
+    return np.hstack(Us), np.vstack(Vs), np.concatenate(untils)
 
 
 def feedback_matrix(n: int, key: str, forcing: Forcing, t: float) -> np.ndarray:

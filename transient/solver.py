@@ -358,7 +358,7 @@ def solve(problem: TransientProblem) -> TransientResult:
     V = np.zeros((U.shape[1], na + pb.n_modes))
     U[:na, :U_a.shape[1]], V[:U_a.shape[1], :na] = U_a, V_a
     U[na:, U_a.shape[1]:], V[U_a.shape[1]:, na:] = U_b, V_b
-    fb_until = np.concatenate([np.full(U_a.shape[1], float(until_a)), np.full(U_b.shape[1], float(until_b))])
+    fb_until = np.concatenate([until_a, until_b]).astype(float)
     args = (na, coef, w2, zw2, const, tk, C(Pk), C(U), C(V), fb_until,
             out_a["L"], out_a["kind"], out_a["targ"], out_b["L"], out_b["kind"], out_b["targ"],
             Phi_c, rows.compliance, rows.offset, rows.contact, rows.axial, rows.sign, rows.release, C(W2), C2)
