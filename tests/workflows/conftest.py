@@ -95,3 +95,82 @@ def rigid_column():
                          phi=phi, participation=part, ref_point=cg, points=names,
                          point_coords=np.array([coords["base"], cg]), rigid_body_mass=Mrb)
     return build
+
+
+# ---------------------------------------------------------------- monolithic reference
+def _coupled_K(problem):
+    """Monolithic stiffness diag(omega^2) + D^T K_C D of vehicle + pad + penalty posts."""
+    a, b = problem.body_a, problem.body_b
+    na, nb = a.n_modes, b.n_modes
+    K = np.zeros((na + nb, na + nb))
+    K[:na, :na] = np.diag(a.omega ** 2)
+    K[na:, na:] = np.diag(b.omega ** 2)
+    rows, ks = [], []
+    for c in problem.contacts:
+        for la, lb, k in zip(c.labels_a, c.labels_b, c.stiffness):
+            rows.append(np.concatenate([a.rows([la])[0], -b.rows([lb])[0]]))
+            ks.append(k)
+    D, ks = np.array(rows), np.array(ks)
+    return K + D.T @ (ks[:, None] * D), D, ks
+
+
+def _modal_loader(problem):
+    """P(t) of both bodies, built here independently of transient/: gravity through the
+    participation factors (eq. 14), constant and tabulated forces through mode rows."""
+    a, b = problem.body_a, problem.body_b
+    f = problem.forcing
+    P0 = np.concatenate([a.participation @ np.r_[f.gravity, 0, 0, 0],
+                         b.participation @ np.r_[f.gravity, 0, 0, 0]])
+    for p in f.constant:
+        P0[: a.n_modes] += a.rows([p.label])[0] * p.value
+    rows = np.array([a.rows([tb.label])[0] for tb in f.tables]).reshape(-1, a.n_modes)
+    tabs = [(tb.time, tb.value) for tb in f.tables]
+
+    def load(t):
+        P = P0.copy()
+        if tabs:
+            P[: a.n_modes] += np.array([np.interp(t, tt, vv) for tt, vv in tabs]) @ rows
+        return P
+    return load
+
+
+def _monolithic_errors(problem, divisions=(2, 4, 8)):
+    """Max |two-body - monolithic| post force / peak, for h = h0/d (h0 = 0.25/f_h, eq. 12).
+
+    The monolithic reference: vehicle + pad + K_C as one modal system (eq. 2), same modal
+    damping, same loads (built independently here), static start, integrated by scipy
+    DOP853 with rtol 1e-10. Contacts must stay bolted over the run (t_end < release)."""
+    from dataclasses import replace
+
+    from scipy.integrate import solve_ivp
+
+    from transient import estimate_step, solve
+
+    assert problem.t_end < min(c.release_time for c in problem.contacts)
+    K, D, ks = _coupled_K(problem)
+    a, b = problem.body_a, problem.body_b
+    C = np.diag(2 * np.concatenate([a.zeta * a.omega, b.zeta * b.omega]))
+    n = K.shape[0]
+    load = _modal_loader(problem)
+    q0 = np.linalg.solve(K, load(problem.t0))
+
+    def rhs(t, y):
+        return np.concatenate([y[n:], load(t) - C @ y[n:] - K @ y[:n]])
+
+    ref = solve_ivp(rhs, (problem.t0, problem.t_end), np.concatenate([q0, np.zeros(n)]), method="DOP853",
+                    dense_output=True, rtol=1e-10, atol=1e-12 * np.abs(q0).max())
+    h0 = estimate_step(a, b, problem.contacts)[1]
+    errs = []
+    for div in divisions:
+        res = solve(replace(problem, h=h0 / div, progress=False, initial="static"))
+        F_ref = -(ks[:, None] * (D @ ref.sol(res.time)[:n])).T       # force on the vehicle (N)
+        errs.append(np.abs(res.contact_force - F_ref).max() / np.abs(F_ref).max())
+    return errs
+
+
+@pytest.fixture
+def monolithic():
+    """Namespace: coupled_K(problem), modal_loader(problem), errors(problem, divisions)."""
+    from types import SimpleNamespace
+
+    return SimpleNamespace(coupled_K=_coupled_K, modal_loader=_modal_loader, errors=_monolithic_errors)

@@ -8,9 +8,8 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 
-from transient import Forcing, PointForce, estimate_step, solve, static_solution
+from transient import Forcing, PointForce, solve, static_solution
 from workflows.cache import StageCache
 from workflows.loads import build_problem, table1
 from workflows.pipeline import build_stack
@@ -36,43 +35,7 @@ def stack():
     return build_stack(scenario().model, StageCache(None), progress=False)
 
 
-def _coupled_K(problem):
-    """Monolithic stiffness diag(omega^2) + D^T K_C D of vehicle + pad + penalty posts."""
-    a, b = problem.body_a, problem.body_b
-    na, nb = a.n_modes, b.n_modes
-    K = np.zeros((na + nb, na + nb))
-    K[:na, :na] = np.diag(a.omega ** 2)
-    K[na:, na:] = np.diag(b.omega ** 2)
-    rows, ks = [], []
-    for c in problem.contacts:
-        for la, lb, k in zip(c.labels_a, c.labels_b, c.stiffness):
-            rows.append(np.concatenate([a.rows([la])[0], -b.rows([lb])[0]]))
-            ks.append(k)
-    D, ks = np.array(rows), np.array(ks)
-    return K + D.T @ (ks[:, None] * D), D, ks
-
-
-def _modal_loader(problem):
-    """P(t) of both bodies, built here independently of transient/: gravity through the
-    participation factors (eq. 14), constant and tabulated forces through mode rows."""
-    a, b = problem.body_a, problem.body_b
-    f = problem.forcing
-    P0 = np.concatenate([a.participation @ np.r_[f.gravity, 0, 0, 0],
-                         b.participation @ np.r_[f.gravity, 0, 0, 0]])
-    for p in f.constant:
-        P0[: a.n_modes] += a.rows([p.label])[0] * p.value
-    rows = np.array([a.rows([tb.label])[0] for tb in f.tables]).reshape(-1, a.n_modes)
-    tabs = [(tb.time, tb.value) for tb in f.tables]
-
-    def load(t):
-        P = P0.copy()
-        if tabs:
-            P[: a.n_modes] += np.array([np.interp(t, tt, vv) for tt, vv in tabs]) @ rows
-        return P
-    return load
-
-
-def test_bolted_phase_matches_monolithic_model(stack):
+def test_bolted_phase_matches_monolithic_model(stack, monolithic):
     """Before release the two uncoupled bodies + contact forces must reproduce the coupled
     system (vehicle + pad + K_C as one modal model, eq. 2) integrated by scipy DOP853
     (rtol 1e-10). SSME build-up over 0-3 s, gravity and cryo preload, static start.
@@ -82,35 +45,14 @@ def test_bolted_phase_matches_monolithic_model(stack):
     eq. 12) be below 1e-5 of the peak post force (measured ~6e-7)."""
     case = scenario(time={"t_end": 3.0}, control={"enabled": False}, softening={"enabled": False})
     cp = build_problem(case, stack, progress=False)
-    K, D, ks = _coupled_K(cp.problem)
-    a, b = cp.problem.body_a, cp.problem.body_b
-    zeta = np.concatenate([a.zeta, b.zeta])
-    omega = np.concatenate([a.omega, b.omega])
-    C = np.diag(2 * zeta * omega)
-    n = K.shape[0]
-    load = _modal_loader(cp.problem)
-    q0 = np.linalg.solve(K, load(0.0))
-
-    def rhs(t, y):
-        q, v = y[:n], y[n:]
-        return np.concatenate([v, load(t) - C @ v - K @ q])
-
-    t_end = cp.problem.t_end
-    ref = solve_ivp(rhs, (0.0, t_end), np.concatenate([q0, np.zeros(n)]), method="DOP853",
-                    dense_output=True, rtol=1e-10, atol=1e-12 * np.abs(q0).max())
-    h0 = estimate_step(cp.problem.body_a, cp.problem.body_b, cp.problem.contacts)[1]
-    errs = []
-    for div in (2, 4, 8):
-        res = solve(replace(cp.problem, h=h0 / div, progress=False))
-        F_ref = -(ks[:, None] * (D @ ref.sol(res.time)[:n])).T       # force on the vehicle (N)
-        errs.append(np.abs(res.contact_force - F_ref).max() / np.abs(F_ref).max())
+    errs = monolithic.errors(cp.problem, (2, 4, 8))
     ratios = [errs[i] / errs[i + 1] for i in range(2)]
     print(f"bolted phase: max error / peak post force at h0/2, h0/4, h0/8: {errs}; ratios {ratios}")
     assert errs[0] < 1e-5
     assert all(r > 3.0 for r in ratios)          # second order: 4 per halving
 
 
-def test_settle_check_oscillates_about_static_solution(stack):
+def test_settle_check_oscillates_about_static_solution(stack, monolithic):
     """Section 2.6: started from zero under constant loads only (gravity, cryo; softening
     as held feedback), the run oscillates about the static solution. With zeta = 0.2 the
     elastic modes decay fast; the mean (fitted, see below) equals the static post forces
@@ -129,7 +71,7 @@ def test_settle_check_oscillates_about_static_solution(stack):
     # by a least-squares fit over the last 12 s of c + sum_k (A_k cos w_k t + B_k sin w_k t)
     # over every coupled mode not yet decayed below 1e-4 at the window start; w_k, sigma_k
     # from the damped monolithic eigenproblem (state space), independent of transient/.
-    K, D, ks = _coupled_K(prob)
+    K, D, ks = monolithic.coupled_K(prob)
     na, n = prob.body_a.n_modes, K.shape[0]
     K[:na, :na] -= cp.softening.matrix
     C = np.diag(2 * np.concatenate([prob.body_a.zeta * prob.body_a.omega, prob.body_b.zeta * prob.body_b.omega]))
