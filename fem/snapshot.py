@@ -6,16 +6,20 @@ edges) is drawn in grey, the deformed surface coloured by |u|, with the title an
 displacement scale factor written on the picture. Works without a display.
 
 Import this module (it imports pyvista) before dolfinx: the other order aborts the
-process when a scalar bar is drawn (FENICSX-NOTES.md).
+process when a scalar bar is drawn (FENICSX-NOTES.md). If dolfinx was imported first, the
+picture is rendered in a fresh Python subprocess instead (slower, but no crash).
 """
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 import tempfile
 from pathlib import Path
 
 import numpy as np
 
+_RENDER_IN_PROCESS = "dolfinx" not in sys.modules     # pyvista must come first (see above)
 os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
 import pyvista  # noqa: E402
 
@@ -59,6 +63,8 @@ def snapshot_png(path, nodes: np.ndarray, cells: np.ndarray, cell_type: str, dis
         raise InputError("snapshot: displacement contains NaN or inf")
     if scale is None:
         scale = auto_scale(nodes, u)
+    if not _RENDER_IN_PROCESS:
+        return _render_in_subprocess(path, nodes, cells, cell_type, u, title, scale, window_size, view)
     base = grid(nodes, cells, cell_type)
     deformed = base.copy()
     deformed.points = nodes + scale * u
@@ -96,3 +102,30 @@ def snapshot_mode(path, model, modes, j: int, scale: float | None = None) -> Pat
         return None
     title = f"{model.name}: mode {j + 1}, {modes.freq_hz[j]:.4g} Hz"
     return snapshot_png(path, model.nodes, model.cells, model.cell_type, u, title, scale)
+
+
+def _render_in_subprocess(path, nodes, cells, cell_type, u, title, scale, window_size, view) -> Path:
+    """Render in a fresh interpreter (no dolfinx there); arrays passed through an .npz."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, npz = tempfile.mkstemp(dir=path.parent, suffix=".snapshot.npz")
+    os.close(fd)
+    try:
+        np.savez(npz, nodes=nodes, cells=np.asarray(cells, np.int64), cell_type=np.array(cell_type),
+                 u=u, title=np.array(title), scale=np.array(float(scale)),
+                 window_size=np.asarray(window_size, np.int64), view=np.array(view), path=np.array(str(path)))
+        root = str(Path(__file__).resolve().parents[1])
+        env = dict(os.environ, PYTHONPATH=os.pathsep.join([root, os.environ.get("PYTHONPATH", "")]))
+        res = subprocess.run([sys.executable, "-m", "fem.snapshot", npz], capture_output=True, text=True,
+                             env=env, cwd=root)
+        if res.returncode != 0 or not path.is_file():
+            raise RuntimeError(f"snapshot subprocess failed ({res.returncode}): {res.stderr[-1000:]}")
+    finally:
+        os.unlink(npz)
+    return path
+
+
+if __name__ == "__main__":      # subprocess renderer: python -m fem.snapshot args.npz
+    with np.load(sys.argv[1], allow_pickle=False) as z:
+        snapshot_png(z["path"].item(), z["nodes"], z["cells"], z["cell_type"].item(), z["u"],
+                     z["title"].item(), float(z["scale"]), tuple(z["window_size"]), z["view"].item())

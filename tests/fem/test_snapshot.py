@@ -40,3 +40,23 @@ def test_snapshot_from_plain_arrays_and_bad_input(tmp_path):
         snapshot_png(tmp_path / "x.png", nodes, cells, "tetra", u[:3])
     with pytest.raises(InputError, match="must end in .png"):
         snapshot_png(tmp_path / "x.jpg", nodes, cells, "tetra", u)
+
+
+def test_snapshot_after_dolfinx_import_renders_in_subprocess(tmp_path):
+    """dolfinx imported before pyvista would abort the process (std::bad_alloc): the module
+    detects the order and renders in a fresh interpreter instead."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    code = ("import dolfinx, numpy as np\n"
+            "from fem.snapshot import snapshot_png, _RENDER_IN_PROCESS\n"
+            "assert not _RENDER_IN_PROCESS\n"
+            "n = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]])\n"
+            f"snapshot_png({str(tmp_path / 'late.png')!r}, n, np.array([[0, 1, 2, 3]]), 'tetra', 0.1 * n, 'late')\n")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=root,
+                         env=dict(os.environ, PYTHONPATH=str(root)), timeout=120)
+    assert res.returncode == 0, res.stderr[-1500:]
+    assert _image_stats(tmp_path / "late.png")[1] > 0.02
