@@ -88,3 +88,14 @@ def test_free_static_solve_needs_supports(box):
     _raises("load has 3 entries", static_solve, model, np.zeros(3), supports=range(6))
     _raises("give either n_modes or band_hz", eigenmodes, model)
     _raises("degree 3 not supported", build_model, Geometry("g", box, {"solid": STEEL}), degree=3)
+
+
+def test_eigensolver_non_convergence_is_an_error(msh):
+    """An unreachable tolerance within one iteration: ConvergenceError, not partial modes."""
+    from fem import petsc_backend as pb
+    from transient.errors import ConvergenceError
+
+    model = build_model(Geometry("g", msh("box", L=1.0, W=0.1, H=0.1, n=(20, 2, 2)), {"solid": STEEL},
+                                 clamped=["x0"]))
+    with pytest.raises(ConvergenceError, match="converged .* of 20 eigenpairs"):
+        pb.eigensolve(model.K, model.M, 20, -1.0, tol=1e-300, max_it=1, what="model 'g'")
