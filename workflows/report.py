@@ -200,7 +200,8 @@ def plots(result, cp, out: Path, case: str) -> list[Path]:
 # ------------------------------------------------------------------ snapshots
 def snapshot_times(result, cp) -> dict[str, int]:
     """Step indices: maximum twang (largest top lateral deflection relative to the c.g.
-    before release), release, and the peak of the largest post or attach load."""
+    before release), release, and the peak of the largest post or attach load change
+    (from its static preload at t0)."""
     t = result.time
     rel = [p.release_time for p in cp.case.posts if np.isfinite(p.release_time)]
     t_rel = min(rel) if rel else t[-1]
@@ -215,14 +216,17 @@ def snapshot_times(result, cp) -> dict[str, int]:
         dy = result.displacement["a"][:, labels.index(f"{top}:Ty")] - cg[:, 1]
         lat = np.hypot(dx, dy)[: max(i_rel, 1)]
         out["max_twang"] = int(np.argmax(lat))
+    # the largest load event: the biggest change of a post axial force or of an attach force
+    # magnitude from its static preload at t0 (the preloads themselves peak at t0)
     best, idx = -1.0, 0
     for j, lab in enumerate(result.contact_labels):
         if lab.endswith(":Tz"):
-            v = np.abs(result.contact_force[:, j])
+            v = np.abs(result.contact_force[:, j] - result.contact_force[0, j])
             if v.max() > best:
                 best, idx = float(v.max()), int(np.argmax(v))
     for k in cp.attach:
-        v = np.linalg.norm(result.recovered[k][:, :3], axis=1)
+        F = result.recovered[k][:, :3]
+        v = np.linalg.norm(F - F[0], axis=1)
         if v.max() > best:
             best, idx = float(v.max()), int(np.argmax(v))
     out["peak_load"] = idx
@@ -295,6 +299,10 @@ def snapshot(path: Path, parts, title: str, scale: float | None = None) -> tuple
     return path, scale
 
 
+TITLES = {"max_twang": "maximum twang", "release": "hold-down release",
+          "peak_load": "peak post/attach load change"}
+
+
 def snapshots(stack, result, cp, out: Path, case: str) -> list[Path]:
     paths = []
     for what, i in snapshot_times(result, cp).items():
@@ -302,7 +310,7 @@ def snapshots(stack, result, cp, out: Path, case: str) -> list[Path]:
         if not parts:
             break
         p, _ = snapshot(out / f"snapshot_{what}_{case}.png", parts,
-                        f"{case}: {what.replace('_', ' ')} at t = {result.time[i]:.3f} s")
+                        f"{case}: {TITLES.get(what, what)} at t = {result.time[i]:.3f} s")
         paths.append(p)
     return paths
 
