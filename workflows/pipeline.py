@@ -28,7 +28,6 @@ from .cache import StageCache, load_arrays, save_arrays, stage_key
 
 VEHICLE = ("core", "srb_left", "srb_right", "orbiter")
 DEFAULT_F_MAX = {"core": 60.0, "srb_left": 60.0, "srb_right": 60.0, "orbiter": 60.0, "pad": 60.0}
-CRYO_COMPONENT_VOLUMES = "cryo_unit"
 
 
 @dataclass

@@ -2,7 +2,6 @@
 references: the static solution (settle check, section 2.6), a monolithic coupled model
 integrated by scipy (bolted phase), rigid-body mechanics (control system), statics
 (cryo self-equilibrium, Table-1 directions)."""
-import copy
 import tomllib
 from dataclasses import replace
 
