@@ -64,8 +64,12 @@ def build_component(params: dict, workdir: Path):
         import pyvista  # noqa: F401
     except ImportError:  # pragma: no cover
         pass
-    from fem import build_model, thermal_load
-    from meshes import Material
+    try:
+        from fem import build_model, thermal_load
+        from meshes import Material
+    except ImportError as exc:
+        raise InputError(f"model.source = 'fe' needs gmsh and dolfinx ({exc}); install them with "
+                         "`make setup` or use source = 'stick'") from None
     from reduction import Component
 
     geo = geometry(params, Path(workdir))
