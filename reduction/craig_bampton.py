@@ -31,6 +31,7 @@ from .component import Component
 
 FORMAT = "liftoff-cb-model"
 VERSION = 1
+BAND_MODE_LIMIT = 640   # most modes a frequency band may select from a sparse eigensolve
 DENSE_LIMIT = 600          # interior size below which the fixed-interface eigensolve is dense
 ORDERING = "COLAMD"        # SuperLU column ordering (benchmarks/bench_reduction.py: COLAMD had
                            # 1.5x less fill and a 6x faster factor than MMD_AT_PLUS_A on a
@@ -242,7 +243,9 @@ def fixed_interface_eig(Kii, Mii, lu, n_modes, f_max, who="component"):
     want = n_i if n_modes is None else min(n_modes, n_i)
     if want == 0:
         return np.zeros(0), np.zeros((n_i, 0))
-    if n_i <= DENSE_LIMIT or want >= n_i - 1:
+    # dense only for small interiors or an explicit request for (nearly) all modes; a band
+    # alone (n_modes None) must never fall through to a dense n_i x n_i eigensolve
+    if n_i <= DENSE_LIMIT or (n_modes is not None and want >= n_i - 1):
         lam, phi = sla.eigh(Kii.toarray(), Mii.toarray())
     else:
         op = spla.LinearOperator(Kii.shape, matvec=lu.solve, dtype=float)
@@ -256,7 +259,15 @@ def fixed_interface_eig(Kii, Mii, lu, n_modes, f_max, who="component"):
             if k >= n_i - 2:
                 raise InputError(f"{who}: f_max covers (nearly) all {n_i} fixed-interface modes; "
                                  "give n_modes instead")
+            if n_modes is None and k >= BAND_MODE_LIMIT:
+                # A band that holds this many modes of a solid mesh is mostly local wall modes;
+                # growing the Lanczos basis further costs GBs (k x n_i vectors and ARPACK work).
+                raise InputError(f"{who}: more than {BAND_MODE_LIMIT} fixed-interface modes lie below "
+                                 f"f_max = {f_max:g} Hz (mode {k} at {np.sqrt(lam[-1]) / (2 * np.pi):.1f} Hz); "
+                                 "lower f_max or give n_modes")
             k = min(2 * k, want, n_i - 2)
+            if n_modes is None:
+                k = min(k, BAND_MODE_LIMIT)
     keep = np.arange(lam.size) < want
     if lam_max is not None:
         keep &= lam <= lam_max
