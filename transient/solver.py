@@ -234,6 +234,19 @@ def _initial_outputs(outm, body, q, v, acc, Y):
 
 # -------------------------------------------------------------------- solve
 def solve(problem: TransientProblem) -> TransientResult:
+    """Integrate the two-body problem (see :func:`_solve`) with one BLAS thread.
+
+    The BLAS products of a step are tiny (n_contact_dirs x n_modes) and the set-up products
+    a few hundred square: a multi-threaded BLAS only adds synchronisation
+    (benchmarks/bench_transient.py: 0.87 s CPU with 2 OpenBLAS threads, 0.65 s with one).
+    """
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _solve(problem)
+
+
+def _solve(problem: TransientProblem) -> TransientResult:
     """Run the two-body transient (sections 2.3-2.7) and return its time histories."""
     started = _time.perf_counter()
     pa, pb = problem.body_a, problem.body_b
