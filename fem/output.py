@@ -6,12 +6,11 @@ Coordinates in m, displacements in m (mass-normalised mode shapes in m/sqrt(kg))
 """
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from transient.atomic import atomic_path
 from transient.errors import InputError
 
 
@@ -30,15 +29,8 @@ def write_vtu(path, nodes: np.ndarray, cells: np.ndarray, cell_type: str,
     mesh = meshio.Mesh(nodes, [(cell_type, np.asarray(cells, np.int64))],
                        point_data={k: np.asarray(v, float) for k, v in point_data.items()},
                        field_data=field_data or {})
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.stem, suffix=".tmp.vtu")
-    os.close(fd)
-    try:
-        meshio.write(tmp, mesh, file_format="vtu")
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    with atomic_path(path, suffix=".vtu") as tmp:
+        meshio.write(str(tmp), mesh, file_format="vtu")
     return path
 
 

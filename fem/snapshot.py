@@ -25,6 +25,7 @@ import pyvista  # noqa: E402
 
 pyvista.OFF_SCREEN = True
 
+from transient.atomic import atomic_path  # noqa: E402
 from transient.errors import InputError  # noqa: E402
 
 _VTK_TYPES = {"tetra": 10, "tetra10": 24, "triangle": 5, "triangle6": 22, "hexahedron": 12,
@@ -82,16 +83,11 @@ def snapshot_png(path, nodes: np.ndarray, cells: np.ndarray, cell_type: str, dis
         getattr(pl, f"view_{view}")()
     else:
         raise InputError(f"snapshot: view {view!r} must be iso, xy, xz or yz")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.stem, suffix=".tmp.png")
-    os.close(fd)
     try:
-        pl.screenshot(tmp)
-        os.replace(tmp, path)
+        with atomic_path(path, suffix=".png") as tmp:
+            pl.screenshot(str(tmp))
     finally:
         pl.close()
-        if os.path.exists(tmp):
-            os.unlink(tmp)
     return path
 
 

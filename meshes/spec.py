@@ -25,12 +25,12 @@ from __future__ import annotations
 import json
 import os
 import re
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from transient.atomic import write_text
 from transient.errors import InputError
 
 FORMAT = "liftoff-geometry"
@@ -178,18 +178,7 @@ class Geometry:
     def save(self, path) -> Path:
         """Write the JSON sidecar atomically (temp file + os.replace); returns the path."""
         path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        text = json.dumps(self.to_dict(path.parent), indent=1)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-        try:
-            with os.fdopen(fd, "w") as f:
-                f.write(text)
-            os.replace(tmp, path)
-        except BaseException:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
-            raise
-        return path
+        return write_text(path, json.dumps(self.to_dict(path.parent), indent=1))
 
     @classmethod
     def load(cls, path) -> "Geometry":

@@ -56,7 +56,7 @@ class Assembly:
 
     def cb_index(self, name: str) -> np.ndarray:
         """System DOF index of each DOF [q; x_b] of component ``name``."""
-        cb = self.component(name)
+        self.component(name)                      # InputError naming an unknown component
         s = self.modal_slices[name]
         return np.concatenate([np.arange(s.start, s.stop), self.n_modal + self.boundary_index[name]])
 

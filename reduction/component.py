@@ -33,14 +33,13 @@ field_map_*         CSR arrays       (3 n_nodes, n) DOF vector -> nodal u [optio
 """
 from __future__ import annotations
 
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
 
+from transient.atomic import atomic_path
 from transient.body import split_label
 from transient.errors import InputError
 
@@ -149,15 +148,8 @@ def save_component(c: Component, path) -> Path:
         rec["cell_type"] = np.array(c.cell_type)
     if c.field_map is not None:
         rec.update(_csr_record("field_map", c.field_map))
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            np.savez(fh, **rec)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+        np.savez(fh, **rec)
     return path
 
 

@@ -13,8 +13,6 @@ constraint modes on all DOFs). Units SI: omega rad/s, M kg (kg m, kg m^2), K N/m
 """
 from __future__ import annotations
 
-import os
-import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,6 +22,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from transient.atomic import atomic_path
 from transient.body import split_label
 from transient.errors import InputError
 
@@ -301,15 +300,8 @@ def save_cb(cb: CBModel, path, recovery: bool = True) -> Path:
     if recovery and cb.constraint_modes is not None and cb.fixed_interface_modes is not None:
         rec["constraint_modes"] = cb.constraint_modes
         rec["fixed_interface_modes"] = cb.fixed_interface_modes
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            np.savez(fh, **rec)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+        np.savez(fh, **rec)
     return path
 
 

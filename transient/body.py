@@ -33,12 +33,12 @@ from __future__ import annotations
 
 import os
 import re
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from .atomic import atomic_path
 from .errors import InputError
 
 COMPONENTS = ("Tx", "Ty", "Tz", "Rx", "Ry", "Rz")
@@ -183,15 +183,14 @@ def save_body(body: ModalBody, path: str | os.PathLike) -> Path:
     path = Path(path)
     body.validate()
     rec = _record(body)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-    os.close(fd)
-    try:
+    if path.suffix not in (".npz", ".h5", ".hdf5"):
+        raise InputError(f"body file {str(path)!r}: unknown extension, use .h5 or .npz")
+    with atomic_path(path) as tmp:
         if path.suffix == ".npz":
             with open(tmp, "wb") as fh:
                 np.savez(fh, format=np.array(FORMAT), version=np.array(VERSION),
                          name=np.array(body.name), units=np.array("SI"), **rec)
-        elif path.suffix in (".h5", ".hdf5"):
+        else:
             import h5py
 
             with h5py.File(tmp, "w") as f:
@@ -204,12 +203,6 @@ def save_body(body: ModalBody, path: str | os.PathLike) -> Path:
                         f.create_dataset(k, data=v.astype(object), dtype=h5py.string_dtype())
                     else:
                         f.create_dataset(k, data=v)
-        else:
-            raise InputError(f"body file {str(path)!r}: unknown extension, use .h5 or .npz")
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
     return path
 
 

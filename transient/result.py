@@ -3,12 +3,12 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from .atomic import atomic_path
 from .errors import InputError
 
 FORMAT = "liftoff-transient-result"
@@ -80,9 +80,6 @@ class TransientResult:
         import h5py
 
         path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-        os.close(fd)
         sdt = h5py.string_dtype()
 
         def put(group, name, data, units, **attrs):
@@ -95,43 +92,38 @@ class TransientResult:
             for k, v in attrs.items():
                 d.attrs[k] = v
 
-        try:
-            with h5py.File(tmp, "w") as f:
-                f.attrs["format"] = FORMAT
-                f.attrs["version"] = VERSION
-                f.attrs["units"] = "SI (m, kg, s, N, rad)"
-                f.attrs["metadata"] = json.dumps(self.metadata)
-                put(f, "time", self.time, "s")
-                put(f, "iterations", self.iterations, "1")
-                c = f.create_group("contact")
-                put(c, "names", np.array(self.contact_names, dtype="U"), "1")
-                put(c, "labels", np.array(self.contact_labels, dtype="U"), "1")
-                put(c, "force", self.contact_force, "N (N m for rotations)", on="body a")
-                put(c, "state", self.contact_state, "1", meaning="0 bolted, 1 closed, 2 open")
-                put(c, "separation_time", self.separation_time, "s", meaning="first opening, NaN if never")
-                put(c, "recontact_count", self.recontact_count, "1")
-                put(c, "release_time", self.release_time, "s")
-                for key in ("a", "b"):
-                    g = f.create_group(f"body_{key}")
-                    labels = list(self.output_labels[key])
-                    put(g, "output_labels", np.array(labels, dtype="U"), "1")
-                    put(g, "displacement", self.displacement[key], _dof_units(labels, "disp"))
-                    put(g, "velocity", self.velocity[key], _dof_units(labels, "vel"))
-                    put(g, "acceleration", self.acceleration[key], _dof_units(labels, "acc"))
-                    rb = self.rigid_body_motion_a if key == "a" else self.rigid_body_motion_b
-                    if rb is not None:
-                        put(g, "rigid_body_motion", rb, "m (Tx Ty Tz), rad (Rx Ry Rz)",
-                            columns="Tx Ty Tz Rx Ry Rz about ref_point")
-                    for mk, unit in (("q", "sqrt(kg) m"), ("v", "sqrt(kg) m/s"), ("acc", "sqrt(kg) m/s^2")):
-                        if f"{mk}_{key}" in self.modal:
-                            put(g, f"modal_{mk}", self.modal[f"{mk}_{key}"], unit)
-                r = f.create_group("recovered")
-                for name, arr in self.recovered.items():
-                    put(r, name, arr, self.recovered_units.get(name, "SI"))
-            os.replace(tmp, path)
-        finally:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
+        with atomic_path(path) as tmp, h5py.File(tmp, "w") as f:
+            f.attrs["format"] = FORMAT
+            f.attrs["version"] = VERSION
+            f.attrs["units"] = "SI (m, kg, s, N, rad)"
+            f.attrs["metadata"] = json.dumps(self.metadata)
+            put(f, "time", self.time, "s")
+            put(f, "iterations", self.iterations, "1")
+            c = f.create_group("contact")
+            put(c, "names", np.array(self.contact_names, dtype="U"), "1")
+            put(c, "labels", np.array(self.contact_labels, dtype="U"), "1")
+            put(c, "force", self.contact_force, "N (N m for rotations)", on="body a")
+            put(c, "state", self.contact_state, "1", meaning="0 bolted, 1 closed, 2 open")
+            put(c, "separation_time", self.separation_time, "s", meaning="first opening, NaN if never")
+            put(c, "recontact_count", self.recontact_count, "1")
+            put(c, "release_time", self.release_time, "s")
+            for key in ("a", "b"):
+                g = f.create_group(f"body_{key}")
+                labels = list(self.output_labels[key])
+                put(g, "output_labels", np.array(labels, dtype="U"), "1")
+                put(g, "displacement", self.displacement[key], _dof_units(labels, "disp"))
+                put(g, "velocity", self.velocity[key], _dof_units(labels, "vel"))
+                put(g, "acceleration", self.acceleration[key], _dof_units(labels, "acc"))
+                rb = self.rigid_body_motion_a if key == "a" else self.rigid_body_motion_b
+                if rb is not None:
+                    put(g, "rigid_body_motion", rb, "m (Tx Ty Tz), rad (Rx Ry Rz)",
+                        columns="Tx Ty Tz Rx Ry Rz about ref_point")
+                for mk, unit in (("q", "sqrt(kg) m"), ("v", "sqrt(kg) m/s"), ("acc", "sqrt(kg) m/s^2")):
+                    if f"{mk}_{key}" in self.modal:
+                        put(g, f"modal_{mk}", self.modal[f"{mk}_{key}"], unit)
+            r = f.create_group("recovered")
+            for name, arr in self.recovered.items():
+                put(r, name, arr, self.recovered_units.get(name, "SI"))
         return path
 
 

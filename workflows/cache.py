@@ -18,6 +18,8 @@ from typing import Any, Callable
 
 import numpy as np
 
+from transient.atomic import atomic_path
+
 ROOT = Path(__file__).resolve().parent.parent
 _CODE_CACHE: dict[tuple[str, ...], str] = {}
 
@@ -100,10 +102,8 @@ def default_cache_dir(out_dir: Path) -> Path:
 
 def save_arrays(arrays: dict, path: Path) -> None:
     """Atomic npz write of plain arrays (no pickle)."""
-    tmp = path.with_name(path.name + f".{os.getpid()}.tmp")
-    with open(tmp, "wb") as fh:
+    with atomic_path(path) as tmp, open(tmp, "wb") as fh:
         np.savez(fh, **arrays)
-    os.replace(tmp, path)
 
 
 def load_arrays(path: Path) -> dict:

@@ -70,9 +70,6 @@ def _run_transient(args: argparse.Namespace) -> int:
     result = solve(scenario.problem)
     wall = time.perf_counter() - started
     path = Path(result.save(out / RESULTS_NAME))
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(path, 0o666 & ~umask)  # the atomic temp file is created 0600; give it normal permissions
     print(summary(scenario, result, path, wall))
     return EXIT_OK
 

@@ -9,13 +9,12 @@ from __future__ import annotations
 
 import csv
 import io
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from transient.atomic import atomic_path, write_text
 from transient.effects import center_of_gravity
 
 
@@ -95,7 +94,7 @@ def write_csv(rows: list[dict], path: Path) -> Path:
     w.writeheader()
     for r in rows:
         w.writerow({k: (f"{r[k]:.6e}" if isinstance(r[k], float) else r[k]) for k in FIELDS})
-    _atomic_text(path, "# liftoff max/min table; SI units (column 'unit'); times in s\n" + buf.getvalue())
+    write_text(path, "# liftoff max/min table; SI units (column 'unit'); times in s\n" + buf.getvalue())
     return path
 
 
@@ -107,15 +106,6 @@ def format_table(rows: list[dict], select=None, limit: int = 60) -> str:
         lines.append(f"{r['item']:<{w}} {r['unit']:>7} {r['max']:12.4e} {r['t_max']:8.4f} {r['case_max']:>12} "
                      f"{r['min']:12.4e} {r['t_min']:8.4f} {r['case_min']:>12}")
     return "\n".join(lines)
-
-
-def _atomic_text(path: Path, text: str) -> None:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name, suffix=".tmp")
-    with os.fdopen(fd, "w") as fh:
-        fh.write(text)
-    os.replace(tmp, path)
 
 
 # ------------------------------------------------------------------ plots
@@ -286,16 +276,11 @@ def snapshot(path: Path, parts, title: str, scale: float | None = None) -> tuple
     pl.view_yz()                   # looking along -x: the orbiter (+y) and the twang plane in view
     pl.camera.azimuth = 35
     pl.camera.elevation = 12
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.stem, suffix=".tmp.png")
-    os.close(fd)
     try:
-        pl.screenshot(tmp)
-        os.replace(tmp, path)
+        with atomic_path(path, suffix=".png") as tmp:
+            pl.screenshot(str(tmp))
     finally:
         pl.close()
-        if os.path.exists(tmp):
-            os.unlink(tmp)
     return path, scale
 
 

@@ -14,6 +14,8 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from transient.atomic import write_text
+
 from .cache import StageCache, default_cache_dir
 
 
@@ -65,15 +67,15 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
             stacks[mkey] = build_stack(case.model, cache, progress=progress)
             for stage, label, how, secs in cache.log[n0:]:
                 stage_times.append((f"{stage} {label} ({how})", secs))
-            stage_times.append((f"model stages total", time.perf_counter() - t0))
+            stage_times.append(("model stages total", time.perf_counter() - t0))
             echo(stack_mass_summary(stacks[mkey]))
         stack = stacks[mkey]
         t0 = time.perf_counter()
         cp = build_problem(case, stack, progress=progress)
         if tab1 is None:
             tab1 = table1(stack, cp, case)
-            report._atomic_text(out / "table1.txt", tab1.table() + "\n")
-            report._atomic_text(out / "table1.csv", "# c.g. motion under static loads; m and rad\n" + tab1.csv())
+            write_text(out / "table1.txt", tab1.table() + "\n")
+            write_text(out / "table1.csv", "# c.g. motion under static loads; m and rad\n" + tab1.csv())
             files += [out / "table1.txt", out / "table1.csv"]
             echo(tab1.table())
         stage_times.append((f"loads + Table 1 [{case.name}]", time.perf_counter() - t0))
@@ -100,7 +102,7 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
                              ("Tx", "Ty", "Tz"), limit=40))
     first = next(iter(stacks.values()))
     text = report.summary(sc, first, results, stage_times, env, time.perf_counter() - t_start)
-    report._atomic_text(out / "summary.txt", text + "\n")
+    write_text(out / "summary.txt", text + "\n")
     files.append(out / "summary.txt")
     echo(text)
     echo(f"  outputs in {out}/ ({len(files)} files); cache {cache.root}")

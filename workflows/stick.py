@@ -135,7 +135,6 @@ class _Frame:
         n = 6 * len(nodes)
         rows, cols, kv, mv = [], [], [], []
         for a, b, E, A, I, mpl, _ in self.elems:
-            L = float(np.linalg.norm(nodes[b] - nodes[a]))
             rho = mpl / A if mpl > 0 else 1e-6
             ke, me = frame_element(nodes[a], nodes[b], E, E / 2.6, A, I, I, 2 * I, rho)
             d = np.r_[6 * a:6 * a + 6, 6 * b:6 * b + 6]
