@@ -22,6 +22,8 @@ import numpy as np
 from .body import ModalBody, ground, load_body
 from .errors import InputError
 from .effects import softening_matrix
+from .tomlcheck import (Where, boolean as _bool, integer as _integer, number as _number, string as _string,
+                        table as _table, vector as _vector)
 from .model import (ContactPoint, Forcing, InitialState, ModalFeedback, ModalForce, PointForce, Recovery,
                     TabulatedForce, TransientProblem)
 
@@ -55,79 +57,7 @@ class Scenario:
 
 
 # ---------------------------------------------------------------- value checks
-class _Where:
-    """Builds the one-line error prefix ``file: key.path``."""
-
-    def __init__(self, source: str, key: str = ""):
-        self.source, self.key = source, key
-
-    def __truediv__(self, sub: str) -> "_Where":
-        if sub.startswith("["):
-            return _Where(self.source, f"{self.key}{sub}")
-        return _Where(self.source, f"{self.key}.{sub}" if self.key else sub)
-
-    def error(self, msg: str) -> InputError:
-        return InputError(f"{self.source}: {self.key}: {msg}" if self.key else f"{self.source}: {msg}")
-
-
-def _table(where: _Where, value: Any, allowed: set[str], required: tuple[str, ...] = ()) -> dict:
-    if not isinstance(value, dict):
-        raise where.error(f"expected a table, got {type(value).__name__}")
-    unknown = sorted(set(value) - allowed)
-    if unknown:
-        raise where.error(f"unknown key {unknown[0]!r} (allowed: {', '.join(sorted(allowed))})")
-    for key in required:
-        if key not in value:
-            raise where.error(f"missing required key {key!r}")
-    return value
-
-
-def _number(where: _Where, value: Any, *, positive: bool = False, nonneg: bool = False,
-            allow_inf: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise where.error(f"expected a number, got {type(value).__name__} {value!r}")
-    x = float(value)
-    if math.isnan(x):
-        raise where.error("value is NaN")
-    if math.isinf(x) and not allow_inf:
-        raise where.error(f"value is {x} (must be finite)")
-    if positive and not x > 0:
-        raise where.error(f"must be positive, got {x:g}")
-    if nonneg and x < 0:
-        raise where.error(f"negative value {x:g}")
-    return x
-
-
-def _integer(where: _Where, value: Any, lo: int, hi: int | None = None) -> int:
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise where.error(f"expected an integer, got {type(value).__name__} {value!r}")
-    if value < lo or (hi is not None and value > hi):
-        raise where.error(f"{value} out of range [{lo}, {hi if hi is not None else 'inf'}]")
-    return value
-
-
-def _string(where: _Where, value: Any) -> str:
-    if not isinstance(value, str):
-        raise where.error(f"expected a string, got {type(value).__name__} {value!r}")
-    return value
-
-
-def _bool(where: _Where, value: Any) -> bool:
-    if not isinstance(value, bool):
-        raise where.error(f"expected true or false, got {value!r}")
-    return value
-
-
-def _vector(where: _Where, value: Any, *, length: int | None = None, nonneg: bool = False) -> np.ndarray:
-    if not isinstance(value, list):
-        raise where.error(f"expected an array of numbers, got {type(value).__name__}")
-    out = np.array([_number(where / f"[{i}]", v, nonneg=nonneg) for i, v in enumerate(value)], dtype=float)
-    if length is not None and out.size != length:
-        raise where.error(f"has {out.size} entries, expected {length}")
-    return out
-
-
-def _labels(where: _Where, value: Any, body: ModalBody, *, allow_empty: bool = False) -> tuple[str, ...]:
+def _labels(where: Where, value: Any, body: ModalBody, *, allow_empty: bool = False) -> tuple[str, ...]:
     if isinstance(value, str):
         value = [value]
     if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
@@ -144,7 +74,7 @@ def _labels(where: _Where, value: Any, body: ModalBody, *, allow_empty: bool = F
     return tuple(value)
 
 
-def _time_table(where: _Where, time: np.ndarray, values: np.ndarray) -> None:
+def _time_table(where: Where, time: np.ndarray, values: np.ndarray) -> None:
     if time.size < 2:
         raise where.error(f"a table needs at least 2 time points, got {time.size}")
     if values.shape[0] != time.size:
@@ -155,7 +85,7 @@ def _time_table(where: _Where, time: np.ndarray, values: np.ndarray) -> None:
         raise where.error(f"time is not strictly increasing at entry {i} ({time[i - 1]:g} -> {time[i]:g} s)")
 
 
-def read_csv_table(path: Path, where: _Where, columns: int | None = None) -> np.ndarray:
+def read_csv_table(path: Path, where: Where, columns: int | None = None) -> np.ndarray:
     """Read a numeric CSV table (comma separated, optional one-line header, '#' comments).
 
     Returns an array (rows, columns); every value must be finite.
@@ -195,7 +125,7 @@ def read_csv_table(path: Path, where: _Where, columns: int | None = None) -> np.
 
 
 # ---------------------------------------------------------------- sections
-def _load_bodies(where: _Where, spec: Any, base: Path) -> tuple[ModalBody, ModalBody, dict[str, str]]:
+def _load_bodies(where: Where, spec: Any, base: Path) -> tuple[ModalBody, ModalBody, dict[str, str]]:
     spec = _table(where, spec, _BODIES, required=("a", "b"))
     bodies, files = {}, {}
     for key in ("a", "b"):
@@ -219,7 +149,7 @@ def _load_bodies(where: _Where, spec: Any, base: Path) -> tuple[ModalBody, Modal
     return bodies["a"], bodies["b"], files
 
 
-def _gravity(where: _Where, spec: Any, body_a: ModalBody) -> tuple[tuple, list]:
+def _gravity(where: Where, spec: Any, body_a: ModalBody) -> tuple[tuple, list]:
     """[gravity]: uniform acceleration (eq. 14) and, optionally, gravity softening of body a
     (section 4.5: KSOF of eq. 27 as a modal feedback force held over each step, eq. 26)."""
     g = _table(where, spec, _GRAVITY, required=("accel",))
@@ -242,7 +172,7 @@ def _gravity(where: _Where, spec: Any, body_a: ModalBody) -> tuple[tuple, list]:
     return accel, feedback
 
 
-def _contacts(where: _Where, spec: Any, body_a: ModalBody, body_b: ModalBody) -> list:
+def _contacts(where: Where, spec: Any, body_a: ModalBody, body_b: ModalBody) -> list:
     if not isinstance(spec, list) or not spec:
         raise where.error("expected at least one [[contact]] table")
     out, names = [], set()
@@ -253,7 +183,7 @@ def _contacts(where: _Where, spec: Any, body_a: ModalBody, body_b: ModalBody) ->
         if name in names:
             raise (w / "name").error(f"duplicate contact name {name!r}")
         names.add(name)
-        w = _Where(where.source, f"{where.key}[{i}] {name!r}")
+        w = Where(where.source, f"{where.key}[{i}] {name!r}")
         labels_a = _labels(w / "labels_a", c["labels_a"], body_a)
         if body_b.is_ground:
             if c.get("labels_b"):
@@ -299,7 +229,7 @@ def _bodies_by_key(body_a: ModalBody, body_b: ModalBody) -> dict[str, ModalBody]
     return {"a": body_a, "b": body_b}
 
 
-def _body_key(where: _Where, value: Any, bodies: dict[str, ModalBody]) -> str:
+def _body_key(where: Where, value: Any, bodies: dict[str, ModalBody]) -> str:
     key = _string(where, value)
     if key not in bodies:
         raise where.error(f"must be 'a' or 'b', got {key!r}")
@@ -308,7 +238,7 @@ def _body_key(where: _Where, value: Any, bodies: dict[str, ModalBody]) -> str:
     return key
 
 
-def _forces(where: _Where, spec: Any, bodies: dict[str, ModalBody], base: Path):
+def _forces(where: Where, spec: Any, bodies: dict[str, ModalBody], base: Path):
     if not isinstance(spec, list):
         raise where.error("expected [[force]] tables")
     constant, tables = [], []
@@ -320,7 +250,7 @@ def _forces(where: _Where, spec: Any, bodies: dict[str, ModalBody], base: Path):
         if len(label) != 1:
             raise (w / "label").error("one DOF label per [[force]]")
         label = label[0]
-        w = _Where(where.source, f"{where.key}[{i}] {label!r}")
+        w = Where(where.source, f"{where.key}[{i}] {label!r}")
         scale = _number(w / "scale", f.get("scale", 1.0))
         kinds = [k for k in ("csv", "time") if k in f]
         if len(kinds) > 1:
@@ -347,7 +277,7 @@ def _forces(where: _Where, spec: Any, bodies: dict[str, ModalBody], base: Path):
     return constant, tables
 
 
-def _modal_forces(where: _Where, spec: Any, bodies: dict[str, ModalBody], base: Path):
+def _modal_forces(where: Where, spec: Any, bodies: dict[str, ModalBody], base: Path):
     if not isinstance(spec, list):
         raise where.error("expected [[modal_force]] tables")
     out = []
@@ -375,7 +305,7 @@ def _modal_forces(where: _Where, spec: Any, bodies: dict[str, ModalBody], base: 
     return out
 
 
-def _initial(where: _Where, spec: Any, body_a: ModalBody, body_b: ModalBody):
+def _initial(where: Where, spec: Any, body_a: ModalBody, body_b: ModalBody):
     """mode static|zero, or given: modal q/v (full length) plus rigid-body motion about ref_point.
 
     A rigid-body motion u (Tx Ty Tz m, Rx Ry Rz rad; 3 or 6 entries) of a body adds the modal
@@ -408,7 +338,7 @@ def _initial(where: _Where, spec: Any, body_a: ModalBody, body_b: ModalBody):
     return InitialState(vec["q_a"], vec["v_a"], vec["q_b"], vec["v_b"])
 
 
-def _outputs(where: _Where, spec: Any, body_a: ModalBody, body_b: ModalBody) -> tuple[dict, bool]:
+def _outputs(where: Where, spec: Any, body_a: ModalBody, body_b: ModalBody) -> tuple[dict, bool]:
     spec = _table(where, spec, _OUTPUT)
     outputs = {}
     for key, body in (("a", body_a), ("b", body_b)):
@@ -422,7 +352,7 @@ def _outputs(where: _Where, spec: Any, body_a: ModalBody, body_b: ModalBody) -> 
     return outputs, keep
 
 
-def _recoveries(where: _Where, spec: Any, bodies: dict[str, ModalBody], base: Path) -> list:
+def _recoveries(where: Where, spec: Any, bodies: dict[str, ModalBody], base: Path) -> list:
     """[[recovery]]: linear output matrices from an .npz file (labels, disp/vel/acc, optional units)."""
     if not isinstance(spec, list):
         raise where.error("expected [[recovery]] tables")
@@ -473,7 +403,7 @@ def _recoveries(where: _Where, spec: Any, bodies: dict[str, ModalBody], base: Pa
 def parse_scenario(data: dict, base: Path, source: str = "scenario", *, method: str | None = None,
                    progress: bool = True) -> Scenario:
     """Build a :class:`Scenario` from an already-parsed TOML mapping; paths relative to ``base``."""
-    top = _Where(source)
+    top = Where(source)
     _table(top, data, _TOP, required=("bodies", "time", "contact"))
     title = _string(top / "title", data.get("title", Path(source).stem))
     if "description" in data:

@@ -15,6 +15,7 @@ import copy
 import math
 import tomllib
 from dataclasses import dataclass, field
+from functools import partial
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -23,6 +24,8 @@ import numpy as np
 
 from transient.body import split_label
 from transient.errors import InputError
+from transient.tomlcheck import (LENGTH_NUMBERS, Where, boolean as _bool, integer as _int, number as _num, string,
+                                 table as _table, vector)
 
 DEFAULT_NAME = "default_scenario.toml"
 SOURCES = ("fe", "stick")
@@ -50,73 +53,10 @@ _CASE = _TOP - {"case"} | {"name"}
 
 
 # --------------------------------------------------------------------- value checks
-class Where:
-    """Key path for messages: ``file: post[2].stiffness``."""
-
-    def __init__(self, source: str, key: str = ""):
-        self.source, self.key = source, key
-
-    def __truediv__(self, sub) -> "Where":
-        if isinstance(sub, int):
-            return Where(self.source, f"{self.key}[{sub}]")
-        return Where(self.source, f"{self.key}.{sub}" if self.key else str(sub))
-
-    def error(self, msg: str) -> InputError:
-        return InputError(f"{self.source}: {self.key}: {msg}" if self.key else f"{self.source}: {msg}")
-
-
-def _table(w: Where, v: Any, allowed: set[str], required=()) -> dict:
-    if not isinstance(v, dict):
-        raise w.error(f"expected a table, got {type(v).__name__}")
-    unknown = sorted(set(v) - allowed)
-    if unknown:
-        raise w.error(f"unknown key {unknown[0]!r} (allowed: {', '.join(sorted(allowed))})")
-    for k in required:
-        if k not in v:
-            raise w.error(f"missing required key {k!r}")
-    return v
-
-
-def _num(w: Where, v: Any, *, positive=False, nonneg=False, allow_inf=False) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
-        raise w.error(f"expected a number, got {type(v).__name__} {v!r}")
-    x = float(v)
-    if math.isnan(x):
-        raise w.error("value is NaN")
-    if math.isinf(x) and not allow_inf:
-        raise w.error(f"value is {x} (must be finite)")
-    if positive and not x > 0:
-        raise w.error(f"must be positive, got {x:g}")
-    if nonneg and x < 0:
-        raise w.error(f"must not be negative, got {x:g}")
-    return x
-
-
-def _int(w: Where, v: Any, lo: int = 0) -> int:
-    if isinstance(v, bool) or not isinstance(v, int) or v < lo:
-        raise w.error(f"expected an integer >= {lo}, got {v!r}")
-    return v
-
-
-def _str(w: Where, v: Any) -> str:
-    if not isinstance(v, str) or not v:
-        raise w.error(f"expected a non-empty string, got {v!r}")
-    return v
-
-
-def _bool(w: Where, v: Any) -> bool:
-    if not isinstance(v, bool):
-        raise w.error(f"expected true or false, got {v!r}")
-    return v
-
-
-def _vec(w: Where, v: Any, length: int | None = None, **kw) -> np.ndarray:
-    if not isinstance(v, list):
-        raise w.error(f"expected an array of numbers, got {type(v).__name__}")
-    out = np.array([_num(w / i, x, **kw) for i, x in enumerate(v)], dtype=float)
-    if length is not None and out.size != length:
-        raise w.error(f"expected {length} numbers, got {out.size}")
-    return out
+# shared checks (transient/tomlcheck.py) with this format's wording: names are non-empty
+# strings; a vector of the wrong length reads "expected 3 numbers, got 2"
+_str = partial(string, nonempty=True)
+_vec = partial(vector, length_msg=LENGTH_NUMBERS)
 
 
 def _label(w: Where, v: Any) -> str:
@@ -284,7 +224,7 @@ def _posts(w: Where, posts: Any, wd: Where, defaults: Any) -> list[Post]:
         rigid = _bool(wp / "rigid", q.get("rigid", False))
         if "stiffness" not in q and not rigid:
             raise wp.error("missing 'stiffness' [kx, ky, kz] (N/m) or rigid = true")
-        k = _vec(wp / "stiffness", q.get("stiffness", [1.0, 1.0, 1.0]), 3, positive=True)
+        k = _vec(wp / "stiffness", q.get("stiffness", [1.0, 1.0, 1.0]), length=3, positive=True)
         rel = _num(wp / "release_time", q.get("release_time", math.inf), allow_inf=True)
         out.append(Post(name, _str(wp / "vehicle", q["vehicle"]), _str(wp / "pad", q["pad"]), k, rigid,
                         rel, _num(wp / "gap", q.get("gap", 0.0), nonneg=True)))
@@ -302,7 +242,7 @@ def _engines(w: Where, engines: Any, profiles: dict) -> list[Engine]:
         if name in names:
             raise (we / "name").error(f"duplicate engine name {name!r}")
         names.add(name)
-        d = _vec(we / "direction", e.get("direction", [0.0, 0.0, 1.0]), 3)
+        d = _vec(we / "direction", e.get("direction", [0.0, 0.0, 1.0]), length=3)
         if not np.linalg.norm(d) > 0:
             raise (we / "direction").error("zero thrust direction")
         if "profile" in e:
@@ -351,7 +291,7 @@ def _case(w: Where, d: dict, name: str) -> Case:
     posts = _posts(w / "post", d.get("post", []), w / "post_defaults", d.get("post_defaults", {}))
     engines = _engines(w / "engine", d.get("engine", []), profiles)
     g = _table(w / "gravity", d.get("gravity", {}), _GRAVITY)
-    gravity = _vec(w / "gravity" / "accel", g.get("accel", [0.0, 0.0, -9.80665]), 3)
+    gravity = _vec(w / "gravity" / "accel", g.get("accel", [0.0, 0.0, -9.80665]), length=3)
 
     c = _table(w / "cryo", d.get("cryo", {}), _CRYO)
     cryo = {"enabled": _bool(w / "cryo" / "enabled", c.get("enabled", False))}
