@@ -9,7 +9,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from transient.body import split_label
 from transient.errors import InputError
 
 from .craig_bampton import CBModel, validate_cb
@@ -140,8 +139,6 @@ def assemble(cb_models, name: str) -> Assembly:
         K[np.ix_(idx, idx)] += cb.K
         start += cb.n_modes
     points = tuple(coords)
-    for lab in boundary:
-        split_label(lab)
     return Assembly(name=name, components=cbs, boundary_labels=tuple(boundary), M=M, K=K,
                     modal_slices=modal_slices, boundary_index=boundary_index, points=points,
                     point_coords=np.array([coords[p] for p in points]).reshape(-1, 3))
