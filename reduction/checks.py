@@ -11,12 +11,13 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 
+from transient.body import COMPONENTS
+
 from .component import Component
 from .craig_bampton import CBModel
 from .rigid import mass_properties, nodal_rb, rb_rows
 
 RB_TOL = 1e-6       # relative residual |K RB| / (|K| |RB|) accepted as rigid (round-off ~1e-12)
-DIRS = ("Tx", "Ty", "Tz", "Rx", "Ry", "Rz")
 DENSE_FE_LIMIT = 2000   # full FE models up to this size are eigensolved densely, else eigsh
 
 
@@ -78,8 +79,7 @@ def cb_check(cb: CBModel, component: Component | None = None, ref_point=None,
     with ``component`` (the FE model it came from) FE mass properties and free-free
     frequencies are compared."""
     nq = cb.n_modes
-    pts = [lab.split(":")[0] for lab in cb.boundary_labels]
-    ref = cb.point_coord(pts[0]) if ref_point is None else np.asarray(ref_point, float)
+    ref = cb.point_coord(cb.boundary_points[0]) if ref_point is None else np.asarray(ref_point, float)
     s: dict = {"name": cb.name, "n_modes": nq, "n_boundary": cb.n_boundary, "ref_point": list(map(float, ref)),
                "units": "SI (kg, m, kg m^2, Hz)"}
     s["M_asymmetry"], s["K_asymmetry"] = _rel_asym(cb.M), _rel_asym(cb.K)
@@ -156,7 +156,7 @@ def _report(s: dict) -> str:
             out.append(f"  rigid-body mass CB vs FE: max rel. difference {s['rigid_body_mass_rel_error']:.1e};"
                        f" FE |K RB| rel. {max(s['fe_rb_residual']):.1e}")
     out.append("  modal effective mass (% of total, per fixed-interface mode):")
-    out.append("    mode   f (Hz)   " + "".join(f"{d:>8s}" for d in DIRS))
+    out.append("    mode   f (Hz)   " + "".join(f"{d:>8s}" for d in COMPONENTS))
     pct = np.array(s["effective_mass_percent"]).reshape(-1, 6)
     for j, f in enumerate(s["fixed_interface_freq_hz"]):
         out.append(f"    {j + 1:4d} {f:9.3f}  " + "".join(f"{v:8.2f}" for v in pct[j]))
