@@ -12,6 +12,7 @@ from transient.body import COMPONENTS
 from transient.errors import InputError
 
 from .component import Component
+from .rigid import nodal_rb
 
 
 # ----------------------------------------------------------------------------- frame
@@ -145,17 +146,12 @@ def spider_component(name, K, M, nodes, spiders: dict) -> Component:
     cols.append(np.arange(n_free))
     vals.append(np.ones(n_free))
     for s, (ids, ref) in enumerate(spiders.values()):
-        col0 = n_free + 6 * s
-        for node in np.asarray(ids):
-            d = nodes[node] - np.asarray(ref, float)
-            rb = np.eye(3, 6)
-            rb[0, 4], rb[0, 5] = d[2], -d[1]
-            rb[1, 3], rb[1, 5] = -d[2], d[0]
-            rb[2, 3], rb[2, 4] = d[1], -d[0]
-            rr, cc = np.nonzero(rb)
-            rows.append(3 * node + rr)
-            cols.append(col0 + cc)
-            vals.append(rb[rr, cc])
+        ids = np.asarray(ids)
+        rb = nodal_rb(nodes[ids], ref)                 # (3 len(ids), 6), x y z per node
+        rr, cc = np.nonzero(rb)
+        rows.append(3 * ids[rr // 3] + rr % 3)
+        cols.append(n_free + 6 * s + cc)
+        vals.append(rb[rr, cc])
     n_red = n_free + 6 * len(spiders)
     T = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                       shape=(3 * n_nodes, n_red))
