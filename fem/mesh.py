@@ -153,10 +153,11 @@ def read_msh(path, comm: MPI.Comm = MPI.COMM_WORLD, rank: int = 0) -> TaggedMesh
 
     domain = ufl_mesh(cell_type, 3)
     dcell = cpp.mesh.to_type(str(domain.ufl_cell()))
-    mesh = dmesh.create_mesh(comm, cells[:, cell_perm_array(dcell, nn)], x, domain)
+    cells = cells[:, cell_perm_array(dcell, nn)]       # gmsh -> dolfinx node order
+    mesh = dmesh.create_mesh(comm, cells, x, domain)
+    cpp_mesh = mesh._mesh if hasattr(mesh, "_mesh") else mesh
     tdim = mesh.topology.dim
-    ents, vals = cpp.io.distribute_entity_data(mesh._mesh if hasattr(mesh, "_mesh") else mesh,
-                                               tdim, cells[:, cell_perm_array(dcell, nn)], cell_vals)
+    ents, vals = cpp.io.distribute_entity_data(cpp_mesh, tdim, cells, cell_vals)
     mesh.topology.create_connectivity(tdim, 0)
     cell_tags = dmesh.meshtags_from_entities(mesh, tdim, cpp.graph.AdjacencyList_int32(ents),
                                              vals.astype(np.int32))
@@ -167,8 +168,7 @@ def read_msh(path, comm: MPI.Comm = MPI.COMM_WORLD, rank: int = 0) -> TaggedMesh
         facets = surfaces[name][1]
         if fgtype is not None:
             facets = facets[:, cell_perm_array(ftype, fnn)]
-        ents, vals = cpp.io.distribute_entity_data(mesh._mesh if hasattr(mesh, "_mesh") else mesh,
-                                                   tdim - 1, facets, np.ones(facets.shape[0], np.int32))
+        ents, vals = cpp.io.distribute_entity_data(cpp_mesh, tdim - 1, facets, np.ones(facets.shape[0], np.int32))
         surface_tags[name] = dmesh.meshtags_from_entities(
             mesh, tdim - 1, cpp.graph.AdjacencyList_int32(ents), vals.astype(np.int32))
     return TaggedMesh(mesh, cell_tags, {n: i for i, n in enumerate(vol_names)}, surface_tags, path)
