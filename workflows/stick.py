@@ -302,14 +302,4 @@ def _frames(params: dict | None, element_length: float) -> dict[str, _Frame]:
             "pad": pad(p, element_length)}
 
 
-def named_points(component: Component) -> list[str]:
-    """The component's named points (interfaces, posts, mounts, stations): its CB boundary."""
-    return [pt for pt in component.points if not _is_auto(pt)]
-
-
-def _is_auto(point: str) -> bool:
-    head, _, tail = point.rpartition("_n")
-    return bool(head) and tail.isdigit()
-
-
-__all__ = ["StackParams", "stack_components", "named_points", "post_points"]
+__all__ = ["StackParams", "stack_components", "post_points"]
