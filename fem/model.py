@@ -120,13 +120,18 @@ def _raise_collective(comm: MPI.Comm, message: str | None) -> None:
         raise InputError(msgs[0])
 
 
-def _surface_blocks(V, tm: TaggedMesh, surface: str, role: str) -> np.ndarray:
-    from dolfinx import fem
-
+def _surface_tags(tm: TaggedMesh, surface: str, role: str):
+    """The facet tags of physical surface ``surface``; InputError naming ``role`` if absent."""
     if surface not in tm.surface_tags:
         raise InputError(f"{role} {surface!r}: no physical surface {surface!r} in mesh {tm.path!r} "
                          f"(has: {', '.join(sorted(tm.surface_tags)) or 'none'})")
-    tags = tm.surface_tags[surface]
+    return tm.surface_tags[surface]
+
+
+def _surface_blocks(V, tm: TaggedMesh, surface: str, role: str) -> np.ndarray:
+    from dolfinx import fem
+
+    tags = _surface_tags(tm, surface, role)
     return fem.locate_dofs_topological(V, V.mesh.topology.dim - 1, tags.indices[tags.values == 1])
 
 
@@ -156,8 +161,7 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
     for sm in geometry.smeared_masses:
         if not np.isfinite(sm.mass) or sm.mass < 0:
             raise InputError(f"smeared mass on {sm.surface!r}: mass {sm.mass!r} kg must be >= 0")
-        _surface_blocks(V, tm, sm.surface, "smeared mass surface")
-        tags = tm.surface_tags[sm.surface]
+        tags = _surface_tags(tm, sm.surface, "smeared mass surface")
         area = comm.allreduce(fem.assemble_scalar(fem.form(area_form(tm.mesh, tags))), op=MPI.SUM)
         if area <= 0.0:
             raise InputError(f"smeared mass surface {sm.surface!r}: zero exterior area "
