@@ -139,6 +139,15 @@ def estimate_step(body_a: ModalBody, body_b: ModalBody, contacts) -> tuple[float
 
 
 # ------------------------------------------------------------- initial force
+def _acceleration(body: ModalBody, key: str, forcing: Forcing, load, t: float, q, v, Pc) -> np.ndarray:
+    """Modal acceleration at time t from the equation of motion: applied load (``load``, the
+    body's ModalLoad) + feedback + contact force Pc, less damping and stiffness."""
+    if body.n_modes == 0:
+        return np.zeros(0)
+    P = load.at(t) + feedback_matrix(body.n_modes, key, forcing, t) @ q + Pc
+    return P - 2 * body.zeta * body.omega * v - body.omega ** 2 * q
+
+
 def initial_contact_force(body_a, body_b, rows, forcing, state: InitialState, t0: float):
     """Contact force (on A, per row) and active set consistent with a given state at t0."""
     e = rows.Phi_a @ state.q_a - rows.Phi_b @ state.q_b
@@ -152,16 +161,14 @@ def initial_contact_force(body_a, body_b, rows, forcing, state: InitialState, t0
     rig = active & ~pen
     if rig.any():
         # rigid rows: zero relative acceleration at t0 given the penalty forces
-        def accel_free(body, key, q, v, Pc):
-            if body.n_modes == 0:
-                return np.zeros(0)
-            P = modal_load(body, key, forcing).at(t0) + feedback_matrix(body.n_modes, key, forcing, t0) @ q + Pc
-            return P - 2 * body.zeta * body.omega * v - body.omega ** 2 * q
+        load_a, load_b = modal_load(body_a, "a", forcing), modal_load(body_b, "b", forcing)
         for _ in range(2):
             fr = f.copy()
             fr[rig] = 0.0
-            acc_rel = rows.Phi_a @ accel_free(body_a, "a", state.q_a, state.v_a, rows.Phi_a.T @ fr) \
-                - rows.Phi_b @ accel_free(body_b, "b", state.q_b, state.v_b, -rows.Phi_b.T @ fr)
+            acc_rel = rows.Phi_a @ _acceleration(body_a, "a", forcing, load_a, t0, state.q_a, state.v_a,
+                                                 rows.Phi_a.T @ fr) \
+                - rows.Phi_b @ _acceleration(body_b, "b", forcing, load_b, t0, state.q_b, state.v_b,
+                                             -rows.Phi_b.T @ fr)
             M = (rows.Phi_a @ rows.Phi_a.T + rows.Phi_b @ rows.Phi_b.T)[np.ix_(rig, rig)]
             try:
                 f[rig] = np.linalg.solve(M, -acc_rel[rig])
@@ -322,13 +329,8 @@ def _solve(problem: TransientProblem) -> TransientResult:
     Pc_a, Pc_b = rows.Phi_a.T @ f0, -(rows.Phi_b.T @ f0)
     pen0 = np.where(rows.compliance > 0, f0, 0.0)  # rigid rows start each step from their own g
 
-    def acc0(body, key, q, v, Pc, load):
-        if body.n_modes == 0:
-            return np.zeros(0)
-        P = load.at(problem.t0) + feedback_matrix(body.n_modes, key, fo, problem.t0) @ q + Pc
-        return P - 2 * body.zeta * body.omega * v - body.omega ** 2 * q
-
-    a_a0, a_b0 = acc0(pa, "a", q_a, v_a, Pc_a, load_a), acc0(pb, "b", q_b, v_b, Pc_b, load_b)
+    a_a0 = _acceleration(pa, "a", fo, load_a, problem.t0, q_a, v_a, Pc_a)
+    a_b0 = _acceleration(pb, "b", fo, load_b, problem.t0, q_b, v_b, Pc_b)
     _initial_outputs(out_a, pa, q_a, v_a, a_a0, Y_a)
     _initial_outputs(out_b, pb, q_b, v_b, a_b0, Y_b)
     Fc[0] = f0
