@@ -36,10 +36,10 @@ def write_vtu(path, nodes: np.ndarray, cells: np.ndarray, cell_type: str,
 
 def write_modes_vtu(model, modes, path) -> Path | None:
     """All mode shapes of ``modes`` as vector fields ``mode_001_<f>Hz`` (written by rank 0)."""
-    T = model.field_map()
+    T = model.field_map()            # collective (gathers T on every rank)
+    if model.comm.rank != 0:
+        return None
     fields = {}
     for j, f in enumerate(modes.freq_hz):
         fields[f"mode_{j + 1:03d}_{f:.4g}Hz"] = (T @ modes.shapes[:, j]).reshape(-1, 3)
-    if model.comm.rank != 0:
-        return None
     return write_vtu(path, model.nodes, model.cells, model.cell_type, fields)
