@@ -109,14 +109,12 @@ def mult_transpose(T: PETSc.Mat, b: PETSc.Vec) -> PETSc.Vec:
     return y
 
 
-def _mumps_ksp(comm, A: PETSc.Mat, cholesky: bool = True) -> PETSc.KSP:
-    ksp = PETSc.KSP().create(comm)
-    ksp.setOperators(A)
+def _mumps_cholesky(ksp: PETSc.KSP) -> None:
+    """Make ``ksp`` a direct solver: one MUMPS Cholesky factorisation, no Krylov iterations."""
     ksp.setType("preonly")
     pc = ksp.getPC()
-    pc.setType("cholesky" if cholesky else "lu")
+    pc.setType("cholesky")
     pc.setFactorSolverType("mumps")
-    return ksp
 
 
 def eigensolve(K: PETSc.Mat, M: PETSc.Mat, n_modes: int, sigma: float, tol: float = 1e-10,
@@ -147,11 +145,7 @@ def eigensolve(K: PETSc.Mat, M: PETSc.Mat, n_modes: int, sigma: float, tol: floa
     st = eps.getST()
     st.setType(SLEPc.ST.Type.SINVERT)
     st.setShift(sigma)
-    ksp = st.getKSP()
-    ksp.setType("preonly")
-    pc = ksp.getPC()
-    pc.setType("cholesky")
-    pc.setFactorSolverType("mumps")
+    _mumps_cholesky(st.getKSP())
     eps.setTarget(sigma)
     eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
     eps.setTolerances(tol, max_it)
@@ -184,7 +178,9 @@ def solve(K: PETSc.Mat, f: np.ndarray, fixed: np.ndarray, what: str = "model") -
     b = vec_from_global(A, np.where(np.isin(np.arange(f.size), rows), 0.0, f))
     r0, r1 = A.getOwnershipRange()
     A.zeroRowsColumns(rows[(rows >= r0) & (rows < r1)], diag=1.0)
-    ksp = _mumps_ksp(comm, A, cholesky=True)
+    ksp = PETSc.KSP().create(comm)
+    ksp.setOperators(A)
+    _mumps_cholesky(ksp)
     x = A.createVecRight()
     try:
         ksp.solve(b, x)
