@@ -26,7 +26,7 @@ def _active_rows(rows, t: float) -> np.ndarray:
     return bolted | rows.axial
 
 
-def _coupled_operator(body_a: ModalBody, body_b: ModalBody, rows, active):
+def _coupled_operator(rows, active):
     """D (n_act, n_a+n_b) such that x_a - x_b = D q on the active rows."""
     D = np.hstack([rows.Phi_a, -rows.Phi_b])
     return D[active]
@@ -44,8 +44,15 @@ def static_solution(body_a: ModalBody, body_b: ModalBody, contacts, forcing: For
     rows = contact_rows(body_a, body_b, contacts)
     act = _active_rows(rows, t)
     released = ~(t < rows.release[rows.contact])
+    # stiffness and load of the bodies alone: the same for every active set tried below
+    na, nb = body_a.n_modes, body_b.n_modes
+    K0 = np.zeros((na + nb, na + nb))
+    K0[:na, :na] = np.diag(body_a.omega ** 2) - feedback_matrix(na, "a", forcing, t)
+    if nb:
+        K0[na:, na:] = np.diag(body_b.omega ** 2) - feedback_matrix(nb, "b", forcing, t)
+    P0 = np.concatenate([modal_load(body_a, "a", forcing).at(t), modal_load(body_b, "b", forcing).at(t)])
     for _ in range(rows.n + 1):
-        state, f = _static_solve(body_a, body_b, rows, forcing, t, act)
+        state, f = _static_solve(na, rows, K0, P0, t, act)
         tension = act & released & (rows.sign * f < 0)
         if not tension.any():
             return state, f
@@ -53,22 +60,18 @@ def static_solution(body_a: ModalBody, body_b: ModalBody, contacts, forcing: For
     raise ConvergenceError(f"static equilibrium at t = {t:g} s: the released contact set did not settle")
 
 
-def _static_solve(body_a, body_b, rows, forcing, t, act):
-    na, nb = body_a.n_modes, body_b.n_modes
-    n = na + nb
-    D = _coupled_operator(body_a, body_b, rows, act)
+def _static_solve(na, rows, K0, P0, t, act):
+    """One static solve with the rows ``act`` coupled; K0, P0: stiffness and load of the bodies alone."""
+    n = K0.shape[0]
+    nb = n - na
+    D = _coupled_operator(rows, act)
     comp = rows.compliance[act]
     off = rows.offset[act]
     pen, rig = comp > 0, comp == 0
-    K = np.zeros((n, n))
-    K[:na, :na] = np.diag(body_a.omega ** 2) - feedback_matrix(na, "a", forcing, t)
-    if nb:
-        K[na:, na:] = np.diag(body_b.omega ** 2) - feedback_matrix(nb, "b", forcing, t)
     Kp = 1.0 / comp[pen]
     Dp = D[pen]
-    K += Dp.T @ (Kp[:, None] * Dp)
-    P = np.concatenate([modal_load(body_a, "a", forcing).at(t), modal_load(body_b, "b", forcing).at(t)])
-    P -= Dp.T @ (Kp * off[pen])
+    K = K0 + Dp.T @ (Kp[:, None] * Dp)
+    P = P0 - Dp.T @ (Kp * off[pen])
     Dr = D[rig]
     nr = Dr.shape[0]
     S = np.zeros((n + nr, n + nr))
