@@ -19,14 +19,13 @@ FREE, CLAMPED = -1, -2
 def rigid_rows(d: np.ndarray, comp: int) -> tuple[np.ndarray, np.ndarray]:
     """Coefficients of u_comp = t_comp + (theta x d)_comp in (t, theta), for offsets d (n, 3).
 
-    Returns (columns 0..5 shape (4,), coefficients shape (n, 4))."""
-    n = d.shape[0]
-    one = np.ones(n)
+    Returns (columns 0..5 shape (3,), coefficients shape (n, 3))."""
+    one = np.ones(d.shape[0])
     if comp == 0:   # ux = tx + ry dz - rz dy
-        return np.array([0, 4, 5, 3]), np.column_stack([one, d[:, 2], -d[:, 1], 0 * one])
+        return np.array([0, 4, 5]), np.column_stack([one, d[:, 2], -d[:, 1]])
     if comp == 1:   # uy = ty + rz dx - rx dz
-        return np.array([1, 5, 3, 4]), np.column_stack([one, d[:, 0], -d[:, 2], 0 * one])
-    return np.array([2, 3, 4, 5]), np.column_stack([one, d[:, 1], -d[:, 0], 0 * one])  # uz = tz + rx dy - ry dx
+        return np.array([1, 5, 3]), np.column_stack([one, d[:, 0], -d[:, 2]])
+    return np.array([2, 3, 4]), np.column_stack([one, d[:, 1], -d[:, 0]])  # uz = tz + rx dy - ry dx
 
 
 def transformation_rows(node_coords: np.ndarray, node_role: np.ndarray, keep_index: np.ndarray,
@@ -49,7 +48,7 @@ def transformation_rows(node_coords: np.ndarray, node_role: np.ndarray, keep_ind
         d = node_coords[nodes] - ref_coords[p]
         for c in range(3):
             cc, coef = rigid_rows(d, c)
-            for k in range(3):   # the 4th column is a structural zero: skip it
+            for k in range(3):
                 rows.append(3 * nodes + c)
                 cols.append(np.full(nodes.size, ref_first_dof + 6 * p + cc[k]))
                 vals.append(coef[:, k])
