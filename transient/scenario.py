@@ -24,10 +24,9 @@ from .errors import InputError
 from .effects import softening_matrix
 from .tomlcheck import (Where, boolean as _bool, integer as _integer, number as _number, string as _string,
                         table as _table, vector as _vector)
-from .model import (ContactPoint, Forcing, InitialState, ModalFeedback, ModalForce, PointForce, Recovery,
+from .model import (METHODS, ContactPoint, Forcing, InitialState, ModalFeedback, ModalForce, PointForce, Recovery,
                     TabulatedForce, TransientProblem)
 
-METHODS = ("direct", "fixed-point")
 INITIAL_MODES = ("static", "zero", "given")
 
 # keys allowed in each table; anything else is an InputError (a typo must not be ignored)
@@ -137,9 +136,7 @@ def _load_bodies(where: Where, spec: Any, base: Path) -> tuple[ModalBody, ModalB
             bodies[key], files[key] = ground(), "ground"
             continue
         path = (base / name).resolve()
-        if not path.is_file():
-            raise w.error(f"body file not found: {str(path)!r}")
-        try:
+        try:  # load_body names a missing or unreadable file
             bodies[key] = load_body(path)
         except InputError as exc:
             raise w.error(str(exc)) from None
