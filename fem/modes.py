@@ -119,7 +119,6 @@ def eigenmodes(model: FEModel, n_modes: int | None = None, band_hz: tuple[float,
             break
         nev = min(2 * nev, n_max)
     n_rigid = _check_singular(model, lam, rigid_tol_hz)
-    f = np.sqrt(np.clip(lam, 0, None)) / (2 * np.pi)
-    f[:n_rigid] = 0.0
+    f = Modes(lam, Phi, n_rigid).freq_hz
     keep = (f >= f_lo) & (f <= f_hi)
     return Modes(lam[keep], Phi[:, keep], int(np.sum(keep[:n_rigid])))
