@@ -9,7 +9,6 @@ solids (boxes, cylinders); the tool parts outside the structure are removed agai
 from __future__ import annotations
 
 import math
-import os
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -17,6 +16,7 @@ from pathlib import Path
 import gmsh
 import numpy as np
 
+from transient.atomic import atomic_path
 from transient.errors import InputError
 
 occ = gmsh.model.occ
@@ -267,15 +267,8 @@ def mesh_and_write(path: Path, mesh_size: float, curvature_n: int = 0) -> int:
     gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
     gmsh.model.mesh.generate(3)
     n_nodes = len(gmsh.model.mesh.getNodes()[0])
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.stem}.{os.getpid()}.tmp.msh")
-    try:
+    with atomic_path(path, suffix=".msh") as tmp:     # gmsh picks the format by the suffix
         gmsh.write(str(tmp))
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
     return n_nodes
 
 
