@@ -62,6 +62,13 @@ class Material:
             raise InputError(f"material {self.name!r}: rho must be > 0 kg/m^3 (got {self.rho})")
 
 
+def equivalent(base: Material, mass: float, volume: float, name: str | None = None) -> Material:
+    """Material of a thickened part: density so that rho * volume = mass, E scaled with it
+    (E/rho of ``base`` kept: membrane/beam stiffness and wave speeds of the real wall)."""
+    rho = mass / volume
+    return Material(name or f"{base.name}-equivalent", base.E * rho / base.rho, base.nu, rho)
+
+
 @dataclass
 class Patch:
     """Surface group ``name`` tied rigidly to one 6-DOF reference point ``ref_point`` (m)."""

@@ -19,7 +19,7 @@ from transient.errors import InputError
 
 from . import _occ
 from ._occ import occ, require_positive
-from .spec import Geometry, Material, Patch, SmearedMass
+from .spec import Geometry, Material, Patch, SmearedMass, equivalent
 
 #: Aluminium alloy 2219 (the Shuttle external tank's alloy): E 73.8 GPa, nu 0.33, 2840 kg/m^3
 AL2219 = Material("Al2219", 73.8e9, 0.33, 2840.0)
@@ -307,10 +307,7 @@ def build_tank(p: TankParams, out_dir) -> Geometry:
             smeared.append(SmearedMass(f"{p.name}_{c.name}_wetted", liquid.liquid_density * c.liquid_volume()))
         _occ.add_physical(3, wall, [tg for _, tg in groups[wall]])
         volume = _occ.group_volume(groups[wall])
-        mat = p.material
-        if p.dry_mass is not None:
-            rho = p.dry_mass / volume
-            mat = Material(f"{p.material.name}-equivalent", p.material.E * rho / p.material.rho, p.material.nu, rho)
+        mat = p.material if p.dry_mass is None else equivalent(p.material, p.dry_mass, volume)
         areas = _occ.physical_measures(2)
         rho_max = max([R] + [R * R / c.a_bottom for c in lay] + [R * R / c.a_top for c in lay]
                       + [c.a_bottom ** 2 / R for c in lay] + [c.a_top ** 2 / R for c in lay])

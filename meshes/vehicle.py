@@ -20,18 +20,11 @@ from transient.errors import InputError
 from . import _occ
 from ._occ import occ, require_positive
 from .layout import StackLayout
-from .spec import Geometry, Material, Patch, PointMass, SmearedMass
+from .spec import Geometry, Material, Patch, PointMass, SmearedMass, equivalent
 from .tank import AL2219, Compartment, TankParams, build_tank, tank_height
 
 #: D6AC steel (SRB case): E 205 GPa, nu 0.29, 7850 kg/m^3
 STEEL_D6AC = Material("D6AC", 205e9, 0.29, 7850.0)
-
-
-def equivalent(base: Material, mass: float, volume: float, name: str | None = None) -> Material:
-    """Material of a thickened part: density so that rho * volume = mass, E scaled with it
-    (E/rho of ``base`` kept: membrane/beam stiffness and wave speeds of the real wall)."""
-    rho = mass / volume
-    return Material(name or f"{base.name}-equivalent", base.E * rho / base.rho, base.nu, rho)
 
 
 def _cylinder_inertia(m: float, r: float, length: float) -> np.ndarray:
