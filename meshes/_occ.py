@@ -188,9 +188,10 @@ def imprint(groups: dict[str, list], tools: list[Tool]) -> dict[str, list]:
     return new
 
 
-def boundary_faces(vols: list) -> list[int]:
-    """Tags of the faces on the outer boundary of the union of the volumes."""
-    return sorted({abs(t) for d, t in gmsh.model.getBoundary(vols, combined=True, oriented=False) if d == 2})
+def boundary_faces(vols: list, combined: bool = True) -> list[int]:
+    """Tags of the faces on the outer boundary of the union of the volumes
+    (``combined=False``: all faces of every volume, shared ones included)."""
+    return sorted({abs(t) for d, t in gmsh.model.getBoundary(vols, combined=combined, oriented=False) if d == 2})
 
 
 def faces_inside(faces: list[int], bbox, tol: float = 1e-3) -> list[int]:

@@ -138,7 +138,7 @@ def build_pad(p: PadParams, out_dir) -> Geometry:
             faces = _occ.faces_inside(bfaces, (pt[0] - s / 2, pt[1] - s / 2, -tol, pt[0] + s / 2, pt[1] + s / 2, tol))
             _occ.add_physical(2, name, faces)
             patches.append(Patch(name, pt))
-        post_faces = gmsh_boundary(groups["pad_posts"])
+        post_faces = _occ.boundary_faces(groups["pad_posts"], combined=False)
         _occ.refine_faces(post_faces, min(p.mesh_size, p.post_mesh_size))
         zb = lo[2] - p.pedestal_height
         for k, (x, y) in enumerate(p.pedestal_xy):
@@ -162,12 +162,6 @@ def build_pad(p: PadParams, out_dir) -> Geometry:
     geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), mats, patches, [], [], clamped, vols, n_nodes, areas)
     geo.save(out_dir / f"{p.name}.json")
     return geo
-
-
-def gmsh_boundary(vols: list) -> list[int]:
-    """All faces (not only the outer ones) of the given volumes."""
-    import gmsh
-    return sorted({abs(t) for d, t in gmsh.model.getBoundary(vols, combined=False, oriented=False) if d == 2})
 
 
 def default_pad(mesh_size: float | None = None, out_dir="out/meshes", layout: StackLayout | None = None) -> Geometry:
