@@ -31,8 +31,8 @@ def _child(json_path: str, n_modes: int) -> None:
     """mpirun child: build the model of one geometry and time its eigensolve."""
     from mpi4py import MPI
 
-    from fem import build_model, eigenmodes
-    from meshes.spec import Geometry
+    from liftoff.fem import build_model, eigenmodes
+    from liftoff.meshes.spec import Geometry
 
     comm = MPI.COMM_WORLD
     t0 = time.perf_counter()
@@ -78,11 +78,11 @@ def main() -> None:
     import scipy.sparse.linalg as sla
     from tqdm import tqdm
 
-    from fem import build_model, eigenmodes
-    from meshes.pad import default_pad
-    from meshes.vehicle import default_stack
+    from liftoff.fem import build_model, eigenmodes
+    from liftoff.meshes.pad import default_pad
+    from liftoff.meshes.vehicle import default_stack
 
-    from meshes.spec import Geometry
+    from liftoff.meshes.spec import Geometry
 
     out = Path(args.out)
     load0 = os.getloadavg()

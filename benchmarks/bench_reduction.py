@@ -24,9 +24,9 @@ import scipy.sparse.linalg as spla
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from reduction import craig_bampton, load_component  # noqa: E402
-from reduction.craig_bampton import ORDERING  # noqa: E402
-from reduction.models import hex_block, six_labels, spider_component  # noqa: E402
+from liftoff.reduction import craig_bampton, load_component  # noqa: E402
+from liftoff.reduction.craig_bampton import ORDERING  # noqa: E402
+from liftoff.reduction.models import hex_block, six_labels, spider_component  # noqa: E402
 
 
 def synthetic(cells):
@@ -46,9 +46,9 @@ def fe_core():
     os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
     import pyvista  # noqa: F401  (before dolfinx)
 
-    import fem
-    from meshes.vehicle import build_core_stage
-    from reduction import Component
+    from liftoff import fem
+    from liftoff.meshes.vehicle import build_core_stage
+    from liftoff.reduction import Component
 
     g = build_core_stage("out/bench_meshes")
     m = fem.build_model(g, degree=1)

@@ -29,7 +29,7 @@ import time
 
 import numpy as np
 
-from transient import (ContactPoint, Forcing, ModalBody, PointForce, TabulatedForce,
+from liftoff.transient import (ContactPoint, Forcing, ModalBody, PointForce, TabulatedForce,
                        TransientProblem, solve)
 
 N_VEH, N_RIGID, N_PAD, N_POINTS = 200, 6, 100, 8

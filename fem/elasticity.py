@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import ufl
 
-from transient.errors import InputError
+from liftoff.transient.errors import InputError
 
 from .mesh import TaggedMesh
 

@@ -17,8 +17,8 @@ import numpy as np
 import scipy.sparse as sp
 from mpi4py import MPI
 
-from transient.body import COMPONENTS, split_label
-from transient.errors import InputError
+from liftoff.transient.body import COMPONENTS, split_label
+from liftoff.transient.errors import InputError
 
 from . import petsc_backend as pb
 from .elasticity import (area_form, mass_form, material_fields, stiffness_form, surface_mass_form)
@@ -146,7 +146,7 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
     from dolfinx import fem
 
     if isinstance(geometry, (str, Path)):
-        from meshes.spec import Geometry
+        from liftoff.meshes.spec import Geometry
         geometry = Geometry.load(geometry)
     name = str(geometry.name)
     if degree not in (1, 2):

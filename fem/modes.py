@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from transient.errors import InputError
+from liftoff.transient.errors import InputError
 
 from . import petsc_backend as pb
 from .model import FEModel

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from transient.atomic import atomic_path
-from transient.errors import InputError
+from liftoff.transient.atomic import atomic_path
+from liftoff.transient.errors import InputError
 
 
 def write_vtu(path, nodes: np.ndarray, cells: np.ndarray, cell_type: str,

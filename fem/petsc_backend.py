@@ -11,7 +11,7 @@ import numpy as np
 import scipy.sparse as sp
 from petsc4py import PETSc
 
-from transient.errors import ConvergenceError, InputError
+from liftoff.transient.errors import ConvergenceError, InputError
 
 
 def assemble_matrix(form) -> PETSc.Mat:

@@ -25,8 +25,8 @@ import pyvista  # noqa: E402
 
 pyvista.OFF_SCREEN = True
 
-from transient.atomic import atomic_path  # noqa: E402
-from transient.errors import InputError  # noqa: E402
+from liftoff.transient.atomic import atomic_path  # noqa: E402
+from liftoff.transient.errors import InputError  # noqa: E402
 
 _VTK_TYPES = {"tetra": 10, "tetra10": 24, "triangle": 5, "triangle6": 22, "hexahedron": 12,
               "quad": 9, "line": 3, "wedge": 13}
@@ -110,10 +110,7 @@ def _render_in_subprocess(path, nodes, cells, cell_type, u, title, scale, window
         np.savez(npz, nodes=nodes, cells=np.asarray(cells, np.int64), cell_type=np.array(cell_type),
                  u=u, title=np.array(title), scale=np.array(float(scale)),
                  window_size=np.asarray(window_size, np.int64), view=np.array(view), path=np.array(str(path)))
-        root = str(Path(__file__).resolve().parents[1])
-        env = dict(os.environ, PYTHONPATH=os.pathsep.join([root, os.environ.get("PYTHONPATH", "")]))
-        res = subprocess.run([sys.executable, "-m", "fem.snapshot", npz], capture_output=True, text=True,
-                             env=env, cwd=root)
+        res = subprocess.run([sys.executable, "-m", "liftoff.fem.snapshot", npz], capture_output=True, text=True)
         if res.returncode != 0 or not path.is_file():
             raise RuntimeError(f"snapshot subprocess failed ({res.returncode}): {res.stderr[-1000:]}")
     finally:
@@ -121,7 +118,7 @@ def _render_in_subprocess(path, nodes, cells, cell_type, u, title, scale, window
     return path
 
 
-if __name__ == "__main__":      # subprocess renderer: python -m fem.snapshot args.npz
+if __name__ == "__main__":      # subprocess renderer: python -m liftoff.fem.snapshot args.npz
     with np.load(sys.argv[1], allow_pickle=False) as z:
         snapshot_png(z["path"].item(), z["nodes"], z["cells"], z["cell_type"].item(), z["u"],
                      z["title"].item(), float(z["scale"]), tuple(z["window_size"]), z["view"].item())

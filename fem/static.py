@@ -5,7 +5,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from transient.errors import ConvergenceError, InputError
+from liftoff.transient.errors import ConvergenceError, InputError
 
 from . import petsc_backend as pb
 from .elasticity import thermal_load_form

@@ -16,8 +16,8 @@ from pathlib import Path
 import gmsh
 import numpy as np
 
-from transient.atomic import atomic_path
-from transient.errors import InputError
+from liftoff.transient.atomic import atomic_path
+from liftoff.transient.errors import InputError
 
 occ = gmsh.model.occ
 SEAM_AZIMUTH = math.radians(-20.0)  # azimuth of the seam of revolved surfaces

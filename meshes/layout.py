@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from transient.errors import InputError
+from liftoff.transient.errors import InputError
 
 from ._occ import require_positive
 

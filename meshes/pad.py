@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from transient.errors import InputError
+from liftoff.transient.errors import InputError
 
 from . import _occ
 from ._occ import occ, require_positive

@@ -30,8 +30,8 @@ from pathlib import Path
 
 import numpy as np
 
-from transient.atomic import write_text
-from transient.errors import InputError
+from liftoff.transient.atomic import write_text
+from liftoff.transient.errors import InputError
 
 FORMAT = "liftoff-geometry"
 VERSION = 1

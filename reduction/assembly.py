@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from transient.errors import InputError
+from liftoff.transient.errors import InputError
 
 from .craig_bampton import CBModel, validate_cb
 

@@ -11,7 +11,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 
-from transient.body import COMPONENTS
+from liftoff.transient.body import COMPONENTS
 
 from .component import Component
 from .craig_bampton import CBModel

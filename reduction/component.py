@@ -39,9 +39,9 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
-from transient.atomic import atomic_path
-from transient.body import split_label
-from transient.errors import InputError
+from liftoff.transient.atomic import atomic_path
+from liftoff.transient.body import split_label
+from liftoff.transient.errors import InputError
 
 FORMAT = "liftoff-component"
 VERSION = 1

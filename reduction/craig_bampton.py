@@ -22,9 +22,9 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from transient.atomic import atomic_path
-from transient.body import split_label
-from transient.errors import InputError
+from liftoff.transient.atomic import atomic_path
+from liftoff.transient.body import split_label
+from liftoff.transient.errors import InputError
 
 from .component import Component
 

@@ -8,8 +8,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from transient.body import COMPONENTS
-from transient.errors import InputError
+from liftoff.transient.body import COMPONENTS
+from liftoff.transient.errors import InputError
 
 from .component import Component
 from .rigid import nodal_rb

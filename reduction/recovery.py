@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from transient.errors import InputError
+from liftoff.transient.errors import InputError
 
 from .assembly import Assembly
 from .component import Component

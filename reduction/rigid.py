@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from transient.body import split_label
-from transient.errors import InputError
+from liftoff.transient.body import split_label
+from liftoff.transient.errors import InputError
 
 
 def rb_rows(labels, points, point_coords, ref_point=(0.0, 0.0, 0.0)) -> np.ndarray:

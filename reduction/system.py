@@ -14,8 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
-from transient.body import ModalBody
-from transient.errors import InputError
+from liftoff.transient.body import ModalBody
+from liftoff.transient.errors import InputError
 
 from .assembly import Assembly
 from .rigid import rb_rows

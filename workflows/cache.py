@@ -18,7 +18,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from transient.atomic import atomic_path
+from liftoff.transient.atomic import atomic_path
 
 ROOT = Path(__file__).resolve().parent.parent
 _CODE_CACHE: dict[tuple[str, ...], str] = {}

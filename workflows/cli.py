@@ -60,10 +60,10 @@ def _add_transient(sub: argparse._SubParsersAction) -> None:
 
 
 def _run_transient(args: argparse.Namespace) -> int:
-    from transient.scenario import load_scenario
+    from liftoff.transient.scenario import load_scenario
 
     scenario = load_scenario(args.scenario, method=args.method, progress=not args.no_progress)
-    from transient import solve
+    from liftoff.transient import solve
 
     out = _prepare_out(args.out)
     started = time.perf_counter()
@@ -94,7 +94,7 @@ def summary(scenario, result, path: Path, wall: float) -> str:
 
 
 # ------------------------------------------------------------------ entry point
-from workflows.run import add_parser as _add_run  # noqa: E402  `liftoff run` (workflows/run.py)
+from liftoff.workflows.run import add_parser as _add_run  # noqa: E402  `liftoff run` (workflows/run.py)
 
 COMMANDS: list[Callable[[argparse._SubParsersAction], None]] = [_add_transient, _add_run]
 
@@ -112,7 +112,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit status (0 ok, 2 bad input or no convergence)."""
-    from transient.errors import ConvergenceError, InputError
+    from liftoff.transient.errors import ConvergenceError, InputError
 
     args = build_parser().parse_args(argv)
     warnings.showwarning = _show_warning

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from transient.errors import InputError
+from liftoff.transient.errors import InputError
 
 
 def _dataclass(cls, kwargs: dict, where: str):
@@ -29,7 +29,7 @@ def _dataclass(cls, kwargs: dict, where: str):
 
 def geometry(params: dict, workdir: Path):
     """The meshed Geometry of one component (``params`` from pipeline._component_params)."""
-    from meshes import (BoosterParams, OrbiterParams, PadParams, StackLayout, build_booster,
+    from liftoff.meshes import (BoosterParams, OrbiterParams, PadParams, StackLayout, build_booster,
                         build_core_stage, build_orbiter, build_pad)
 
     name = params["name"]
@@ -65,12 +65,12 @@ def build_component(params: dict, workdir: Path):
     except ImportError:  # pragma: no cover
         pass
     try:
-        from fem import build_model, thermal_load
-        from meshes import Material
+        from liftoff.fem import build_model, thermal_load
+        from liftoff.meshes import Material
     except ImportError as exc:
         raise InputError(f"model.source = 'fe' needs gmsh and dolfinx ({exc}); install them with "
                          "`make setup` or use source = 'stick'") from None
-    from reduction import Component
+    from liftoff.reduction import Component
 
     geo = geometry(params, Path(workdir))
     for vol, mat in params["materials"].items():

@@ -1,6 +1,6 @@
 """The lift-off pipeline step by step through the Python API (what `liftoff run` does).
 
-    python -m workflows.liftoff_step_by_step [--stick] [--out DIR]
+    python -m liftoff.workflows.liftoff_step_by_step [--stick] [--out DIR]
 
 Each step names the section of Prabhakar & Palermo it implements. SI units throughout.
 `--stick` uses the beam stick model (seconds); without it the gmsh + dolfinx solids
@@ -24,13 +24,13 @@ def main(argv=None) -> None:
     args.out.mkdir(parents=True, exist_ok=True)
     import pyvista  # noqa: F401  (before dolfinx, FENICSX-NOTES.md)
 
-    from reduction import assemble, craig_bampton, interface_force_recovery, system_modes
-    from transient import (ContactPoint, Forcing, ModalFeedback, PointForce, Recovery, TabulatedForce,
+    from liftoff.reduction import assemble, craig_bampton, interface_force_recovery, system_modes
+    from liftoff.transient import (ContactPoint, Forcing, ModalFeedback, PointForce, Recovery, TabulatedForce,
                            TransientProblem, estimate_step, solve)
-    from transient.effects import (center_of_gravity, cg_motion_matrix, cg_static_report, control_forces,
+    from liftoff.transient.effects import (center_of_gravity, cg_motion_matrix, cg_static_report, control_forces,
                                    cryo_point_loads, softening_matrix)
-    from workflows.pipeline import boundary_points
-    from workflows.scenario import load_scenario
+    from liftoff.workflows.pipeline import boundary_points
+    from liftoff.workflows.scenario import load_scenario
 
     # 1. The scenario: the embedded default (workflows/default_scenario.toml), first case.
     case = load_scenario(None).cases[0]
@@ -38,11 +38,11 @@ def main(argv=None) -> None:
 
     # 2. Components: sparse K, M with labelled 6-DOF points (spiders), from FE or sticks.
     if args.stick:
-        from workflows.stick import stack_components, stack_thermal
+        from liftoff.workflows.stick import stack_components, stack_thermal
 
         comps, thermal = stack_components(element_length=4.0), stack_thermal(element_length=4.0)
     else:
-        from workflows.fe_source import build_component
+        from liftoff.workflows.fe_source import build_component
 
         comps, thermal = {}, {}
         with tempfile.TemporaryDirectory() as work:

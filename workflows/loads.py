@@ -16,10 +16,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from transient import (ContactPoint, Forcing, ModalFeedback, PointForce, Recovery, TabulatedForce,
+from liftoff.transient import (ContactPoint, Forcing, ModalFeedback, PointForce, Recovery, TabulatedForce,
                        TransientProblem)
-from transient.effects import (center_of_gravity, cg_motion_matrix, control_forces, softening_matrix)
-from transient.errors import InputError
+from liftoff.transient.effects import (center_of_gravity, cg_motion_matrix, control_forces, softening_matrix)
+from liftoff.transient.errors import InputError
 
 from .pipeline import StackModel, cryo_loads
 from .scenario import Case
@@ -111,7 +111,7 @@ def _attach_component(stack: StackModel, point: str) -> str:
 
 def recoveries(case: Case, stack: StackModel) -> tuple[list[Recovery], dict, dict]:
     """Interface forces at attach points, c.g. motion (eq. 23), top/payload/stations motion."""
-    from reduction import interface_force_recovery
+    from liftoff.reduction import interface_force_recovery
 
     body = stack.vehicle
     out, attach = [], {}
@@ -173,7 +173,7 @@ def table1(stack: StackModel, cp: CaseProblem, case: Case):
     (gravity only; + softening; + cryo; + both). Softening is always evaluated (KSOF of
     this stack and gravity); the cryo rows use the case's cryo preload and are marked
     when the case has cryo switched off (they then repeat rows 1-2)."""
-    from transient.effects import cg_static_report
+    from liftoff.transient.effects import cg_static_report
 
     soft = cp.softening or ModalFeedback("a", softening_matrix(stack.vehicle, case.gravity))
     cryo = [PointForce("a", k, v) for k, v in cp.cryo.items()]

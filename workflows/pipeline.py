@@ -18,11 +18,11 @@ from pathlib import Path
 
 import numpy as np
 
-from reduction import (Assembly, CBModel, Component, SystemModes, assemble, craig_bampton,
+from liftoff.reduction import (Assembly, CBModel, Component, SystemModes, assemble, craig_bampton,
                        load_cb, load_component, save_component, system_modes)
-from transient.body import COMPONENTS, ModalBody
-from transient.effects import center_of_gravity
-from transient.errors import InputError
+from liftoff.transient.body import COMPONENTS, ModalBody
+from liftoff.transient.effects import center_of_gravity
+from liftoff.transient.errors import InputError
 
 from .cache import StageCache, load_arrays, save_arrays, stage_key
 
@@ -182,7 +182,7 @@ def build_stack(model: dict, cache: StageCache, progress: bool = True) -> StackM
 def cryo_loads(stack: StackModel, cryo: dict) -> dict[str, float]:
     """{vehicle label: force} of the cryo preload (section 4.3): the tank's free thermal
     strain alpha * delta_T reduced to the component's boundary DOFs only."""
-    from transient.effects import cryo_point_loads
+    from liftoff.transient.effects import cryo_point_loads
 
     if not cryo.get("enabled"):
         return {}

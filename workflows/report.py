@@ -14,8 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from transient.atomic import atomic_path, write_text
-from transient.effects import center_of_gravity
+from liftoff.transient.atomic import atomic_path, write_text
+from liftoff.transient.effects import center_of_gravity
 
 
 @dataclass
@@ -226,7 +226,7 @@ def snapshot_times(result, cp) -> dict[str, int]:
 def deformed_fields(stack, result, i: int) -> list[tuple[np.ndarray, np.ndarray, str, np.ndarray]]:
     """(nodes, cells, cell_type, displacement) of every component at step i, elastic part
     of the vehicle only (its rigid-body motion removed, so the picture stays on the pad)."""
-    from reduction import field_recovery
+    from liftoff.reduction import field_recovery
 
     out = []
     qa = result.recovered["modal_q_a"][i].copy()

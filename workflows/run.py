@@ -14,7 +14,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from transient.atomic import write_text
+from liftoff.transient.atomic import write_text
 
 from .cache import StageCache, default_cache_dir
 
@@ -38,7 +38,7 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
 
     ``cache_dir``: None -> default (``$LIFTOFF_CACHE`` or DIR/../.liftoff-cache),
     False -> no cache, else that directory."""
-    from transient import solve
+    from liftoff.transient import solve
 
     from . import report
     from .loads import build_problem, stack_mass_summary, table1

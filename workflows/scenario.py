@@ -22,9 +22,9 @@ from typing import Any
 
 import numpy as np
 
-from transient.body import split_label
-from transient.errors import InputError
-from transient.tomlcheck import (LENGTH_NUMBERS, Where, boolean as _bool, integer as _int, number as _num, string,
+from liftoff.transient.body import split_label
+from liftoff.transient.errors import InputError
+from liftoff.transient.tomlcheck import (LENGTH_NUMBERS, Where, boolean as _bool, integer as _int, number as _num, string,
                                  table as _table, vector)
 
 DEFAULT_NAME = "default_scenario.toml"
@@ -387,7 +387,7 @@ def parse_scenario(data: dict, source: str = "scenario") -> Scenario:
 
 def default_text() -> str:
     """The embedded default scenario (package data workflows/default_scenario.toml)."""
-    return resources.files("workflows").joinpath(DEFAULT_NAME).read_text()
+    return resources.files("liftoff.workflows").joinpath(DEFAULT_NAME).read_text()
 
 
 def load_scenario(path: str | Path | None = None) -> Scenario:

@@ -19,10 +19,10 @@ from dataclasses import asdict, dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from reduction.component import Component
-from reduction.models import frame_element
-from transient.body import COMPONENTS
-from transient.errors import InputError
+from liftoff.reduction.component import Component
+from liftoff.reduction.models import frame_element
+from liftoff.transient.body import COMPONENTS
+from liftoff.transient.errors import InputError
 
 LINK = dict(E=2.0e11, A=0.5, I=0.05, mass_per_length=500.0, link=True)   # stiff steel links (skirts, fittings)
 

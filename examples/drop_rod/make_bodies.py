@@ -11,8 +11,8 @@ import math
 import sys
 from pathlib import Path
 
-from transient import save_body
-from transient.examples import free_free_rod, spring_block
+from liftoff.transient import save_body
+from liftoff.transient.examples import free_free_rod, spring_block
 
 HERE = Path(__file__).resolve().parent
 L, E, RHO, A = 1.0, 200e9, 7800.0, 1e-3          # m, Pa, kg/m^3, m^2

@@ -11,8 +11,8 @@ then the rods part with their velocities exchanged.
 import sys
 from pathlib import Path
 
-from transient import save_body
-from transient.examples import free_free_rod
+from liftoff.transient import save_body
+from liftoff.transient.examples import free_free_rod
 
 HERE = Path(__file__).resolve().parent
 L, E, RHO, A, N_MODES = 1.0, 70e9, 2700.0, 1e-3, 100

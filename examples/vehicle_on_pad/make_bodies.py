@@ -14,8 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from transient import save_body
-from transient.examples import toy_pad, toy_vehicle
+from liftoff.transient import save_body
+from liftoff.transient.examples import toy_pad, toy_vehicle
 
 HERE = Path(__file__).resolve().parent
 N_POSTS, G = 4, 9.81

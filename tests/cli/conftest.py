@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from transient import ModalBody, save_body
+from liftoff.transient import ModalBody, save_body
 
 M1, M2, K_AXIAL = 10.0, 30.0, 4.0e6          # kg, kg, N/m
 MP, KPX, KPZ = 50.0, 2.0e7, 5.0e7            # kg, N/m, N/m

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from workflows.cli import main
+from liftoff.workflows.cli import main
 
 from .conftest import base_scenario, write_scenario
 
@@ -190,7 +190,7 @@ def test_out_is_a_file(case_dir: Path, capsys):
 
 def _subprocess(args: list[str], cwd: Path) -> subprocess.CompletedProcess:
     exe = Path(sys.executable).with_name("liftoff")
-    cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "workflows.cli"]
+    cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "liftoff.workflows.cli"]
     return subprocess.run(cmd + args, cwd=cwd, capture_output=True, text=True, timeout=300)
 
 

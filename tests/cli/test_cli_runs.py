@@ -12,7 +12,7 @@ import h5py
 import numpy as np
 import pytest
 
-from workflows.cli import main
+from liftoff.workflows.cli import main
 
 from .conftest import M1, M2, base_scenario, write_scenario
 
@@ -44,7 +44,7 @@ def _check_layout(path: Path) -> h5py.File:
 
 def _liftoff(args: list[str]) -> subprocess.CompletedProcess:
     exe = Path(sys.executable).with_name("liftoff")
-    cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "workflows.cli"]
+    cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "liftoff.workflows.cli"]
     return subprocess.run(cmd + args, capture_output=True, text=True, timeout=300)
 
 
@@ -66,10 +66,10 @@ def test_fixture_scenario_runs(case_dir: Path, capsys):
 
 
 def test_python_m_entry_point(tmp_path: Path):
-    """`python -m workflows.cli` works; a missing required option is an argparse error (exit 2)."""
-    proc = subprocess.run([sys.executable, "-m", "workflows.cli", "--help"], capture_output=True, text=True)
+    """`python -m liftoff.workflows.cli` works; a missing required option is an argparse error (exit 2)."""
+    proc = subprocess.run([sys.executable, "-m", "liftoff.workflows.cli", "--help"], capture_output=True, text=True)
     assert proc.returncode == 0 and "transient" in proc.stdout
-    proc = subprocess.run([sys.executable, "-m", "workflows.cli", "transient"], capture_output=True, text=True)
+    proc = subprocess.run([sys.executable, "-m", "liftoff.workflows.cli", "transient"], capture_output=True, text=True)
     assert proc.returncode == 2 and "--out" in proc.stderr
 
 
@@ -179,9 +179,9 @@ def test_gravity_softening_is_wired_and_softens():
     import copy
     import tomllib
 
-    from transient import static_equilibrium
-    from transient.effects import cg_motion_matrix, softening_matrix
-    from transient.scenario import parse_scenario
+    from liftoff.transient import static_equilibrium
+    from liftoff.transient.effects import cg_motion_matrix, softening_matrix
+    from liftoff.transient.scenario import parse_scenario
 
     base = EXAMPLES / "vehicle_on_pad"
     data = tomllib.loads((base / "scenario.toml").read_text())

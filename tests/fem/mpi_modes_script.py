@@ -6,8 +6,8 @@ import sys
 import numpy as np
 from mpi4py import MPI
 
-from fem import build_model, eigenmodes, mass_properties, point_load, static_solve
-from meshes.spec import Geometry, Material, Patch
+from liftoff.fem import build_model, eigenmodes, mass_properties, point_load, static_solve
+from liftoff.meshes.spec import Geometry, Material, Patch
 
 path, degree = sys.argv[1], int(sys.argv[2])
 steel = Material("steel", 2.0e11, 0.3, 7800.0)
@@ -18,7 +18,7 @@ clamped = build_model(Geometry("cant", path, {"solid": steel}, patches=[Patch("x
 x = static_solve(clamped, point_load(clamped, "x1", force=(0, 0, 1000.0), moment=(50.0, 0, 0)))
 # gathered mesh + field_map consistent: a rigid rotation about z gives u = (-y, x, 0) at
 # every node; the cells (first 4 nodes = vertices) tile the box volume
-from fem.spiders import rigid_body_shape  # noqa: E402
+from liftoff.fem.spiders import rigid_body_shape  # noqa: E402
 
 rot = rigid_body_shape(free.dof_coords, free.dof_comp)[:, 5]
 u = free.nodal_displacement(rot)

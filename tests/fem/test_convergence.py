@@ -9,8 +9,8 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
-from fem import build_model, eigenmodes
-from meshes.spec import Geometry, Material
+from liftoff.fem import build_model, eigenmodes
+from liftoff.meshes.spec import Geometry, Material
 
 pytestmark = pytest.mark.fem
 E, RHO = 2.0e11, 7800.0

@@ -4,12 +4,12 @@ import numpy as np
 import pytest
 
 pytestmark = [pytest.mark.fem, pytest.mark.slow]
-vehicle = pytest.importorskip("meshes.vehicle", reason="meshes.vehicle (helper B1) not in this tree")
-pad_mod = pytest.importorskip("meshes.pad", reason="meshes.pad (helper B1) not in this tree")
+vehicle = pytest.importorskip("liftoff.meshes.vehicle", reason="meshes.vehicle (helper B1) not in this tree")
+pad_mod = pytest.importorskip("liftoff.meshes.pad", reason="meshes.pad (helper B1) not in this tree")
 
-from fem import build_model, eigenmodes, mass_properties  # noqa: E402
-from meshes.layout import StackLayout  # noqa: E402
-from meshes.tank import wall_volume  # noqa: E402
+from liftoff.fem import build_model, eigenmodes, mass_properties  # noqa: E402
+from liftoff.meshes.layout import StackLayout  # noqa: E402
+from liftoff.meshes.tank import wall_volume  # noqa: E402
 
 
 def closed_form_volumes(name: str) -> dict:

@@ -3,9 +3,9 @@ import numpy as np
 import pytest
 import scipy.sparse.linalg as sla
 
-from fem import build_model, eigenmodes, mass_properties, write_modes_vtu
-from meshes.spec import Geometry, Material, Patch, PointMass, SmearedMass
-from reduction.component import Component, load_component
+from liftoff.fem import build_model, eigenmodes, mass_properties, write_modes_vtu
+from liftoff.meshes.spec import Geometry, Material, Patch, PointMass, SmearedMass
+from liftoff.reduction.component import Component, load_component
 
 pytestmark = pytest.mark.fem
 STEEL = Material("steel", 2.0e11, 0.3, 7800.0)
@@ -40,7 +40,7 @@ def test_free_free_rigid_modes_zero_to_roundoff(box_model):
     r = K @ Phi - (M @ Phi) * modes.eigenvalues
     assert np.linalg.norm(r[:, 6:]) < 1e-6 * np.linalg.norm(K @ Phi[:, 6:])
     # rigid modes span the geometric rigid-body shape: K RB = 0 and RB in span(Phi_rigid)
-    from fem.spiders import rigid_body_shape
+    from liftoff.fem.spiders import rigid_body_shape
     RB = rigid_body_shape(box_model.dof_coords, box_model.dof_comp)
     assert np.abs(K @ RB).max() < 1e-6 * np.abs(K).max()
     P = Phi[:, :6] @ (Phi[:, :6].T @ (M @ RB))

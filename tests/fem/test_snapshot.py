@@ -2,10 +2,10 @@
 import numpy as np
 import pytest
 
-from fem.snapshot import snapshot_mode, snapshot_png  # pyvista first (before dolfinx)
-from fem import build_model, eigenmodes
-from meshes.spec import Geometry, Material
-from transient.errors import InputError
+from liftoff.fem.snapshot import snapshot_mode, snapshot_png  # pyvista first (before dolfinx)
+from liftoff.fem import build_model, eigenmodes
+from liftoff.meshes.spec import Geometry, Material
+from liftoff.transient.errors import InputError
 
 pytestmark = pytest.mark.fem
 
@@ -52,7 +52,7 @@ def test_snapshot_after_dolfinx_import_renders_in_subprocess(tmp_path):
 
     root = Path(__file__).resolve().parents[2]
     code = ("import dolfinx, numpy as np\n"
-            "from fem.snapshot import snapshot_png, _RENDER_IN_PROCESS\n"
+            "from liftoff.fem.snapshot import snapshot_png, _RENDER_IN_PROCESS\n"
             "assert not _RENDER_IN_PROCESS\n"
             "n = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]])\n"
             f"snapshot_png({str(tmp_path / 'late.png')!r}, n, np.array([[0, 1, 2, 3]]), 'tetra', 0.1 * n, 'late')\n")

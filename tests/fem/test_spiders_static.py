@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from fem import build_model, eigenmodes, point_load, static_solve, thermal_load
-from meshes.spec import Geometry, Material, Patch
+from liftoff.fem import build_model, eigenmodes, point_load, static_solve, thermal_load
+from liftoff.meshes.spec import Geometry, Material, Patch
 
 pytestmark = pytest.mark.fem
 STEEL = Material("steel", 2.0e11, 0.3, 7800.0)
@@ -94,6 +94,6 @@ def test_free_block_thermal_shrink_is_alpha_dT_L(msh):
 
 def test_thermal_load_in_one_volume_only_is_self_equilibrated(msh, spider_box):
     f = thermal_load(spider_box, "solid", -100.0, {"solid": 2e-5})
-    from fem.spiders import rigid_body_shape
+    from liftoff.fem.spiders import rigid_body_shape
     RB = rigid_body_shape(spider_box.dof_coords, spider_box.dof_comp)
     assert np.abs(RB.T @ f).max() < 1e-9 * np.abs(f).max()      # no net force or moment

@@ -49,13 +49,13 @@ def _node_lookup() -> np.ndarray:
 
 @pytest.fixture(scope="session")
 def stack(tmp_path_factory):
-    from meshes import default_stack
+    from liftoff.meshes import default_stack
     return default_stack(out_dir=tmp_path_factory.mktemp("stack"))
 
 
 @pytest.fixture(scope="session")
 def pad(tmp_path_factory):
-    from meshes import default_pad
+    from liftoff.meshes import default_pad
     return default_pad(out_dir=tmp_path_factory.mktemp("pad"))
 
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from meshes import PadParams
-from meshes.pad import pad_closed_form_volumes
+from liftoff.meshes import PadParams
+from liftoff.meshes.pad import pad_closed_form_volumes
 
 
 def test_groups_clamps_and_posts(pad, msh_groups):

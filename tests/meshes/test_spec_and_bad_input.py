@@ -7,10 +7,10 @@ import shutil
 import numpy as np
 import pytest
 
-from meshes import (BoosterParams, Compartment, Geometry, Material, OrbiterParams, PadParams, Patch, PointMass,
+from liftoff.meshes import (BoosterParams, Compartment, Geometry, Material, OrbiterParams, PadParams, Patch, PointMass,
                     SmearedMass, StackLayout, TankParams, build_booster, build_orbiter, build_pad, build_tank,
                     default_stack)
-from transient.errors import InputError
+from liftoff.transient.errors import InputError
 
 
 def _geometry(msh):

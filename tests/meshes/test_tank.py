@@ -8,8 +8,8 @@ import gmsh
 import numpy as np
 import pytest
 
-from meshes import Compartment, TankParams, build_tank
-from meshes.tank import liquid_volume, tank_layout, wall_volume, wetted_area
+from liftoff.meshes import Compartment, TankParams, build_tank
+from liftoff.meshes.tank import liquid_volume, tank_layout, wall_volume, wetted_area
 
 # OCC solids of revolution are exact analytic surfaces; occ.getMass integrates them
 # numerically to ~1e-6 relative (observed 1.3e-6 on the default tank wall), so 1e-5.

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from meshes import BoosterParams, OrbiterParams, StackLayout, core_stage_params
-from meshes.tank import tank_layout, wall_volume
-from meshes.vehicle import booster_closed_form_volumes, orbiter_closed_form_volumes
+from liftoff.meshes import BoosterParams, OrbiterParams, StackLayout, core_stage_params
+from liftoff.meshes.tank import tank_layout, wall_volume
+from liftoff.meshes.vehicle import booster_closed_form_volumes, orbiter_closed_form_volumes
 
 CAD_RTOL = 1e-5  # occ.getMass numerical integration (~1e-6), see test_tank.py
 

@@ -4,9 +4,9 @@ import pytest
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from reduction import Component, assemble, craig_bampton, system_modes
-from reduction.models import chain_component, hex_block, six_labels, spider_component
-from transient import InputError, load_body
+from liftoff.reduction import Component, assemble, craig_bampton, system_modes
+from liftoff.reduction.models import chain_component, hex_block, six_labels, spider_component
+from liftoff.transient import InputError, load_body
 
 SECTION = dict(E=70e9, nu=0.33, A=4e-4, Iy=6e-8, Iz=1.1e-7, J=1.2e-7, rho=2700.0)
 N_SEG = 16

@@ -3,9 +3,9 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from reduction import Component, assemble, craig_bampton, load_cb, system_modes
-from reduction.models import chain_component, six_labels
-from transient import InputError
+from liftoff.reduction import Component, assemble, craig_bampton, load_cb, system_modes
+from liftoff.reduction.models import chain_component, six_labels
+from liftoff.transient import InputError
 
 SECTION = dict(E=70e9, nu=0.33, A=4e-4, Iy=6e-8, Iz=1.1e-7, J=1.2e-7, rho=2700.0)
 

@@ -5,8 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from reduction import Component, cb_check, craig_bampton
-from reduction.models import chain_component, six_labels
+from liftoff.reduction import Component, cb_check, craig_bampton
+from liftoff.reduction.models import chain_component, six_labels
 
 SECTION = dict(E=70e9, nu=0.33, A=4e-4, Iy=6e-8, Iz=1.1e-7, J=1.2e-7, rho=2700.0)
 N = 16
@@ -76,7 +76,7 @@ def test_flags_a_grounded_component_and_asymmetry(frame):
 
 
 def test_sparse_fe_eigensolve_matches_dense(frame, monkeypatch):
-    import reduction.checks as checks
+    import liftoff.reduction.checks as checks
 
     comp, cb = frame
     dense = cb_check(cb, comp).summary

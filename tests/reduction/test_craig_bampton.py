@@ -3,9 +3,9 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from reduction import CBModel, craig_bampton, load_cb
-from reduction.craig_bampton import DENSE_LIMIT
-from reduction.models import chain_component, hex_block, six_labels, spider_component
+from liftoff.reduction import CBModel, craig_bampton, load_cb
+from liftoff.reduction.craig_bampton import DENSE_LIMIT
+from liftoff.reduction.models import chain_component, hex_block, six_labels, spider_component
 
 SECTION = dict(E=70e9, nu=0.33, A=4e-4, Iy=6e-8, Iz=1.1e-7, J=1.2e-7, rho=2700.0)
 
@@ -171,8 +171,8 @@ def test_band_holding_too_many_modes_is_a_clear_error(monkeypatch):
     # here so that the same code path runs on a small solid.
     import importlib
 
-    cbm = importlib.import_module("reduction.craig_bampton")  # the package exports a function of that name
-    from transient.errors import InputError
+    cbm = importlib.import_module("liftoff.reduction.craig_bampton")  # the package exports a function of that name
+    from liftoff.transient.errors import InputError
 
     monkeypatch.setattr(cbm, "BAND_MODE_LIMIT", 30)
     K, M, nodes = hex_block((3, 3, 16), (0.1, 0.1, 0.6))

@@ -10,11 +10,11 @@ pytest.importorskip("pyvista")      # before dolfinx (FENICSX-NOTES.md)
 gmsh = pytest.importorskip("gmsh")
 pytest.importorskip("dolfinx")
 fem = pytest.importorskip("fem")
-spec = pytest.importorskip("meshes.spec")
+spec = pytest.importorskip("liftoff.meshes.spec")
 
-from reduction import (Component, assemble, cb_check, craig_bampton, field_recovery,  # noqa: E402
+from liftoff.reduction import (Component, assemble, cb_check, craig_bampton, field_recovery,  # noqa: E402
                        system_modes)
-from reduction.models import six_labels  # noqa: E402
+from liftoff.reduction.models import six_labels  # noqa: E402
 
 pytestmark = pytest.mark.fem
 L, W, H = 0.8, 0.1, 0.06

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from reduction import (Component, acceleration_recovery, assemble, craig_bampton, displacement_recovery,
+from liftoff.reduction import (Component, acceleration_recovery, assemble, craig_bampton, displacement_recovery,
                        field_recovery, interface_force_recovery, system_modes)
-from reduction.models import chain_component, six_labels
+from liftoff.reduction.models import chain_component, six_labels
 
 SECTION = dict(E=70e9, nu=0.33, A=4e-4, Iy=6e-8, Iz=1.1e-7, J=1.2e-7, rho=2700.0)
 N = 16                                      # elements per leg; joint n16, tip n32, station n24
@@ -111,7 +111,7 @@ def test_interface_force_all_modes_equals_monolithic(frame, Omega_hz):
     assert np.allclose(acceleration_recovery(sysm, labs) @ qdd, -Omega**2 * u_ref,
                        rtol=0, atol=1e-8 * max(Omega**2, 1) * np.abs(u_ref).max())
     # the matrices plug into the transient core's Recovery (y = disp q + acc qddot)
-    from transient.model import Recovery
+    from liftoff.transient.model import Recovery
 
     rec = Recovery("joint_A", "a", six_labels(f"n{N}"), disp=D, acc=Acc)
     assert np.allclose(rec.disp @ q + rec.acc @ qdd, F)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import scipy.signal as sig
 
-from transient.coefficients import step_coefficients
+from liftoff.transient.coefficients import step_coefficients
 
 RTOL = 1e-10  # issue 2; the closed forms are exact, both sides carry only rounding (~1e-14)
 

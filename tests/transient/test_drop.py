@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from transient import ContactPoint, Forcing, ModalBody, TransientProblem, ground, solve
+from liftoff.transient import ContactPoint, Forcing, ModalBody, TransientProblem, ground, solve
 
 M, K, G0, G = 10.0, 1e5, 0.05, 9.81
 

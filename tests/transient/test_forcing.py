@@ -4,9 +4,9 @@ import math
 
 import numpy as np
 
-from transient import (ContactPoint, Forcing, ModalForce, PointForce, TabulatedForce, TransientProblem, ground,
+from liftoff.transient import (ContactPoint, Forcing, ModalForce, PointForce, TabulatedForce, TransientProblem, ground,
                        solve)
-from transient.examples import spring_block
+from liftoff.transient.examples import spring_block
 
 M, K = 2.0, 800.0
 W = math.sqrt(K / M)

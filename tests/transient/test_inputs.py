@@ -5,9 +5,9 @@ import warnings
 import numpy as np
 import pytest
 
-from transient import (ContactPoint, ConvergenceError, Forcing, InputError, ModalForce, TabulatedForce, TransientProblem,
+from liftoff.transient import (ContactPoint, ConvergenceError, Forcing, InputError, ModalForce, TabulatedForce, TransientProblem,
                        estimate_step, ground, solve)
-from transient.examples import free_free_rod, spring_block
+from liftoff.transient.examples import free_free_rod, spring_block
 
 
 def test_estimate_step_closed_forms():

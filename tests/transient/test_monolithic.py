@@ -19,9 +19,9 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from transient import (ConvergenceError, Forcing, TabulatedForce, TransientProblem, estimate_step, solve,
+from liftoff.transient import (ConvergenceError, Forcing, TabulatedForce, TransientProblem, estimate_step, solve,
                        static_equilibrium)
-from transient.examples import holddown_contacts, pad_truss, truss_body, vehicle_truss
+from liftoff.transient.examples import holddown_contacts, pad_truss, truss_body, vehicle_truss
 
 N_POSTS = 4
 KC = 1e10  # N/m, ~100x the local truss stiffness

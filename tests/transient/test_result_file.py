@@ -5,8 +5,8 @@ import h5py
 import numpy as np
 import pytest
 
-from transient import Forcing, InputError, Recovery, TabulatedForce, TransientProblem, load_result, solve
-from transient.examples import holddown_contacts, toy_pad, toy_vehicle
+from liftoff.transient import Forcing, InputError, Recovery, TabulatedForce, TransientProblem, load_result, solve
+from liftoff.transient.examples import holddown_contacts, toy_pad, toy_vehicle
 
 
 @pytest.fixture(scope="module")
@@ -77,7 +77,7 @@ def test_load_result_rejects_other_files(tmp_path):
 @pytest.mark.parametrize("rigid", [False, True])
 def test_chunked_march_is_seamless(monkeypatch, rigid):
     """The time loop runs in compiled chunks; any chunk size must give bit-identical results."""
-    import transient.solver as solver
+    import liftoff.transient.solver as solver
 
     v, p = toy_vehicle(3), toy_pad(3)
     contacts = holddown_contacts(3, 1e10, release_time=0.02, rigid=rigid)

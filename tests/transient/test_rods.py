@@ -8,8 +8,8 @@ import math
 
 import numpy as np
 
-from transient import ContactPoint, Forcing, InitialState, TransientProblem, solve
-from transient.examples import free_free_rod
+from liftoff.transient import ContactPoint, Forcing, InitialState, TransientProblem, solve
+from liftoff.transient.examples import free_free_rod
 
 L, E, RHO, A, V0 = 1.0, 70e9, 2700.0, 1e-3, 2.0
 N_MODES = 200  # per rod (rigid + 199 elastic): resolves the wave front to ~ L / N

@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from transient import (ContactPoint, Forcing, InitialState, InputError, ModalFeedback, PointForce, Recovery,
+from liftoff.transient import (ContactPoint, Forcing, InitialState, InputError, ModalFeedback, PointForce, Recovery,
                        TransientProblem, ground, solve, static_solution)
-from transient.examples import holddown_contacts, spring_block, toy_pad, truss_body, vehicle_truss
+from liftoff.transient.examples import holddown_contacts, spring_block, toy_pad, truss_body, vehicle_truss
 
 G = 9.81
 

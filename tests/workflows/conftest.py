@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from transient.body import ModalBody
-from transient.effects import rigid_body_rows
+from liftoff.transient.body import ModalBody
+from liftoff.transient.effects import rigid_body_rows
 
 
 def _truss(n_levels=6, half_width=2.0, height=30.0, EA=5e9, mass_per_node=2000.0,
@@ -144,7 +144,7 @@ def _monolithic_errors(problem, divisions=(2, 4, 8)):
 
     from scipy.integrate import solve_ivp
 
-    from transient import estimate_step, solve
+    from liftoff.transient import estimate_step, solve
 
     assert problem.t_end < min(c.release_time for c in problem.contacts)
     K, D, ks = _coupled_K(problem)

@@ -2,11 +2,11 @@
 import numpy as np
 import pytest
 
-from transient.effects import (center_of_gravity, cg_motion_matrix, control_forces,
+from liftoff.transient.effects import (center_of_gravity, cg_motion_matrix, control_forces,
                                control_gimbal_matrix, cryo_point_loads, load_resultant,
                                modal_resultant_about, resultant_about, rigid_body_rows,
                                softening_matrix)
-from transient.errors import InputError
+from liftoff.transient.errors import InputError
 
 G = np.array([0.0, 0.0, -9.80665])
 GIMBALS = ["n0_0:Tx", "n0_0:Ty", "n0_2:Tx", "n0_2:Ty"]
@@ -155,7 +155,7 @@ def test_softening_feedback_in_transient_matches_inverted_pendulum(rigid_column)
     Errors: penalty pin ~k/(k_t l^2) = 2e-6; the held feedback lags by half a step,
     (omega h) ~ 1e-4 at most; zero crossings interpolated linearly, ~(omega h)^2:
     rtol 1e-5 (measured 1e-6). Without softening the period is shorter."""
-    from transient import ContactPoint, Forcing, InitialState, ModalFeedback, TransientProblem, ground, solve
+    from liftoff.transient import ContactPoint, Forcing, InitialState, ModalFeedback, TransientProblem, ground, solve
 
     m, I, l, k, kt, g = 1000.0, 500.0, 10.0, 2.0e5, 1.0e9, 9.80665
     body = rigid_column(m=m, inertia=(I, I, 200.0), l=l)

@@ -8,11 +8,11 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from transient import Forcing, PointForce, solve, static_solution
-from workflows.cache import StageCache
-from workflows.loads import build_problem, table1
-from workflows.pipeline import build_stack
-from workflows.scenario import default_text, parse_scenario
+from liftoff.transient import Forcing, PointForce, solve, static_solution
+from liftoff.workflows.cache import StageCache
+from liftoff.workflows.loads import build_problem, table1
+from liftoff.workflows.pipeline import build_stack
+from liftoff.workflows.scenario import default_text, parse_scenario
 
 
 # the default scenario on a coarse stick model (6 m beam elements): fast, no dolfinx
@@ -97,7 +97,7 @@ def test_settle_check_oscillates_about_static_solution(stack, monolithic):
 def test_cryo_preload_is_self_equilibrated(stack):
     """The cryo load at boundary DOFs has zero resultant; statically the post forces it
     causes sum to zero (the pad sees only internal restraint loads, section 4.3)."""
-    from transient.effects import load_resultant
+    from liftoff.transient.effects import load_resultant
 
     case = scenario()
     cp = build_problem(case, stack, progress=False)

@@ -8,9 +8,9 @@ import tomllib
 import numpy as np
 import pytest
 
-from transient import load_result
-from workflows.cli import main
-from workflows.scenario import default_text
+from liftoff.transient import load_result
+from liftoff.workflows.cli import main
+from liftoff.workflows.scenario import default_text
 
 HAVE_FE = all(importlib.util.find_spec(m) is not None for m in ("dolfinx", "gmsh"))
 
@@ -159,10 +159,10 @@ def test_fe_scenario_end_to_end_coarse(tmp_path, capsys, monolithic):
     for what in ("max_twang", "release", "peak_load"):
         assert (tmp_path / "fe" / f"snapshot_{what}_nominal.png").stat().st_size > 20_000
 
-    from workflows.cache import StageCache
-    from workflows.loads import build_problem
-    from workflows.pipeline import build_stack
-    from workflows.scenario import load_scenario
+    from liftoff.workflows.cache import StageCache
+    from liftoff.workflows.loads import build_problem
+    from liftoff.workflows.pipeline import build_stack
+    from liftoff.workflows.scenario import load_scenario
 
     case = load_scenario(p).cases[0]
     cache = StageCache(tmp_path / "cache")

@@ -4,8 +4,8 @@ import tomllib
 
 import pytest
 
-from transient.errors import InputError
-from workflows.scenario import default_text, load_scenario, merge, parse_scenario
+from liftoff.transient.errors import InputError
+from liftoff.workflows.scenario import default_text, load_scenario, merge, parse_scenario
 
 
 @pytest.fixture(scope="module")

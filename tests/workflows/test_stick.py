@@ -4,13 +4,13 @@ import importlib.util
 import numpy as np
 import pytest
 
-from workflows.pipeline import boundary_points
-from workflows.stick import StackParams, stack_components
+from liftoff.workflows.pipeline import boundary_points
+from liftoff.workflows.stick import StackParams, stack_components
 
 
 @pytest.mark.skipif(importlib.util.find_spec("gmsh") is None, reason="meshes/ needs gmsh")
 def test_stick_points_match_fe_layout():
-    from meshes import PadParams, StackLayout
+    from liftoff.meshes import PadParams, StackLayout
 
     lay = StackLayout()
     fe = {}
