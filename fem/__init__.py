@@ -15,10 +15,21 @@ Public API (SI units throughout)::
 Import pyvista (fem.snapshot) before dolfinx when both are used (FENICSX-NOTES.md).
 Only this package and meshes/ import gmsh or dolfinx; PETSc/SLEPc live in petsc_backend.
 """
-from .model import FEModel, build_model
-from .modes import Modes, eigenmodes
-from .output import write_modes_vtu, write_vtu
-from .static import MassProperties, mass_properties, point_load, static_solve, thermal_load
 
-__all__ = ["FEModel", "build_model", "Modes", "eigenmodes", "static_solve", "point_load",
-           "thermal_load", "MassProperties", "mass_properties", "write_vtu", "write_modes_vtu"]
+from liftoff.core.lazy import lazy_exports
+
+_EXPORTS = {
+    "FEModel": ".model",
+    "build_model": ".model",
+    "Modes": ".modes",
+    "eigenmodes": ".modes",
+    "write_modes_vtu": ".output",
+    "write_vtu": ".output",
+    "MassProperties": ".static",
+    "mass_properties": ".static",
+    "point_load": ".static",
+    "static_solve": ".static",
+    "thermal_load": ".static",
+}
+__all__ = list(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import ufl
 
-from liftoff.transient.errors import InputError
+from liftoff.core.errors import InputError
 
 from .mesh import TaggedMesh
 

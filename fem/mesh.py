@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from liftoff.transient.errors import InputError
+from liftoff.core.errors import InputError
 
 
 @dataclass

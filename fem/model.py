@@ -17,11 +17,12 @@ import numpy as np
 import scipy.sparse as sp
 from mpi4py import MPI
 
-from liftoff.transient.body import COMPONENTS, split_label
-from liftoff.transient.errors import InputError
+from liftoff.core.errors import InputError
+from liftoff.core.labels import COMPONENTS, split_label
+from liftoff.core.rigid import dof_rb
 
 from . import petsc_backend as pb
-from .elasticity import (area_form, mass_form, material_fields, stiffness_form, surface_mass_form)
+from .elasticity import area_form, mass_form, material_fields, stiffness_form, surface_mass_form
 from .mesh import TaggedMesh, read_msh
 from .spiders import CLAMPED, FREE, transformation_rows
 
@@ -79,6 +80,10 @@ class FEModel:
             raise InputError(f"model {self.name!r} has no reference point {point!r} "
                              f"(has: {', '.join(self.points) or 'none'})")
         return self.ref_first_dof + 6 * self.points.index(point) + comp
+
+    def rigid_body_shape(self, about=(0.0, 0.0, 0.0)) -> np.ndarray:
+        """Geometric rigid-body shape RB (n_dof, 6) of the model's DOFs about ``about`` (m)."""
+        return dof_rb(self.dof_coords - np.asarray(about, float), self.dof_comp)
 
     def node_dofs(self, xyz) -> np.ndarray:
         """The three DOF indices (x, y, z) of the free mesh node nearest ``xyz``."""

@@ -13,11 +13,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from liftoff.transient.errors import InputError
+from liftoff.core.errors import InputError
 
 from . import petsc_backend as pb
 from .model import FEModel
-from .spiders import rigid_body_shape
 
 
 @dataclass
@@ -63,7 +62,7 @@ def _check_singular(model: FEModel, lam: np.ndarray, rigid_tol_hz: float) -> int
 def _rigid_modes(model: FEModel) -> tuple[np.ndarray, np.ndarray]:
     """Geometric rigid-body modes, M-orthonormalised (eigenvalues = Rayleigh quotients)."""
     K, M = model.matrices()
-    RB = rigid_body_shape(model.dof_coords, model.dof_comp, model.dof_coords.mean(axis=0))
+    RB = model.rigid_body_shape(model.dof_coords.mean(axis=0))
     Mr = RB.T @ (M @ RB)
     w, V = np.linalg.eigh(0.5 * (Mr + Mr.T))
     if w.min() <= 1e-12 * w.max():

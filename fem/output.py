@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from liftoff.transient.atomic import atomic_path
-from liftoff.transient.errors import InputError
+from liftoff.core.errors import InputError
+from liftoff.core.records import atomic_path
 
 
 def write_vtu(path, nodes: np.ndarray, cells: np.ndarray, cell_type: str,

@@ -11,13 +11,13 @@ import numpy as np
 import scipy.sparse as sp
 from petsc4py import PETSc
 
-from liftoff.transient.errors import ConvergenceError, InputError
+from liftoff.core.errors import ConvergenceError, InputError
 
 
 def assemble_matrix(form) -> PETSc.Mat:
     """Assemble a bilinear dolfinx form (no boundary conditions) into a PETSc AIJ matrix."""
-    from dolfinx import fem
     import dolfinx.fem.petsc as fpetsc
+    from dolfinx import fem
 
     A = fpetsc.assemble_matrix(fem.form(form))
     A.assemble()
@@ -26,8 +26,8 @@ def assemble_matrix(form) -> PETSc.Mat:
 
 def assemble_vector(form) -> PETSc.Vec:
     """Assemble a linear dolfinx form; ghost contributions summed into owners."""
-    from dolfinx import fem
     import dolfinx.fem.petsc as fpetsc
+    from dolfinx import fem
 
     b = fpetsc.assemble_vector(fem.form(form))
     b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)

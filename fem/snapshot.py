@@ -25,8 +25,8 @@ import pyvista  # noqa: E402
 
 pyvista.OFF_SCREEN = True
 
-from liftoff.transient.atomic import atomic_path  # noqa: E402
-from liftoff.transient.errors import InputError  # noqa: E402
+from liftoff.core.errors import InputError  # noqa: E402
+from liftoff.core.records import atomic_path  # noqa: E402
 
 _VTK_TYPES = {"tetra": 10, "tetra10": 24, "triangle": 5, "triangle6": 22, "hexahedron": 12,
               "quad": 9, "line": 3, "wedge": 13}

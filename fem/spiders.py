@@ -13,19 +13,9 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from liftoff.core.rigid import TRANSLATION_COLUMNS, translation_coefficients
+
 FREE, CLAMPED = -1, -2
-
-
-def rigid_rows(d: np.ndarray, comp: int) -> tuple[np.ndarray, np.ndarray]:
-    """Coefficients of u_comp = t_comp + (theta x d)_comp in (t, theta), for offsets d (n, 3).
-
-    Returns (columns 0..5 shape (3,), coefficients shape (n, 3))."""
-    one = np.ones(d.shape[0])
-    if comp == 0:   # ux = tx + ry dz - rz dy
-        return np.array([0, 4, 5]), np.column_stack([one, d[:, 2], -d[:, 1]])
-    if comp == 1:   # uy = ty + rz dx - rx dz
-        return np.array([1, 5, 3]), np.column_stack([one, d[:, 0], -d[:, 2]])
-    return np.array([2, 3, 4]), np.column_stack([one, d[:, 1], -d[:, 0]])  # uz = tz + rx dy - ry dx
 
 
 def transformation_rows(node_coords: np.ndarray, node_role: np.ndarray, keep_index: np.ndarray,
@@ -47,27 +37,10 @@ def transformation_rows(node_coords: np.ndarray, node_role: np.ndarray, keep_ind
         nodes = np.flatnonzero(node_role == p)
         d = node_coords[nodes] - ref_coords[p]
         for c in range(3):
-            cc, coef = rigid_rows(d, c)
+            cc, coef = TRANSLATION_COLUMNS[c], translation_coefficients(d, c)
             for k in range(3):
                 rows.append(3 * nodes + c)
                 cols.append(np.full(nodes.size, ref_first_dof + 6 * p + cc[k]))
                 vals.append(coef[:, k])
     r, cidx, v = (np.concatenate(a) if a else np.zeros(0) for a in (rows, cols, vals))
     return sp.csr_matrix((v, (r.astype(np.int64), cidx.astype(np.int64))), shape=(3 * n, n_cols))
-
-
-def rigid_body_shape(dof_coords: np.ndarray, dof_comp: np.ndarray, about=(0.0, 0.0, 0.0)) -> np.ndarray:
-    """Geometric rigid-body shape RB (n, 6) of DOFs with coordinates (n, 3) and components
-    0..5 (Tx..Rz): column j is the DOF response to a unit translation (j < 3) or a unit small
-    rotation (j >= 3) about ``about``."""
-    n = dof_comp.size
-    RB = np.zeros((n, 6))
-    d = dof_coords - np.asarray(about, float)
-    for c in range(3):
-        m = dof_comp == c
-        cc, coef = rigid_rows(d[m], c)
-        for k in range(3):
-            RB[np.flatnonzero(m), cc[k]] = coef[:, k]
-    for c in range(3, 6):
-        RB[dof_comp == c, c] = 1.0
-    return RB

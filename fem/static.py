@@ -1,16 +1,14 @@
 """Static solves, loads and mass properties on an FE model's independent DOFs (SI units)."""
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from liftoff.transient.errors import ConvergenceError, InputError
+from liftoff.core.errors import ConvergenceError, InputError
+from liftoff.core.rigid import MassProperties, cg_mass
 
 from . import petsc_backend as pb
 from .elasticity import thermal_load_form
 from .model import FEModel
-from .spiders import rigid_body_shape
 
 
 def static_solve(model: FEModel, f: np.ndarray, supports=()) -> np.ndarray:
@@ -73,26 +71,9 @@ def thermal_load(model: FEModel, volumes, delta_T: float, alpha) -> np.ndarray:
     return pb.gather_vec(pb.mult_transpose(model.T, b))
 
 
-@dataclass
-class MassProperties:
-    """Mass (kg), centre of gravity (m), inertia tensor about the c.g. (kg m^2), and the
-    6 x 6 rigid-body mass RB^T M RB about ``about`` (kg, kg m, kg m^2)."""
-
-    mass: float
-    cg: np.ndarray
-    inertia: np.ndarray
-    rigid_mass: np.ndarray
-    about: np.ndarray
-
-
 def mass_properties(model: FEModel, about=(0.0, 0.0, 0.0)) -> MassProperties:
-    """Mass properties from M and the geometric rigid-body shape: M6 = RB^T M RB."""
+    """Mass properties (liftoff.core.cg_mass) of M6 = RB^T M RB about ``about`` (m)."""
     _, M = model.matrices()
     about = np.asarray(about, float)
-    RB = rigid_body_shape(model.dof_coords, model.dof_comp, about)
-    M6 = RB.T @ (M @ RB)
-    m = M6[0, 0]
-    c = np.array([-M6[2, 4], -M6[0, 5], -M6[1, 3]]) / m      # M6[:3, 3:] = -m [c]x
-    I0 = M6[3:, 3:]
-    I_cg = I0 - m * (np.dot(c, c) * np.eye(3) - np.outer(c, c))
-    return MassProperties(float(m), about + c, I_cg, M6, about)
+    RB = model.rigid_body_shape(about)
+    return cg_mass(RB.T @ (M @ RB), about)

@@ -6,14 +6,30 @@ sidecar, and returns a :class:`Geometry` (see meshes/spec.py and docs/meshes.md)
 All parts share the global frame of :mod:`meshes.layout` (z up, origin on the core axis
 at the hold-down level, x along the booster-booster line, y towards the orbiter).
 """
-from .layout import StackLayout
-from .pad import PadParams, build_pad, default_pad
-from .spec import Geometry, Material, Patch, PointMass, SmearedMass
-from .tank import AL2219, Compartment, TankParams, build_tank
-from .vehicle import (BoosterParams, OrbiterParams, build_booster, build_core_stage, build_orbiter,
-                      core_stage_params, default_stack)
 
-__all__ = ["Geometry", "Material", "Patch", "PointMass", "SmearedMass", "StackLayout",
-           "AL2219", "Compartment", "TankParams", "build_tank",
-           "BoosterParams", "OrbiterParams", "build_booster", "build_core_stage", "build_orbiter",
-           "core_stage_params", "default_stack", "PadParams", "build_pad", "default_pad"]
+from liftoff.core.lazy import lazy_exports
+
+_EXPORTS = {
+    "StackLayout": ".layout",
+    "PadParams": ".pad",
+    "build_pad": ".pad",
+    "default_pad": ".pad",
+    "Geometry": ".spec",
+    "Material": ".spec",
+    "Patch": ".spec",
+    "PointMass": ".spec",
+    "SmearedMass": ".spec",
+    "AL2219": ".tank",
+    "Compartment": ".tank",
+    "TankParams": ".tank",
+    "build_tank": ".tank",
+    "BoosterParams": ".vehicle",
+    "OrbiterParams": ".vehicle",
+    "build_booster": ".vehicle",
+    "build_core_stage": ".vehicle",
+    "build_orbiter": ".vehicle",
+    "core_stage_params": ".vehicle",
+    "default_stack": ".vehicle",
+}
+__all__ = list(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

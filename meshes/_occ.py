@@ -8,30 +8,36 @@ solids (boxes, cylinders); the tool parts outside the structure are removed agai
 """
 from __future__ import annotations
 
+import importlib
 import math
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
-import gmsh
 import numpy as np
 
-from liftoff.transient.atomic import atomic_path
-from liftoff.transient.errors import InputError
+from liftoff.core.errors import InputError
+from liftoff.core.records import atomic_path
 
-occ = gmsh.model.occ
+
+class _Lazy:
+    """A module attribute path (``gmsh``, ``gmsh.model.occ``) imported on first use, so the
+    parameter classes and closed forms of meshes/ load without gmsh."""
+
+    def __init__(self, path: str):
+        self._path = path
+
+    def __getattr__(self, name: str):
+        head, *rest = self._path.split(".")
+        obj = importlib.import_module(head)
+        for part in rest:
+            obj = getattr(obj, part)
+        return getattr(obj, name)
+
+
+gmsh = _Lazy("gmsh")
+occ = _Lazy("gmsh.model.occ")
 SEAM_AZIMUTH = math.radians(-20.0)  # azimuth of the seam of revolved surfaces
-
-
-def require_positive(owner: str, **values: float) -> None:
-    """InputError naming the first parameter that is not a finite number > 0."""
-    for name, v in values.items():
-        try:
-            ok = math.isfinite(float(v)) and float(v) > 0
-        except (TypeError, ValueError):
-            ok = False
-        if not ok:
-            raise InputError(f"{owner}.{name} must be a finite number > 0 (got {v!r})")
 
 
 @contextmanager
@@ -151,11 +157,6 @@ def cylinder_tool(name, center, radius: float, z0: float, z1: float) -> Tool:
     return Tool(name, (3, c), occ.getBoundingBox(3, c))
 
 
-def box_tool(name, lo, hi) -> Tool:
-    b = occ.addBox(lo[0], lo[1], lo[2], hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2])
-    return Tool(name, (3, b), occ.getBoundingBox(3, b))
-
-
 def plane_cut(z: float, half_size: float = 1e3) -> Tool:
     """Horizontal plane at height z (splits walls, e.g. at a fill level)."""
     s = occ.addRectangle(-half_size, -half_size, z, 2 * half_size, 2 * half_size)
@@ -230,10 +231,6 @@ def capsule_distance(axis_xy, r: float, z_cb: float, z_ct: float, a_b: float, a_
             return r * (math.hypot(rho / r, (z - z_ct) / a_t) - 1)
         return rho - r
     return d
-
-
-def surface_area(faces: list[int]) -> float:
-    return float(sum(occ.getMass(2, f) for f in faces))
 
 
 def refine_faces(faces: list[int], size: float) -> None:

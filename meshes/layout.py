@@ -17,9 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from liftoff.transient.errors import InputError
+from liftoff.core.errors import InputError
 
-from ._occ import require_positive
+from .spec import require_positive
 
 SIDES = ("left", "right")
 

@@ -15,12 +15,12 @@ from pathlib import Path
 
 import numpy as np
 
-from liftoff.transient.errors import InputError
+from liftoff.core.errors import InputError
 
 from . import _occ
-from ._occ import occ, require_positive
+from ._occ import occ
 from .layout import SIDES, StackLayout
-from .spec import Geometry, Material, Patch
+from .spec import Geometry, Material, Patch, require_positive
 
 STEEL = Material("steel", 200e9, 0.29, 7850.0)
 

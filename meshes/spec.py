@@ -23,6 +23,7 @@ m^2) and ``mesh_nodes`` (node count of the written mesh).
 from __future__ import annotations
 
 import json
+import math
 import os
 import re
 from dataclasses import dataclass, field
@@ -30,8 +31,20 @@ from pathlib import Path
 
 import numpy as np
 
-from liftoff.transient.atomic import write_text
-from liftoff.transient.errors import InputError
+from liftoff.core.errors import InputError
+from liftoff.core.records import write_text
+
+
+def require_positive(owner: str, **values: float) -> None:
+    """InputError naming the first parameter that is not a finite number > 0."""
+    for name, v in values.items():
+        try:
+            ok = math.isfinite(float(v)) and float(v) > 0
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
+            raise InputError(f"{owner}.{name} must be a finite number > 0 (got {v!r})")
+
 
 FORMAT = "liftoff-geometry"
 VERSION = 1

@@ -15,11 +15,11 @@ from pathlib import Path
 
 import numpy as np
 
-from liftoff.transient.errors import InputError
+from liftoff.core.errors import InputError
 
 from . import _occ
-from ._occ import occ, require_positive
-from .spec import Geometry, Material, Patch, SmearedMass, equivalent
+from ._occ import occ
+from .spec import Geometry, Material, Patch, SmearedMass, equivalent, require_positive
 
 #: Aluminium alloy 2219 (the Shuttle external tank's alloy): E 73.8 GPa, nu 0.33, 2840 kg/m^3
 AL2219 = Material("Al2219", 73.8e9, 0.33, 2840.0)
@@ -274,7 +274,7 @@ def build_tank(p: TankParams, out_dir) -> Geometry:
     lay = tank_layout(p)
     R, t, w = p.radius, p.wall_thickness, p.patch_half_width
     wall = f"{p.name}_wall"
-    with _occ.gmsh_session(p.name) as model:
+    with _occ.gmsh_session(p.name):
         vols = _occ.revolve_to_z(_profile(p), p.axis_xy)
         occ.synchronize()
         cyl_ranges = [(lay[0].z_cyl_bottom, lay[-1].z_cyl_top)]

@@ -15,12 +15,12 @@ from pathlib import Path
 
 import numpy as np
 
-from liftoff.transient.errors import InputError
+from liftoff.core.errors import InputError
 
 from . import _occ
-from ._occ import occ, require_positive
+from ._occ import occ
 from .layout import StackLayout
-from .spec import Geometry, Material, Patch, PointMass, SmearedMass, equivalent
+from .spec import Geometry, Material, Patch, PointMass, SmearedMass, equivalent, require_positive
 from .tank import AL2219, Compartment, TankParams, build_tank, tank_height
 
 #: D6AC steel (SRB case): E 205 GPa, nu 0.29, 7850 kg/m^3
@@ -129,8 +129,9 @@ class BoosterParams:
 
 def booster_closed_form_volumes(p: BoosterParams) -> dict[str, float]:
     """Closed-form volumes (m^3) of the case shell and of the skirt's part outside the case."""
-    from .tank import capsule_volume
     from scipy.integrate import quad
+
+    from .tank import capsule_volume
     R, t = p.layout.srb_radius, p.case_thickness
     L = p.cyl_top_z - p.case_bottom_z
     a_b, a_t = p.aft_dome_ratio * R, p.nose_ratio * R

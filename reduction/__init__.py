@@ -2,16 +2,32 @@
 
 Section 3.0 and 4.2 of Prabhakar & Palermo; file formats in docs/reduction.md.
 """
-from .assembly import Assembly, assemble
-from .checks import CBCheck, cb_check
-from .component import Component, load_component, save_component
-from .craig_bampton import CBModel, craig_bampton, load_cb, save_cb
-from .recovery import (acceleration_recovery, displacement_recovery, field_recovery,
-                       interface_force_recovery, label_transform)
-from .rigid import mass_properties, nodal_rb, rb_rows
-from .system import SystemModes, system_modes, system_rb
 
-__all__ = ["Component", "load_component", "save_component", "CBModel", "craig_bampton", "load_cb",
-           "save_cb", "CBCheck", "cb_check", "Assembly", "assemble", "SystemModes", "system_modes",
-           "system_rb", "displacement_recovery", "acceleration_recovery", "interface_force_recovery",
-           "field_recovery", "label_transform", "rb_rows", "nodal_rb", "mass_properties"]
+from liftoff.core.lazy import lazy_exports
+
+_EXPORTS = {
+    "Assembly": ".assembly",
+    "assemble": ".assembly",
+    "CBCheck": ".checks",
+    "cb_check": ".checks",
+    "Component": ".component",
+    "load_component": ".component",
+    "save_component": ".component",
+    "CBModel": ".craig_bampton",
+    "craig_bampton": ".craig_bampton",
+    "load_cb": ".craig_bampton",
+    "save_cb": ".craig_bampton",
+    "acceleration_recovery": ".recovery",
+    "displacement_recovery": ".recovery",
+    "field_recovery": ".recovery",
+    "interface_force_recovery": ".recovery",
+    "label_transform": ".assembly",
+    "SystemModes": ".system",
+    "system_modes": ".system",
+    "system_rb": ".system",
+}
+__all__ = list(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+# the function shadows the module of the same name (a lazy export could not: importing the
+# submodule sets the package attribute), so bind it now
+from .craig_bampton import craig_bampton  # noqa: E402

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from liftoff.transient.errors import InputError
+from liftoff.core.errors import InputError
 
 from .craig_bampton import CBModel, validate_cb
 
@@ -37,14 +37,6 @@ class Assembly:
     @property
     def n_modal(self) -> int:
         return self.n_dof - len(self.boundary_labels)
-
-    @property
-    def dof_names(self) -> tuple[str, ...]:
-        """Names of the system DOFs: ``component:q<j>`` for modal ones, then boundary labels."""
-        names = []
-        for cb in self.components:
-            names += [f"{cb.name}:q{j}" for j in range(cb.n_modes)]
-        return tuple(names) + self.boundary_labels
 
     def component(self, name: str) -> CBModel:
         for cb in self.components:
@@ -142,3 +134,22 @@ def assemble(cb_models, name: str) -> Assembly:
     return Assembly(name=name, components=cbs, boundary_labels=tuple(boundary), M=M, K=K,
                     modal_slices=modal_slices, boundary_index=boundary_index, points=points,
                     point_coords=np.array([coords[p] for p in points]).reshape(-1, 3))
+
+
+def label_transform(assembly: Assembly, labels) -> np.ndarray:
+    """(len(labels) x n_sys_dof) map from system DOFs to physical labelled DOFs."""
+    out = np.zeros((len(labels), assembly.n_dof))
+    bpos = {lab: k for k, lab in enumerate(assembly.boundary_labels)}
+    for r, lab in enumerate(labels):
+        if lab in bpos:
+            out[r, assembly.n_modal + bpos[lab]] = 1.0
+            continue
+        hits = [cb for cb in assembly.components if lab in cb.dof_labels]
+        if not hits:
+            raise InputError(f"label {lab!r} is not a labelled DOF of assembly {assembly.name!r}")
+        if len(hits) > 1:
+            raise InputError(f"label {lab!r} is an interior DOF of both {hits[0].name!r} and "
+                             f"{hits[1].name!r}: ambiguous (make it a boundary DOF of both)")
+        cb = hits[0]
+        out[r, assembly.cb_index(cb.name)] = cb.label_transform[cb.dof_labels.index(lab)]
+    return out

@@ -11,11 +11,11 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse.linalg as spla
 
-from liftoff.transient.body import COMPONENTS
+from liftoff.core.labels import COMPONENTS
+from liftoff.core.rigid import cg_mass, nodal_rb, rb_rows
 
 from .component import Component
 from .craig_bampton import CBModel
-from .rigid import mass_properties, nodal_rb, rb_rows
 
 RB_TOL = 1e-6       # relative residual |K RB| / (|K| |RB|) accepted as rigid (round-off ~1e-12)
 DENSE_FE_LIMIT = 2000   # full FE models up to this size are eigensolved densely, else eigsh
@@ -97,7 +97,7 @@ def cb_check(cb: CBModel, component: Component | None = None, ref_point=None,
     s["rb_ok"] = bool(res.max() < RB_TOL)
     m6 = rb.T @ cb.M_B @ rb
     s["rigid_body_mass"] = m6.tolist()
-    s["mass_properties_cb"] = mass_properties(m6, ref)
+    s["mass_properties_cb"] = cg_mass(m6, ref).as_dict()
     # modal effective mass of the fixed-interface modes (unit modal mass): (C_M RB)^2
     L = cb.C_M @ rb
     eff = L**2
@@ -116,7 +116,7 @@ def cb_check(cb: CBModel, component: Component | None = None, ref_point=None,
         s["fe_rb_source"] = source
         if rbf is not None:
             m6f = rbf.T @ (component.M @ rbf)
-            s["mass_properties_fe"] = mass_properties(m6f, ref)
+            s["mass_properties_fe"] = cg_mass(m6f, ref).as_dict()
             s["fe_rb_residual"] = _rb_residual(component.K, rbf).tolist()
             s["rigid_body_mass_rel_error"] = float(np.abs(m6 - m6f).max() / np.abs(m6f).max())
         ncmp = min(ncmp, component.n_dof - 2)

@@ -18,9 +18,9 @@ format              str              "liftoff-component"
 version             int              1
 name                str              component name
 units               str              "SI"
-K_data/indices/     CSR arrays       stiffness (N/m, N/rad, N m/rad)
-  indptr/shape
-M_data/...          CSR arrays       mass (kg, kg m, kg m^2)
+K/data,indices,     CSR arrays       stiffness (N/m, N/rad, N m/rad)
+  indptr,shape
+M/data,...          CSR arrays       mass (kg, kg m, kg m^2)
 dof_labels          (n_l,) str       labels of the labelled DOFs
 label_dofs          (n_l,) int       their indices into K and M
 points              (n_p,) str       names of labelled points
@@ -28,7 +28,7 @@ point_coords        (n_p, 3)         their coordinates (m)
 nodes               (n_nodes, 3)     mesh node coordinates (m)            [optional]
 cells               (n_cells, k)     cell connectivity into nodes         [optional]
 cell_type           str              meshio cell type, e.g. "tetra"       [optional]
-field_map_*         CSR arrays       (3 n_nodes, n) DOF vector -> nodal u [optional]
+field_map/*         CSR arrays       (3 n_nodes, n) DOF vector -> nodal u [optional]
 ==================  ===============  ================================================
 """
 from __future__ import annotations
@@ -39,9 +39,9 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
-from liftoff.transient.atomic import atomic_path
-from liftoff.transient.body import split_label
-from liftoff.transient.errors import InputError
+from liftoff.core.errors import InputError
+from liftoff.core.labels import split_label
+from liftoff.core.records import read_record, write_record
 
 FORMAT = "liftoff-component"
 VERSION = 1
@@ -122,53 +122,40 @@ class Component:
         return save_component(self, path)
 
 
-def _csr_record(prefix: str, A: sp.csr_matrix) -> dict:
-    return {f"{prefix}_data": A.data, f"{prefix}_indices": A.indices,
-            f"{prefix}_indptr": A.indptr, f"{prefix}_shape": np.array(A.shape)}
+def _csr_record(A: sp.csr_matrix) -> dict:
+    return {"data": A.data, "indices": A.indices, "indptr": A.indptr, "shape": np.array(A.shape)}
 
 
-def _csr_from(prefix: str, z) -> sp.csr_matrix:
-    return sp.csr_matrix((z[f"{prefix}_data"], z[f"{prefix}_indices"], z[f"{prefix}_indptr"]),
-                         shape=tuple(z[f"{prefix}_shape"]))
+def _csr_from(g: dict) -> sp.csr_matrix:
+    return sp.csr_matrix((g["data"], g["indices"], g["indptr"]), shape=tuple(g["shape"]))
 
 
 def save_component(c: Component, path) -> Path:
     """Write atomically as .npz (temporary file + rename)."""
-    path = Path(path)
-    if path.suffix != ".npz":
-        raise InputError(f"component file {str(path)!r}: use the .npz extension")
-    rec = {"format": np.array(FORMAT), "version": np.array(VERSION), "name": np.array(c.name),
-           "units": np.array("SI"), "dof_labels": np.array(c.dof_labels, dtype="U"),
-           "label_dofs": c.label_dofs, "points": np.array(c.points, dtype="U"),
-           "point_coords": c.point_coords, **_csr_record("K", c.K), **_csr_record("M", c.M)}
+    data = {"dof_labels": np.array(c.dof_labels, dtype="U"), "label_dofs": c.label_dofs,
+            "points": np.array(c.points, dtype="U"), "point_coords": c.point_coords,
+            "K": _csr_record(c.K), "M": _csr_record(c.M)}
     if c.nodes is not None:
-        rec["nodes"] = np.asarray(c.nodes, float)
+        data["nodes"] = np.asarray(c.nodes, float)
     if c.cells is not None:
-        rec["cells"] = np.asarray(c.cells, np.int64)
-        rec["cell_type"] = np.array(c.cell_type)
+        data["cells"] = np.asarray(c.cells, np.int64)
+        data["cell_type"] = np.array(c.cell_type)
     if c.field_map is not None:
-        rec.update(_csr_record("field_map", c.field_map))
-    with atomic_path(path) as tmp, open(tmp, "wb") as fh:
-        np.savez(fh, **rec)
-    return path
+        data["field_map"] = _csr_record(c.field_map)
+    return write_record(path, FORMAT, VERSION, data, units="SI", attrs={"name": c.name}, suffixes=(".npz",))
 
 
 def load_component(path) -> Component:
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"component file not found: {str(path)!r}")
+    rec = read_record(path, FORMAT, (VERSION,), what="component file")
+    z = rec.data
     try:
-        with np.load(path, allow_pickle=False) as z:
-            if "format" not in z.files or z["format"].item() != FORMAT:
-                raise InputError(f"component file {str(path)!r}: not a {FORMAT!r} file")
-            return Component(
-                name=z["name"].item(), K=_csr_from("K", z), M=_csr_from("M", z),
-                dof_labels=tuple(z["dof_labels"]), label_dofs=z["label_dofs"],
-                points=tuple(z["points"]), point_coords=z["point_coords"],
-                nodes=z["nodes"] if "nodes" in z.files else None,
-                cells=z["cells"] if "cells" in z.files else None,
-                cell_type=z["cell_type"].item() if "cell_type" in z.files else "",
-                field_map=_csr_from("field_map", z) if "field_map_data" in z.files else None)
+        return Component(
+            name=str(rec.attrs["name"]), K=_csr_from(z["K"]), M=_csr_from(z["M"]),
+            dof_labels=tuple(z["dof_labels"]), label_dofs=z["label_dofs"],
+            points=tuple(z["points"]), point_coords=z["point_coords"],
+            nodes=z.get("nodes"), cells=z.get("cells"),
+            cell_type=str(z["cell_type"]) if "cell_type" in z else "",
+            field_map=_csr_from(z["field_map"]) if "field_map" in z else None)
     except InputError:
         raise
     except Exception as exc:

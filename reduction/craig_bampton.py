@@ -22,9 +22,9 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from liftoff.transient.atomic import atomic_path
-from liftoff.transient.body import split_label
-from liftoff.transient.errors import InputError
+from liftoff.core.errors import InputError
+from liftoff.core.labels import split_label
+from liftoff.core.records import read_record, write_record
 
 from .component import Component
 
@@ -289,40 +289,26 @@ def _check_not_floating(lam, Kii, Mii, who):
 # ---------------------------------------------------------------------------- file
 def save_cb(cb: CBModel, path, recovery: bool = True) -> Path:
     """Write a CB model atomically as .npz (no pickle). Format in docs/reduction.md."""
-    path = Path(path)
-    if path.suffix != ".npz":
-        raise InputError(f"CB model file {str(path)!r}: use the .npz extension")
-    rec = {"format": np.array(FORMAT), "version": np.array(VERSION), "units": np.array("SI"),
-           "name": np.array(cb.name), "boundary_labels": np.array(cb.boundary_labels, dtype="U"),
-           "fixed_omega": cb.fixed_omega, "M": cb.M, "K": cb.K,
-           "points": np.array(cb.points, dtype="U"), "point_coords": cb.point_coords,
-           "dof_labels": np.array(cb.dof_labels, dtype="U"), "label_transform": cb.label_transform,
-           "n_dof": np.array(cb.n_dof)}
+    data = {"boundary_labels": np.array(cb.boundary_labels, dtype="U"),
+            "fixed_omega": cb.fixed_omega, "M": cb.M, "K": cb.K,
+            "points": np.array(cb.points, dtype="U"), "point_coords": cb.point_coords,
+            "dof_labels": np.array(cb.dof_labels, dtype="U"), "label_transform": cb.label_transform,
+            "n_dof": np.array(cb.n_dof)}
     if recovery and cb.constraint_modes is not None and cb.fixed_interface_modes is not None:
-        rec["constraint_modes"] = cb.constraint_modes
-        rec["fixed_interface_modes"] = cb.fixed_interface_modes
-    with atomic_path(path) as tmp, open(tmp, "wb") as fh:
-        np.savez(fh, **rec)
-    return path
+        data["constraint_modes"] = cb.constraint_modes
+        data["fixed_interface_modes"] = cb.fixed_interface_modes
+    return write_record(path, FORMAT, VERSION, data, units="SI", attrs={"name": cb.name}, suffixes=(".npz",))
 
 
 def load_cb(path) -> CBModel:
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"CB model file not found: {str(path)!r}")
+    rec = read_record(path, FORMAT, (VERSION,), what="CB model file")
+    z = rec.data
     try:
-        with np.load(path, allow_pickle=False) as z:
-            if "format" not in z.files or z["format"].item() != FORMAT:
-                raise InputError(f"CB model file {str(path)!r}: not a {FORMAT!r} file")
-            cb = CBModel(name=z["name"].item(), boundary_labels=tuple(z["boundary_labels"]),
-                         fixed_omega=z["fixed_omega"], M=z["M"], K=z["K"], points=tuple(z["points"]),
-                         point_coords=z["point_coords"], dof_labels=tuple(z["dof_labels"]),
-                         label_transform=z["label_transform"], n_dof=int(z["n_dof"]),
-                         constraint_modes=z["constraint_modes"] if "constraint_modes" in z.files else None,
-                         fixed_interface_modes=(z["fixed_interface_modes"]
-                                                if "fixed_interface_modes" in z.files else None))
-    except InputError:
-        raise
+        cb = CBModel(name=str(rec.attrs["name"]), boundary_labels=tuple(z["boundary_labels"]),
+                     fixed_omega=z["fixed_omega"], M=z["M"], K=z["K"], points=tuple(z["points"]),
+                     point_coords=z["point_coords"], dof_labels=tuple(z["dof_labels"]),
+                     label_transform=z["label_transform"], n_dof=int(z["n_dof"]),
+                     constraint_modes=z.get("constraint_modes"), fixed_interface_modes=z.get("fixed_interface_modes"))
     except Exception as exc:
         raise InputError(f"CB model file {str(path)!r} cannot be read: {exc}") from None
     validate_cb(cb, str(path))

@@ -8,11 +8,11 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from liftoff.transient.body import COMPONENTS
-from liftoff.transient.errors import InputError
+from liftoff.core.errors import InputError
+from liftoff.core.labels import COMPONENTS
+from liftoff.core.rigid import nodal_rb
 
 from .component import Component
-from .rigid import nodal_rb
 
 
 # ----------------------------------------------------------------------------- frame

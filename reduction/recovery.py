@@ -12,30 +12,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from liftoff.transient.errors import InputError
+from liftoff.core.errors import InputError
 
-from .assembly import Assembly
+from .assembly import Assembly, label_transform
 from .component import Component
 from .system import SystemModes
-
-
-def label_transform(assembly: Assembly, labels) -> np.ndarray:
-    """(len(labels) x n_sys_dof) map from system DOFs to physical labelled DOFs."""
-    out = np.zeros((len(labels), assembly.n_dof))
-    bpos = {lab: k for k, lab in enumerate(assembly.boundary_labels)}
-    for r, lab in enumerate(labels):
-        if lab in bpos:
-            out[r, assembly.n_modal + bpos[lab]] = 1.0
-            continue
-        hits = [cb for cb in assembly.components if lab in cb.dof_labels]
-        if not hits:
-            raise InputError(f"label {lab!r} is not a labelled DOF of assembly {assembly.name!r}")
-        if len(hits) > 1:
-            raise InputError(f"label {lab!r} is an interior DOF of both {hits[0].name!r} and "
-                             f"{hits[1].name!r}: ambiguous (make it a boundary DOF of both)")
-        cb = hits[0]
-        out[r, assembly.cb_index(cb.name)] = cb.label_transform[cb.dof_labels.index(lab)]
-    return out
 
 
 def displacement_recovery(sysm: SystemModes, labels) -> np.ndarray:

@@ -13,12 +13,12 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
-
 from liftoff.transient.body import ModalBody
-from liftoff.transient.errors import InputError
 
-from .assembly import Assembly
-from .rigid import rb_rows
+from liftoff.core.errors import InputError
+from liftoff.core.rigid import rb_rows
+
+from .assembly import Assembly, label_transform
 
 RB_TOL = 1e-6         # relative K RB residual above which an assembly is not free-free
 
@@ -48,8 +48,6 @@ class SystemModes:
         DOF), participation Phi^T M RB about ref_point (eq. 14), rigid_body_mass RB^T M RB,
         all labelled points. A scalar ``zeta`` applies to the elastic modes (rigid modes get
         0); an array gives one ratio per mode."""
-        from .recovery import label_transform
-
         a = self.assembly
         labels = a.boundary_labels if labels is None else tuple(labels)
         rows = label_transform(a, labels) @ self.phi

@@ -1,13 +1,31 @@
 """Two-body modal contact transient (Prabhakar & Palermo), numpy + numba only."""
-from .body import ModalBody, ground, load_body, save_body
-from .coefficients import StepCoefficients, step_coefficients
-from .errors import ConvergenceError, InputError
-from .model import (ContactPoint, Forcing, InitialState, ModalFeedback, ModalForce, PointForce, Recovery,
-                    TabulatedForce, TransientProblem)
-from .result import TransientResult, load_result
-from .solver import estimate_step, solve, static_equilibrium, static_solution
 
-__all__ = ["ModalBody", "ground", "load_body", "save_body", "InputError", "ConvergenceError",
-           "StepCoefficients", "step_coefficients", "ContactPoint", "PointForce", "TabulatedForce", "ModalForce",
-           "ModalFeedback", "Forcing", "Recovery", "InitialState", "TransientProblem", "TransientResult",
-           "load_result", "solve", "static_equilibrium", "static_solution", "estimate_step"]
+from liftoff.core.lazy import lazy_exports
+
+_EXPORTS = {
+    "ModalBody": ".body",
+    "ground": ".body",
+    "load_body": ".body",
+    "save_body": ".body",
+    "StepCoefficients": ".coefficients",
+    "step_coefficients": ".coefficients",
+    "ConvergenceError": "liftoff.core.errors",
+    "InputError": "liftoff.core.errors",
+    "ContactPoint": ".model",
+    "Forcing": ".model",
+    "InitialState": ".model",
+    "ModalFeedback": ".model",
+    "ModalForce": ".model",
+    "PointForce": ".model",
+    "Recovery": ".model",
+    "TabulatedForce": ".model",
+    "TransientProblem": ".model",
+    "TransientResult": ".result",
+    "load_result": ".result",
+    "estimate_step": ".solver",
+    "solve": ".solver",
+    "static_equilibrium": ".solver",
+    "static_solution": ".solver",
+}
+__all__ = list(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -11,8 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from liftoff.core.errors import InputError
+
 from .body import ModalBody
-from .errors import InputError
 from .model import Forcing
 
 

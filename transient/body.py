@@ -32,27 +32,17 @@ rigid_body_mass    (6, 6)           RB^T M RB about ref_point (kg, kg m, kg m^2)
 from __future__ import annotations
 
 import os
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from .atomic import atomic_path
-from .errors import InputError
+from liftoff.core.errors import InputError
+from liftoff.core.labels import split_label
+from liftoff.core.records import read_record, write_record
 
-COMPONENTS = ("Tx", "Ty", "Tz", "Rx", "Ry", "Rz")
 FORMAT = "liftoff-modal-body"
 VERSION = 1
-_LABEL = re.compile(r"^[^:\s]+:(Tx|Ty|Tz|Rx|Ry|Rz)$")
-
-
-def split_label(label: str) -> tuple[str, int]:
-    """``'post_1:Tz'`` -> ``('post_1', 2)``; raises InputError on a malformed label."""
-    if not isinstance(label, str) or not _LABEL.match(label):
-        raise InputError(f"malformed DOF label {label!r}: expected 'point:Tx|Ty|Tz|Rx|Ry|Rz'")
-    point, comp = label.split(":")
-    return point, COMPONENTS.index(comp)
 
 
 @dataclass
@@ -169,80 +159,30 @@ def ground(name: str = "ground") -> ModalBody:
 
 
 _ARRAYS = ("omega", "zeta", "phi", "participation", "ref_point", "point_coords", "rigid_body_mass")
-
-
-def _record(body: ModalBody) -> dict:
-    rec = {k: getattr(body, k) for k in _ARRAYS}
-    rec["dof_labels"] = np.array(body.dof_labels, dtype="U")
-    rec["points"] = np.array(body.points, dtype="U")
-    return rec
+UNITS = "SI (m, kg, s, rad)"
 
 
 def save_body(body: ModalBody, path: str | os.PathLike) -> Path:
     """Write a body atomically (temporary file + rename) as .h5 or .npz."""
-    path = Path(path)
     body.validate()
-    rec = _record(body)
-    if path.suffix not in (".npz", ".h5", ".hdf5"):
-        raise InputError(f"body file {str(path)!r}: unknown extension, use .h5 or .npz")
-    with atomic_path(path) as tmp:
-        if path.suffix == ".npz":
-            with open(tmp, "wb") as fh:
-                np.savez(fh, format=np.array(FORMAT), version=np.array(VERSION),
-                         name=np.array(body.name), units=np.array("SI"), **rec)
-        else:
-            import h5py
-
-            with h5py.File(tmp, "w") as f:
-                f.attrs["format"] = FORMAT
-                f.attrs["version"] = VERSION
-                f.attrs["name"] = body.name
-                f.attrs["units"] = "SI (m, kg, s, rad)"
-                for k, v in rec.items():
-                    if v.dtype.kind == "U":
-                        f.create_dataset(k, data=v.astype(object), dtype=h5py.string_dtype())
-                    else:
-                        f.create_dataset(k, data=v)
-    return path
+    data = {k: getattr(body, k) for k in _ARRAYS}
+    data["dof_labels"] = np.array(body.dof_labels, dtype="U")
+    data["points"] = np.array(body.points, dtype="U")
+    return write_record(path, FORMAT, VERSION, data, units=UNITS, attrs={"name": body.name})
 
 
 def load_body(path: str | os.PathLike) -> ModalBody:
     """Read a body written by :func:`save_body` (or by a user's tool in the same format)."""
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"body file not found: {str(path)!r}")
-    try:
-        if path.suffix == ".npz":
-            with np.load(path, allow_pickle=False) as z:
-                data = {k: z[k] for k in z.files}
-            meta = {k: data.pop(k).item() for k in ("format", "version", "name") if k in data}
-            data.pop("units", None)
-        elif path.suffix in (".h5", ".hdf5"):
-            import h5py
-
-            with h5py.File(path, "r") as f:
-                meta = dict(f.attrs)
-                data = {}
-                for k in f.keys():
-                    v = f[k][()]
-                    if k in ("dof_labels", "points"):
-                        v = [s.decode() if isinstance(s, bytes) else str(s) for s in v]
-                    data[k] = v
-        else:
-            raise InputError(f"body file {str(path)!r}: unknown extension, use .h5 or .npz")
-    except InputError:
-        raise
-    except Exception as exc:  # corrupt file, wrong HDF5 layout ...
-        raise InputError(f"body file {str(path)!r} cannot be read: {exc}") from None
-    if meta.get("format") != FORMAT:
-        raise InputError(f"body file {str(path)!r}: format is {meta.get('format')!r}, expected {FORMAT!r}")
+    rec = read_record(path, FORMAT, (VERSION,), what="body file")
+    data = {k: v for k, v in rec.data.items() if k in _ARRAYS or k in ("dof_labels", "points")}
     missing = [k for k in ("omega", "zeta", "dof_labels", "phi", "participation") if k not in data]
     if missing:
         raise InputError(f"body file {str(path)!r}: missing dataset {missing[0]!r}")
     try:
-        return ModalBody(name=str(meta.get("name", path.stem)),
-                         dof_labels=tuple(data.pop("dof_labels")),
-                         points=tuple(data.pop("points", ())), **data)
+        return ModalBody(name=str(rec.attrs.get("name", path.stem)),
+                         dof_labels=tuple(str(s) for s in np.atleast_1d(data.pop("dof_labels"))),
+                         points=tuple(str(s) for s in np.atleast_1d(data.pop("points", ()))), **data)
     except InputError as exc:
         raise InputError(f"body file {str(path)!r}: {exc}") from None
     except (ValueError, TypeError) as exc:

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InputError
+from liftoff.core.errors import InputError
 
 _SERIES_LIMIT = 2.0  # rho*h below which the Taylor series is used (terms <= 2^k/k!)
 

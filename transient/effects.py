@@ -1,7 +1,7 @@
 """Vehicle effects of section 4 of Prabhakar & Palermo, as plain numpy functions.
 
-* geometric rigid-body shape RB of labelled DOFs about a point, and the c.g. of a
-  modal body from its rigid-body mass (eq. 14 quantities);
+* the c.g. of a modal body from its rigid-body mass (eq. 14 quantities; the rigid-body
+  kinematics themselves are liftoff.core.rigid);
 * control system (eq. 15-21): lateral gimbal forces that cancel the moment of the
   applied forces about the vehicle c.g.;
 * gravity softening (eq. 22-27): the c.g. motion matrix ERV and the softening matrix
@@ -20,46 +20,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .body import ModalBody, split_label
-from .errors import InputError
+from liftoff.core.errors import InputError
+from liftoff.core.labels import split_label
+from liftoff.core.rigid import cg_mass, rb_rows, shift_rb, skew
+
+from .body import ModalBody
 
 
-# ---------------------------------------------------------------- rigid-body shape
-def skew(v) -> np.ndarray:
-    """Cross-product matrix: skew(a) @ b == np.cross(a, b)."""
-    x, y, z = np.asarray(v, dtype=float)
-    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-
-
-def rigid_body_rows(labels, coords: dict[str, np.ndarray] | ModalBody, ref_point) -> np.ndarray:
-    """Geometric rigid-body shape RB (len(labels), 6) of labelled DOFs about ``ref_point``.
-
-    Column j is the motion of each DOF for a unit motion j (Tx Ty Tz Rx Ry Rz) of the
-    reference point; ``coords`` maps point names to coordinates (or is a ModalBody).
-    """
-    ref = np.asarray(ref_point, dtype=float)
-    rows = np.zeros((len(labels), 6))
-    for i, lab in enumerate(labels):
-        point, comp = split_label(lab)
-        if isinstance(coords, ModalBody):
-            r = coords.point_coord(point) - ref
-        else:
-            if point not in coords:
-                raise InputError(f"no coordinates for point {point!r} (label {lab!r})")
-            r = np.asarray(coords[point], dtype=float) - ref
-        if comp < 3:  # u = t + theta x r = t - skew(r) theta
-            rows[i, comp] = 1.0
-            rows[i, 3:] = -skew(r)[comp]
-        else:
-            rows[i, comp] = 1.0
-    return rows
-
-
-def shift_rb(d) -> np.ndarray:
-    """T (6x6) with RB_about(ref + d) = RB_about(ref) @ T (moving the reference point by d)."""
-    T = np.eye(6)
-    T[:3, 3:] = skew(d)
-    return T
+# ---------------------------------------------------------------- rigid-body mass
+def body_rb(body: ModalBody, labels, point) -> np.ndarray:
+    """Geometric rigid-body shape RB (len(labels), 6) of the body's labelled DOFs about ``point``."""
+    return rb_rows(labels, body.points, body.point_coords, point)
 
 
 def rigid_mass(body: ModalBody) -> np.ndarray:
@@ -71,14 +42,11 @@ def rigid_mass(body: ModalBody) -> np.ndarray:
 
 
 def center_of_gravity(body: ModalBody) -> tuple[float, np.ndarray]:
-    """(mass kg, c.g. m) from the rigid-body mass matrix (block M_tr = -m skew(cg - ref))."""
-    R = rigid_mass(body)
-    m = float(R[0, 0])
-    if not m > 0:
+    """(mass kg, c.g. m) of a body from its rigid-body mass (liftoff.core.cg_mass)."""
+    mp = cg_mass(rigid_mass(body), body.ref_point)
+    if not mp.mass > 0:
         raise InputError(f"body {body.name!r}: zero mass in its rigid-body mass matrix; no c.g.")
-    B = R[:3, 3:] / m
-    rc = np.array([B[1, 2], B[2, 0], B[0, 1]])
-    return m, body.ref_point + rc
+    return mp.mass, mp.cg
 
 
 def participation_about(body: ModalBody, point) -> np.ndarray:
@@ -98,7 +66,7 @@ def control_gimbal_matrix(body: ModalBody, gimbal_labels, cg=None) -> np.ndarray
     """
     if cg is None:
         cg = center_of_gravity(body)[1]
-    RBL_R = rigid_body_rows(gimbal_labels, body, cg)[:, 3:]
+    RBL_R = body_rb(body, gimbal_labels, cg)[:, 3:]
     if np.linalg.matrix_rank(RBL_R, tol=1e-9 * max(1.0, np.abs(RBL_R).max())) < 3:
         raise InputError("control system: the gimbal DOFs " + ", ".join(gimbal_labels)
                          + " cannot produce a moment about every axis through the c.g.")
@@ -109,7 +77,7 @@ def control_gimbal_matrix(body: ModalBody, gimbal_labels, cg=None) -> np.ndarray
 def resultant_about(body: ModalBody, labels, forces: np.ndarray, point) -> np.ndarray:
     """Resultant (..., 6: force, moment) about ``point`` of physical forces at labelled DOFs,
     P_R = RB^T P_A (eq. 15). ``forces`` has shape (..., len(labels))."""
-    RB = rigid_body_rows(labels, body, point)
+    RB = body_rb(body, labels, point)
     return np.asarray(forces, float) @ RB
 
 
@@ -137,7 +105,7 @@ def cg_motion_matrix(body: ModalBody, boundary_labels=None, cg=None) -> np.ndarr
     if cg is None:
         cg = center_of_gravity(body)[1]
     labels = list(body.dof_labels if boundary_labels is None else boundary_labels)
-    RB = rigid_body_rows(labels, body, cg)
+    RB = body_rb(body, labels, cg)
     if np.linalg.matrix_rank(RB) < 6:
         raise InputError(f"body {body.name!r}: boundary DOFs do not determine the c.g. motion "
                          "(their rigid-body shape has rank < 6)")
@@ -220,7 +188,7 @@ def cg_static_report(body_a: ModalBody, body_b: ModalBody, contacts, gravity_for
     ModalFeedback carrying KSOF."""
     from dataclasses import replace
 
-    from . import static_equilibrium
+    from .solver import static_equilibrium
 
     ERV = cg_motion_matrix(body_a, boundary_labels)
     motion = []

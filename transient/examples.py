@@ -15,8 +15,11 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from .body import COMPONENTS, ModalBody
-from .errors import InputError
+from liftoff.core.errors import InputError
+from liftoff.core.labels import COMPONENTS
+from liftoff.core.rigid import nodal_rb
+
+from .body import ModalBody
 from .model import ContactPoint
 
 _AXES = {"Tx": 0, "Ty": 1, "Tz": 2}
@@ -102,15 +105,6 @@ class Truss:
         M = np.diag(np.repeat(self.masses, 3))
         return K, M
 
-    def rigid_body_shape(self, ref_point) -> np.ndarray:
-        """RB (n_dof, 6): translations and small rotations about ref_point."""
-        RB = np.zeros((3 * len(self.names), 6))
-        for a, x in enumerate(self.coords):
-            r = x - ref_point
-            RB[3 * a:3 * a + 3, :3] = np.eye(3)
-            RB[3 * a:3 * a + 3, 3:] = -np.array([[0, -r[2], r[1]], [r[2], 0, -r[0]], [-r[1], r[0], 0]])
-        return RB
-
 
 def truss_body(truss: Truss, name: str, zeta: float = 0.02, ref_point=None, n_modes: int | None = None) -> ModalBody:
     """Exact modal body of a truss (scipy.linalg.eigh of K, M); rigid modes (omega = 0) get zeta = 0."""
@@ -122,7 +116,7 @@ def truss_body(truss: Truss, name: str, zeta: float = 0.02, ref_point=None, n_mo
         lam, Phi = lam[:n_modes], Phi[:, :n_modes]
     omega = np.sqrt(lam)
     ref = np.asarray(truss.masses @ truss.coords / truss.masses.sum() if ref_point is None else ref_point, dtype=float)
-    RB = truss.rigid_body_shape(ref)
+    RB = nodal_rb(truss.coords, ref)
     labels = tuple(f"{p}:{c}" for p in truss.names for c in COMPONENTS[:3])
     return ModalBody(name=name, omega=omega, zeta=np.where(omega > 0, zeta, 0.0), dof_labels=labels, phi=Phi,
                      participation=Phi.T @ M @ RB, ref_point=ref, points=tuple(truss.names),

@@ -11,8 +11,9 @@ from typing import Sequence
 
 import numpy as np
 
+from liftoff.core.errors import InputError
+
 from .body import ModalBody
-from .errors import InputError
 
 INF = math.inf
 

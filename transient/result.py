@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .atomic import atomic_path
-from .errors import InputError
+from liftoff.core.errors import InputError
+from liftoff.core.records import atomic_path
 
 FORMAT = "liftoff-transient-result"
 VERSION = 1

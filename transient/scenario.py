@@ -19,13 +19,29 @@ from typing import Any
 
 import numpy as np
 
+from liftoff.core.errors import InputError
+
 from .body import ModalBody, ground, load_body
-from .errors import InputError
 from .effects import softening_matrix
-from .tomlcheck import (Where, boolean as _bool, integer as _integer, number as _number, string as _string,
-                        table as _table, vector as _vector)
-from .model import (METHODS, ContactPoint, Forcing, InitialState, ModalFeedback, ModalForce, PointForce, Recovery,
-                    TabulatedForce, TransientProblem)
+from .model import (
+    METHODS,
+    ContactPoint,
+    Forcing,
+    InitialState,
+    ModalFeedback,
+    ModalForce,
+    PointForce,
+    Recovery,
+    TabulatedForce,
+    TransientProblem,
+)
+from .tomlcheck import Where
+from .tomlcheck import boolean as _bool
+from .tomlcheck import integer as _integer
+from .tomlcheck import number as _number
+from .tomlcheck import string as _string
+from .tomlcheck import table as _table
+from .tomlcheck import vector as _vector
 
 INITIAL_MODES = ("static", "zero", "given")
 

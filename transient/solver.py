@@ -7,11 +7,12 @@ import warnings
 
 import numpy as np
 
+from liftoff.core.errors import ConvergenceError, InputError
+
 from .assembly import contact_rows, feedback_factors, feedback_matrix, modal_load
 from .body import ModalBody
 from .coefficients import step_coefficients
-from .errors import ConvergenceError, InputError
-from .kernel import CYCLING, NO_CONVERGENCE, OPEN, CLOSED, SINGULAR, march
+from .kernel import CLOSED, CYCLING, NO_CONVERGENCE, OPEN, SINGULAR, march
 from .model import Forcing, InitialState, TransientProblem
 from .result import TransientResult
 

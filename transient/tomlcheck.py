@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import InputError
+from liftoff.core.errors import InputError
 
 # wordings for a vector of the wrong length ({got} entries, {length} expected)
 LENGTH_ENTRIES = "has {got} entries, expected {length}"

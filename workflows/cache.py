@@ -9,6 +9,7 @@ their own save functions; deleting the cache directory at any time is safe.
 from __future__ import annotations
 
 import hashlib
+import importlib.util
 import json
 import os
 import time
@@ -18,26 +19,33 @@ from typing import Any, Callable
 
 import numpy as np
 
-from liftoff.transient.atomic import atomic_path
+from liftoff.core.records import read_record, write_record
 
-ROOT = Path(__file__).resolve().parent.parent
 _CODE_CACHE: dict[tuple[str, ...], str] = {}
+ARRAYS_FORMAT = "liftoff-stage-arrays"
 
 
-def code_version(*parts: str) -> str:
-    """SHA-256 of the .py files under the given package dirs / files (relative to the repo)."""
-    parts = tuple(sorted(parts))
-    if parts not in _CODE_CACHE:
+def _source_files(module: str) -> list[Path]:
+    """The .py files of a module or package (``liftoff.reduction``), found without importing it."""
+    spec = importlib.util.find_spec(module)
+    if spec is None or spec.origin is None:
+        raise ModuleNotFoundError(module)
+    if spec.submodule_search_locations:
+        return sorted(f for d in spec.submodule_search_locations for f in Path(d).rglob("*.py"))
+    return [Path(spec.origin)]
+
+
+def code_version(*modules: str) -> str:
+    """SHA-256 of the source of the given modules / packages (dotted names)."""
+    modules = tuple(sorted(modules))
+    if modules not in _CODE_CACHE:
         h = hashlib.sha256()
-        for part in parts:
-            p = ROOT / part
-            files = sorted(p.rglob("*.py")) if p.is_dir() else [p]
-            for f in files:
-                if f.is_file():
-                    h.update(str(f.relative_to(ROOT)).encode())
-                    h.update(f.read_bytes())
-        _CODE_CACHE[parts] = h.hexdigest()
-    return _CODE_CACHE[parts]
+        for mod in modules:
+            for f in _source_files(mod):
+                h.update(f"{mod}:{f.name}".encode())
+                h.update(f.read_bytes())
+        _CODE_CACHE[modules] = h.hexdigest()
+    return _CODE_CACHE[modules]
 
 
 def _canonical(obj: Any) -> Any:
@@ -101,11 +109,9 @@ def default_cache_dir(out_dir: Path) -> Path:
 
 
 def save_arrays(arrays: dict, path: Path) -> None:
-    """Atomic npz write of plain arrays (no pickle)."""
-    with atomic_path(path) as tmp, open(tmp, "wb") as fh:
-        np.savez(fh, **arrays)
+    """Atomic .npz record of plain arrays (no pickle)."""
+    write_record(path, ARRAYS_FORMAT, 1, arrays, units="SI", suffixes=(".npz",))
 
 
 def load_arrays(path: Path) -> dict:
-    with np.load(path, allow_pickle=False) as z:
-        return {k: z[k] for k in z.files}
+    return read_record(path, ARRAYS_FORMAT, what="cache entry").data

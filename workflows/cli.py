@@ -112,7 +112,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit status (0 ok, 2 bad input or no convergence)."""
-    from liftoff.transient.errors import ConvergenceError, InputError
+    from liftoff.core.errors import ConvergenceError, InputError
 
     args = build_parser().parse_args(argv)
     warnings.showwarning = _show_warning

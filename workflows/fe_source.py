@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from liftoff.transient.errors import InputError
+from liftoff.core.errors import InputError
 
 
 def _dataclass(cls, kwargs: dict, where: str):
@@ -29,8 +29,16 @@ def _dataclass(cls, kwargs: dict, where: str):
 
 def geometry(params: dict, workdir: Path):
     """The meshed Geometry of one component (``params`` from pipeline._component_params)."""
-    from liftoff.meshes import (BoosterParams, OrbiterParams, PadParams, StackLayout, build_booster,
-                        build_core_stage, build_orbiter, build_pad)
+    from liftoff.meshes import (
+        BoosterParams,
+        OrbiterParams,
+        PadParams,
+        StackLayout,
+        build_booster,
+        build_core_stage,
+        build_orbiter,
+        build_pad,
+    )
 
     name = params["name"]
     lay = _dataclass(StackLayout, dict(params["stack"]), "model.vehicle.params")

@@ -23,12 +23,26 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
     import pyvista  # noqa: F401  (before dolfinx, FENICSX-NOTES.md)
-
     from liftoff.reduction import assemble, craig_bampton, interface_force_recovery, system_modes
-    from liftoff.transient import (ContactPoint, Forcing, ModalFeedback, PointForce, Recovery, TabulatedForce,
-                           TransientProblem, estimate_step, solve)
-    from liftoff.transient.effects import (center_of_gravity, cg_motion_matrix, cg_static_report, control_forces,
-                                   cryo_point_loads, softening_matrix)
+    from liftoff.transient import (
+        ContactPoint,
+        Forcing,
+        ModalFeedback,
+        PointForce,
+        Recovery,
+        TabulatedForce,
+        TransientProblem,
+        estimate_step,
+        solve,
+    )
+    from liftoff.transient.effects import (
+        center_of_gravity,
+        cg_motion_matrix,
+        cg_static_report,
+        control_forces,
+        cryo_point_loads,
+        softening_matrix,
+    )
     from liftoff.workflows.pipeline import boundary_points
     from liftoff.workflows.scenario import load_scenario
 

@@ -15,11 +15,18 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from liftoff.transient import (
+    ContactPoint,
+    Forcing,
+    ModalFeedback,
+    PointForce,
+    Recovery,
+    TabulatedForce,
+    TransientProblem,
+)
+from liftoff.transient.effects import center_of_gravity, cg_motion_matrix, control_forces, softening_matrix
 
-from liftoff.transient import (ContactPoint, Forcing, ModalFeedback, PointForce, Recovery, TabulatedForce,
-                       TransientProblem)
-from liftoff.transient.effects import (center_of_gravity, cg_motion_matrix, control_forces, softening_matrix)
-from liftoff.transient.errors import InputError
+from liftoff.core.errors import InputError
 
 from .pipeline import StackModel, cryo_loads
 from .scenario import Case

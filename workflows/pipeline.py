@@ -17,12 +17,23 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-
-from liftoff.reduction import (Assembly, CBModel, Component, SystemModes, assemble, craig_bampton,
-                       load_cb, load_component, save_component, system_modes)
-from liftoff.transient.body import COMPONENTS, ModalBody
+from liftoff.reduction import (
+    Assembly,
+    CBModel,
+    Component,
+    SystemModes,
+    assemble,
+    craig_bampton,
+    load_cb,
+    load_component,
+    save_component,
+    system_modes,
+)
+from liftoff.transient.body import ModalBody
 from liftoff.transient.effects import center_of_gravity
-from liftoff.transient.errors import InputError
+
+from liftoff.core.errors import InputError
+from liftoff.core.labels import named_points, points_labels
 
 from .cache import StageCache, load_arrays, save_arrays, stage_key
 
@@ -47,17 +58,8 @@ class StackModel:
 
 
 def boundary_points(component: Component) -> list[str]:
-    """Named points of a component (not the stick model's automatic ``<name>_n<k>`` nodes)."""
-    out = []
-    for pt in component.points:
-        head, _, tail = pt.rpartition("_n")
-        if not (head and tail.isdigit()):
-            out.append(pt)
-    return out
-
-
-def _labels(points) -> list[str]:
-    return [f"{p}:{c}" for p in points for c in COMPONENTS]
+    """Named points of a component (liftoff.core.labels.is_named_point): its CB boundary."""
+    return named_points(component.points)
 
 
 # ------------------------------------------------------------------ components
@@ -89,8 +91,8 @@ def _build_fe(params: dict, workdir: Path) -> tuple[Component, dict]:
 
 def component_stage(model: dict, name: str, cache: StageCache, workdir: Path) -> tuple[Component, dict, str]:
     params = _component_params(model, name)
-    code = ("workflows/stick.py", "reduction") if model["source"] == "stick" else \
-        ("meshes", "fem", "reduction/component.py", "workflows/fe_source.py")
+    code = ("liftoff.workflows.stick", "liftoff.reduction", "liftoff.core") if model["source"] == "stick" else \
+        ("liftoff.meshes", "liftoff.fem", "liftoff.reduction.component", "liftoff.workflows.fe_source", "liftoff.core")
     key = stage_key("component", params, code)
     thermal_path = cache.path("thermal", key, ".npz")
 
@@ -115,9 +117,9 @@ def component_stage(model: dict, name: str, cache: StageCache, workdir: Path) ->
 
 def cb_stage(model: dict, name: str, comp: Component, comp_key: str, cache: StageCache) -> tuple[CBModel, str]:
     sel = model["component"].get(name, {}) if name != "pad" else model.get("pad", {})
-    params = {"boundary": _labels(boundary_points(comp)), "n_modes": sel.get("n_modes"),
+    params = {"boundary": points_labels(boundary_points(comp)), "n_modes": sel.get("n_modes"),
               "f_max": sel.get("f_max", None if sel.get("n_modes") is not None else DEFAULT_F_MAX[name])}
-    key = stage_key("cb", params, ("reduction",), (comp_key,))
+    key = stage_key("cb", params, ("liftoff.reduction", "liftoff.core"), (comp_key,))
     cb = cache.get_or_build("cb", key, ".npz",
                             lambda: craig_bampton(comp, params["boundary"], params["n_modes"], params["f_max"]),
                             lambda out, p: out.save(p, recovery=True), load_cb, label=name)
@@ -125,7 +127,7 @@ def cb_stage(model: dict, name: str, comp: Component, comp_key: str, cache: Stag
 
 
 def modes_stage(asm: Assembly, n_rigid: int, f_max, keys: list[str], cache: StageCache, label: str) -> SystemModes:
-    key = stage_key("system", {"n_rigid": n_rigid, "f_max": f_max}, ("reduction",), tuple(keys))
+    key = stage_key("system", {"n_rigid": n_rigid, "f_max": f_max}, ("liftoff.reduction", "liftoff.core"), tuple(keys))
 
     def build():
         return system_modes(asm, n_rigid=n_rigid, f_max=f_max)

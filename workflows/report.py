@@ -13,9 +13,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-
-from liftoff.transient.atomic import atomic_path, write_text
 from liftoff.transient.effects import center_of_gravity
+
+from liftoff.core.records import atomic_path, write_text
 
 
 @dataclass

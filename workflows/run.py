@@ -14,7 +14,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from liftoff.transient.atomic import write_text
+from liftoff.core.records import write_text
 
 from .cache import StageCache, default_cache_dir
 

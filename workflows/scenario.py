@@ -21,11 +21,14 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from liftoff.transient.tomlcheck import LENGTH_NUMBERS, Where, string, vector
+from liftoff.transient.tomlcheck import boolean as _bool
+from liftoff.transient.tomlcheck import integer as _int
+from liftoff.transient.tomlcheck import number as _num
+from liftoff.transient.tomlcheck import table as _table
 
-from liftoff.transient.body import split_label
-from liftoff.transient.errors import InputError
-from liftoff.transient.tomlcheck import (LENGTH_NUMBERS, Where, boolean as _bool, integer as _int, number as _num, string,
-                                 table as _table, vector)
+from liftoff.core.errors import InputError
+from liftoff.core.labels import split_label
 
 DEFAULT_NAME = "default_scenario.toml"
 SOURCES = ("fe", "stick")

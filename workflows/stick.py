@@ -18,11 +18,11 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 import scipy.sparse as sp
-
 from liftoff.reduction.component import Component
 from liftoff.reduction.models import frame_element
-from liftoff.transient.body import COMPONENTS
-from liftoff.transient.errors import InputError
+
+from liftoff.core.errors import InputError
+from liftoff.core.labels import COMPONENTS
 
 LINK = dict(E=2.0e11, A=0.5, I=0.05, mass_per_length=500.0, link=True)   # stiff steel links (skirts, fittings)
 

@@ -18,9 +18,8 @@ clamped = build_model(Geometry("cant", path, {"solid": steel}, patches=[Patch("x
 x = static_solve(clamped, point_load(clamped, "x1", force=(0, 0, 1000.0), moment=(50.0, 0, 0)))
 # gathered mesh + field_map consistent: a rigid rotation about z gives u = (-y, x, 0) at
 # every node; the cells (first 4 nodes = vertices) tile the box volume
-from liftoff.fem.spiders import rigid_body_shape  # noqa: E402
 
-rot = rigid_body_shape(free.dof_coords, free.dof_comp)[:, 5]
+rot = free.rigid_body_shape()[:, 5]
 u = free.nodal_displacement(rot)
 fields = free.component_fields()
 v = fields["nodes"][fields["cells"][:, :4]]

@@ -6,7 +6,7 @@ import pytest
 
 from liftoff.fem import build_model, eigenmodes, static_solve
 from liftoff.meshes.spec import Geometry, Material, Patch
-from liftoff.transient.errors import InputError
+from liftoff.core.errors import InputError
 
 pytestmark = pytest.mark.fem
 STEEL = Material("steel", 2.0e11, 0.3, 7800.0)
@@ -93,7 +93,7 @@ def test_free_static_solve_needs_supports(box):
 def test_eigensolver_non_convergence_is_an_error(msh):
     """An unreachable tolerance within one iteration: ConvergenceError, not partial modes."""
     from liftoff.fem import petsc_backend as pb
-    from liftoff.transient.errors import ConvergenceError
+    from liftoff.core.errors import ConvergenceError
 
     model = build_model(Geometry("g", msh("box", L=1.0, W=0.1, H=0.1, n=(20, 2, 2)), {"solid": STEEL},
                                  clamped=["x0"]))

@@ -5,7 +5,7 @@ import pytest
 from liftoff.fem.snapshot import snapshot_mode, snapshot_png  # pyvista first (before dolfinx)
 from liftoff.fem import build_model, eigenmodes
 from liftoff.meshes.spec import Geometry, Material
-from liftoff.transient.errors import InputError
+from liftoff.core.errors import InputError
 
 pytestmark = pytest.mark.fem
 

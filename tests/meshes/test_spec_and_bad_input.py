@@ -10,7 +10,7 @@ import pytest
 from liftoff.meshes import (BoosterParams, Compartment, Geometry, Material, OrbiterParams, PadParams, Patch, PointMass,
                     SmearedMass, StackLayout, TankParams, build_booster, build_orbiter, build_pad, build_tank,
                     default_stack)
-from liftoff.transient.errors import InputError
+from liftoff.core.errors import InputError
 
 
 def _geometry(msh):

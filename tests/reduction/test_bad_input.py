@@ -75,7 +75,7 @@ def test_system_modes_bad_requests():
 def test_bad_files(tmp_path):
     p = tmp_path / "not_cb.npz"
     np.savez(p, format=np.array("something-else"))
-    with pytest.raises(InputError, match="not a 'liftoff-cb-model'"):
+    with pytest.raises(InputError, match="format is 'something-else', expected 'liftoff-cb-model'"):
         load_cb(p)
     with pytest.raises(InputError, match="not found"):
         load_cb(tmp_path / "missing.npz")

@@ -172,7 +172,7 @@ def test_band_holding_too_many_modes_is_a_clear_error(monkeypatch):
     import importlib
 
     cbm = importlib.import_module("liftoff.reduction.craig_bampton")  # the package exports a function of that name
-    from liftoff.transient.errors import InputError
+    from liftoff.core.errors import InputError
 
     monkeypatch.setattr(cbm, "BAND_MODE_LIMIT", 30)
     K, M, nodes = hex_block((3, 3, 16), (0.1, 0.1, 0.6))

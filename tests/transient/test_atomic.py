@@ -4,7 +4,7 @@ import stat
 
 import pytest
 
-from liftoff.transient.atomic import atomic_path, write_text
+from liftoff.core.records import atomic_path, write_text
 
 
 def test_success_renames_with_umask_permissions(tmp_path):

@@ -13,7 +13,7 @@ import pytest
 import scipy.linalg as sla
 
 from liftoff.transient.body import ModalBody
-from liftoff.transient.effects import rigid_body_rows
+from liftoff.core.rigid import rb_rows
 
 
 def _truss(n_levels=6, half_width=2.0, height=30.0, EA=5e9, mass_per_node=2000.0,
@@ -60,7 +60,7 @@ def modal_body_from_matrices(name, K, M, labels, names, nodes, zeta=0.01, n_mode
     if n_modes is not None:
         w2, Phi = w2[:n_modes], Phi[:, :n_modes]
     coords = dict(zip(names, nodes))
-    RB = rigid_body_rows(labels, coords, ref_point)
+    RB = rb_rows(labels, list(coords), list(coords.values()), ref_point)
     part = Phi.T @ M @ RB
     zeta_v = np.where(w2 > 0, zeta, 0.0)
     return ModalBody(name=name, omega=np.sqrt(np.maximum(w2, 0)), zeta=zeta_v, dof_labels=labels,
@@ -89,7 +89,7 @@ def rigid_column():
         names = ("base", "cg")
         coords = {"base": np.zeros(3), "cg": cg}
         labels = [f"{p}:{c}" for p in names for c in ("Tx", "Ty", "Tz", "Rx", "Ry", "Rz")]
-        phi = rigid_body_rows(labels, coords, cg) @ Phi_g
+        phi = rb_rows(labels, list(coords), list(coords.values()), cg) @ Phi_g
         part = Phi_g.T @ Mrb @ np.eye(6)  # about the c.g.
         return ModalBody(name="column", omega=np.zeros(6), zeta=np.zeros(6), dof_labels=labels,
                          phi=phi, participation=part, ref_point=cg, points=names,

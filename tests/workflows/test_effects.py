@@ -4,9 +4,9 @@ import pytest
 
 from liftoff.transient.effects import (center_of_gravity, cg_motion_matrix, control_forces,
                                control_gimbal_matrix, cryo_point_loads, load_resultant,
-                               modal_resultant_about, resultant_about, rigid_body_rows,
+                               modal_resultant_about, resultant_about, body_rb,
                                softening_matrix)
-from liftoff.transient.errors import InputError
+from liftoff.core.errors import InputError
 
 G = np.array([0.0, 0.0, -9.80665])
 GIMBALS = ["n0_0:Tx", "n0_0:Ty", "n0_2:Tx", "n0_2:Ty"]
@@ -68,7 +68,7 @@ def test_controlled_vehicle_has_no_rigid_rotation(truss_tower):
     m, cg = center_of_gravity(body)
     labels, P = _applied(body)
     FSL = control_forces(body, GIMBALS, labels, P)
-    RBc = rigid_body_rows(body.dof_labels, body, cg)
+    RBc = body_rb(body, body.dof_labels, cg)
     I_cg = (RBc.T @ M @ RBc)[3:, 3:]
     rows = [body.dof_index(l) for l in labels + GIMBALS]
     f = np.zeros((2, len(body.dof_labels)))

@@ -4,7 +4,7 @@ import tomllib
 
 import pytest
 
-from liftoff.transient.errors import InputError
+from liftoff.core.errors import InputError
 from liftoff.workflows.scenario import default_text, load_scenario, merge, parse_scenario
 
 

@@ -1,0 +1,127 @@
+"""The building plan (README, Layout): one import name, imports pointing down only.
+
+Walks every module's imports with ``ast`` (nothing is imported):
+
+* layers, lowest first: core; meshes and transient; fem and reduction; config; workflows.
+  A module may import its own layer's package and lower ones, except that meshes and fem
+  never import transient, reduction imports transient only for ModalBody, and reduction
+  never imports meshes or fem (it runs on matrices from elsewhere);
+* only meshes/ and fem/ import gmsh, dolfinx, ufl, PETSc, SLEPc or MPI;
+* no import cycle between modules (module-level imports);
+* a built wheel adds exactly one top-level import name, ``liftoff``.
+"""
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+PACKAGES = {"core": ROOT / "liftoff" / "core", "config": ROOT / "liftoff" / "config", "meshes": ROOT / "meshes",
+            "fem": ROOT / "fem", "reduction": ROOT / "reduction", "transient": ROOT / "transient",
+            "workflows": ROOT / "workflows"}
+FLOOR = {"core": 0, "meshes": 1, "transient": 1, "fem": 2, "reduction": 2, "config": 3, "workflows": 4}
+FE_STACK = {"gmsh", "dolfinx", "ufl", "basix", "ffcx", "petsc4py", "slepc4py", "mpi4py"}
+
+
+def _modules():
+    """(package, dotted module name, path) of every module of every layer."""
+    for pkg, folder in PACKAGES.items():
+        if not folder.is_dir():
+            continue
+        for f in sorted(folder.rglob("*.py")):
+            rel = f.relative_to(folder).with_suffix("")
+            parts = [] if rel.name == "__init__" and rel.parent == Path(".") else list(rel.parts)
+            if parts and parts[-1] == "__init__":
+                parts = parts[:-1]
+            yield pkg, ".".join(["liftoff", pkg, *parts]), f
+
+
+def _imports(module: str, path: Path, top_level_only: bool = False):
+    """Absolute dotted names imported by a module (relative imports resolved)."""
+    tree = ast.parse(path.read_text())
+    package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+    nodes = tree.body if top_level_only else ast.walk(tree)
+    for node in nodes:
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                yield node.lineno, a.name
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                base = base[: len(base) - node.level + 1]
+                yield node.lineno, ".".join(base + ([node.module] if node.module else []))
+            else:
+                yield node.lineno, node.module or ""
+
+
+def _layer(name: str) -> str | None:
+    parts = name.split(".")
+    if parts[0] == "liftoff" and len(parts) > 1 and parts[1] in FLOOR:
+        return parts[1]
+    return None
+
+
+def test_imports_point_down():
+    bad = []
+    for pkg, module, path in _modules():
+        for line, name in _imports(module, path):
+            target = _layer(name)
+            where = f"{path.relative_to(ROOT)}:{line} imports {name}"
+            if name.split(".")[0] in (set(PACKAGES) - {"core", "config"}):
+                bad.append(where + " (outside the liftoff namespace)")
+            if name.split(".")[0] in FE_STACK and pkg not in ("meshes", "fem"):
+                bad.append(where + " (the FE stack belongs to meshes/ and fem/)")
+            if target is None or target == pkg:
+                continue
+            ok = FLOOR[target] < FLOOR[pkg]
+            if pkg in ("meshes", "fem") and target == "transient":
+                ok = False
+            if pkg == "reduction":
+                ok = target == "core" or name in ("liftoff.transient.body", "liftoff.transient")
+            if not ok:
+                bad.append(where)
+    assert not bad, "imports against the layers:\n" + "\n".join(bad)
+
+
+def test_no_import_cycles():
+    graph = {}
+    for _, module, path in _modules():
+        graph[module] = {n for _, n in _imports(module, path, top_level_only=True) if n.startswith("liftoff.")}
+    names = set(graph)
+    for m in graph:  # 'from liftoff.x import y' may name a module liftoff.x.y: keep existing modules only
+        graph[m] = {n for n in graph[m] if n in names and n != m}
+    state, cycle = {}, []
+
+    def visit(m, stack):
+        state[m] = 1
+        for n in sorted(graph[m]):
+            if state.get(n) == 1:
+                cycle.append(stack[stack.index(n):] + [n])
+            elif n not in state:
+                visit(n, stack + [n])
+        state[m] = 2
+
+    for m in sorted(graph):
+        if m not in state:
+            visit(m, [m])
+    assert not cycle, "import cycles: " + "; ".join(" -> ".join(c) for c in cycle)
+
+
+def test_wheel_adds_one_import_name(tmp_path):
+    """`pip install` adds exactly one top-level import name: the wheel holds liftoff/ only."""
+    proc = subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "--no-build-isolation",
+                           "-w", str(tmp_path), str(ROOT)], capture_output=True, text=True, cwd=tmp_path)
+    if proc.returncode != 0:
+        pytest.fail(f"pip wheel failed: {proc.stderr[-2000:]}")
+    wheel = next(tmp_path.glob("*.whl"))
+    names = zipfile.ZipFile(wheel).namelist()
+    tops = {n.split("/")[0] for n in names if not n.split("/")[0].endswith(".dist-info")}
+    assert tops == {"liftoff"}, tops
+    for sub in ("meshes", "fem", "reduction", "transient", "workflows", "core"):
+        assert f"liftoff/{sub}/__init__.py" in names
+    assert "liftoff/workflows/default_scenario.toml" in names
