@@ -7,24 +7,11 @@ free thermal strain alpha dT I). SI units: Pa, kg/m^3, 1/K, K.
 """
 from __future__ import annotations
 
-import numpy as np
 import ufl
 
 from liftoff.core.errors import InputError
 
 from .mesh import TaggedMesh
-
-
-def check_material(volume: str, mat) -> None:
-    """InputError naming the volume and the value if E, rho or nu is not physical."""
-    E, nu, rho = float(mat.E), float(mat.nu), float(mat.rho)
-    who = f"material {getattr(mat, 'name', '?')!r} of volume {volume!r}"
-    if not np.isfinite(E) or E <= 0.0:
-        raise InputError(f"{who}: Young's modulus E = {E!r} Pa must be > 0")
-    if not np.isfinite(rho) or rho <= 0.0:
-        raise InputError(f"{who}: density rho = {rho!r} kg/m^3 must be > 0")
-    if not np.isfinite(nu) or not (-1.0 < nu < 0.5):
-        raise InputError(f"{who}: Poisson's ratio nu = {nu!r} must lie in (-1, 0.5)")
 
 
 def material_fields(tm: TaggedMesh, volumes: dict) -> tuple:
@@ -40,7 +27,7 @@ def material_fields(tm: TaggedMesh, volumes: dict) -> tuple:
         if name not in volumes:
             raise InputError(f"physical volume {name!r} of mesh {tm.path!r} has no material")
     for name, mat in volumes.items():
-        check_material(name, mat)
+        mat.check(f"volume {name!r}")        # meshes.spec.Material: the one material check
     Q = fem.FunctionSpace(tm.mesh, ("DG", 0))
     fields = {k: fem.Function(Q, name=k) for k in ("E", "nu", "rho")}
     for name, mat in volumes.items():

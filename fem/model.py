@@ -146,7 +146,9 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
 
     ``degree``: 1 or 2 (Lagrange). ``lumped_smeared_mass``: non-structural surface mass
     lumped to the nodes by row sums (P1 only: P2 row sums vanish at vertices) instead of
-    the consistent surface mass.
+    the consistent surface mass. Steps: mesh and materials, K and M (with smeared mass),
+    the role of every node (free, on a spider, clamped), the reduction x_full = T x, the
+    lumped masses, and the per-DOF description gathered on every rank.
     """
     from dolfinx import fem
 
@@ -163,7 +165,33 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
     V = fem.VectorFunctionSpace(tm.mesh, ("CG", degree))
     K = pb.assemble_matrix(stiffness_form(V, E, nu))
     M = pb.assemble_matrix(mass_form(V, rho))
-    for sm in geometry.smeared_masses:
+    _add_smeared_masses(M, V, tm, geometry.smeared_masses, lumped_smeared_mass)
+    imap = V.dofmap.index_map
+    if K.getOwnershipRange() != (3 * imap.local_range[0], 3 * imap.local_range[1]):
+        raise RuntimeError("unexpected PETSc row layout of the assembled stiffness")
+    coords = V.tabulate_dof_coordinates()[: imap.size_local + imap.num_ghosts]
+    pnames = [p.name for p in geometry.patches]
+    role = _node_roles(V, tm, pnames, [str(s) for s in geometry.clamped], comm)
+    ref_coords = np.array([np.asarray(p.ref_point, float).reshape(3) for p in geometry.patches]).reshape(-1, 3)
+    red = _reduction(V, coords, role, ref_coords, comm)
+    Kr, Mr = pb.ptap(K, red.T), pb.ptap(M, red.T)
+    K.destroy()
+    M.destroy()
+    _add_point_masses(Mr, geometry.point_masses, pnames, red.n_keep_total)
+    dof_coords, dof_comp, dof_node = _dof_table(comm, coords, red, ref_coords, imap.local_range[0])
+    nodes, cells, cell_type = _global_mesh(V, comm, coords[: imap.size_local])
+    return FEModel(name=name, comm=comm, tagged=tm, V=V, degree=degree, E=E, nu=nu, rho=rho,
+                   K=Kr, M=Mr, T=red.T, points=tuple(pnames), point_coords=ref_coords,
+                   dof_coords=dof_coords, dof_comp=dof_comp, dof_node=dof_node, nodes=nodes,
+                   cells=cells, cell_type=cell_type, clamped=tuple(str(s) for s in geometry.clamped))
+
+
+def _add_smeared_masses(M, V, tm: TaggedMesh, smeared, lumped: bool) -> None:
+    """Non-structural mass (kg) spread uniformly over surface groups, consistent or lumped."""
+    from dolfinx import fem
+
+    comm = tm.mesh.comm
+    for sm in smeared:
         if not np.isfinite(sm.mass) or sm.mass < 0:
             raise InputError(f"smeared mass on {sm.surface!r}: mass {sm.mass!r} kg must be >= 0")
         tags = _surface_tags(tm, sm.surface, "smeared mass surface")
@@ -172,67 +200,76 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
             raise InputError(f"smeared mass surface {sm.surface!r}: zero exterior area "
                              "(an interior surface cannot carry surface mass here)")
         Ms = pb.assemble_matrix(surface_mass_form(V, tags, sm.mass / area))
-        if lumped_smeared_mass:
+        if lumped:
             pb.add_row_sums_to_diagonal(M, Ms)     # P1 row sums = mass/3 per triangle vertex
         else:
             pb.add_subset(M, Ms)
 
+
+def _node_roles(V, tm: TaggedMesh, patches: list[str], clamped: list[str], comm: MPI.Comm) -> np.ndarray:
+    """Role of every local node (owned and ghost): FREE, CLAMPED or its patch number."""
     imap = V.dofmap.index_map
     n_own = imap.size_local
-    n_all = n_own + imap.num_ghosts
-    if K.getOwnershipRange() != (3 * imap.local_range[0], 3 * imap.local_range[1]):
-        raise RuntimeError("unexpected PETSc row layout of the assembled stiffness")
-    coords = V.tabulate_dof_coordinates()[:n_all]
-
-    patches = list(geometry.patches)
-    pnames = [p.name for p in patches]
-    if len(set(pnames)) != len(pnames):
-        raise InputError(f"model {name!r}: duplicate patch names in {pnames}")
-    role = np.full(n_all, FREE, dtype=np.int64)
+    role = np.full(n_own + imap.num_ghosts, FREE, dtype=np.int64)
     problem = None
     for p, patch in enumerate(patches):
-        blocks = _surface_blocks(V, tm, patch.name, "patch")
+        blocks = _surface_blocks(V, tm, patch, "patch")
         n_nodes = comm.allreduce(int(np.sum(blocks < n_own)), op=MPI.SUM)
         if n_nodes < 3:
-            raise InputError(f"patch {patch.name!r}: its surface has {n_nodes} nodes; a rigid spider needs >= 3")
+            raise InputError(f"patch {patch!r}: its surface has {n_nodes} nodes; a rigid spider needs >= 3")
         clash = role[blocks][role[blocks] >= 0]
         if clash.size and problem is None:
-            problem = (f"patches {pnames[int(clash[0])]!r} and {patch.name!r} share nodes; "
+            problem = (f"patches {patches[int(clash[0])]!r} and {patch!r} share nodes; "
                        "a node can hang on one rigid spider only")
         role[blocks] = p
     _raise_collective(comm, problem)
-    clamped = tuple(str(s) for s in geometry.clamped)
     for surface in clamped:
         blocks = _surface_blocks(V, tm, surface, "clamped surface")
         if comm.allreduce(int(np.sum(blocks < n_own)), op=MPI.SUM) == 0:
             raise InputError(f"clamped surface {surface!r} has no nodes in mesh {tm.path!r}")
         on_patch = role[blocks][role[blocks] >= 0]
         if on_patch.size and problem is None:
-            problem = (f"clamped surface {surface!r} shares nodes with patch {pnames[int(on_patch[0])]!r}; "
+            problem = (f"clamped surface {surface!r} shares nodes with patch {patches[int(on_patch[0])]!r}; "
                        "a node is either clamped or on a spider")
         role[blocks] = CLAMPED
     _raise_collective(comm, problem)
+    return role
 
-    ref_coords = np.array([np.asarray(p.ref_point, float).reshape(3) for p in patches]).reshape(-1, 3)
+
+@dataclass
+class _Reduction:
+    """x_full = T x: the independent DOFs (free nodes' translations, then 6 per patch point)."""
+
+    T: object                  # PETSc Mat, 3 n_nodes x n_dof
+    free_blocks: np.ndarray    # owned free nodes (local indices)
+    n_keep_total: int          # free translations over all ranks
+    n_dof: int
+
+
+def _reduction(V, coords: np.ndarray, role: np.ndarray, ref_coords: np.ndarray, comm: MPI.Comm) -> _Reduction:
+    """The spider/clamp transformation T (fem/spiders.py) in PETSc's rank order."""
+    n_own = V.dofmap.index_map.size_local
     role_own = role[:n_own]
     free_blocks = np.flatnonzero(role_own == FREE)
     n_keep = 3 * free_blocks.size
     offset = comm.exscan(n_keep) or 0
     n_keep_total = comm.allreduce(n_keep, op=MPI.SUM)
-    n_ref = 6 * len(patches)
+    n_ref = 6 * ref_coords.shape[0]
     n_dof = n_keep_total + n_ref
     last = comm.rank == comm.size - 1
     keep_index = np.full(n_own, -1, dtype=np.int64)
     keep_index[free_blocks] = offset + 3 * np.arange(free_blocks.size)
     T_local = transformation_rows(coords[:n_own], role_own, keep_index, ref_coords, n_keep_total, n_dof)
     T = pb.csr_matrix(comm, 3 * n_own, n_keep + (n_ref if last else 0), n_dof, T_local)
-    Kr, Mr = pb.ptap(K, T), pb.ptap(M, T)
-    K.destroy()
-    M.destroy()
+    return _Reduction(T, free_blocks, n_keep_total, n_dof)
 
-    for pm in geometry.point_masses:
-        if pm.patch not in pnames:
-            raise InputError(f"point mass {pm.name!r}: unknown patch {pm.patch!r} (has: {', '.join(pnames) or 'none'})")
+
+def _add_point_masses(Mr, point_masses, patches: list[str], ref_first_dof: int) -> None:
+    """Lumped mass and inertia (about the patch point) on the six DOFs of a patch point."""
+    for pm in point_masses:
+        if pm.patch not in patches:
+            raise InputError(f"point mass {pm.name!r}: unknown patch {pm.patch!r} "
+                             f"(has: {', '.join(patches) or 'none'})")
         J = np.asarray(pm.inertia, float).reshape(3, 3)
         if not np.isfinite(pm.mass) or pm.mass < 0:
             raise InputError(f"point mass {pm.name!r}: mass {pm.mass!r} kg must be >= 0")
@@ -241,26 +278,22 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
         block = np.zeros((6, 6))
         block[:3, :3] = pm.mass * np.eye(3)
         block[3:, 3:] = J
-        rows = n_keep_total + 6 * pnames.index(pm.patch) + np.arange(6)
-        pb.add_block(Mr, rows, block)
+        pb.add_block(Mr, ref_first_dof + 6 * patches.index(pm.patch) + np.arange(6), block)
 
-    # global per-DOF description and mesh (gathered on every rank)
-    gnode = imap.local_range[0] + free_blocks
-    loc = (np.repeat(coords[free_blocks], 3, axis=0), np.tile(np.arange(3), free_blocks.size),
-           np.repeat(gnode, 3))
-    if last and n_ref:
+
+def _dof_table(comm: MPI.Comm, coords: np.ndarray, red: _Reduction, ref_coords: np.ndarray, node0: int):
+    """(dof_coords, dof_comp, dof_node) of every independent DOF, gathered on every rank."""
+    fb = red.free_blocks
+    loc = (np.repeat(coords[fb], 3, axis=0), np.tile(np.arange(3), fb.size), np.repeat(node0 + fb, 3))
+    n_ref = 6 * ref_coords.shape[0]
+    if comm.rank == comm.size - 1 and n_ref:
         loc = (np.vstack([loc[0], np.repeat(ref_coords, 6, axis=0)]),
-               np.concatenate([loc[1], np.tile(np.arange(6), len(patches))]),
+               np.concatenate([loc[1], np.tile(np.arange(6), ref_coords.shape[0])]),
                np.concatenate([loc[2], -np.ones(n_ref, dtype=np.int64)]))
     parts = comm.allgather(loc)
-    dof_coords = np.vstack([p[0] for p in parts]).reshape(-1, 3)
-    dof_comp = np.concatenate([p[1] for p in parts]).astype(np.int64)
-    dof_node = np.concatenate([p[2] for p in parts]).astype(np.int64)
-    nodes, cells, cell_type = _global_mesh(V, comm, coords[:n_own])
-    return FEModel(name=name, comm=comm, tagged=tm, V=V, degree=degree, E=E, nu=nu, rho=rho,
-                   K=Kr, M=Mr, T=T, points=tuple(pnames), point_coords=ref_coords,
-                   dof_coords=dof_coords, dof_comp=dof_comp, dof_node=dof_node, nodes=nodes,
-                   cells=cells, cell_type=cell_type, clamped=clamped)
+    return (np.vstack([p[0] for p in parts]).reshape(-1, 3),
+            np.concatenate([p[1] for p in parts]).astype(np.int64),
+            np.concatenate([p[2] for p in parts]).astype(np.int64))
 
 
 def _global_mesh(V, comm: MPI.Comm, own_coords: np.ndarray):

@@ -1,9 +1,10 @@
 """Off-screen PNG pictures of deformed shapes (mode shapes, static or recovered fields).
 
-Plain arrays in (nodes (n, 3) m, cells, meshio cell type, displacement (n, 3)), so the
-workflow can draw Craig-Bampton-recovered fields too. The undeformed outline (feature
-edges) is drawn in grey, the deformed surface coloured by |u|, with the title and the
-displacement scale factor written on the picture. Works without a display.
+Plain arrays in (one :class:`Part` per mesh: nodes (n, 3) m, cells, meshio cell type,
+displacement (n, 3) m), so the workflow draws Craig-Bampton-recovered fields of a whole
+stack with the same function. The undeformed outline (feature edges, or the lines of a
+beam model) is drawn in grey, the deformed shape coloured by |u| on one colour scale, with
+the title and the displacement scale factor written on the picture. Works without a display.
 
 Import this module (it imports pyvista) before dolfinx: the other order aborts the
 process when a scalar bar is drawn (FENICSX-NOTES.md). If dolfinx was imported first, the
@@ -11,10 +12,12 @@ picture is rendered in a fresh Python subprocess instead (slower, but no crash).
 """
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -32,57 +35,80 @@ _VTK_TYPES = {"tetra": 10, "tetra10": 24, "triangle": 5, "triangle6": 22, "hexah
               "quad": 9, "line": 3, "wedge": 13}
 
 
-def auto_scale(nodes: np.ndarray, displacement: np.ndarray, fraction: float = 0.1) -> float:
-    """Scale factor that makes the largest displacement ``fraction`` of the model size."""
-    size = float(np.linalg.norm(nodes.max(axis=0) - nodes.min(axis=0)))
-    umax = float(np.linalg.norm(displacement, axis=1).max())
+@dataclass
+class Part:
+    """One mesh in a picture: nodes (n, 3) m, cells (meshio ``cell_type``), displacement (n, 3) m."""
+
+    nodes: np.ndarray
+    cells: np.ndarray
+    cell_type: str
+    displacement: np.ndarray
+
+    def __post_init__(self) -> None:
+        self.nodes = np.asarray(self.nodes, float).reshape(-1, 3)
+        self.cells = np.asarray(self.cells, np.int64)
+        self.displacement = np.asarray(self.displacement, float).reshape(-1, 3)
+        if self.cell_type not in _VTK_TYPES:
+            raise InputError(f"snapshot: cell type {self.cell_type!r} not supported ({', '.join(_VTK_TYPES)})")
+        if self.displacement.shape[0] != self.nodes.shape[0]:
+            raise InputError(f"snapshot: displacement has {self.displacement.shape[0]} rows, "
+                             f"mesh has {self.nodes.shape[0]} nodes")
+        if not np.all(np.isfinite(self.displacement)):
+            raise InputError("snapshot: displacement contains NaN or inf")
+
+    def grid(self) -> "pyvista.UnstructuredGrid":
+        k = self.cells.shape[1]
+        conn = np.hstack([np.full((self.cells.shape[0], 1), k), self.cells]).ravel()
+        types = np.full(self.cells.shape[0], _VTK_TYPES[self.cell_type], dtype=np.uint8)
+        return pyvista.UnstructuredGrid(conn, types, self.nodes)
+
+
+def auto_scale(parts: list[Part], fraction: float = 0.1) -> float:
+    """Scale factor that makes the largest displacement ``fraction`` of the largest extent."""
+    size = max(float(np.ptp(np.vstack([p.nodes for p in parts]), axis=0).max()), 1e-9)
+    umax = max(float(np.linalg.norm(p.displacement, axis=1).max()) for p in parts)
     return fraction * size / umax if umax > 0 else 1.0
 
 
-def grid(nodes: np.ndarray, cells: np.ndarray, cell_type: str) -> "pyvista.UnstructuredGrid":
-    if cell_type not in _VTK_TYPES:
-        raise InputError(f"snapshot: cell type {cell_type!r} not supported ({', '.join(_VTK_TYPES)})")
-    cells = np.asarray(cells, np.int64)
-    k = cells.shape[1]
-    conn = np.hstack([np.full((cells.shape[0], 1), k), cells]).ravel()
-    types = np.full(cells.shape[0], _VTK_TYPES[cell_type], dtype=np.uint8)
-    return pyvista.UnstructuredGrid(conn, types, np.asarray(nodes, float))
-
-
-def snapshot_png(path, nodes: np.ndarray, cells: np.ndarray, cell_type: str, displacement: np.ndarray,
-                 title: str = "", scale: float | None = None, window_size=(1024, 768),
-                 view: str = "iso") -> Path:
-    """Write a PNG of the deformed shape; returns the path. ``scale=None``: auto (10 % of size)."""
+def snapshot_png(path, parts: Part | list[Part], title: str = "", scale: float | None = None, *,
+                 fraction: float = 0.1, note: str = "", window_size=(1024, 768), view: str = "iso",
+                 azimuth: float = 0.0, elevation: float = 0.0) -> Path:
+    """Write a PNG of the deformed parts; returns the path. ``scale=None``: the largest
+    displacement drawn as ``fraction`` of the model size. ``view``: iso, xy, xz or yz, then
+    turned by ``azimuth`` and ``elevation`` (degrees). Line cells are drawn as thick lines."""
     path = Path(path)
     if path.suffix.lower() != ".png":
         raise InputError(f"snapshot: {str(path)!r} must end in .png")
-    nodes = np.asarray(nodes, float)
-    u = np.asarray(displacement, float).reshape(-1, 3)
-    if u.shape[0] != nodes.shape[0]:
-        raise InputError(f"snapshot: displacement has {u.shape[0]} rows, mesh has {nodes.shape[0]} nodes")
-    if not np.all(np.isfinite(u)):
-        raise InputError("snapshot: displacement contains NaN or inf")
+    if view not in ("iso", "xy", "xz", "yz"):
+        raise InputError(f"snapshot: view {view!r} must be iso, xy, xz or yz")
+    parts = [parts] if isinstance(parts, Part) else list(parts)
     if scale is None:
-        scale = auto_scale(nodes, u)
+        scale = auto_scale(parts, fraction)
     if not _RENDER_IN_PROCESS:
-        return _render_in_subprocess(path, nodes, cells, cell_type, u, title, scale, window_size, view)
-    base = grid(nodes, cells, cell_type)
-    deformed = base.copy()
-    deformed.points = nodes + scale * u
-    deformed.point_data["|u| (m)"] = np.linalg.norm(u, axis=1)
+        return _render_in_subprocess(path, parts, dict(title=title, scale=scale, note=note, window_size=window_size,
+                                                       view=view, azimuth=azimuth, elevation=elevation))
+    umax = max(float(np.linalg.norm(p.displacement, axis=1).max()) for p in parts)
     pl = pyvista.Plotter(off_screen=True, window_size=list(window_size))
     pl.set_background("white")
-    pl.add_mesh(base.extract_feature_edges(), color="grey", line_width=1)
-    pl.add_mesh(deformed, scalars="|u| (m)", cmap="viridis", show_edges=False,
-                scalar_bar_args={"title": "|u| (m)", "color": "black"})
-    pl.add_text(title, position="upper_left", font_size=12, color="black")
-    pl.add_text(f"displacement scale x {scale:.3g}", position="lower_left", font_size=10, color="black")
+    bar = {"title": "|u| (m)", "color": "black"}
+    for part in parts:
+        base = part.grid()
+        deformed = base.copy()
+        deformed.points = part.nodes + scale * part.displacement
+        deformed.point_data["|u| (m)"] = np.linalg.norm(part.displacement, axis=1)
+        line = part.cell_type == "line"
+        pl.add_mesh(base if line else base.extract_feature_edges(), color="lightgrey", line_width=2 if line else 1)
+        pl.add_mesh(deformed, scalars="|u| (m)", cmap="viridis", clim=[0, umax or 1], scalar_bar_args=bar,
+                    **({"line_width": 6} if line else {}))
+    pl.add_text(title, position="upper_left", font_size=11, color="black")
+    pl.add_text(f"displacement scale x {scale:.3g}, max |u| = {umax:.3g} m" + (f" ({note})" if note else ""),
+                position="lower_left", font_size=9, color="black")
     if view == "iso":
         pl.view_isometric()
-    elif view in ("xy", "xz", "yz"):
-        getattr(pl, f"view_{view}")()
     else:
-        raise InputError(f"snapshot: view {view!r} must be iso, xy, xz or yz")
+        getattr(pl, f"view_{view}")()
+    pl.camera.azimuth += azimuth
+    pl.camera.elevation += elevation
     try:
         with atomic_path(path, suffix=".png") as tmp:
             pl.screenshot(str(tmp))
@@ -97,19 +123,20 @@ def snapshot_mode(path, model, modes, j: int, scale: float | None = None) -> Pat
     if model.comm.rank != 0:
         return None
     title = f"{model.name}: mode {j + 1}, {modes.freq_hz[j]:.4g} Hz"
-    return snapshot_png(path, model.nodes, model.cells, model.cell_type, u, title, scale)
+    return snapshot_png(path, Part(model.nodes, model.cells, model.cell_type, u), title, scale)
 
 
-def _render_in_subprocess(path, nodes, cells, cell_type, u, title, scale, window_size, view) -> Path:
+def _render_in_subprocess(path: Path, parts: list[Part], options: dict) -> Path:
     """Render in a fresh interpreter (no dolfinx there); arrays passed through an .npz."""
-    path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, npz = tempfile.mkstemp(dir=path.parent, suffix=".snapshot.npz")
     os.close(fd)
     try:
-        np.savez(npz, nodes=nodes, cells=np.asarray(cells, np.int64), cell_type=np.array(cell_type),
-                 u=u, title=np.array(title), scale=np.array(float(scale)),
-                 window_size=np.asarray(window_size, np.int64), view=np.array(view), path=np.array(str(path)))
+        arrays = {"path": np.array(str(path)), "options": np.array(json.dumps(options))}
+        for k, p in enumerate(parts):
+            arrays.update({f"nodes_{k}": p.nodes, f"cells_{k}": p.cells, f"cell_type_{k}": np.array(p.cell_type),
+                           f"u_{k}": p.displacement})
+        np.savez(npz, **arrays)
         res = subprocess.run([sys.executable, "-m", "liftoff.fem.snapshot", npz], capture_output=True, text=True)
         if res.returncode != 0 or not path.is_file():
             raise RuntimeError(f"snapshot subprocess failed ({res.returncode}): {res.stderr[-1000:]}")
@@ -118,7 +145,15 @@ def _render_in_subprocess(path, nodes, cells, cell_type, u, title, scale, window
     return path
 
 
-if __name__ == "__main__":      # subprocess renderer: python -m liftoff.fem.snapshot args.npz
-    with np.load(sys.argv[1], allow_pickle=False) as z:
-        snapshot_png(z["path"].item(), z["nodes"], z["cells"], z["cell_type"].item(), z["u"],
-                     z["title"].item(), float(z["scale"]), tuple(z["window_size"]), z["view"].item())
+def _main(npz: str) -> None:
+    """Subprocess renderer: ``python -m liftoff.fem.snapshot args.npz``."""
+    with np.load(npz, allow_pickle=False) as z:
+        n = sum(1 for k in z.files if k.startswith("nodes_"))
+        parts = [Part(z[f"nodes_{k}"], z[f"cells_{k}"], z[f"cell_type_{k}"].item(), z[f"u_{k}"]) for k in range(n)]
+        options = json.loads(z["options"].item())
+        options["window_size"] = tuple(options["window_size"])
+        snapshot_png(z["path"].item(), parts, **options)
+
+
+if __name__ == "__main__":
+    _main(sys.argv[1])

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 from liftoff.transient.effects import center_of_gravity
 
-from liftoff.core.records import atomic_path, write_text
+from liftoff.core.records import write_text
 
 
 @dataclass
@@ -223,9 +223,10 @@ def snapshot_times(result, cp) -> dict[str, int]:
     return out
 
 
-def deformed_fields(stack, result, i: int) -> list[tuple[np.ndarray, np.ndarray, str, np.ndarray]]:
-    """(nodes, cells, cell_type, displacement) of every component at step i, elastic part
-    of the vehicle only (its rigid-body motion removed, so the picture stays on the pad)."""
+def deformed_fields(stack, result, i: int) -> list:
+    """One fem.snapshot.Part per component at step i, elastic part of the vehicle only (its
+    rigid-body motion removed, so the picture stays on the pad)."""
+    from liftoff.fem.snapshot import Part
     from liftoff.reduction import field_recovery
 
     out = []
@@ -239,49 +240,8 @@ def deformed_fields(stack, result, i: int) -> list[tuple[np.ndarray, np.ndarray,
             u = field_recovery(stack.pad_asm, stack.pad_modes, name, comp) @ qb
         else:
             u = field_recovery(stack.vehicle_asm, stack.vehicle_modes, name, comp) @ qa
-        out.append((comp.nodes, comp.cells, comp.cell_type, u.reshape(-1, 3)))
+        out.append(Part(comp.nodes, comp.cells, comp.cell_type, u.reshape(-1, 3)))
     return out
-
-
-def snapshot(path: Path, parts, title: str, scale: float | None = None) -> tuple[Path, float]:
-    """Off-screen PNG of the deformed stack and pad (pyvista), undeformed outline in grey."""
-    import pyvista
-
-    pyvista.OFF_SCREEN = True
-    vtk_type = {"tetra": 10, "tetra10": 24, "line": 3, "triangle": 5, "hexahedron": 12}
-    size = max(float(np.ptp(np.vstack([p[0] for p in parts]), axis=0).max()), 1e-9)
-    umax = max(float(np.linalg.norm(p[3], axis=1).max()) for p in parts)
-    if scale is None:
-        scale = 0.03 * size / umax if umax > 0 else 1.0
-    pl = pyvista.Plotter(off_screen=True, window_size=[900, 1100])
-    pl.set_background("white")
-    for nodes, cells, ctype, u in parts:
-        cells = np.asarray(cells, np.int64)
-        conn = np.hstack([np.full((cells.shape[0], 1), cells.shape[1]), cells]).ravel()
-        g = pyvista.UnstructuredGrid(conn, np.full(cells.shape[0], vtk_type[ctype], np.uint8), nodes)
-        d = g.copy()
-        d.points = nodes + scale * u
-        d.point_data["|u| (m)"] = np.linalg.norm(u, axis=1)
-        if ctype == "line":
-            pl.add_mesh(g, color="lightgrey", line_width=2)
-            pl.add_mesh(d, scalars="|u| (m)", cmap="viridis", line_width=6, clim=[0, umax or 1],
-                        scalar_bar_args={"title": "|u| (m)", "color": "black"})
-        else:
-            pl.add_mesh(g.extract_feature_edges(), color="lightgrey", line_width=1)
-            pl.add_mesh(d, scalars="|u| (m)", cmap="viridis", clim=[0, umax or 1],
-                        scalar_bar_args={"title": "|u| (m)", "color": "black"})
-    pl.add_text(title, position="upper_left", font_size=11, color="black")
-    pl.add_text(f"displacement scale x {scale:.3g} (elastic part; max |u| = {umax:.3g} m)",
-                position="lower_left", font_size=9, color="black")
-    pl.view_yz()                   # looking along -x: the orbiter (+y) and the twang plane in view
-    pl.camera.azimuth = 35
-    pl.camera.elevation = 12
-    try:
-        with atomic_path(path, suffix=".png") as tmp:
-            pl.screenshot(str(tmp))
-    finally:
-        pl.close()
-    return path, scale
 
 
 TITLES = {"max_twang": "maximum twang", "release": "hold-down release",
@@ -289,14 +249,18 @@ TITLES = {"max_twang": "maximum twang", "release": "hold-down release",
 
 
 def snapshots(stack, result, cp, out: Path, case: str) -> list[Path]:
+    from liftoff.fem.snapshot import snapshot_png
+
     paths = []
     for what, i in snapshot_times(result, cp).items():
         parts = deformed_fields(stack, result, i)
         if not parts:
             break
-        p, _ = snapshot(out / f"snapshot_{what}_{case}.png", parts,
-                        f"{case}: {TITLES.get(what, what)} at t = {result.time[i]:.3f} s")
-        paths.append(p)
+        # looking along -x: the orbiter (+y) and the twang plane in view
+        paths.append(snapshot_png(out / f"snapshot_{what}_{case}.png", parts,
+                                  f"{case}: {TITLES.get(what, what)} at t = {result.time[i]:.3f} s",
+                                  fraction=0.03, note="elastic part", window_size=(900, 1100), view="yz",
+                                  azimuth=35, elevation=12))
     return paths
 
 

@@ -50,8 +50,8 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
     out.mkdir(parents=True, exist_ok=True)
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     want_pics = snapshots and any(c.output["snapshots"] for c in sc.cases)
-    if want_pics:  # pyvista before dolfinx (FENICSX-NOTES.md)
-        import pyvista  # noqa: F401
+    if want_pics:  # pyvista (imported by fem.snapshot) before dolfinx (FENICSX-NOTES.md)
+        import liftoff.fem.snapshot  # noqa: F401
     cache = StageCache(None if cache_dir is False else Path(cache_dir) if cache_dir else default_cache_dir(out))
     stage_times: list[tuple[str, float]] = []
     stacks: dict[str, object] = {}

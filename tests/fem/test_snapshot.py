@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from liftoff.fem.snapshot import snapshot_mode, snapshot_png  # pyvista first (before dolfinx)
+from liftoff.fem.snapshot import Part, snapshot_mode, snapshot_png  # pyvista first (before dolfinx)
 from liftoff.fem import build_model, eigenmodes
 from liftoff.meshes.spec import Geometry, Material
 from liftoff.core.errors import InputError
@@ -34,12 +34,14 @@ def test_snapshot_from_plain_arrays_and_bad_input(tmp_path):
     nodes = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]])
     cells = np.array([[0, 1, 2, 3]])
     u = np.array([[0, 0, 0], [0, 0, 0.1], [0, 0, 0.05], [0.02, 0, 0]])
-    p = snapshot_png(tmp_path / "tet.png", nodes, cells, "tetra", u, title="one tet", scale=2.0)
+    p = snapshot_png(tmp_path / "tet.png", Part(nodes, cells, "tetra", u), title="one tet", scale=2.0)
     assert _image_stats(p)[1] > 0.02
+    beam = Part(nodes[:2], np.array([[0, 1]]), "line", u[:2])           # a stick model beside a solid
+    assert _image_stats(snapshot_png(tmp_path / "two.png", [Part(nodes, cells, "tetra", u), beam]))[1] > 0.02
     with pytest.raises(InputError, match="displacement has 3 rows"):
-        snapshot_png(tmp_path / "x.png", nodes, cells, "tetra", u[:3])
+        Part(nodes, cells, "tetra", u[:3])
     with pytest.raises(InputError, match="must end in .png"):
-        snapshot_png(tmp_path / "x.jpg", nodes, cells, "tetra", u)
+        snapshot_png(tmp_path / "x.jpg", Part(nodes, cells, "tetra", u))
 
 
 def test_snapshot_after_dolfinx_import_renders_in_subprocess(tmp_path):
@@ -52,10 +54,10 @@ def test_snapshot_after_dolfinx_import_renders_in_subprocess(tmp_path):
 
     root = Path(__file__).resolve().parents[2]
     code = ("import dolfinx, numpy as np\n"
-            "from liftoff.fem.snapshot import snapshot_png, _RENDER_IN_PROCESS\n"
+            "from liftoff.fem.snapshot import Part, snapshot_png, _RENDER_IN_PROCESS\n"
             "assert not _RENDER_IN_PROCESS\n"
             "n = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]])\n"
-            f"snapshot_png({str(tmp_path / 'late.png')!r}, n, np.array([[0, 1, 2, 3]]), 'tetra', 0.1 * n, 'late')\n")
+            f"snapshot_png({str(tmp_path / 'late.png')!r}, Part(n, np.array([[0, 1, 2, 3]]), 'tetra', 0.1 * n), 'late')\n")
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=root,
                          env=dict(os.environ, PYTHONPATH=str(root)), timeout=120)
     assert res.returncode == 0, res.stderr[-1500:]

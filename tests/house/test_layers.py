@@ -13,6 +13,7 @@ Walks every module's imports with ``ast`` (nothing is imported):
 from __future__ import annotations
 
 import ast
+import shutil
 import subprocess
 import sys
 import zipfile
@@ -24,6 +25,7 @@ ROOT = Path(__file__).resolve().parents[2]
 PACKAGES = {"core": ROOT / "liftoff" / "core", "config": ROOT / "liftoff" / "config", "meshes": ROOT / "meshes",
             "fem": ROOT / "fem", "reduction": ROOT / "reduction", "transient": ROOT / "transient",
             "workflows": ROOT / "workflows"}
+PACKAGES_DIRS = ("liftoff", "meshes", "fem", "reduction", "transient", "workflows")
 FLOOR = {"core": 0, "meshes": 1, "transient": 1, "fem": 2, "reduction": 2, "config": 3, "workflows": 4}
 FE_STACK = {"gmsh", "dolfinx", "ufl", "basix", "ffcx", "petsc4py", "slepc4py", "mpi4py"}
 
@@ -113,9 +115,14 @@ def test_no_import_cycles():
 
 
 def test_wheel_adds_one_import_name(tmp_path):
-    """`pip install` adds exactly one top-level import name: the wheel holds liftoff/ only."""
+    """`pip install` adds exactly one top-level import name: the wheel holds liftoff/ only.
+    Built from a copy of the sources, so that setuptools' build/ folder stays out of the tree."""
+    src = tmp_path / "src"
+    src.mkdir()
+    for name in ("pyproject.toml", "README.md", *PACKAGES_DIRS):
+        (shutil.copytree if (ROOT / name).is_dir() else shutil.copy)(ROOT / name, src / name)
     proc = subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "--no-build-isolation",
-                           "-w", str(tmp_path), str(ROOT)], capture_output=True, text=True, cwd=tmp_path)
+                           "-w", str(tmp_path), str(src)], capture_output=True, text=True, cwd=tmp_path)
     if proc.returncode != 0:
         pytest.fail(f"pip wheel failed: {proc.stderr[-2000:]}")
     wheel = next(tmp_path.glob("*.whl"))

@@ -44,9 +44,9 @@ def test_sidecar_round_trip_and_relocation(tmp_path):
 
 
 @pytest.mark.parametrize("make, culprit", [
-    (lambda: Material("x", 0.0, 0.3, 1.0), "E must be > 0"),
-    (lambda: Material("x", 1e9, 0.5, 1.0), "nu must be in"),
-    (lambda: Material("x", 1e9, 0.3, -1.0), "rho must be > 0"),
+    (lambda: Material("x", 0.0, 0.3, 1.0), "E = 0.0 Pa must be > 0"),
+    (lambda: Material("x", 1e9, 0.5, 1.0), "nu = 0.5 must be in"),
+    (lambda: Material("x", 1e9, 0.3, -1.0), "rho = -1.0 kg/m\\^3 must be > 0"),
     (lambda: Patch("bad name", [0, 0, 0]), "bad name"),
     (lambda: Patch("p", [0, 0]), "ref_point"),
     (lambda: PointMass("m", "p", 0.0), "mass must be > 0"),
