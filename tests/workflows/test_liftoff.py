@@ -12,7 +12,7 @@ from liftoff.transient import Forcing, PointForce, solve, static_solution
 from liftoff.workflows.cache import StageCache
 from liftoff.workflows.loads import build_problem, table1
 from liftoff.workflows.pipeline import build_stack
-from liftoff.workflows.scenario import default_text, parse_scenario
+from liftoff.config import default_text, parse_scenario
 
 
 # the default scenario on a coarse stick model (6 m beam elements): fast, no dolfinx
