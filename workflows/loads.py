@@ -87,7 +87,10 @@ def applied_forces(case: Case, stack: StackModel) -> tuple[list[PointForce], lis
             if d != 0.0:
                 tables.append(TabulatedForce("a", f"{e.mount}:{c}", t, d * v))
     for i, f in enumerate(case.forces):
-        _check_labels(stack.vehicle, [f.label], (Where(case.source, "force") / i).named(f.label) / "label")
+        try:
+            stack.vehicle.dof_index(f.label)
+        except InputError as exc:
+            raise ((Where(case.source, "force") / i).named(f.label) / "label").wrap(exc) from None
         (constant if f.time is None else tables).append(f.on("a"))
     return constant, tables
 
@@ -113,7 +116,10 @@ def control_table(case: Case, stack: StackModel, tables: list[TabulatedForce],
     for pf in constant:
         P[:, labels.index(pf.label)] += pf.value
     gimbals = list(ctl.gimbals)
-    F = control_forces(body, gimbals, labels, P) if labels else np.zeros((grid.size, len(gimbals)))
+    try:
+        F = control_forces(body, gimbals, labels, P) if labels else np.zeros((grid.size, len(gimbals)))
+    except InputError as exc:
+        raise Where(case.source, "control.gimbals").wrap(exc) from None
     if np.isfinite(start):
         on = np.clip((grid - start) / max(ramp, 1e-6), 0.0, 1.0)
         F = F * on[:, None]
@@ -126,7 +132,10 @@ def softening(case: Case, stack: StackModel, soft: Softening | None = None) -> M
     soft = soft or case.softening
     if soft.labels is not None:
         _check_labels(stack.vehicle, soft.labels, Where(case.source, "softening.labels"))
-    return soft.feedback(stack.vehicle, case.gravity)
+    try:
+        return soft.feedback(stack.vehicle, case.gravity)
+    except InputError as exc:
+        raise Where(case.source, "softening").wrap(exc) from None
 
 
 def _attach_component(stack: StackModel, point: str, where: Where) -> str:

@@ -174,3 +174,25 @@ def test_fe_scenario_end_to_end_coarse(tmp_path, capsys, monolithic):
     errs = monolithic.errors(build_problem(case, stack, progress=False).problem, (2, 4))
     print(f"FE bolted phase vs monolithic: max error / peak post force at h0/2, h0/4: {errs}")
     assert errs[0] < 1e-5 and errs[0] / errs[1] > 3.0
+
+
+def test_step_by_step_script_is_what_run_does(tmp_path, capsys):
+    """workflows/liftoff_step_by_step.py (stick) calls the model and loads functions of `liftoff
+    run`: its post forces equal those of build_stack + build_problem on the same case. Same
+    functions on the same inputs, so equal up to BLAS summation order (1e-9 of the peak)."""
+    from liftoff.transient import solve
+    from liftoff.workflows import liftoff_step_by_step as sbs
+    from liftoff.workflows.cache import StageCache
+    from liftoff.workflows.loads import build_problem
+    from liftoff.workflows.pipeline import build_stack
+
+    sbs.main(["--stick", "--out", str(tmp_path)])
+    text = capsys.readouterr().out
+    assert "gravity + softening + cryo" in text and "left forward attach" in text
+    res = load_result(tmp_path / "results.h5")
+    case = sbs._scenario(True)
+    stack = build_stack(case.model, StageCache(None), progress=False)
+    ref = solve(replace(build_problem(case, stack, progress=False).problem, progress=False))
+    assert res.contact_force.shape == ref.contact_force.shape
+    np.testing.assert_allclose(res.contact_force, ref.contact_force, rtol=0,
+                               atol=1e-9 * np.abs(ref.contact_force).max())
