@@ -187,12 +187,22 @@ def _stick_builders(where: Where, layout: StackLayout, sel: dict[str, dict], spe
     return {name: stick for name in NAMES}
 
 
+# keys of the stick model's [model.vehicle.params] (workflows.stick.StackParams) before the
+# layout was shared: where they are now
+_OLD_STICK = {"holddown_radius": "[model.vehicle.params] srb_skirt_radius - srb_skirt_thickness / 2",
+              "pad_mass": "[model.pad.params] mlp_mass", "deck_top_z": "[model.pad.params] post_height (deck top "
+              "at z = -post_height)", "deck_thickness": "[model.pad.params] deck_thickness",
+              "pedestal_height": "[model.pad.params] pedestal_height", "pedestal_xy": "[model.pad.params] pedestal_xy"}
+
+
 def _layout(where: Where, spec: Any, source: str) -> StackLayout:
     if source == "stick" and isinstance(spec, dict):
         stick_only = {f.name for f in dataclasses.fields(StickParams)} - {f.name for f in dataclasses.fields(StackLayout)}
         for key in spec:
             if key in stick_only:
                 raise (where / key).error("a stick-model parameter (StickParams): write it in [model.stick]")
+            if key in _OLD_STICK:
+                raise (where / key).error(f"the stick model takes this from {_OLD_STICK[key]}")
     return builder(where, StackLayout, spec)
 
 

@@ -197,6 +197,8 @@ def test_stick_model_parameters(base):
            ({"stick": {"lox_bottom_z": 80.0}}, "model.stick: StickParams.lox_bottom_z = 80.0 m is not between"),
            ({"vehicle": {"params": {"srb_mass": 1.0}}}, "model.vehicle.params.srb_mass: a stick-model parameter "
                                                         "(StickParams): write it in [model.stick]"),
+           ({"vehicle": {"params": {"pad_mass": 3e6}}}, "model.vehicle.params.pad_mass: the stick model takes this "
+                                                        "from [model.pad.params] mlp_mass"),
            ({"component": {"core": {"params": {"core_wall": 0.02}}}}, "model.component.core.params: the stick source "
                                                                       "takes no per-component parameters"),
            ({"materials": {"core_wall": {"E": 7e10, "nu": 0.3, "rho": 2800.0}}},
