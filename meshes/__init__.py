@@ -12,6 +12,7 @@ from liftoff.core.lazy import lazy_exports
 _EXPORTS = {
     "StackLayout": ".layout",
     "PadParams": ".pad",
+    "StickParams": ".stick",
     "build_pad": ".pad",
     "default_pad": ".pad",
     "Geometry": ".spec",

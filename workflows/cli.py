@@ -60,9 +60,9 @@ def _add_transient(sub: argparse._SubParsersAction) -> None:
 
 
 def _run_transient(args: argparse.Namespace) -> int:
-    from liftoff.transient.scenario import load_scenario
+    from liftoff.config import load_twobody
 
-    scenario = load_scenario(args.scenario, method=args.method, progress=not args.no_progress)
+    scenario = load_twobody(args.scenario, method=args.method, progress=not args.no_progress)
     from liftoff.transient import solve
 
     out = _prepare_out(args.out)

@@ -24,12 +24,15 @@ from liftoff.transient import (
     TabulatedForce,
     TransientProblem,
 )
-from liftoff.transient.effects import center_of_gravity, cg_motion_matrix, control_forces, softening_matrix
+from liftoff.transient.effects import center_of_gravity, cg_motion_matrix, control_forces
 
+from liftoff.config.scenario import Case
+from liftoff.config.sections import Softening
+from liftoff.config.values import Where
 from liftoff.core.errors import InputError
+from liftoff.core.labels import named_points
 
 from .pipeline import StackModel, cryo_loads
-from .scenario import Case
 
 XYZ = ("Tx", "Ty", "Tz")
 SIX = ("Tx", "Ty", "Tz", "Rx", "Ry", "Rz")
@@ -48,36 +51,48 @@ class CaseProblem:
     gravity_only: Forcing | None = None
 
 
-def _check_point(body, point: str, where: str) -> None:
+def _check_point(body, point: str, where: Where) -> None:
     if point not in body.points:
-        raise InputError(f"{where}: point {point!r} is not on the {body.name} model "
-                         f"(named points: {', '.join(p for p in body.points if '_n' not in p)[:300]})")
+        raise where.error(f"point {point!r} is not on the {body.name} model "
+                          f"(named points: {', '.join(named_points(body.points))[:300]})")
+
+
+def _check_labels(body, labels, where: Where) -> None:
+    for j, lab in enumerate(labels):
+        try:
+            body.dof_index(lab)
+        except InputError as exc:
+            raise (where / j).wrap(exc) from None
 
 
 def contacts(case: Case, stack: StackModel) -> list[ContactPoint]:
+    """The hold-down posts (section 2.7) as contact points, vehicle = body a, pad = body b."""
     out = []
     for i, p in enumerate(case.posts):
-        _check_point(stack.vehicle, p.vehicle, f"post[{i}].vehicle")
-        _check_point(stack.pad, p.pad, f"post[{i}].pad")
-        out.append(ContactPoint(p.name, [f"{p.vehicle}:{c}" for c in XYZ], [f"{p.pad}:{c}" for c in XYZ],
-                                stiffness=p.stiffness, axial=2, normal_sign=1.0, gap=p.gap,
-                                release_time=p.release_time, rigid=p.rigid))
+        w = (Where(case.source, "post") / i).named(p.name)
+        _check_point(stack.vehicle, p.vehicle, w / "vehicle")
+        _check_point(stack.pad, p.pad, w / "pad")
+        out.append(p.contact())
     return out
 
 
-def applied_tables(case: Case, stack: StackModel) -> list[TabulatedForce]:
-    """Engine thrust (per direction component) and tabulated forces, all on the vehicle."""
-    out = []
+def applied_forces(case: Case, stack: StackModel) -> tuple[list[PointForce], list[TabulatedForce]]:
+    """Engine thrust (per direction component, tables) and the [[force]] entries (constant
+    or tables), all on the vehicle."""
+    constant, tables = [], []
     for i, e in enumerate(case.engines):
-        _check_point(stack.vehicle, e.mount, f"engine[{i}].mount")
+        _check_point(stack.vehicle, e.mount, (Where(case.source, "engine") / i).named(e.name) / "mount")
         t, v = e.table()
         for c, d in zip(XYZ, e.direction):
             if d != 0.0:
-                out.append(TabulatedForce("a", f"{e.mount}:{c}", t, d * v))
+                tables.append(TabulatedForce("a", f"{e.mount}:{c}", t, d * v))
     for i, f in enumerate(case.forces):
-        stack.vehicle.dof_index(f.label)
-        out.append(TabulatedForce("a", f.label, f.time, f.value))
-    return out
+        try:
+            stack.vehicle.dof_index(f.label)
+        except InputError as exc:
+            raise ((Where(case.source, "force") / i).named(f.label) / "label").wrap(exc) from None
+        (constant if f.time is None else tables).append(f.on("a"))
+    return constant, tables
 
 
 def control_table(case: Case, stack: StackModel, tables: list[TabulatedForce],
@@ -86,11 +101,10 @@ def control_table(case: Case, stack: StackModel, tables: list[TabulatedForce],
     applied tables, switched on at ``control.start`` over ``control.ramp`` seconds."""
     ctl = case.control
     body = stack.vehicle
-    for lab in ctl["gimbals"]:
-        body.dof_index(lab)
-    t0, t1 = case.time["t0"], case.time["t_end"]
+    _check_labels(body, ctl.gimbals, Where(case.source, "control.gimbals"))
+    t0, t1 = case.time.t0, case.time.t_end
     pts = [np.array([t0, t1])] + [tb.time for tb in tables]
-    start, ramp = ctl["start"], ctl["ramp"]
+    start, ramp = ctl.start, ctl.ramp
     if np.isfinite(start):
         pts.append(np.array([start, start + max(ramp, 1e-6)]))
     grid = np.unique(np.concatenate(pts))
@@ -101,17 +115,33 @@ def control_table(case: Case, stack: StackModel, tables: list[TabulatedForce],
         P[:, labels.index(tb.label)] += np.interp(grid, tb.time, tb.value)
     for pf in constant:
         P[:, labels.index(pf.label)] += pf.value
-    F = control_forces(body, ctl["gimbals"], labels, P) if labels else np.zeros((grid.size, len(ctl["gimbals"])))
+    gimbals = list(ctl.gimbals)
+    try:
+        F = control_forces(body, gimbals, labels, P) if labels else np.zeros((grid.size, len(gimbals)))
+    except InputError as exc:
+        raise Where(case.source, "control.gimbals").wrap(exc) from None
     if np.isfinite(start):
         on = np.clip((grid - start) / max(ramp, 1e-6), 0.0, 1.0)
         F = F * on[:, None]
-    return grid, F, list(ctl["gimbals"])
+    return grid, F, gimbals
 
 
-def _attach_component(stack: StackModel, point: str) -> str:
+def softening(case: Case, stack: StackModel, soft: Softening | None = None) -> ModalFeedback:
+    """Gravity softening KSOF (eq. 22-27) of the vehicle under the case's gravity, held over
+    each step until ``softening.until`` (``soft``: another softening spec than the case's)."""
+    soft = soft or case.softening
+    if soft.labels is not None:
+        _check_labels(stack.vehicle, soft.labels, Where(case.source, "softening.labels"))
+    try:
+        return soft.feedback(stack.vehicle, case.gravity)
+    except InputError as exc:
+        raise Where(case.source, "softening").wrap(exc) from None
+
+
+def _attach_component(stack: StackModel, point: str, where: Where) -> str:
     owners = [n for n, cb in stack.cbs.items() if n != "pad" and f"{point}:Tx" in cb.boundary_labels]
     if not owners:
-        raise InputError(f"recovery.attach: point {point!r} is not a boundary point of any vehicle component")
+        raise where.error(f"point {point!r} is not a boundary point of any vehicle component")
     non_core = [n for n in owners if n != "core"]
     return (non_core or owners)[0]
 
@@ -122,9 +152,9 @@ def recoveries(case: Case, stack: StackModel) -> tuple[list[Recovery], dict, dic
 
     body = stack.vehicle
     out, attach = [], {}
-    for spec in case.recovery["attach"]:
+    for spec in case.recovery.attach:
         point, _, comp = spec.partition("@")
-        comp = comp or _attach_component(stack, point)
+        comp = comp or _attach_component(stack, point, Where(case.source, "recovery.attach"))
         labels = [f"{point}:{c}" for c in SIX]
         D, A = interface_force_recovery(stack.vehicle_asm, stack.vehicle_modes, comp, labels)
         name = f"attach_{point}"
@@ -138,41 +168,39 @@ def recoveries(case: Case, stack: StackModel) -> tuple[list[Recovery], dict, dic
         out.append(Recovery("modal_q_b", "b", [f"q{j}" for j in range(n_b)], disp=np.eye(n_b),
                             units="sqrt(kg) m"))
     outputs = []
+    w = Where(case.source, "recovery")
     for key in ("top", "payload"):
-        pt = case.recovery[key]
+        pt = getattr(case.recovery, key)
         if pt:
-            _check_point(body, pt, f"recovery.{key}")
+            _check_point(body, pt, w / key)
             outputs += [f"{pt}:{c}" for c in XYZ]
-    for i, pt in enumerate(case.recovery["stations"]):
-        _check_point(body, pt, f"recovery.stations[{i}]")
+    for i, pt in enumerate(case.recovery.stations):
+        _check_point(body, pt, w / "stations" / i)
         outputs += [f"{pt}:{c}" for c in XYZ if f"{pt}:{c}" not in outputs]
     return out, attach, {"a": outputs, "b": []}
 
 
 def build_problem(case: Case, stack: StackModel, progress: bool = True) -> CaseProblem:
+    """The two-body transient of one case: posts, cryo preload, thrust and forces, control
+    forces, gravity softening, recoveries; static initial state (section 2.6)."""
     body = stack.vehicle
     cps = contacts(case, stack)
-    cryo = cryo_loads(stack, case.cryo)
-    constant = [PointForce("a", lab, val) for lab, val in cryo.items()]
-    tables = applied_tables(case, stack)
+    cryo = cryo_loads(stack, case.cryo, Where(case.source, "cryo"))
+    constant, tables = applied_forces(case, stack)
+    constant = [PointForce("a", lab, val) for lab, val in cryo.items()] + constant
     ctab = None
-    if case.control["enabled"]:
+    if case.control.enabled:
         ctab = control_table(case, stack, tables, constant)
         grid, F, labels = ctab
         tables = tables + [TabulatedForce("a", lab, grid, F[:, j]) for j, lab in enumerate(labels)]
-    feedback = []
-    soft = None
-    if case.softening["enabled"]:
-        soft = ModalFeedback("a", softening_matrix(body, case.gravity), until=case.softening["until"])
-        feedback.append(soft)
-    forcing = Forcing(constant=constant, tables=tables, feedback=feedback, gravity=case.gravity)
+    soft = softening(case, stack) if case.softening.enabled else None
+    forcing = Forcing(constant=constant, tables=tables, feedback=[soft] if soft else [], gravity=case.gravity)
     recs, attach, outputs = recoveries(case, stack)
     t = case.time
-    problem = TransientProblem(body, stack.pad, cps, forcing, t_end=t["t_end"], h=t["h"], t0=t["t0"],
-                               method=t["method"], initial="static", outputs=outputs, recoveries=recs,
-                               progress=progress and case.output["progress"])
-    return CaseProblem(case, problem, cryo, ctab, soft, attach,
-                       gravity_only=Forcing(gravity=case.gravity))
+    problem = TransientProblem(body, stack.pad, cps, forcing, t_end=t.t_end, h=t.h, t0=t.t0, method=t.method,
+                               tol=t.tol, max_iter=t.max_iter, initial="static", outputs=outputs,
+                               recoveries=recs, progress=progress and case.output.progress)
+    return CaseProblem(case, problem, cryo, ctab, soft, attach, gravity_only=Forcing(gravity=case.gravity))
 
 
 def table1(stack: StackModel, cp: CaseProblem, case: Case):
@@ -182,7 +210,7 @@ def table1(stack: StackModel, cp: CaseProblem, case: Case):
     when the case has cryo switched off (they then repeat rows 1-2)."""
     from liftoff.transient.effects import cg_static_report
 
-    soft = cp.softening or ModalFeedback("a", softening_matrix(stack.vehicle, case.gravity))
+    soft = cp.softening or softening(case, stack, Softening(True, labels=case.softening.labels))
     cryo = [PointForce("a", k, v) for k, v in cp.cryo.items()]
     cps = [c for c in cp.problem.contacts]
     rep = cg_static_report(stack.vehicle, stack.pad, cps, cp.gravity_only, cryo, soft)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import tempfile
 import time
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -32,13 +32,12 @@ from liftoff.reduction import (
 from liftoff.transient.body import ModalBody
 from liftoff.transient.effects import center_of_gravity
 
-from liftoff.core.errors import InputError
+from liftoff.config.model import VEHICLE, ComponentModel, ModelConfig
+from liftoff.config.sections import Cryo
+from liftoff.config.values import Where
 from liftoff.core.labels import named_points, points_labels
 
 from .cache import StageCache, load_arrays, save_arrays, stage_key
-
-VEHICLE = ("core", "srb_left", "srb_right", "orbiter")
-DEFAULT_F_MAX = {"core": 60.0, "srb_left": 60.0, "srb_right": 60.0, "orbiter": 60.0, "pad": 60.0}
 
 
 @dataclass
@@ -63,62 +62,55 @@ def boundary_points(component: Component) -> list[str]:
 
 
 # ------------------------------------------------------------------ components
-def _component_params(model: dict, name: str) -> dict:
-    comp = model["component"].get(name, {}) if name != "pad" else model.get("pad", {})
-    size = comp.get("mesh_size", model.get("vehicle", {}).get("mesh_size") if name != "pad" else None)
-    size = size or model.get("mesh_size") or (4.0 if model["source"] == "stick" else None)  # fe: builder default
-    return {"source": model["source"], "name": name, "mesh_size": size, "degree": model["degree"],
-            "stack": model.get("vehicle", {}).get("params", {}),
-            "params": comp.get("params", {}), "materials": model.get("materials", {})}
+def _component_key(model: ModelConfig, comp: ComponentModel) -> dict:
+    """Everything a component stage depends on (its cache key's parameters)."""
+    return {"source": model.source, "name": comp.name, "mesh_size": comp.mesh_size, "degree": model.degree,
+            "builder": {type(comp.builder).__name__: asdict(comp.builder)},
+            "materials": {vol: asdict(m) for vol, m in model.materials.items()}}
 
 
-def _build_stick(params: dict) -> tuple[Component, dict]:
-    from .stick import stack_components, stack_thermal
+def build_component(model: ModelConfig, comp: ComponentModel, workdir: Path) -> tuple[Component, dict]:
+    """Component and {volume: unit thermal load} from the beam stick model (workflows/stick.py)
+    or from gmsh geometry -> dolfinx FE model (workflows/fe_source.py)."""
+    if model.source == "stick":
+        from .stick import build
 
-    stack = dict(params["stack"])
-    stack.update(params["params"])
-    name = params["name"]
-    return stack_components(stack, params["mesh_size"])[name], stack_thermal(stack, params["mesh_size"])[name]
-
-
-def _build_fe(params: dict, workdir: Path) -> tuple[Component, dict]:
-    """gmsh geometry (meshes/) -> dolfinx FE model (fem/) -> Component; unit thermal loads
-    (alpha * delta_T = 1) of every volume group for the cryo preload."""
+        return build(comp.name, comp.builder, comp.mesh_size)
     from . import fe_source
 
-    return fe_source.build_component(params, workdir)
+    return fe_source.build_component(comp, model, workdir)
 
 
-def component_stage(model: dict, name: str, cache: StageCache, workdir: Path) -> tuple[Component, dict, str]:
-    params = _component_params(model, name)
-    code = ("liftoff.workflows.stick", "liftoff.reduction", "liftoff.core") if model["source"] == "stick" else \
-        ("liftoff.meshes", "liftoff.fem", "liftoff.reduction.component", "liftoff.workflows.fe_source", "liftoff.core")
-    key = stage_key("component", params, code)
+def component_stage(model: ModelConfig, name: str, cache: StageCache, workdir: Path) -> tuple[Component, dict, str]:
+    comp = model.components[name]
+    code = (("liftoff.workflows.stick", "liftoff.meshes", "liftoff.reduction", "liftoff.core") if model.source == "stick"
+            else ("liftoff.meshes", "liftoff.fem", "liftoff.reduction.component", "liftoff.workflows.fe_source",
+                  "liftoff.core"))
+    key = stage_key("component", _component_key(model, comp), code)
     thermal_path = cache.path("thermal", key, ".npz")
 
     def build():
-        comp, thermal = (_build_stick(params) if model["source"] == "stick" else _build_fe(params, workdir))
+        comp_, thermal = build_component(model, comp, workdir)
         if thermal_path is not None:
             thermal_path.parent.mkdir(parents=True, exist_ok=True)
             save_arrays({f"vol_{k}": v for k, v in thermal.items()}, thermal_path)
-        return comp, thermal
+        return comp_, thermal
 
     def load(p):
-        comp = load_component(p)
+        comp_ = load_component(p)
         if thermal_path is None or not thermal_path.is_file():
             raise FileNotFoundError(thermal_path)
         th = {k[4:]: v for k, v in load_arrays(thermal_path).items()}
-        return comp, th
+        return comp_, th
 
-    comp, thermal = cache.get_or_build("fe" if model["source"] == "fe" else "stick", key, ".npz", build,
-                                       lambda out, p: save_component(out[0], p), load, label=name)
-    return comp, thermal, key
+    out, thermal = cache.get_or_build(model.source, key, ".npz", build,
+                                      lambda out, p: save_component(out[0], p), load, label=name)
+    return out, thermal, key
 
 
-def cb_stage(model: dict, name: str, comp: Component, comp_key: str, cache: StageCache) -> tuple[CBModel, str]:
-    sel = model["component"].get(name, {}) if name != "pad" else model.get("pad", {})
-    params = {"boundary": points_labels(boundary_points(comp)), "n_modes": sel.get("n_modes"),
-              "f_max": sel.get("f_max", None if sel.get("n_modes") is not None else DEFAULT_F_MAX[name])}
+def cb_stage(model: ModelConfig, name: str, comp: Component, comp_key: str, cache: StageCache) -> tuple[CBModel, str]:
+    sel = model.components[name]
+    params = {"boundary": points_labels(boundary_points(comp)), "n_modes": sel.n_modes, "f_max": sel.f_max}
     key = stage_key("cb", params, ("liftoff.reduction", "liftoff.core"), (comp_key,))
     cb = cache.get_or_build("cb", key, ".npz",
                             lambda: craig_bampton(comp, params["boundary"], params["n_modes"], params["f_max"]),
@@ -145,8 +137,9 @@ def modes_stage(asm: Assembly, n_rigid: int, f_max, keys: list[str], cache: Stag
 
 
 # ------------------------------------------------------------------ the stack
-def build_stack(model: dict, cache: StageCache, progress: bool = True) -> StackModel:
-    """All model stages for a validated ``[model]`` table (workflows.scenario)."""
+def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, where: Where | None = None) -> StackModel:
+    """All model stages of a checked ``[model]`` (liftoff.config.ModelConfig); ``where``
+    names the scenario's ``model`` key in messages."""
     from tqdm import tqdm
 
     t0 = time.perf_counter()
@@ -159,19 +152,20 @@ def build_stack(model: dict, cache: StageCache, progress: bool = True) -> StackM
             comps[name], thermal[name], k = component_stage(model, name, cache, Path(work))
             cbs[name], ckeys[name] = cb_stage(model, name, comps[name], k, cache)
     t1 = time.perf_counter()
-    sysp = model.get("system", {})
+    _check_materials(model, thermal, where or Where("scenario", "model"))
+    sysp = model.system
     vasm = assemble([cbs[n] for n in VEHICLE], "vehicle")
-    vmodes = modes_stage(vasm, 6, sysp.get("f_max"), [ckeys[n] for n in VEHICLE], cache, "vehicle")
-    if sysp.get("n_modes") and vmodes.n_modes > sysp["n_modes"]:
-        vmodes = SystemModes(vasm, vmodes.omega[: sysp["n_modes"]], vmodes.phi[:, : sysp["n_modes"]], 6)
-    body0 = vmodes.to_body(zeta=model["zeta"], name="vehicle")
+    vmodes = modes_stage(vasm, 6, sysp.f_max, [ckeys[n] for n in VEHICLE], cache, "vehicle")
+    if sysp.n_modes and vmodes.n_modes > sysp.n_modes:
+        vmodes = SystemModes(vasm, vmodes.omega[: sysp.n_modes], vmodes.phi[:, : sysp.n_modes], 6)
+    body0 = vmodes.to_body(zeta=model.zeta, name="vehicle")
     _, cg = center_of_gravity(body0)
-    vehicle = vmodes.to_body(ref_point=cg, zeta=model["zeta"], name="vehicle")
+    vehicle = vmodes.to_body(ref_point=cg, zeta=model.zeta, name="vehicle")
     pasm = assemble([cbs["pad"]], "pad")
-    pmodes = modes_stage(pasm, 0, sysp.get("pad_f_max"), [ckeys["pad"]], cache, "pad")
-    if sysp.get("pad_n_modes") and pmodes.n_modes > sysp["pad_n_modes"]:
-        pmodes = SystemModes(pasm, pmodes.omega[: sysp["pad_n_modes"]], pmodes.phi[:, : sysp["pad_n_modes"]], 0)
-    pad = pmodes.to_body(zeta=model["zeta"], name="pad")
+    pmodes = modes_stage(pasm, 0, sysp.pad_f_max, [ckeys["pad"]], cache, "pad")
+    if sysp.pad_n_modes and pmodes.n_modes > sysp.pad_n_modes:
+        pmodes = SystemModes(pasm, pmodes.omega[: sysp.pad_n_modes], pmodes.phi[:, : sysp.pad_n_modes], 0)
+    pad = pmodes.to_body(zeta=model.zeta, name="pad")
     unit = {}
     for name in names:
         cb = cbs[name]
@@ -181,21 +175,31 @@ def build_stack(model: dict, cache: StageCache, progress: bool = True) -> StackM
                       timings={"components+CB (s)": t1 - t0, "system modes (s)": t2 - t1})
 
 
-def cryo_loads(stack: StackModel, cryo: dict) -> dict[str, float]:
+def _check_materials(model: ModelConfig, thermal: dict[str, dict], where: Where) -> None:
+    """Every [model.materials] volume names a volume group of some component."""
+    volumes = {vol for th in thermal.values() for vol in th}
+    for vol in model.materials:
+        if vol not in volumes:
+            raise (where / "materials" / vol).error(f"no component has a volume {vol!r} "
+                                                    f"(volumes: {', '.join(sorted(volumes))})")
+
+
+def cryo_loads(stack: StackModel, cryo: Cryo, where: Where | None = None) -> dict[str, float]:
     """{vehicle label: force} of the cryo preload (section 4.3): the tank's free thermal
     strain alpha * delta_T reduced to the component's boundary DOFs only."""
     from liftoff.transient.effects import cryo_point_loads
 
-    if not cryo.get("enabled"):
+    where = where or Where("scenario", "cryo")
+    if not cryo.enabled:
         return {}
-    name = cryo["component"]
+    name = cryo.component
     if name not in stack.cbs or name == "pad":
-        raise InputError(f"cryo.component: {name!r} is not a vehicle component ({', '.join(VEHICLE)})")
+        raise (where / "component").error(f"{name!r} is not a vehicle component ({', '.join(VEHICLE)})")
     avail = stack.unit_thermal[name]
     parts = []
-    for vol in cryo["volumes"]:
+    for vol in cryo.volumes:
         if vol not in avail:
-            raise InputError(f"cryo.volumes: {vol!r} is not a volume of component {name!r} "
-                             f"(has: {', '.join(sorted(avail)) or 'none'})")
-        parts.append((stack.cbs[name].boundary_labels, cryo["alpha"] * cryo["delta_T"] * avail[vol]))
+            raise (where / "volumes").error(f"{vol!r} is not a volume of component {name!r} "
+                                            f"(has: {', '.join(sorted(avail)) or 'none'})")
+        parts.append((stack.cbs[name].boundary_labels, cryo.alpha * cryo.delta_T * avail[vol]))
     return cryo_point_loads(parts)

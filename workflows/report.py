@@ -161,7 +161,7 @@ def plots(result, cp, out: Path, case: str) -> list[Path]:
     for j in range(3):
         axs[0].plot(t, cg[:, j], lw=0.9, label=f"c.g. {'xyz'[j]} (m)")
     labels = result.output_labels["a"]
-    top = cp.case.recovery["top"]
+    top = cp.case.recovery.top
     if top:
         for j, c in enumerate("xy"):
             col = labels.index(f"{top}:T{c}")
@@ -176,7 +176,7 @@ def plots(result, cp, out: Path, case: str) -> list[Path]:
     axs[1].legend(fontsize=7)
     finish(fig, list(axs), "motion", "C.g. motion, top-of-stack deflection, attitude")
 
-    pay = cp.case.recovery["payload"]
+    pay = cp.case.recovery.payload
     if pay:
         fig, axs = plt.subplots(1, 1, figsize=(10, 4))
         for c in "xyz":
@@ -198,7 +198,7 @@ def snapshot_times(result, cp) -> dict[str, int]:
     i_rel = int(np.searchsorted(t, t_rel))
     i_rel = min(i_rel, t.size - 1)
     out = {"release": i_rel}
-    top = cp.case.recovery["top"]
+    top = cp.case.recovery.top
     if top:
         labels = result.output_labels["a"]
         cg = result.recovered["cg_motion"]

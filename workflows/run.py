@@ -3,20 +3,19 @@
 Stages: scenario -> components (gmsh + dolfinx, or stick) -> Craig-Bampton -> system
 modes -> per case: loads and vehicle effects -> static initial state -> two-body
 transient -> results HDF5, max/min tables, plots, snapshots; Table 1 and a summary.
-Without a scenario the embedded default (workflows/default_scenario.toml) runs.
+Without a scenario the embedded default (liftoff/config/default_scenario.toml) runs.
 Outputs are listed in docs/workflow.md.
 """
 from __future__ import annotations
 
 import argparse
-import json
 import time
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from liftoff.core.records import write_text
 
-from .cache import StageCache, default_cache_dir
+from .cache import StageCache, default_cache_dir, stage_key
 
 
 @dataclass
@@ -40,16 +39,17 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
     False -> no cache, else that directory."""
     from liftoff.transient import solve
 
+    from liftoff.config import Scenario, Where, load_scenario
+
     from . import report
     from .loads import build_problem, stack_mass_summary, table1
     from .pipeline import build_stack
-    from .scenario import Scenario, load_scenario
 
     t_start = time.perf_counter()
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
-    want_pics = snapshots and any(c.output["snapshots"] for c in sc.cases)
+    want_pics = snapshots and any(c.output.snapshots for c in sc.cases)
     if want_pics:  # pyvista (imported by fem.snapshot) before dolfinx (FENICSX-NOTES.md)
         import liftoff.fem.snapshot  # noqa: F401
     cache = StageCache(None if cache_dir is False else Path(cache_dir) if cache_dir else default_cache_dir(out))
@@ -60,11 +60,11 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
     per_case_rows: dict[str, list] = {}
     tab1 = None
     for case in sc.cases:
-        mkey = json.dumps(case.model, sort_keys=True, default=str)
+        mkey = stage_key("model", asdict(case.model))      # cases with equal models share one stack
         if mkey not in stacks:
             n0 = len(cache.log)
             t0 = time.perf_counter()
-            stacks[mkey] = build_stack(case.model, cache, progress=progress)
+            stacks[mkey] = build_stack(case.model, cache, progress=progress, where=Where(case.source, "model"))
             for stage, label, how, secs in cache.log[n0:]:
                 stage_times.append((f"{stage} {label} ({how})", secs))
             stage_times.append(("model stages total", time.perf_counter() - t0))
@@ -89,9 +89,9 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
         rows = report.maxmin(res.time, report.items(res, cp.attach), case.name)
         per_case_rows[case.name] = rows
         files.append(report.write_csv(rows, out / f"maxmin_{case.name}.csv"))
-        if plots and case.output["plots"]:
+        if plots and case.output.plots:
             files += report.plots(res, cp, out, case.name)
-        if want_pics and case.output["snapshots"]:
+        if want_pics and case.output.snapshots:
             files += report.snapshots(stack, res, cp, out, case.name)
         stage_times.append((f"reports [{case.name}]", time.perf_counter() - t0))
     env = report.envelope(per_case_rows)

@@ -4,20 +4,22 @@ The loads engineer's classic: each component is a line of 3-D Euler-Bernoulli be
 (reduction.models.frame_element) along its axis, with stiff links out to the named
 points it shares with its neighbours (attach points, hold-down points, engine mounts).
 No gmsh or dolfinx: this is the fast model of the tests and of quick studies; the
-``fe`` source meshes the same stack in 3-D. Point names and coordinates are those of
-the default scenario (z up, origin at the booster base; SI units).
+``fe`` source meshes the same stack in 3-D. Point names and positions are those of the
+FE stack: they come from meshes.layout.StackLayout and meshes.pad.PadParams (frame of
+meshes/layout.py: z up, origin on the core axis at the hold-down level; SI units).
 
-Section properties are thin-walled cylinders (I = pi R^3 t, A = 2 pi R t); the mass of
-propellant and equipment is smeared on the beams (a line density, documented per
-component in docs/workflow.md), so the beam "density" is not a material density.
+The parameters (meshes.stick.StickParams) are section properties (thin-walled cylinders
+I = pi R^3 t, A = 2 pi R t) and masses; the mass of propellant and equipment is smeared on
+the beams (a line density, documented per component in docs/workflow.md), so the beam
+"density" is not a material density.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
 
 import numpy as np
 import scipy.sparse as sp
+from liftoff.meshes.stick import StickParams
 from liftoff.reduction.component import Component
 from liftoff.reduction.models import frame_element
 
@@ -25,63 +27,6 @@ from liftoff.core.errors import InputError
 from liftoff.core.labels import COMPONENTS
 
 LINK = dict(E=2.0e11, A=0.5, I=0.05, mass_per_length=500.0, link=True)   # stiff steel links (skirts, fittings)
-
-
-@dataclass
-class StackParams:
-    """Shuttle-like stack (m, kg, Pa) in the frame of meshes.layout.StackLayout: z up, origin
-    on the core axis at the hold-down level, x along the booster-booster line (left at
-    x < 0), y towards the orbiter. Positions equal the StackLayout defaults (checked by a
-    test); masses follow the meshes/ defaults; see docs/workflow.md."""
-
-    core_radius: float = 4.2
-    core_bottom_z: float = 9.2
-    core_top_z: float = 56.1
-    core_wall: float = 0.012           # equivalent skin for EA, EI (thin-walled tube)
-    core_E: float = 7.0e10
-    lox_bottom_z: float = 42.0         # LOX tank (forward) carries most of the propellant
-    core_mass_lox: float = 630.0e3
-    core_mass_aft: float = 126.0e3     # LH2, intertank, dry structure below lox_bottom_z
-    srb_radius: float = 1.855
-    srb_axis_x: float = 6.36
-    srb_length: float = 45.46
-    srb_wall: float = 0.0127
-    srb_E: float = 2.0e11
-    srb_mass: float = 590.0e3
-    holddown_radius: float = 2.45      # StackLayout: skirt radius 2.7 - thickness 0.5 / 2
-    holddown_azimuths_deg: tuple = (45.0, 135.0, 225.0, 315.0)
-    gimbal_z: float = 1.30             # aft dome apex
-    srb_fwd_attach_z: float = 40.5
-    srb_aft_attach_z: float = 13.2
-    orbiter_radius: float = 2.6
-    orbiter_axis_y: float = 7.8
-    orbiter_bottom_z: float = 8.0
-    orbiter_length: float = 37.24
-    orbiter_fwd_attach_z: float = 37.0
-    orbiter_aft_attach_z: float = 13.2
-    orbiter_aft_attach_x: float = 1.5
-    orbiter_mass: float = 84.46e3      # structure (smeared on the fuselage beam)
-    orbiter_I: float = 3.0             # m^4, fuselage bending
-    orbiter_A: float = 0.4
-    orbiter_E: float = 7.0e10
-    ssme_mass: float = 3 * 3180.0
-    ssme_cg_below_bulkhead: float = 1.8
-    payload_mass: float = 16.0e3
-    payload_z: float = 25.0
-    pad_mass: float = 3.73e6
-    deck_top_z: float = -2.0           # post tops at z = 0, posts 2 m tall
-    deck_thickness: float = 7.6
-    deck_I: float = 10.0               # m^4 per girder (0.05 m flanges, 7.6 m deep, ~10 m strips)
-    deck_A: float = 1.0
-    steel_E: float = 2.0e11
-    pedestal_height: float = 6.7
-    pedestal_I: float = 2.0
-    pedestal_A: float = 0.4
-    pedestal_xy: tuple = ((-20.0, -16.5), (0.0, -16.5), (20.0, -16.5),
-                          (-20.0, 18.5), (0.0, 18.5), (20.0, 18.5))
-    post_A: float = 1.0                # 1 m square steel posts
-    post_I: float = 0.083
-    post_mass: float = 15.7e3          # kg per post (1 x 1 x 2 m steel)
 
 
 def _tube(R: float, t: float) -> tuple[float, float]:
@@ -166,40 +111,22 @@ class _Frame:
                          field_map=fmap)
 
 
-def _side(side: str) -> float:
-    return -1.0 if side == "left" else 1.0
+def attach_points(p: StickParams) -> dict[str, np.ndarray]:
+    """Core-booster and core-orbiter attach points of the layout (booster left, right; orbiter)."""
+    lay = p.layout
+    return {**lay.srb_attach_points("left"), **lay.srb_attach_points("right"), **lay.orbiter_attach_points()}
 
 
-def holddown_points(p: StackParams, side: str) -> dict[str, np.ndarray]:
-    x0 = _side(side) * p.srb_axis_x
-    return {f"srb_{side}_hd_{k + 1}": np.array([x0 + p.holddown_radius * math.cos(math.radians(a)),
-                                               p.holddown_radius * math.sin(math.radians(a)), 0.0])
-            for k, a in enumerate(p.holddown_azimuths_deg)}
-
-
-def attach_points(p: StackParams) -> dict[str, np.ndarray]:
-    out = {}
-    for side in ("left", "right"):
-        xm = _side(side) * 0.5 * (p.core_radius + p.srb_axis_x - p.srb_radius)
-        out[f"att_srb_{side}_fwd"] = np.array([xm, 0.0, p.srb_fwd_attach_z])
-        out[f"att_srb_{side}_aft"] = np.array([xm, 0.0, p.srb_aft_attach_z])
-    ym = 0.5 * (p.core_radius + p.orbiter_axis_y - p.orbiter_radius)
-    out["att_orb_fwd"] = np.array([0.0, ym, p.orbiter_fwd_attach_z])
-    out["att_orb_aft_left"] = np.array([-p.orbiter_aft_attach_x, ym, p.orbiter_aft_attach_z])
-    out["att_orb_aft_right"] = np.array([p.orbiter_aft_attach_x, ym, p.orbiter_aft_attach_z])
-    return out
-
-
-def core(p: StackParams, h: float) -> _Frame:
+def core(p: StickParams, h: float) -> _Frame:
     f = _Frame("core")
-    A, I = _tube(p.core_radius, p.core_wall)
-    att = {k: v for k, v in attach_points(p).items()}
-    ids, zs = f.axis(0, 0, p.core_bottom_z, p.core_top_z, h,
-                     [v[2] for v in att.values()] + [p.lox_bottom_z])
+    bottom = p.layout.core_bottom_z
+    A, I = _tube(p.layout.core_radius, p.core_wall)
+    att = attach_points(p)
+    ids, zs = f.axis(0, 0, bottom, p.core_top_z, h, [v[2] for v in att.values()] + [p.lox_bottom_z])
     for a, b, za, zb in zip(ids, ids[1:], zs, zs[1:]):
         lox = za >= p.lox_bottom_z - 1e-9
         mpl = p.core_mass_lox / (p.core_top_z - p.lox_bottom_z) if lox else \
-            p.core_mass_aft / (p.lox_bottom_z - p.core_bottom_z)
+            p.core_mass_aft / (p.lox_bottom_z - bottom)
         f.beam(a, b, p.core_E, A, I, mpl)
     f.rename(ids[-1], "stack_top")
     at = dict(zip(zs, ids))
@@ -208,28 +135,28 @@ def core(p: StackParams, h: float) -> _Frame:
     return f
 
 
-def srb(p: StackParams, h: float, side: str) -> _Frame:
+def srb(p: StickParams, h: float, side: str) -> _Frame:
     f = _Frame(f"srb_{side}")
-    x = _side(side) * p.srb_axis_x
-    A, I = _tube(p.srb_radius, p.srb_wall)
-    ids, zs = f.axis(x, 0, 0.0, p.srb_length, h, (p.srb_aft_attach_z, p.srb_fwd_attach_z, p.gimbal_z))
+    x = p.layout.srb_axis(side)[0]
+    A, I = _tube(p.layout.srb_radius, p.srb_wall)
+    ids, zs = f.axis(x, 0, 0.0, p.srb_length, h,
+                     (p.layout.srb_aft_attach_z, p.layout.srb_fwd_attach_z, p.gimbal_z))
     for a, b in zip(ids, ids[1:]):
         f.beam(a, b, p.srb_E, A, I, p.srb_mass / p.srb_length)
     at = dict(zip(zs, ids))
     f.rename(at[round(p.gimbal_z, 6)], f"srb_{side}_gimbal")       # nozzle gimbal on the axis
-    for name, xyz in attach_points(p).items():
-        if name.startswith(f"att_srb_{side}_"):
-            f.beam(at[round(xyz[2], 6)], f.node(xyz, name), **LINK)
-    for name, xyz in holddown_points(p, side).items():                # aft skirt
+    for name, xyz in p.layout.srb_attach_points(side).items():
+        f.beam(at[round(xyz[2], 6)], f.node(xyz, name), **LINK)
+    for name, xyz in p.layout.holddown_points(side).items():          # aft skirt
         f.beam(ids[0], f.node(xyz, name), **LINK)
     return f
 
 
-def orbiter(p: StackParams, h: float) -> _Frame:
+def orbiter(p: StickParams, h: float) -> _Frame:
     f = _Frame("orbiter")
-    y = p.orbiter_axis_y
-    z0, z1 = p.orbiter_bottom_z, p.orbiter_bottom_z + p.orbiter_length
-    att = {k: v for k, v in attach_points(p).items() if k.startswith("att_orb")}
+    y = p.layout.orbiter_axis_y
+    z0, z1 = p.layout.orbiter_bottom_z, p.layout.orbiter_bottom_z + p.orbiter_length
+    att = p.layout.orbiter_attach_points()
     ids, zs = f.axis(0, y, z0, z1, h, [v[2] for v in att.values()] + [p.payload_z])
     for a, b in zip(ids, ids[1:]):
         f.beam(a, b, p.orbiter_E, p.orbiter_A, p.orbiter_I, p.orbiter_mass / p.orbiter_length)
@@ -244,31 +171,29 @@ def orbiter(p: StackParams, h: float) -> _Frame:
     return f
 
 
-def post_points(p: StackParams) -> dict[str, np.ndarray]:
-    return {k.replace(f"srb_{side}_hd_", f"pad_post_{side}_"): v
-            for side in ("left", "right") for k, v in holddown_points(p, side).items()}
-
-
-def pad(p: StackParams, h: float) -> _Frame:
-    """Deck girder grillage (mid-depth) on six clamped pedestals; hold-down posts up to z = 0."""
+def pad(p: StickParams, h: float) -> _Frame:
+    """Deck girder grillage (mid-depth) on the pad's clamped pedestals; hold-down posts up to
+    z = 0 (deck, pedestals and posts where meshes.pad.PadParams puts them)."""
     f = _Frame("pad")
-    posts = post_points(p)
-    zd = p.deck_top_z - 0.5 * p.deck_thickness
-    xs = sorted({round(v, 6) for v in [-24.5, 24.5] + [xy[0] for xy in p.pedestal_xy]
+    pp = p.pad
+    posts = pp.post_points()
+    lo, hi = pp.deck_bounds()
+    zd = hi[2] - 0.5 * pp.deck_thickness
+    xs = sorted({round(v, 6) for v in [lo[0], hi[0]] + [xy[0] for xy in pp.pedestal_xy]
                  + [v[0] for v in posts.values()]})
-    ys = sorted({round(v, 6) for v in [-18.5, 22.5] + [xy[1] for xy in p.pedestal_xy]
+    ys = sorted({round(v, 6) for v in [lo[1], hi[1]] + [xy[1] for xy in pp.pedestal_xy]
                  + [v[1] for v in posts.values()]})
     grid = {(x, y): f.node((x, y, zd)) for x in xs for y in ys}
     length = (xs[-1] - xs[0]) * len(ys) + (ys[-1] - ys[0]) * len(xs)
-    mpl = (p.pad_mass - len(posts) * p.post_mass) / length
+    mpl = (pp.mlp_mass - len(posts) * p.post_mass) / length
     for i, x in enumerate(xs):
         for j, y in enumerate(ys):
             if i + 1 < len(xs):
                 f.beam(grid[(x, y)], grid[(xs[i + 1], y)], p.steel_E, p.deck_A, p.deck_I, mpl)
             if j + 1 < len(ys):
                 f.beam(grid[(x, y)], grid[(x, ys[j + 1])], p.steel_E, p.deck_A, p.deck_I, mpl)
-    for x, y in p.pedestal_xy:
-        g = f.node((x, y, p.deck_top_z - p.deck_thickness - p.pedestal_height))
+    for x, y in pp.pedestal_xy:
+        g = f.node((x, y, lo[2] - pp.pedestal_height))
         f.beam(g, grid[(round(x, 6), round(y, 6))], p.steel_E, p.pedestal_A, p.pedestal_I, 0.0)
         f.clamped.append(g)
     for name, xyz in posts.items():
@@ -278,28 +203,28 @@ def pad(p: StackParams, h: float) -> _Frame:
     return f
 
 
-def stack_components(params: dict | None = None, element_length: float = 4.0) -> dict[str, Component]:
+def stack_components(params: StickParams | None = None, element_length: float = 4.0) -> dict[str, Component]:
     """The four vehicle components and the pad, keyed core, srb_left, srb_right, orbiter, pad."""
-    return {k: f.component(f.clamped) for k, f in _frames(params, element_length).items()}
+    return {name: build(name, params, element_length)[0] for name in FRAMES}
 
 
-def stack_thermal(params: dict | None = None, element_length: float = 4.0) -> dict[str, dict[str, np.ndarray]]:
-    """Per component, {volume: nodal load of a unit free axial strain}; the stick model's
-    only 'volume' of a component is its wall, ``<component>_wall`` (as the FE core's)."""
-    return {k: {f"{k}_wall": f.thermal(f.clamped)} for k, f in _frames(params, element_length).items()}
-
-
-def _frames(params: dict | None, element_length: float) -> dict[str, _Frame]:
-    try:
-        p = StackParams(**(params or {}))
-    except TypeError as exc:
-        known = ", ".join(asdict(StackParams()))
-        raise InputError(f"stick model: unknown parameter ({exc}); known: {known}") from None
+def build(name: str, params: StickParams | None = None, element_length: float = 4.0) -> tuple[Component, dict]:
+    """Component ``name`` (core, srb_left, srb_right, orbiter or pad) and its {volume: nodal
+    load of a unit free axial strain}; the stick model's only 'volume' of a component is its
+    wall, ``<name>_wall`` (as the FE core's)."""
+    p = params or StickParams()
+    if not isinstance(p, StickParams):
+        raise InputError(f"stick model: expected StickParams, got {type(p).__name__}")
+    if name not in FRAMES:
+        raise InputError(f"stick model: unknown component {name!r} (one of {', '.join(FRAMES)})")
+    p.check()
     if not element_length > 0:
         raise InputError(f"stick model: element length must be positive, got {element_length}")
-    return {"core": core(p, element_length), "srb_left": srb(p, element_length, "left"),
-            "srb_right": srb(p, element_length, "right"), "orbiter": orbiter(p, element_length),
-            "pad": pad(p, element_length)}
+    f = FRAMES[name](p, element_length)
+    return f.component(f.clamped), {f"{name}_wall": f.thermal(f.clamped)}
 
 
-__all__ = ["StackParams", "stack_components", "post_points"]
+FRAMES = {"core": core, "srb_left": lambda p, h: srb(p, h, "left"), "srb_right": lambda p, h: srb(p, h, "right"),
+          "orbiter": orbiter, "pad": pad}
+
+__all__ = ["StickParams", "build", "stack_components"]

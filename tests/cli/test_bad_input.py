@@ -42,6 +42,13 @@ def _set(path: str, value):
     return mutate
 
 
+def _both(first, second):
+    def mutate(d: dict) -> None:
+        first(d)
+        second(d)
+    return mutate
+
+
 def _files(write: dict[str, str]):
     def mutate(d: dict, directory: Path) -> None:
         for name, content in write.items():
@@ -73,7 +80,7 @@ CASES = [
     ("unknown-label-pad", _set("contact[0].labels_b", ["post:Tx", "foot:Tz"]), None,
      "unknown DOF label 'foot:Tz' on body 'pad'"),
     ("malformed-label", _set("contact[0].labels_a", ["base:Tx", "base_Tz"]), None, "malformed DOF label 'base_Tz'"),
-    ("unknown-label-force", _set("force[1].label", "tip:Tx"), None, "force[1].label[0]: unknown DOF label 'tip:Tx'"),
+    ("unknown-label-force", _set("force[1].label", "tip:Tx"), None, "force[1].label: unknown DOF label 'tip:Tx'"),
     ("unknown-label-output", _set("output.a", ["top:Tz", "top:Rz"]), None, "output.a[1]: unknown DOF label 'top:Rz'"),
     ("labels-unequal", _set("contact[0].labels_b", ["post:Tz"]), None, "has 1 labels but labels_a has 2"),
     ("stiffness-negative", _set("contact[0].stiffness", [1e8, -1e8]), None, "stiffness[1]: negative value -1e+08"),
@@ -119,6 +126,16 @@ CASES = [
      "recovery[0].file: recovery file not found"),
     ("ground-labels_b", _set("bodies.b", "ground"), None, "body b is ground: omit labels_b"),
     ("keep-modal-type", _set("output.keep_modal", "yes"), None, "output.keep_modal: expected true or false"),
+    ("h-not-auto", _set("time.h", "automatic"), None, "time.h: expected a step in s or \"auto\""),
+    ("axial-name", _set("contact[0].axial", "Ty"), None,
+     "contact[0] 'post'.axial: 'Ty' is not one of the directions base:Tx, base:Tz"),
+    ("softening-key", _set("softening", {"enabled": True, "untill": 0.1}), None, "softening: unknown key 'untill'"),
+    ("softening-label", _set("softening", {"enabled": True, "labels": ["top:Ty"]}), None,
+     "softening.labels[0]: unknown DOF label 'top:Ty'"),
+    ("softening-no-gravity", _both(_set("gravity", None), _set("softening", {"enabled": True})), None,
+     "softening: needs [gravity] accel"),
+    ("softening-two-spellings", _both(_set("gravity.softening", True), _set("softening", {"enabled": True})), None,
+     "gravity.softening: softening is given in [softening]: remove it from [gravity]"),
 ]
 
 
@@ -160,6 +177,12 @@ def test_toml_syntax_error(case_dir: Path, capsys):
     (case_dir / "bad.toml").write_text("[time]\nt_end = = 1\n")
     code = main(["transient", str(case_dir / "bad.toml"), "--out", str(case_dir / "out")])
     _assert_clean_failure(code, capsys.readouterr().err, "bad.toml: TOML syntax error", case_dir / "out")
+
+
+def test_not_utf8(case_dir: Path, capsys):
+    (case_dir / "bad.toml").write_bytes(b"title = '\xe9t\xe9'\n")
+    code = main(["transient", str(case_dir / "bad.toml"), "--out", str(case_dir / "out")])
+    _assert_clean_failure(code, capsys.readouterr().err, "bad.toml: not a UTF-8 text file", case_dir / "out")
 
 
 def test_body_file_with_nan(case_dir: Path, capsys):

@@ -173,15 +173,16 @@ def test_ground_rigid_bolt_modal_force_and_recovery(case_dir: Path, capsys):
 
 
 def test_gravity_softening_is_wired_and_softens():
-    """[gravity] softening = true adds KSOF (transient.effects.softening_matrix, eq. 27) as a feedback on
-    body a until softening_until; in statics under a side load it increases the lateral c.g. deflection
-    (the reference's Table 1: gravity softening adds deflection)."""
+    """[softening] enabled = true adds KSOF (transient.effects.softening_matrix, eq. 27) as a feedback on
+    body a until `until`; in statics under a side load it increases the lateral c.g. deflection
+    (the reference's Table 1: gravity softening adds deflection). The older spelling in [gravity]
+    (softening = true, softening_until) gives the same feedback."""
     import copy
     import tomllib
 
     from liftoff.transient import static_equilibrium
     from liftoff.transient.effects import cg_motion_matrix, softening_matrix
-    from liftoff.transient.scenario import parse_scenario
+    from liftoff.config import parse_twobody
 
     base = EXAMPLES / "vehicle_on_pad"
     data = tomllib.loads((base / "scenario.toml").read_text())
@@ -190,12 +191,16 @@ def test_gravity_softening_is_wired_and_softens():
     for soft in (False, True):
         d = copy.deepcopy(data)
         if soft:
-            d["gravity"].update(softening=True, softening_until=0.5)
-        p = parse_scenario(d, base, "scenario.toml").problem
+            d["softening"] = {"enabled": True, "until": 0.5}
+        p = parse_twobody(d, base, "scenario.toml").problem
         if soft:
             (fb,) = p.forcing.feedback
             assert fb.body == "a" and fb.until == 0.5
             np.testing.assert_array_equal(fb.matrix, softening_matrix(p.body_a, [0.0, 0.0, -G]))
+            old = copy.deepcopy(data)
+            old["gravity"].update(softening=True, softening_until=0.5)
+            (fb_old,) = parse_twobody(old, base, "scenario.toml").problem.forcing.feedback
+            assert fb_old.until == 0.5 and np.array_equal(fb_old.matrix, fb.matrix)
         else:
             assert p.forcing.feedback == []
         st = static_equilibrium(p.body_a, p.body_b, p.contacts, p.forcing)
@@ -219,3 +224,19 @@ def test_method_override_fixed_point_agrees_with_direct(tmp_path: Path, capsys):
     # the iteration stops when successive forces differ by < tol = 1 N, with a contraction factor
     # below 1 the remaining error is a few tol; the peak force is 1.6e5 N
     assert np.abs(forces["fixed-point"] - forces["direct"]).max() < 10.0
+
+
+def test_axial_by_name_auto_step_and_sections(case_dir: Path):
+    """The normal direction may be named by label or component; h = "auto" is the default
+    0.25/f_h; [time] tol/max_iter reach the problem (the sections liftoff run reads too)."""
+    from liftoff.config import parse_twobody
+
+    axes = []
+    for axial in (1, "Tz", "base:Tz"):
+        data = base_scenario()
+        data["contact"][0]["axial"] = axial
+        data["time"].update(h="auto", tol=0.5, max_iter=7)
+        p = parse_twobody(data, case_dir, "s.toml").problem
+        assert p.h is None and p.tol == 0.5 and p.max_iter == 7
+        axes.append(p.contacts[0].axial)
+    assert axes == [1, 1, 1]

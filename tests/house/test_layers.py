@@ -129,6 +129,6 @@ def test_wheel_adds_one_import_name(tmp_path):
     names = zipfile.ZipFile(wheel).namelist()
     tops = {n.split("/")[0] for n in names if not n.split("/")[0].endswith(".dist-info")}
     assert tops == {"liftoff"}, tops
-    for sub in ("meshes", "fem", "reduction", "transient", "workflows", "core"):
+    for sub in ("meshes", "fem", "reduction", "transient", "workflows", "core", "config"):
         assert f"liftoff/{sub}/__init__.py" in names
-    assert "liftoff/workflows/default_scenario.toml" in names
+    assert "liftoff/config/default_scenario.toml" in names

@@ -12,7 +12,7 @@ from liftoff.transient import Forcing, PointForce, solve, static_solution
 from liftoff.workflows.cache import StageCache
 from liftoff.workflows.loads import build_problem, table1
 from liftoff.workflows.pipeline import build_stack
-from liftoff.workflows.scenario import default_text, parse_scenario
+from liftoff.config import default_text, parse_scenario
 
 
 # the default scenario on a coarse stick model (6 m beam elements): fast, no dolfinx
@@ -147,3 +147,29 @@ def test_table1_rows_change_in_expected_direction(stack):
     assert gs[1] / g[1] < 1.5                                # ... a second-order effect
     assert gc[2] < g[2]                                      # cryo: c.g. down
     assert abs(g[0]) < 1e-9 * abs(g[1])                      # symmetric stack: no x motion
+
+
+def test_model_dependent_checks_name_file_and_key(stack):
+    """Checks that need the models (points, DOF labels, volumes, gimbal geometry) use the
+    one wording 'file: key.path: what' too."""
+    from dataclasses import replace
+
+    from liftoff.core.errors import InputError
+
+    bad = [(dict(control={"gimbals": ["srb_left_gimbal:Tx", "srb_left_gimbal:Ty", "stack_top:Tq"]}),
+            "test.toml: control.gimbals[2]: malformed DOF label"),
+           (dict(control={"gimbals": ["srb_left_gimbal:Tx", "srb_left_gimbal:Ty", "nowhere:Tx"]}),
+            "test.toml: control.gimbals[2]: unknown DOF label 'nowhere:Tx'"),
+           (dict(control={"gimbals": ["srb_left_gimbal:Tx", "srb_right_gimbal:Tx", "stack_top:Tx"]}),
+            "test.toml: control.gimbals: control system: the gimbal DOFs"),
+           (dict(softening={"labels": ["stack_top:Tq"]}), "test.toml: softening.labels[0]: malformed DOF label"),
+           (dict(cryo={"volumes": ["core_skin"]}), "test.toml: cryo.volumes: 'core_skin' is not a volume of component"),
+           (dict(recovery={"payload": "cargo_bay"}), "test.toml: recovery.payload: point 'cargo_bay' is not on the vehicle"),
+           (dict(force=[{"label": "stack_top:Rq", "value": 1.0}]), "test.toml: force[0].label: malformed DOF label")]
+    for over, expect in bad:
+        with pytest.raises(InputError) as exc:
+            build_problem(scenario(**over), stack, progress=False)
+        assert str(exc.value).startswith(expect), str(exc.value)
+    case = scenario(force=[{"label": "stack_top:Tx", "value": 1.0}])
+    with pytest.raises(InputError, match=r"^test.toml: force\[0\] 'top:Tx'.label: unknown DOF label 'top:Tx'"):
+        build_problem(replace(case, forces=[replace(case.forces[0], label="top:Tx")]), stack, progress=False)

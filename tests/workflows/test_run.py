@@ -4,13 +4,14 @@ stage cache (a loads-only change skips the model stages; a model change does not
 import csv
 import importlib.util
 import tomllib
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from liftoff.transient import load_result
 from liftoff.workflows.cli import main
-from liftoff.workflows.scenario import default_text
+from liftoff.config import default_text
 
 HAVE_FE = all(importlib.util.find_spec(m) is not None for m in ("dolfinx", "gmsh"))
 
@@ -128,7 +129,7 @@ def test_cli_bad_scenario_one_line(tmp_path, capsys):
     p.write_text(_toml(d))
     assert main(["run", str(p), "--out", str(tmp_path / "o"), "--no-cache", "--no-progress"]) == 2
     err = capsys.readouterr().err.strip()
-    assert err.count("\n") == 0 and "post[2].vehicle" in err and "srb_left_hd_9" in err
+    assert err.count("\n") == 0 and "bad.toml: post[2] 'left_3'.vehicle: point 'srb_left_hd_9'" in err
     assert not list((tmp_path / "o").glob("results_*.h5"))
     p.write_text("[model]\nsource = 'nastran'\n")
     assert main(["run", str(p), "--out", str(tmp_path / "o")]) == 2
@@ -162,14 +163,36 @@ def test_fe_scenario_end_to_end_coarse(tmp_path, capsys, monolithic):
     from liftoff.workflows.cache import StageCache
     from liftoff.workflows.loads import build_problem
     from liftoff.workflows.pipeline import build_stack
-    from liftoff.workflows.scenario import load_scenario
+    from liftoff.config import load_scenario
 
     case = load_scenario(p).cases[0]
     cache = StageCache(tmp_path / "cache")
     stack = build_stack(case.model, cache, progress=False)
     assert all(how == "hit" for _, _, how, _ in cache.log)
-    case.time["t_end"] = 3.0
-    case.control["enabled"] = case.softening["enabled"] = False
+    case = replace(case, time=replace(case.time, t_end=3.0), control=replace(case.control, enabled=False),
+                   softening=replace(case.softening, enabled=False))
     errs = monolithic.errors(build_problem(case, stack, progress=False).problem, (2, 4))
     print(f"FE bolted phase vs monolithic: max error / peak post force at h0/2, h0/4: {errs}")
     assert errs[0] < 1e-5 and errs[0] / errs[1] > 3.0
+
+
+def test_step_by_step_script_is_what_run_does(tmp_path, capsys):
+    """workflows/liftoff_step_by_step.py (stick) calls the model and loads functions of `liftoff
+    run`: its post forces equal those of build_stack + build_problem on the same case. Same
+    functions on the same inputs, so equal up to BLAS summation order (1e-9 of the peak)."""
+    from liftoff.transient import solve
+    from liftoff.workflows import liftoff_step_by_step as sbs
+    from liftoff.workflows.cache import StageCache
+    from liftoff.workflows.loads import build_problem
+    from liftoff.workflows.pipeline import build_stack
+
+    sbs.main(["--stick", "--out", str(tmp_path)])
+    text = capsys.readouterr().out
+    assert "gravity + softening + cryo" in text and "left forward attach" in text
+    res = load_result(tmp_path / "results.h5")
+    case = sbs._scenario(True)
+    stack = build_stack(case.model, StageCache(None), progress=False)
+    ref = solve(replace(build_problem(case, stack, progress=False).problem, progress=False))
+    assert res.contact_force.shape == ref.contact_force.shape
+    np.testing.assert_allclose(res.contact_force, ref.contact_force, rtol=0,
+                               atol=1e-9 * np.abs(ref.contact_force).max())

@@ -1,0 +1,78 @@
+"""Reading the text files of a scenario: the TOML file itself and numeric CSV tables.
+
+Both are read as bytes and decoded here, so that every format reports a file that is not
+UTF-8 text, a TOML syntax error or a bad CSV cell with the same one line
+(``file: what`` or ``file: key.path: what``). A UTF-8 byte-order mark is accepted.
+"""
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from liftoff.core.errors import InputError
+
+from .values import Where
+
+
+def _text(raw: bytes, error) -> str:
+    """``raw`` decoded as UTF-8; ``error(reason)`` gives the InputError otherwise."""
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise error(exc.reason) from None
+
+
+def parse_toml(raw: bytes | str, source: str) -> dict:
+    """The mapping of a TOML document (``raw``: the file's bytes or its text)."""
+    if isinstance(raw, bytes):
+        raw = _text(raw, lambda why: InputError(f"{source}: not a UTF-8 text file ({why})"))
+    try:
+        return tomllib.loads(raw)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{source}: TOML syntax error: {' '.join(str(exc).split())}") from None
+
+
+def read_toml(path: str | Path) -> dict:
+    """Read a scenario TOML file; errors are named by the file's name."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{path}: scenario file not found")
+    return parse_toml(path.read_bytes(), path.name)
+
+
+def read_csv_table(path: Path, where: Where, columns: int | None = None) -> np.ndarray:
+    """A numeric CSV table (comma separated, optional one-line header, '#' comments) as an
+    array (rows, columns) of finite numbers; ``columns``: the required column count."""
+    path = Path(path)
+    if not path.is_file():
+        raise where.error(f"CSV file not found: {str(path)!r}")
+    rows: list[list[float]] = []
+    header_allowed = True
+    text = _text(path.read_bytes(), lambda why: where.error(f"{path.name} is not a UTF-8 text file ({why})"))
+    for lineno, line in enumerate(text.splitlines(), start=1):
+        text = line.split("#", 1)[0].strip()
+        if not text:
+            continue
+        try:
+            row = [float(c) for c in text.split(",")]
+        except ValueError:
+            if header_allowed:  # the first non-comment line may be a header
+                header_allowed = False
+                continue
+            raise where.error(f"{path.name} line {lineno}: not a number in {text!r}") from None
+        header_allowed = False
+        if not all(math.isfinite(x) for x in row):
+            raise where.error(f"{path.name} line {lineno}: NaN or inf in {text!r}")
+        if rows and len(row) != len(rows[0]):
+            raise where.error(f"{path.name} line {lineno}: {len(row)} columns, expected {len(rows[0])}")
+        rows.append(row)
+    if not rows:
+        raise where.error(f"{path.name}: no data rows")
+    table = np.array(rows, dtype=float)
+    if columns is not None and table.shape[1] != columns:
+        what = " (time, value)" if columns == 2 else " (time, then one per mode)"
+        raise where.error(f"{path.name}: {table.shape[1]} columns, expected {columns}{what}")
+    return table

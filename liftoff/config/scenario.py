@@ -1,0 +1,293 @@
+"""Lift-off scenario files (``liftoff run``): models, loads, vehicle effects, cases.
+
+The format is documented key by key in docs/workflow.md; the embedded default is
+liftoff/config/default_scenario.toml. Units are SI (m, kg, s, N, K). Every error is one
+line ``file: key.path: what``, e.g. ``my.toml: post[3] 'left_4'.stiffness[2]: negative
+value -1``. Paths inside a scenario (CSV tables) are relative to the scenario file.
+
+A scenario is validated as a whole, then once per ``[[case]]``: a case is a partial
+scenario deep-merged over the base (tables merge key by key; arrays of tables with a
+``name`` merge by name; other arrays are replaced).
+"""
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from liftoff.core.labels import TRANSLATIONS, point_labels
+from liftoff.transient.model import ContactPoint
+
+from .files import parse_toml, read_toml
+from .model import ModelConfig, model_config
+from .sections import (
+    FORCE_KEYS,
+    LAW_KEYS,
+    STANDARD_GRAVITY,
+    ContactLaw,
+    Control,
+    Cryo,
+    Force,
+    Softening,
+    TimeSpan,
+    contact_law,
+    control,
+    cryo,
+    force,
+    gravity,
+    softening,
+    tabulated,
+    time_span,
+)
+from .values import Where, array_of_tables, boolean, number, string, strings, table, unique_name, vector
+
+DEFAULT_NAME = "default_scenario.toml"
+
+_TOP = {"title", "description", "model", "profiles", "post_defaults", "post", "engine",
+        "gravity", "cryo", "control", "softening", "force", "time", "recovery", "output", "case"}
+_PROFILE = {"time", "value", "csv"}
+_POST = {"name", "vehicle", "pad"} | LAW_KEYS
+_ENGINE = {"name", "mount", "direction", "start", "time", "thrust", "profile", "scale"}
+_RECOVERY = {"attach", "stations", "top", "payload"}
+_OUTPUT = {"plots", "snapshots", "progress"}
+_CASE = _TOP - {"case"} | {"name"}
+
+
+# --------------------------------------------------------------------- dataclasses
+@dataclass(frozen=True)
+class Post:
+    """A hold-down post: vehicle point on pad point, coupled in Tx, Ty, Tz by ``law``
+    (normal direction ``axial``, default Tz; bolted until ``law.release_time``)."""
+
+    name: str
+    vehicle: str
+    pad: str
+    law: ContactLaw
+
+    DIRECTIONS = TRANSLATIONS
+
+    @property
+    def release_time(self) -> float:
+        return self.law.release_time
+
+    def contact(self) -> ContactPoint:
+        """The transient model's contact point (vehicle = body a, pad = body b)."""
+        return self.law.contact(self.name, point_labels(self.vehicle, self.DIRECTIONS),
+                                point_labels(self.pad, self.DIRECTIONS))
+
+
+@dataclass(frozen=True)
+class Engine:
+    """Thrust ``thrust(t - start)`` (N) along unit ``direction`` at vehicle point ``mount``."""
+
+    name: str
+    mount: str
+    direction: np.ndarray
+    time: np.ndarray
+    thrust: np.ndarray
+    start: float
+
+    def table(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.time + self.start, self.thrust
+
+
+@dataclass(frozen=True)
+class RecoveryPoints:
+    """``[recovery]``: interface forces at ``attach`` points (``point@component`` picks the
+    side), motion of ``top``, ``payload`` and ``stations`` (vehicle points)."""
+
+    attach: tuple[str, ...] = ()
+    stations: tuple[str, ...] = ()
+    top: str | None = None
+    payload: str | None = None
+
+
+@dataclass(frozen=True)
+class OutputFlags:
+    """``[output]``: time-history plots, deformed-shape snapshots, progress bars."""
+
+    plots: bool = True
+    snapshots: bool = True
+    progress: bool = True
+
+
+@dataclass
+class Case:
+    """One fully validated load case (the base scenario with its overrides merged).
+
+    ``source``: the scenario file's name, for the messages of checks made once the models
+    exist (point names, volumes)."""
+
+    name: str
+    source: str
+    model: ModelConfig
+    posts: list[Post]
+    engines: list[Engine]
+    gravity: np.ndarray
+    cryo: Cryo
+    control: Control
+    softening: Softening
+    forces: list[Force]
+    time: TimeSpan
+    recovery: RecoveryPoints
+    output: OutputFlags
+
+
+@dataclass
+class Scenario:
+    path: str
+    title: str
+    description: str
+    cases: list[Case]
+
+
+# --------------------------------------------------------------------- sections
+def _profiles(w: Where, p: Any, base: Path) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    if not isinstance(p, dict):
+        raise w.error("expected a table of named time tables")
+    return {name: tabulated(w / name, table(w / name, tab, _PROFILE), base) for name, tab in p.items()}
+
+
+def _posts(w: Where, posts: Any, wd: Where, defaults: Any) -> list[Post]:
+    d = table(wd, defaults, LAW_KEYS)
+    out, names = [], set()
+    for i, p in enumerate(array_of_tables(w, posts, "post", nonempty=True)):
+        wp = w / i
+        p = table(wp, p, _POST, required=("name", "vehicle", "pad"))
+        q = {**d, **p}
+        if p.get("rigid") is True and "stiffness" not in p:
+            q.pop("stiffness", None)          # a default stiffness is for the elastic posts
+        wp = wp.named(unique_name(wp / "name", q["name"], names, "post"))
+        vehicle, pad = string(wp / "vehicle", q["vehicle"]), string(wp / "pad", q["pad"])
+        law = contact_law(wp, q, point_labels(vehicle, Post.DIRECTIONS), default_axial="Tz")
+        out.append(Post(q["name"], vehicle, pad, law))
+    return out
+
+
+def _engines(w: Where, engines: Any, profiles: dict) -> list[Engine]:
+    out, names = [], set()
+    for i, e in enumerate(array_of_tables(w, engines, "engine")):
+        we = w / i
+        e = table(we, e, _ENGINE, required=("name", "mount"))
+        we = we.named(name := unique_name(we / "name", e["name"], names, "engine"))
+        d = vector(we / "direction", e.get("direction", [0.0, 0.0, 1.0]), length=3)
+        if not np.linalg.norm(d) > 0:
+            raise (we / "direction").error("zero thrust direction")
+        if "profile" in e:
+            if "time" in e or "thrust" in e:
+                raise (we / "profile").error("give either profile (+ scale) or time + thrust, not both")
+            prof = string(we / "profile", e["profile"])
+            if prof not in profiles:
+                raise (we / "profile").error(f"unknown profile {prof!r} (defined: {', '.join(profiles) or 'none'})")
+            t, v = profiles[prof]
+        else:
+            if "time" not in e or "thrust" not in e:
+                raise we.error("missing thrust table: give time + thrust (N) or profile + scale")
+            t, v = tabulated(we, e, Path("."), vkey="thrust")
+        v = v * number(we / "scale", e.get("scale", 1.0))
+        out.append(Engine(name, string(we / "mount", e["mount"]), d / np.linalg.norm(d), t, v,
+                          number(we / "start", e.get("start", 0.0))))
+    return out
+
+
+def _forces(w: Where, forces: Any, base: Path) -> list[Force]:
+    return [force(w / i, table(w / i, f, FORCE_KEYS, required=("label",)), base)
+            for i, f in enumerate(array_of_tables(w, forces, "force"))]
+
+
+def _recovery(w: Where, spec: Any) -> RecoveryPoints:
+    r = table(w, spec, _RECOVERY)
+    return RecoveryPoints(strings(w / "attach", r.get("attach", [])), strings(w / "stations", r.get("stations", [])),
+                          string(w / "top", r["top"]) if "top" in r else None,
+                          string(w / "payload", r["payload"]) if "payload" in r else None)
+
+
+def _case(w: Where, d: dict, name: str, base: Path) -> Case:
+    table(w, d, _TOP | {"name"})
+    profiles = _profiles(w / "profiles", d.get("profiles", {}), base)
+    o = table(w / "output", d.get("output", {}), _OUTPUT)
+    return Case(
+        name, w.source,
+        model=model_config(w / "model", d.get("model", {})),
+        posts=_posts(w / "post", d.get("post", []), w / "post_defaults", d.get("post_defaults", {})),
+        engines=_engines(w / "engine", d.get("engine", []), profiles),
+        gravity=gravity(w / "gravity", d.get("gravity", {}), default=STANDARD_GRAVITY),
+        cryo=cryo(w / "cryo", d.get("cryo", {})),
+        control=control(w / "control", d.get("control", {})),
+        softening=softening(w / "softening", d.get("softening", {})),
+        forces=_forces(w / "force", d.get("force", []), base),
+        time=time_span(w / "time", d.get("time", {})),
+        recovery=_recovery(w / "recovery", d.get("recovery", {})),
+        output=OutputFlags(**{k: boolean(w / "output" / k, o.get(k, True)) for k in _OUTPUT}))
+
+
+def _used_profiles(d: dict) -> set:
+    engines = d.get("engine", [])
+    return {e.get("profile") for e in engines if isinstance(e, dict)} if isinstance(engines, list) else set()
+
+
+def _check_profiles_used(w: Where, profiles: Any, used: set) -> None:
+    """A profile a case override defines that no engine of the case uses is a misspelt name
+    (it would be merged in and ignored): an error."""
+    for name in profiles if isinstance(profiles, dict) else ():
+        if name not in used:
+            raise (w / "profiles" / name).error(f"no engine uses this profile (engines use: "
+                                                f"{', '.join(sorted(str(u) for u in used if u)) or 'none'})")
+
+
+def merge(base: dict, over: dict) -> dict:
+    """Deep merge ``over`` into a copy of ``base`` (tables by key, named tables by name)."""
+    out = copy.deepcopy(base)
+    for k, v in over.items():
+        if isinstance(v, dict) and isinstance(out.get(k), dict):
+            out[k] = merge(out[k], v)
+        elif (isinstance(v, list) and isinstance(out.get(k), list) and v and out[k]
+              and all(isinstance(x, dict) and "name" in x for x in v + out[k])):
+            merged = {x["name"]: copy.deepcopy(x) for x in out[k]}
+            for x in v:
+                merged[x["name"]] = merge(merged.get(x["name"], {}), x)
+            out[k] = list(merged.values())
+        else:
+            out[k] = copy.deepcopy(v)
+    return out
+
+
+# --------------------------------------------------------------------- entry points
+def parse_scenario(data: dict, source: str = "scenario", base: Path | str = ".") -> Scenario:
+    """Validate a scenario mapping (as read from TOML): one Case per [[case]] (or 'base');
+    CSV paths relative to ``base``."""
+    w, base = Where(source), Path(base)
+    table(w, data, _TOP)
+    title = string(w / "title", data.get("title", "liftoff scenario"))
+    description = string(w / "description", data.get("description", ""), nonempty=False)
+    common = {k: v for k, v in data.items() if k not in ("case", "title", "description")}
+    cases_raw = array_of_tables(w / "case", data.get("case", []), "case")
+    base_case = _case(w, common, "base", base)  # errors in the base name the base key, not a case
+    cases, names = [] if cases_raw else [base_case], set()
+    for i, c in enumerate(cases_raw):
+        wc = w / "case" / i
+        c = table(wc, c, _CASE, required=("name",))
+        name = unique_name(wc / "name", c["name"], names, "case")
+        over = {k: v for k, v in c.items() if k != "name"}
+        merged = merge(common, over)
+        cases.append(_case(wc, merged, name, base))
+        _check_profiles_used(wc, over.get("profiles"), _used_profiles(merged))
+    return Scenario(source, title, description, cases)
+
+
+def default_text() -> str:
+    """The embedded default scenario (package data liftoff/config/default_scenario.toml)."""
+    return resources.files("liftoff.config").joinpath(DEFAULT_NAME).read_text(encoding="utf-8")
+
+
+def load_scenario(path: str | Path | None = None) -> Scenario:
+    """Read and validate a scenario file; ``None`` gives the embedded default."""
+    if path is None:
+        source = f"<default {DEFAULT_NAME}>"
+        return parse_scenario(parse_toml(default_text(), source), source)
+    path = Path(path)
+    return parse_scenario(read_toml(path), path.name, path.resolve().parent)

@@ -1,0 +1,278 @@
+"""Sections shared by both scenario formats (``liftoff transient`` and ``liftoff run``).
+
+Each parser takes a :class:`Where` and the raw TOML value and returns a typed object:
+time span, forces (constant, inline tables, CSV tables), gravity, the contact law of a
+hold-down post or contact point (eq. 2-3, section 2.7), and the vehicle effects of
+section 4 (gravity softening, control system, cryo preload). Units are SI (m, kg, s, N,
+K, rad); the keys are documented in docs/transient-cli.md and docs/workflow.md.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from liftoff.transient.effects import softening_matrix
+from liftoff.transient.model import METHODS, ContactPoint, ModalFeedback, PointForce, TabulatedForce
+
+from .files import read_csv_table
+from .values import Where, boolean, choice, integer, label, labels, number, string, strings, table, vector
+
+TIME_KEYS = {"t0", "t_end", "h", "method", "tol", "max_iter"}
+FORCE_KEYS = {"label", "value", "time", "csv", "scale"}
+GRAVITY_KEYS = {"accel"}
+LAW_KEYS = {"stiffness", "rigid", "axial", "normal_sign", "gap", "release_time"}
+SOFTENING_KEYS = {"enabled", "until", "labels"}
+CONTROL_KEYS = {"enabled", "gimbals", "start", "ramp"}
+CRYO_KEYS = {"enabled", "component", "volumes", "delta_T", "alpha"}
+STANDARD_GRAVITY = (0.0, 0.0, -9.80665)
+
+
+# ---------------------------------------------------------------- time
+@dataclass(frozen=True)
+class TimeSpan:
+    """``[time]``: the run from ``t0`` to ``t_end`` (s) in steps ``h`` (s; None: 0.25/f_h,
+    eq. 12); contact solve ``method``; fixed-point tolerance ``tol`` (N) and ``max_iter``."""
+
+    t_end: float
+    t0: float = 0.0
+    h: float | None = None
+    method: str = "direct"
+    tol: float = 1.0
+    max_iter: int = 100
+
+
+def time_span(where: Where, spec: Any, *, method: str | None = None) -> TimeSpan:
+    """``[time]``; ``method`` (the command line's --method) overrides the file's."""
+    t = table(where, spec, TIME_KEYS, required=("t_end",))
+    t0 = number(where / "t0", t.get("t0", 0.0))
+    t_end = number(where / "t_end", t["t_end"])
+    if not t_end > t0:
+        raise (where / "t_end").error(f"must be greater than t0 = {t0:g} s, got {t_end:g}")
+    h = t.get("h", "auto")
+    if isinstance(h, str):
+        if h != "auto":
+            raise (where / "h").error(f"expected a step in s or \"auto\" (0.25/f_h), got {h!r}")
+        h = None
+    else:
+        h = number(where / "h", h, positive=True)
+        if h > t_end - t0:
+            raise (where / "h").error(f"step {h:g} s is longer than the run ({t_end - t0:g} s)")
+    meth = method if method is not None else choice(where / "method", t.get("method", "direct"), METHODS)
+    return TimeSpan(t_end, t0, h, meth, number(where / "tol", t.get("tol", 1.0), positive=True),
+                    integer(where / "max_iter", t.get("max_iter", 100), 1))
+
+
+# ---------------------------------------------------------------- tables and forces
+def check_table(where_t: Where, where_v: Where, time: np.ndarray, values: np.ndarray) -> None:
+    """A time table: >= 2 points, as many rows of values as times, time strictly increasing."""
+    if time.size < 2:
+        raise where_t.error(f"a table needs at least 2 time points, got {time.size}")
+    if values.shape[0] != time.size:
+        raise where_v.error(f"{time.size} times but {values.shape[0]} values (unequal lengths)")
+    bad = np.flatnonzero(np.diff(time) <= 0)
+    if bad.size:
+        i = int(bad[0]) + 1
+        raise where_t.error(f"time is not strictly increasing at entry {i} ({time[i - 1]:g} -> {time[i]:g} s)")
+
+
+def csv_table(where: Where, value: Any, base: Path, columns: int = 2) -> tuple[np.ndarray, np.ndarray]:
+    """(time, values) of a CSV file named by ``value`` (relative to ``base``): time, then data columns."""
+    tab = read_csv_table(base / string(where, value), where, columns=columns)
+    time, values = tab[:, 0], (tab[:, 1] if columns == 2 else tab[:, 1:])
+    check_table(where, where, time, values)
+    return time, values
+
+
+def inline_table(where: Where, spec: dict, vkey: str = "value") -> tuple[np.ndarray, np.ndarray]:
+    """(time, values) of the arrays ``time`` (s) and ``vkey`` of a table."""
+    time, values = vector(where / "time", spec["time"]), vector(where / vkey, spec[vkey])
+    check_table(where / "time", where / vkey, time, values)
+    return time, values
+
+
+def tabulated(where: Where, spec: dict, base: Path, vkey: str = "value") -> tuple[np.ndarray, np.ndarray]:
+    """A table given as ``time`` + ``vkey`` arrays or as ``csv`` (two columns), not both."""
+    if "csv" in spec:
+        if "time" in spec or vkey in spec:
+            raise where.error(f"give either time/{vkey} arrays or csv, not both")
+        return csv_table(where / "csv", spec["csv"], base)
+    for key in ("time", vkey):
+        if key not in spec:
+            raise where.error(f"missing {key!r}: give time + {vkey} arrays or csv")
+    return inline_table(where, spec, vkey)
+
+
+@dataclass(frozen=True)
+class Force:
+    """A force (N) or moment (N m) at the DOF ``label``: ``value`` when constant, else the
+    table (``time`` s, ``table``), piecewise linear and held at its end values outside."""
+
+    label: str
+    value: float = 0.0
+    time: np.ndarray | None = None
+    table: np.ndarray | None = None
+
+    def on(self, body: str) -> PointForce | TabulatedForce:
+        """The transient model's force on body ``'a'`` or ``'b'``."""
+        if self.time is None:
+            return PointForce(body, self.label, self.value)
+        return TabulatedForce(body, self.label, self.time, self.table)
+
+
+def force(where: Where, spec: dict, base: Path) -> Force:
+    """One ``[[force]]`` (keys FORCE_KEYS, checked by the caller): constant ``value``,
+    ``time`` + ``value`` arrays or ``csv``, times ``scale``."""
+    lab = label(where / "label", spec["label"])
+    w = where.named(lab)
+    scale = number(w / "scale", spec.get("scale", 1.0))
+    if "csv" in spec or isinstance(spec.get("value"), list):
+        if "csv" not in spec and "time" not in spec:
+            raise w.error("a tabulated force needs 'time' (s) with its 'value' (N)")
+        t, v = tabulated(w, spec, base)
+        return Force(lab, time=t, table=scale * v)
+    if "value" not in spec:
+        raise w.error("missing 'value' (N or N m), 'time' + 'value' or 'csv'")
+    if "time" in spec:
+        raise (w / "time").error("'time' given with a constant value")
+    return Force(lab, value=scale * number(w / "value", spec["value"]))
+
+
+# ---------------------------------------------------------------- gravity
+def gravity(where: Where, spec: Any, default: Sequence[float] | None = None) -> np.ndarray:
+    """``[gravity] accel`` (m/s^2, eq. 14); required unless a ``default`` is given."""
+    g = table(where, spec, GRAVITY_KEYS, required=() if default is not None else ("accel",))
+    return vector(where / "accel", g.get("accel", list(default or ())), length=3)
+
+
+# ---------------------------------------------------------------- contact law
+@dataclass(frozen=True)
+class ContactLaw:
+    """How a post or contact point couples its directions (eq. 2-3, section 2.7): penalty
+    ``stiffness`` K_C per direction (N/m, N m/rad) or a ``rigid`` bolt; the normal
+    direction ``axial`` (index) with ``normal_sign``; ``gap`` (m); bolted while
+    t < ``release_time`` (s), then compression-only on the normal."""
+
+    stiffness: np.ndarray
+    rigid: bool = False
+    axial: int = 0
+    normal_sign: float = 1.0
+    gap: float = 0.0
+    release_time: float = math.inf
+
+    def contact(self, name: str, labels_a: Sequence[str], labels_b: Sequence[str | None]) -> ContactPoint:
+        """The transient model's contact point with this law."""
+        return ContactPoint(name, list(labels_a), list(labels_b), self.stiffness, axial=self.axial,
+                            normal_sign=self.normal_sign, gap=self.gap, release_time=self.release_time,
+                            rigid=self.rigid)
+
+
+def axial_index(where: Where, value: Any, directions: Sequence[str]) -> int:
+    """The normal direction: an index into ``directions`` or its name (a label of it, or
+    its component ``Tz``)."""
+    if isinstance(value, str):
+        hits = [i for i, d in enumerate(directions) if value in (d, d.rpartition(":")[2])]
+        if len(hits) != 1:
+            raise where.error(f"{value!r} is not one of the directions {', '.join(directions)}")
+        return hits[0]
+    return integer(where, value, 0, len(directions) - 1)
+
+
+def contact_law(where: Where, spec: dict, directions: Sequence[str], default_axial: int | str = 0) -> ContactLaw:
+    """The LAW_KEYS of a ``[[contact]]`` or ``[[post]]`` table coupling ``directions``."""
+    n = len(directions)
+    rigid = boolean(where / "rigid", spec.get("rigid", False))
+    if rigid:
+        if "stiffness" in spec:
+            raise (where / "stiffness").error("a rigid contact takes no stiffness (remove one of the two)")
+        k = np.zeros(n)
+    else:
+        if "stiffness" not in spec:
+            raise where.error("missing required key 'stiffness' (N/m or N m/rad) or rigid = true")
+        s = spec["stiffness"]
+        k = vector(where / "stiffness", s, length=n, nonneg=True) if isinstance(s, list) else \
+            np.full(n, number(where / "stiffness", s, nonneg=True))
+        if not np.all(k > 0):
+            raise (where / "stiffness").error("zero stiffness: give a positive coupling stiffness")
+    axial = axial_index(where / "axial", spec.get("axial", default_axial), directions)
+    sign = number(where / "normal_sign", spec.get("normal_sign", 1.0))
+    if sign not in (1.0, -1.0):
+        raise (where / "normal_sign").error(f"must be 1 or -1, got {sign:g}")
+    gap = number(where / "gap", spec.get("gap", 0.0), nonneg=True)
+    release = number(where / "release_time", spec.get("release_time", math.inf), allow_inf=True)
+    return ContactLaw(k, rigid, axial, sign, gap, release)
+
+
+# ---------------------------------------------------------------- effects (section 4)
+@dataclass(frozen=True)
+class Softening:
+    """Gravity softening of body a (section 4.5, eq. 22-27), on while t < ``until`` (s);
+    ``labels``: the DOFs that define the c.g. motion (eq. 22), None: all of body a."""
+
+    enabled: bool = False
+    until: float = math.inf
+    labels: tuple[str, ...] | None = None
+
+    def feedback(self, body, accel) -> ModalFeedback:
+        """KSOF of eq. 27 for ``body`` under gravity ``accel`` as a held modal feedback (eq. 26)."""
+        ksof = softening_matrix(body, accel, boundary_labels=None if self.labels is None else list(self.labels))
+        return ModalFeedback("a", ksof, until=self.until)
+
+
+def softening(where: Where, spec: Any) -> Softening:
+    s = table(where, spec, SOFTENING_KEYS)
+    return Softening(boolean(where / "enabled", s.get("enabled", False)),
+                     number(where / "until", s.get("until", math.inf), allow_inf=True),
+                     labels(where / "labels", s["labels"]) if "labels" in s else None)
+
+
+@dataclass(frozen=True)
+class Control:
+    """Control system (section 4.4, eq. 15-21): lateral forces at the ``gimbals`` DOFs that
+    cancel the applied moment about the c.g., switched on at ``start`` over ``ramp`` (s)."""
+
+    enabled: bool = False
+    gimbals: tuple[str, ...] = ()
+    start: float = -math.inf
+    ramp: float = 0.0
+
+
+def control(where: Where, spec: Any) -> Control:
+    c = table(where, spec, CONTROL_KEYS)
+    enabled = boolean(where / "enabled", c.get("enabled", False))
+    if enabled:
+        table(where, c, CONTROL_KEYS, required=("gimbals",))
+    gimbals: tuple[str, ...] = ()
+    if "gimbals" in c:
+        if not isinstance(c["gimbals"], list) or len(c["gimbals"]) < 3:
+            raise (where / "gimbals").error("expected >= 3 lateral gimbal DOF labels (e.g. 'srb_left_gimbal:Tx')")
+        gimbals = labels(where / "gimbals", c["gimbals"])
+    return Control(enabled, gimbals, number(where / "start", c.get("start", -math.inf), allow_inf=True),
+                   number(where / "ramp", c.get("ramp", 0.0), nonneg=True))
+
+
+@dataclass(frozen=True)
+class Cryo:
+    """Cryogenic shrinkage (section 4.3): free thermal strain ``alpha`` (1/K) x ``delta_T``
+    (K) of the ``volumes`` (physical volume groups) of vehicle ``component``."""
+
+    enabled: bool = False
+    component: str = ""
+    volumes: tuple[str, ...] = ()
+    delta_T: float = 0.0
+    alpha: float = 0.0
+
+
+def cryo(where: Where, spec: Any) -> Cryo:
+    c = table(where, spec, CRYO_KEYS)
+    enabled = boolean(where / "enabled", c.get("enabled", False))
+    if enabled:
+        table(where, c, CRYO_KEYS, required=("component", "volumes", "delta_T", "alpha"))
+    return Cryo(enabled,
+                string(where / "component", c["component"]) if "component" in c else "",
+                strings(where / "volumes", c["volumes"], nonempty=True) if "volumes" in c else (),
+                number(where / "delta_T", c["delta_T"]) if "delta_T" in c else 0.0,
+                number(where / "alpha", c["alpha"], positive=True) if "alpha" in c else 0.0)

@@ -1,0 +1,173 @@
+"""Value checks for scenario files, shared by both formats (numpy only).
+
+Every check raises :class:`liftoff.core.errors.InputError` with one line naming the file
+and the key, ``file: key.path[3]: what``, built by :class:`Where`. This is the one
+wording of every scenario error.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from liftoff.core.errors import InputError
+from liftoff.core.labels import split_label
+
+# wording of a vector of the wrong length ({got} entries, {length} expected)
+LENGTH_ENTRIES = "has {got} entries, expected {length}"
+
+
+class Where:
+    """Key path for one-line messages: ``file: post[2].stiffness: what``.
+
+    ``where / "key"`` appends ``.key``; ``where / 3`` and ``where / "[3]"`` append ``[3]``;
+    ``where.named(i, name)`` gives ``post[3] 'left_1'`` (an array entry with its name).
+    """
+
+    def __init__(self, source: str, key: str = ""):
+        self.source, self.key = source, key
+
+    def __truediv__(self, sub: str | int) -> Where:
+        if isinstance(sub, int):
+            return Where(self.source, f"{self.key}[{sub}]")
+        if sub.startswith("["):
+            return Where(self.source, f"{self.key}{sub}")
+        return Where(self.source, f"{self.key}.{sub}" if self.key else sub)
+
+    def named(self, name: str) -> Where:
+        """This key with an entry's name appended: ``contact[0] 'post'``."""
+        return Where(self.source, f"{self.key} {name!r}")
+
+    def error(self, msg: str) -> InputError:
+        return InputError(f"{self.source}: {self.key}: {msg}" if self.key else f"{self.source}: {msg}")
+
+    def wrap(self, exc: InputError) -> InputError:
+        """An InputError raised below (a model's own check) re-worded at this key."""
+        return self.error(" ".join(str(exc).split()))
+
+
+def table(where: Where, value: Any, allowed: set[str], required: tuple[str, ...] = ()) -> dict:
+    """``value`` as a table whose keys are all in ``allowed`` and include ``required``."""
+    if not isinstance(value, dict):
+        raise where.error(f"expected a table, got {type(value).__name__}")
+    unknown = sorted(set(value) - allowed)
+    if unknown:
+        raise where.error(f"unknown key {unknown[0]!r} (allowed: {', '.join(sorted(allowed))})")
+    for key in required:
+        if key not in value:
+            raise where.error(f"missing required key {key!r}")
+    return value
+
+
+def array_of_tables(where: Where, value: Any, what: str, *, nonempty: bool = False) -> list[dict]:
+    """``value`` as an array of tables ``[[what]]`` (at least one when ``nonempty``)."""
+    if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
+        raise where.error(f"expected an array of tables [[{what}]]")
+    if nonempty and not value:
+        raise where.error(f"expected at least one [[{what}]] table")
+    return value
+
+
+def number(where: Where, value: Any, *, positive: bool = False, nonneg: bool = False,
+           allow_inf: bool = False) -> float:
+    """``value`` as a float: never NaN, finite unless ``allow_inf``, optionally > 0 or >= 0."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise where.error(f"expected a number, got {type(value).__name__} {value!r}")
+    x = float(value)
+    if math.isnan(x):
+        raise where.error("value is NaN")
+    if math.isinf(x) and not allow_inf:
+        raise where.error(f"value is {x} (must be finite)")
+    if positive and not x > 0:
+        raise where.error(f"must be positive, got {x:g}")
+    if nonneg and x < 0:
+        raise where.error(f"negative value {x:g}")
+    return x
+
+
+def integer(where: Where, value: Any, lo: int = 0, hi: int | None = None) -> int:
+    """``value`` as an int (not a bool) in ``[lo, hi]`` (``hi`` None: no upper bound)."""
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise where.error(f"expected an integer, got {type(value).__name__} {value!r}")
+    if value < lo or (hi is not None and value > hi):
+        raise where.error(f"{value} out of range [{lo}, {hi if hi is not None else 'inf'}]")
+    return value
+
+
+def string(where: Where, value: Any, *, nonempty: bool = True) -> str:
+    """``value`` as a string, non-empty unless ``nonempty`` is False."""
+    if not isinstance(value, str):
+        raise where.error(f"expected a string, got {type(value).__name__} {value!r}")
+    if nonempty and not value:
+        raise where.error(f"expected a non-empty string, got {value!r}")
+    return value
+
+
+def strings(where: Where, value: Any, *, nonempty: bool = False) -> tuple[str, ...]:
+    """``value`` as an array of non-empty strings (at least one when ``nonempty``)."""
+    if not isinstance(value, list):
+        raise where.error(f"expected an array of strings, got {type(value).__name__}")
+    if nonempty and not value:
+        raise where.error("expected a non-empty array of strings")
+    return tuple(string(where / i, v) for i, v in enumerate(value))
+
+
+def choice(where: Where, value: Any, options: tuple[str, ...]) -> str:
+    """``value`` as one of the strings ``options``."""
+    s = string(where, value)
+    if s not in options:
+        raise where.error(f"must be one of {', '.join(options)}, got {s!r}")
+    return s
+
+
+def boolean(where: Where, value: Any) -> bool:
+    """``value`` as a bool (TOML true/false; 0 and 1 are refused)."""
+    if not isinstance(value, bool):
+        raise where.error(f"expected true or false, got {value!r}")
+    return value
+
+
+def vector(where: Where, value: Any, *, length: int | None = None, positive: bool = False,
+           nonneg: bool = False) -> np.ndarray:
+    """``value`` (an array of numbers, each checked by :func:`number`) as a float array;
+    ``length``: the required number of entries (checked after the entries)."""
+    if not isinstance(value, list):
+        raise where.error(f"expected an array of numbers, got {type(value).__name__}")
+    out = np.array([number(where / i, v, positive=positive, nonneg=nonneg) for i, v in enumerate(value)],
+                   dtype=float)
+    if length is not None and out.size != length:
+        raise where.error(LENGTH_ENTRIES.format(got=out.size, length=length))
+    return out
+
+
+def label(where: Where, value: Any) -> str:
+    """``value`` as a well-formed DOF label ``point:Tx|Ty|Tz|Rx|Ry|Rz``."""
+    s = string(where, value)
+    try:
+        split_label(s)
+    except InputError as exc:
+        raise where.wrap(exc) from None
+    return s
+
+
+def labels(where: Where, value: Any, *, allow_empty: bool = False) -> tuple[str, ...]:
+    """``value`` (one label or an array of them) as distinct well-formed DOF labels."""
+    if isinstance(value, str):
+        value = [value]
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        raise where.error("expected a DOF label 'point:Tx' or an array of them")
+    if not value and not allow_empty:
+        raise where.error("empty list of DOF labels")
+    if len(set(value)) != len(value):
+        raise where.error("duplicate DOF label")
+    return tuple(label(where / i, v) for i, v in enumerate(value))
+
+
+def unique_name(where: Where, value: Any, seen: set[str], what: str) -> str:
+    """A non-empty name not in ``seen`` (added to it): ``duplicate post name 'left_1'``."""
+    name = string(where, value)
+    if name in seen:
+        raise where.error(f"duplicate {what} name {name!r}")
+    seen.add(name)
+    return name
