@@ -89,11 +89,6 @@ class CBModel:
         return tuple(dict.fromkeys(lab.split(":")[0] for lab in self.boundary_labels))
 
     @property
-    def boundary_point_coords(self) -> np.ndarray:
-        """(n_boundary_points, 3) coordinates (m) of ``boundary_points``."""
-        return np.array([self.point_coord(p) for p in self.boundary_points]).reshape(-1, 3)
-
-    @property
     def fixed_freq_hz(self) -> np.ndarray:
         return self.fixed_omega / (2 * np.pi)
 
