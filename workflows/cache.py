@@ -13,13 +13,16 @@ import importlib.util
 import json
 import os
 import time
+import warnings
+from contextlib import contextmanager
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 
-from liftoff.core.records import read_record, write_record
+from liftoff.core.records import TEMP_TAG, read_record, sweep_stale, write_record, write_text
 
 _CODE_CACHE: dict[tuple[str, ...], str] = {}
 ARRAYS_FORMAT = "liftoff-stage-arrays"
@@ -63,14 +66,29 @@ def _canonical(obj: Any) -> Any:
 
 
 def stage_key(stage: str, params: dict, code: tuple[str, ...] = (), inputs: tuple[str, ...] = ()) -> str:
+    """Key of a stage: its parameters, the keys of its inputs, the source of the code that
+    computes it and the versions of the libraries it runs on (a new numpy or dolfinx gives a
+    new key, never an old product)."""
     payload = json.dumps({"stage": stage, "params": _canonical(params), "inputs": list(inputs),
-                          "code": code_version(*code) if code else ""}, sort_keys=True)
+                          "code": code_version(*code) if code else "",
+                          "libraries": library_versions() if code else {}}, sort_keys=True)
     return hashlib.sha256(payload.encode()).hexdigest()[:24]
+
+
+ENTRY_FORMAT = "liftoff-cache-entry"
 
 
 @dataclass
 class StageCache:
-    """Cache directory (None: no caching) plus a record of hits, misses and wall times."""
+    """Cache directory (None: no caching) plus a record of hits, misses and wall times.
+
+    An entry is the product's files ``<stage>/<key>*`` plus ``<stage>/<key>.entry.json``
+    (its key and the SHA-256 of each file), written last. A product is loaded only when
+    the record matches its files; a damaged, partial or foreign entry (say another mesh's
+    file copied over it) is rebuilt with a warning. Builds of one key are serialised by a
+    lock file, so concurrent runs on one cache write each entry once. A cache folder
+    that cannot be written (read-only, full disk) is a warning: the run goes on without it.
+    """
 
     root: Path | None
     log: list = field(default_factory=list)
@@ -82,22 +100,136 @@ class StageCache:
 
     def get_or_build(self, stage: str, key: str, suffix: str, build: Callable[[], Any],
                      save: Callable[[Any, Path], Any], load: Callable[[Path], Any], label: str = "") -> Any:
-        """Load the product of ``stage`` under ``key`` if present, else build and save it."""
-        p = self.path(stage, key, suffix)
+        """Load the product of ``stage`` under ``key`` if its entry checks, else build and save it."""
         t0 = time.perf_counter()
-        if p is not None and p.is_file():
-            try:
-                out = load(p)
-                self.log.append((stage, label, "hit", time.perf_counter() - t0))
-                return out
-            except Exception:  # unreadable (e.g. interrupted write by an older version): rebuild
-                p.unlink(missing_ok=True)
-        out = build()
-        if p is not None:
-            p.parent.mkdir(parents=True, exist_ok=True)
-            save(out, p)
+        p = self.path(stage, key, suffix)
+        if p is not None and not self._usable(p.parent):
+            p = None
+        if p is None:
+            out = build()
+        else:
+            with _locked(p.with_name(f"{key}.lock")):
+                out = self._load(p, key, load, label or stage)
+                if out is not None:
+                    self.log.append((stage, label, "hit", time.perf_counter() - t0))
+                    return out
+                out = build()
+                self._save(out, p, key, stage, save)
         self.log.append((stage, label, "built", time.perf_counter() - t0))
         return out
+
+    def _usable(self, folder: Path) -> bool:
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            sweep_stale(folder)
+            if os.access(folder, os.W_OK):
+                return True
+            reason = "not writable"
+        except OSError as exc:
+            reason = exc.strerror or str(exc)
+        warnings.warn(f"stage cache {str(self.root)!r}: {reason}; running without the cache", stacklevel=3)
+        self.root = None
+        return False
+
+    def _load(self, p: Path, key: str, load: Callable[[Path], Any], what: str):
+        record = p.with_name(f"{key}.entry.json")
+        if not p.is_file() and not record.is_file():
+            return None
+        problem = _entry_problem(p.parent, key, record)
+        if problem is None:
+            try:
+                return load(p)
+            except Exception as exc:  # noqa: BLE001 - an unreadable product is rebuilt
+                problem = f"cannot be read ({' '.join(str(exc).split())})"
+        warnings.warn(f"stage cache entry {what} ({key}) {problem}: rebuilding it", stacklevel=4)
+        for f in _entry_files(p.parent, key) + [record]:
+            f.unlink(missing_ok=True)
+        return None
+
+    def _save(self, out, p: Path, key: str, stage: str, save: Callable[[Any, Path], Any]) -> None:
+        try:
+            save(out, p)
+            files = {f.name: _sha256(f) for f in _entry_files(p.parent, key)}
+            write_text(p.with_name(f"{key}.entry.json"),
+                       json.dumps({"format": ENTRY_FORMAT, "version": 1, "stage": stage, "key": key,
+                                   "files": files, "libraries": library_versions()}, indent=1))
+        except OSError as exc:  # a full or read-only disk: keep the result, drop the entry
+            for f in _entry_files(p.parent, key):
+                f.unlink(missing_ok=True)
+            warnings.warn(f"stage cache {str(self.root)!r}: {exc.strerror or exc}; running without the cache",
+                          stacklevel=4)
+            self.root = None
+
+
+def _entry_files(folder: Path, key: str) -> list[Path]:
+    return sorted(f for f in folder.glob(f"{key}.*")
+                  if f.is_file() and not f.name.endswith((".entry.json", ".lock")) and TEMP_TAG not in f.name)
+
+
+def _entry_problem(folder: Path, key: str, record: Path) -> str | None:
+    """Why an entry cannot be trusted, or None."""
+    try:
+        rec = json.loads(record.read_text())
+    except (OSError, ValueError):
+        return "has no readable record"
+    if rec.get("format") != ENTRY_FORMAT or rec.get("key") != key:
+        return f"is recorded under key {rec.get('key')!r}"
+    files = {f.name: f for f in _entry_files(folder, key)}
+    if set(files) != set(rec.get("files", {})):
+        return "has missing or extra files"
+    for name, digest in rec["files"].items():
+        if _sha256(files[name]) != digest:
+            return f"file {name} does not match its checksum"
+    return None
+
+
+def _sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+@contextmanager
+def _locked(path: Path):
+    """An exclusive advisory lock (fcntl) held while one key is built and saved."""
+    import fcntl
+
+    with open(path, "a") as fh:
+        fcntl.flock(fh, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(fh, fcntl.LOCK_UN)
+
+
+@lru_cache(maxsize=1)
+def library_versions() -> dict[str, str]:
+    """Versions of the libraries whose numbers a cached product depends on."""
+    from importlib import metadata
+
+    out = {}
+    for dist in ("numpy", "scipy", "fenics-dolfinx", "fenics-ffcx", "fenics-basix", "fenics-ufl", "petsc4py",
+                 "slepc4py", "meshio"):
+        try:
+            out[dist] = metadata.version(dist)
+        except metadata.PackageNotFoundError:
+            out[dist] = "absent"
+    spec = importlib.util.find_spec("gmsh")
+    out["gmsh"] = _gmsh_version(spec.origin) if spec and spec.origin else "absent"
+    return out
+
+
+def _gmsh_version(origin: str) -> str:
+    """GMSH_API_VERSION read from gmsh.py (no import: it loads the gmsh library)."""
+    import re
+
+    try:
+        m = re.search(r'GMSH_API_VERSION\s*=\s*"([^"]+)"', Path(origin).read_text(errors="ignore"))
+    except OSError:
+        return "unknown"
+    return m.group(1) if m else "unknown"
 
 
 def default_cache_dir(out_dir: Path) -> Path:

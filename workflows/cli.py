@@ -1,23 +1,27 @@
 """The ``liftoff`` command line (console script ``liftoff`` -> :func:`main`).
 
 Subcommands are registered in ``COMMANDS``: each entry adds its own argparse subparser
-and sets ``func`` (``args -> exit status``). Bad input and non-converged contact
-iterations end with one line ``liftoff: error: ...`` on stderr and exit status 2,
-never a traceback and never a results file.
+and sets ``func`` (``args -> exit status``). A failure ends with one line
+``liftoff: error: ...`` on stderr, never a traceback and never a results file, and the
+exit status says what kind: 2 bad input (or a usage error), 3 no convergence or a
+diverged solution, 4 not enough resources (memory, disk), 1 an internal error (a bug:
+the line asks to report it), 130/143 interrupted by SIGINT/SIGTERM.
 
     liftoff transient SCENARIO.toml --out DIR [--method direct|fixed-point] [--no-progress]
 """
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import time
 import warnings
 from pathlib import Path
 from typing import Callable
 
-EXIT_OK, EXIT_INPUT = 0, 2
+from .outdir import check_target, staged_output
+
+EXIT_OK, EXIT_INTERNAL, EXIT_INPUT, EXIT_CONVERGENCE, EXIT_RESOURCES = 0, 1, 2, 3, 4
+EXIT_SIGINT, EXIT_SIGTERM = 130, 143
 RESULTS_NAME = "results.h5"
 
 
@@ -31,16 +35,6 @@ def _one_line(exc: BaseException) -> str:
 
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
     print(f"liftoff: warning: {_one_line(Exception(str(message)))}", file=sys.stderr)
-
-
-def _prepare_out(out: Path) -> Path:
-    """Create the output directory up front, so a long run does not fail at the end."""
-    if out.exists() and not out.is_dir():
-        raise FileExistsError(17, "output path exists and is not a directory", str(out))
-    out.mkdir(parents=True, exist_ok=True)
-    if not os.access(out, os.W_OK):
-        raise PermissionError(13, "output directory is not writable", str(out))
-    return out
 
 
 # ------------------------------------------------------------------ transient
@@ -65,12 +59,13 @@ def _run_transient(args: argparse.Namespace) -> int:
     scenario = load_twobody(args.scenario, method=args.method, progress=not args.no_progress)
     from liftoff.transient import solve
 
-    out = _prepare_out(args.out)
+    check_target(args.out)
     started = time.perf_counter()
     result = solve(scenario.problem)
     wall = time.perf_counter() - started
-    path = Path(result.save(out / RESULTS_NAME))
-    print(summary(scenario, result, path, wall))
+    with staged_output(args.out, command=f"liftoff transient {args.scenario}") as stage:
+        result.save(stage / RESULTS_NAME)
+    print(summary(scenario, result, args.out / RESULTS_NAME, wall))
     return EXIT_OK
 
 
@@ -99,35 +94,72 @@ from liftoff.workflows.run import add_parser as _add_run  # noqa: E402  `liftoff
 COMMANDS: list[Callable[[argparse._SubParsersAction], None]] = [_add_transient, _add_run]
 
 
+class _Parser(argparse.ArgumentParser):
+    """Usage errors in one line (``liftoff: error: ...``), exit status 2."""
+
+    def error(self, message: str):
+        self.exit(EXIT_INPUT, f"liftoff: error: {self.prog}: {_one_line(Exception(message))}\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    from liftoff import __version__
+
+    parser = _Parser(
         prog="liftoff",
         description="Lift-off transient of a launch vehicle on a flexible pad "
                     "(two-body modal contact, Prabhakar & Palermo). SI units throughout.")
+    parser.add_argument("--version", action="version", version=f"liftoff {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for register in COMMANDS:
         register(sub)
     return parser
 
 
+class _Terminated(BaseException):
+    """SIGTERM, raised in the main thread so that every cleanup (finally) runs."""
+
+
+def _on_sigterm(signum, frame):
+    raise _Terminated()
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Run the command line; returns the exit status (0 ok, 2 bad input or no convergence)."""
-    from liftoff.core.errors import ConvergenceError, InputError
+    """Run the command line; returns the exit status (see the module docstring)."""
+    import errno
+    import signal
+
+    from liftoff.core.errors import ConvergenceError, InputError, ResourceError
 
     args = build_parser().parse_args(argv)
     warnings.showwarning = _show_warning
+    previous = signal.signal(signal.SIGTERM, _on_sigterm)
     try:
         return args.func(args)
-    except (InputError, ConvergenceError, OSError) as exc:
-        print(f"liftoff: error: {_one_line(exc)}", file=sys.stderr)
-        return EXIT_INPUT
-    except MemoryError:
-        print("liftoff: error: out of memory: use fewer steps or outputs (keep_modal = false keeps memory "
-              "independent of the number of modes)", file=sys.stderr)
-        return EXIT_INPUT
+    except InputError as exc:
+        return _fail(EXIT_INPUT, exc)
+    except ConvergenceError as exc:
+        return _fail(EXIT_CONVERGENCE, exc)
+    except (ResourceError, MemoryError) as exc:
+        return _fail(EXIT_RESOURCES, exc if str(exc) else "out of memory: use fewer steps, outputs or modes")
+    except OSError as exc:
+        full = exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.ENOMEM)
+        return _fail(EXIT_RESOURCES if full else EXIT_INPUT, exc)
     except KeyboardInterrupt:
-        print("liftoff: interrupted, no results written", file=sys.stderr)
-        return 130
+        print("liftoff: interrupted (SIGINT), no results written", file=sys.stderr)
+        return EXIT_SIGINT
+    except _Terminated:
+        print("liftoff: terminated (SIGTERM), no results written", file=sys.stderr)
+        return EXIT_SIGTERM
+    except Exception as exc:  # a bug: still one line, and a way to report it
+        return _fail(EXIT_INTERNAL, f"internal error ({type(exc).__name__}: {exc}); please report it with the "
+                                    "command and input that caused it")
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _fail(code: int, exc) -> int:
+    print(f"liftoff: error: {_one_line(exc if isinstance(exc, BaseException) else Exception(exc))}", file=sys.stderr)
+    return code
 
 
 if __name__ == "__main__":

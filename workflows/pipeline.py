@@ -87,24 +87,19 @@ def component_stage(model: ModelConfig, name: str, cache: StageCache, workdir: P
             else ("liftoff.meshes", "liftoff.fem", "liftoff.reduction.component", "liftoff.workflows.fe_source",
                   "liftoff.core"))
     key = stage_key("component", _component_key(model, comp), code)
-    thermal_path = cache.path("thermal", key, ".npz")
 
-    def build():
-        comp_, thermal = build_component(model, comp, workdir)
-        if thermal_path is not None:
-            thermal_path.parent.mkdir(parents=True, exist_ok=True)
-            save_arrays({f"vol_{k}": v for k, v in thermal.items()}, thermal_path)
-        return comp_, thermal
+    def thermal_path(p: Path) -> Path:          # the unit thermal loads beside the component
+        return p.with_name(p.name.replace(".npz", ".thermal.npz"))
+
+    def save(out, p):
+        save_component(out[0], p)
+        save_arrays({f"vol_{k}": v for k, v in out[1].items()}, thermal_path(p))
 
     def load(p):
-        comp_ = load_component(p)
-        if thermal_path is None or not thermal_path.is_file():
-            raise FileNotFoundError(thermal_path)
-        th = {k[4:]: v for k, v in load_arrays(thermal_path).items()}
-        return comp_, th
+        return load_component(p), {k[4:]: v for k, v in load_arrays(thermal_path(p)).items()}
 
-    out, thermal = cache.get_or_build(model.source, key, ".npz", build,
-                                      lambda out, p: save_component(out[0], p), load, label=name)
+    out, thermal = cache.get_or_build(model.source, key, ".npz", lambda: build_component(model, comp, workdir),
+                                      save, load, label=name)
     return out, thermal, key
 
 

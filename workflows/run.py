@@ -13,9 +13,11 @@ import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+from liftoff.core.errors import InputError
 from liftoff.core.records import write_text
 
 from .cache import StageCache, default_cache_dir, stage_key
+from .outdir import check_target, staged_output
 
 
 @dataclass
@@ -31,34 +33,56 @@ class RunOutput:
     summary: str = ""
 
 
+@dataclass
+class Prepared:
+    """Everything a run needs before it writes a file: the reduced stacks and every case's
+    validated transient problem (points, labels, loads and statics checked up front)."""
+
+    stacks: dict                        # model key -> StackModel
+    problems: dict                      # case name -> (CaseProblem, model key)
+    stage_times: list
+
+
 def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None | bool = None,
         progress: bool = True, plots: bool = True, snapshots: bool = True, echo=print) -> RunOutput:
     """Run a scenario (path, parsed Scenario, or None for the default) into ``out``.
 
     ``cache_dir``: None -> default (``$LIFTOFF_CACHE`` or DIR/../.liftoff-cache),
-    False -> no cache, else that directory."""
-    from liftoff.transient import solve
-
-    from liftoff.config import Scenario, Where, load_scenario
-
-    from . import report
-    from .loads import build_problem, stack_mass_summary, table1
-    from .pipeline import build_stack
+    False -> no cache, else that directory. Every case is built and checked before the
+    first file is written; the files are written into a staging folder that replaces
+    ``out`` as a whole at the end (workflows/outdir.py), so a failed run leaves ``out``
+    as it was."""
+    from liftoff.config import Scenario, load_scenario
 
     t_start = time.perf_counter()
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
+    check_target(out)
     want_pics = snapshots and any(c.output.snapshots for c in sc.cases)
     if want_pics:  # pyvista (imported by fem.snapshot) before dolfinx (FENICSX-NOTES.md)
         import liftoff.fem.snapshot  # noqa: F401
     cache = StageCache(None if cache_dir is False else Path(cache_dir) if cache_dir else default_cache_dir(out))
-    stage_times: list[tuple[str, float]] = []
-    stacks: dict[str, object] = {}
-    results: dict[str, tuple] = {}
-    files: list[Path] = []
-    per_case_rows: dict[str, list] = {}
-    tab1 = None
+    prep = prepare(sc, cache, progress, echo)
+    with staged_output(out, command=f"liftoff run {sc.path}") as stage:
+        output = write_results(sc, prep, stage, plots, want_pics, echo, t_start)
+    output.out = out
+    output.files = [out / Path(f).relative_to(stage) for f in output.files]
+    echo(f"  outputs in {out}/ ({len(output.files)} files); cache {cache.root}")
+    return output
+
+
+def prepare(sc, cache: StageCache, progress: bool, echo) -> Prepared:
+    """Model stages (cached) for every distinct model, then every case's problem and its
+    static initial state (section 2.6), so that bad input in any case stops the run before
+    any output."""
+    from liftoff.transient import estimate_step, static_equilibrium
+
+    from liftoff.config import Where
+
+    from .loads import build_problem, stack_mass_summary
+    from .pipeline import build_stack
+
+    stacks, problems, stage_times = {}, {}, []
     for case in sc.cases:
         mkey = stage_key("model", asdict(case.model))      # cases with equal models share one stack
         if mkey not in stacks:
@@ -69,22 +93,44 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
                 stage_times.append((f"{stage} {label} ({how})", secs))
             stage_times.append(("model stages total", time.perf_counter() - t0))
             echo(stack_mass_summary(stacks[mkey]))
-        stack = stacks[mkey]
         t0 = time.perf_counter()
-        cp = build_problem(case, stack, progress=progress)
+        cp = build_problem(case, stacks[mkey], progress=progress)
+        pr = cp.problem
+        try:
+            estimate_step(pr.body_a, pr.body_b, pr.contacts)
+            static_equilibrium(pr.body_a, pr.body_b, pr.contacts, pr.forcing, pr.t0)
+        except InputError as exc:
+            raise InputError(f"{case.source}: case {case.name!r}: {exc}") from None
+        problems[case.name] = (cp, mkey)
+        stage_times.append((f"loads [{case.name}]", time.perf_counter() - t0))
+    return Prepared(stacks, problems, stage_times)
+
+
+def write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, echo, t_start: float) -> RunOutput:
+    """Table 1, then per case the transient, its results file, max/min table, plots and
+    snapshots; the envelope over cases and the summary. Everything goes to ``out``."""
+    from liftoff.transient import solve
+
+    from . import report
+    from .loads import table1
+
+    stage_times = list(prep.stage_times)
+    results, files, per_case_rows, tab1 = {}, [], {}, None
+    for case in sc.cases:
+        cp, mkey = prep.problems[case.name]
+        stack = prep.stacks[mkey]
         if tab1 is None:
+            t0 = time.perf_counter()
             tab1 = table1(stack, cp, case)
-            write_text(out / "table1.txt", tab1.table() + "\n")
-            write_text(out / "table1.csv", "# c.g. motion under static loads; m and rad\n" + tab1.csv())
-            files += [out / "table1.txt", out / "table1.csv"]
+            files += [write_text(out / "table1.txt", tab1.table() + "\n"),
+                      write_text(out / "table1.csv", "# c.g. motion under static loads; m and rad\n" + tab1.csv())]
             echo(tab1.table())
-        stage_times.append((f"loads + Table 1 [{case.name}]", time.perf_counter() - t0))
+            stage_times.append(("Table 1", time.perf_counter() - t0))
         t0 = time.perf_counter()
         res = solve(cp.problem)
         stage_times.append((f"transient [{case.name}]", time.perf_counter() - t0))
         t0 = time.perf_counter()
-        p = res.save(out / f"results_{case.name}.h5")
-        files.append(Path(p))
+        files.append(Path(res.save(out / f"results_{case.name}.h5")))
         results[case.name] = (res, cp)
         rows = report.maxmin(res.time, report.items(res, cp.attach), case.name)
         per_case_rows[case.name] = rows
@@ -100,13 +146,11 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
          "maxmin_envelope.csv):")
     echo(report.format_table(env, select=lambda s: s.startswith(("post", "attach")) and s[-2:] in
                              ("Tx", "Ty", "Tz"), limit=40))
-    first = next(iter(stacks.values()))
+    first = next(iter(prep.stacks.values()))
     text = report.summary(sc, first, results, stage_times, env, time.perf_counter() - t_start)
-    write_text(out / "summary.txt", text + "\n")
-    files.append(out / "summary.txt")
+    files.append(write_text(out / "summary.txt", text + "\n"))
     echo(text)
-    echo(f"  outputs in {out}/ ({len(files)} files); cache {cache.root}")
-    return RunOutput(out, sc, stacks, results, tab1, env, stage_times, files, text)
+    return RunOutput(out, sc, prep.stacks, results, tab1, env, stage_times, files, text)
 
 
 # ------------------------------------------------------------------ command line

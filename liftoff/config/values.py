@@ -7,6 +7,7 @@ wording of every scenario error.
 from __future__ import annotations
 
 import math
+import re
 from typing import Any
 
 import numpy as np
@@ -164,9 +165,17 @@ def labels(where: Where, value: Any, *, allow_empty: bool = False) -> tuple[str,
     return tuple(label(where / i, v) for i, v in enumerate(value))
 
 
+SAFE_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.+-]{0,99}$")
+
+
 def unique_name(where: Where, value: Any, seen: set[str], what: str) -> str:
-    """A non-empty name not in ``seen`` (added to it): ``duplicate post name 'left_1'``."""
+    """A name not in ``seen`` (added to it): ``duplicate post name 'left_1'``. Names become
+    file names and HDF5 keys, so they are plain: a letter or digit, then letters, digits
+    and ``_ . + -`` (at most 100 characters; no '/', no spaces, not '.' or '..')."""
     name = string(where, value)
+    if not SAFE_NAME.match(name):
+        raise where.error(f"{what} name {name!r} is not a plain name (letters, digits, _ . + -; it becomes a "
+                          "file name or an HDF5 key)")
     if name in seen:
         raise where.error(f"duplicate {what} name {name!r}")
     seen.add(name)

@@ -6,4 +6,9 @@ class InputError(ValueError):
 
 
 class ConvergenceError(RuntimeError):
-    """A contact iteration that did not converge; the message gives the time and the residual."""
+    """A solution that did not converge or diverged; the message gives the time and the residual."""
+
+
+class ResourceError(RuntimeError):
+    """A run that would exceed the machine's memory or a documented size limit; the message
+    gives the estimate and how to override or reduce it."""

@@ -18,29 +18,96 @@ import numpy as np
 
 from .errors import InputError
 
+TEMP_TAG = ".liftoff-tmp-"          # temporary names carry the writer's pid: .<name>.liftoff-tmp-<pid>-<random>
+
 
 @contextmanager
 def atomic_path(path: str | os.PathLike, suffix: str = ".tmp") -> Iterator[Path]:
     """Yield a temporary path in the folder of ``path`` (created if needed).
 
-    When the ``with`` block succeeds, the temporary file is given the usual permissions
-    (0666 less the umask; ``mkstemp`` makes it 0600) and renamed onto ``path``; when the
-    block raises, it is removed and ``path`` is left as it was. ``suffix`` is the temporary
-    file's extension, for writers that choose the format by it (``.png``, ``.vtu``).
+    When the ``with`` block succeeds, the temporary file is flushed to disk (fsync), given
+    the usual permissions (0666 less the umask; ``mkstemp`` makes it 0600) and renamed onto
+    ``path``, and the folder is synced; when the block raises, it is removed and ``path``
+    is left as it was. ``suffix`` is the temporary file's extension, for writers that
+    choose the format by it (``.png``, ``.vtu``). A temporary file left by a killed
+    writer carries its pid and is removed by :func:`sweep_stale`.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=suffix)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}{TEMP_TAG}{os.getpid()}-", suffix=suffix)
     os.close(fd)
     try:
         yield Path(tmp)
+        _fsync_file(tmp)
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)
         os.replace(tmp, path)
+        fsync_dir(path.parent)
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+
+
+def _fsync_file(path) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+def fsync_dir(folder) -> None:
+    """Make a rename in ``folder`` durable (POSIX: fsync the directory)."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
+def pid_alive(pid: int) -> bool:
+    """True if a process with this pid exists (on this machine)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def temp_owner(name: str, tag: str = TEMP_TAG) -> int | None:
+    """The pid in a temporary name ``...<tag><pid>-...``, None if it has none."""
+    _, found, rest = name.partition(tag)
+    pid = rest.split("-", 1)[0]
+    return int(pid) if found and pid.isdigit() else None
+
+
+def sweep_stale(folder, tag: str = TEMP_TAG) -> list[Path]:
+    """Remove temporary files and folders in ``folder`` left by writers that no longer run
+    (killed by SIGKILL or a power cut); returns what was removed."""
+    import shutil
+
+    removed = []
+    folder = Path(folder)
+    if not folder.is_dir():
+        return removed
+    for entry in folder.iterdir():
+        pid = temp_owner(entry.name, tag)
+        if pid is None or pid == os.getpid() or pid_alive(pid):
+            continue
+        try:
+            shutil.rmtree(entry) if entry.is_dir() and not entry.is_symlink() else entry.unlink()
+            removed.append(entry)
+        except OSError:
+            pass
+    return removed
 
 
 def write_text(path: str | os.PathLike, text: str) -> Path:

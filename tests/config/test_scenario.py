@@ -224,3 +224,14 @@ def test_files_read_the_same_way_in_both_formats(tmp_path):
             load(p)
     p.write_bytes(b"\xef\xbb\xbf" + default_text().encode())     # a byte-order mark is fine
     assert [c.name for c in load_scenario(p).cases] == ["nominal", "no-control"]
+
+
+@pytest.mark.parametrize("name", ["x/../../../escaped", "", ".", "..", "a\x00b", "/abs", "two words", "-lead"])
+def test_names_that_become_paths_are_plain(base, name):
+    """Case names become file names (results_<case>.h5): a name that could escape --out,
+    hide a file or break HDF5 is refused when the file is read."""
+    d = copy.deepcopy(base)
+    d["case"] = [{"name": name}]
+    with pytest.raises(InputError, match=r"case\[0\]\.name: .*(not a plain name|non-empty)") as e:
+        parse_scenario(d, "s.toml")
+    assert "\n" not in str(e.value)

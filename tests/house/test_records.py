@@ -1,4 +1,4 @@
-"""Atomic writes (transient/atomic.py): all or nothing, usual permissions."""
+"""Atomic writes (liftoff.core.records): all or nothing, usual permissions, stale temporaries swept."""
 import os
 import stat
 
@@ -29,3 +29,20 @@ def test_failure_leaves_old_file_and_no_temporary(tmp_path):
             raise RuntimeError("solver failed")
     assert target.read_text() == "previous result"
     assert [p.name for p in tmp_path.iterdir()] == ["r.h5"]
+
+
+def test_stale_temporaries_of_dead_writers_are_swept(tmp_path):
+    """A writer killed by SIGKILL leaves its temporary file (named with its pid); the next
+    writer in that folder removes it, but never a live process's temporary."""
+    import subprocess
+    import sys
+
+    from liftoff.core.records import TEMP_TAG, sweep_stale
+
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
+                          text=True).stdout.strip()
+    stale = tmp_path / f".r.h5{TEMP_TAG}{dead}-abc.h5"
+    live = tmp_path / f".r.h5{TEMP_TAG}{os.getpid()}-def.h5"
+    stale.write_text("half")
+    live.write_text("being written")
+    assert sweep_stale(tmp_path) == [stale] and live.exists() and not stale.exists()

@@ -1,0 +1,111 @@
+"""A run's outputs appear together or not at all (workflows/outdir.py): a manifest that
+matches the files, a failed or interrupted run that leaves the previous output folder as
+it was, a killed run whose staging folder the next run removes, and a folder of the
+user's own files that is never replaced."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+import tomllib
+
+import pytest
+
+from liftoff.config import default_text
+from liftoff.core.errors import InputError
+from liftoff.workflows.outdir import MANIFEST, check_target, staged_output, verify
+
+from .test_run import STICK, _toml
+
+
+def _stick_scenario(tmp_path, name="s.toml", t_end=7.0):
+    d = tomllib.loads(default_text())
+    d["model"] = STICK
+    d["time"]["t_end"] = t_end
+    d["case"] = [{"name": "nominal"}, {"name": "no-control", "control": {"enabled": False}}]
+    p = tmp_path / name
+    p.write_text(_toml(d))
+    return p
+
+
+def _cmd(*args):
+    exe = os.path.join(os.path.dirname(sys.executable), "liftoff")
+    return [exe, *args] if os.path.exists(exe) else [sys.executable, "-m", "liftoff.workflows.cli", *args]
+
+
+def _staging(tmp_path, name="out"):
+    return [p for p in tmp_path.iterdir() if p.name.startswith(f".{name}.liftoff-tmp-")]
+
+
+def test_staged_output_publishes_all_or_nothing(tmp_path):
+    out = tmp_path / "out"
+    with staged_output(out, "test") as stage:
+        (stage / "results_a.h5").write_bytes(b"new a")
+        (stage / "summary.txt").write_text("first")
+    man = json.loads((out / MANIFEST).read_text())
+    assert {f["name"] for f in man["files"]} == {"results_a.h5", "summary.txt"} and verify(out) == []
+    with pytest.raises(RuntimeError):                      # a run that fails half-way
+        with staged_output(out, "test") as stage:
+            (stage / "results_a.h5").write_bytes(b"half")
+            raise RuntimeError("case 2 failed")
+    assert (out / "summary.txt").read_text() == "first" and verify(out) == [] and not _staging(tmp_path)
+    with staged_output(out, "test") as stage:              # a second run replaces the set as a whole
+        (stage / "results_b.h5").write_bytes(b"b")
+    assert sorted(p.name for p in out.iterdir()) == [MANIFEST, "results_b.h5"] and verify(out) == []
+    (out / "results_b.h5").write_bytes(b"tampered")
+    assert verify(out) == ["changed results_b.h5"]
+
+
+def test_foreign_folders_are_refused(tmp_path):
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "thesis.tex").write_text("x")
+    with pytest.raises(InputError, match="'thesis.tex', which liftoff did not write"):
+        check_target(tmp_path / "mine")
+    for bad in ("", "."):
+        with pytest.raises(InputError, match="give a folder of its own"):
+            check_target(__import__("pathlib").Path(bad))
+
+
+@pytest.mark.slow
+def test_sigterm_and_sigkill_leave_the_previous_run(tmp_path):
+    """Kill `liftoff run` while it writes (its staging folder exists): SIGTERM exits 143 and
+    cleans up; SIGKILL leaves a staging folder that the next run removes; in both cases
+    the output folder keeps the previous run's complete, manifest-checked set."""
+    out, cache = tmp_path / "out", tmp_path / "cache"
+    args = ["--out", str(out), "--cache", str(cache), "--no-progress", "--no-snapshots"]
+    first = subprocess.run(_cmd("run", str(_stick_scenario(tmp_path)), *args), capture_output=True, text=True,
+                           timeout=600)
+    assert first.returncode == 0, first.stderr
+    before = (out / MANIFEST).read_text()
+    longer = _stick_scenario(tmp_path, "long.toml", t_end=9.0)
+    for sig, code in ((signal.SIGTERM, 143), (signal.SIGKILL, -9)):
+        proc = subprocess.Popen(_cmd("run", str(longer), *args), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                text=True)
+        t0 = time.time()
+        while not _staging(tmp_path) and proc.poll() is None and time.time() - t0 < 300:
+            time.sleep(0.02)
+        assert proc.poll() is None, "the run ended before its staging folder was seen"
+        proc.send_signal(sig)
+        err = proc.communicate(timeout=120)[1]
+        assert proc.returncode == code, err
+        assert (out / MANIFEST).read_text() == before and verify(out) == []
+        if sig == signal.SIGTERM:
+            assert not _staging(tmp_path) and "terminated (SIGTERM), no results written" in err
+    assert _staging(tmp_path)                              # SIGKILL: nothing could clean up
+    again = subprocess.run(_cmd("run", str(longer), *args), capture_output=True, text=True, timeout=600)
+    assert again.returncode == 0, again.stderr
+    assert not _staging(tmp_path) and verify(out) == [] and (out / MANIFEST).read_text() != before
+
+
+def test_usage_errors_and_version_in_one_line(capsys):
+    from liftoff import __version__
+    from liftoff.workflows.cli import main
+
+    with pytest.raises(SystemExit) as e:
+        main(["transient"])
+    err = capsys.readouterr().err
+    assert e.value.code == 2 and err.count("\n") == 1 and err.startswith("liftoff: error: ") and "--out" in err
+    with pytest.raises(SystemExit) as e:
+        main(["--version"])
+    assert e.value.code == 0 and capsys.readouterr().out.strip() == f"liftoff {__version__}"

@@ -1,0 +1,78 @@
+"""Stage cache integrity (workflows/cache.py): an entry is used only when its record matches
+its files; damaged or foreign entries are rebuilt with a warning; one key is built once
+under concurrency; an unwritable cache folder is a warning, never a failed run."""
+import os
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from liftoff.workflows.cache import StageCache, library_versions, load_arrays, save_arrays, stage_key
+
+
+def _get(cache, key, value, builds):
+    def build():
+        builds.append(key)
+        time.sleep(0.05)
+        return value
+    return cache.get_or_build("system", key, ".npz", build, lambda v, p: save_arrays({"v": v}, p),
+                              lambda p: load_arrays(p)["v"], label=key)
+
+
+def test_hit_damaged_and_foreign_entries(tmp_path):
+    cache, builds = StageCache(tmp_path), []
+    a, b = np.arange(5.0), np.arange(7.0)
+    assert np.array_equal(_get(cache, "ka", a, builds), a) and builds == ["ka"]
+    assert np.array_equal(_get(cache, "ka", a, builds), a) and builds == ["ka"]          # a hit
+    _get(cache, "kb", b, builds)
+    entry_a, entry_b = tmp_path / "system" / "ka.npz", tmp_path / "system" / "kb.npz"
+    entry_a.write_bytes(entry_b.read_bytes())             # a valid file of another key copied over
+    with pytest.warns(UserWarning, match=r"entry ka \(ka\) file ka.npz does not match its checksum"):
+        assert np.array_equal(_get(cache, "ka", a, builds), a)
+    raw = bytearray(entry_b.read_bytes())
+    raw[len(raw) // 2] ^= 0xFF                            # a flipped byte
+    entry_b.write_bytes(bytes(raw))
+    with pytest.warns(UserWarning, match="rebuilding it"):
+        assert np.array_equal(_get(cache, "kb", b, builds), b)
+    (tmp_path / "system" / "kb.entry.json").unlink()        # a product without its record
+    with pytest.warns(UserWarning, match="has no readable record"):
+        _get(cache, "kb", b, builds)
+    assert builds == ["ka", "kb", "ka", "kb", "kb"]
+
+
+def test_one_build_per_key_under_concurrency(tmp_path):
+    builds = []
+    threads = [threading.Thread(target=_get, args=(StageCache(tmp_path), "k", np.ones(3), builds)) for _ in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert builds == ["k"]
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes into read-only folders")
+def test_read_only_cache_is_a_warning(tmp_path):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o500)
+    cache, builds = StageCache(ro), []
+    with pytest.warns(UserWarning, match="running without the cache"):
+        _get(cache, "k", np.ones(2), builds)
+    assert cache.root is None and builds == ["k"]
+
+
+def test_read_only_cache_is_a_warning_even_for_root(tmp_path, monkeypatch):
+    """The same path for root (who can write anywhere): os.access says no."""
+    monkeypatch.setattr(os, "access", lambda *a, **k: False)
+    cache, builds = StageCache(tmp_path), []
+    with pytest.warns(UserWarning, match="not writable; running without the cache"):
+        _get(cache, "k", np.ones(2), builds)
+    assert builds == ["k"] and not (tmp_path / "system" / "k.npz").exists()
+
+
+def test_keys_change_with_code_and_library_versions():
+    v = library_versions()
+    assert v["numpy"] == np.__version__ and "gmsh" in v and "fenics-dolfinx" in v
+    assert stage_key("s", {"a": 1}, ("liftoff.core",)) != stage_key("s", {"a": 1}, ("liftoff.reduction",))
+    assert stage_key("s", {"a": 1}, ("liftoff.core",)) != stage_key("s", {"a": 2}, ("liftoff.core",))
