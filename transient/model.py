@@ -193,7 +193,8 @@ class Recovery:
     ``labels``: one per row (column of the history). ``units``: one string for every
     column, or one per column. ``category`` says what the item is, so that reports select
     items without reading names: ``"interface_force"``, ``"cg_motion"``, ``"modal"``,
-    ``"displacement"``, or any word of the user's (default ``"user"``)."""
+    ``"displacement"``, or any word of the user's (default ``"user"``); ``description``:
+    free text kept with it (e.g. the component an interface force acts on)."""
 
     name: str
     body: str
@@ -203,6 +204,7 @@ class Recovery:
     acc: np.ndarray | None = None
     units: str | Sequence[str] = "SI"
     category: str = "user"
+    description: str = ""
 
     def __post_init__(self) -> None:
         who = f"recovery {self.name!r}"

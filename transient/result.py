@@ -74,6 +74,7 @@ class RecoveryItem:
     category: str               # interface_force, cg_motion, modal, displacement, user, ...
     labels: tuple[str, ...]     # per column
     units: tuple[str, ...]      # per column
+    description: str = ""
 
 
 @dataclass
@@ -162,7 +163,8 @@ class TransientResult:
             it = self.recovery_items[name]
             rec[name + COLUMNS] = Dataset(np.array(it.labels, dtype=object), "1")
             rec[name] = Dataset(arr, units_text(it.units, "SI"), dims=("/time", name + COLUMNS),
-                                column_units=list(it.units), category=it.category, body=it.body)
+                                column_units=list(it.units), category=it.category, body=it.body,
+                                description=it.description)
         data["recovered"] = rec
         return write_record(path, FORMAT, VERSION, data, units="SI (m, kg, s, N, rad)",
                             attrs={"metadata": json.dumps(self.metadata)}, suffixes=(".h5", ".hdf5"))
@@ -240,7 +242,8 @@ def load_result(path: str | os.PathLike) -> TransientResult:
         a = attrs[f"recovered/{name}"]
         recovered[name] = arr
         items[name] = RecoveryItem(name, str(a["body"]), str(a["category"]), strings(d["recovered"][name + COLUMNS]),
-                                   strings(np.atleast_1d(a["column_units"])) if arr.shape[1] else ())
+                                   strings(np.atleast_1d(a["column_units"])) if arr.shape[1] else (),
+                                   str(a.get("description", "")))
     return TransientResult(
         time=d["time"], contact_names=strings(c["names"]), contact_directions=dirs, contact_force=c["force"],
         contact_state=c["state"], separation_time=c["separation_time"], recontact_count=c["recontact_count"],

@@ -537,7 +537,7 @@ def _result(problem: TransientProblem, rows, step: StepChoice, plans, hist: Hist
             "f_h": step.f_h, "h_default": step.h_default, "n_steps": step.n_steps, "t0": problem.t0,
             "t_end": problem.t_end, "body_a": problem.body_a.name, "body_b": problem.body_b.name,
             "wall_time_s": _time.perf_counter() - started, "active_set_patterns": n_patterns}
-    items = {r.name: RecoveryItem(r.name, r.body, r.category, r.labels, r.units) for r in problem.recoveries}
+    items = {r.name: RecoveryItem(r.name, r.body, r.category, r.labels, r.units, r.description) for r in problem.recoveries}
     return TransientResult(
         time=time, contact_names=rows.names, contact_directions=rows.directions, contact_force=hist.Fc,
         contact_state=hist.state, separation_time=sep, recontact_count=rec, release_time=rows.release.copy(),
