@@ -107,8 +107,7 @@ class Cache(NamedTuple):
 
     keys: np.ndarray    # (cap, 2 n2) bool: rows and columns of each pattern
     invs: np.ndarray    # (cap, n2, n2)
-    n: np.ndarray       # (1,) int64, patterns stored
-    last: np.ndarray    # (1,) int64, slot used last
+    used: np.ndarray    # (2,) int64: patterns stored, slot used last
 
 
 class History(NamedTuple):
@@ -291,7 +290,7 @@ def march(i0, i1, steps, modal, contact, rows_out, state, cache, hist):
     Phi_c, Cdiag, coff, dcontact, axial, nsign, release, W, C2 = contact
     L_a, kind_a, targ_a, L_b, kind_b, targ_b = rows_out
     q, v, f, active, Pc, Pext, ptr = state
-    keys, invs, ncache, last = cache
+    keys, invs, used = cache
     Y_a, Y_b, Fc, states, iters, keep, Qa, Va, Aa, Qb, Vb, Ab = hist
     n, nc = q.size, f.size
     P1 = np.empty(n); fb = np.zeros(n); qf = np.empty(n); vf = np.empty(n)
@@ -304,6 +303,7 @@ def march(i0, i1, steps, modal, contact, rows_out, state, cache, hist):
     rigid = Cdiag == 0.0
     any_rigid = n2 > nc
     cand = np.empty(nc, dtype=np.bool_)
+    free = np.empty(nc, dtype=np.bool_)
     bolted = np.empty(release.size, dtype=np.bool_)
     for i in range(i0, i1):
         ta = t0 + i * h
@@ -313,20 +313,28 @@ def march(i0, i1, steps, modal, contact, rows_out, state, cache, hist):
             _feedback(q, U, V, until, ta, fb)
         ptr[0] = _pre_step(coef, const, tk, Pk, ptr[0], tb, V.shape[0] > 0, fb, q, v, Pext, Pc, P1, qf, vf)
         # ---------------- candidate rows and free relative displacement
-        _candidates(Phi_c, coff, dcontact, axial, release, qf, vf, tb, rigid, any_rigid, bolted, cand, active, u)
+        e = np.dot(Phi_c, qf)  # one BLAS product
+        ed = np.dot(Phi_c, vf) if any_rigid else e
+        for c in range(release.size):
+            bolted[c] = tb < release[c]
+        for j in range(nc):
+            cand[j] = bolted[dcontact[j]] or axial[j]
+            free[j] = cand[j] and not bolted[dcontact[j]]  # may open or close in this step
+            if not bolted[dcontact[j]] and not axial[j]:
+                active[j] = False
+            elif bolted[dcontact[j]]:
+                active[j] = True
+            u[j] = coff[j] + e[j] if cand[j] else 0.0
+            if any_rigid:
+                u[nc + j] = ed[j] if (cand[j] and rigid[j]) else 0.0
         # ---------------- contact solve
         if method == 0:
-            st, it, info = _solve_direct(W, C2, dcontact, nsign, cache, u, cand, bolted, rigid, active, opening,
-                                         max_iter, fn, g, rows2, cols2)
+            st, it, info1, info2 = _solve_direct(W, C2, nsign, keys, invs, used, u, free, rigid, active, opening,
+                                                 max_iter, fn, g, rows2, cols2)
         else:
-            st, it, info = _solve_fixed_point(W, Cdiag, dcontact, nsign, u, cand, bolted, active, f, tol,
-                                              max_iter, fn)
-        if st == SINGULAR:
-            return SINGULAR, i + 1, 0.0, 0.0
-        if st == CYCLING:
-            return CYCLING, i + 1, float(it), 0.0
-        if st == NO_CONVERGENCE:
-            return NO_CONVERGENCE, i + 1, info, float(it)
+            st, it, info1, info2 = _solve_fixed_point(W, Cdiag, nsign, u, free, active, f, tol, max_iter, fn)
+        if st != OK:
+            return st, i + 1, info1, info2
         # ---------------- end-of-step state with the contact force
         anyf, anyg = _contact_load(Phi_c, rigid, any_rigid, fn, g, f, Pf, Pg, Pc)
         _post_step(coef, qf, vf, P1, Pf, Pg, anyf, anyg, zw2, w2, q, v, acc)
@@ -342,32 +350,13 @@ def march(i0, i1, steps, modal, contact, rows_out, state, cache, hist):
 
 
 @njit(cache=True)
-def _candidates(Phi_c, coff, dcontact, axial, release, qf, vf, tb, rigid, any_rigid, bolted, cand, active, u):
-    """Rows that may carry force at tb (all rows of bolted points, axial rows of released ones)
-    and the free constraint values u: gap rows c + e_free, rigid velocity rows e_free'."""
-    nc = cand.size
-    e = np.dot(Phi_c, qf)  # one BLAS product
-    ed = np.dot(Phi_c, vf) if any_rigid else e
-    for c in range(release.size):
-        bolted[c] = tb < release[c]
-    for j in range(nc):
-        cand[j] = bolted[dcontact[j]] or axial[j]
-        if not bolted[dcontact[j]] and not axial[j]:
-            active[j] = False
-        elif bolted[dcontact[j]]:
-            active[j] = True
-        u[j] = coff[j] + e[j] if cand[j] else 0.0
-        if any_rigid:
-            u[nc + j] = ed[j] if (cand[j] and rigid[j]) else 0.0
-
-
-@njit(cache=True)
-def _solve_direct(W, C2, dcontact, nsign, cache, u, cand, bolted, rigid, active, opening, max_iter, fn, g,
-                  rows2, cols2):
-    """Active-set solve (C + W_SS) x_S = -u_S with the inverses cached per pattern (``cache``);
-    returns (status, iterations, 0). fn: end-of-step force f1, g: start value of rigid rows
-    (see the module docstring); rows2, cols2: work arrays (n2,) for the equations and unknowns."""
-    keys, invs, ncache, last = cache
+def _solve_direct(W, C2, nsign, keys, invs, used, u, free, rigid, active, opening, max_iter, fn, g, rows2, cols2):
+    """Active-set solve (C + W_SS) x_S = -u_S with the inverses cached per pattern (``keys``,
+    ``invs``, ``used``: see :class:`Cache`); returns (status, iterations, info1, info2) with
+    info1 the iterations when cycling. ``free``: rows
+    whose state may change (released, candidate); fn: end-of-step force f1, g: start value
+    of rigid rows (module docstring); rows2, cols2: work arrays (n2,), equations and unknowns.
+    Cycling switches to one change per iteration (least-index rule), then fails."""
     nc = fn.size
     any_rigid = W.shape[0] > nc
     it = 0
@@ -383,68 +372,59 @@ def _solve_direct(W, C2, dcontact, nsign, cache, u, cand, bolted, rigid, active,
             if any_rigid:
                 rows2[nc + j] = active[j] and rigid[j] and not opening[j]
                 cols2[nc + j] = active[j] and rigid[j]
-        slot, ncache[0], ok = _pattern_inverse(rows2, cols2, C2, W, keys, invs, ncache[0], last[0])
+        slot, used[0], ok = _pattern_inverse(rows2, cols2, C2, W, keys, invs, used[0], used[1])
         if not ok:
-            return SINGULAR, it, 0.0
-        last[0] = slot
+            return SINGULAR, it, 0.0, 0.0
+        used[1] = slot
         # the cached inverse is zero outside [cols, rows]: one BLAS product does the masking
         x2 = np.dot(invs[slot], u)
         for j in range(nc):
             fn[j] = -x2[j]
             g[j] = -x2[nc + j] if any_rigid else 0.0
-        if not _flip(W, dcontact, nsign, u, cand, bolted, rigid, active, opening, fn, g, single):
-            return OK, it, 0.0
+        changed = False
+        for j in range(nc):
+            if not free[j]:
+                continue
+            flip = False
+            if active[j] and rigid[j]:
+                if not opening[j] and nsign[j] * fn[j] < 0.0:  # closed -> opening
+                    opening[j] = True
+                    changed = True
+                    if single:
+                        break
+                elif opening[j] and nsign[j] * g[j] < 0.0:  # opening -> open
+                    opening[j] = False
+                    active[j] = False
+                    changed = True
+                    if single:
+                        break
+                continue
+            if active[j]:
+                flip = nsign[j] * fn[j] < 0.0
+            else:
+                s = u[j]
+                for l in range(nc):
+                    s += W[j, l] * fn[l]
+                    if any_rigid:
+                        s += W[j, nc + l] * g[l]
+                flip = nsign[j] * s < 0.0
+            if flip:
+                active[j] = not active[j]
+                changed = True
+                if single:
+                    break
+        if not changed:
+            return OK, it, 0.0, 0.0
         if it > nc + 2:
             single = True
         if it > max_iter + 4 * nc:
-            return CYCLING, it, 0.0
+            return CYCLING, it, float(it), 0.0
 
 
 @njit(cache=True)
-def _flip(W, dcontact, nsign, u, cand, bolted, rigid, active, opening, fn, g, single):
-    """Update the active set from a trial solution; True if it changed (only the first
-    change when ``single``, the least-index rule against cycling)."""
-    nc = fn.size
-    any_rigid = W.shape[0] > nc
-    changed = False
-    for j in range(nc):
-        if not cand[j] or bolted[dcontact[j]]:
-            continue
-        flip = False
-        if active[j] and rigid[j]:
-            if not opening[j] and nsign[j] * fn[j] < 0.0:  # closed -> opening
-                opening[j] = True
-                changed = True
-                if single:
-                    break
-            elif opening[j] and nsign[j] * g[j] < 0.0:  # opening -> open
-                opening[j] = False
-                active[j] = False
-                changed = True
-                if single:
-                    break
-            continue
-        if active[j]:
-            flip = nsign[j] * fn[j] < 0.0
-        else:
-            s = u[j]
-            for l in range(nc):
-                s += W[j, l] * fn[l]
-                if any_rigid:
-                    s += W[j, nc + l] * g[l]
-            flip = nsign[j] * s < 0.0
-        if flip:
-            active[j] = not active[j]
-            changed = True
-            if single:
-                break
-    return changed
-
-
-@njit(cache=True)
-def _solve_fixed_point(W, Cdiag, dcontact, nsign, u, cand, bolted, active, f, tol, max_iter, fn):
+def _solve_fixed_point(W, Cdiag, nsign, u, free, active, f, tol, max_iter, fn):
     """The reference's iteration f <- -K_C (c + e_free + W f), |f_j - f_i| < tol (eq. 11);
-    returns (status, iterations, last |dF|)."""
+    returns (status, iterations, last |dF|, iterations)."""
     nc = fn.size
     Wf = np.empty(nc)
     Kc = np.empty(nc)
@@ -463,7 +443,7 @@ def _solve_fixed_point(W, Cdiag, dcontact, nsign, u, cand, bolted, active, f, to
         changed = False
         dmax = 0.0
         for j in range(nc):
-            if cand[j] and not bolted[dcontact[j]]:
+            if free[j]:
                 if active[j] and nsign[j] * fn[j] < 0.0:
                     active[j] = False
                     changed = True
@@ -476,9 +456,9 @@ def _solve_fixed_point(W, Cdiag, dcontact, nsign, u, cand, bolted, active, f, to
                 dmax = d
             fn[j] = new
         if not changed and dmax < tol:
-            return OK, it, dmax
+            return OK, it, dmax, float(it)
         if it >= max_iter or not np.isfinite(dmax):
-            return NO_CONVERGENCE, it, dmax
+            return NO_CONVERGENCE, it, dmax, float(it)
 
 
 @njit(cache=True)

@@ -411,8 +411,7 @@ def _start(problem: TransientProblem, rows, contact: Contact, init: InitialState
 
 def _new_cache(n2: int, cap: int = 64) -> Cache:
     """Room for ``cap`` active-set patterns of the (n2, n2) step matrix."""
-    return Cache(np.zeros((cap, 2 * n2), dtype=np.bool_), np.zeros((cap, n2, n2)),
-                 np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64))
+    return Cache(np.zeros((cap, 2 * n2), dtype=np.bool_), np.zeros((cap, n2, n2)), np.zeros(2, dtype=np.int64))
 
 
 # -------------------------------------------------------------------- solve
@@ -449,7 +448,7 @@ def _solve(problem: TransientProblem) -> TransientResult:
     out_rows = OutputRows(plans[0].L, plans[0].kind, plans[0].targ, plans[1].L, plans[1].kind, plans[1].targ)
     inputs = (steps, _modal_inputs(problem, coefs, loads), contact, out_rows)
     _drive(problem, step, inputs, state, cache, hist, lambda: _spectral_radius(W, rows, state.active))
-    return _result(problem, rows, step, plans, hist, int(cache.n[0]), started)
+    return _result(problem, rows, step, plans, hist, int(cache.used[0]), started)
 
 
 def _drive(problem: TransientProblem, step: StepChoice, inputs, state: State, cache: Cache, hist: History,
