@@ -12,15 +12,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from liftoff.core.errors import InputError
+from liftoff.core.labels import COMPONENTS, split_label
 
 from .body import ModalBody
 from .model import Forcing
+from .result import ContactDirection
 
 
 @dataclass
 class ContactRows:
-    labels: tuple
-    names: tuple
+    directions: tuple      # (n_c,) ContactDirection: what each row is
+    names: tuple           # (n_contacts,) contact names
     Phi_a: np.ndarray      # (n_c, n_a)
     Phi_b: np.ndarray      # (n_c, n_b)
     compliance: np.ndarray  # (n_c,) 1/K_C, 0 for rigid
@@ -36,15 +38,22 @@ class ContactRows:
     def n(self) -> int:
         return self.compliance.size
 
+    @property
+    def labels(self) -> tuple:
+        """``contact/label_a`` per row."""
+        return tuple(d.label for d in self.directions)
+
 
 def contact_rows(body_a: ModalBody, body_b: ModalBody, contacts) -> ContactRows:
+    """One row per coupled direction of every contact point, in contact order."""
     na, nb = body_a.n_modes, body_b.n_modes
-    labels, Pa, Pb, comp, off, cidx, ax, sgn, axcol = [], [], [], [], [], [], [], [], []
+    dirs, Pa, Pb, comp, off, cidx, ax, sgn, axcol = [], [], [], [], [], [], [], [], []
     for ci, c in enumerate(contacts):
         for d, (la, lb) in enumerate(zip(c.labels_a, c.labels_b)):
             if d == c.axial:
-                axcol.append(len(labels))
-            labels.append(f"{c.name}/{la}")
+                axcol.append(len(dirs))
+            dirs.append(ContactDirection(c.name, ci, la, lb, COMPONENTS[split_label(la)[1]], d == c.axial,
+                                         c.normal_sign))
             Pa.append(body_a.phi[body_a.dof_index(la)])
             Pb.append(np.zeros(nb) if lb is None else body_b.phi[body_b.dof_index(lb)])
             comp.append(0.0 if c.rigid else 1.0 / c.stiffness[d])
@@ -52,8 +61,9 @@ def contact_rows(body_a: ModalBody, body_b: ModalBody, contacts) -> ContactRows:
             cidx.append(ci)
             ax.append(d == c.axial)
             sgn.append(c.normal_sign)
-    return ContactRows(labels=tuple(labels), names=tuple(c.name for c in contacts),
-                       Phi_a=np.array(Pa).reshape(len(labels), na), Phi_b=np.array(Pb).reshape(len(labels), nb),
+    n = len(dirs)
+    return ContactRows(directions=tuple(dirs), names=tuple(c.name for c in contacts),
+                       Phi_a=np.array(Pa).reshape(n, na), Phi_b=np.array(Pb).reshape(n, nb),
                        compliance=np.array(comp), offset=np.array(off), contact=np.array(cidx, dtype=np.int64),
                        axial=np.array(ax, dtype=np.bool_), sign=np.array(sgn),
                        release=np.array([c.release_time for c in contacts]),

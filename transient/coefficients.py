@@ -54,6 +54,21 @@ class StepCoefficients:
         v1 = self.Fd * q0 + self.Gd * v0 + self.Acd * P0 + self.Bcd * P1
         return q1, v1
 
+    def flexibility(self, phi_rows: np.ndarray, kind: str = "Bc") -> np.ndarray:
+        """Step flexibility of the DOFs ``phi_rows`` (k, n_modes): Phi diag(c) Phi^T (k, k).
+
+        The response over one step at those DOFs to unit forces at them, for the coefficient
+        ``kind`` (pyyeti's ``get_f2x`` pattern): ``"Bc"`` end-of-step force -> end
+        displacement (W of section 2.3), ``"Ac"`` start force -> end displacement, ``"Bcd"``
+        and ``"Acd"`` the same to the end velocity (eq. 9-10)."""
+        if kind not in ("Ac", "Bc", "Acd", "Bcd"):
+            raise InputError(f"flexibility: kind must be Ac, Bc, Acd or Bcd, got {kind!r}")
+        return (phi_rows * getattr(self, kind)) @ phi_rows.T
+
+    def packed(self) -> np.ndarray:
+        """(8, n_modes) rows F G Ac Bc Fd Gd Acd Bcd, the layout of the compiled kernel."""
+        return np.vstack([self.F, self.G, self.Ac, self.Bc, self.Fd, self.Gd, self.Acd, self.Bcd])
+
 
 def _series(w: float, z: float, h: float):
     """g(h), g'(h), I0, I1 from the Taylor series of g (valid for any zeta; used for rho h <= 2)."""

@@ -14,6 +14,7 @@ import numpy as np
 from liftoff.core.errors import InputError
 
 from .body import ModalBody
+from .result import COLUMNS
 
 INF = math.inf
 
@@ -187,7 +188,13 @@ class Forcing:
 
 @dataclass
 class Recovery:
-    """Linear output y = disp @ q + vel @ qdot + acc @ qddot of one body (k rows each)."""
+    """Linear output y = disp @ q + vel @ qdot + acc @ qddot of one body (k rows each).
+
+    ``labels``: one per row (column of the history). ``units``: one string for every
+    column, or one per column. ``category`` says what the item is, so that reports select
+    items without reading names: ``"interface_force"``, ``"cg_motion"``, ``"modal"``,
+    ``"displacement"``, or any word of the user's (default ``"user"``); ``description``:
+    free text kept with it (e.g. the component an interface force acts on)."""
 
     name: str
     body: str
@@ -195,20 +202,31 @@ class Recovery:
     disp: np.ndarray | None = None
     vel: np.ndarray | None = None
     acc: np.ndarray | None = None
-    units: str = "SI"
+    units: str | Sequence[str] = "SI"
+    category: str = "user"
+    description: str = ""
 
     def __post_init__(self) -> None:
         who = f"recovery {self.name!r}"
         _body_key(who, self.body)
+        if not isinstance(self.name, str) or not self.name or "/" in self.name or self.name.endswith(COLUMNS):
+            raise InputError(f"{who}: the name must be a non-empty string without '/' and not end in {COLUMNS!r}")
         self.labels = tuple(str(s) for s in self.labels)
+        k = len(self.labels)
+        units = (self.units,) * k if isinstance(self.units, str) else tuple(str(u) for u in self.units)
+        if len(units) != k:
+            raise InputError(f"{who}: {len(units)} units for {k} labels")
+        self.units = units
+        if not isinstance(self.category, str) or not self.category.strip():
+            raise InputError(f"{who}: category must be a non-empty string, got {self.category!r}")
         if self.disp is None and self.vel is None and self.acc is None:
             raise InputError(f"{who}: needs at least one of disp, vel, acc")
         for key in ("disp", "vel", "acc"):
             m = getattr(self, key)
             if m is not None:
                 m = _finite(f"{who}: {key}", m)
-                if m.ndim != 2 or m.shape[0] != len(self.labels):
-                    raise InputError(f"{who}: {key} has shape {m.shape}, expected ({len(self.labels)}, n_modes)")
+                if m.ndim != 2 or m.shape[0] != k:
+                    raise InputError(f"{who}: {key} has shape {m.shape}, expected ({k}, n_modes)")
                 setattr(self, key, m)
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 import math
 import time as _time
 import warnings
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -11,10 +12,25 @@ from liftoff.core.errors import ConvergenceError, InputError
 
 from .assembly import contact_rows, feedback_factors, feedback_matrix, modal_load
 from .body import ModalBody
-from .coefficients import step_coefficients
-from .kernel import CLOSED, CYCLING, NO_CONVERGENCE, OPEN, SINGULAR, march
+from .coefficients import StepCoefficients, step_coefficients
+from .kernel import (
+    BOLTED,
+    CLOSED,
+    CYCLING,
+    NO_CONVERGENCE,
+    OPEN,
+    SINGULAR,
+    Cache,
+    Contact,
+    History,
+    Modal,
+    OutputRows,
+    State,
+    Stepping,
+    march,
+)
 from .model import Forcing, InitialState, TransientProblem
-from .result import TransientResult
+from .result import RecoveryItem, TransientResult
 
 CHUNK = 5000  # steps per compiled call (progress updated between chunks)
 STABILITY = math.sqrt(3) / math.pi  # 2 pi f_h h < 2 sqrt(3): stability of penalty coupling (0.551/f_h)
@@ -142,6 +158,45 @@ def estimate_step(body_a: ModalBody, body_b: ModalBody, contacts) -> tuple[float
     return f_h, 0.25 / f_h
 
 
+@dataclass
+class StepChoice:
+    """The fixed step of a run (section 2.5): h, the contact frequency f_h it came from and
+    the default 0.25/f_h (eq. 12), the number of steps from t0."""
+
+    h: float
+    f_h: float
+    h_default: float
+    n_steps: int
+    t0: float
+
+    @property
+    def time(self) -> np.ndarray:
+        """(n_steps + 1,) the time of every step (s)."""
+        return self.t0 + self.h * np.arange(self.n_steps + 1)
+
+
+def choose_step(problem: TransientProblem, rows) -> StepChoice:
+    """h = problem.h, or 0.25/f_h (eq. 12) when not given; warns when a given h is larger
+    than 0.25/f_h (and says so when it also exceeds the penalty stability limit)."""
+    f_h, h_default = estimate_step(problem.body_a, problem.body_b, problem.contacts)
+    h = h_default if problem.h is None else float(problem.h)
+    if problem.h is not None and h > h_default * (1 + 1e-9):
+        extra = ""
+        if (rows.compliance > 0).any() and h > STABILITY * h_default / 0.25:
+            extra = (f"; it also exceeds about {STABILITY:.2f}/f_h = {STABILITY / f_h:.4g} s, the stability limit "
+                     "of the penalty coupling (linear-acceleration scheme), so the run may diverge")
+        warnings.warn(f"time step h = {h:.4g} s is larger than 0.25/f_h = {h_default:.4g} s "
+                      f"(f_h = {f_h:.4g} Hz, eq. 12): the contact force may be under-resolved{extra}",
+                      stacklevel=4)
+    span = problem.t_end - problem.t0
+    n_steps = int(math.ceil(span / h - 1e-9))
+    if n_steps < 1:
+        raise InputError(f"time step h = {h:g} s is longer than the run ({span:g} s)")
+    if n_steps > 2e8:
+        raise InputError(f"{n_steps} steps of h = {h:g} s: too many; use a larger h or a shorter run")
+    return StepChoice(h, f_h, h_default, n_steps, float(problem.t0))
+
+
 # ------------------------------------------------------------- initial force
 def _acceleration(body: ModalBody, key: str, forcing: Forcing, load, t: float, q, v, Pc) -> np.ndarray:
     """Modal acceleration at time t from the equation of motion: applied load (``load``, the
@@ -187,9 +242,69 @@ def initial_contact_force(body_a, body_b, rows, forcing, state: InitialState, t0
     return f, active
 
 
+def initial_state(problem: TransientProblem) -> InitialState:
+    """The state at t0: the one given, zero, or static equilibrium (section 2.6)."""
+    pa, pb = problem.body_a, problem.body_b
+    if isinstance(problem.initial, InitialState):
+        return problem.initial
+    if problem.initial == "zero":
+        return InitialState(np.zeros(pa.n_modes), np.zeros(pa.n_modes), np.zeros(pb.n_modes), np.zeros(pb.n_modes))
+    return static_equilibrium(pa, pb, problem.contacts, problem.forcing, problem.t0)
+
+
 # ---------------------------------------------------------------- outputs
-def _output_matrices(problem: TransientProblem, key: str):
-    """Stacked output rows (L, kind, target), labels per target group."""
+@dataclass
+class OutputPlan:
+    """Output rows of one body for the kernel, and where each history lands in its Y (n_t, ntarg):
+    columns [0, k) displacement, [k, 2k) velocity, [2k, 3k) acceleration of the labelled
+    outputs, then the rigid-body motion (``rb``) and the recoveries (``rec``)."""
+
+    L: np.ndarray                   # (n_rows, n_modes), rows sorted by kind
+    kind: np.ndarray                # (n_rows,) 0: q, 1: qdot, 2: qddot
+    targ: np.ndarray                # (n_rows,) column of Y each row adds to
+    ntarg: int
+    k: int                          # number of labelled outputs
+    rb: tuple[int, int] | None      # columns of the rigid-body motion (Tx..Rz), None if not defined
+    rb_sel: np.ndarray | None       # rigid-body components the body's rigid-body mass determines
+    rec: dict                       # recovery name -> (first, last + 1) columns
+
+    def first_row(self, q, v, acc, Y) -> None:
+        """Y[0] from the state at t0 (the kernel fills the rows after)."""
+        for row in range(self.L.shape[0]):
+            x = (q, v, acc)[self.kind[row]]
+            Y[0, self.targ[row]] += self.L[row] @ x
+
+    def split(self, Y):
+        """(displacement, velocity, acceleration, rigid-body motion or None, {recovery: history})."""
+        k = self.k
+        d, v, a = Y[:, :k], Y[:, k:2 * k], Y[:, 2 * k:3 * k]
+        rb = None
+        if self.rb is not None:
+            rb = Y[:, self.rb[0]:self.rb[1]].copy()
+            rb[:, np.setdiff1d(np.arange(6), self.rb_sel)] = np.nan
+        rec = {name: Y[:, s0:s1].copy() for name, (s0, s1) in self.rec.items()}
+        return d.copy(), v.copy(), a.copy(), rb, rec
+
+
+def _rigid_body_rows(body: ModalBody):
+    """(R (6, n), sel): R q is the rigid-body motion about ref_point, (RB^T M RB)^-1 Phi^T M RB q
+    on the components ``sel`` the rigid-body mass determines; (None, None) when it is not defined."""
+    if not body.n_modes:
+        return None, None
+    Mrb = body.rigid_body_mass
+    sel = np.flatnonzero(np.abs(np.diag(Mrb)) > 0)
+    if not sel.size:
+        return None, None
+    sub = Mrb[np.ix_(sel, sel)]
+    if not np.linalg.cond(sub) < 1e12:
+        return None, None
+    R = np.full((6, body.n_modes), np.nan)
+    R[sel] = np.linalg.solve(sub, body.participation[:, sel].T)
+    return R, sel
+
+
+def output_plan(problem: TransientProblem, key: str) -> OutputPlan:
+    """Stacked output rows of body ``key``: labelled outputs, rigid-body motion, recoveries."""
     body = problem.body(key)
     n = body.n_modes
     labels = problem.outputs[key]
@@ -200,23 +315,14 @@ def _output_matrices(problem: TransientProblem, key: str):
         for kd in range(3):
             L.append(row); kind.append(kd); targ.append(kd * k + i)
     ntarg = 3 * k
-    rb_slice = None
-    if n:
-        Mrb = body.rigid_body_mass
-        sel = np.flatnonzero(np.abs(np.diag(Mrb)) > 0)
-        R = None
-        if sel.size:
-            sub = Mrb[np.ix_(sel, sel)]
-            if np.linalg.cond(sub) < 1e12:
-                R = np.full((6, n), np.nan)
-                R[sel] = np.linalg.solve(sub, body.participation[:, sel].T)
-        if R is not None:
-            rb_slice = (ntarg, ntarg + 6)
-            for d in range(6):
-                L.append(np.zeros(n) if d not in sel else R[d]); kind.append(0); targ.append(ntarg + d)
-            rb_sel = sel
-            ntarg += 6
-    rec_slices = {}
+    R, rb_sel = _rigid_body_rows(body)
+    rb = None
+    if R is not None:
+        rb = (ntarg, ntarg + 6)
+        for d in range(6):
+            L.append(np.zeros(n) if d not in rb_sel else R[d]); kind.append(0); targ.append(ntarg + d)
+        ntarg += 6
+    rec = {}
     for r in problem.recoveries:
         if r.body != key:
             continue
@@ -226,21 +332,100 @@ def _output_matrices(problem: TransientProblem, key: str):
                 continue
             for i in range(m):
                 L.append(mat[i]); kind.append(kd); targ.append(ntarg + i)
-        rec_slices[r.name] = (ntarg, ntarg + m)
+        rec[r.name] = (ntarg, ntarg + m)
         ntarg += m
     L = np.array(L).reshape(len(kind), n) if kind else np.zeros((0, n))
     order = np.argsort(np.array(kind, dtype=np.int64), kind="stable")  # the kernel wants rows grouped by kind
-    L, kind, targ = L[order], np.array(kind, dtype=np.int64)[order], np.array(targ, dtype=np.int64)[order]
-    out = dict(L=np.ascontiguousarray(L), kind=kind, targ=targ,
-               ntarg=ntarg, k=k, rb=rb_slice, rec=rec_slices)
-    out["rb_sel"] = rb_sel if rb_slice is not None else None
-    return out
+    return OutputPlan(np.ascontiguousarray(L[order]), np.array(kind, dtype=np.int64)[order],
+                      np.array(targ, dtype=np.int64)[order], ntarg, k, rb, rb_sel, rec)
 
 
-def _initial_outputs(outm, body, q, v, acc, Y):
-    for row in range(outm["L"].shape[0]):
-        x = (q, v, acc)[outm["kind"][row]]
-        Y[0, outm["targ"][row]] += outm["L"][row] @ x
+# ------------------------------------------------------------- kernel inputs
+def step_flexibility(coefs: tuple[StepCoefficients, StepCoefficients], rows, kind: str = "Bc") -> np.ndarray:
+    """Relative step flexibility of the contact rows, both bodies: Phi_ca diag(c_a) Phi_ca^T +
+    Phi_cb diag(c_b) Phi_cb^T (e = x_a - x_b per unit force on A and its reaction on B)."""
+    return coefs[0].flexibility(rows.Phi_a, kind) + coefs[1].flexibility(rows.Phi_b, kind)
+
+
+def _contact_inputs(rows, coefs) -> tuple[Contact, np.ndarray]:
+    """The kernel's contact bundle and W, the step flexibility of the rows (end force -> end
+    displacement). With rigid rows the unknowns are x = [f1; g] (kernel.py) and the step
+    matrix [[C + W_Bc, W_Ac], [W_Bcd, W_Acd]]; penalty only: C + W on f1 alone."""
+    W = step_flexibility(coefs, rows, "Bc")
+    if (rows.compliance == 0).any():
+        W2 = np.block([[W, step_flexibility(coefs, rows, "Ac")],
+                       [step_flexibility(coefs, rows, "Bcd"), step_flexibility(coefs, rows, "Acd")]])
+        C2 = np.concatenate([rows.compliance, np.zeros(rows.n)])
+    else:
+        W2, C2 = W, rows.compliance.copy()
+    Phi_c = np.ascontiguousarray(np.hstack([rows.Phi_a, -rows.Phi_b]))  # both bodies as one modal set
+    return Contact(Phi_c, rows.compliance, rows.offset, rows.contact, rows.axial, rows.sign, rows.release,
+                   np.ascontiguousarray(W2), C2), W
+
+
+def _modal_inputs(problem: TransientProblem, coefs, loads) -> Modal:
+    """The kernel's modal bundle: both bodies as one modal set (a then b), their step
+    coefficients, applied loads on one merged time grid and rank-factored feedback."""
+    C = np.ascontiguousarray
+    pa, pb = problem.body_a, problem.body_b
+    na, n = pa.n_modes, pa.n_modes + pb.n_modes
+    load_a, load_b = loads
+    coef = C(np.hstack([C(coefs[0].packed()), C(coefs[1].packed())]))
+    w2 = np.concatenate([pa.omega, pb.omega]) ** 2
+    zw2 = 2 * np.concatenate([pa.zeta * pa.omega, pb.zeta * pb.omega])
+    const = np.concatenate([load_a.const, load_b.const])
+    tk = np.union1d(load_a.times, load_b.times)
+    Pk = np.zeros((tk.size, n))
+    for ld, cols in ((load_a, slice(0, na)), (load_b, slice(na, None))):
+        if ld.times.size:  # exact: each body's table is linear between its own breakpoints
+            Pk[:, cols] = np.column_stack([np.interp(tk, ld.times, ld.table[:, m]) for m in range(ld.table.shape[1])])
+    U_a, V_a, until_a = feedback_factors(pa.n_modes, "a", problem.forcing, problem.t0)
+    U_b, V_b, until_b = feedback_factors(pb.n_modes, "b", problem.forcing, problem.t0)
+    U = np.zeros((n, U_a.shape[1] + U_b.shape[1]))
+    V = np.zeros((U.shape[1], n))
+    U[:na, :U_a.shape[1]], V[:U_a.shape[1], :na] = U_a, V_a
+    U[na:, U_a.shape[1]:], V[U_a.shape[1]:, na:] = U_b, V_b
+    until = np.concatenate([until_a, until_b]).astype(float)
+    return Modal(na, coef, w2, zw2, const, tk, C(Pk), C(U), C(V), until)
+
+
+def _histories(problem: TransientProblem, rows, n_t: int, plans) -> History:
+    """Zeroed time histories; the modal ones only with ``keep_modal``."""
+    keep = bool(problem.keep_modal)
+    na, nb = problem.body_a.n_modes, problem.body_b.n_modes
+    Qa, Va, Aa = (np.zeros((n_t if keep else 0, na)) for _ in range(3))
+    Qb, Vb, Ab = (np.zeros((n_t if keep else 0, nb)) for _ in range(3))
+    return History(np.zeros((n_t, plans[0].ntarg)), np.zeros((n_t, plans[1].ntarg)), np.zeros((n_t, rows.n)),
+                   np.zeros((n_t, len(rows.names)), dtype=np.int8), np.zeros(n_t, dtype=np.int32), keep,
+                   Qa, Va, Aa, Qb, Vb, Ab)
+
+
+def _start(problem: TransientProblem, rows, contact: Contact, init: InitialState, f0, active0, loads,
+           plans, hist: History) -> State:
+    """Row 0 of the histories and the kernel state at t0 (contact force f0, active set active0)."""
+    pa, pb, fo, t0 = problem.body_a, problem.body_b, problem.forcing, problem.t0
+    q_a, v_a, q_b, v_b = (np.array(x, dtype=float) for x in (init.q_a, init.v_a, init.q_b, init.v_b))
+    a_a0 = _acceleration(pa, "a", fo, loads[0], t0, q_a, v_a, rows.Phi_a.T @ f0)
+    a_b0 = _acceleration(pb, "b", fo, loads[1], t0, q_b, v_b, -(rows.Phi_b.T @ f0))
+    plans[0].first_row(q_a, v_a, a_a0, hist.Y_a)
+    plans[1].first_row(q_b, v_b, a_b0, hist.Y_b)
+    hist.Fc[0] = f0
+    bolted0 = t0 < rows.release
+    hist.state[0] = np.where(bolted0, BOLTED, OPEN)
+    for c in range(len(rows.names)):
+        if not bolted0[c] and active0[rows.axial_column[c]]:
+            hist.state[0, c] = CLOSED
+    if hist.keep:
+        hist.Qa[0], hist.Va[0], hist.Aa[0], hist.Qb[0], hist.Vb[0], hist.Ab[0] = q_a, v_a, a_a0, q_b, v_b, a_b0
+    pen0 = np.where(rows.compliance > 0, f0, 0.0)  # rigid rows start each step from their own g
+    return State(np.concatenate([q_a, q_b]), np.concatenate([v_a, v_b]), f0.copy(), active0.copy(),
+                 contact.Phi.T @ pen0, np.concatenate([loads[0].at(t0), loads[1].at(t0)]),
+                 np.zeros(1, dtype=np.int64))
+
+
+def _new_cache(n2: int, cap: int = 64) -> Cache:
+    """Room for ``cap`` active-set patterns of the (n2, n2) step matrix."""
+    return Cache(np.zeros((cap, 2 * n2), dtype=np.bool_), np.zeros((cap, n2, n2)), np.zeros(2, dtype=np.int64))
 
 
 # -------------------------------------------------------------------- solve
@@ -260,160 +445,49 @@ def solve(problem: TransientProblem) -> TransientResult:
 def _solve(problem: TransientProblem) -> TransientResult:
     """Run the two-body transient (sections 2.3-2.7) and return its time histories."""
     started = _time.perf_counter()
-    pa, pb = problem.body_a, problem.body_b
-    fo = problem.forcing
+    pa, pb, fo = problem.body_a, problem.body_b, problem.forcing
     rows = contact_rows(pa, pb, problem.contacts)
-    f_h, h_default = estimate_step(pa, pb, problem.contacts)
-    if problem.h is None:
-        h = h_default
-    else:
-        h = float(problem.h)
-        if h > h_default * (1 + 1e-9):
-            extra = ""
-            if (rows.compliance > 0).any() and h > STABILITY * h_default / 0.25:
-                extra = (f"; it also exceeds about {STABILITY:.2f}/f_h = {STABILITY / f_h:.4g} s, the stability limit "
-                         "of the penalty coupling (linear-acceleration scheme), so the run may diverge")
-            warnings.warn(f"time step h = {h:.4g} s is larger than 0.25/f_h = {h_default:.4g} s "
-                          f"(f_h = {f_h:.4g} Hz, eq. 12): the contact force may be under-resolved{extra}",
-                          stacklevel=2)
-    span = problem.t_end - problem.t0
-    n_steps = int(math.ceil(span / h - 1e-9))
-    if n_steps < 1:
-        raise InputError(f"time step h = {h:g} s is longer than the run ({span:g} s)")
-    if n_steps > 2e8:
-        raise InputError(f"{n_steps} steps of h = {h:g} s: too many; use a larger h or a shorter run")
-    n_t = n_steps + 1
-    time = problem.t0 + h * np.arange(n_t)
-
-    # initial state
-    if isinstance(problem.initial, InitialState):
-        init = problem.initial
-    elif problem.initial == "zero":
-        init = InitialState(np.zeros(pa.n_modes), np.zeros(pa.n_modes), np.zeros(pb.n_modes), np.zeros(pb.n_modes))
-    else:
-        init = static_equilibrium(pa, pb, problem.contacts, fo, problem.t0)
+    step = choose_step(problem, rows)
+    init = initial_state(problem)
     f0, active0 = initial_contact_force(pa, pb, rows, fo, init, problem.t0)
+    coefs = (step_coefficients(pa.omega, pa.zeta, step.h), step_coefficients(pb.omega, pb.zeta, step.h))
+    loads = (modal_load(pa, "a", fo), modal_load(pb, "b", fo))
+    plans = (output_plan(problem, "a"), output_plan(problem, "b"))
+    contact, W = _contact_inputs(rows, coefs)
+    hist = _histories(problem, rows, step.n_steps + 1, plans)
+    state = _start(problem, rows, contact, init, f0, active0, loads, plans, hist)
+    cache = _new_cache(contact.W.shape[0])
+    steps = Stepping(float(problem.t0), float(step.h), 0 if problem.method == "direct" else 1,
+                     float(problem.tol), int(problem.max_iter))
+    out_rows = OutputRows(plans[0].L, plans[0].kind, plans[0].targ, plans[1].L, plans[1].kind, plans[1].targ)
+    inputs = (steps, _modal_inputs(problem, coefs, loads), contact, out_rows)
+    _drive(problem, step, inputs, state, cache, hist, lambda: _spectral_radius(W, rows, state.active))
+    return _result(problem, rows, step, plans, hist, int(cache.used[0]), started)
 
-    # per-body arrays
-    def body_arrays(body, key):
-        c = step_coefficients(body.omega, body.zeta, h)
-        coef = np.ascontiguousarray(np.vstack([c.F, c.G, c.Ac, c.Bc, c.Fd, c.Gd, c.Acd, c.Bcd]))
-        load = modal_load(body, key, fo)
-        U, V, until = feedback_factors(body.n_modes, key, fo, problem.t0)
-        return c, coef, load, U, V, until
 
-    ca, coef_a, load_a, U_a, V_a, until_a = body_arrays(pa, "a")
-    cb, coef_b, load_b, U_b, V_b, until_b = body_arrays(pb, "b")
-    def flex(ka, kb):  # Phi diag(coefficient) Phi^T summed over both bodies
-        return (rows.Phi_a * getattr(ca, ka)) @ rows.Phi_a.T + (rows.Phi_b * getattr(cb, kb)) @ rows.Phi_b.T
-
-    W = flex("Bc", "Bc")  # step flexibility (end-of-step force -> end-of-step displacement)
-    # kernel matrix for x = [f1; g] (g: start values of rigid rows, see kernel.py)
-    if (rows.compliance == 0).any():
-        W2 = np.block([[W, flex("Ac", "Ac")], [flex("Bcd", "Bcd"), flex("Acd", "Acd")]])
-        C2 = np.concatenate([rows.compliance, np.zeros(rows.n)])
-    else:  # penalty only: unknowns f1 alone
-        W2, C2 = W, rows.compliance.copy()
-    out_a, out_b = _output_matrices(problem, "a"), _output_matrices(problem, "b")
-
-    # outputs
-    nc, ncon = rows.n, len(problem.contacts)
-    Y_a = np.zeros((n_t, out_a["ntarg"]))
-    Y_b = np.zeros((n_t, out_b["ntarg"]))
-    Fc = np.zeros((n_t, nc))
-    state = np.zeros((n_t, ncon), dtype=np.int8)
-    iters = np.zeros(n_t, dtype=np.int32)
-    keep = bool(problem.keep_modal)
-    shp = lambda n: (n_t, n) if keep else (0, n)  # noqa: E731
-    Qa, Va, Aa = np.zeros(shp(pa.n_modes)), np.zeros(shp(pa.n_modes)), np.zeros(shp(pa.n_modes))
-    Qb, Vb, Ab = np.zeros(shp(pb.n_modes)), np.zeros(shp(pb.n_modes)), np.zeros(shp(pb.n_modes))
-
-    # state at t0
-    q_a, v_a, q_b, v_b = (np.array(x, dtype=float) for x in (init.q_a, init.v_a, init.q_b, init.v_b))
-    Pc_a, Pc_b = rows.Phi_a.T @ f0, -(rows.Phi_b.T @ f0)
-    pen0 = np.where(rows.compliance > 0, f0, 0.0)  # rigid rows start each step from their own g
-
-    a_a0 = _acceleration(pa, "a", fo, load_a, problem.t0, q_a, v_a, Pc_a)
-    a_b0 = _acceleration(pb, "b", fo, load_b, problem.t0, q_b, v_b, Pc_b)
-    _initial_outputs(out_a, pa, q_a, v_a, a_a0, Y_a)
-    _initial_outputs(out_b, pb, q_b, v_b, a_b0, Y_b)
-    Fc[0] = f0
-    bolted0 = problem.t0 < rows.release
-    state[0] = np.where(bolted0, 0, 2)
-    for c in range(ncon):
-        if not bolted0[c] and active0[rows.axial_column[c]]:
-            state[0, c] = CLOSED
-    if keep:
-        Qa[0], Va[0], Aa[0], Qb[0], Vb[0], Ab[0] = q_a, v_a, a_a0, q_b, v_b, a_b0
-
-    f = f0.copy()
-    active = active0.copy()
-    cap = 64
-    n2 = W2.shape[0]
-    keys = np.zeros((cap, 2 * n2), dtype=np.bool_)
-    invs = np.zeros((cap, n2, n2))
-    ncache = np.zeros(1, dtype=np.int64)
-    last = np.zeros(1, dtype=np.int64)
-    ptr = np.zeros(1, dtype=np.int64)
-    method = 0 if problem.method == "direct" else 1
-    C = np.ascontiguousarray
-    # both bodies as one modal set (a then b): one BLAS product per contact projection
-    na = pa.n_modes
-    Phi_c = C(np.hstack([rows.Phi_a, -rows.Phi_b]))
-    q = np.concatenate([q_a, q_b])
-    v = np.concatenate([v_a, v_b])
-    Pc = Phi_c.T @ pen0  # contact force of the penalty rows at t0 (rigid rows start from their own g)
-    Pext = np.concatenate([load_a.at(problem.t0), load_b.at(problem.t0)])  # applied load at the step start
-    coef = C(np.hstack([coef_a, coef_b]))
-    w2 = np.concatenate([pa.omega, pb.omega]) ** 2
-    zw2 = 2 * np.concatenate([pa.zeta * pa.omega, pb.zeta * pb.omega])
-    const = np.concatenate([load_a.const, load_b.const])
-    tk = np.union1d(load_a.times, load_b.times)
-    Pk = np.zeros((tk.size, na + pb.n_modes))
-    for ld, cols in ((load_a, slice(0, na)), (load_b, slice(na, None))):
-        if ld.times.size:  # exact: each body's table is linear between its own breakpoints
-            Pk[:, cols] = np.column_stack([np.interp(tk, ld.times, ld.table[:, m]) for m in range(ld.table.shape[1])])
-    U = np.zeros((na + pb.n_modes, U_a.shape[1] + U_b.shape[1]))
-    V = np.zeros((U.shape[1], na + pb.n_modes))
-    U[:na, :U_a.shape[1]], V[:U_a.shape[1], :na] = U_a, V_a
-    U[na:, U_a.shape[1]:], V[U_a.shape[1]:, na:] = U_b, V_b
-    fb_until = np.concatenate([until_a, until_b]).astype(float)
-    args = (na, coef, w2, zw2, const, tk, C(Pk), C(U), C(V), fb_until,
-            out_a["L"], out_a["kind"], out_a["targ"], out_b["L"], out_b["kind"], out_b["targ"],
-            Phi_c, rows.compliance, rows.offset, rows.contact, rows.axial, rows.sign, rows.release, C(W2), C2)
-
+def _drive(problem: TransientProblem, step: StepChoice, inputs, state: State, cache: Cache, hist: History,
+           radius) -> None:
+    """March every step in compiled chunks of CHUNK steps (a progress bar between chunks);
+    a failed chunk raises (``radius()``: spectral radius of K_C W for the message)."""
     bar = None
-    if problem.progress and n_steps > 4 * CHUNK:
+    if problem.progress and step.n_steps > 4 * CHUNK:
         from tqdm import tqdm
 
-        bar = tqdm(total=n_steps, unit="step", desc="transient", leave=False)
+        bar = tqdm(total=step.n_steps, unit="step", desc="transient", leave=False)
     try:
         i = 0
-        while i < n_steps:
-            i1 = min(i + CHUNK, n_steps)
-            st, step, info1, info2 = march(
-                i, i1, float(problem.t0), float(h), method, float(problem.tol), int(problem.max_iter),
-                *args, q, v, f, active, Pc, Pext, ptr, keys, invs, ncache, last,
-                Y_a, Y_b, Fc, state, iters, keep, Qa, Va, Aa, Qb, Vb, Ab)
-            if st != 0:
-                t_fail = problem.t0 + step * h
-                if st == NO_CONVERGENCE:
-                    rho = _spectral_radius(W, rows, active)
-                    raise ConvergenceError(
-                        f"contact fixed-point iteration did not converge at t = {t_fail:.6g} s "
-                        f"(|dF| = {info1:.3g} N after {int(info2)} iterations; spectral radius of K_C W = {rho:.3g})")
-                if st == CYCLING:
-                    raise ConvergenceError(f"contact active set did not settle at t = {t_fail:.6g} s "
-                                           f"({int(info1)} active-set changes in one step)")
-                if st == SINGULAR:
-                    raise InputError(f"singular contact system at t = {t_fail:.6g} s: rigid contact directions "
-                                     "are redundant or act on DOFs with no flexibility")
-            if not np.all(np.isfinite(q)):
-                bad = np.flatnonzero(~np.all(np.isfinite(Fc[i + 1:i1 + 1]), axis=1))
-                t_bad = time[i + 1 + (bad[0] if bad.size else 0)]
+        while i < step.n_steps:
+            i1 = min(i + CHUNK, step.n_steps)
+            status, at, info1, info2 = march(i, i1, *inputs, state, cache, hist)
+            if status != 0:
+                _failure(status, step.t0 + at * step.h, info1, info2, radius)
+            if not np.all(np.isfinite(state.q)):
+                bad = np.flatnonzero(~np.all(np.isfinite(hist.Fc[i + 1:i1 + 1]), axis=1))
+                t_bad = step.t0 + step.h * (i + 1 + (bad[0] if bad.size else 0))
                 raise ConvergenceError(
-                    f"the solution diverged (non-finite contact force) at t = {t_bad:.6g} s: h = {h:.4g} s; the "
-                    f"penalty coupling is stable only for h below about {STABILITY / f_h:.4g} s ({STABILITY:.2f}/f_h)")
+                    f"the solution diverged (non-finite contact force) at t = {t_bad:.6g} s: h = {step.h:.4g} s; "
+                    f"the penalty coupling is stable only for h below about {STABILITY / step.f_h:.4g} s "
+                    f"({STABILITY:.2f}/f_h)")
             if bar is not None:
                 bar.update(i1 - i)
             i = i1
@@ -421,45 +495,20 @@ def _solve(problem: TransientProblem) -> TransientResult:
         if bar is not None:
             bar.close()
 
-    # events
-    sep = np.full(ncon, np.nan)
-    rec = np.zeros(ncon, dtype=np.int64)
-    for c in range(ncon):
-        s = state[:, c]
-        opened = np.flatnonzero((s[1:] == OPEN) & (s[:-1] != OPEN)) + 1
-        if opened.size:
-            sep[c] = time[opened[0]]
-        rec[c] = int(np.sum((s[1:] == CLOSED) & (s[:-1] == OPEN)))
 
-    def split(Y, outm):
-        k = outm["k"]
-        d, v, a = Y[:, :k], Y[:, k:2 * k], Y[:, 2 * k:3 * k]
-        rb = None
-        if outm["rb"] is not None:
-            rb = Y[:, outm["rb"][0]:outm["rb"][1]].copy()
-            missing = np.setdiff1d(np.arange(6), outm["rb_sel"])
-            rb[:, missing] = np.nan
-        recd = {name: Y[:, s0:s1].copy() for name, (s0, s1) in outm["rec"].items()}
-        return d.copy(), v.copy(), a.copy(), rb, recd
-
-    da, va, aa, rba, reca = split(Y_a, out_a)
-    db, vb, ab, rbb, recb = split(Y_b, out_b)
-    modal = {}
-    if keep:
-        modal = {"q_a": Qa, "v_a": Va, "acc_a": Aa, "q_b": Qb, "v_b": Vb, "acc_b": Ab}
-    meta = {"h": h, "method": problem.method, "tol": problem.tol, "max_iter": problem.max_iter,
-            "f_h": f_h, "h_default": h_default, "n_steps": n_steps, "t0": problem.t0, "t_end": problem.t_end,
-            "body_a": pa.name, "body_b": pb.name, "wall_time_s": _time.perf_counter() - started,
-            "axial_columns": [int(x) for x in rows.axial_column],
-            "normal_signs": [float(x) for x in rows.normal_sign],
-            "active_set_patterns": int(ncache[0])}
-    return TransientResult(
-        time=time, contact_names=rows.names, contact_labels=rows.labels, contact_force=Fc, contact_state=state,
-        separation_time=sep, recontact_count=rec, release_time=rows.release.copy(),
-        output_labels={"a": tuple(problem.outputs["a"]), "b": tuple(problem.outputs["b"])},
-        displacement={"a": da, "b": db}, velocity={"a": va, "b": vb}, acceleration={"a": aa, "b": ab},
-        recovered={**reca, **recb}, recovered_units={r.name: r.units for r in problem.recoveries},
-        rigid_body_motion_a=rba, rigid_body_motion_b=rbb, iterations=iters, modal=modal, metadata=meta)
+def _failure(status: int, t_fail: float, info1: float, info2: float, radius) -> None:
+    """Raise the error of a kernel status code."""
+    if status == NO_CONVERGENCE:
+        raise ConvergenceError(
+            f"contact fixed-point iteration did not converge at t = {t_fail:.6g} s "
+            f"(|dF| = {info1:.3g} N after {int(info2)} iterations; spectral radius of K_C W = {radius():.3g})")
+    if status == CYCLING:
+        raise ConvergenceError(f"contact active set did not settle at t = {t_fail:.6g} s "
+                               f"({int(info1)} active-set changes in one step)")
+    if status == SINGULAR:
+        raise InputError(f"singular contact system at t = {t_fail:.6g} s: rigid contact directions "
+                         "are redundant or act on DOFs with no flexibility")
+    raise ConvergenceError(f"the time loop stopped at t = {t_fail:.6g} s with status {status}")
 
 
 def _spectral_radius(W, rows, active) -> float:
@@ -469,3 +518,43 @@ def _spectral_radius(W, rows, active) -> float:
         act = rows.compliance > 0
     k = 1.0 / rows.compliance[act]
     return float(np.max(np.abs(np.linalg.eigvals(k[:, None] * W[np.ix_(act, act)]))))
+
+
+# ------------------------------------------------------------------- result
+def contact_events(state: np.ndarray, time: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per contact point: time of the first opening (NaN if never) and the number of recontacts
+    (open -> closed), from the state histories (n_t, n_contacts)."""
+    ncon = state.shape[1]
+    sep = np.full(ncon, np.nan)
+    rec = np.zeros(ncon, dtype=np.int64)
+    for c in range(ncon):
+        s = state[:, c]
+        opened = np.flatnonzero((s[1:] == OPEN) & (s[:-1] != OPEN)) + 1
+        if opened.size:
+            sep[c] = time[opened[0]]
+        rec[c] = int(np.sum((s[1:] == CLOSED) & (s[:-1] == OPEN)))
+    return sep, rec
+
+
+def _result(problem: TransientProblem, rows, step: StepChoice, plans, hist: History, n_patterns: int,
+            started: float) -> TransientResult:
+    """The TransientResult of a finished run: histories split per body, events, metadata."""
+    time = step.time
+    sep, rec = contact_events(hist.state, time)
+    da, va, aa, rba, reca = plans[0].split(hist.Y_a)
+    db, vb, ab, rbb, recb = plans[1].split(hist.Y_b)
+    modal = {}
+    if hist.keep:
+        modal = {"q_a": hist.Qa, "v_a": hist.Va, "acc_a": hist.Aa, "q_b": hist.Qb, "v_b": hist.Vb, "acc_b": hist.Ab}
+    meta = {"h": step.h, "method": problem.method, "tol": problem.tol, "max_iter": problem.max_iter,
+            "f_h": step.f_h, "h_default": step.h_default, "n_steps": step.n_steps, "t0": problem.t0,
+            "t_end": problem.t_end, "body_a": problem.body_a.name, "body_b": problem.body_b.name,
+            "wall_time_s": _time.perf_counter() - started, "active_set_patterns": n_patterns}
+    items = {r.name: RecoveryItem(r.name, r.body, r.category, r.labels, r.units, r.description) for r in problem.recoveries}
+    return TransientResult(
+        time=time, contact_names=rows.names, contact_directions=rows.directions, contact_force=hist.Fc,
+        contact_state=hist.state, separation_time=sep, recontact_count=rec, release_time=rows.release.copy(),
+        output_labels={"a": tuple(problem.outputs["a"]), "b": tuple(problem.outputs["b"])},
+        displacement={"a": da, "b": db}, velocity={"a": va, "b": vb}, acceleration={"a": aa, "b": ab},
+        recovered={**reca, **recb}, recovery_items=items, rigid_body_motion_a=rba, rigid_body_motion_b=rbb,
+        iterations=hist.iters, modal=modal, metadata=meta)

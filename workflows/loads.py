@@ -158,15 +158,18 @@ def recoveries(case: Case, stack: StackModel) -> tuple[list[Recovery], dict, dic
         labels = [f"{point}:{c}" for c in SIX]
         D, A = interface_force_recovery(stack.vehicle_asm, stack.vehicle_modes, comp, labels)
         name = f"attach_{point}"
-        out.append(Recovery(name, "a", labels, disp=D, acc=A, units="N (N m for rotations), on " + comp))
+        out.append(Recovery(name, "a", SIX, disp=D, acc=A, units=("N",) * 3 + ("N m",) * 3,
+                            category="interface_force",
+                            description=f"force of the rest of the vehicle on {comp} at {point}"))
         attach[name] = (point, comp)
-    out.append(Recovery("cg_motion", "a", [f"cg:{c}" for c in SIX], disp=cg_motion_matrix(body),
-                        units="m (Tx Ty Tz), rad (Rx Ry Rz)"))
+    out.append(Recovery("cg_motion", "a", SIX, disp=cg_motion_matrix(body), units=("m",) * 3 + ("rad",) * 3,
+                        category="cg_motion", description="vehicle c.g. motion (eq. 23)"))
     n_a, n_b = body.n_modes, stack.pad.n_modes
-    out.append(Recovery("modal_q_a", "a", [f"q{j}" for j in range(n_a)], disp=np.eye(n_a), units="sqrt(kg) m"))
+    out.append(Recovery("modal_q_a", "a", [f"q{j}" for j in range(n_a)], disp=np.eye(n_a), units="sqrt(kg) m",
+                        category="modal", description="modal coordinates of the vehicle"))
     if n_b:
         out.append(Recovery("modal_q_b", "b", [f"q{j}" for j in range(n_b)], disp=np.eye(n_b),
-                            units="sqrt(kg) m"))
+                            units="sqrt(kg) m", category="modal", description="modal coordinates of the pad"))
     outputs = []
     w = Where(case.source, "recovery")
     for key in ("top", "payload"):

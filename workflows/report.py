@@ -15,49 +15,43 @@ from pathlib import Path
 import numpy as np
 from liftoff.transient.effects import center_of_gravity
 
+from liftoff.core.labels import TRANSLATIONS, point_labels
 from liftoff.core.records import write_text
 
 
 @dataclass
 class Item:
-    """One recovered time history (one column) of one case."""
+    """One recovered time history (one column) of one case; ``category``: contact_force,
+    displacement, acceleration, or the category of the recovery it comes from."""
 
     name: str
     unit: str
     values: np.ndarray
-
-
-def _unit(label: str, kind: str) -> str:
-    rot = label.split(":")[-1].startswith("R")
-    return {"force": ("N m" if rot else "N"), "disp": ("rad" if rot else "m"),
-            "acc": ("rad/s^2" if rot else "m/s^2")}[kind]
+    category: str = ""
 
 
 def items(result, attach: dict) -> list[Item]:
-    """Every reported history: post forces, attach forces, c.g. motion, output points."""
+    """Every reported history: post forces, recovered items (attach forces, c.g. motion; not
+    the modal coordinates), output points. Names, units and kinds come from the result's
+    contact directions and recovery items; ``attach``: recovery name -> (point, component)."""
     out = []
-    for j, lab in enumerate(result.contact_labels):
-        name, _, dof = lab.partition("/")
-        out.append(Item(f"post {name} {dof.split(':')[-1]}", _unit(dof, "force"), result.contact_force[:, j]))
-    for rname, arr in result.recovered.items():
-        if rname.startswith("modal_q"):
+    for j, d in enumerate(result.contact_directions):
+        out.append(Item(f"post {d.contact} {d.component}", d.unit, result.contact_force[:, j], "contact_force"))
+    for it in result.recovery_items.values():
+        if it.category == "modal":
             continue
-        labels = _recovery_labels(rname, arr.shape[1])
-        for j in range(arr.shape[1]):
-            if rname in attach:
-                point, comp = attach[rname]
-                out.append(Item(f"attach {point} on {comp} {labels[j]}", _unit(labels[j], "force"), arr[:, j]))
-            else:
-                out.append(Item(f"{rname} {labels[j]}", _unit(labels[j], "disp"), arr[:, j]))
+        arr = result.recovered[it.name]
+        head = it.name
+        if it.category == "interface_force" and it.name in attach:
+            point, comp = attach[it.name]
+            head = f"attach {point} on {comp}"
+        for j, (lab, unit) in enumerate(zip(it.labels, it.units)):
+            out.append(Item(f"{head} {lab}", unit, arr[:, j], it.category))
+    dunits, aunits = result.output_units("a", "disp"), result.output_units("a", "acc")
     for j, lab in enumerate(result.output_labels["a"]):
-        out.append(Item(f"disp {lab}", _unit(lab, "disp"), result.displacement["a"][:, j]))
-        out.append(Item(f"acc {lab}", _unit(lab, "acc"), result.acceleration["a"][:, j]))
+        out.append(Item(f"disp {lab}", dunits[j], result.displacement["a"][:, j], "displacement"))
+        out.append(Item(f"acc {lab}", aunits[j], result.acceleration["a"][:, j], "acceleration"))
     return out
-
-
-def _recovery_labels(name: str, k: int) -> list[str]:
-    six = ["Tx", "Ty", "Tz", "Rx", "Ry", "Rz"]
-    return six[:k] if k <= 6 else [f"c{j}" for j in range(k)]
 
 
 def maxmin(time: np.ndarray, its: list[Item], case: str) -> list[dict]:
@@ -65,7 +59,8 @@ def maxmin(time: np.ndarray, its: list[Item], case: str) -> list[dict]:
     for it in its:
         i, k = int(np.argmax(it.values)), int(np.argmin(it.values))
         rows.append({"item": it.name, "unit": it.unit, "max": float(it.values[i]), "t_max": float(time[i]),
-                     "case_max": case, "min": float(it.values[k]), "t_min": float(time[k]), "case_min": case})
+                     "case_max": case, "min": float(it.values[k]), "t_min": float(time[k]), "case_min": case,
+                     "category": it.category})
     return rows
 
 
@@ -135,37 +130,42 @@ def plots(result, cp, out: Path, case: str) -> list[Path]:
         plt.close(fig)
         paths.append(p)
 
-    # post forces: axial and lateral
+    # post forces: axial (normal, + compression) and the magnitude of the lateral translations
     fig, axs = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
+    dirs, F = result.contact_directions, result.contact_force
     for c, name in enumerate(result.contact_names):
-        cols = [j for j, lab in enumerate(result.contact_labels) if lab.split("/")[0] == name]
-        axs[0].plot(t, result.contact_force[:, cols[2]] / 1e6, lw=0.8, label=name)
-        axs[1].plot(t, np.hypot(result.contact_force[:, cols[0]], result.contact_force[:, cols[1]]) / 1e6, lw=0.8)
+        ax = result.axial_column(c)
+        lat = [j for j in result.directions_of(c) if not dirs[j].axial and dirs[j].component in TRANSLATIONS]
+        axs[0].plot(t, dirs[ax].normal_sign * F[:, ax] / 1e6, lw=0.8, label=name)
+        axs[1].plot(t, np.sqrt(np.sum(F[:, lat] ** 2, axis=1)) / 1e6, lw=0.8)
     axs[0].set_ylabel("axial force on vehicle (MN)\n(+ compression)")
-    axs[1].set_ylabel("lateral force |Fx, Fy| (MN)")
+    axs[1].set_ylabel("lateral force magnitude (MN)")
     finish(fig, list(axs), "post_forces", "Hold-down post forces")
 
-    att = {k: v for k, v in result.recovered.items() if k in cp.attach}
+    att = [it for it in result.items("interface_force") if it.name in cp.attach]
     if att:
-        fig, axs = plt.subplots(3, 1, figsize=(10, 8), sharex=True)
-        for k, arr in att.items():
-            point, comp = cp.attach[k]
-            for j, ax in enumerate(axs):
-                ax.plot(t, arr[:, j] / 1e6, lw=0.8, label=f"{point} ({comp})")
-        for j, ax in enumerate(axs):
-            ax.set_ylabel(f"F{'xyz'[j]} (MN)")
+        cols = _translations(att[0])
+        fig, axs = plt.subplots(len(cols), 1, figsize=(10, 8), sharex=True)
+        for it in att:
+            point, comp = cp.attach[it.name]
+            for ax, j in zip(axs, _translations(it)):
+                ax.plot(t, result.recovered[it.name][:, j] / 1e6, lw=0.8, label=f"{point} ({comp})")
+        for ax, j in zip(axs, cols):
+            ax.set_ylabel(f"{att[0].labels[j]} (M{att[0].units[j]})")
         finish(fig, list(axs), "attach_forces", "Attach forces (on the named component)")
 
     fig, axs = plt.subplots(3, 1, figsize=(10, 9), sharex=True)
-    cg = result.recovered["cg_motion"]
-    for j in range(3):
-        axs[0].plot(t, cg[:, j], lw=0.9, label=f"c.g. {'xyz'[j]} (m)")
+    cg_item = result.items("cg_motion")[0]
+    cg, cgc = result.recovered[cg_item.name], _translations(cg_item)
+    for j in cgc:
+        axs[0].plot(t, cg[:, j], lw=0.9, label=f"c.g. {cg_item.labels[j]} ({cg_item.units[j]})")
     labels = result.output_labels["a"]
     top = cp.case.recovery.top
     if top:
-        for j, c in enumerate("xy"):
-            col = labels.index(f"{top}:T{c}")
-            axs[1].plot(t, result.displacement["a"][:, col] - cg[:, j], lw=0.9, label=f"{top} {c} rel. to c.g. (m)")
+        for j, lab in zip(cgc[:2], point_labels(top, TRANSLATIONS[:2])):
+            col = labels.index(lab)
+            axs[1].plot(t, result.displacement["a"][:, col] - cg[:, j], lw=0.9,
+                        label=f"{lab} rel. to c.g. ({cg_item.units[j]})")
     if result.rigid_body_motion_a is not None:
         for j in range(3):
             axs[2].plot(t, np.degrees(result.rigid_body_motion_a[:, 3 + j]), lw=0.9, label=f"R{'xyz'[j]}")
@@ -179,12 +179,16 @@ def plots(result, cp, out: Path, case: str) -> list[Path]:
     pay = cp.case.recovery.payload
     if pay:
         fig, axs = plt.subplots(1, 1, figsize=(10, 4))
-        for c in "xyz":
-            col = labels.index(f"{pay}:T{c}")
-            axs.plot(t, result.acceleration["a"][:, col], lw=0.8, label=f"a{c}")
+        for lab in point_labels(pay, TRANSLATIONS):
+            axs.plot(t, result.acceleration["a"][:, labels.index(lab)], lw=0.8, label=lab)
         axs.set_ylabel(f"{pay} acceleration (m/s^2)")
         finish(fig, [axs], "payload_acc", "Payload-station acceleration")
     return paths
+
+
+def _translations(item) -> list[int]:
+    """Columns of a recovery item labelled with a translation component (Tx Ty Tz), in order."""
+    return [item.labels.index(c) for c in TRANSLATIONS if c in item.labels]
 
 
 # ------------------------------------------------------------------ snapshots
@@ -201,21 +205,23 @@ def snapshot_times(result, cp) -> dict[str, int]:
     top = cp.case.recovery.top
     if top:
         labels = result.output_labels["a"]
-        cg = result.recovered["cg_motion"]
-        dx = result.displacement["a"][:, labels.index(f"{top}:Tx")] - cg[:, 0]
-        dy = result.displacement["a"][:, labels.index(f"{top}:Ty")] - cg[:, 1]
+        cg_item = result.items("cg_motion")[0]
+        cg, (cx, cy) = result.recovered[cg_item.name], _translations(cg_item)[:2]
+        lx, ly = point_labels(top, TRANSLATIONS[:2])
+        dx = result.displacement["a"][:, labels.index(lx)] - cg[:, cx]
+        dy = result.displacement["a"][:, labels.index(ly)] - cg[:, cy]
         lat = np.hypot(dx, dy)[: max(i_rel, 1)]
         out["max_twang"] = int(np.argmax(lat))
     # the largest load event: the biggest change of a post axial force or of an attach force
     # magnitude from its static preload at t0 (the preloads themselves peak at t0)
     best, idx = -1.0, 0
-    for j, lab in enumerate(result.contact_labels):
-        if lab.endswith(":Tz"):
+    for j, d in enumerate(result.contact_directions):
+        if d.axial:
             v = np.abs(result.contact_force[:, j] - result.contact_force[0, j])
             if v.max() > best:
                 best, idx = float(v.max()), int(np.argmax(v))
-    for k in cp.attach:
-        F = result.recovered[k][:, :3]
+    for it in result.items("interface_force"):
+        F = result.recovered[it.name][:, _translations(it)]
         v = np.linalg.norm(F - F[0], axis=1)
         if v.max() > best:
             best, idx = float(v.max()), int(np.argmax(v))
@@ -280,7 +286,8 @@ def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[di
             rel = "never" if not np.isfinite(c["release_time"]) else f"{c['release_time']:.3f}"
             lines.append(f"    {c['name']:<10}{rel:>12}{sep:>16}{c['recontacts']:>12}"
                          f"{c['peak_compression'] / 1e6:>18.3f}{c['peak_tension'] / 1e6:>19.3f}")
-    peaks = sorted((r for r in rows_env if r["item"].startswith(("attach", "post")) and r["unit"] == "N"),
+    peaks = sorted((r for r in rows_env if r.get("category") in ("contact_force", "interface_force")
+                    and r["unit"] == "N"),
                    key=lambda r: -max(abs(r["max"]), abs(r["min"])))[:5]
     if peaks:
         lines.append("  largest loads (envelope over cases):")

@@ -10,7 +10,7 @@ import os
 import tempfile
 from collections.abc import Mapping
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterator
 
@@ -120,18 +120,29 @@ def write_text(path: str | os.PathLike, text: str) -> Path:
 # ------------------------------------------------------------------ records
 class Dataset:
     """An array with HDF5 attributes (``units`` and others) for :func:`write_record`;
-    in ``.npz`` records the attributes are not stored."""
+    in ``.npz`` records the attributes are not stored.
 
-    def __init__(self, data, units: str = "", **attrs):
+    ``dims``: per axis, the dataset that labels it (an HDF5 dimension scale, the
+    netCDF/xarray notion of a dimension): its path, absolute (``"/time"``) or relative to
+    this dataset's group, or None for an unlabelled axis. That dataset is made a scale
+    named after itself and attached to the axis (HDF5 only)."""
+
+    def __init__(self, data, units: str = "", dims=None, **attrs):
         self.data, self.attrs = np.asarray(data), {"units": units, **attrs} if units else dict(attrs)
+        self.dims = tuple(dims) if dims is not None else ()
+        if self.dims and len(self.dims) != self.data.ndim:
+            raise ValueError(f"dims {self.dims} for an array of {self.data.ndim} axes")
 
 
 @dataclass
 class Record:
-    """What :func:`read_record` returns: header attributes and the (nested) arrays."""
+    """What :func:`read_record` returns: header attributes, the (nested) arrays, and the
+    attributes of each HDF5 dataset by path (``group/name``; empty for ``.npz``), less the
+    dimension-scale bookkeeping."""
 
     attrs: dict
     data: dict
+    dataset_attrs: dict = field(default_factory=dict)
 
 
 SUFFIXES = (".npz", ".h5", ".hdf5")
@@ -156,10 +167,12 @@ def write_record(path: str | os.PathLike, kind: str, version: int, data: Mapping
         else:
             import h5py
 
-            with h5py.File(tmp, "w") as f:
+            with h5py.File(tmp, "w", track_order=True) as f:
                 for k, v in header.items():
                     f.attrs[k] = v
-                _write_group(f, data)
+                scaled: list = []
+                _write_group(f, data, scaled)
+                _attach_scales(f, scaled)
     return path
 
 
@@ -179,12 +192,14 @@ def read_record(path: str | os.PathLike, kind: str, versions=(1,), what: str | N
                 flat = {k: z[k] for k in z.files}
             attrs = {k: flat.pop(k).item() for k in list(flat) if flat[k].ndim == 0 and k in _HEADER_KEYS}
             data = _unflatten({k: _text(v) for k, v in flat.items()})
+            ds_attrs = {}
         else:
             import h5py
 
             with h5py.File(path, "r") as f:
                 attrs = {k: _scalar(v) for k, v in f.attrs.items()}
-                data = _read_group(f)
+                ds_attrs: dict = {}
+                data = _read_group(f, ds_attrs)
     except Exception as exc:  # corrupt file, pickled content, wrong HDF5 layout ...
         raise InputError(f"{what} {str(path)!r} cannot be read: {' '.join(str(exc).split())}") from None
     if attrs.get("format") != kind:
@@ -192,7 +207,7 @@ def read_record(path: str | os.PathLike, kind: str, versions=(1,), what: str | N
     if attrs.get("version", 1) not in versions:
         raise InputError(f"{what} {str(path)!r}: version {attrs.get('version')!r} is not supported "
                          f"(this liftoff reads version {', '.join(map(str, versions))})")
-    return Record(attrs, data)
+    return Record(attrs, data, ds_attrs)
 
 
 _HEADER_KEYS = ("format", "version", "units", "name", "metadata")
@@ -220,12 +235,13 @@ def _unflatten(flat: dict) -> dict:
     return out
 
 
-def _write_group(group, data: Mapping) -> None:
+def _write_group(group, data: Mapping, scaled: list) -> None:
+    """Write ``data`` into ``group`` in order; (dataset, dims) of datasets with dims go to ``scaled``."""
     import h5py
 
     for k, v in data.items():
         if isinstance(v, Mapping):
-            _write_group(group.create_group(k), v)
+            _write_group(group.create_group(k, track_order=True), v, scaled)
             continue
         ds = v if isinstance(v, Dataset) else Dataset(v)
         arr = ds.data
@@ -234,18 +250,43 @@ def _write_group(group, data: Mapping) -> None:
         else:
             d = group.create_dataset(k, data=arr)
         for a, val in ds.attrs.items():
+            if isinstance(val, (list, tuple)) and all(isinstance(x, str) for x in val):
+                val = np.array(val, dtype=h5py.string_dtype())  # a list of strings: a text array
             d.attrs[a] = val
+        if ds.dims:
+            scaled.append((d, ds.dims))
 
 
-def _read_group(group) -> dict:
+def _attach_scales(f, scaled: list) -> None:
+    """Make the datasets named in ``dims`` dimension scales and attach them (after all are written)."""
+    from h5py import h5ds
+
+    for d, dims in scaled:
+        for axis, where in enumerate(dims):
+            if where is None:
+                continue
+            scale = f[where] if where.startswith("/") else d.parent[where]
+            if scale.shape[0] != d.shape[axis]:
+                raise ValueError(f"{d.name}: axis {axis} has {d.shape[axis]} entries, its scale {scale.name} "
+                                 f"{scale.shape[0]}")
+            if not h5ds.is_scale(scale.id):
+                scale.make_scale(scale.name.rsplit("/", 1)[-1])
+            d.dims[axis].attach_scale(scale)
+
+
+_SCALE_ATTRS = ("CLASS", "NAME", "REFERENCE_LIST", "DIMENSION_LIST")
+
+
+def _read_group(group, ds_attrs: dict, prefix: str = "") -> dict:
     import h5py
 
     out = {}
     for k, v in group.items():
         if isinstance(v, h5py.Group):
-            out[k] = _read_group(v)
+            out[k] = _read_group(v, ds_attrs, f"{prefix}{k}/")
         else:
             out[k] = _text(v[()])
+            ds_attrs[f"{prefix}{k}"] = {a: _scalar(x) for a, x in v.attrs.items() if a not in _SCALE_ATTRS}
     return out
 
 

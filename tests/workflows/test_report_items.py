@@ -1,0 +1,36 @@
+"""The lift-off report reads names, units and kinds of its histories from the result's metadata
+(contact directions, recovery items), not from the spelling of labels: checked on a run whose
+hold-downs list the axial direction first, with recoveries of several
+categories. Reference: the problem definition the run was given."""
+import numpy as np
+
+from liftoff.transient import ContactPoint, Forcing, Recovery, TransientProblem, solve
+from liftoff.transient.examples import toy_pad, toy_vehicle
+from liftoff.workflows import report
+
+
+def test_items_follow_the_result_metadata():
+    v, p = toy_vehicle(3), toy_pad(3)
+    cps = [ContactPoint(f"hd{i}", [f"post_{i}:{c}" for c in ("Tz", "Ty", "Tx")],
+                        [f"pad_{i}:{c}" for c in ("Tz", "Ty", "Tx")], 1e10, axial=0) for i in (1, 2, 3)]
+    recs = [Recovery("attach_x", "a", ["Tx", "Rz"], disp=v.rows(["top:Tx", "top:Tz"]), units=("N", "N m"),
+                     category="interface_force"),
+            Recovery("q", "a", [f"q{j}" for j in range(v.n_modes)], disp=np.eye(v.n_modes), category="modal"),
+            Recovery("mine", "a", ["u"], disp=v.rows(["top:Tz"]), units="mm")]
+    prob = TransientProblem(v, p, cps, Forcing(gravity=(0, 0, -9.81)), t_end=0.005, outputs={"a": ["top:Tz"]},
+                            recoveries=recs, progress=False)
+    r = solve(prob)
+    its = report.items(r, {"attach_x": ("top", "core")})
+    names = [(it.name, it.unit, it.category) for it in its]
+    posts = [(f"post {c.name} {la.split(':')[1]}", "N", "contact_force")
+             for c in cps for la in c.labels_a]
+    assert names[:len(posts)] == posts
+    assert names[len(posts):] == [("attach top on core Tx", "N", "interface_force"),
+                                  ("attach top on core Rz", "N m", "interface_force"),
+                                  ("mine u", "mm", "user"),
+                                  ("disp top:Tz", "m", "displacement"), ("acc top:Tz", "m/s^2", "acceleration")]
+    # the columns are the result's: post forces in direction order, recoveries by name
+    assert np.array_equal(its[0].values, r.contact_force[:, 0])
+    assert np.array_equal(its[len(posts) + 1].values, r.recovered["attach_x"][:, 1])
+    rows = report.maxmin(r.time, its, "c")
+    assert [row["category"] for row in rows] == [n[2] for n in names]
