@@ -93,8 +93,14 @@ def write_csv(rows: list[dict], path: Path) -> Path:
     return path
 
 
+def is_force(row: dict) -> bool:
+    """A max/min row of a post or attach force (N; moments, N m, excluded)."""
+    return row.get("category") in ("contact_force", "interface_force") and row["unit"] == "N"
+
+
 def format_table(rows: list[dict], select=None, limit: int = 60) -> str:
-    sel = [r for r in rows if select is None or select(r["item"])][:limit]
+    """Fixed-width text of max/min rows; ``select(row)`` filters them."""
+    sel = [r for r in rows if select is None or select(r)][:limit]
     w = max([len(r["item"]) for r in sel] + [10])
     lines = [f"{'item':<{w}} {'unit':>7} {'max':>12} {'t (s)':>8} {'case':>12} {'min':>12} {'t (s)':>8} {'case':>12}"]
     for r in sel:

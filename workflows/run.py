@@ -144,8 +144,7 @@ def write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, e
     files.append(report.write_csv(env, out / "maxmin_envelope.csv"))
     echo("Max/min envelope over cases (posts: force on vehicle, Tz > 0 compression; full table in "
          "maxmin_envelope.csv):")
-    echo(report.format_table(env, select=lambda s: s.startswith(("post", "attach")) and s[-2:] in
-                             ("Tx", "Ty", "Tz"), limit=40))
+    echo(report.format_table(env, select=report.is_force, limit=40))
     first = next(iter(prep.stacks.values()))
     text = report.summary(sc, first, results, stage_times, env, time.perf_counter() - t_start)
     files.append(write_text(out / "summary.txt", text + "\n"))

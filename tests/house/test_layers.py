@@ -132,3 +132,18 @@ def test_wheel_adds_one_import_name(tmp_path):
     for sub in ("meshes", "fem", "reduction", "transient", "workflows", "core", "config"):
         assert f"liftoff/{sub}/__init__.py" in names
     assert "liftoff/config/default_scenario.toml" in names
+
+
+def test_functions_fit_on_a_screen():
+    """No function over 100 lines, no signature over 16 positional arguments (kernels take
+    a few named bundles, not dozens of arrays)."""
+    long, wide = [], []
+    for _, module, path in _modules():
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                where = f"{path.relative_to(ROOT)}:{node.lineno} {node.name}"
+                if node.end_lineno - node.lineno + 1 > 100:
+                    long.append(f"{where} ({node.end_lineno - node.lineno + 1} lines)")
+                if len(node.args.args) + len(node.args.posonlyargs) > 16:
+                    wide.append(where)
+    assert not long and not wide, f"too long: {long}; too wide: {wide}"
