@@ -49,6 +49,7 @@ from pathlib import Path
 
 import numpy as np
 import scipy.linalg as sla
+import scipy.sparse as sp
 
 from liftoff.core.errors import InputError
 from liftoff.core.labels import COMPONENTS
@@ -307,24 +308,35 @@ def _boundary_map(raw: _Raw, names: dict, who: str):
     return blocks, labels
 
 
-def _qset_basis(raw: _Raw, who: str) -> tuple[np.ndarray, np.ndarray]:
-    """(q rows of x_nas, V) with q_nas = V q: unused SPOINTs dropped, V = I when the q-set
-    is already in CB form, else the eigenvectors of (K_qq, M_qq)."""
+def _row_absmax(A: np.ndarray, rows: np.ndarray, chunk: int = 1024) -> np.ndarray:
+    """max |A[r]| per row r, a block of rows at a time (no n_q x n copy of a large A)."""
+    out = np.zeros(rows.size)
+    for k in range(0, rows.size, chunk):
+        out[k: k + chunk] = np.abs(A[rows[k: k + chunk]]).max(axis=1, initial=0.0)
+    return out
+
+
+def _qset_basis(raw: _Raw, who: str) -> tuple[np.ndarray, np.ndarray | None]:
+    """(q rows of x_nas, V) with q_nas = V q: unused SPOINTs dropped; V is None (identity)
+    when the q-set is already in CB form, else the eigenvectors of (K_qq, M_qq)."""
     q = np.flatnonzero(raw.iddof[:, 1] == 0)
-    used = (np.abs(raw.K[q]).max(axis=1, initial=0) > 0) | (np.abs(raw.M[q]).max(axis=1, initial=0) > 0)
-    q = q[used]
+    q = q[(_row_absmax(raw.K, q) > 0) | (_row_absmax(raw.M, q) > 0)]
     b = np.flatnonzero(raw.iddof[:, 1] > 0)
     Kqq, Mqq = raw.K[np.ix_(q, q)], raw.M[np.ix_(q, q)]
     dk = np.abs(np.diag(Kqq))
     if q.size and b.size:
-        Kqb = np.abs(raw.K[np.ix_(q, b)])
-        scale = np.sqrt(np.outer(np.maximum(dk, 1e-300), np.maximum(np.abs(np.diag(raw.K)[b]), 1e-300)))
-        if (Kqb / scale).max() > CB_FORM_TOL:
+        kb = np.sqrt(np.maximum(np.abs(np.diag(raw.K)[b]), 1e-300))
+        kq = np.sqrt(np.maximum(dk, 1e-300))
+        coupling = 0.0                          # max |K_qb| / sqrt(K_qq K_bb), 1024 q rows at a time
+        for k in range(0, q.size, 1024):
+            blk = np.abs(raw.K[q[k: k + 1024]][:, b]) / kb / kq[k: k + 1024, None]
+            coupling = max(coupling, float(blk.max(initial=0.0)))
+        if coupling > CB_FORM_TOL:
             raise InputError(f"{who}: not a Craig-Bampton model: the modal-boundary stiffness K_qb is not zero "
-                             f"(relative {(Kqb / scale).max():.1e})")
+                             f"(relative {coupling:.1e})")
     off = np.abs(Kqq - np.diag(np.diag(Kqq))).max(initial=0) / max(dk.max(initial=0), 1e-300)
     if np.abs(Mqq - np.eye(q.size)).max(initial=0) <= CB_FORM_TOL and off <= CB_FORM_TOL:
-        return q, np.eye(q.size)
+        return q, None
     try:
         lam, V = sla.eigh(0.5 * (Kqq + Kqq.T), 0.5 * (Mqq + Mqq.T))
     except np.linalg.LinAlgError:
@@ -337,6 +349,33 @@ def _dof_scale(units: UnitSystem, labels, nq: int) -> np.ndarray:
     rot = np.array([lab.endswith((":Rx", ":Ry", ":Rz")) for lab in labels])
     return np.concatenate([np.full(nq, math.sqrt(units.mass) * units.length),
                            np.where(rot, 1.0, units.length)])
+
+
+def _transform(n: int, q: np.ndarray, V, blocks, m: int):
+    """Sparse P (n x m): the q rows take V (or the identity), each boundary block its rotation."""
+    rows, cols, vals = [], [], []
+    nq = q.size
+    if V is None:
+        rows.append(q), cols.append(np.arange(nq)), vals.append(np.ones(nq))
+    else:
+        rows.append(np.repeat(q, nq)), cols.append(np.tile(np.arange(nq), nq)), vals.append(V.ravel())
+    col = nq
+    for r, R in blocks:
+        k = R.shape[1]
+        rows.append(np.repeat(r, k)), cols.append(np.tile(np.arange(col, col + k), r.size)), vals.append(R.ravel())
+        col += k
+    return sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, m))
+
+
+def _congruence(P, A: np.ndarray, Dinv: np.ndarray, factor: float) -> np.ndarray:
+    """factor D^-1 P^T A P D^-1, dense; P sparse, so the work is O(nnz(P) n), not O(n^3)."""
+    X = np.asarray(P.T @ A)                   # P^T A         (m x n)
+    B = np.asarray(P.T @ X.T).T               # (P^T (P^T A)^T)^T = P^T A P
+    del X
+    B = np.ascontiguousarray(B)
+    B *= Dinv[:, None]
+    B *= Dinv[None, :] * factor
+    return B
 
 
 def _build(raw: _Raw, name: str, units, grid_names, recovery) -> CBModel:
@@ -354,16 +393,11 @@ def _build(raw: _Raw, name: str, units, grid_names, recovery) -> CBModel:
     nq, nb = q.size, len(labels)
     if nb == 0:
         raise InputError(f"{who}: no boundary GRID DOFs")
-    P = np.zeros((n, nq + nb))                 # x_nas = P x_lo, x_lo = [q; x_b basic]
-    P[np.ix_(q, np.arange(nq))] = V
-    col = nq
-    for rows, R in blocks:
-        P[np.ix_(rows, np.arange(col, col + R.shape[1]))] = R
-        col += R.shape[1]
+    P = _transform(n, q, V, blocks, nq + nb)   # x_nas = P x_lo, x_lo = [q; x_b basic] (sparse)
     Dinv = 1.0 / _dof_scale(us, labels, nq)
     e = us.factor(length=2, mass=1)
-    M = e * (Dinv[:, None] * (P.T @ raw.M @ P) * Dinv)
-    K = e / us.time**2 * (Dinv[:, None] * (P.T @ raw.K @ P) * Dinv)
+    M = _congruence(P, raw.M, Dinv, e)
+    K = _congruence(P, raw.K, Dinv, e / us.time**2)
     lam = np.diag(K)[:nq]
     if nq and lam.min() < -CB_FORM_TOL * max(lam.max(), 1e-300):
         raise InputError(f"{who}: negative fixed-interface eigenvalue {lam.min():.3e} (K_qq)")
@@ -412,7 +446,7 @@ def _recovery_item(who, us: UnitSystem, spec: NastranRecovery, mats: dict, rows,
             raise InputError(f"{who}: recovery {spec.name!r}: matrix {mname!r} is {Y.shape[0]} x {Y.shape[1]}, "
                              f"expected {len(labels)} x {P.shape[0]} (rows x a-set DOFs)")
         power = {"disp": 0, "vel": 1, "acc": 2}[key]
-        parts[key] = r[:, None] * (Y @ P) * Dinv * us.time**power
+        parts[key] = r[:, None] * np.asarray(P.T @ Y.T).T * Dinv * us.time**power      # Y P (P sparse)
     return CBRecovery(name=spec.name, labels=tuple(labels), units=tuple(QUANTITIES[qn][0] for qn in qty), **parts)
 
 

@@ -263,6 +263,36 @@ def test_cylindrical_output_frame(parts, tmp_path):
     assert np.allclose(cb.K, ref.K, rtol=0, atol=1e-12 * np.abs(ref.K).max())
 
 
+def test_q_set_not_in_cb_form_and_unused_spoints(parts, tmp_path):
+    """Modal coordinates in a non-normalised, coupled basis (q = W q', W random) plus two
+    unused SPOINTs (zero rows, as when EXTSEOUT reserves more SPOINTs than modes), written
+    by pyyeti's wtextseout: the import re-orthonormalises the q-set (eigh of K_qq, M_qq) and
+    drops the unused ones. The CB invariants match the original: fixed-interface
+    frequencies, M_B, K_B and C_M^T C_M = M_bq M_qq^-1 M_qb."""
+    mats = op4.read(str(DATA / "inboard.op4"), ["kxx", "mxx"])
+    uset, _, b = bulk.asm2uset(str(DATA / "inboard.asm"))
+    S = np.zeros((32, 34))                       # x_old = S x_new; columns 32, 33 unused SPOINTs
+    S[:24, :24] = np.eye(24)
+    S[24:, 24:32] = np.random.default_rng(7).normal(size=(8, 8)) + 3 * np.eye(8)
+    name = str(tmp_path / "skewed")
+    bulk.wtextseout(name, se=102, bset=np.arange(24), uset=uset[b], spoint1=2995001, namelist=["kxx", "mxx"],
+                    kxx=S.T @ mats["kxx"] @ S, mxx=S.T @ mats["mxx"] @ S)
+    cb, ref = from_extseout(name + ".op4", name="inboard", units=MM), parts[0]
+    assert cb.n_modes == 8 and cb.boundary_labels == ref.boundary_labels
+    assert np.allclose(cb.fixed_omega, ref.fixed_omega, rtol=1e-9)        # eigh of the 8 x 8 pencil
+    assert np.allclose(cb.M[:8, :8], np.eye(8), atol=1e-12)
+    assert np.abs(cb.K[:8, :8] - np.diag(cb.fixed_omega**2)).max() < 1e-9 * ref.fixed_omega.max() ** 2
+    for A, B in ((cb.M_B, ref.M_B), (cb.K_B, ref.K_B), (cb.C_M.T @ cb.C_M, ref.C_M.T @ ref.C_M)):
+        assert np.allclose(A, B, rtol=0, atol=1e-10 * np.abs(B).max())
+    bad = S.T @ mats["kxx"] @ S
+    bad[30, 3] = bad[3, 30] = 1e-3 * np.sqrt(bad[30, 30] * bad[3, 3])       # a modal-boundary stiffness
+    bulk.wtextseout(name, se=102, bset=np.arange(24), uset=uset[b], spoint1=2995001, namelist=["kxx", "mxx"],
+                    kxx=bad, mxx=S.T @ mats["mxx"] @ S)
+    with pytest.raises(InputError, match=r"not a Craig-Bampton model: the modal-boundary stiffness K_qb is "
+                                         r"not zero \(relative 1.0e-03\)"):
+        from_extseout(name + ".op4", name="inboard", units=MM)
+
+
 # ------------------------------------------------------------------------------- units
 def write_in_units(tmp_path: Path, stem: str, length: float, mass: float) -> Path:
     """The component rewritten by pyyeti in other units: cbconvert / uset_convert with
