@@ -27,6 +27,7 @@ _EXPORTS = {
     "from_dmig": ".nastran",
     "from_nas2cam": ".nastran",
     "import_nastran": ".nastran",
+    "write_dmig": ".nastran",
     "displacement_recovery": ".recovery",
     "field_recovery": ".recovery",
     "interface_force_recovery": ".recovery",

@@ -479,3 +479,20 @@ def test_unknown_unit_system_and_other_errors(tmp_path):
                                                       quantity="length")])
     with pytest.raises(InputError, match=r"recovery 'r': quantity 'displacement' needs rows named by DOF"):
         extseout("inboard", recovery=[NastranRecovery("r", disp="mef1")])
+
+
+def test_boundary_grid_with_one_component():
+    """EXTRN `475 2`: grid 475 (basic output frame) is a boundary point with Ty only. The
+    import keeps the 19 boundary DOFs in EXTRN order, and the geometric rigid-body check
+    K_B RB = 0 holds. The matrices are Nastran's, moved to modes first and scaled by the
+    in-lbf-s factors alone (all frames basic)."""
+    cb = from_extseout(DATA / "reduced_bset_notall6.op4", name="se75", units="in-lbf-s")
+    assert cb.n_modes == 10 and cb.n_boundary == 19 and cb.boundary_labels[-1] == "g475:Ty"
+    s = cb_check(cb).summary
+    assert s["rb_ok"] and max(s["rb_residual"]) < 1e-10            # measured 1.2e-12
+    raw = op4.read(str(DATA / "reduced_bset_notall6.op4"), ["kaa", "maa"])
+    order = np.r_[np.arange(19, 29), np.arange(19)]
+    f = unit_system("in-lbf-s")
+    assert np.allclose(cb.K[:10, :10], raw["kaa"][np.ix_(order, order)][:10, :10], rtol=1e-14)    # omega^2
+    # a translation-translation mass entry scales by the mass factor only
+    assert cb.M[-1, -1] == pytest.approx(raw["maa"][18, 18] * f.mass, rel=1e-14)
