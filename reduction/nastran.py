@@ -513,7 +513,7 @@ def _row_labels(who: str, spec: NastranRecovery, n_rows: int, pch: Path | None, 
         iddof = np.asarray(_call(str(pch), f"DTI {table}", bulk.rddtipch, str(pch), table), dtype=np.int64)
         names = dict(grid_names or {})
         if table == "TUG1":
-            labels = [f"{names.get(int(i), f'g{i}')}:{NASTRAN_COMPONENTS[d - 1]}" for i, d in iddof]
+            labels = [f"{names.get(int(i), names.get(str(i), f'g{i}'))}:{NASTRAN_COMPONENTS[d - 1]}" for i, d in iddof]
             comps = iddof[:, 1].tolist()
         else:
             labels, comps = [f"e{i}:{d}" for i, d in iddof], [0] * iddof.shape[0]

@@ -235,8 +235,10 @@ def test_frames_labels_and_order(parts):
     # its basic Tx is Nastran's T3 (row 8); a translation's mass needs no unit factor (kg)
     i = 8 + inboard.boundary_labels.index("g11:Tx")
     assert inboard.M[i, i] == pytest.approx(raw["mxx"][8, 8], rel=1e-14)        # g11 T3 (mm-kg: kg)
-    cb = extseout("inboard", grid_names={3: "hd_1", 11: "hd_2"})
+    cb = extseout("inboard", grid_names={3: "hd_1", "11": "hd_2"},          # TOML tables have string keys
+                  recovery=[NastranRecovery("d", disp="mug1")])
     assert cb.points == ("hd_1", "hd_2", "g19", "g27") and cb.boundary_labels[6] == "hd_2:Tx"
+    assert cb.recovery[0].labels[0] == "hd_1:T1" and cb.recovery[0].labels[12] == "hd_2:T1"
 
 
 def test_cylindrical_output_frame(parts, tmp_path):
