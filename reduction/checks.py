@@ -16,6 +16,7 @@ from liftoff.core.rigid import cg_mass, nodal_rb, rb_rows
 
 from .component import Component
 from .craig_bampton import CBModel
+from .system import MASSLESS_TOL, eigh_massless
 
 RB_TOL = 1e-6       # relative residual |K RB| / (|K| |RB|) accepted as rigid (round-off ~1e-12)
 DENSE_FE_LIMIT = 2000   # full FE models up to this size are eigensolved densely, else eigsh
@@ -83,13 +84,14 @@ def cb_check(cb: CBModel, component: Component | None = None, ref_point=None,
     s: dict = {"name": cb.name, "n_modes": nq, "n_boundary": cb.n_boundary, "ref_point": list(map(float, ref)),
                "units": "SI (kg, m, kg m^2, Hz)"}
     s["M_asymmetry"], s["K_asymmetry"] = _rel_asym(cb.M), _rel_asym(cb.K)
-    m_eig = sla.eigvalsh(0.5 * (cb.M + cb.M.T))
+    m_eig = sla.eigvalsh(0.5 * (cb.M + cb.M.T))         # PSD is enough: massless DOFs are condensed below
     kb_eig = sla.eigvalsh(0.5 * (cb.K_B + cb.K_B.T))
     s["M_min_eig_rel"] = float(m_eig[0] / m_eig[-1])
     k_scale = stiffness_scale(cb)
     s["K_B_min_eig_rel"] = float(kb_eig[0] / k_scale)
     s["K_B_n_zero_eig"] = int(np.sum(np.abs(kb_eig) < 1e-9 * k_scale))
-    s["M_positive_definite"] = bool(m_eig[0] > 0)
+    s["M_positive_definite"] = bool(m_eig[0] > MASSLESS_TOL * m_eig[-1])
+    s["M_n_massless"] = int(np.sum(m_eig <= MASSLESS_TOL * m_eig[-1]))
     s["K_positive_semidefinite"] = bool(kb_eig[0] > -1e-9 * k_scale and np.all(cb.fixed_omega >= 0))
     rb = rb_rows(cb.boundary_labels, cb.points, cb.point_coords, ref)
     res = _rb_residual(cb.K_B, rb, k_scale)
@@ -107,7 +109,7 @@ def cb_check(cb: CBModel, component: Component | None = None, ref_point=None,
     s["effective_mass_percent"] = pct.tolist()
     s["effective_mass_cumulative_percent"] = np.cumsum(pct, axis=0).tolist()
     s["fixed_interface_freq_hz"] = cb.fixed_freq_hz.tolist()
-    lam = sla.eigvalsh(cb.K, cb.M)
+    lam = eigh_massless(cb.K, cb.M, f"CB model {cb.name!r}")[0]      # massless DOFs condensed (Nastran models)
     ncmp = min(n_freefree, lam.size)
     f_cb = np.sqrt(np.abs(lam[:ncmp])) / (2 * np.pi)
     s["freefree_freq_hz_cb"] = f_cb.tolist()
@@ -136,9 +138,10 @@ def cb_check(cb: CBModel, component: Component | None = None, ref_point=None,
 
 
 def _report(s: dict) -> str:
+    m_def = "PD" if s["M_positive_definite"] else f"NOT PD: {s['M_n_massless']} massless, condensed"
     out = [f"Craig-Bampton check: {s['name']}  ({s['n_modes']} modes, {s['n_boundary']} boundary DOFs; SI units)",
            f"  symmetry      M {s['M_asymmetry']:.1e}   K {s['K_asymmetry']:.1e}  (max |A-A^T| / max |A|)",
-           f"  definiteness  M min/max eig {s['M_min_eig_rel']:.2e} ({'PD' if s['M_positive_definite'] else 'NOT PD'})"
+           f"  definiteness  M min/max eig {s['M_min_eig_rel']:.2e} ({m_def})"
            f"   K_B min eig / scale {s['K_B_min_eig_rel']:.1e}, {s['K_B_n_zero_eig']} zero"
            f" ({'PSD' if s['K_positive_semidefinite'] else 'NOT PSD'})",
            f"  rigid body    |K_B RB| / (k_scale |RB|) max {max(s['rb_residual']):.1e} about "

@@ -13,6 +13,7 @@ constraint modes on all DOFs). Units SI: omega rad/s, M kg (kg m, kg m^2), K N/m
 """
 from __future__ import annotations
 
+import re
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,12 +30,53 @@ from liftoff.core.records import read_record, write_record
 from .component import Component
 
 FORMAT = "liftoff-cb-model"
-VERSION = 1
+VERSION = 2                # 2: optional source_units attribute and recovery items (version 1 still read)
 BAND_MODE_LIMIT = 640   # most modes a frequency band may select from a sparse eigensolve
 DENSE_LIMIT = 600          # interior size below which the fixed-interface eigensolve is dense
 ORDERING = "COLAMD"        # SuperLU column ordering (benchmarks/bench_reduction.py: COLAMD had
                            # 1.5x less fill and a 6x faster factor than MMD_AT_PLUS_A on a
                            # 39k-DOF hex solid, and was within 1.6x of it on an 18.8k-DOF tet model)
+
+
+@dataclass
+class CBRecovery:
+    """A named linear output of one CB component (a DTM/ATM/LTM row block, SI units):
+    ``y = disp @ x + vel @ xdot + acc @ xddot`` with x = [q; x_b] the component's CB DOFs
+    (CBModel order). ``labels`` and ``units`` name each row (``units`` an SI unit per row:
+    "m", "rad", "N", "N m", "Pa", "m/s^2" ...)."""
+
+    name: str
+    labels: tuple[str, ...]
+    units: tuple[str, ...]
+    disp: np.ndarray | None = None
+    vel: np.ndarray | None = None
+    acc: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        who = f"recovery item {self.name!r}"
+        if not isinstance(self.name, str) or not re.fullmatch(r"[A-Za-z0-9_.+-]+", self.name):
+            raise InputError(f"{who}: a name is letters, digits and _ . + - only")
+        self.labels = tuple(str(s) for s in self.labels)
+        self.units = tuple(str(s) for s in self.units)
+        if len(self.units) != len(self.labels):
+            raise InputError(f"{who}: {len(self.labels)} labels but {len(self.units)} units")
+        if all(getattr(self, k) is None for k in RECOVERY_PARTS):
+            raise InputError(f"{who}: needs at least one of disp, vel, acc")
+        for key in RECOVERY_PARTS:
+            m = getattr(self, key)
+            if m is not None:
+                m = np.asarray(m, dtype=float)
+                if m.ndim != 2 or m.shape[0] != len(self.labels):
+                    raise InputError(f"{who}: {key} has shape {m.shape}, expected ({len(self.labels)}, n)")
+                setattr(self, key, m)
+
+    @property
+    def parts(self) -> dict:
+        """The matrices present, by name (disp, vel, acc)."""
+        return {k: getattr(self, k) for k in RECOVERY_PARTS if getattr(self, k) is not None}
+
+
+RECOVERY_PARTS = ("disp", "vel", "acc")
 
 
 @dataclass
@@ -46,7 +88,9 @@ class CBModel:
     gives the physical displacement of every labelled DOF of the component (``dof_labels``)
     from [q; x_b]; ``fixed_interface_modes`` (n x n_modes) and ``constraint_modes``
     (n x n_b, identity on the boundary rows) do the same for all n DOFs (optional: they
-    may be dropped from files to save space)."""
+    may be dropped from files to save space). ``source_units`` says which unit system the
+    model came in (it is SI now); ``recovery`` holds named output matrices over [q; x_b]
+    (Nastran DTM/ATM/LTM, :class:`CBRecovery`)."""
 
     name: str
     boundary_labels: tuple[str, ...]
@@ -61,6 +105,15 @@ class CBModel:
     constraint_modes: np.ndarray | None = None
     fixed_interface_modes: np.ndarray | None = None
     timings: dict = field(default_factory=dict)
+    source_units: str = "SI"
+    recovery: tuple[CBRecovery, ...] = ()
+
+    def recovery_item(self, name: str) -> CBRecovery:
+        for item in self.recovery:
+            if item.name == name:
+                return item
+        have = ", ".join(it.name for it in self.recovery) or "none"
+        raise InputError(f"CB model {self.name!r}: no recovery item {name!r} (has {have})")
 
     @property
     def n_modes(self) -> int:
@@ -292,18 +345,31 @@ def save_cb(cb: CBModel, path, recovery: bool = True) -> Path:
     if recovery and cb.constraint_modes is not None and cb.fixed_interface_modes is not None:
         data["constraint_modes"] = cb.constraint_modes
         data["fixed_interface_modes"] = cb.fixed_interface_modes
-    return write_record(path, FORMAT, VERSION, data, units="SI", attrs={"name": cb.name}, suffixes=(".npz",))
+    if cb.recovery:
+        data["recovery_names"] = np.array([it.name for it in cb.recovery], dtype="U")
+        data["recovery"] = {it.name: {"labels": np.array(it.labels, dtype="U"),
+                                      "units": np.array(it.units, dtype="U"), **it.parts}
+                            for it in cb.recovery}
+    return write_record(path, FORMAT, VERSION, data, units="SI", suffixes=(".npz",),
+                        attrs={"name": cb.name, "source_units": cb.source_units})
 
 
 def load_cb(path) -> CBModel:
-    rec = read_record(path, FORMAT, (VERSION,), what="CB model file")
+    rec = read_record(path, FORMAT, (1, VERSION), what="CB model file")
     z = rec.data
     try:
+        items = tuple(CBRecovery(name=str(nm), labels=tuple(z["recovery"][nm]["labels"]),
+                                 units=tuple(z["recovery"][nm]["units"]),
+                                 **{k: z["recovery"][nm].get(k) for k in RECOVERY_PARTS})
+                      for nm in z.get("recovery_names", ()))
         cb = CBModel(name=str(rec.attrs["name"]), boundary_labels=tuple(z["boundary_labels"]),
                      fixed_omega=z["fixed_omega"], M=z["M"], K=z["K"], points=tuple(z["points"]),
                      point_coords=z["point_coords"], dof_labels=tuple(z["dof_labels"]),
                      label_transform=z["label_transform"], n_dof=int(z["n_dof"]),
-                     constraint_modes=z.get("constraint_modes"), fixed_interface_modes=z.get("fixed_interface_modes"))
+                     constraint_modes=z.get("constraint_modes"), fixed_interface_modes=z.get("fixed_interface_modes"),
+                     source_units=str(rec.attrs.get("source_units", "SI")), recovery=items)
+    except InputError as exc:
+        raise InputError(f"CB model file {str(path)!r}: {exc}") from None
     except Exception as exc:
         raise InputError(f"CB model file {str(path)!r} cannot be read: {exc}") from None
     validate_cb(cb, str(path))
@@ -327,3 +393,13 @@ def validate_cb(cb: CBModel, where: str = "") -> None:
     for nm in ("M", "K", "fixed_omega", "point_coords", "label_transform"):
         if not np.all(np.isfinite(getattr(cb, nm))):
             raise InputError(f"{who}: {nm} contains NaN or inf")
+    names = [it.name for it in cb.recovery]
+    for it in cb.recovery:
+        if names.count(it.name) > 1:
+            raise InputError(f"{who}: recovery item {it.name!r} given twice")
+        for key, m in it.parts.items():
+            if m.shape[1] != nq + nb:
+                raise InputError(f"{who}: recovery item {it.name!r}: {key} has {m.shape[1]} columns, "
+                                 f"expected {nq + nb} (n_modes + n_boundary)")
+            if not np.all(np.isfinite(m)):
+                raise InputError(f"{who}: recovery item {it.name!r}: {key} contains NaN or inf")

@@ -6,7 +6,9 @@
   boundary DOFs, F_b = [C_M^T M_B] [qdd_cb; xdd_b] + K_B x_b (eq. 13, lower rows), which
   is what the component carries there. It excludes loads applied to the component
   itself (subtract its ``boundary_load``) and damping;
-- full-field nodal displacement of a component through its ``field_map``.
+- full-field nodal displacement of a component through its ``field_map``;
+- a component's own recovery items (Nastran DTM/ATM/LTM, ``CBModel.recovery``) through
+  the system modes, as transient ``Recovery`` rows.
 """
 from __future__ import annotations
 
@@ -58,3 +60,24 @@ def field_recovery(assembly: Assembly, sysm: SystemModes, component_name: str,
     T = sysm.phi[assembly.cb_index(cb.name)]
     physical = cb.fixed_interface_modes @ T[: cb.n_modes] + cb.constraint_modes @ T[cb.n_modes:]
     return np.asarray(component.field_map @ physical)
+
+
+def component_recovery(assembly: Assembly, sysm: SystemModes, component_name: str, names=None,
+                       body: str = "a") -> list:
+    """The recovery items of component ``component_name`` (``CBModel.recovery``, over its CB
+    DOFs [q; x_b]) as ``transient.Recovery`` rows of ``body`` in system modal coordinates:
+    with [q_cb; x_b] = T q (T the component's rows of the system modes), each part is
+    ``item.part @ T``. ``names`` picks items (default all); each Recovery is named
+    ``<component>_<item>``, its labels are the item's, and its units the item's row units
+    (one string when they agree, else the distinct ones joined by ', ')."""
+    from liftoff.transient import Recovery       # the transient's output row (y = D q + V qdot + A qddot)
+
+    cb = assembly.component(component_name)
+    items = cb.recovery if names is None else tuple(cb.recovery_item(nm) for nm in names)
+    T = sysm.phi[assembly.cb_index(cb.name)]
+    out = []
+    for it in items:
+        units = ", ".join(dict.fromkeys(it.units))
+        out.append(Recovery(name=f"{cb.name}_{it.name}", body=body, labels=it.labels,
+                            units=units, **{k: m @ T for k, m in it.parts.items()}))
+    return out

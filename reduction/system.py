@@ -21,6 +21,8 @@ from liftoff.core.rigid import rb_rows
 from .assembly import Assembly, label_transform
 
 RB_TOL = 1e-6         # relative K RB residual above which an assembly is not free-free
+MASSLESS_TOL = 1e-12  # mass eigenvalues below this x the largest span the massless subspace
+                      # (round-off of a singular M is ~eps x max = 2e-16; a real inertia is far above)
 
 
 @dataclass
@@ -72,6 +74,38 @@ def system_rb(assembly: Assembly, ref_point=(0.0, 0.0, 0.0)) -> np.ndarray:
     return rb
 
 
+def eigh_massless(K: np.ndarray, M: np.ndarray, who: str = "model") -> tuple[np.ndarray, np.ndarray]:
+    """Finite eigenpairs of K x = lam M x for symmetric K and positive *semi*-definite M
+    (massless DOFs, common in Nastran models: boundary rotations without inertia).
+
+    With M = U diag(w) U^T split into a massive part A (w > MASSLESS_TOL max w) and a
+    massless part Z, the massless coordinates follow the massive ones statically,
+    y_z = -(Z^T K Z)^-1 Z^T K A y_a (exact: they carry no inertia force), so
+    x = T y_a with T = A + Z G and (T^T K T) y = lam diag(w_A) y. The modes satisfy
+    K x = lam M x and x^T M x = I; there are rank(M) of them. When M is positive
+    definite this is plain ``eigh``."""
+    try:
+        return sla.eigh(K, M)
+    except np.linalg.LinAlgError:
+        pass
+    w, U = sla.eigh(0.5 * (M + M.T))
+    if w[-1] <= 0 or w[0] < -MASSLESS_TOL * w[-1]:
+        raise InputError(f"{who}: mass matrix is not positive semi-definite "
+                         f"(eigenvalues {w[0]:.3e} .. {w[-1]:.3e})")
+    zero = w <= MASSLESS_TOL * w[-1]
+    A, Z = U[:, ~zero], U[:, zero]
+    Kz = Z.T @ K @ Z
+    try:
+        G = -sla.solve(0.5 * (Kz + Kz.T), Z.T @ K @ A, assume_a="sym")
+    except (np.linalg.LinAlgError, sla.LinAlgWarning):
+        raise InputError(f"{who}: {int(zero.sum())} massless DOF combinations without stiffness "
+                         "(a massless mechanism)") from None
+    T = A + Z @ G
+    Kr = T.T @ K @ T
+    lam, y = sla.eigh(0.5 * (Kr + Kr.T), np.diag(w[~zero]))
+    return lam, T @ y
+
+
 def system_modes(assembly: Assembly, n_rigid: int = 6, f_max: float | None = None) -> SystemModes:
     """Eigensolution of the assembled model (dense; CB sizes are a few hundred)."""
     who = f"assembly {assembly.name!r}"
@@ -93,7 +127,7 @@ def system_modes(assembly: Assembly, n_rigid: int = 6, f_max: float | None = Non
             raise InputError(f"{who} is not free-free: K RB / (|K| |RB|) = {res.max():.1e} for rigid "
                              f"motion {int(np.argmax(res))} (constrained or non-geometric stiffness)")
         MR = M @ R
-        lam, vec = sla.eigh(K - MR @ MR.T, M)
+        lam, vec = eigh_massless(K - MR @ MR.T, M, who)
         elastic = lam[6:]
         if elastic.size and elastic[0] < 1e-10 * abs(scale):
             raise InputError(f"{who}: more than six zero-frequency modes (a mechanism or an "
@@ -101,7 +135,7 @@ def system_modes(assembly: Assembly, n_rigid: int = 6, f_max: float | None = Non
         omega = np.concatenate([np.zeros(6), np.sqrt(elastic)])
         phi = np.hstack([R, vec[:, 6:]])
     elif n_rigid == 0:
-        lam, phi = sla.eigh(K, M)
+        lam, phi = eigh_massless(K, M, who)
         if lam[0] < 1e-10 * abs(scale):
             raise InputError(f"{who}: zero-frequency mode in a grounded model (eigenvalue {lam[0]:.2e}); "
                              "is it really grounded?")

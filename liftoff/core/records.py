@@ -210,7 +210,7 @@ def read_record(path: str | os.PathLike, kind: str, versions=(1,), what: str | N
     return Record(attrs, data, ds_attrs)
 
 
-_HEADER_KEYS = ("format", "version", "units", "name", "metadata")
+_HEADER_KEYS = ("format", "version", "units", "name", "metadata", "source_units")
 
 
 def _flatten(data: Mapping, prefix: str = "") -> dict:
