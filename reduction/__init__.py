@@ -40,4 +40,4 @@ __all__ = list(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
 # the function shadows the module of the same name (a lazy export could not: importing the
 # submodule sets the package attribute), so bind it now
-from .craig_bampton import craig_bampton  # noqa: E402
+from .craig_bampton import craig_bampton  # noqa: E402,F401

@@ -698,7 +698,7 @@ def write_dmig(cb: CBModel, path, *, units="SI", grid_ids: Mapping | None = None
     index = pd.MultiIndex.from_tuples(rows, names=["id", "dof"])
     K = pd.DataFrame((us.time**2 / e) * (D[:, None] * cb.K[np.ix_(order, order)] * D), index=index, columns=index)
     M = pd.DataFrame((1.0 / e) * (D[:, None] * cb.M[np.ix_(order, order)] * D), index=index, columns=index)
-    xyz = cb.boundary_point_coords / us.length
+    xyz = np.array([cb.point_coord(p) for p in cb.boundary_points]).reshape(-1, 3) / us.length
     with atomic_path(path) as tmp, open(tmp, "w") as f:
         f.write(f"$ liftoff CB model {cb.name!r}: {nq} modes, {cb.n_boundary} boundary DOFs\n"
                 f"$ units: {us.describe()}\n")

@@ -18,6 +18,7 @@ from liftoff.core.errors import InputError
 
 from .assembly import Assembly, label_transform
 from .component import Component
+from .craig_bampton import RECOVERY_PARTS, CBRecovery
 from .system import SystemModes
 
 
@@ -62,22 +63,15 @@ def field_recovery(assembly: Assembly, sysm: SystemModes, component_name: str,
     return np.asarray(component.field_map @ physical)
 
 
-def component_recovery(assembly: Assembly, sysm: SystemModes, component_name: str, names=None,
-                       body: str = "a") -> list:
+def component_recovery(assembly: Assembly, sysm: SystemModes, component_name: str, names=None) -> list:
     """The recovery items of component ``component_name`` (``CBModel.recovery``, over its CB
-    DOFs [q; x_b]) as ``transient.Recovery`` rows of ``body`` in system modal coordinates:
-    with [q_cb; x_b] = T q (T the component's rows of the system modes), each part is
-    ``item.part @ T``. ``names`` picks items (default all); each Recovery is named
-    ``<component>_<item>``, its labels are the item's, and its units the item's row units
-    (one string when they agree, else the distinct ones joined by ', ')."""
-    from liftoff.transient import Recovery       # the transient's output row (y = D q + V qdot + A qddot)
-
+    DOFs [q; x_b]) in system modal coordinates, as :class:`CBRecovery` items named
+    ``<component>_<item>``: with [q_cb; x_b] = T q (T the component's rows of the system
+    modes), each part is ``item.part @ T``. ``names`` picks items (default all). The
+    workflow turns them into the transient's Recovery rows (name, labels, units, disp, vel, acc)."""
     cb = assembly.component(component_name)
     items = cb.recovery if names is None else tuple(cb.recovery_item(nm) for nm in names)
     T = sysm.phi[assembly.cb_index(cb.name)]
-    out = []
-    for it in items:
-        units = ", ".join(dict.fromkeys(it.units))
-        out.append(Recovery(name=f"{cb.name}_{it.name}", body=body, labels=it.labels,
-                            units=units, **{k: m @ T for k, m in it.parts.items()}))
-    return out
+    return [CBRecovery(f"{cb.name}_{it.name}", it.labels, it.units,
+                       **{k: getattr(it, k) @ T for k in RECOVERY_PARTS if getattr(it, k) is not None})
+            for it in items]
