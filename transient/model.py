@@ -318,8 +318,6 @@ class TransientProblem:
             if self.method == "fixed-point" and c.rigid:
                 raise InputError(f"contact {c.name!r}: rigid contacts need method 'direct' "
                                  "(the fixed-point iteration needs a finite K_C)")
-        if len(self.contacts) == 0:
-            raise InputError("no contact points")
         f = self.forcing
         for p in f.constant + f.tables:
             self.body(p.body).dof_index(p.label)

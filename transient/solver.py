@@ -128,13 +128,20 @@ def static_equilibrium(body_a: ModalBody, body_b: ModalBody, contacts, forcing: 
 
 # ----------------------------------------------------------------- step size
 def estimate_step(body_a: ModalBody, body_b: ModalBody, contacts) -> tuple[float, float]:
-    """(f_h in Hz, h = 0.25/f_h in s) from the bodies reduced to the contact DOFs (eq. 12).
+    """(f_h in Hz, h = 0.25/f_h in s) from the bodies reduced to the contact DOFs (eq. 12);
+    without contacts (a plain modal transient) f_h is the highest modal frequency.
 
     Penalty directions: the interface masses (Phi_c Phi_c^T)^-1 of both bodies coupled by
     K_C, i.e. omega_h^2 = lambda_max(K_C^1/2 (Phi_ca Phi_ca^T + Phi_cb Phi_cb^T) K_C^1/2)
     (body stiffness negligible against K_C). Rigid directions: the highest frequency of the
     coupled modal system with those directions constrained (conservative)."""
     rows = contact_rows(body_a, body_b, contacts)
+    if rows.n == 0:       # a plain modal transient: resolve the highest mode instead
+        w = max(float(np.max(body_a.omega, initial=0.0)), float(np.max(body_b.omega, initial=0.0)))
+        if not w > 0:
+            raise InputError("cannot estimate the step size: no contacts and no elastic modes; give h explicitly")
+        f_h = w / (2 * math.pi)
+        return f_h, 0.25 / f_h
     W0 = rows.Phi_a @ rows.Phi_a.T + rows.Phi_b @ rows.Phi_b.T
     pen = rows.compliance > 0
     w2 = 0.0
@@ -180,7 +187,7 @@ def choose_step(problem: TransientProblem, rows) -> StepChoice:
     than 0.25/f_h (and says so when it also exceeds the penalty stability limit)."""
     f_h, h_default = estimate_step(problem.body_a, problem.body_b, problem.contacts)
     h = h_default if problem.h is None else float(problem.h)
-    if problem.h is not None and h > h_default * (1 + 1e-9):
+    if problem.h is not None and h > h_default * (1 + 1e-9) and rows.n:   # no contacts: every h is exact
         extra = ""
         if (rows.compliance > 0).any() and h > STABILITY * h_default / 0.25:
             extra = (f"; it also exceeds about {STABILITY:.2f}/f_h = {STABILITY / f_h:.4g} s, the stability limit "

@@ -164,6 +164,7 @@ def recoveries(case: Case, stack: StackModel) -> tuple[list[Recovery], dict, dic
         attach[name] = (point, comp)
     out.append(Recovery("cg_motion", "a", SIX, disp=cg_motion_matrix(body), units=("m",) * 3 + ("rad",) * 3,
                         category="cg_motion", description="vehicle c.g. motion (eq. 23)"))
+    out += component_recoveries(stack)
     n_a, n_b = body.n_modes, stack.pad.n_modes
     out.append(Recovery("modal_q_a", "a", [f"q{j}" for j in range(n_a)], disp=np.eye(n_a), units="sqrt(kg) m",
                         category="modal", description="modal coordinates of the vehicle"))
@@ -181,6 +182,24 @@ def recoveries(case: Case, stack: StackModel) -> tuple[list[Recovery], dict, dic
         _check_point(body, pt, w / "stations" / i)
         outputs += [f"{pt}:{c}" for c in XYZ if f"{pt}:{c}" not in outputs]
     return out, attach, {"a": outputs, "b": []}
+
+
+def component_recoveries(stack: StackModel) -> list[Recovery]:
+    """The recovery items that came with the components (Nastran DTM/ATM/LTM: CBModel.recovery),
+    carried through the system modes (reduction.component_recovery): vehicle ones on body a,
+    the pad's on body b."""
+    from liftoff.reduction import component_recovery
+
+    out = []
+    for name, cb in stack.cbs.items():
+        if not cb.recovery:
+            continue
+        asm, modes, key = (stack.pad_asm, stack.pad_modes, "b") if name == "pad" else \
+            (stack.vehicle_asm, stack.vehicle_modes, "a")
+        for it in component_recovery(asm, modes, name):
+            out.append(Recovery(it.name, key, it.labels, disp=it.disp, vel=it.vel, acc=it.acc, units=it.units,
+                                category="component", description=f"recovery item of component {name}"))
+    return out
 
 
 def build_problem(case: Case, stack: StackModel, progress: bool = True) -> CaseProblem:
