@@ -202,6 +202,19 @@ def component_recoveries(stack: StackModel) -> list[Recovery]:
     return out
 
 
+def attitude_feedback(case: Case, stack: StackModel) -> ModalFeedback:
+    """The attitude hold of ``[control] law = "attitude-hold"`` (transient.effects.attitude_hold),
+    on from ``hold_start`` (default: the control start)."""
+    from liftoff.transient.effects import attitude_hold
+
+    ctl = case.control
+    since = ctl.hold_start if ctl.hold_start is not None else ctl.start
+    try:
+        return attitude_hold(stack.vehicle, ctl.gimbals, ctl.bandwidth_hz, ctl.damping, since=since)
+    except InputError as exc:
+        raise Where(case.source, "control").wrap(exc) from None
+
+
 def build_problem(case: Case, stack: StackModel, progress: bool = True) -> CaseProblem:
     """The two-body transient of one case: posts, cryo preload, thrust and forces, control
     forces, gravity softening, recoveries; static initial state (section 2.6)."""
@@ -216,7 +229,10 @@ def build_problem(case: Case, stack: StackModel, progress: bool = True) -> CaseP
         grid, F, labels = ctab
         tables = tables + [TabulatedForce("a", lab, grid, F[:, j]) for j, lab in enumerate(labels)]
     soft = softening(case, stack) if case.softening.enabled else None
-    forcing = Forcing(constant=constant, tables=tables, feedback=[soft] if soft else [], gravity=case.gravity)
+    feedback = [soft] if soft else []
+    if case.control.enabled and case.control.law == "attitude-hold":
+        feedback.append(attitude_feedback(case, stack))
+    forcing = Forcing(constant=constant, tables=tables, feedback=feedback, gravity=case.gravity)
     recs, attach, outputs = recoveries(case, stack)
     t = case.time
     problem = TransientProblem(body, stack.pad, cps, forcing, t_end=t.t_end, h=t.h, t0=t.t0, method=t.method,
