@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import ufl
 from mpi4py import MPI
 
 from liftoff.core.errors import InputError
@@ -172,3 +173,16 @@ def read_msh(path, comm: MPI.Comm = MPI.COMM_WORLD, rank: int = 0) -> TaggedMesh
         surface_tags[name] = dmesh.meshtags_from_entities(
             mesh, tdim - 1, cpp.graph.AdjacencyList_int32(ents), vals.astype(np.int32))
     return TaggedMesh(mesh, cell_tags, {n: i for i, n in enumerate(vol_names)}, surface_tags, path)
+
+
+def triangle_mesh(comm: MPI.Comm, x: np.ndarray, cells: np.ndarray, rank: int = 0):
+    """A dolfinx mesh of flat (3-node) triangles embedded in 3-D, for shells: nodes ``x``
+    (n, 3) m and ``cells`` (m, 3) node indices, given on ``rank`` (other ranks' arrays are
+    ignored) and distributed over ``comm``."""
+    import dolfinx.mesh as dmesh
+
+    x = np.asarray(x, float).reshape(-1, 3) if comm.rank == rank else np.zeros((0, 3))
+    cells = np.asarray(cells, np.int64).reshape(-1, 3) if comm.rank == rank else np.zeros((0, 3), np.int64)
+    domain = ufl.Mesh(ufl.VectorElement("Lagrange", ufl.Cell("triangle", geometric_dimension=3), 1))
+    return dmesh.create_mesh(comm, cells, x, domain)
+
