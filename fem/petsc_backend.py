@@ -39,6 +39,13 @@ def add_subset(A: PETSc.Mat, B: PETSc.Mat, alpha: float = 1.0) -> None:
     A.axpy(alpha, B, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
 
 
+def add(A: PETSc.Mat, B: PETSc.Mat) -> PETSc.Mat:
+    """A + B (any non-zero patterns, same layout); B is destroyed. Returns A."""
+    A.axpy(1.0, B, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+    B.destroy()
+    return A
+
+
 def add_row_sums_to_diagonal(A: PETSc.Mat, B: PETSc.Mat) -> None:
     """A += diag(row sums of B) (row-sum mass lumping)."""
     d = B.getRowSum()

@@ -72,6 +72,30 @@ class ShellFields:
     t: object
 
 
+def shell_fields(tm, materials: dict, thickness: dict) -> ShellFields:
+    """Cell-wise E, nu, rho and t of a shell TaggedMesh from {shell group: Material} and
+    {shell group: thickness (m)}; every shell group needs both."""
+    from dolfinx import fem
+
+    from .elasticity import check_material
+
+    Q = fem.FunctionSpace(tm.mesh, ("DG", 0))
+    out = {k: fem.Function(Q, name=k) for k in ("E", "nu", "rho", "t")}
+    for name, gid in tm.volume_ids.items():
+        if name not in materials or name not in thickness:
+            raise InputError(f"shell surface {name!r} of mesh {tm.path!r} needs a material and a thickness")
+        mat, t = materials[name], float(thickness[name])
+        check_material(name, mat)
+        if not np.isfinite(t) or t <= 0:
+            raise InputError(f"shell surface {name!r}: thickness {t!r} m must be > 0")
+        dofs = Q.dofmap.list.array[tm.cell_tags.find(gid)]
+        for k, v in (("E", mat.E), ("nu", mat.nu), ("rho", mat.rho), ("t", t)):
+            out[k].x.array[dofs] = float(v)
+    for f in out.values():
+        f.x.scatter_forward()
+    return ShellFields(out["E"], out["nu"], out["rho"], out["t"])
+
+
 def shell_element(cell) -> ufl.MixedElement:
     """P2 displacement x Crouzeix-Raviart rotation, both 3-component (global frame)."""
     return ufl.MixedElement([ufl.VectorElement("CG", cell, 2, dim=3), ufl.VectorElement("CR", cell, 1, dim=3)])
@@ -159,12 +183,13 @@ def load_form(W, traction, dx=None):
     return ufl.dot(traction, v) * dx
 
 
-def thermal_load_form(W, f: ShellFields, strain, dx):
-    """Equivalent forces of a free in-plane thermal strain ``strain`` = alpha dT (isotropic,
-    uniform through the thickness): L(v) = int t E/(1-nu) strain tr(eps(v)) dA."""
+def thermal_load_form(W, f: ShellFields, cell_tags, strain_by_id: dict[int, float]):
+    """Equivalent forces of a free in-plane thermal strain (alpha dT, isotropic, uniform
+    through the thickness) per shell group id: L(v) = sum int t E/(1-nu) strain tr(eps(v)) dA."""
     v, eta = ufl.split(ufl.TestFunction(W))
     ev, _, _, _ = strains(v, eta, local_frame(W.mesh))
-    return f.t * f.E / (1 - f.nu) * strain * ufl.tr(ev) * dx
+    dx = ufl.Measure("dx", domain=W.mesh, subdomain_data=cell_tags)
+    return sum(f.t * f.E / (1 - f.nu) * float(s) * ufl.tr(ev) * dx(int(i)) for i, s in strain_by_id.items())
 
 
 def dof_table(W) -> tuple[np.ndarray, np.ndarray]:
