@@ -12,6 +12,8 @@ Public API (SI units throughout)::
     write_vtu(path, nodes, cells, cell_type, point_data) / write_modes_vtu(model, modes, path)
     fem.snapshot.snapshot_png(path, nodes, cells, cell_type, displacement, title, scale=None)
 
+Parts: solids (tetrahedra of the volume groups) and Reissner-Mindlin shells (triangles of
+the surface groups in ``Geometry.shells``, fem.shell), tied by node position.
 Import pyvista (fem.snapshot) before dolfinx when both are used (FENICSX-NOTES.md).
 Only this package and meshes/ import gmsh or dolfinx; PETSc/SLEPc live in petsc_backend.
 """

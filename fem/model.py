@@ -16,7 +16,8 @@ every node that is neither clamped nor on a patch, node by node (Tx Ty Tz, then 
 shell nodes that carry rotations), then six DOFs per patch reference point (Tx Ty Tz Rx Ry
 Rz, in patch order) at the end. Patches and clamps are surface groups (tet facets or shell
 triangles) or, on shells, curve groups (shell edges); a patch ties every DOF of its nodes,
-rotations included, to its reference point (fem.spiders). Units SI (m, kg, N, rad).
+rotations included, to its reference point (fem.spiders). Checks run on data gathered on
+every rank, so every rank raises the same InputError (no MPI deadlock). Units SI (m, kg, N, rad).
 """
 from __future__ import annotations
 
@@ -159,13 +160,6 @@ class FEModel:
                     cells=self.cells.copy(), cell_type=self.cell_type, field_map=self.field_map())
 
 
-def _raise_collective(comm: MPI.Comm, message: str | None) -> None:
-    """Raise InputError on every rank if any rank found a problem (avoids MPI deadlocks)."""
-    msgs = [m for m in comm.allgather(message) if m]
-    if msgs:
-        raise InputError(msgs[0])
-
-
 # ---- parts -------------------------------------------------------------------------------
 def _solid_part(tm: TaggedMesh, materials: dict, degree: int) -> Part:
     from dolfinx import fem
@@ -185,10 +179,10 @@ def _solid_part(tm: TaggedMesh, materials: dict, degree: int) -> Part:
     return part
 
 
-def _shell_part(tm: TaggedMesh, materials: dict, thickness: dict) -> Part:
+def _shell_part(tm: TaggedMesh, materials: dict, thickness: dict, bending: dict) -> Part:
     from . import shell
 
-    fields = shell.shell_fields(tm, materials, thickness)
+    fields = shell.shell_fields(tm, materials, thickness, bending)
     W = shell.shell_space(tm.mesh)
     coords, comp = shell.dof_table(W)
     return Part("shell", tm, W, fields, coords, comp, W.dofmap.index_map.size_local,
@@ -199,7 +193,8 @@ def _shell_part(tm: TaggedMesh, materials: dict, thickness: dict) -> Part:
 PART_BUILDERS = {
     "solid": lambda tm, geo, degree: _solid_part(tm, {g: m for g, m in geo.volumes.items() if g not in geo.shells},
                                                  degree),
-    "shell": lambda tm, geo, degree: _shell_part(tm, {g: geo.volumes[g] for g in geo.shells}, geo.shells),
+    "shell": lambda tm, geo, degree: _shell_part(tm, {g: geo.volumes[g] for g in geo.shells}, geo.shells,
+                                                 geo.shell_bending),
 }
 
 

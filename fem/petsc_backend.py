@@ -132,7 +132,8 @@ def eigensolve(K: PETSc.Mat, M: PETSc.Mat, n_modes: int, sigma: float, tol: floa
     to the columns of ``deflation`` (global array (n, k), e.g. the rigid-body modes:
     a Krylov method can miss members of an exactly 6-fold cluster).
 
-    Returns (lambda ascending, Phi (n, n_modes) M-orthonormal), gathered on every rank.
+    Returns (lambda ascending, Phi (n, n_modes) M-orthonormal), gathered on every rank: the
+    n_modes eigenpairs nearest sigma among the converged ones (the lowest for sigma < 0).
     Raises ConvergenceError if fewer than ``n_modes`` pairs converge and InputError if the
     factorisation fails (K - sigma M singular).
     """
@@ -171,7 +172,8 @@ def eigensolve(K: PETSc.Mat, M: PETSc.Mat, n_modes: int, sigma: float, tol: floa
     for i in range(nconv):
         lam[i] = eps.getEigenpair(i, vr).real
         vecs.append(gather_vec(vr))
-    order = np.argsort(lam)[:n_modes]
+    near = np.argsort(np.abs(lam - sigma), kind="stable")[:n_modes]    # the n_modes nearest sigma,
+    order = near[np.argsort(lam[near], kind="stable")]                 # ascending
     Phi = np.column_stack([vecs[i] for i in order]) if vecs else np.zeros((K.getSize()[0], 0))
     eps.destroy()
     return lam[order], Phi

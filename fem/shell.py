@@ -12,10 +12,13 @@ rigid spiders share nodal unknowns without transformations). With the facet fram
     shear     gamma = P^T grad(u . e3) - P^T beta
     drilling  varpi = (1/2)(P^T grad(u) P)_[12 - 21] + theta . e3
 
-    W = int  t C:eps:eps + t^3/12 C:kappa:kappa + k G t gamma.gamma + kd E t^3/h^2 varpi^2  dA
+    W = int  t C:eps:eps + b t^3/12 C:kappa:kappa + k G t gamma.gamma + kd E t^3/h^2 varpi^2  dA
 
 with the plane-stress C = E/(1-nu^2)[(1-nu) sym + nu I x I], G = E/(2(1+nu)), the
-Reissner-Mindlin shear factor k = 5/6 and h the cell diameter. Kinetic energy (consistent
+Reissner-Mindlin shear factor k = 5/6 and h the cell diameter. b = 12 I / t^3 is the
+bending stiffness ratio of Nastran's PSHELL (1 for a homogeneous plate; > 1 for a wall
+whose frames and stringers are smeared into its bending stiffness while its membrane
+stiffness and mass stay those of the skin). Kinetic energy (consistent
 mass) ``int rho t u.u + rho t^3/12 theta.theta dA``: the rotary inertia of the fibre; the
 drilling component (theta . e3) is included with the same coefficient so that the mass is
 positive definite on every rotation DOF (its energy is (t/h)^2 of the facet's own in-plane
@@ -64,36 +67,42 @@ DRILLING_FACTOR = 1.0
 
 @dataclass
 class ShellFields:
-    """Cell-wise (DG0) shell properties: E (Pa), nu, rho (kg/m^3), thickness t (m)."""
+    """Cell-wise (DG0) shell properties: E (Pa), nu, rho (kg/m^3), thickness t (m) and the
+    bending stiffness ratio b = 12 I / t^3 (1: homogeneous plate)."""
 
     E: object
     nu: object
     rho: object
     t: object
+    bend: object = 1.0
 
 
-def shell_fields(tm, materials: dict, thickness: dict) -> ShellFields:
-    """Cell-wise E, nu, rho and t of a shell TaggedMesh from {shell group: Material} and
-    {shell group: thickness (m)}; every shell group needs both."""
+def shell_fields(tm, materials: dict, thickness: dict, bending: dict | None = None) -> ShellFields:
+    """Cell-wise E, nu, rho, t and b of a shell TaggedMesh from {shell group: Material},
+    {shell group: thickness (m)} (every shell group needs both) and {shell group: 12 I/t^3}
+    (default 1)."""
     from dolfinx import fem
 
     from .elasticity import check_material
 
     Q = fem.FunctionSpace(tm.mesh, ("DG", 0))
-    out = {k: fem.Function(Q, name=k) for k in ("E", "nu", "rho", "t")}
+    out = {k: fem.Function(Q, name=k) for k in ("E", "nu", "rho", "t", "bend")}
+    bending = bending or {}
     for name, gid in tm.volume_ids.items():
         if name not in materials or name not in thickness:
             raise InputError(f"shell surface {name!r} of mesh {tm.path!r} needs a material and a thickness")
-        mat, t = materials[name], float(thickness[name])
+        mat, t, b = materials[name], float(thickness[name]), float(bending.get(name, 1.0))
         check_material(name, mat)
         if not np.isfinite(t) or t <= 0:
             raise InputError(f"shell surface {name!r}: thickness {t!r} m must be > 0")
+        if not np.isfinite(b) or b <= 0:
+            raise InputError(f"shell surface {name!r}: bending ratio 12I/t^3 = {b!r} must be > 0")
         dofs = Q.dofmap.list.array[tm.cell_tags.find(gid)]
-        for k, v in (("E", mat.E), ("nu", mat.nu), ("rho", mat.rho), ("t", t)):
+        for k, v in (("E", mat.E), ("nu", mat.nu), ("rho", mat.rho), ("t", t), ("bend", b)):
             out[k].x.array[dofs] = float(v)
     for f in out.values():
         f.x.scatter_forward()
-    return ShellFields(out["E"], out["nu"], out["rho"], out["t"])
+    return ShellFields(out["E"], out["nu"], out["rho"], out["t"], out["bend"])
 
 
 def shell_element(cell) -> ufl.MixedElement:
@@ -156,7 +165,7 @@ def stiffness_form(W, f: ShellFields, drilling: float = DRILLING_FACTOR, dx=None
     h = ufl.CellDiameter(mesh)
     dx = dx or ufl.dx(domain=mesh)
     return (f.t * ufl.inner(_plane_stress(f.E, f.nu, eu), ev)
-            + f.t ** 3 / 12 * ufl.inner(_plane_stress(f.E, f.nu, ku), kv)
+            + f.bend * f.t ** 3 / 12 * ufl.inner(_plane_stress(f.E, f.nu, ku), kv)
             + SHEAR_FACTOR * G * f.t * ufl.dot(gu, gv)
             + drilling * f.E * f.t ** 3 / h ** 2 * du * dv) * dx
 
