@@ -16,7 +16,7 @@ pytestmark = pytest.mark.fem
 
 @pytest.fixture(scope="module")
 def tube(msh):
-    path = msh("shell_tube", R=0.1, L=1.0, n_around=12, n_along=10)
+    path = msh("shell_tube", R=0.1, L=1.0, n_around=8, n_along=5)
     geo = Geometry("tube", path, {"tube": Material("al", 70e9, 0.3, 2700.0)}, shells={"tube": 0.004},
                    patches=[Patch("root", (0, 0, 0)), Patch("tip", (0, 0, 1.0))],
                    smeared_masses=[SmearedMass("band", 0.5)])
