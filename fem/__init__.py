@@ -5,6 +5,7 @@ Public API (SI units throughout)::
     build_model(geometry, degree=1, comm=MPI.COMM_WORLD, lumped_smeared_mass=False) -> FEModel
     FEModel.component_fields() -> dict   # Component(name=..., **fields)
     eigenmodes(model, n_modes=None, band_hz=None, shift_hz=1.0, rigid_tol_hz=0.01) -> Modes
+    beam_content(model, shape) -> float   # beam-bending share of a mode (shell models)
     static_solve(model, f, supports=()) -> x
     point_load(model, point, force, moment) -> f
     thermal_load(model, volumes, delta_T, alpha) -> f
@@ -25,6 +26,7 @@ _EXPORTS = {
     "build_model": ".model",
     "Modes": ".modes",
     "eigenmodes": ".modes",
+    "beam_content": ".modes",
     "write_modes_vtu": ".output",
     "write_vtu": ".output",
     "MassProperties": ".static",
