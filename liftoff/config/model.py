@@ -41,7 +41,10 @@ NAMES = VEHICLE + ("pad",)
 DEFAULT_F_MAX = 60.0        # Hz, fixed-interface modes kept when neither n_modes nor f_max is given
 STICK_ELEMENT = 4.0         # m, default beam element length of the stick source
 
-_MODEL = {"source", "mesh_size", "degree", "zeta", "vehicle", "pad", "component", "materials", "system", "stick"}
+_MODEL = {"source", "mesh_size", "degree", "zeta", "vehicle", "pad", "component", "materials", "system", "stick",
+          "walls"}
+WALLS = ("solid", "shell")
+_CORE_PARAMS = {"shell_bending_ratio"}
 _VEHICLE = {"mesh_size", "params"}
 _COMP = {"mesh_size", "n_modes", "f_max", "params", "nastran"}
 _NASTRAN = {"file", "units", "grids", "asm", "pch", "op4", "bulk", "stiffness", "mass", "se", "recovery"}
@@ -215,24 +218,31 @@ def _sizes(where: Where, spec: dict, keys: set[str], base: Path = Path(".")) -> 
     return out
 
 
-def _fe_builders(where: Where, layout: StackLayout, sel: dict[str, dict], size: dict[str, float | None]) -> dict:
-    """Builder dataclasses of the FE components (gmsh geometry of meshes/)."""
+def _fe_builders(where: Where, layout: StackLayout, sel: dict[str, dict], size: dict[str, float | None],
+                 walls: str) -> dict:
+    """Builder dataclasses of the FE components (gmsh geometry of meshes/); ``walls`` the
+    vehicle walls' model ([model] walls: thickened solids or shells), overridable per
+    booster/orbiter in their params."""
     out = {}
     wc = where / "component"
-    if sel["core"]["params"]:
+    core = dict(sel["core"]["params"])
+    extra = sorted(set(core) - _CORE_PARAMS)
+    if extra:
         raise (wc / "core" / "params").error(
-            f"the core stage takes no builder parameters in the FE source (got {', '.join(sel['core']['params'])}); "
-            "change [model.vehicle.params] (StackLayout)")
+            f"unknown key {extra[0]!r}: the core stage takes only {', '.join(sorted(_CORE_PARAMS))} (shell walls); "
+            "its tank follows from [model.vehicle.params] (StackLayout)")
     try:
-        out["core"] = core_stage_params(layout, **({} if size["core"] is None else {"mesh_size": size["core"]}))
+        ratio = number(wc / "core" / "params" / "shell_bending_ratio", core.get("shell_bending_ratio", 1.0),
+                       positive=True)
+        out["core"] = core_stage_params(layout, **_size(size["core"]), walls=walls, shell_bending_ratio=ratio)
         out["core"].check()
     except InputError as exc:
         raise (wc / "core").wrap(exc) from None
     for name in ("srb_left", "srb_right"):
         out[name] = builder(wc / name / "params", BoosterParams, sel[name]["params"],
-                            {"side": name[4:], "layout": layout}, _size(size[name]))
+                            {"side": name[4:], "layout": layout}, {**_size(size[name]), "walls": walls})
     out["orbiter"] = builder(wc / "orbiter" / "params", OrbiterParams, sel["orbiter"]["params"], {"layout": layout},
-                             _size(size["orbiter"]))
+                             {**_size(size["orbiter"]), "walls": walls})
     out["pad"] = builder(where / "pad" / "params", PadParams, sel["pad"]["params"], {"layout": layout},
                          _size(size["pad"]))
     return out
@@ -314,7 +324,12 @@ def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig
     sizes = {name: sel[name].get("mesh_size", vehicle.get("mesh_size") if name != "pad" else None) or size
              for name in NAMES}
     layout = _layout(where / "vehicle" / "params", vehicle["params"], source)
-    builders = _fe_builders(where, layout, sel, sizes) if source == "fe" else \
+    walls = string(where / "walls", m.get("walls", "solid"))
+    if walls not in WALLS:
+        raise (where / "walls").error(f"must be one of {', '.join(WALLS)}, got {walls!r}")
+    if source == "stick" and "walls" in m:
+        raise (where / "walls").error("[model] walls is for source = \"fe\" (the stick model has beams)")
+    builders = _fe_builders(where, layout, sel, sizes, walls) if source == "fe" else \
         _stick_builders(where, layout, sel, m.get("stick", {}))
     components = {name: ComponentModel(name, builders[name], sizes[name], sel[name].get("n_modes"),
                                        sel[name].get("f_max", None if "n_modes" in sel[name] else DEFAULT_F_MAX),
