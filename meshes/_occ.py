@@ -316,6 +316,22 @@ def refine_faces(faces: list[int], size: float) -> None:
     gmsh.model.mesh.setSize(list({(0, abs(t)) for d, t in pts if d == 0}), size)
 
 
+def patch_groups(faces: list[int], tools: list[Tool], refs: dict, size) -> list:
+    """Spider patches of the named tools: the faces (of ``faces``) inside the boxes of the
+    tools of one name become the physical surface of that name, meshed at ``size(name)``
+    (m); returns the ``meshes.spec.Patch`` list with the reference points ``refs[name]``."""
+    from .spec import Patch
+
+    faces_of: dict[str, list] = {}
+    for tl in tools:
+        if tl.name is not None:
+            faces_of.setdefault(tl.name, []).extend(faces_inside(faces, tl.bbox))
+    for name, inside in faces_of.items():
+        add_physical(2, name, inside)
+        refine_faces(inside, size(name))
+    return [Patch(name, np.asarray(refs[name], float)) for name in faces_of]
+
+
 def add_physical(dim: int, name: str, tags: list[int]) -> int:
     if not tags:
         raise InputError(f"physical group {name!r}: no entities selected (geometry parameters?)")

@@ -92,14 +92,8 @@ def build_shell_tank(p: TankParams, out_dir: Path) -> Geometry:
                                   lay[-1].a_top - 0.5 * t) for n, ref in p.patches.items()]
         tools += [_occ.plane_cut(c.z_fill) for c in lay if c.fill_height < (c.z_inner_top - c.z_inner_bottom)]
         wall_faces = _occ.imprint_surfaces({wall: faces}, tools)[wall]
-        patches, smeared = [], []
-        for tl in tools:
-            if tl.name is None:
-                continue
-            pf = _occ.faces_inside(wall_faces, tl.bbox)
-            _occ.add_physical(2, tl.name, pf)
-            _occ.refine_faces(pf, min(p.mesh_size, 0.6 * w))
-            patches.append(Patch(tl.name, np.asarray(p.patches[tl.name], float)))
+        patches = _occ.patch_groups(wall_faces, tools, p.patches, lambda _: min(p.mesh_size, 0.6 * w))
+        smeared = []
         ax, ay = p.axis_xy
         for c in lay:
             zb = c.z_cyl_bottom - (c.a_bottom - 0.5 * t)

@@ -28,7 +28,7 @@ from liftoff.core.errors import InputError
 
 from . import _occ
 from ._occ import occ
-from .spec import Geometry, Material, Patch, SmearedMass, check_walls, equivalent, require_positive
+from .spec import Geometry, Material, SmearedMass, check_walls, equivalent, require_positive
 
 #: Aluminium alloy 2219 (the Shuttle external tank's alloy): E 73.8 GPa, nu 0.33, 2840 kg/m^3
 AL2219 = Material("Al2219", 73.8e9, 0.33, 2840.0)
@@ -306,14 +306,8 @@ def build_tank(p: TankParams, out_dir) -> Geometry:
         occ.synchronize()
         groups = _occ.imprint({wall: vols}, tools)
         bfaces = _occ.boundary_faces(groups[wall])
-        patches, smeared = [], []
-        for tl in tools:
-            if tl.name is None:
-                continue
-            faces = _occ.faces_inside(bfaces, tl.bbox)
-            _occ.add_physical(2, tl.name, faces)
-            _occ.refine_faces(faces, min(p.mesh_size, 0.6 * w))
-            patches.append(Patch(tl.name, np.asarray(p.patches[tl.name], float)))
+        patches = _occ.patch_groups(bfaces, tools, p.patches, lambda _: min(p.mesh_size, 0.6 * w))
+        smeared = []
         ax, ay = p.axis_xy
         for c in lay:
             box = (ax - c.r_inner, ay - c.r_inner, c.z_inner_bottom, ax + c.r_inner, ay + c.r_inner, c.z_fill)

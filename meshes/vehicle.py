@@ -20,7 +20,7 @@ from liftoff.core.errors import InputError
 from . import _occ
 from ._occ import occ
 from .layout import StackLayout
-from .spec import Geometry, Material, Patch, PointMass, SmearedMass, check_walls, equivalent, require_positive
+from .spec import Geometry, Material, PointMass, SmearedMass, check_walls, equivalent, require_positive
 from .tank import AL2219, Compartment, TankParams, build_tank, tank_height
 
 #: D6AC steel (SRB case): E 205 GPa, nu 0.29, 7850 kg/m^3
@@ -219,12 +219,8 @@ def build_booster(p: BoosterParams, out_dir) -> Geometry:
         groups = _occ.imprint({case_g: vol_case, skirt_g: vol_skirt}, tools)
         allv = groups[case_g] + groups[skirt_g]
         bfaces = _occ.boundary_faces(allv)
-        patches = []
-        for tl in tools:
-            faces = _occ.faces_inside(bfaces, tl.bbox)
-            _occ.add_physical(2, tl.name, faces)
-            _occ.refine_faces(faces, min(p.mesh_size, 0.6 * (p.holddown_patch_radius if "_hd_" in tl.name else w)))
-            patches.append(Patch(tl.name, refs[tl.name]))
+        patches = _occ.patch_groups(bfaces, tools, refs,
+                                    lambda n: min(p.mesh_size, 0.6 * (p.holddown_patch_radius if "_hd_" in n else w)))
         ri = R - t
         inner = _occ.faces_inside(bfaces, (axis[0] - ri, axis[1] - ri, p.case_bottom_z - (a_b - t),
                                            axis[0] + ri, axis[1] + ri, p.cyl_top_z + a_t - t), tol=1e-3 * R)
@@ -366,14 +362,7 @@ def build_orbiter(p: OrbiterParams, out_dir) -> Geometry:
             refs[name] = pt
         groups = _occ.imprint({g: fus + wings}, tools)
         bfaces = _occ.boundary_faces(groups[g])
-        faces_of: dict[str, list] = {}
-        for tl in tools:
-            faces_of.setdefault(tl.name, []).extend(_occ.faces_inside(bfaces, tl.bbox))
-        patches = []
-        for name, faces in faces_of.items():
-            _occ.add_physical(2, name, faces)
-            _occ.refine_faces(faces, min(p.mesh_size, 0.6 * w))
-            patches.append(Patch(name, refs[name]))
+        patches = _occ.patch_groups(bfaces, tools, refs, lambda _: min(p.mesh_size, 0.6 * w))
         _occ.add_physical(3, g, [tg for _, tg in groups[g]])
         vols = {g: _occ.group_volume(groups[g])}
         areas = _occ.physical_measures(2)

@@ -22,7 +22,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from liftoff.core.records import TEMP_TAG, read_record, sweep_stale, write_record, write_text
+from liftoff.core.records import TEMP_TAG, file_sha256, read_record, sweep_stale, write_record, write_text
 
 _CODE_CACHE: dict[tuple[str, ...], str] = {}
 ARRAYS_FORMAT = "liftoff-stage-arrays"
@@ -149,7 +149,7 @@ class StageCache:
     def _save(self, out, p: Path, key: str, stage: str, save: Callable[[Any, Path], Any]) -> None:
         try:
             save(out, p)
-            files = {f.name: _sha256(f) for f in _entry_files(p.parent, key)}
+            files = {f.name: file_sha256(f) for f in _entry_files(p.parent, key)}
             write_text(p.with_name(f"{key}.entry.json"),
                        json.dumps({"format": ENTRY_FORMAT, "version": 1, "stage": stage, "key": key,
                                    "files": files, "libraries": library_versions()}, indent=1))
@@ -178,17 +178,9 @@ def _entry_problem(folder: Path, key: str, record: Path) -> str | None:
     if set(files) != set(rec.get("files", {})):
         return "has missing or extra files"
     for name, digest in rec["files"].items():
-        if _sha256(files[name]) != digest:
+        if file_sha256(files[name]) != digest:
             return f"file {name} does not match its checksum"
     return None
-
-
-def _sha256(path: Path) -> str:
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
 
 
 @contextmanager

@@ -41,8 +41,14 @@ def main(argv=None) -> None:
     from liftoff.reduction import assemble, craig_bampton, system_modes
     from liftoff.transient import Forcing, PointForce, TabulatedForce, TransientProblem, estimate_step, solve
     from liftoff.transient.effects import center_of_gravity, cg_static_report
-    from liftoff.workflows.loads import (applied_forces, attitude_feedback, contacts, control_table, recoveries,
-                                         softening)
+    from liftoff.workflows.loads import (
+        applied_forces,
+        attitude_feedback,
+        contacts,
+        control_table,
+        recoveries,
+        softening,
+    )
     from liftoff.workflows.pipeline import VEHICLE, StackModel, boundary_points, build_component, cryo_loads
 
     from liftoff.core.labels import points_labels

@@ -15,7 +15,6 @@ never replaces a folder of the user's own files.
 from __future__ import annotations
 
 import ctypes
-import hashlib
 import json
 import os
 import shutil
@@ -27,7 +26,7 @@ from pathlib import Path
 from typing import Iterator
 
 from liftoff.core.errors import InputError
-from liftoff.core.records import TEMP_TAG, fsync_dir, sweep_stale, write_text
+from liftoff.core.records import TEMP_TAG, file_sha256, fsync_dir, sweep_stale, write_text
 
 MANIFEST = "MANIFEST.json"
 FORMAT = "liftoff-run-manifest"
@@ -58,7 +57,7 @@ def _manifest(stage: Path, command: str) -> dict:
     files = []
     for f in sorted(p for p in stage.rglob("*") if p.is_file()):
         files.append({"name": str(f.relative_to(stage)), "bytes": f.stat().st_size,
-                      "sha256": hashlib.sha256(f.read_bytes()).hexdigest()})
+                      "sha256": file_sha256(f)})
     return {"format": FORMAT, "version": 1, "liftoff": __version__, "command": command,
             "written": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "units": "SI (m, kg, s, N, rad) unless a file says",
             "files": files}
@@ -123,7 +122,7 @@ def verify(out) -> list[str]:
         listed.add(f["name"])
         if not p.is_file():
             problems.append(f"missing {f['name']}")
-        elif hashlib.sha256(p.read_bytes()).hexdigest() != f["sha256"]:
+        elif file_sha256(p) != f["sha256"]:
             problems.append(f"changed {f['name']}")
     extra = [str(p.relative_to(out)) for p in out.rglob("*") if p.is_file()
              and str(p.relative_to(out)) not in listed | {MANIFEST}]

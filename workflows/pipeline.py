@@ -37,7 +37,7 @@ from liftoff.config.model import VEHICLE, ComponentModel, ModelConfig
 from liftoff.config.sections import Cryo
 from liftoff.config.values import Where
 from liftoff.core.labels import named_points, points_labels
-from liftoff.core.records import TEMP_TAG, sweep_stale
+from liftoff.core.records import TEMP_TAG, file_sha256, sweep_stale
 
 from .cache import StageCache, load_arrays, save_arrays, stage_key
 
@@ -122,7 +122,7 @@ def nastran_stage(model: ModelConfig, name: str, cache: StageCache) -> tuple[CBM
 
     sel = model.components[name]
     src = sel.nastran
-    params = {"files": {f: _file_digest(f) for f in src.files()}, "units": src.units, "grids": src.grid_names,
+    params = {"files": {f: file_sha256(f) for f in src.files()}, "units": src.units, "grids": src.grid_names,
               "options": src.options, "recovery": list(src.recovery), "n_modes": sel.n_modes, "f_max": sel.f_max}
     key = stage_key("nastran", params, ("liftoff.reduction", "liftoff.core"))
 
@@ -135,16 +135,6 @@ def nastran_stage(model: ModelConfig, name: str, cache: StageCache) -> tuple[CBM
     cb = cache.get_or_build("nastran", key, ".npz", build, lambda out, p: out.save(p, recovery=True), load_cb,
                             label=name)
     return cb, key
-
-
-def _file_digest(path: str) -> str:
-    import hashlib
-
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
 
 
 def modes_stage(asm: Assembly, n_rigid: int, f_max, keys: list[str], cache: StageCache, label: str) -> SystemModes:

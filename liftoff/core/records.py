@@ -110,6 +110,17 @@ def sweep_stale(folder, tag: str = TEMP_TAG) -> list[Path]:
     return removed
 
 
+def file_sha256(path) -> str:
+    """SHA-256 (hex) of a file's bytes, read in 1 MiB blocks."""
+    import hashlib
+
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
 def write_text(path: str | os.PathLike, text: str) -> Path:
     """Write a text file atomically; returns its path."""
     with atomic_path(path) as tmp:
