@@ -19,6 +19,9 @@ is affine in the contact force, e = e_free + W f (W the step flexibility), and
   the step); it is open from the next step on (or at once if g itself is tensile).
 * ``fixed-point``: the reference's iteration f <- -K_C (c + e_free + W f) with its
   convergence test |f_j - f_i| < tol (eq. 11).
+* contact laws beyond the reference's (friction, dashpots, latches: ``Contact.laws``):
+  transient/contact_laws.py, called from the same loop in place of the candidate rows
+  and ``_solve_direct``; problems without them never enter that branch.
 
 No Python objects, no I/O: named bundles of arrays in (:class:`Modal`, :class:`Contact`, ...),
 arrays out; status codes report failures.
@@ -30,7 +33,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-OK, NO_CONVERGENCE, CYCLING, SINGULAR = 0, 1, 2, 3
+OK, NO_CONVERGENCE, CYCLING, SINGULAR, FRICTION_SINGULAR = 0, 1, 2, 3, 4
 BOLTED, CLOSED, OPEN = 0, 1, 2
 
 
@@ -77,6 +80,13 @@ class Contact(NamedTuple):
     release: np.ndarray     # (ncon,) s
     W: np.ndarray           # (n2, n2) step matrix (n2 = nc, or 2 nc with rigid rows: unknowns [f1; g])
     C2: np.ndarray          # (n2,) its compliance diagonal
+    laws: bool              # friction, dashpots or latches present: contact_laws.py's path
+    tau: np.ndarray         # (nc,) s, dashpot / K_C (W already holds + diag(tau) W_v)
+    Wv: np.ndarray          # (nc, n2) velocity step flexibility [W_Bcd, W_Acd] (0 rows: no dashpot)
+    mu: np.ndarray          # (nc,) friction coefficient on tangent rows of friction points, else 0
+    axrow: np.ndarray       # (nc,) the normal row of each row's contact point
+    axcol: np.ndarray       # (ncon,) the normal row of each contact point
+    latch: np.ndarray       # (ncon,) N, latch force (inf: none)
 
 
 class OutputRows(NamedTuple):
@@ -100,6 +110,10 @@ class State(NamedTuple):
     Pc: np.ndarray      # (n,) modal contact force at the step start (penalty rows)
     Pext: np.ndarray    # (n,) applied modal load at the step start
     ptr: np.ndarray     # (1,) int64, position in tk
+    anchor: np.ndarray  # (nc,) stick anchor of friction rows / latched laterals (contact_laws.py)
+    latched: np.ndarray  # (ncon,) bool, captured by a latch
+    slip: np.ndarray    # (nc,) bool, friction row slipping
+    sdir: np.ndarray    # (nc,) slip direction (unit per contact point)
 
 
 class Cache(NamedTuple):
@@ -287,9 +301,9 @@ def march(i0, i1, steps, modal, contact, rows_out, state, cache, hist):
     the helpers take plain arrays (no reference counting per step)."""
     t0, h, method, tol, max_iter = steps
     na, coef, w2, zw2, const, tk, Pk, U, V, until = modal
-    Phi_c, Cdiag, coff, dcontact, axial, nsign, release, W, C2 = contact
+    Phi_c, Cdiag, coff, dcontact, axial, nsign, release, W, C2, laws, tau, Wv, mu, axrow, axcol, latch = contact
     L_a, kind_a, targ_a, L_b, kind_b, targ_b = rows_out
-    q, v, f, active, Pc, Pext, ptr = state
+    q, v, f, active, Pc, Pext, ptr, anchor, latched, slip, sdir = state
     keys, invs, used = cache
     Y_a, Y_b, Fc, states, iters, keep, Qa, Va, Aa, Qb, Vb, Ab = hist
     n, nc = q.size, f.size
@@ -314,30 +328,41 @@ def march(i0, i1, steps, modal, contact, rows_out, state, cache, hist):
         ptr[0] = _pre_step(coef, const, tk, Pk, ptr[0], tb, V.shape[0] > 0, fb, q, v, Pext, Pc, P1, qf, vf)
         # ---------------- candidate rows and free relative displacement
         e = np.dot(Phi_c, qf)  # one BLAS product
-        ed = np.dot(Phi_c, vf) if any_rigid else e
-        for c in range(release.size):
-            bolted[c] = tb < release[c]
-        for j in range(nc):
-            cand[j] = bolted[dcontact[j]] or axial[j]
-            free[j] = cand[j] and not bolted[dcontact[j]]  # may open or close in this step
-            if not bolted[dcontact[j]] and not axial[j]:
-                active[j] = False
-            elif bolted[dcontact[j]]:
-                active[j] = True
-            u[j] = coff[j] + e[j] if cand[j] else 0.0
-            if any_rigid:
-                u[nc + j] = ed[j] if (cand[j] and rigid[j]) else 0.0
-        # ---------------- contact solve
-        if method == 0:
-            st, it, info1, info2 = _solve_direct(W, C2, nsign, keys, invs, used, u, free, rigid, active, opening,
-                                                 max_iter, fn, g, rows2, cols2)
+        if laws:  # friction, dashpots, latches (contact_laws.py)
+            ed = np.dot(Phi_c, vf)
+            contact_laws.candidates(tb, e, ed, coff, dcontact, axial, release, latched, tau, anchor, mu, rigid,
+                                    any_rigid, bolted, cand, free, active, u)
+            st, it, info1, info2 = contact_laws.solve(W, C2, Wv, tau, nsign, axial, keys, invs, used, u, ed, free,
+                                                      rigid, active, opening, mu, axrow, slip, sdir, max_iter, fn,
+                                                      g, rows2, cols2)
         else:
-            st, it, info1, info2 = _solve_fixed_point(W, Cdiag, nsign, u, free, active, f, tol, max_iter, fn)
+            ed = np.dot(Phi_c, vf) if any_rigid else e
+            for c in range(release.size):
+                bolted[c] = tb < release[c]
+            for j in range(nc):
+                cand[j] = bolted[dcontact[j]] or axial[j]
+                free[j] = cand[j] and not bolted[dcontact[j]]  # may open or close in this step
+                if not bolted[dcontact[j]] and not axial[j]:
+                    active[j] = False
+                elif bolted[dcontact[j]]:
+                    active[j] = True
+                u[j] = coff[j] + e[j] if cand[j] else 0.0
+                if any_rigid:
+                    u[nc + j] = ed[j] if (cand[j] and rigid[j]) else 0.0
+            # ---------------- contact solve
+            if method == 0:
+                st, it, info1, info2 = _solve_direct(W, C2, nsign, keys, invs, used, u, free, rigid, active,
+                                                     opening, max_iter, fn, g, rows2, cols2)
+            else:
+                st, it, info1, info2 = _solve_fixed_point(W, Cdiag, nsign, u, free, active, f, tol, max_iter, fn)
         if st != OK:
             return st, i + 1, info1, info2
         # ---------------- end-of-step state with the contact force
         anyf, anyg = _contact_load(Phi_c, rigid, any_rigid, fn, g, f, Pf, Pg, Pc)
         _post_step(coef, qf, vf, P1, Pf, Pg, anyf, anyg, zw2, w2, q, v, acc)
+        if laws:
+            contact_laws.after_step(Phi_c, q, v, Wv.shape[0] > 0, fn, Cdiag, tau, mu, axial, nsign, dcontact,
+                                    axcol, bolted, active, opening, latch, latched, anchor, slip)
         # ---------------- outputs at t1
         r = i + 1
         _record_contact(r, it, fn, bolted, active, opening, dcontact, axial, Fc, states, iters)
@@ -536,3 +561,6 @@ def _outputs(L, kind, targ, q, v, acc, Y, r):
         for row in range(s0, s1):
             Y[r, targ[row]] += y[row - s0]
         s0 = s1
+
+
+from . import contact_laws  # noqa: E402  (it imports _pattern_inverse from here; march resolves it when compiled)
