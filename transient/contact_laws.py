@@ -42,11 +42,15 @@ TURN_TOL = 1e-10    # slip direction converged when no component moves by more t
 
 
 @njit(cache=True)
-def candidates(tb, e, ed, coff, dcontact, axial, release, latched, tau, anchor, mu, rigid, any_rigid,
-               bolted, cand, free, active, u):
+def candidates(tb, e, ed, contact, state, rigid, bolted, cand, free, u):
     """Rows that take part in the step's solve and their right-hand side u = c0 + e - a + tau e'
-    (and the rigid velocity rows); ``bolted`` includes latched points."""
+    (and the rigid velocity rows); ``bolted`` includes latched points. ``contact``, ``state``:
+    the kernel's bundles (kernel.Contact, kernel.State), unpacked once here."""
+    coff, dcontact, axial, release, tau, mu = contact.offset, contact.contact, contact.axial, contact.release, \
+        contact.tau, contact.mu
+    active, anchor, latched = state.active, state.anchor, state.latched
     nc = e.size
+    any_rigid = u.size > nc
     for c in range(release.size):
         bolted[c] = tb < release[c] or latched[c]
     for j in range(nc):
@@ -151,7 +155,7 @@ def _follow_normals(free, active, opening, slip, mu, axrow):
 
 
 @njit(cache=True)
-def _normal_flips(W, Wv, C2, tau, nsign, u, ed, free, rigid, active, opening, mu, fn, g, single):
+def _normal_flips(W, Wv, tau, nsign, u, ed, free, rigid, active, opening, mu, fn, g, single):
     """The active-set rules of kernel._solve_direct for normal and rigid rows, with the dashpot's
     position conditions; returns whether a row changed (one only when ``single``)."""
     nc = fn.size
@@ -250,10 +254,14 @@ def _friction_checks(W, C2, nsign, u, free, axial, active, mu, axrow, slip, sdir
 
 
 @njit(cache=True)
-def solve(W, C2, Wv, tau, nsign, axial, keys, invs, used, u, ed, free, rigid, active, opening, mu, axrow,
-          slip, sdir, max_iter, fn, g, rows2, cols2):
+def solve(contact, state, cache, rigid, u, ed, free, opening, max_iter, fn, g, rows2, cols2):
     """Active-set solve with friction, dashpots and rigid rows (kernel._solve_direct's rules plus
-    the stick/slip states); returns (status, iterations, info1, info2)."""
+    the stick/slip states); returns (status, iterations, info1, info2). ``contact``, ``state``,
+    ``cache``: the kernel's bundles; the other arguments as in kernel._solve_direct."""
+    W, C2, Wv, tau, nsign, axial, mu, axrow = contact.W, contact.C2, contact.Wv, contact.tau, contact.sign, \
+        contact.axial, contact.mu, contact.axrow
+    active, slip, sdir = state.active, state.slip, state.sdir
+    keys, invs, used = cache
     nc = fn.size
     n2 = W.shape[0]
     any_rigid = n2 > nc
@@ -283,7 +291,7 @@ def solve(W, C2, Wv, tau, nsign, axial, keys, invs, used, u, ed, free, rigid, ac
         for j in range(nc):  # slip rows: mu N d with the solved normal force
             if slip[j] and active[j]:
                 fn[j] = mu[j] * nsign[axrow[j]] * fn[axrow[j]] * sdir[j]
-        changed = _normal_flips(W, Wv, C2, tau, nsign, u, ed, free, rigid, active, opening, mu, fn, g, single)
+        changed = _normal_flips(W, Wv, tau, nsign, u, ed, free, rigid, active, opening, mu, fn, g, single)
         turned = False
         if not (changed and single):
             ch, turned = _friction_checks(W, C2, nsign, u, free, axial, active, mu, axrow, slip, sdir, fn, g,
@@ -302,15 +310,18 @@ def solve(W, C2, Wv, tau, nsign, axial, keys, invs, used, u, ed, free, rigid, ac
 
 
 @njit(cache=True)
-def after_step(Phi_c, q, v, any_tau, fn, Cdiag, tau, mu, axial, nsign, dcontact, axcol, bolted, active,
-               opening, latch, latched, anchor, slip):
+def after_step(contact, state, fn, bolted, opening):
     """Anchors and latches at the step end: a slipping tangent row's anchor moves so that the
     stick relation holds with the slip force; an open point's tangent anchors follow the
     relative position (a new contact starts unstressed); a point closed with compression
     >= latch force is latched (bolted from the next step), its frictionless laterals
     anchored at the current relative position."""
-    e = np.dot(Phi_c, q)
-    ev = np.dot(Phi_c, v) if any_tau else e
+    Phi_c, Cdiag, tau, mu, axial, nsign = contact.Phi, contact.compliance, contact.tau, contact.mu, contact.axial, \
+        contact.sign
+    dcontact, axcol, latch = contact.contact, contact.axcol, contact.latch
+    active, latched, anchor, slip = state.active, state.latched, state.anchor, state.slip
+    e = np.dot(Phi_c, state.q)
+    ev = np.dot(Phi_c, state.v) if contact.Wv.shape[0] > 0 else e
     nc = fn.size
     for j in range(nc):
         if mu[j] > 0.0 and not bolted[dcontact[j]]:

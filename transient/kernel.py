@@ -301,9 +301,9 @@ def march(i0, i1, steps, modal, contact, rows_out, state, cache, hist):
     the helpers take plain arrays (no reference counting per step)."""
     t0, h, method, tol, max_iter = steps
     na, coef, w2, zw2, const, tk, Pk, U, V, until = modal
-    Phi_c, Cdiag, coff, dcontact, axial, nsign, release, W, C2, laws, tau, Wv, mu, axrow, axcol, latch = contact
+    Phi_c, Cdiag, coff, dcontact, axial, nsign, release, W, C2, laws = contact[:10]  # the rest: contact_laws.py
     L_a, kind_a, targ_a, L_b, kind_b, targ_b = rows_out
-    q, v, f, active, Pc, Pext, ptr, anchor, latched, slip, sdir = state
+    q, v, f, active, Pc, Pext, ptr = state[:7]
     keys, invs, used = cache
     Y_a, Y_b, Fc, states, iters, keep, Qa, Va, Aa, Qb, Vb, Ab = hist
     n, nc = q.size, f.size
@@ -330,11 +330,9 @@ def march(i0, i1, steps, modal, contact, rows_out, state, cache, hist):
         e = np.dot(Phi_c, qf)  # one BLAS product
         if laws:  # friction, dashpots, latches (contact_laws.py)
             ed = np.dot(Phi_c, vf)
-            contact_laws.candidates(tb, e, ed, coff, dcontact, axial, release, latched, tau, anchor, mu, rigid,
-                                    any_rigid, bolted, cand, free, active, u)
-            st, it, info1, info2 = contact_laws.solve(W, C2, Wv, tau, nsign, axial, keys, invs, used, u, ed, free,
-                                                      rigid, active, opening, mu, axrow, slip, sdir, max_iter, fn,
-                                                      g, rows2, cols2)
+            contact_laws.candidates(tb, e, ed, contact, state, rigid, bolted, cand, free, u)
+            st, it, info1, info2 = contact_laws.solve(contact, state, cache, rigid, u, ed, free, opening, max_iter,
+                                                      fn, g, rows2, cols2)
         else:
             ed = np.dot(Phi_c, vf) if any_rigid else e
             for c in range(release.size):
@@ -361,8 +359,7 @@ def march(i0, i1, steps, modal, contact, rows_out, state, cache, hist):
         anyf, anyg = _contact_load(Phi_c, rigid, any_rigid, fn, g, f, Pf, Pg, Pc)
         _post_step(coef, qf, vf, P1, Pf, Pg, anyf, anyg, zw2, w2, q, v, acc)
         if laws:
-            contact_laws.after_step(Phi_c, q, v, Wv.shape[0] > 0, fn, Cdiag, tau, mu, axial, nsign, dcontact,
-                                    axcol, bolted, active, opening, latch, latched, anchor, slip)
+            contact_laws.after_step(contact, state, fn, bolted, opening)
         # ---------------- outputs at t1
         r = i + 1
         _record_contact(r, it, fn, bolted, active, opening, dcontact, axial, Fc, states, iters)
