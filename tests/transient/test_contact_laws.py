@@ -263,7 +263,7 @@ def test_docking_normals_are_not_axes():
 
 # ------------------------------------------------------------------ the reference's path is kept
 def test_laws_path_without_a_law_is_the_reference_path():
-    """A latch that never closes sends the problem through contact_laws.solve; with no friction,
+    """A latch that never closes sends the problem through kernel._solve_laws; with no friction,
     no dashpot and no capture it must give the reference path's results (same arithmetic)."""
     def problem(latch):
         veh, pad = toy_vehicle(), toy_pad()
