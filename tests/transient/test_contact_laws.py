@@ -305,3 +305,27 @@ def test_fixed_point_refuses_laws():
     c = ContactPoint("floor", ["b:Tz", "b:Tx", "b:Ty"], [None] * 3, KN, release_time=-math.inf, friction=0.3)
     with pytest.raises(InputError, match="need method 'direct'"):
         TransientProblem(b, ground(), [c], Forcing(), t_end=0.1, method="fixed-point", initial="zero")
+
+
+def test_friction_cone_through_lift_off_and_landing():
+    """A vehicle on four friction posts, released, rocked by a lateral pulse so that posts lift off
+    and land again while it slides: at every step end the Coulomb cone holds on closed points
+    (|f_T| <= mu N), open points carry nothing, and the run settles every step."""
+    veh, pad = toy_vehicle(), toy_pad()
+    mu = 0.3
+    cps = holddown_contacts(release_time=0.01)            # statics bolted, then released
+    for c in cps:
+        c.friction = mu
+    weight = veh.mass * G
+    pulse = TabulatedForce("a", "top:Tx", [0.0, 0.05, 0.15, 0.2], [0.0, 0.12 * weight, 0.12 * weight, 0.0])
+    p = TransientProblem(veh, pad, cps, Forcing(gravity=(0, 0, -G), tables=[pulse]), t_end=1.5,
+                         outputs={"a": ["top:Tx"]}, progress=False)
+    r = solve(p)
+    F = r.contact_force.reshape(r.time.size, 4, 3)            # per post: Tz (normal), Tx, Ty
+    N, T = F[:, :, 0], np.hypot(F[:, :, 1], F[:, :, 2])
+    assert (r.recontact_count > 0).any()                         # posts lifted off and landed again
+    closed = r.contact_state == 1
+    assert np.all(T[closed] <= mu * N[closed] * (1 + 1e-9) + 1e-9 * weight)
+    assert np.all(F[r.contact_state == 2] == 0.0)
+    slipping = closed & (T >= mu * N * (1 - 1e-6)) & (N > 0)
+    assert slipping.any() and (closed & ~slipping).any()        # both stick and slip happened
