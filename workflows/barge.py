@@ -194,7 +194,9 @@ def build_problem(case: BargeCase, models: BargeModels, progress: bool = True) -
                             t_end=t.t_end, h=t.h, t0=t.t0, method=t.method, tol=t.tol, max_iter=t.max_iter,
                             initial=init, outputs=outputs, recoveries=recs,
                             progress=progress and case.output.progress)
-    return BargeProblem(case, prob, interface, series_spring(models, case))
+    est = series_spring(models, case)
+    est["F_wave"] = abs(case.velocity) * impedance(models, case)
+    return BargeProblem(case, prob, interface, est)
 
 
 

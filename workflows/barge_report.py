@@ -79,6 +79,7 @@ def case_plot(result, bp, out: Path, name: str) -> Path:
         axs[0].plot(t, result.contact_directions[j].normal_sign * result.contact_force[w, j] / 1e6, lw=0.8, label=cname)
     est = bp.estimate
     axs[0].axhline(est["F_series"] / 1e6, color="r", ls="--", lw=1, label="series spring v0 sqrt(m k_eff)")
+    axs[0].axhline(est["F_wave"] / 1e6, color="m", ls="-.", lw=1, label="hull wave impedance v0 sqrt(EA m')")
     axs[0].set_ylabel("fender compression (MN)")
     for rec, pt in bp.interface.items():
         it = result.recovery_items[rec]
@@ -174,7 +175,7 @@ def sweep_csv(rows: list[dict], out: Path) -> Path:
     from liftoff.core.records import write_text
 
     keys = ("case", "k_fenders", "k_quay", "k_dock", "k_barge", "k_eff", "mass", "F_fe", "F_series", "ratio",
-            "F_dock_limit", "F_barge_limit", "duration_fe", "duration_series")
+            "F_dock_limit", "F_barge_limit", "F_wave", "duration_fe", "duration_series")
     lines = ["# barge impact sweep: peak fender force vs dock stiffness; N/m, kg, N, s", ",".join(keys)]
     for r in rows:
         lines.append(",".join(r[k] if isinstance(r[k], str) else f"{r[k]:.6e}" for k in keys))
