@@ -222,7 +222,7 @@ def sweep_row(case: BargeCase, result, bp: BargeProblem) -> dict:
     lab = result.output_labels["a"]
     deck = [j for j, s in enumerate(lab) if s.startswith("deck_")]
     return {"case": case.name, **{k: float(v) for k, v in est.items()}, "F_fe": float(F.max()),
-            "ratio": float(F.max() / est["F_series"]), "duration_fe": float(on[-1] - on[0]) if on.size else 0.0,
+            "ratio": float(F.max() / est["F_series"]) if est["F_series"] > 0 else float("nan"), "duration_fe": float(on[-1] - on[0]) if on.size else 0.0,
             "duration_series": float(est["duration"]), "cargo_peak": cargo,
             "deck_acc_peak": float(np.abs(result.acceleration["a"][:, deck]).max())}
 
