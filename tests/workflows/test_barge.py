@@ -154,3 +154,12 @@ def test_wave_force_pushes_the_barge_onto_the_dock(sweep):
     r = sweep[1]["wave"]
     Fw, g = 2.0e5, 0.02
     assert r["F_fe"] == pytest.approx(Fw + np.sqrt(Fw ** 2 + 2 * r["k_eff"] * g * Fw), rel=2e-3)
+
+
+def test_example_and_file_conflict(tmp_path, capsys):
+    path = tmp_path / "b.toml"
+    path.write_text(SCENARIO)
+    code = main(["run", str(path), "--example", "barge", "--out", str(tmp_path / "o"), "--no-progress"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "not both" in err[0]
+    assert not (tmp_path / "o").exists()
