@@ -5,6 +5,7 @@ Public API (SI units throughout)::
     build_model(geometry, degree=1, comm=MPI.COMM_WORLD, lumped_smeared_mass=False) -> FEModel
     FEModel.component_fields() -> dict   # Component(name=..., **fields)
     eigenmodes(model, n_modes=None, band_hz=None, shift_hz=1.0, rigid_tol_hz=0.01) -> Modes
+    beam_content(model, shape) -> float   # beam-bending share of a mode (shell models)
     static_solve(model, f, supports=()) -> x
     point_load(model, point, force, moment) -> f
     thermal_load(model, volumes, delta_T, alpha) -> f
@@ -12,6 +13,8 @@ Public API (SI units throughout)::
     write_vtu(path, nodes, cells, cell_type, point_data) / write_modes_vtu(model, modes, path)
     fem.snapshot.snapshot_png(path, nodes, cells, cell_type, displacement, title, scale=None)
 
+Parts: solids (tetrahedra of the volume groups) and Reissner-Mindlin shells (triangles of
+the surface groups in ``Geometry.shells``, fem.shell), tied by node position.
 Import pyvista (fem.snapshot) before dolfinx when both are used (FENICSX-NOTES.md).
 Only this package and meshes/ import gmsh or dolfinx; PETSc/SLEPc live in petsc_backend.
 """
@@ -23,6 +26,7 @@ _EXPORTS = {
     "build_model": ".model",
     "Modes": ".modes",
     "eigenmodes": ".modes",
+    "beam_content": ".modes",
     "write_modes_vtu": ".output",
     "write_vtu": ".output",
     "MassProperties": ".static",

@@ -1,21 +1,31 @@
-"""Read a gmsh ``.msh`` file into a distributed dolfinx mesh with *named* tags.
+"""Read a gmsh ``.msh`` file into distributed dolfinx meshes with *named* tags.
 
 dolfinx 0.5.2's ``gmshio.read_from_msh`` is broken (it returns an undefined name) and its
 ``model_to_mesh`` duplicates cells that belong to two physical groups and keeps a single
 facet tag per facet. This reader does the same job (rank 0 reads, dolfinx distributes)
-but keeps one tag set per named surface group, so that a facet may belong to a patch and
-to a smeared-mass surface at once, and it checks the input:
+but keeps one tag set per named group, so that a facet may belong to a patch and to a
+smeared-mass surface at once. A file may hold two parts that share nodes:
+
+* the **solid** part: tetrahedra of the physical VOLUME groups;
+* the **shell** part: the flat 3-node triangles of the physical SURFACE groups named in
+  ``shells`` (a triangle mesh in 3-D, for fem.shell).
+
+Each part is a :class:`TaggedMesh` whose ``surface_tags`` tag the part's 2-D entities (tet
+facets, or shell cells) of every surface group, and ``curve_tags`` (shell part only) its
+1-D entities (shell edges) of every curve group. Checks (InputError naming the file):
 
 * every physical group must have a name (names are the user's handles);
-* a mesh with no 3-D physical group is rejected (InputError naming the file);
-* a volume entity may belong to one physical volume only.
+* a mesh with neither a 3-D physical group nor a shell surface is rejected;
+* a volume entity may belong to one physical volume only, a shell triangle to one shell
+  group only (one material, one thickness).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import ufl
 from mpi4py import MPI
 
 from liftoff.core.errors import InputError
@@ -23,13 +33,14 @@ from liftoff.core.errors import InputError
 
 @dataclass
 class TaggedMesh:
-    """A dolfinx mesh with per-cell volume ids and one facet tag set per surface group."""
+    """A dolfinx mesh with per-cell group ids and one tag set per named lower-dimensional group."""
 
     mesh: object                      # dolfinx.mesh.Mesh
-    cell_tags: object                 # MeshTags over cells, value = volume id
-    volume_ids: dict[str, int]        # physical volume name -> id in cell_tags
-    surface_tags: dict[str, object]   # physical surface name -> MeshTags (facets, value 1)
+    cell_tags: object                 # MeshTags over cells, value = group id
+    volume_ids: dict[str, int]        # cell group name (volume, or shell surface) -> id in cell_tags
+    surface_tags: dict[str, object]   # physical surface name -> MeshTags (2-D entities, value 1)
     path: str
+    curve_tags: dict[str, object] = field(default_factory=dict)   # curve name -> MeshTags (1-D, value 1)
 
 
 def _gmsh_is_initialized(gmsh) -> bool:
@@ -50,8 +61,59 @@ def _gmsh_is_initialized(gmsh) -> bool:
         os.close(saved)
 
 
-def _read_rank0(path: str):
-    """On the reading rank: nodes, cells per volume group, facets per surface group."""
+def _elements(gmsh, dim: int, tag: int) -> tuple[int | None, np.ndarray]:
+    """(gmsh element type, (n, nodes) 0-based node indices) of physical group (dim, tag)."""
+    etype, out, width = None, [], {0: 1, 1: 2, 2: 3, 3: 4}[dim]
+    for ent in gmsh.model.getEntitiesForPhysicalGroup(dim, tag):
+        etypes, _, enodes = gmsh.model.mesh.getElements(dim, ent)
+        for et, en in zip(etypes, enodes):
+            etype = int(et)
+            width = gmsh.model.mesh.getElementProperties(et)[3]
+            out.append(np.asarray(en, dtype=np.int64).reshape(-1, width) - 1)
+    return etype, (np.vstack(out) if out else np.zeros((0, width), dtype=np.int64))
+
+
+def _cell_groups(gmsh, path: str, groups: list, what: str):
+    """(gmsh type, cells, group index per cell) of the named groups [(dim, tag, name)],
+    each element in one group only."""
+    cell_type, cells, vals, seen = None, [], [], {}
+    for gid, (dim, tag, name) in enumerate(groups):
+        for ent in gmsh.model.getEntitiesForPhysicalGroup(dim, tag):
+            if ent in seen:
+                raise InputError(f"mesh {path!r}: {what} entity {ent} is in groups {seen[ent]!r} and "
+                                 f"{name!r}; a cell needs one material")
+            seen[ent] = name
+        et, c = _elements(gmsh, dim, tag)
+        if et is not None:
+            if cell_type is not None and et != cell_type:
+                raise InputError(f"mesh {path!r}: mixed {what} element types {cell_type} and {et}")
+            cell_type = et
+        cells.append(c)
+        vals.append(np.full(c.shape[0], gid, dtype=np.int32))
+    return cell_type, np.vstack(cells), np.concatenate(vals)
+
+
+def _sub_entities(cells: np.ndarray, k: int) -> np.ndarray:
+    """Sorted vertex k-tuples (rows) of the sub-entities of tets or triangles (vertices first)."""
+    from itertools import combinations
+
+    nv = 4 if cells.shape[1] in (4, 10) else 3
+    return np.vstack([np.sort(cells[:, list(c)], axis=1) for c in combinations(range(nv), k)])
+
+
+def _rows_in(rows: np.ndarray, table: np.ndarray) -> np.ndarray:
+    """Mask of the rows of ``rows`` (vertex tuples, any order) that are rows of ``table`` (sorted)."""
+    if rows.shape[0] == 0:
+        return np.zeros(0, bool)
+    k = table.shape[1]
+    a = np.ascontiguousarray(np.sort(rows[:, :k], axis=1))
+    b = np.ascontiguousarray(table)
+    view = np.dtype((np.void, a.dtype.itemsize * k))
+    return np.isin(a.view(view).ravel(), b.view(view).ravel())
+
+
+def _read_rank0(path: str, shells: tuple[str, ...]):
+    """On the reading rank: nodes, the solid and shell parts, and the groups' entities."""
     import gmsh
 
     was_initialized = _gmsh_is_initialized(gmsh)
@@ -66,50 +128,36 @@ def _read_rank0(path: str):
         tags, coords, _ = gmsh.model.mesh.getNodes()
         x = np.zeros((len(tags), 3))
         x[np.asarray(tags, dtype=np.int64) - 1] = coords.reshape(-1, 3)
-        groups = gmsh.model.getPhysicalGroups()
-        names = {}
-        for dim, tag in groups:
+        groups = []
+        for dim, tag in gmsh.model.getPhysicalGroups():
             name = gmsh.model.getPhysicalName(dim, tag)
             if not name:
                 raise InputError(f"mesh {path!r}: physical group (dim {dim}, tag {tag}) has no name")
-            names[(dim, tag)] = name
-        vols = [(t, names[(3, t)]) for d, t in groups if d == 3]
-        if not vols:
-            raise InputError(f"mesh {path!r} has no volume (3-D) physical group: nothing to model")
-        cell_type, cells, cell_vals, seen = None, [], [], {}
-        for vid, (tag, name) in enumerate(vols):
-            for ent in gmsh.model.getEntitiesForPhysicalGroup(3, tag):
-                if ent in seen:
-                    raise InputError(f"mesh {path!r}: volume entity {ent} is in physical volumes "
-                                     f"{seen[ent]!r} and {name!r}; a cell needs one material")
-                seen[ent] = name
-                etypes, _, enodes = gmsh.model.mesh.getElements(3, ent)
-                for et, en in zip(etypes, enodes):
-                    if cell_type is None:
-                        cell_type = int(et)
-                    elif int(et) != cell_type:
-                        raise InputError(f"mesh {path!r}: mixed 3-D element types {cell_type} and {et}")
-                    nn = gmsh.model.mesh.getElementProperties(et)[3]
-                    cells.append(np.asarray(en, dtype=np.int64).reshape(-1, nn) - 1)
-                    cell_vals.append(np.full(cells[-1].shape[0], vid, dtype=np.int32))
-        if cell_type is None:
-            raise InputError(f"mesh {path!r}: the volume groups hold no 3-D elements (was it meshed in 3-D?)")
-        surfaces = {}
-        for d, tag in groups:
-            if d != 2:
-                continue
-            tris, ftype = [], None
-            for ent in gmsh.model.getEntitiesForPhysicalGroup(2, tag):
-                etypes, _, enodes = gmsh.model.mesh.getElements(2, ent)
-                for et, en in zip(etypes, enodes):
-                    ftype = int(et)
-                    nn = gmsh.model.mesh.getElementProperties(et)[3]
-                    tris.append(np.asarray(en, dtype=np.int64).reshape(-1, nn) - 1)
-            if tris:
-                surfaces[names[(2, tag)]] = (ftype, np.vstack(tris))
-            else:
-                surfaces[names[(2, tag)]] = (None, np.zeros((0, 3), dtype=np.int64))
-        return x, cell_type, np.vstack(cells), np.concatenate(cell_vals), [n for _, n in vols], surfaces
+            groups.append((dim, tag, name))
+        surf_names = {n for d, _, n in groups if d == 2}
+        missing = [s for s in shells if s not in surf_names]
+        if missing:
+            raise InputError(f"mesh {path!r}: shell surface {missing[0]!r} is not a physical surface "
+                             f"(has: {', '.join(sorted(surf_names)) or 'none'})")
+        vols = [g for g in groups if g[0] == 3]
+        if not vols and not shells:
+            raise InputError(f"mesh {path!r} has no volume (3-D) physical group and no shell surface: "
+                             "nothing to model")
+        parts = {"solid": None, "shell": None}
+        if vols:
+            ct, cells, vals = _cell_groups(gmsh, path, vols, "volume")
+            if ct is None:
+                raise InputError(f"mesh {path!r}: the volume groups hold no 3-D elements (was it meshed in 3-D?)")
+            parts["solid"] = (ct, cells, vals, [n for _, _, n in vols])
+        if shells:
+            sg = [next(g for g in groups if g[0] == 2 and g[2] == s) for s in shells]
+            ct, cells, vals = _cell_groups(gmsh, path, sg, "shell surface")
+            if ct != 2:
+                raise InputError(f"mesh {path!r}: shell surfaces must be meshed with flat 3-node triangles "
+                                 f"(gmsh element type 2, got {ct})")
+            parts["shell"] = (ct, cells, vals, list(shells))
+        entities = {d: {n: _elements(gmsh, d, t) for dd, t, n in groups if dd == d} for d in (1, 2)}
+        return x, parts, entities
     finally:
         gmsh.model.remove()
         if was_initialized and previous:
@@ -118,19 +166,60 @@ def _read_rank0(path: str):
             gmsh.finalize()
 
 
-def read_msh(path, comm: MPI.Comm = MPI.COMM_WORLD, rank: int = 0) -> TaggedMesh:
-    """Read ``path`` on ``rank`` and distribute it over ``comm``; see the module docstring."""
+def _part_entities(kind: str, cells: np.ndarray, entities: dict, hybrid: bool) -> dict:
+    """The groups' entities that belong to a part: in a file with both parts, surface
+    triangles that are tet faces (solid) or shell cells (shell), curve segments that are
+    shell edges; curves are tagged on the shell part only."""
+    out = {2: dict(entities[2]), 1: dict(entities[1]) if kind == "shell" else {}}
+    if hybrid:
+        for d in (2, 1) if kind == "shell" else (2,):
+            table = _sub_entities(cells, d + 1)
+            out[d] = {n: (t, e[_rows_in(e, table)]) for n, (t, e) in out[d].items()}
+    return out
+
+
+def _tagged_mesh(comm, rank: int, path: str, x, cell_type: int, cells, cell_vals, names, entities) -> TaggedMesh:
+    """Distribute one part (arrays given on ``rank``; shapes from ``cell_type``/``entities``)."""
     import dolfinx.mesh as dmesh
     from dolfinx import cpp
     from dolfinx.io.gmshio import cell_perm_array, ufl_mesh
 
-    path = str(path)
+    domain = ufl_mesh(cell_type, 3)
+    dcell = cpp.mesh.to_type(str(domain.ufl_cell()))
+    nn = cells.shape[1]
+    cells = cells[:, cell_perm_array(dcell, nn)]       # gmsh -> dolfinx node order
+    mesh = dmesh.create_mesh(comm, cells, x, domain)
+    cpp_mesh = mesh._mesh if hasattr(mesh, "_mesh") else mesh
+    tdim = mesh.topology.dim
+
+    def tags(dim, ents, vals):
+        mesh.topology.create_connectivity(dim, tdim)
+        e, v = cpp.io.distribute_entity_data(cpp_mesh, dim, ents, vals)
+        return dmesh.meshtags_from_entities(mesh, dim, cpp.graph.AdjacencyList_int32(e), v.astype(np.int32))
+
+    mesh.topology.create_connectivity(tdim, 0)
+    cell_tags = tags(tdim, cells, cell_vals)
+    groups = {}
+    for dim in (2, 1):
+        etype = cpp.mesh.cell_entity_type(dcell, dim, 0)
+        groups[dim] = {}
+        for name, (gtype, ents) in entities.get(dim, {}).items():
+            if gtype is not None:
+                ents = ents[:, cell_perm_array(etype, ents.shape[1])]
+            groups[dim][name] = tags(dim, ents, np.ones(ents.shape[0], np.int32))
+    return TaggedMesh(mesh, cell_tags, {n: i for i, n in enumerate(names)}, groups[2], path, groups[1])
+
+
+def read_mesh_parts(path, comm: MPI.Comm = MPI.COMM_WORLD, shells=(), rank: int = 0):
+    """(solid TaggedMesh or None, shell TaggedMesh or None) of ``path``; ``shells``: the
+    physical surface groups modelled as shells. See the module docstring."""
+    path, shells = str(path), tuple(str(s) for s in shells)
     payload, err = None, None
     if comm.rank == rank:
         try:
             if not Path(path).is_file():
                 raise InputError(f"mesh file not found: {path!r}")
-            payload = _read_rank0(path)
+            payload = _read_rank0(path, shells)
         except InputError as exc:
             err = str(exc)
         except Exception as exc:  # gmsh raises plain Exception on unreadable files
@@ -138,37 +227,49 @@ def read_msh(path, comm: MPI.Comm = MPI.COMM_WORLD, rank: int = 0) -> TaggedMesh
     err = comm.bcast(err, root=rank)
     if err:
         raise InputError(err)
+    meta = None
     if comm.rank == rank:
-        x, cell_type, cells, cell_vals, vol_names, surfaces = payload
-        meta = (cell_type, cells.shape[1], vol_names,
-                [(n, s[0], s[1].shape[1]) for n, s in surfaces.items()])
-    else:
-        meta = None
-    cell_type, nn, vol_names, surf_meta = comm.bcast(meta, root=rank)
-    if comm.rank != rank:
-        x = np.zeros((0, 3))
-        cells = np.zeros((0, nn), dtype=np.int64)
-        cell_vals = np.zeros(0, dtype=np.int32)
-        surfaces = {n: (ft, np.zeros((0, fnn), dtype=np.int64)) for n, ft, fnn in surf_meta}
+        x, parts, entities = payload
+        hybrid = all(p is not None for p in parts.values())
+        ents = {k: _part_entities(k, p[1], entities, hybrid) for k, p in parts.items() if p is not None}
+        meta = {k: None if p is None else (p[0], p[1].shape[1], p[3],
+                                           {d: {n: (t, e.shape[1]) for n, (t, e) in ents[k][d].items()} for d in (1, 2)})
+                for k, p in parts.items()}
+    meta = comm.bcast(meta, root=rank)
+    out = []
+    for kind in ("solid", "shell"):
+        if meta[kind] is None:
+            out.append(None)
+            continue
+        cell_type, nn, names, emeta = meta[kind]
+        if comm.rank == rank:          # each part gets only its own nodes (dolfinx needs every node used)
+            _, cells, vals, _ = parts[kind]
+            used = np.unique(cells)
+            new = np.full(payload[0].shape[0], -1, dtype=np.int64)
+            new[used] = np.arange(used.size)
+            x, cells = payload[0][used], new[cells]
+            e = {d: {n: (t, new[a]) for n, (t, a) in ents[kind][d].items()} for d in (1, 2)}
+        else:
+            x, cells, vals = np.zeros((0, 3)), np.zeros((0, nn), np.int64), np.zeros(0, np.int32)
+            e = {d: {n: (t, np.zeros((0, w), np.int64)) for n, (t, w) in emeta[d].items()} for d in (1, 2)}
+        out.append(_tagged_mesh(comm, rank, path, x, cell_type, cells, vals, names, e))
+    return out[0], out[1]
 
-    domain = ufl_mesh(cell_type, 3)
-    dcell = cpp.mesh.to_type(str(domain.ufl_cell()))
-    cells = cells[:, cell_perm_array(dcell, nn)]       # gmsh -> dolfinx node order
-    mesh = dmesh.create_mesh(comm, cells, x, domain)
-    cpp_mesh = mesh._mesh if hasattr(mesh, "_mesh") else mesh
-    tdim = mesh.topology.dim
-    ents, vals = cpp.io.distribute_entity_data(cpp_mesh, tdim, cells, cell_vals)
-    mesh.topology.create_connectivity(tdim, 0)
-    cell_tags = dmesh.meshtags_from_entities(mesh, tdim, cpp.graph.AdjacencyList_int32(ents),
-                                             vals.astype(np.int32))
-    mesh.topology.create_connectivity(tdim - 1, tdim)
-    ftype = cpp.mesh.cell_entity_type(dcell, tdim - 1, 0)
-    surface_tags = {}
-    for name, fgtype, fnn in surf_meta:
-        facets = surfaces[name][1]
-        if fgtype is not None:
-            facets = facets[:, cell_perm_array(ftype, fnn)]
-        ents, vals = cpp.io.distribute_entity_data(cpp_mesh, tdim - 1, facets, np.ones(facets.shape[0], np.int32))
-        surface_tags[name] = dmesh.meshtags_from_entities(
-            mesh, tdim - 1, cpp.graph.AdjacencyList_int32(ents), vals.astype(np.int32))
-    return TaggedMesh(mesh, cell_tags, {n: i for i, n in enumerate(vol_names)}, surface_tags, path)
+
+def read_msh(path, comm: MPI.Comm = MPI.COMM_WORLD, rank: int = 0) -> TaggedMesh:
+    """The solid part of ``path`` (InputError if it has no 3-D physical group)."""
+    solid, _ = read_mesh_parts(path, comm, (), rank)
+    return solid
+
+
+def triangle_mesh(comm: MPI.Comm, x: np.ndarray, cells: np.ndarray, rank: int = 0):
+    """A dolfinx mesh of flat (3-node) triangles embedded in 3-D, for shells: nodes ``x``
+    (n, 3) m and ``cells`` (m, 3) node indices, given on ``rank`` (other ranks' arrays are
+    ignored) and distributed over ``comm``."""
+    import dolfinx.mesh as dmesh
+
+    x = np.asarray(x, float).reshape(-1, 3) if comm.rank == rank else np.zeros((0, 3))
+    cells = np.asarray(cells, np.int64).reshape(-1, 3) if comm.rank == rank else np.zeros((0, 3), np.int64)
+    domain = ufl.Mesh(ufl.VectorElement("Lagrange", ufl.Cell("triangle", geometric_dimension=3), 1))
+    return dmesh.create_mesh(comm, cells, x, domain)
+

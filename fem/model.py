@@ -1,12 +1,23 @@
-"""Build a grounded or free-free FE model from a ``meshes`` Geometry: mesh, materials,
-P1/P2 elasticity, K and M assembled once (PETSc), rigid spiders to 6-DOF reference
-points, clamped surfaces removed, lumped masses at reference points, smeared
-non-structural mass on surfaces.
+"""Build a grounded or free-free FE model from a ``meshes`` Geometry: mesh, materials, K and
+M assembled once (PETSc) on each *part*, rigid spiders to 6-DOF reference points, clamped
+groups removed, lumped masses at reference points, smeared non-structural mass on surfaces.
 
-Independent DOFs of the model (its K and M, size n_dof), in PETSc's rank order:
-the three translations of every mesh node that is neither clamped nor on a patch (x, y, z
-consecutive), then six DOFs per patch reference point (Tx Ty Tz Rx Ry Rz, in patch order)
-at the end. Units SI (m, kg, N, rad).
+Parts (one dispatch, :data:`PART_BUILDERS`): the **solid** part (tetrahedra of the volume
+groups, P1/P2 elasticity, fem.elasticity) and the **shell** part (the triangles of the
+surface groups in ``Geometry.shells``, P2 x Crouzeix-Raviart Reissner-Mindlin shells,
+fem.shell). A model has one or both. Their DOFs are gathered into *nodes* by position: a
+node shared by a shell and a solid (a shell meshed onto a solid face) has one set of
+translations, so the two are tied; the shell's rotations there stay the shell's own (a
+solid has no rotational stiffness to tie them to; the shell is held through the
+translations of its neighbouring nodes, as in a shell-to-solid mesh of any FE program).
+
+Independent DOFs of the model (its K and M, size n_dof), in PETSc's rank order: the DOFs of
+every node that is neither clamped nor on a patch, node by node (Tx Ty Tz, then Rx Ry Rz on
+shell nodes that carry rotations), then six DOFs per patch reference point (Tx Ty Tz Rx Ry
+Rz, in patch order) at the end. Patches and clamps are surface groups (tet facets or shell
+triangles) or, on shells, curve groups (shell edges); a patch ties every DOF of its nodes,
+rotations included, to its reference point (fem.spiders). Checks run on data gathered on
+every rank, so every rank raises the same InputError (no MPI deadlock). Units SI (m, kg, N, rad).
 """
 from __future__ import annotations
 
@@ -22,9 +33,43 @@ from liftoff.core.labels import COMPONENTS, split_label
 from liftoff.core.rigid import dof_rb
 
 from . import petsc_backend as pb
-from .elasticity import area_form, mass_form, material_fields, stiffness_form, surface_mass_form
-from .mesh import TaggedMesh, read_msh
+from .mesh import TaggedMesh, read_mesh_parts
 from .spiders import CLAMPED, FREE, transformation_rows
+
+
+@dataclass
+class Part:
+    """One dolfinx space of a model and its link to the model's DOFs."""
+
+    kind: str                      # "solid" or "shell"
+    tagged: TaggedMesh
+    V: object                      # solid: VectorFunctionSpace P1/P2; shell: fem.shell.shell_space
+    fields: object                 # solid: (E, nu, rho) DG0 Functions; shell: fem.shell.ShellFields
+    coords: np.ndarray             # (n_local, 3) position of each local DOF (owned first, then ghosts)
+    comp: np.ndarray               # (n_local,) 0..5 = Tx..Rz
+    n_own: int                     # owned DOFs (this rank's PETSc rows)
+    K: object = None               # PETSc Mat on V (released once the model is reduced)
+    M: object = None
+    T: object = None               # PETSc Mat (part DOFs x model DOFs): x_part = T x
+
+    def global_dofs(self, local: np.ndarray) -> np.ndarray:
+        """Global DOF numbers (PETSc rows of K) of local DOF indices (owned or ghost)."""
+        imap, bs = self.V.dofmap.index_map, self.V.dofmap.index_map_bs
+        local = np.asarray(local, np.int64)
+        return imap.local_to_global((local // bs).astype(np.int32)).astype(np.int64) * bs + local % bs
+
+    def group_dofs(self, name: str) -> np.ndarray | None:
+        """Local DOFs on the entities of surface or curve group ``name``; None if the part lacks it."""
+        from dolfinx import fem
+
+        tm = self.tagged
+        tags = tm.surface_tags.get(name, tm.curve_tags.get(name))
+        if tags is None:
+            return None
+        dim = 2 if name in tm.surface_tags else 1
+        dofs = fem.locate_dofs_topological(self.V, dim, tags.indices[tags.values == 1])
+        bs = self.V.dofmap.index_map_bs
+        return (np.asarray(dofs, np.int64)[:, None] * bs + np.arange(bs)).ravel()
 
 
 @dataclass
@@ -33,23 +78,19 @@ class FEModel:
 
     name: str
     comm: MPI.Comm
-    tagged: TaggedMesh
-    V: object                      # dolfinx VectorFunctionSpace
-    degree: int
-    E: object                      # DG0 material fields (dolfinx Functions)
-    nu: object
-    rho: object
+    parts: tuple[Part, ...]
+    degree: int                    # Lagrange degree of the solid part (shells are always P2 x CR)
     K: object                      # PETSc Mat, n_dof x n_dof (N/m ...)
     M: object                      # PETSc Mat (kg ...)
-    T: object                      # PETSc Mat, 3 n_nodes x n_dof: full nodal u = T x
     points: tuple[str, ...]        # patch reference points
     point_coords: np.ndarray       # (n_points, 3) m
     dof_coords: np.ndarray         # (n_dof, 3): node or reference-point position of each DOF
     dof_comp: np.ndarray           # (n_dof,) 0..5 = Tx..Rz
-    dof_node: np.ndarray           # (n_dof,) global node index, -1 for reference-point DOFs
-    nodes: np.ndarray              # (n_nodes, 3) all DOF nodes (P2: incl. edge midpoints)
-    cells: np.ndarray              # (n_cells, 4 or 10) into nodes, VTK/meshio order
-    cell_type: str                 # "tetra" or "tetra10"
+    dof_node: np.ndarray           # (n_dof,) index into nodes, -1 for reference-point DOFs
+    nodes: np.ndarray              # (n_nodes, 3) all nodes (P2: incl. edge midpoints)
+    cells: np.ndarray              # (n_cells, k) into nodes, VTK/meshio order
+    cell_type: str                 # "tetra", "tetra10", "triangle6" (shells) or "triangle" (P1 + shells)
+    T: sp.csr_matrix               # field map (3 n_nodes x n_dof): nodal translations = T x
     clamped: tuple[str, ...] = ()
     _cache: dict = field(default_factory=dict, repr=False)
 
@@ -73,6 +114,9 @@ class FEModel:
     def label_dofs(self) -> np.ndarray:
         return self.ref_first_dof + np.arange(6 * len(self.points), dtype=np.int64)
 
+    def part(self, kind: str) -> Part | None:
+        return next((p for p in self.parts if p.kind == kind), None)
+
     def dof_index(self, label: str) -> int:
         """Index of ``point:Tx``-style label among the model's DOFs."""
         point, comp = split_label(label)
@@ -86,7 +130,7 @@ class FEModel:
         return dof_rb(self.dof_coords - np.asarray(about, float), self.dof_comp)
 
     def node_dofs(self, xyz) -> np.ndarray:
-        """The three DOF indices (x, y, z) of the free mesh node nearest ``xyz``."""
+        """The three translation DOF indices (x, y, z) of the free mesh node nearest ``xyz``."""
         free = np.flatnonzero(self.dof_comp == 0)
         free = free[self.dof_node[free] >= 0]
         if free.size == 0:
@@ -101,10 +145,8 @@ class FEModel:
         return self._cache["KM"]
 
     def field_map(self) -> sp.csr_matrix:
-        """T as scipy CSR (3 n_nodes x n_dof): DOF vector -> nodal displacement (x,y,z interleaved)."""
-        if "T" not in self._cache:
-            self._cache["T"] = pb.gather_csr(self.T)
-        return self._cache["T"]
+        """T (3 n_nodes x n_dof): DOF vector -> nodal displacement (x,y,z interleaved), every rank."""
+        return self.T
 
     def nodal_displacement(self, x: np.ndarray) -> np.ndarray:
         """(n_nodes, 3) nodal displacements of DOF vector(s) ``x`` (n_dof,)."""
@@ -118,40 +160,219 @@ class FEModel:
                     cells=self.cells.copy(), cell_type=self.cell_type, field_map=self.field_map())
 
 
-def _raise_collective(comm: MPI.Comm, message: str | None) -> None:
-    """Raise InputError on every rank if any rank found a problem (avoids MPI deadlocks)."""
-    msgs = [m for m in comm.allgather(message) if m]
-    if msgs:
-        raise InputError(msgs[0])
-
-
-def _surface_tags(tm: TaggedMesh, surface: str, role: str):
-    """The facet tags of physical surface ``surface``; InputError naming ``role`` if absent."""
-    if surface not in tm.surface_tags:
-        raise InputError(f"{role} {surface!r}: no physical surface {surface!r} in mesh {tm.path!r} "
-                         f"(has: {', '.join(sorted(tm.surface_tags)) or 'none'})")
-    return tm.surface_tags[surface]
-
-
-def _surface_blocks(V, tm: TaggedMesh, surface: str, role: str) -> np.ndarray:
+# ---- parts -------------------------------------------------------------------------------
+def _solid_part(tm: TaggedMesh, materials: dict, degree: int) -> Part:
     from dolfinx import fem
 
-    tags = _surface_tags(tm, surface, role)
-    return fem.locate_dofs_topological(V, V.mesh.topology.dim - 1, tags.indices[tags.values == 1])
+    from .elasticity import mass_form, material_fields, stiffness_form
+
+    E, nu, rho = material_fields(tm, materials)
+    V = fem.VectorFunctionSpace(tm.mesh, ("CG", degree))
+    imap = V.dofmap.index_map
+    n_all = imap.size_local + imap.num_ghosts
+    X = V.tabulate_dof_coordinates()[:n_all]
+    part = Part("solid", tm, V, (E, nu, rho), np.repeat(X, 3, axis=0), np.tile(np.arange(3), n_all),
+                3 * imap.size_local, pb.assemble_matrix(stiffness_form(V, E, nu)),
+                pb.assemble_matrix(mass_form(V, rho)))
+    if part.K.getOwnershipRange() != (3 * imap.local_range[0], 3 * imap.local_range[1]):
+        raise RuntimeError("unexpected PETSc row layout of the assembled stiffness")
+    return part
+
+
+def _shell_part(tm: TaggedMesh, materials: dict, thickness: dict, bending: dict) -> Part:
+    from . import shell
+
+    fields = shell.shell_fields(tm, materials, thickness, bending)
+    W = shell.shell_space(tm.mesh)
+    coords, comp = shell.dof_table(W)
+    return Part("shell", tm, W, fields, coords, comp, W.dofmap.index_map.size_local,
+                pb.assemble_matrix(shell.stiffness_form(W, fields)), pb.assemble_matrix(shell.mass_form(W, fields)))
+
+
+#: how each kind of part is built from its TaggedMesh and the geometry
+PART_BUILDERS = {
+    "solid": lambda tm, geo, degree: _solid_part(tm, {g: m for g, m in geo.volumes.items() if g not in geo.shells},
+                                                 degree),
+    "shell": lambda tm, geo, degree: _shell_part(tm, {g: geo.volumes[g] for g in geo.shells}, geo.shells,
+                                                 geo.shell_bending),
+}
+
+
+def _smeared_masses(parts: list[Part], geometry, comm: MPI.Comm, lumped: bool) -> None:
+    """Add each smeared mass (mass / total area per unit area) to the parts' M: on the
+    shell triangles of the surface where it has any, else on the solid's exterior facets."""
+    import ufl
+    from dolfinx import fem
+
+    from . import elasticity, shell
+
+    for sm in geometry.smeared_masses:
+        if not np.isfinite(sm.mass) or sm.mass < 0:
+            raise InputError(f"smeared mass on {sm.surface!r}: mass {sm.mass!r} kg must be >= 0")
+        on = [p for p in parts if sm.surface in p.tagged.surface_tags]
+        if not on:
+            names = sorted({n for p in parts for n in p.tagged.surface_tags})
+            raise InputError(f"smeared mass surface {sm.surface!r}: no physical surface {sm.surface!r} in mesh "
+                             f"{parts[0].tagged.path!r} (has: {', '.join(names) or 'none'})")
+        measures, area = {}, {}
+        for p in on:
+            tags = p.tagged.surface_tags[sm.surface]
+            m = ufl.Measure("dx" if p.kind == "shell" else "ds", domain=p.tagged.mesh, subdomain_data=tags)(1)
+            measures[p.kind] = m
+            area[p.kind] = comm.allreduce(fem.assemble_scalar(fem.form(fem.Constant(p.tagged.mesh, 1.0) * m)),
+                                          op=MPI.SUM)
+        use = "shell" if area.get("shell", 0.0) > 0 else "solid"
+        if area.get(use, 0.0) <= 0.0:
+            raise InputError(f"smeared mass surface {sm.surface!r}: zero exterior area "
+                             "(an interior solid surface cannot carry surface mass here)")
+        p = next(q for q in on if q.kind == use)
+        if use == "shell":
+            if lumped:
+                raise InputError(f"smeared mass on {sm.surface!r}: lumped smeared mass needs P1 solids, "
+                                 "not shells (P2 row sums vanish at vertices)")
+            pb.add_subset(p.M, pb.assemble_matrix(shell.surface_mass_form(p.V, sm.mass / area[use], measures[use])))
+            continue
+        Ms = pb.assemble_matrix(elasticity.surface_mass_form(p.V, p.tagged.surface_tags[sm.surface],
+                                                             sm.mass / area[use]))
+        if lumped:
+            pb.add_row_sums_to_diagonal(p.M, Ms)     # P1 row sums = mass/3 per triangle vertex
+        else:
+            pb.add_subset(p.M, Ms)
+
+
+# ---- nodes and independent DOFs ------------------------------------------------------------
+@dataclass
+class _Nodes:
+    """The parts' DOFs gathered into nodes by position, nodes in PETSc rank order."""
+
+    xyz: np.ndarray                # (n_nodes, 3) m
+    comps: np.ndarray              # (n_nodes, 6) bool: components the node carries
+    owner: np.ndarray              # (n_nodes,) rank that owns the node's independent DOFs
+    label: list                    # per part: node of each of the part's global DOFs
+    in_part: np.ndarray            # (n_nodes, n_parts) bool: the node has DOFs of the part
+    parent: np.ndarray = None      # (n_nodes, 2): translations = mean of these two nodes' (-1: own)
+
+    @property
+    def n(self) -> int:
+        return self.xyz.shape[0]
+
+
+def _gather_nodes(comm: MPI.Comm, parts: list[Part]) -> _Nodes:
+    """Cluster the owned DOFs of all parts and ranks by position (every rank, same result).
+
+    Node order = order of first appearance with DOFs sorted by (rank, part, DOF): for one
+    solid part that is the dolfinx node order, so the DOF numbering is the plain one."""
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    X, C, key = [], [], []
+    for k, p in enumerate(parts):
+        for r, (x, c) in enumerate(comm.allgather((p.coords[:p.n_own], p.comp[:p.n_own]))):
+            X.append(np.asarray(x).reshape(-1, 3))
+            C.append(np.asarray(c, np.int64))
+            key.append(np.column_stack([np.full(c.size, r), np.full(c.size, k), np.arange(c.size)]))
+    X, C, key = np.vstack(X), np.concatenate(C), np.vstack(key)
+    n = C.size
+    tol = 1e-9 * max(float(np.linalg.norm(X.max(axis=0) - X.min(axis=0))), 1e-300) if n else 1.0
+    pairs = cKDTree(X).query_pairs(tol, output_type="ndarray")
+    graph = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    n_lab, lab = connected_components(graph, directed=False)
+    seq = np.lexsort((key[:, 2], key[:, 1], key[:, 0]))
+    first = np.full(n_lab, n, dtype=np.int64)
+    np.minimum.at(first, lab[seq], np.arange(n))
+    new = np.empty(n_lab, dtype=np.int64)
+    new[np.argsort(first)] = np.arange(n_lab)
+    lab = new[lab]
+    head = seq[np.sort(first)]                      # first DOF of each node, in node order
+    rows, counts = np.unique(np.column_stack([lab, key[:, 1], C]), axis=0, return_counts=True)
+    if np.any(counts > 1):
+        where = X[head[rows[np.argmax(counts > 1), 0]]]
+        raise InputError(f"mesh {parts[0].tagged.path!r}: coincident nodes within one part at "
+                         f"{np.round(where, 6).tolist()} m (parts are joined by node position)")
+    comps = np.zeros((n_lab, 6), bool)
+    comps[lab, C] = True
+    in_part = np.zeros((n_lab, len(parts)), bool)
+    in_part[lab, key[:, 1]] = True
+    sizes = np.concatenate([[0], np.cumsum(np.bincount(key[:, 1], minlength=len(parts)))])
+    return _Nodes(X[head], comps, key[head, 0], [lab[sizes[k]:sizes[k + 1]] for k in range(len(parts))], in_part,
+                  np.full((n_lab, 2), -1, dtype=np.int64))
+
+
+def _tie_midpoints(nodes: _Nodes, parts: list[Part], cells: dict) -> None:
+    """P1 solids with shells: a shell edge-midpoint node on an edge of the solid mesh has no
+    solid node to share, so its translations are tied to the mean of the edge's two end
+    nodes (the P1 solid's own displacement there): nodes.parent."""
+    if "shell" not in cells or "solid" not in cells or cells["solid"].shape[1] != 4:
+        return
+    solid = [k for k, p in enumerate(parts) if p.kind == "solid"][0]
+    tets = cells["solid"]
+    edges = np.unique(np.sort(np.vstack([tets[:, [i, j]] for i in range(4) for j in range(i + 1, 4)]), axis=1), axis=0)
+    tri = cells["shell"]
+    trip = np.vstack([tri[:, [3, 0, 1]], tri[:, [4, 1, 2]], tri[:, [5, 2, 0]]])      # (midpoint, a, b)
+    on = nodes.in_part[:, solid]
+    cand = trip[~on[trip[:, 0]] & on[trip[:, 1]] & on[trip[:, 2]]]
+    if cand.size:
+        from .mesh import _rows_in
+
+        cand = cand[_rows_in(cand[:, 1:], edges)]
+        nodes.parent[cand[:, 0]] = cand[:, 1:]
+
+
+def _group_nodes(comm: MPI.Comm, parts: list[Part], nodes: _Nodes, name: str, role: str) -> np.ndarray:
+    """Nodes (every rank) on the entities of surface or curve group ``name`` in any part."""
+    found, local = False, [np.zeros(0, np.int64)]
+    for k, p in enumerate(parts):
+        dofs = p.group_dofs(name)
+        if dofs is not None:
+            found = True
+            local.append(nodes.label[k][p.global_dofs(dofs)])
+    if not found:
+        have = sorted({n for p in parts for n in (*p.tagged.surface_tags, *p.tagged.curve_tags)})
+        raise InputError(f"{role} {name!r}: no physical surface {name!r} in mesh {parts[0].tagged.path!r} "
+                         f"(has: {', '.join(have) or 'none'})")
+    return np.unique(np.concatenate(comm.allgather(np.unique(np.concatenate(local)))))
+
+
+def _roles(comm: MPI.Comm, parts: list[Part], nodes: _Nodes, pnames: list[str], clamped: tuple) -> np.ndarray:
+    """FREE, CLAMPED or the patch number of every node; InputError on overlaps."""
+    role = np.full(nodes.n, FREE, dtype=np.int64)
+    for p, name in enumerate(pnames):
+        on = _group_nodes(comm, parts, nodes, name, "patch")
+        if on.size < 3:
+            raise InputError(f"patch {name!r}: its surface has {on.size} nodes; a rigid spider needs >= 3")
+        clash = role[on][role[on] >= 0]
+        if clash.size:
+            raise InputError(f"patches {pnames[int(clash[0])]!r} and {name!r} share nodes; "
+                             "a node can hang on one rigid spider only")
+        role[on] = p
+    for surface in clamped:
+        on = _group_nodes(comm, parts, nodes, surface, "clamped surface")
+        if on.size == 0:
+            raise InputError(f"clamped surface {surface!r} has no nodes in mesh {parts[0].tagged.path!r}")
+        on_patch = role[on][role[on] >= 0]
+        if on_patch.size:
+            raise InputError(f"clamped surface {surface!r} shares nodes with patch {pnames[int(on_patch[0])]!r}; "
+                             "a node is either clamped or on a spider")
+        role[on] = CLAMPED
+    return role
+
+
+def _slots(nodes: _Nodes, role: np.ndarray) -> np.ndarray:
+    """(n_nodes, 6) independent DOF of each (free node, component), -1 elsewhere."""
+    carried = nodes.comps & (role == FREE)[:, None]
+    carried[nodes.parent[:, 0] >= 0, :3] = False           # tied midpoint translations
+    slot = np.cumsum(carried.ravel()).reshape(-1, 6) - 1
+    return np.where(carried, slot, -1)
 
 
 def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
                 lumped_smeared_mass: bool = False) -> FEModel:
     """FE model of a ``meshes.spec.Geometry`` (or the path of its JSON file).
 
-    ``degree``: 1 or 2 (Lagrange). ``lumped_smeared_mass``: non-structural surface mass
-    lumped to the nodes by row sums (P1 only: P2 row sums vanish at vertices) instead of
-    the consistent surface mass. Steps: mesh and materials, K and M (with smeared mass),
-    the role of every node (free, on a spider, clamped), the reduction x_full = T x, the
-    lumped masses, and the per-DOF description gathered on every rank.
+    ``degree``: 1 or 2 (Lagrange, solid part; shells are P2 x CR). ``lumped_smeared_mass``:
+    non-structural surface mass on solids lumped to the nodes by row sums (P1 only: P2 row
+    sums vanish at vertices) instead of the consistent surface mass.
     """
-    from dolfinx import fem
-
     if isinstance(geometry, (str, Path)):
         from liftoff.meshes.spec import Geometry
         geometry = Geometry.load(geometry)
@@ -160,116 +381,62 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
         raise InputError(f"model {name!r}: degree {degree!r} not supported (use 1 or 2)")
     if lumped_smeared_mass and degree != 1:
         raise InputError(f"model {name!r}: lumped smeared mass needs degree 1")
-    tm = read_msh(geometry.msh_path, comm)
-    E, nu, rho = material_fields(tm, dict(geometry.volumes))
-    V = fem.VectorFunctionSpace(tm.mesh, ("CG", degree))
-    K = pb.assemble_matrix(stiffness_form(V, E, nu))
-    M = pb.assemble_matrix(mass_form(V, rho))
-    _add_smeared_masses(M, V, tm, geometry.smeared_masses, lumped_smeared_mass)
-    imap = V.dofmap.index_map
-    if K.getOwnershipRange() != (3 * imap.local_range[0], 3 * imap.local_range[1]):
-        raise RuntimeError("unexpected PETSc row layout of the assembled stiffness")
-    coords = V.tabulate_dof_coordinates()[: imap.size_local + imap.num_ghosts]
-    pnames = [p.name for p in geometry.patches]
-    role = _node_roles(V, tm, pnames, [str(s) for s in geometry.clamped], comm)
-    ref_coords = np.array([np.asarray(p.ref_point, float).reshape(3) for p in geometry.patches]).reshape(-1, 3)
-    red = _reduction(V, coords, role, ref_coords, comm)
-    Kr, Mr = pb.ptap(K, red.T), pb.ptap(M, red.T)
-    K.destroy()
-    M.destroy()
-    _add_point_masses(Mr, geometry.point_masses, pnames, red.n_keep_total)
-    dof_coords, dof_comp, dof_node = _dof_table(comm, coords, red, ref_coords, imap.local_range[0])
-    nodes, cells, cell_type = _global_mesh(V, comm, coords[: imap.size_local])
-    return FEModel(name=name, comm=comm, tagged=tm, V=V, degree=degree, E=E, nu=nu, rho=rho,
-                   K=Kr, M=Mr, T=red.T, points=tuple(pnames), point_coords=ref_coords,
-                   dof_coords=dof_coords, dof_comp=dof_comp, dof_node=dof_node, nodes=nodes,
-                   cells=cells, cell_type=cell_type, clamped=tuple(str(s) for s in geometry.clamped))
+    meshes = dict(zip(("solid", "shell"), read_mesh_parts(geometry.msh_path, comm, tuple(geometry.shells))))
+    solids = [g for g in geometry.volumes if g not in geometry.shells]
+    if meshes["solid"] is None and solids:
+        raise InputError(f"volume group {solids[0]!r} is not a physical volume of mesh {geometry.msh_path!r} "
+                         "(it has none)")
+    parts = [PART_BUILDERS[k](tm, geometry, degree) for k, tm in meshes.items() if tm is not None]
+    _smeared_masses(parts, geometry, comm, lumped_smeared_mass)
+    patches = list(geometry.patches)
+    pnames = [p.name for p in patches]
+    if len(set(pnames)) != len(pnames):
+        raise InputError(f"model {name!r}: duplicate patch names in {pnames}")
+    clamped = tuple(str(s) for s in geometry.clamped)
+    nodes = _gather_nodes(comm, parts)
+    part_cells = {p.kind: _part_cells(comm, p, nodes.label[k]) for k, p in enumerate(parts)}
+    _tie_midpoints(nodes, parts, part_cells)
+    role = _roles(comm, parts, nodes, pnames, clamped)
+    slot = _slots(nodes, role)
+    n_keep = int(slot.max()) + 1 if slot.size and slot.max() >= 0 else 0
+    ref_coords = np.array([np.asarray(p.ref_point, float).reshape(3) for p in patches]).reshape(-1, 3)
+    n_dof = n_keep + 6 * len(patches)
+    K, M = _reduce(comm, parts, nodes, role, slot, ref_coords, n_keep, n_dof)
+    _point_masses(M, geometry, pnames, n_keep)
+    T = _field_map(nodes, role, slot, ref_coords, n_keep, n_dof)
+    free = np.flatnonzero(slot.ravel() >= 0)
+    dof_node, dof_comp = free // 6, free % 6
+    dof_coords = np.vstack([nodes.xyz[dof_node], np.repeat(ref_coords, 6, axis=0)])
+    dof_comp = np.concatenate([dof_comp, np.tile(np.arange(6), len(patches))]).astype(np.int64)
+    dof_node = np.concatenate([dof_node, -np.ones(6 * len(patches), dtype=np.int64)])
+    cells, cell_type = _output_cells(part_cells)
+    return FEModel(name=name, comm=comm, parts=tuple(parts), degree=degree, K=K, M=M, points=tuple(pnames),
+                   point_coords=ref_coords, dof_coords=dof_coords, dof_comp=dof_comp, dof_node=dof_node,
+                   nodes=nodes.xyz, cells=cells, cell_type=cell_type, T=T, clamped=clamped)
 
 
-def _add_smeared_masses(M, V, tm: TaggedMesh, smeared, lumped: bool) -> None:
-    """Non-structural mass (kg) spread uniformly over surface groups, consistent or lumped."""
-    from dolfinx import fem
-
-    comm = tm.mesh.comm
-    for sm in smeared:
-        if not np.isfinite(sm.mass) or sm.mass < 0:
-            raise InputError(f"smeared mass on {sm.surface!r}: mass {sm.mass!r} kg must be >= 0")
-        tags = _surface_tags(tm, sm.surface, "smeared mass surface")
-        area = comm.allreduce(fem.assemble_scalar(fem.form(area_form(tm.mesh, tags))), op=MPI.SUM)
-        if area <= 0.0:
-            raise InputError(f"smeared mass surface {sm.surface!r}: zero exterior area "
-                             "(an interior surface cannot carry surface mass here)")
-        Ms = pb.assemble_matrix(surface_mass_form(V, tags, sm.mass / area))
-        if lumped:
-            pb.add_row_sums_to_diagonal(M, Ms)     # P1 row sums = mass/3 per triangle vertex
-        else:
-            pb.add_subset(M, Ms)
+def _reduce(comm, parts, nodes, role, slot, ref_coords, n_keep, n_dof):
+    """K_r = sum T_p^T K_p T_p (and M_r) over the parts; sets each part's T, frees K_p, M_p."""
+    counts = np.bincount(nodes.owner[slot.max(axis=1) >= 0],
+                         weights=(slot >= 0).sum(axis=1)[slot.max(axis=1) >= 0], minlength=comm.size)
+    n_cols_local = int(counts[comm.rank]) + (6 * len(ref_coords) if comm.rank == comm.size - 1 else 0)
+    K = M = None
+    for k, p in enumerate(parts):
+        lab = nodes.label[k][p.global_dofs(np.arange(p.n_own))]
+        rows = _rows(nodes, role, slot, ref_coords, n_keep, n_dof, lab, p.comp[:p.n_own])
+        p.T = pb.csr_matrix(comm, p.n_own, n_cols_local, n_dof, rows)
+        Kp, Mp = pb.ptap(p.K, p.T), pb.ptap(p.M, p.T)
+        p.K.destroy()
+        p.M.destroy()
+        p.K = p.M = None
+        K, M = (Kp, Mp) if K is None else (pb.add(K, Kp), pb.add(M, Mp))
+    return K, M
 
 
-def _node_roles(V, tm: TaggedMesh, patches: list[str], clamped: list[str], comm: MPI.Comm) -> np.ndarray:
-    """Role of every local node (owned and ghost): FREE, CLAMPED or its patch number."""
-    imap = V.dofmap.index_map
-    n_own = imap.size_local
-    role = np.full(n_own + imap.num_ghosts, FREE, dtype=np.int64)
-    problem = None
-    for p, patch in enumerate(patches):
-        blocks = _surface_blocks(V, tm, patch, "patch")
-        n_nodes = comm.allreduce(int(np.sum(blocks < n_own)), op=MPI.SUM)
-        if n_nodes < 3:
-            raise InputError(f"patch {patch!r}: its surface has {n_nodes} nodes; a rigid spider needs >= 3")
-        clash = role[blocks][role[blocks] >= 0]
-        if clash.size and problem is None:
-            problem = (f"patches {patches[int(clash[0])]!r} and {patch!r} share nodes; "
-                       "a node can hang on one rigid spider only")
-        role[blocks] = p
-    _raise_collective(comm, problem)
-    for surface in clamped:
-        blocks = _surface_blocks(V, tm, surface, "clamped surface")
-        if comm.allreduce(int(np.sum(blocks < n_own)), op=MPI.SUM) == 0:
-            raise InputError(f"clamped surface {surface!r} has no nodes in mesh {tm.path!r}")
-        on_patch = role[blocks][role[blocks] >= 0]
-        if on_patch.size and problem is None:
-            problem = (f"clamped surface {surface!r} shares nodes with patch {patches[int(on_patch[0])]!r}; "
-                       "a node is either clamped or on a spider")
-        role[blocks] = CLAMPED
-    _raise_collective(comm, problem)
-    return role
-
-
-@dataclass
-class _Reduction:
-    """x_full = T x: the independent DOFs (free nodes' translations, then 6 per patch point)."""
-
-    T: object                  # PETSc Mat, 3 n_nodes x n_dof
-    free_blocks: np.ndarray    # owned free nodes (local indices)
-    n_keep_total: int          # free translations over all ranks
-    n_dof: int
-
-
-def _reduction(V, coords: np.ndarray, role: np.ndarray, ref_coords: np.ndarray, comm: MPI.Comm) -> _Reduction:
-    """The spider/clamp transformation T (fem/spiders.py) in PETSc's rank order."""
-    n_own = V.dofmap.index_map.size_local
-    role_own = role[:n_own]
-    free_blocks = np.flatnonzero(role_own == FREE)
-    n_keep = 3 * free_blocks.size
-    offset = comm.exscan(n_keep) or 0
-    n_keep_total = comm.allreduce(n_keep, op=MPI.SUM)
-    n_ref = 6 * ref_coords.shape[0]
-    n_dof = n_keep_total + n_ref
-    last = comm.rank == comm.size - 1
-    keep_index = np.full(n_own, -1, dtype=np.int64)
-    keep_index[free_blocks] = offset + 3 * np.arange(free_blocks.size)
-    T_local = transformation_rows(coords[:n_own], role_own, keep_index, ref_coords, n_keep_total, n_dof)
-    T = pb.csr_matrix(comm, 3 * n_own, n_keep + (n_ref if last else 0), n_dof, T_local)
-    return _Reduction(T, free_blocks, n_keep_total, n_dof)
-
-
-def _add_point_masses(Mr, point_masses, patches: list[str], ref_first_dof: int) -> None:
-    """Lumped mass and inertia (about the patch point) on the six DOFs of a patch point."""
-    for pm in point_masses:
-        if pm.patch not in patches:
-            raise InputError(f"point mass {pm.name!r}: unknown patch {pm.patch!r} "
-                             f"(has: {', '.join(patches) or 'none'})")
+def _point_masses(M, geometry, pnames: list[str], ref_first: int) -> None:
+    for pm in geometry.point_masses:
+        if pm.patch not in pnames:
+            raise InputError(f"point mass {pm.name!r}: unknown patch {pm.patch!r} (has: {', '.join(pnames) or 'none'})")
         J = np.asarray(pm.inertia, float).reshape(3, 3)
         if not np.isfinite(pm.mass) or pm.mass < 0:
             raise InputError(f"point mass {pm.name!r}: mass {pm.mass!r} kg must be >= 0")
@@ -278,35 +445,64 @@ def _add_point_masses(Mr, point_masses, patches: list[str], ref_first_dof: int) 
         block = np.zeros((6, 6))
         block[:3, :3] = pm.mass * np.eye(3)
         block[3:, 3:] = J
-        pb.add_block(Mr, ref_first_dof + 6 * patches.index(pm.patch) + np.arange(6), block)
+        pb.add_block(M, ref_first + 6 * pnames.index(pm.patch) + np.arange(6), block)
 
 
-def _dof_table(comm: MPI.Comm, coords: np.ndarray, red: _Reduction, ref_coords: np.ndarray, node0: int):
-    """(dof_coords, dof_comp, dof_node) of every independent DOF, gathered on every rank."""
-    fb = red.free_blocks
-    loc = (np.repeat(coords[fb], 3, axis=0), np.tile(np.arange(3), fb.size), np.repeat(node0 + fb, 3))
-    n_ref = 6 * ref_coords.shape[0]
-    if comm.rank == comm.size - 1 and n_ref:
-        loc = (np.vstack([loc[0], np.repeat(ref_coords, 6, axis=0)]),
-               np.concatenate([loc[1], np.tile(np.arange(6), ref_coords.shape[0])]),
-               np.concatenate([loc[2], -np.ones(n_ref, dtype=np.int64)]))
-    parts = comm.allgather(loc)
-    return (np.vstack([p[0] for p in parts]).reshape(-1, 3),
-            np.concatenate([p[1] for p in parts]).astype(np.int64),
-            np.concatenate([p[2] for p in parts]).astype(np.int64))
+def _rows(nodes: _Nodes, role, slot, ref_coords, n_keep: int, n_dof: int, node, comp) -> sp.csr_matrix:
+    """Rows of T for the DOFs (node, comp): spiders and clamps (fem.spiders), and a tied
+    midpoint's translations as the mean of its two parents' rows."""
+    rows = transformation_rows(nodes.xyz[node], comp, role[node], slot[node, comp], ref_coords, n_keep, n_dof)
+    i = np.flatnonzero((nodes.parent[node, 0] >= 0) & (comp < 3) & (role[node] == FREE))
+    if i.size:
+        half = [transformation_rows(nodes.xyz[a], comp[i], role[a], slot[a, comp[i]], ref_coords, n_keep, n_dof)
+                for a in (nodes.parent[node[i], 0], nodes.parent[node[i], 1])]
+        pick = sp.csr_matrix((np.full(i.size, 0.5), (i, np.arange(i.size))), shape=(node.size, i.size))
+        rows = sp.csr_matrix(rows + pick @ (half[0] + half[1]))
+    return rows
 
 
-def _global_mesh(V, comm: MPI.Comm, own_coords: np.ndarray):
-    """All DOF nodes (global node order) and owned cells in VTK order, on every rank."""
+def _field_map(nodes: _Nodes, role, slot, ref_coords, n_keep: int, n_dof: int) -> sp.csr_matrix:
+    """T (3 n_nodes x n_dof): the nodal translations of every node (every rank)."""
+    return _rows(nodes, role, slot, ref_coords, n_keep, n_dof, np.repeat(np.arange(nodes.n), 3),
+                 np.tile(np.arange(3), nodes.n))
+
+
+_TET10_EDGE = {(0, 1): 4, (1, 2): 5, (0, 2): 6, (0, 3): 7, (1, 3): 8, (2, 3): 9}    # VTK quadratic tet
+
+
+def _part_cells(comm: MPI.Comm, part: Part, label: np.ndarray) -> np.ndarray:
+    """All cells of a part (VTK order, every rank) as node indices."""
     from dolfinx.plot import create_vtk_mesh
 
+    V, to_parent = (part.V, None) if part.kind == "solid" else part.V.sub(0).collapse()
     topology, _, _ = create_vtk_mesh(V)
     k = V.dofmap.dof_layout.num_dofs
-    local_cells = np.asarray(topology).reshape(-1, k + 1)[:, 1:]
-    gcells = V.dofmap.index_map.local_to_global(local_cells.ravel().astype(np.int32)).reshape(-1, k)
-    nodes = np.vstack(comm.allgather(np.asarray(own_coords))).reshape(-1, 3)
-    cells = np.vstack(comm.allgather(np.asarray(gcells, dtype=np.int64))).reshape(-1, k)
-    cell_type = {4: "tetra", 10: "tetra10"}.get(k)
-    if cell_type is None:
-        raise InputError(f"unsupported cell with {k} nodes: fem supports tetrahedral meshes (P1/P2)")
-    return nodes, cells, cell_type
+    blocks = np.asarray(topology).reshape(-1, k + 1)[:, 1:].astype(np.int64)
+    local = 3 * blocks if to_parent is None else np.asarray(to_parent, np.int64)[3 * blocks]
+    cells = label[part.global_dofs(local.ravel())].reshape(-1, k)
+    return np.vstack(comm.allgather(cells)).reshape(-1, k)
+
+
+def _boundary_faces(tets: np.ndarray) -> np.ndarray:
+    """Exterior faces of tetra/tetra10 cells as triangle/triangle6 (VTK order)."""
+    faces = []
+    for a, b, c in ((0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3)):
+        f = [a, b, c] + ([_TET10_EDGE[(a, b)], _TET10_EDGE[(b, c)], _TET10_EDGE[(a, c)]] if tets.shape[1] == 10 else [])
+        faces.append(tets[:, f])
+    faces = np.vstack(faces)
+    _, inv, count = np.unique(np.sort(faces[:, :3], axis=1), axis=0, return_inverse=True, return_counts=True)
+    return faces[count[inv.ravel()] == 1]
+
+
+def _output_cells(cells: dict) -> tuple[np.ndarray, str]:
+    """(cells, meshio cell type) for pictures and VTU from {part kind: cells}: the solid's
+    tets, the shell's triangle6, or, for both, the solid's exterior faces with the shell
+    triangles (split into four 3-node triangles next to P1 solids)."""
+    if len(cells) == 1:
+        kind, c = next(iter(cells.items()))
+        return c, {4: "tetra", 10: "tetra10", 6: "triangle6"}[c.shape[1]]
+    faces, shells = _boundary_faces(cells["solid"]), cells["shell"]
+    if faces.shape[1] == 6:
+        return np.vstack([faces, shells]), "triangle6"
+    split = np.vstack([shells[:, s] for s in ((0, 3, 5), (3, 1, 4), (5, 4, 2), (3, 4, 5))])
+    return np.vstack([faces, split]), "triangle"

@@ -121,3 +121,19 @@ def eigenmodes(model: FEModel, n_modes: int | None = None, band_hz: tuple[float,
     f = Modes(lam, Phi, n_rigid).freq_hz
     keep = (f >= f_lo) & (f <= f_hi)
     return Modes(lam[keep], Phi[:, keep], int(np.sum(keep[:n_rigid])))
+
+
+def beam_content(model: FEModel, shape: np.ndarray, n_slices: int = 60) -> float:
+    """Share (0..1) of the lateral (x, y) nodal displacement of ``shape`` that is a uniform
+    translation of each of ``n_slices`` slices along z: ~1 for a beam-bending mode of a
+    vertical body, ~0 for lobar (n >= 2) shell modes. Picks the beam modes of a shell model
+    whose spectrum is dense with shell modes."""
+    u = model.nodal_displacement(shape)
+    z = model.nodes[:, 2]
+    k = np.minimum(((z - z.min()) / max(np.ptp(z), 1e-300) * n_slices).astype(int), n_slices - 1)
+    count = np.bincount(k, minlength=n_slices)
+    beam = 0.0
+    for c in range(2):
+        s = np.bincount(k, weights=u[:, c], minlength=n_slices)
+        beam += np.sum(s[count > 0] ** 2 / count[count > 0])
+    return float(beam / max(np.sum(u[:, :2] ** 2), 1e-300))

@@ -39,6 +39,13 @@ def add_subset(A: PETSc.Mat, B: PETSc.Mat, alpha: float = 1.0) -> None:
     A.axpy(alpha, B, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
 
 
+def add(A: PETSc.Mat, B: PETSc.Mat) -> PETSc.Mat:
+    """A + B (any non-zero patterns, same layout); B is destroyed. Returns A."""
+    A.axpy(1.0, B, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+    B.destroy()
+    return A
+
+
 def add_row_sums_to_diagonal(A: PETSc.Mat, B: PETSc.Mat) -> None:
     """A += diag(row sums of B) (row-sum mass lumping)."""
     d = B.getRowSum()
@@ -125,7 +132,8 @@ def eigensolve(K: PETSc.Mat, M: PETSc.Mat, n_modes: int, sigma: float, tol: floa
     to the columns of ``deflation`` (global array (n, k), e.g. the rigid-body modes:
     a Krylov method can miss members of an exactly 6-fold cluster).
 
-    Returns (lambda ascending, Phi (n, n_modes) M-orthonormal), gathered on every rank.
+    Returns (lambda ascending, Phi (n, n_modes) M-orthonormal), gathered on every rank: the
+    n_modes eigenpairs nearest sigma among the converged ones (the lowest for sigma < 0).
     Raises ConvergenceError if fewer than ``n_modes`` pairs converge and InputError if the
     factorisation fails (K - sigma M singular).
     """
@@ -164,7 +172,8 @@ def eigensolve(K: PETSc.Mat, M: PETSc.Mat, n_modes: int, sigma: float, tol: floa
     for i in range(nconv):
         lam[i] = eps.getEigenpair(i, vr).real
         vecs.append(gather_vec(vr))
-    order = np.argsort(lam)[:n_modes]
+    near = np.argsort(np.abs(lam - sigma), kind="stable")[:n_modes]    # the n_modes nearest sigma,
+    order = near[np.argsort(lam[near], kind="stable")]                 # ascending
     Phi = np.column_stack([vecs[i] for i in order]) if vecs else np.zeros((K.getSize()[0], 0))
     eps.destroy()
     return lam[order], Phi

@@ -50,25 +50,36 @@ def point_load(model: FEModel, point: str, force=(0.0, 0.0, 0.0), moment=(0.0, 0
 
 def thermal_load(model: FEModel, volumes, delta_T: float, alpha) -> np.ndarray:
     """Equivalent nodal forces (n_dof,) of a uniform free thermal strain alpha * delta_T in
-    the named volume groups (the cryogenic preload: delta_T < 0 shrinks).
+    the named volume groups or shell surfaces (the cryogenic preload: delta_T < 0 shrinks;
+    on a shell the strain is in-plane and uniform through the thickness).
 
-    ``alpha``: expansion coefficient (1/K), one number or {volume: alpha}; ``delta_T`` in K.
+    ``alpha``: expansion coefficient (1/K), one number or {group: alpha}; ``delta_T`` in K.
     """
-    tm = model.tagged
+    from . import shell
+
     volumes = [volumes] if isinstance(volumes, str) else list(volumes)
-    strains = {}
+    groups = {g: p for p in model.parts for g in p.tagged.volume_ids}
+    strains: dict = {}
     for v in volumes:
-        if v not in tm.volume_ids:
+        if v not in groups:
             raise InputError(f"thermal_load: volume {v!r} is not in model {model.name!r} "
-                             f"(has: {', '.join(sorted(tm.volume_ids))})")
+                             f"(has: {', '.join(sorted(groups))})")
         a = alpha[v] if isinstance(alpha, dict) else alpha
         if not np.isfinite(a) or not np.isfinite(delta_T):
             raise InputError(f"thermal_load: alpha {a!r} or delta_T {delta_T!r} of {v!r} is not finite")
-        strains[tm.volume_ids[v]] = float(a) * float(delta_T)
+        part = groups[v]
+        strains.setdefault(part.kind, (part, {}))[1][part.tagged.volume_ids[v]] = float(a) * float(delta_T)
     if not strains:
         raise InputError("thermal_load: no volume given")
-    b = pb.assemble_vector(thermal_load_form(model.V, model.E, model.nu, tm.cell_tags, strains))
-    return pb.gather_vec(pb.mult_transpose(model.T, b))
+    f = np.zeros(model.n_dof)
+    for kind, (part, by_id) in strains.items():
+        if kind == "solid":
+            E, nu, _ = part.fields
+            form = thermal_load_form(part.V, E, nu, part.tagged.cell_tags, by_id)
+        else:
+            form = shell.thermal_load_form(part.V, part.fields, part.tagged.cell_tags, by_id)
+        f += pb.gather_vec(pb.mult_transpose(part.T, pb.assemble_vector(form)))
+    return f
 
 
 def mass_properties(model: FEModel, about=(0.0, 0.0, 0.0)) -> MassProperties:

@@ -116,6 +116,74 @@ def revolve_to_z(profile: list, axis_xy=(0.0, 0.0), z_shift: float = 0.0) -> lis
     return vols
 
 
+# ---- mid-surfaces (shell walls) ------------------------------------------------------------
+def capsule_surface(r: float, a_bottom: float, a_top: float, z0: float, length: float, axis_xy=(0.0, 0.0)) -> list[int]:
+    """Face tags of the closed surface of revolution about a vertical axis: cylinder of
+    radius r from z0 to z0 + length closed by half-ellipsoid domes of heights a_bottom,
+    a_top (0 = flat disk). Built as the boundary of the revolved solid, which is removed."""
+    vols = revolve_to_z(half(capsule_profile(r, a_bottom, a_top, z0, length)), axis_xy)
+    occ.synchronize()
+    faces = boundary_faces(vols)
+    occ.remove(vols)                       # not recursive: the faces stay
+    occ.synchronize()
+    return faces
+
+
+def cylinder_surface(r: float, z0: float, z1: float, axis_xy=(0.0, 0.0)) -> list[int]:
+    """Face tags of an open cylinder (skirt) of radius r from z0 to z1 about a vertical
+    axis (seam at SEAM_AZIMUTH, like the revolved parts)."""
+    c = occ.addCircle(0, 0, z0, r)
+    occ.rotate([(1, c)], 0, 0, 0, 0, 0, 1, SEAM_AZIMUTH)
+    occ.translate([(1, c)], axis_xy[0], axis_xy[1], 0)
+    faces = [t for d, t in occ.extrude([(1, c)], 0, 0, z1 - z0) if d == 2]
+    occ.synchronize()
+    return faces
+
+
+def remove_faces(faces: list[int]) -> None:
+    """Remove faces (and what only they use) from the model."""
+    if faces:
+        occ.remove([(2, f) for f in faces], recursive=True)
+        occ.synchronize()
+
+
+def imprint_parts(volumes: dict[str, list], faces: dict[str, list[int]], tools: list["Tool"]) -> tuple[dict, dict]:
+    """Fragment solid volumes (group -> volume dimTags) and shell faces (group -> face tags)
+    together and with the tools (volumes or surfaces): conforming junctions (a shell face
+    lying on a solid's face becomes that face: shared nodes), patch outlines and fill lines
+    imprinted. Returns the new (volume dimTags per group, face tags per group); everything
+    else (tool pieces) is removed."""
+    order = [(g, d) for g, ds in volumes.items() for d in ds] + [(g, (2, f)) for g, fs in faces.items() for f in fs]
+    out, outmap = occ.fragment([d for _, d in order], [t.dimtag for t in tools])
+    new_v: dict[str, list] = {g: [] for g in volumes}
+    new_f: dict[str, list[int]] = {g: [] for g in faces}
+    for (g, d), children in zip(order, outmap[: len(order)]):
+        if d[0] == 3:
+            new_v[g].extend(c for c in children if c[0] == 3 and c not in new_v[g])
+        else:
+            new_f[g].extend(t for dd, t in children if dd == 2 and t not in new_f[g])
+    occ.synchronize()
+    keep_v = {d for ds in new_v.values() for d in ds}
+    extra = [d for d in gmsh.model.getEntities(3) if d not in keep_v]
+    if extra:
+        occ.remove(extra)
+        occ.synchronize()
+    keep_f = {f for fs in new_f.values() for f in fs}
+    if keep_v:
+        keep_f |= {abs(t) for d, t in gmsh.model.getBoundary(list(keep_v), combined=False, oriented=False)}
+    remove_faces([t for _, t in gmsh.model.getEntities(2) if t not in keep_f])
+    stray = [d for d in gmsh.model.getEntities(1) if not gmsh.model.getAdjacencies(1, d[1])[0].size]
+    if stray:
+        occ.remove(stray, recursive=True)
+        occ.synchronize()
+    return new_v, new_f
+
+
+def imprint_surfaces(groups: dict[str, list[int]], tools: list["Tool"]) -> dict[str, list[int]]:
+    """imprint_parts for shell faces only: the new face tags per group."""
+    return imprint_parts({}, groups, tools)[1]
+
+
 # ---- patch tools ---------------------------------------------------------------------------
 @dataclass
 class Tool:
@@ -149,6 +217,15 @@ def wall_patch(name, axis_xy, phi: float, z: float, r_surface: float, r_other: f
     if hi <= lo:
         raise InputError(f"patch {name}: half-width {w} m too wide for a wall of radius {r_surface} m")
     return radial_box(name, axis_xy, phi, max(r_surface - 1.0, 0.0), 0.5 * (lo + hi), z - h, z + h, w)
+
+
+def shell_wall_patch(name, axis_xy, phi: float, z: float, r: float, w: float, h: float) -> Tool:
+    """Tool imprinting a (2w x 2h) patch on a cylindrical mid-surface of radius r at azimuth
+    phi and height z: a radial box reaching just past the patch's sagitta on both sides."""
+    if w >= r:
+        raise InputError(f"patch {name}: half-width {w} m too wide for a wall of radius {r} m")
+    d = 2 * (r - math.sqrt(r * r - w * w)) + 0.05 * r
+    return radial_box(name, axis_xy, phi, r - d, r + d, z - h, z + h, w)
 
 
 def cylinder_tool(name, center, radius: float, z0: float, z1: float) -> Tool:

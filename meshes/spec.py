@@ -2,7 +2,14 @@
 
 Contract (DESIGN.md, issue 3). Units SI throughout: m, kg, Pa, kg/m^3, kg m^2.
 
-- ``volumes``: physical VOLUME group name -> :class:`Material`.
+- ``volumes``: physical group name -> :class:`Material`: every VOLUME group (solid
+  tetrahedra), and every SURFACE group listed in ``shells``.
+- ``shells``: physical SURFACE group name -> thickness (m): the group's triangles are
+  Reissner-Mindlin shells (fem.shell) on the mid-surface, with the material of
+  ``volumes[name]``. Shells and solids meshed together share nodes (translations tie).
+- ``shell_bending``: shell group -> bending stiffness ratio 12 I / t^3 (Nastran PSHELL's
+  12I/T**3; absent = 1, a homogeneous plate): frames and stringers smeared into the
+  bending stiffness of a wall whose membrane stiffness and mass are the skin's.
 - ``patches``: a physical SURFACE group (dim 2) named ``Patch.name``, tied by a rigid
   spider (Nastran RBE2) to one 6-DOF reference point at ``Patch.ref_point``; the point's
   DOFs are labelled ``"<name>:Tx" ... "<name>:Rz"``. Interfaces, hold-downs, engine
@@ -16,9 +23,10 @@ Contract (DESIGN.md, issue 3). Units SI throughout: m, kg, Pa, kg/m^3, kg m^2.
 JSON sidecar layout (``format = "liftoff-geometry"``, ``version = 1``, ``units = "SI"``):
 the fields above as plain JSON; ``msh_path`` is stored relative to the sidecar's folder
 when the mesh lies in or below it, and is returned absolute by :meth:`Geometry.load`.
-Optional extras: ``group_volumes`` (CAD volume of each physical volume group, m^3, from
-``gmsh.model.occ.getMass``), ``surface_areas`` (CAD area of each physical surface group,
-m^2) and ``mesh_nodes`` (node count of the written mesh).
+Optional extras: ``shells`` and ``shell_bending`` (absent = no shells), ``group_volumes``
+(CAD volume of each physical volume group, m^3, from ``gmsh.model.occ.getMass``),
+``surface_areas`` (CAD area of each physical surface group, m^2) and ``mesh_nodes`` (node
+count of the written mesh).
 """
 from __future__ import annotations
 
@@ -44,6 +52,15 @@ def require_positive(owner: str, **values: float) -> None:
             ok = False
         if not ok:
             raise InputError(f"{owner}.{name} must be a finite number > 0 (got {v!r})")
+
+
+WALLS = ("solid", "shell")
+
+
+def check_walls(owner: str, walls) -> None:
+    """InputError unless ``walls`` is "solid" (thickened tetrahedra) or "shell" (mid-surface)."""
+    if walls not in WALLS:
+        raise InputError(f"{owner}.walls must be one of {', '.join(map(repr, WALLS))} (got {walls!r})")
 
 
 FORMAT = "liftoff-geometry"
@@ -153,11 +170,25 @@ class Geometry:
     group_volumes: dict[str, float] = field(default_factory=dict)  # CAD volumes (m^3)
     mesh_nodes: int = 0
     surface_areas: dict[str, float] = field(default_factory=dict)  # CAD areas of surface groups (m^2)
+    shells: dict[str, float] = field(default_factory=dict)         # shell surface group -> thickness (m)
+    shell_bending: dict[str, float] = field(default_factory=dict)  # shell surface group -> 12 I / t^3
 
     def __post_init__(self) -> None:
         self.msh_path = str(self.msh_path)
         if not self.volumes:
             raise InputError(f"geometry {self.name!r}: no volume groups")
+        for g, t in self.shells.items():
+            _check_name("shell surface", g)
+            require_positive(f"geometry {self.name!r}: shells", **{g: t})
+        self.shells = {g: float(t) for g, t in self.shells.items()}
+        for g, b in self.shell_bending.items():
+            if g not in self.shells:
+                raise InputError(f"geometry {self.name!r}: shell_bending names {g!r}, which is not in shells")
+            require_positive(f"geometry {self.name!r}: shell_bending", **{g: b})
+        self.shell_bending = {g: float(b) for g, b in self.shell_bending.items()}
+        for g in self.shells:
+            if g not in self.volumes:
+                raise InputError(f"geometry {self.name!r}: shell surface {g!r} has no material in volumes")
         names = [p.name for p in self.patches]
         dup = {n for n in names if names.count(n) > 1}
         if dup:
@@ -174,11 +205,14 @@ class Geometry:
         raise InputError(f"geometry {self.name!r} has no patch {name!r}")
 
     def nominal_mass(self) -> float:
-        """Sum of rho * CAD volume over volume groups + smeared + point masses (kg)."""
-        missing = [g for g in self.volumes if g not in self.group_volumes]
+        """Sum of rho * CAD volume over volume groups, rho * thickness * CAD area over shell
+        surfaces, + smeared + point masses (kg)."""
+        missing = [g for g in self.volumes if g not in self.shells and g not in self.group_volumes]
+        missing += [g for g in self.shells if g not in self.surface_areas]
         if missing:
-            raise InputError(f"geometry {self.name!r}: no CAD volume recorded for groups {missing}")
-        structural = sum(m.rho * self.group_volumes[g] for g, m in self.volumes.items())
+            raise InputError(f"geometry {self.name!r}: no CAD volume/area recorded for groups {missing}")
+        structural = sum(m.rho * (self.shells[g] * self.surface_areas[g] if g in self.shells else self.group_volumes[g])
+                         for g, m in self.volumes.items())
         return structural + sum(s.mass for s in self.smeared_masses) + sum(p.mass for p in self.point_masses)
 
     # ---- JSON sidecar ----------------------------------------------------------------
@@ -203,6 +237,8 @@ class Geometry:
             "group_volumes": dict(self.group_volumes),
             "mesh_nodes": int(self.mesh_nodes),
             "surface_areas": dict(self.surface_areas),
+            "shells": dict(self.shells),
+            "shell_bending": dict(self.shell_bending),
         }
 
     def save(self, path) -> Path:
@@ -237,6 +273,8 @@ class Geometry:
                 group_volumes={g: float(v) for g, v in d.get("group_volumes", {}).items()},
                 mesh_nodes=int(d.get("mesh_nodes", 0)),
                 surface_areas={g: float(v) for g, v in d.get("surface_areas", {}).items()},
+                shells={g: float(v) for g, v in d.get("shells", {}).items()},
+                shell_bending={g: float(v) for g, v in d.get("shell_bending", {}).items()},
             )
         except (KeyError, TypeError) as e:
             raise InputError(f"{path}: malformed {FORMAT} file ({e!r})") from None

@@ -6,6 +6,15 @@ The liquid is *not* modelled as a solid: it is non-structural mass spread unifor
 wetted inner wall up to the fill level (``SmearedMass`` on the group
 ``<tank>_<compartment>_wetted``), mass = liquid density x liquid volume (closed form below).
 A hydroelastic model is later work. Units SI. See docs/meshes.md.
+
+Walls (``TankParams.walls``): ``"solid"``, a thick wall of tetrahedra (outer radius R,
+thickness ``wall_thickness``, thickened: density and E scaled to the dry mass); or
+``"shell"``, the wall's mid-surface (radius R - t/2, dome heights a - t/2) meshed with
+triangles for fem.shell, with the real material and the thickness that gives the dry mass
+(``shell_thickness`` to set it). The two share everything else: group names (the wall
+group ``<name>_wall`` is a volume or a surface group), patches, fill cuts, the cavity and
+hence the liquid mass. The closed shell surface bounds each compartment's cavity, so
+liquid volumes can later be meshed against the same faces.
 """
 from __future__ import annotations
 
@@ -19,7 +28,7 @@ from liftoff.core.errors import InputError
 
 from . import _occ
 from ._occ import occ
-from .spec import Geometry, Material, Patch, SmearedMass, equivalent, require_positive
+from .spec import Geometry, Material, Patch, SmearedMass, check_walls, equivalent, require_positive
 
 #: Aluminium alloy 2219 (the Shuttle external tank's alloy): E 73.8 GPa, nu 0.33, 2840 kg/m^3
 AL2219 = Material("Al2219", 73.8e9, 0.33, 2840.0)
@@ -70,9 +79,16 @@ class TankParams:
                                                     "tank_top": (0.0, 0.0, 4.6 + 0.72 * 4.2 + 1.6 * 4.2)})
     patch_half_width: float = 0.5
     mesh_size: float = 0.6
+    walls: str = "solid"                  # "solid" (thickened tetrahedra) or "shell" (mid-surface)
+    shell_thickness: float | None = None  # shell walls: None = the thickness of `material` that weighs dry_mass
+    shell_bending_ratio: float = 1.0      # shell walls: 12 I / t^3 (frames, stringers smeared; 1 = bare skin)
 
     def check(self) -> None:
         o = f"TankParams({self.name})"
+        check_walls(o, self.walls)
+        if self.shell_thickness is not None:
+            require_positive(o, shell_thickness=self.shell_thickness)
+        require_positive(o, shell_bending_ratio=self.shell_bending_ratio)
         require_positive(o, radius=self.radius, wall_thickness=self.wall_thickness,
                          intertank_length=self.intertank_length, mesh_size=self.mesh_size,
                          patch_half_width=self.patch_half_width)
@@ -265,11 +281,14 @@ def patch_tool(name: str, ref, axis_xy, r_out: float, r_in: float, z_lo_apex: fl
 def build_tank(p: TankParams, out_dir) -> Geometry:
     """Build, mesh and write ``<out_dir>/<name>.msh`` (+ ``.json`` sidecar); return the Geometry.
 
-    Physical groups: volume ``<name>_wall``; surfaces ``<name>_<compartment>_wetted`` and
-    one per patch."""
+    Physical groups: ``<name>_wall`` (volume, or surface for shell walls); surfaces
+    ``<name>_<compartment>_wetted`` and one per patch."""
     if not isinstance(p, TankParams):
         raise InputError(f"build_tank expects TankParams, got {type(p).__name__}")
     p.check()
+    if p.walls == "shell":
+        from .shells import build_shell_tank
+        return build_shell_tank(p, Path(out_dir))
     out_dir = Path(out_dir)
     lay = tank_layout(p)
     R, t, w = p.radius, p.wall_thickness, p.patch_half_width

@@ -20,7 +20,7 @@ from liftoff.core.errors import InputError
 from . import _occ
 from ._occ import occ
 from .layout import StackLayout
-from .spec import Geometry, Material, Patch, PointMass, SmearedMass, equivalent, require_positive
+from .spec import Geometry, Material, Patch, PointMass, SmearedMass, check_walls, equivalent, require_positive
 from .tank import AL2219, Compartment, TankParams, build_tank, tank_height
 
 #: D6AC steel (SRB case): E 205 GPa, nu 0.29, 7850 kg/m^3
@@ -42,9 +42,13 @@ def _point_inertia(m: float, offsets) -> np.ndarray:
 
 
 # ---- core stage ---------------------------------------------------------------------------
-def core_stage_params(layout: StackLayout | None = None, mesh_size: float = 0.9) -> TankParams:
+def core_stage_params(layout: StackLayout | None = None, mesh_size: float = 0.9, walls: str = "solid",
+                      shell_bending_ratio: float = 1.0) -> TankParams:
     """External-tank-like core stage: LH2 tank (aft), intertank skirt, LOX tank (forward),
-    Al 2219 wall thickened to 0.15 m, dry mass 26.5 t, propellants as wetted-wall mass."""
+    Al 2219 wall thickened to 0.15 m (``walls="solid"``) or its mid-surface as an Al 2219
+    shell of the thickness that weighs the dry mass, 6.8 mm (``walls="shell"``, bending
+    stiffness ratio 12 I/t^3 ``shell_bending_ratio``), dry mass 26.5 t, propellants as
+    wetted-wall mass."""
     lay = layout or StackLayout()
     lay.check()
     patches = {}
@@ -57,7 +61,7 @@ def core_stage_params(layout: StackLayout | None = None, mesh_size: float = 0.9)
                       Compartment("lox", 4.65, 0.72, 1.6, 0.90, 1141.0)),
         intertank_length=6.9, z_bottom=lay.core_bottom_z, axis_xy=(0.0, 0.0),
         material=replace(AL2219), dry_mass=26_500.0, patches=patches, patch_half_width=0.5,
-        mesh_size=mesh_size)
+        mesh_size=mesh_size, walls=walls, shell_bending_ratio=shell_bending_ratio)
     p.patches["stack_top"] = np.array([0.0, 0.0, lay.core_bottom_z + tank_height(p)])
     return p
 
@@ -74,7 +78,7 @@ class BoosterParams:
     side: str = "left"
     layout: StackLayout = field(default_factory=StackLayout)
     length: float = 45.46               # skirt bottom to nose tip
-    case_thickness: float = 0.15        # thickened (real case ~13 mm)
+    case_thickness: float = 0.15        # thickened (real case ~13 mm); shell walls: sets the mid-surface radius
     case_bottom_z: float = 2.6          # case cylinder bottom (aft dome equator)
     aft_dome_ratio: float = 0.7
     nose_ratio: float = 1.9
@@ -88,6 +92,9 @@ class BoosterParams:
     holddown_patch_radius: float = 0.2
     attach_patch_half_width: float = 0.45
     mesh_size: float = 0.6
+    walls: str = "solid"                # "solid" (thickened tetrahedra) or "shell" (case as a shell, meshes.shells)
+    case_shell_thickness: float | None = None   # shell case: None = the D6AC thickness that weighs case_mass
+    case_shell_bending_ratio: float = 1.0       # shell case: 12 I / t^3 (1 = bare skin)
 
     @property
     def name(self) -> str:
@@ -95,6 +102,10 @@ class BoosterParams:
 
     def check(self) -> None:
         o = f"BoosterParams({self.side})"
+        check_walls(o, self.walls)
+        if self.case_shell_thickness is not None:
+            require_positive(o, case_shell_thickness=self.case_shell_thickness)
+        require_positive(o, case_shell_bending_ratio=self.case_shell_bending_ratio)
         require_positive(o, length=self.length, case_thickness=self.case_thickness,
                          case_bottom_z=self.case_bottom_z, aft_dome_ratio=self.aft_dome_ratio,
                          nose_ratio=self.nose_ratio, skirt_joint_height=self.skirt_joint_height,
@@ -159,6 +170,13 @@ def _skirt_quad(p: BoosterParams):
             (R - 0.5 * t, p.case_bottom_z), (Rb - ts, hf)]
 
 
+def booster_point_masses(p: BoosterParams) -> list[PointMass]:
+    """Nozzle + TVC lumped at the gimbal (its c.g. nozzle_cg_below_gimbal below)."""
+    d = np.array([0.0, 0.0, -p.nozzle_cg_below_gimbal])
+    inertia = _cylinder_inertia(p.nozzle_mass, 1.5, 4.0) + _point_inertia(p.nozzle_mass, [d])
+    return [PointMass(f"{p.name}_nozzle", f"{p.name}_gimbal", p.nozzle_mass, inertia)]
+
+
 def build_booster(p: BoosterParams, out_dir) -> Geometry:
     """Booster ``srb_<side>``: volumes ``srb_<side>_case``, ``srb_<side>_skirt``; surfaces
     ``srb_<side>_case_inner`` (propellant), hold-down patches ``srb_<side>_hd_<k>`` (skirt
@@ -166,6 +184,9 @@ def build_booster(p: BoosterParams, out_dir) -> Geometry:
     if not isinstance(p, BoosterParams):
         raise InputError(f"build_booster expects BoosterParams, got {type(p).__name__}")
     p.check()
+    if p.walls == "shell":
+        from .shells import build_shell_booster
+        return build_shell_booster(p, Path(out_dir))
     lay, out_dir = p.layout, Path(out_dir)
     R, t = lay.srb_radius, p.case_thickness
     a_b, a_t = p.aft_dome_ratio * R, p.nose_ratio * R
@@ -218,10 +239,7 @@ def build_booster(p: BoosterParams, out_dir) -> Geometry:
         n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size, _occ.curvature_elements(t, rho_max))
     mats = {case_g: equivalent(STEEL_D6AC, p.case_mass, vols[case_g], "D6AC-equivalent-case"),
             skirt_g: equivalent(AL2219, p.skirt_mass, vols[skirt_g], "Al2219-equivalent-skirt")}
-    d = np.array([0.0, 0.0, -p.nozzle_cg_below_gimbal])
-    nozzle_inertia = _cylinder_inertia(p.nozzle_mass, 1.5, 4.0) + _point_inertia(p.nozzle_mass, [d])
-    geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), mats, patches,
-                   [PointMass(f"{p.name}_nozzle", f"{p.name}_gimbal", p.nozzle_mass, nozzle_inertia)],
+    geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), mats, patches, booster_point_masses(p),
                    [SmearedMass(f"{p.name}_case_inner", p.propellant_mass)], [], vols, n_nodes, areas)
     geo.save(out_dir / f"{p.name}.json")
     return geo
@@ -250,11 +268,18 @@ class OrbiterParams:
     payload_z: float = 25.0
     attach_patch_half_width: float = 0.45
     mesh_size: float = 0.7
+    walls: str = "solid"                # "solid" or "shell" (fuselage skin as a shell, meshes.shells)
+    skin_shell_thickness: float | None = None   # shell skin: None = the Al 2219 thickness that weighs its mass share
+    skin_shell_bending_ratio: float = 1.0       # shell skin: 12 I / t^3 (1 = bare skin)
 
     name = "orbiter"
 
     def check(self) -> None:
         o = "OrbiterParams"
+        check_walls(o, self.walls)
+        if self.skin_shell_thickness is not None:
+            require_positive(o, skin_shell_thickness=self.skin_shell_thickness)
+        require_positive(o, skin_shell_bending_ratio=self.skin_shell_bending_ratio)
         require_positive(o, length=self.length, wall_thickness=self.wall_thickness, nose_ratio=self.nose_ratio,
                          wing_span=self.wing_span, wing_root_chord=self.wing_root_chord,
                          wing_thickness=self.wing_thickness, wing_bottom_offset=self.wing_bottom_offset,
@@ -280,15 +305,30 @@ class OrbiterParams:
         return self.length - self.nose_ratio * self.layout.orbiter_radius
 
 
-def orbiter_closed_form_volumes(p: OrbiterParams) -> dict[str, float]:
-    """Closed-form volume (m^3): fuselage shell + wing slab outside the fuselage cylinder."""
+def orbiter_part_volumes(p: OrbiterParams) -> tuple[float, float]:
+    """Closed-form volumes (m^3) of the fuselage wall and of the wing slab outside the
+    fuselage cylinder (solid variant)."""
     from .tank import capsule_volume
     R, t, L, a = p.layout.orbiter_radius, p.wall_thickness, p.cyl_length, p.nose_ratio * p.layout.orbiter_radius
     shell = capsule_volume(R, 0.0, a, L) - capsule_volume(R - t, 0.0, a - t, L - t)
     y = 0.5 * p.wing_thickness
     strip = 2 * (y * math.sqrt(R * R - y * y) + R * R * math.asin(y / R))  # slab x circle area
-    wing = (p.wing_span * p.wing_thickness - strip) * p.wing_root_chord
-    return {"orbiter_structure": shell + wing}
+    return shell, (p.wing_span * p.wing_thickness - strip) * p.wing_root_chord
+
+
+def orbiter_closed_form_volumes(p: OrbiterParams) -> dict[str, float]:
+    """Closed-form volume (m^3): fuselage shell + wing slab outside the fuselage cylinder."""
+    return {"orbiter_structure": sum(orbiter_part_volumes(p))}
+
+
+def orbiter_point_masses(p: OrbiterParams) -> list[PointMass]:
+    """SSME cluster (three engines in a triangle about the cluster c.g.: upper one at +y,
+    lower two at -/+x) at ``ssme_mount``, payload at ``payload_station``."""
+    offs = [(0.0, 1.2, 0.0), (-1.3, -0.6, 0.0), (1.3, -0.6, 0.0)]
+    J_ssme = 3 * _cylinder_inertia(p.ssme_mass, 1.1, 4.3) + _point_inertia(p.ssme_mass, offs)
+    J_pl = _cylinder_inertia(p.payload_mass, 2.0, 10.0)
+    return [PointMass("ssme_cluster", "ssme_mount", 3 * p.ssme_mass, J_ssme),
+            PointMass("payload", "payload_station", p.payload_mass, J_pl)]
 
 
 def build_orbiter(p: OrbiterParams, out_dir) -> Geometry:
@@ -297,6 +337,9 @@ def build_orbiter(p: OrbiterParams, out_dir) -> Geometry:
     if not isinstance(p, OrbiterParams):
         raise InputError(f"build_orbiter expects OrbiterParams, got {type(p).__name__}")
     p.check()
+    if p.walls == "shell":
+        from .shells import build_shell_orbiter
+        return build_shell_orbiter(p, Path(out_dir))
     lay, out_dir = p.layout, Path(out_dir)
     R, t, z0 = lay.orbiter_radius, p.wall_thickness, lay.orbiter_bottom_z
     axis = np.array([0.0, lay.orbiter_axis_y])
@@ -337,32 +380,29 @@ def build_orbiter(p: OrbiterParams, out_dir) -> Geometry:
         rho_max = max(R, R * R / a_n, a_n ** 2 / R)
         n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size, _occ.curvature_elements(t, rho_max))
     mat = equivalent(AL2219, p.structure_mass, vols[g], "Al2219-equivalent-orbiter")
-    # three engines in a triangle about the cluster c.g. (upper one at +y, lower two at -/+x)
-    offs = [(0.0, 1.2, 0.0), (-1.3, -0.6, 0.0), (1.3, -0.6, 0.0)]
-    J_ssme = 3 * _cylinder_inertia(p.ssme_mass, 1.1, 4.3) + _point_inertia(p.ssme_mass, offs)
-    J_pl = _cylinder_inertia(p.payload_mass, 2.0, 10.0)
-    geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), {g: mat}, patches,
-                   [PointMass("ssme_cluster", "ssme_mount", 3 * p.ssme_mass, J_ssme),
-                    PointMass("payload", "payload_station", p.payload_mass, J_pl)],
+    geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), {g: mat}, patches, orbiter_point_masses(p),
                    [], [], vols, n_nodes, areas)
     geo.save(out_dir / f"{p.name}.json")
     return geo
 
 
 # ---- the stack --------------------------------------------------------------------------------
-def build_core_stage(out_dir, layout: StackLayout | None = None, mesh_size: float = 0.9) -> Geometry:
+def build_core_stage(out_dir, layout: StackLayout | None = None, mesh_size: float = 0.9, walls: str = "solid",
+                     shell_bending_ratio: float = 1.0) -> Geometry:
     """Core stage ``core`` built with the tank builder (see :func:`core_stage_params`)."""
-    return build_tank(core_stage_params(layout, mesh_size), out_dir)
+    return build_tank(core_stage_params(layout, mesh_size, walls, shell_bending_ratio), out_dir)
 
 
 def default_stack(mesh_size: float | None = None, out_dir="out/meshes",
-                  layout: StackLayout | None = None) -> dict[str, Geometry]:
+                  layout: StackLayout | None = None, walls: str = "solid") -> dict[str, Geometry]:
     """Build all four components (``core``, ``srb_left``, ``srb_right``, ``orbiter``) with
-    their default parameters (``mesh_size`` overrides every component's default)."""
+    their default parameters (``mesh_size`` overrides every component's default; ``walls``
+    = "solid" or "shell" sets every component's walls, see meshes.shells)."""
     lay = layout or StackLayout()
     if mesh_size is not None:
         require_positive("default_stack", mesh_size=mesh_size)
-    kw = {} if mesh_size is None else {"mesh_size": mesh_size}
+    check_walls("default_stack", walls)
+    kw = {"walls": walls} if mesh_size is None else {"mesh_size": mesh_size, "walls": walls}
     out = {"core": build_core_stage(out_dir, lay, **kw)}
     for side in ("left", "right"):
         b = build_booster(BoosterParams(side=side, layout=lay, **kw), out_dir)

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import re
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -118,6 +118,27 @@ class CBModel:
     @property
     def n_modes(self) -> int:
         return self.fixed_omega.size
+
+    def select_modes(self, n_modes: int | None = None, f_max: float | None = None) -> "CBModel":
+        """The same component keeping only its first ``n_modes`` fixed-interface modes at or
+        below ``f_max`` Hz (None: no limit): rows and columns of the dropped modal
+        coordinates removed from M, K, the label transform, the mode shapes and the
+        recovery items (eq. 13 is block-diagonal in K, so this is the CB model a smaller
+        selection would have given)."""
+        keep = np.arange(self.n_modes)
+        if f_max is not None:
+            keep = keep[self.fixed_freq_hz[keep] <= f_max * (1 + 1e-12)]
+        if n_modes is not None:
+            keep = keep[:n_modes]
+        if keep.size == self.n_modes:
+            return self
+        cols = np.concatenate([keep, self.n_modes + np.arange(self.n_boundary)])
+        rec = tuple(CBRecovery(it.name, it.labels, it.units, **{k: m[:, cols] for k, m in it.parts.items()})
+                    for it in self.recovery)
+        fim = None if self.fixed_interface_modes is None else self.fixed_interface_modes[:, keep]
+        return replace(self, fixed_omega=self.fixed_omega[keep], M=self.M[np.ix_(cols, cols)],
+                       K=self.K[np.ix_(cols, cols)], label_transform=self.label_transform[:, cols],
+                       fixed_interface_modes=fim, recovery=rec)
 
     @property
     def n_boundary(self) -> int:

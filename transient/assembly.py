@@ -142,26 +142,31 @@ def modal_load(body: ModalBody, key: str, forcing: Forcing) -> ModalLoad:
 
 
 def feedback_factors(n: int, key: str, forcing: Forcing, t0: float):
-    """Feedback matrices of a body as rank-factored terms: (U (n, r), V (r, n), until (r,)).
+    """Feedback matrices of a body as rank-factored terms: (U (n, r), V (r, 2n), since (r,),
+    until (r,)) acting on [q; v].
 
-    Each matrix is factored by SVD (singular values below 1e-14 of the largest dropped:
-    exact to rounding), so force = sum_k U[:, k] (V[k] . q) over the terms with t < until[k]."""
-    Us, Vs, untils = [np.zeros((n, 0))], [np.zeros((0, n))], [np.zeros(0)]
+    Each [matrix, rate_matrix] is factored by SVD (singular values below 1e-14 of the
+    largest dropped: exact to rounding), so force = sum_k U[:, k] (V[k] . [q; v]) over the
+    terms with since[k] <= t < until[k]."""
+    Us, Vs, sinces, untils = [np.zeros((n, 0))], [np.zeros((0, 2 * n))], [np.zeros(0)], [np.zeros(0)]
     for fb in forcing.feedback:
         if fb.body != key or n == 0:
             continue
-        U, s, Vt = np.linalg.svd(fb.matrix)
+        rate = np.zeros_like(fb.matrix) if fb.rate_matrix is None else fb.rate_matrix
+        U, s, Vt = np.linalg.svd(np.hstack([fb.matrix, rate]), full_matrices=False)
         r = int(np.sum(s > 1e-14 * max(s[0], 1e-300))) if s.size else 0
         Us.append(U[:, :r] * s[:r])
         Vs.append(Vt[:r])
+        sinces.append(np.full(r, fb.since))
         untils.append(np.full(r, fb.until))
-    return np.hstack(Us), np.vstack(Vs), np.concatenate(untils)
+    return np.hstack(Us), np.vstack(Vs), np.concatenate(sinces), np.concatenate(untils)
 
 
-def feedback_matrix(n: int, key: str, forcing: Forcing, t: float) -> np.ndarray:
-    """Sum of the feedback matrices active at time t (for static equilibrium)."""
+def feedback_matrix(n: int, key: str, forcing: Forcing, t: float, rate: bool = False) -> np.ndarray:
+    """Sum of the feedback matrices (``rate``: rate matrices) active at time t (statics uses
+    the displacement part)."""
     M = np.zeros((n, n))
     for fb in forcing.feedback:
-        if fb.body == key and t < fb.until:
-            M += fb.matrix
+        if fb.body == key and fb.active(t) and (not rate or fb.rate_matrix is not None):
+            M += fb.rate_matrix if rate else fb.matrix
     return M

@@ -3,7 +3,8 @@
 * the c.g. of a modal body from its rigid-body mass (eq. 14 quantities; the rigid-body
   kinematics themselves are liftoff.core.rigid);
 * control system (eq. 15-21): lateral gimbal forces that cancel the moment of the
-  applied forces about the vehicle c.g.;
+  applied forces about the vehicle c.g.; beyond the reference, an attitude hold (a PD
+  law on the rigid-body attitude and rate through the same gimbals);
 * gravity softening (eq. 22-27): the c.g. motion matrix ERV and the softening matrix
   KSOF, carried as a modal feedback force (held over a step) in the transient and as a
   stiffness correction in statics;
@@ -95,6 +96,41 @@ def control_forces(body: ModalBody, gimbal_labels, applied_labels, applied: np.n
         cg = center_of_gravity(body)[1]
     M_R = resultant_about(body, applied_labels, applied, cg)[..., 3:]
     return -M_R @ control_gimbal_matrix(body, gimbal_labels, cg).T
+
+
+def rigid_rotation_rows(body: ModalBody, cg=None) -> tuple[np.ndarray, np.ndarray]:
+    """(R (3, n), I_cg (3, 3)): the rigid-body rotation of the body about its c.g.,
+    theta = R q (from x_rb = (RB^T M RB)^-1 (Phi^T M RB)^T q about the c.g., eq. 14
+    quantities), and its inertia tensor about the c.g. (kg m^2)."""
+    if cg is None:
+        cg = center_of_gravity(body)[1]
+    T = shift_rb(np.asarray(cg, float) - body.ref_point)
+    M_cg = T.T @ rigid_mass(body) @ T
+    part = participation_about(body, cg)
+    return np.linalg.solve(M_cg, part.T)[3:], M_cg[3:, 3:]
+
+
+def attitude_hold(body: ModalBody, gimbal_labels, bandwidth_hz: float, damping: float, since: float = -np.inf,
+                  cg=None):
+    """Attitude hold beyond the reference: a PD law on the vehicle's rigid-body attitude and
+    rate, through the same lateral gimbal forces as eq. 15-21. The commanded angular
+    acceleration about the c.g. is alpha = -(w^2 theta + 2 zeta w theta_dot), w = 2 pi
+    ``bandwidth_hz``, zeta = ``damping``; the moment I_cg alpha is applied by the gimbal
+    forces F = G (I_cg alpha) (G of :func:`control_gimbal_matrix`: -G M cancels M, so G M
+    applies it), i.e. the modal force Phi_g^T F. Returned as a ModalFeedback (matrix on q,
+    rate_matrix on v, held over each step, on from ``since``): the rigid vehicle's pitch,
+    yaw and roll then follow theta'' + 2 zeta w theta' + w^2 theta = 0."""
+    from .model import ModalFeedback
+
+    if not (np.isfinite(bandwidth_hz) and bandwidth_hz > 0 and np.isfinite(damping) and damping >= 0):
+        raise InputError(f"attitude hold: bandwidth {bandwidth_hz!r} Hz must be > 0 and damping {damping!r} >= 0")
+    if cg is None:
+        cg = center_of_gravity(body)[1]
+    R, I_cg = rigid_rotation_rows(body, cg)
+    G = control_gimbal_matrix(body, gimbal_labels, cg)
+    B = body.rows(gimbal_labels).T @ G @ I_cg @ R          # modal force of alpha = theta (rad/s^2 per rad)
+    w = 2 * np.pi * bandwidth_hz
+    return ModalFeedback("a", -w * w * B, rate_matrix=-2 * damping * w * B, since=since)
 
 
 # ---------------------------------------------------------------- gravity softening

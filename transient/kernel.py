@@ -64,9 +64,10 @@ class Modal(NamedTuple):
     const: np.ndarray   # (n,) constant modal load
     tk: np.ndarray      # (n_k,) breakpoints of the tabulated modal load
     Pk: np.ndarray      # (n_k, n) tabulated modal load
-    U: np.ndarray       # (n, r) feedback factors: force = sum_k U[:, k] (V[k] . q) (eq. 26)
-    V: np.ndarray       # (r, n)
-    until: np.ndarray   # (r,) s, each term on while t < until
+    U: np.ndarray       # (n, r) feedback factors: force = sum_k U[:, k] (V[k] . [q; v]) (eq. 26)
+    V: np.ndarray       # (r, 2 n)
+    since: np.ndarray   # (r,) s, each term on while since <= t < until
+    until: np.ndarray   # (r,) s
 
 
 class Contact(NamedTuple):
@@ -143,17 +144,19 @@ class History(NamedTuple):
 
 
 @njit(cache=True)
-def _feedback(q, U, V, until, ta, out):
-    """out = sum_k U[:, k] (V[k] . q) over the rank-one terms still on (ta < until[k]) (eq. 26)."""
-    for m in range(q.size):
+def _feedback(q, v, U, V, since, until, ta, out):
+    """out = sum_k U[:, k] (V[k] . [q; v]) over the rank-one terms on at ta
+    (since[k] <= ta < until[k]) (eq. 26)."""
+    n = q.size
+    for m in range(n):
         out[m] = 0.0
     for k in range(V.shape[0]):
-        if not ta < until[k]:
+        if not (since[k] <= ta < until[k]):
             continue
         s = 0.0
-        for m in range(q.size):
-            s += V[k, m] * q[m]
-        for m in range(q.size):
+        for m in range(n):
+            s += V[k, m] * q[m] + V[k, n + m] * v[m]
+        for m in range(n):
             out[m] += U[m, k] * s
 
 
@@ -301,7 +304,7 @@ def march(i0, i1, steps, modal, contact, rows_out, state, cache, hist):
     and ``hist`` :class:`History` are updated in place. The bundles are unpacked once here:
     the helpers take plain arrays (no reference counting per step)."""
     t0, h, method, tol, max_iter = steps
-    na, coef, w2, zw2, const, tk, Pk, U, V, until = modal
+    na, coef, w2, zw2, const, tk, Pk, U, V, since, until = modal
     Phi_c, Cdiag, coff, dcontact, axial, nsign, release, W, C2, laws = contact[:10]  # the rest: _solve_laws
     L_a, kind_a, targ_a, L_b, kind_b, targ_b = rows_out
     q, v, f, active, Pc, Pext, ptr = state[:7]
@@ -325,7 +328,7 @@ def march(i0, i1, steps, modal, contact, rows_out, state, cache, hist):
         tb = t0 + (i + 1) * h
         # ---------------- free step of both bodies (contact force at t1 = 0)
         if V.shape[0] > 0:
-            _feedback(q, U, V, until, ta, fb)
+            _feedback(q, v, U, V, since, until, ta, fb)
         ptr[0] = _pre_step(coef, const, tk, Pk, ptr[0], tb, V.shape[0] > 0, fb, q, v, Pext, Pc, P1, qf, vf)
         # ---------------- candidate rows and free relative displacement
         e = np.dot(Phi_c, qf)  # one BLAS product

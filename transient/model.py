@@ -226,14 +226,17 @@ class ModalForce:
 
 @dataclass
 class ModalFeedback:
-    """Modal force ``matrix @ q`` taken at the start of each step and held over it (eq. 26).
+    """Modal force ``matrix @ q + rate_matrix @ v`` taken at the start of each step and held
+    over it (eq. 26; a control law's proportional and derivative parts).
 
-    Active while ``t < until``; in :func:`static_equilibrium` it enters as ``-matrix`` in
-    the stiffness (the 'softening stiffness' KSOF of eq. 27)."""
+    Active while ``since <= t < until``; in :func:`static_equilibrium` it enters as
+    ``-matrix`` in the stiffness (the 'softening stiffness' KSOF of eq. 27)."""
 
     body: str
     matrix: np.ndarray
     until: float = INF
+    rate_matrix: np.ndarray | None = None
+    since: float = -INF
 
     def __post_init__(self) -> None:
         who = f"modal feedback on body {self.body!r}"
@@ -241,7 +244,16 @@ class ModalFeedback:
         self.matrix = _finite(f"{who}: matrix", self.matrix)
         if self.matrix.ndim != 2 or self.matrix.shape[0] != self.matrix.shape[1]:
             raise InputError(f"{who}: matrix has shape {self.matrix.shape}, expected (n_modes, n_modes)")
-        self.until = float(self.until)
+        if self.rate_matrix is not None:
+            self.rate_matrix = _finite(f"{who}: rate_matrix", self.rate_matrix)
+            if self.rate_matrix.shape != self.matrix.shape:
+                raise InputError(f"{who}: rate_matrix has shape {self.rate_matrix.shape}, expected {self.matrix.shape}")
+        self.until, self.since = float(self.until), float(self.since)
+        if math.isnan(self.since) or math.isnan(self.until) or not self.since < self.until:
+            raise InputError(f"{who}: since = {self.since!r} s must be before until = {self.until!r} s")
+
+    def active(self, t: float) -> bool:
+        return self.since <= t < self.until
 
 
 @dataclass
@@ -398,8 +410,6 @@ class TransientProblem:
             if self.method == "fixed-point" and c.has_laws:
                 raise InputError(f"contact {c.name!r}: friction, damping and latches need method 'direct' "
                                  "(the fixed-point iteration is the reference's contact law only)")
-        if len(self.contacts) == 0:
-            raise InputError("no contact points")
         f = self.forcing
         for p in f.constant + f.tables:
             self.body(p.body).dof_index(p.label)

@@ -130,13 +130,18 @@ def static_equilibrium(body_a: ModalBody, body_b: ModalBody, contacts, forcing: 
 
 # ----------------------------------------------------------------- step size
 def estimate_step(body_a: ModalBody, body_b: ModalBody, contacts) -> tuple[float, float]:
-    """(f_h in Hz, h = 0.25/f_h in s) from the bodies reduced to the contact DOFs (eq. 12).
+    """(f_h in Hz, h = 0.25/f_h in s) from the bodies reduced to the contact DOFs (eq. 12);
+    without contacts (a plain modal transient) f_h is the highest modal frequency.
 
     Penalty directions: the interface masses (Phi_c Phi_c^T)^-1 of both bodies coupled by
     K_C, i.e. omega_h^2 = lambda_max(K_C^1/2 (Phi_ca Phi_ca^T + Phi_cb Phi_cb^T) K_C^1/2)
     (body stiffness negligible against K_C). Rigid directions: the highest frequency of the
     coupled modal system with those directions constrained (conservative)."""
     rows = contact_rows(body_a, body_b, contacts)
+    if rows.n == 0:       # a plain modal transient: resolve the highest mode instead
+        w = max(float(np.max(body_a.omega, initial=0.0)), float(np.max(body_b.omega, initial=0.0)))
+        f_h = w / (2 * math.pi)
+        return f_h, (0.25 / f_h if f_h > 0 else math.inf)     # rigid bodies only: any h is exact
     W0 = rows.Phi_a @ rows.Phi_a.T + rows.Phi_b @ rows.Phi_b.T
     pen = rows.compliance > 0
     w2 = 0.0
@@ -182,7 +187,9 @@ def choose_step(problem: TransientProblem, rows) -> StepChoice:
     than 0.25/f_h (and says so when it also exceeds the penalty stability limit)."""
     f_h, h_default = estimate_step(problem.body_a, problem.body_b, problem.contacts)
     h = h_default if problem.h is None else float(problem.h)
-    if problem.h is not None and h > h_default * (1 + 1e-9):
+    if not math.isfinite(h):
+        raise InputError("cannot choose the step: no contacts and no elastic modes; give h explicitly")
+    if problem.h is not None and h > h_default * (1 + 1e-9) and rows.n:   # no contacts: every h is exact
         extra = ""
         if (rows.compliance > 0).any() and h > STABILITY * h_default / 0.25:
             extra = (f"; it also exceeds about {STABILITY:.2f}/f_h = {STABILITY / f_h:.4g} s, the stability limit "
@@ -205,7 +212,8 @@ def _acceleration(body: ModalBody, key: str, forcing: Forcing, load, t: float, q
     body's ModalLoad) + feedback + contact force Pc, less damping and stiffness."""
     if body.n_modes == 0:
         return np.zeros(0)
-    P = load.at(t) + feedback_matrix(body.n_modes, key, forcing, t) @ q + Pc
+    n = body.n_modes
+    P = load.at(t) + feedback_matrix(n, key, forcing, t) @ q + feedback_matrix(n, key, forcing, t, rate=True) @ v + Pc
     return P - 2 * body.zeta * body.omega * v - body.omega ** 2 * q
 
 
@@ -403,14 +411,17 @@ def _modal_inputs(problem: TransientProblem, coefs, loads) -> Modal:
     for ld, cols in ((load_a, slice(0, na)), (load_b, slice(na, None))):
         if ld.times.size:  # exact: each body's table is linear between its own breakpoints
             Pk[:, cols] = np.column_stack([np.interp(tk, ld.times, ld.table[:, m]) for m in range(ld.table.shape[1])])
-    U_a, V_a, until_a = feedback_factors(pa.n_modes, "a", problem.forcing, problem.t0)
-    U_b, V_b, until_b = feedback_factors(pb.n_modes, "b", problem.forcing, problem.t0)
-    U = np.zeros((n, U_a.shape[1] + U_b.shape[1]))
-    V = np.zeros((U.shape[1], n))
-    U[:na, :U_a.shape[1]], V[:U_a.shape[1], :na] = U_a, V_a
-    U[na:, U_a.shape[1]:], V[U_a.shape[1]:, na:] = U_b, V_b
+    U_a, V_a, since_a, until_a = feedback_factors(pa.n_modes, "a", problem.forcing, problem.t0)
+    U_b, V_b, since_b, until_b = feedback_factors(pb.n_modes, "b", problem.forcing, problem.t0)
+    ra = U_a.shape[1]
+    U = np.zeros((n, ra + U_b.shape[1]))
+    V = np.zeros((U.shape[1], 2 * n))        # over [q; v] of both bodies
+    U[:na, :ra], U[na:, ra:] = U_a, U_b
+    V[:ra, :na], V[:ra, n:n + na] = V_a[:, :na], V_a[:, na:]
+    V[ra:, na:n], V[ra:, n + na:] = V_b[:, :pb.n_modes], V_b[:, pb.n_modes:]
+    since = np.concatenate([since_a, since_b]).astype(float)
     until = np.concatenate([until_a, until_b]).astype(float)
-    return Modal(na, coef, w2, zw2, const, tk, C(Pk), C(U), C(V), until)
+    return Modal(na, coef, w2, zw2, const, tk, C(Pk), C(U), C(V), since, until)
 
 
 def _histories(problem: TransientProblem, rows, n_t: int, plans) -> History:

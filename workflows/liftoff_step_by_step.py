@@ -41,7 +41,8 @@ def main(argv=None) -> None:
     from liftoff.reduction import assemble, craig_bampton, system_modes
     from liftoff.transient import Forcing, PointForce, TabulatedForce, TransientProblem, estimate_step, solve
     from liftoff.transient.effects import center_of_gravity, cg_static_report
-    from liftoff.workflows.loads import applied_forces, contacts, control_table, recoveries, softening
+    from liftoff.workflows.loads import (applied_forces, attitude_feedback, contacts, control_table, recoveries,
+                                         softening)
     from liftoff.workflows.pipeline import VEHICLE, StackModel, boundary_points, build_component, cryo_loads
 
     from liftoff.core.labels import points_labels
@@ -88,14 +89,16 @@ def main(argv=None) -> None:
     print(f"step: f_h = {f_h:.1f} Hz, h = 0.25/f_h = {h * 1e3:.3f} ms (eq. 12)")
 
     # 6. Loads (section 4): cryo preload at boundary DOFs only (4.3), thrust tables and forces,
-    #    control-system gimbal forces (4.4, eq. 15-21), gravity softening (4.5, eq. 22-27).
+    #    control-system gimbal forces (4.4, eq. 15-21) and the attitude hold after release
+    #    (beyond the reference), gravity softening (4.5, eq. 22-27).
     cryo = [PointForce("a", lab, v) for lab, v in cryo_loads(stack, case.cryo).items()]
     constant, tables = applied_forces(case, stack)
     constant = cryo + constant
     grid, FSL, gimbals = control_table(case, stack, tables, constant)
     tables += [TabulatedForce("a", lab, grid, FSL[:, j]) for j, lab in enumerate(gimbals)]
     soft = softening(case, stack)
-    forcing = Forcing(constant=constant, tables=tables, feedback=[soft], gravity=case.gravity)
+    hold = attitude_feedback(case, stack)
+    forcing = Forcing(constant=constant, tables=tables, feedback=[soft, hold], gravity=case.gravity)
 
     # 7. Table 1: c.g. motion under static loads (section 4.5).
     print(cg_static_report(vehicle, pad, posts, Forcing(gravity=case.gravity), cryo, soft).table())

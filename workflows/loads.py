@@ -164,6 +164,7 @@ def recoveries(case: Case, stack: StackModel) -> tuple[list[Recovery], dict, dic
         attach[name] = (point, comp)
     out.append(Recovery("cg_motion", "a", SIX, disp=cg_motion_matrix(body), units=("m",) * 3 + ("rad",) * 3,
                         category="cg_motion", description="vehicle c.g. motion (eq. 23)"))
+    out += component_recoveries(stack)
     n_a, n_b = body.n_modes, stack.pad.n_modes
     out.append(Recovery("modal_q_a", "a", [f"q{j}" for j in range(n_a)], disp=np.eye(n_a), units="sqrt(kg) m",
                         category="modal", description="modal coordinates of the vehicle"))
@@ -183,6 +184,37 @@ def recoveries(case: Case, stack: StackModel) -> tuple[list[Recovery], dict, dic
     return out, attach, {"a": outputs, "b": []}
 
 
+def component_recoveries(stack: StackModel) -> list[Recovery]:
+    """The recovery items that came with the components (Nastran DTM/ATM/LTM: CBModel.recovery),
+    carried through the system modes (reduction.component_recovery): vehicle ones on body a,
+    the pad's on body b."""
+    from liftoff.reduction import component_recovery
+
+    out = []
+    for name, cb in stack.cbs.items():
+        if not cb.recovery:
+            continue
+        asm, modes, key = (stack.pad_asm, stack.pad_modes, "b") if name == "pad" else \
+            (stack.vehicle_asm, stack.vehicle_modes, "a")
+        for it in component_recovery(asm, modes, name):
+            out.append(Recovery(it.name, key, it.labels, disp=it.disp, vel=it.vel, acc=it.acc, units=it.units,
+                                category="component", description=f"recovery item of component {name}"))
+    return out
+
+
+def attitude_feedback(case: Case, stack: StackModel) -> ModalFeedback:
+    """The attitude hold of ``[control] law = "attitude-hold"`` (transient.effects.attitude_hold),
+    on from ``hold_start`` (default: the control start)."""
+    from liftoff.transient.effects import attitude_hold
+
+    ctl = case.control
+    since = ctl.hold_start if ctl.hold_start is not None else ctl.start
+    try:
+        return attitude_hold(stack.vehicle, ctl.gimbals, ctl.bandwidth_hz, ctl.damping, since=since)
+    except InputError as exc:
+        raise Where(case.source, "control").wrap(exc) from None
+
+
 def build_problem(case: Case, stack: StackModel, progress: bool = True) -> CaseProblem:
     """The two-body transient of one case: posts, cryo preload, thrust and forces, control
     forces, gravity softening, recoveries; static initial state (section 2.6)."""
@@ -197,7 +229,10 @@ def build_problem(case: Case, stack: StackModel, progress: bool = True) -> CaseP
         grid, F, labels = ctab
         tables = tables + [TabulatedForce("a", lab, grid, F[:, j]) for j, lab in enumerate(labels)]
     soft = softening(case, stack) if case.softening.enabled else None
-    forcing = Forcing(constant=constant, tables=tables, feedback=[soft] if soft else [], gravity=case.gravity)
+    feedback = [soft] if soft else []
+    if case.control.enabled and case.control.law == "attitude-hold":
+        feedback.append(attitude_feedback(case, stack))
+    forcing = Forcing(constant=constant, tables=tables, feedback=feedback, gravity=case.gravity)
     recs, attach, outputs = recoveries(case, stack)
     t = case.time
     problem = TransientProblem(body, stack.pad, cps, forcing, t_end=t.t_end, h=t.h, t0=t.t0, method=t.method,

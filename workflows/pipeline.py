@@ -11,6 +11,7 @@ reference point, stick node with a name) is a Craig-Bampton boundary point (sect
 """
 from __future__ import annotations
 
+import os
 import tempfile
 import time
 from dataclasses import asdict, dataclass, field
@@ -36,6 +37,7 @@ from liftoff.config.model import VEHICLE, ComponentModel, ModelConfig
 from liftoff.config.sections import Cryo
 from liftoff.config.values import Where
 from liftoff.core.labels import named_points, points_labels
+from liftoff.core.records import TEMP_TAG, sweep_stale
 
 from .cache import StageCache, load_arrays, save_arrays, stage_key
 
@@ -113,6 +115,38 @@ def cb_stage(model: ModelConfig, name: str, comp: Component, comp_key: str, cach
     return cb, key
 
 
+def nastran_stage(model: ModelConfig, name: str, cache: StageCache) -> tuple[CBModel, str]:
+    """A component from a Nastran CB model (liftoff.reduction.nastran), its fixed-interface
+    modes selected like an FE component's; cached under the SHA-256 of the files it reads."""
+    from liftoff.reduction.nastran import NastranRecovery, import_nastran
+
+    sel = model.components[name]
+    src = sel.nastran
+    params = {"files": {f: _file_digest(f) for f in src.files()}, "units": src.units, "grids": src.grid_names,
+              "options": src.options, "recovery": list(src.recovery), "n_modes": sel.n_modes, "f_max": sel.f_max}
+    key = stage_key("nastran", params, ("liftoff.reduction", "liftoff.core"))
+
+    def build():
+        recovery = [NastranRecovery(**r) for r in src.recovery]
+        cb = import_nastran(src.file, name=name, units=src.units, grid_names=src.grid_names, **src.options,
+                            **({"recovery": recovery} if recovery else {}))
+        return cb.select_modes(sel.n_modes, sel.f_max)
+
+    cb = cache.get_or_build("nastran", key, ".npz", build, lambda out, p: out.save(p, recovery=True), load_cb,
+                            label=name)
+    return cb, key
+
+
+def _file_digest(path: str) -> str:
+    import hashlib
+
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
 def modes_stage(asm: Assembly, n_rigid: int, f_max, keys: list[str], cache: StageCache, label: str) -> SystemModes:
     key = stage_key("system", {"n_rigid": n_rigid, "f_max": f_max}, ("liftoff.reduction", "liftoff.core"), tuple(keys))
 
@@ -140,10 +174,15 @@ def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, wh
     t0 = time.perf_counter()
     comps, cbs, ckeys, thermal = {}, {}, {}, {}
     names = list(VEHICLE) + ["pad"]
-    with tempfile.TemporaryDirectory(prefix="liftoff-geom-") as work:
+    sweep_stale(tempfile.gettempdir())          # geometry folders of killed runs
+    with tempfile.TemporaryDirectory(prefix=f"liftoff-geom{TEMP_TAG}{os.getpid()}-") as work:
         bar = tqdm(names, desc="model stages", unit="component", disable=not progress, leave=False)
         for name in bar:
             bar.set_postfix_str(name)
+            if model.components[name].nastran is not None:
+                cbs[name], ckeys[name] = nastran_stage(model, name, cache)
+                thermal[name] = {}
+                continue
             comps[name], thermal[name], k = component_stage(model, name, cache, Path(work))
             cbs[name], ckeys[name] = cb_stage(model, name, comps[name], k, cache)
     t1 = time.perf_counter()

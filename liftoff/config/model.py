@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from liftoff.core.errors import InputError
@@ -32,7 +33,7 @@ from liftoff.meshes.spec import Material
 from liftoff.meshes.stick import StickParams
 from liftoff.meshes.vehicle import BoosterParams, OrbiterParams, core_stage_params
 
-from .values import Where, boolean, integer, number, string, table, vector
+from .values import Where, array_of_tables, boolean, integer, number, string, table, unique_name, vector
 
 SOURCES = ("fe", "stick")
 VEHICLE = ("core", "srb_left", "srb_right", "orbiter")
@@ -40,11 +41,38 @@ NAMES = VEHICLE + ("pad",)
 DEFAULT_F_MAX = 60.0        # Hz, fixed-interface modes kept when neither n_modes nor f_max is given
 STICK_ELEMENT = 4.0         # m, default beam element length of the stick source
 
-_MODEL = {"source", "mesh_size", "degree", "zeta", "vehicle", "pad", "component", "materials", "system", "stick"}
+_MODEL = {"source", "mesh_size", "degree", "zeta", "vehicle", "pad", "component", "materials", "system", "stick",
+          "walls"}
+WALLS = ("solid", "shell")
+_CORE_PARAMS = {"shell_bending_ratio"}
 _VEHICLE = {"mesh_size", "params"}
-_COMP = {"mesh_size", "n_modes", "f_max", "params"}
+_COMP = {"mesh_size", "n_modes", "f_max", "params", "nastran"}
+_NASTRAN = {"file", "units", "grids", "asm", "pch", "op4", "bulk", "stiffness", "mass", "se", "recovery"}
+_NASTRAN_FILES = ("file", "asm", "pch", "op4", "bulk")
+_NASTRAN_RECOVERY = {"name", "disp", "vel", "acc", "rows", "quantity"}
 _SYSTEM = {"n_modes", "f_max", "pad_n_modes", "pad_f_max"}
 _MATERIAL = {"E", "nu", "rho"}
+
+
+@dataclass(frozen=True)
+class NastranSource:
+    """A component that comes from a Nastran Craig-Bampton model instead of a builder
+    (``[model.component.<name>.nastran]``, read by liftoff.reduction.nastran.import_nastran):
+    ``file`` (.op4 EXTSEOUT, .pch/.dmig/.bdf DMIG or .op2 nas2cam; absolute path), the
+    model's ``units`` (a name such as "in-lbf-s" or SI factors {length, mass, time[, force]}),
+    ``grid_names`` (grid ID -> point name of the stack; others are ``g<ID>``), the reader's
+    ``options`` (asm, pch, op4, bulk paths; stiffness, mass matrix names; se) and
+    ``recovery`` (OUTPUT4 recovery items: name, disp/vel/acc matrix names, rows, quantity)."""
+
+    file: str
+    units: Any
+    grid_names: dict
+    options: dict
+    recovery: tuple = ()
+
+    def files(self) -> list[str]:
+        """Every file the import reads that the scenario names (for the cache key)."""
+        return [self.file] + [v for k, v in sorted(self.options.items()) if k in _NASTRAN_FILES]
 
 
 @dataclass(frozen=True)
@@ -58,6 +86,7 @@ class ComponentModel:
     mesh_size: float | None = None
     n_modes: int | None = None
     f_max: float | None = None
+    nastran: NastranSource | None = None
 
 
 @dataclass(frozen=True)
@@ -134,10 +163,50 @@ def builder(where: Where, cls: type, spec: Any, fixed: dict | None = None, defau
 
 
 # ---------------------------------------------------------------- [model]
-def _sizes(where: Where, spec: dict, keys: set[str]) -> dict:
-    """mesh_size (m), n_modes, f_max (Hz) of a [model.component.*] / [model.pad] / [model.vehicle] table."""
+def _nastran(where: Where, spec: Any, base: Path) -> NastranSource:
+    """``[model.component.<name>.nastran]``, files checked and units understood when read."""
+    from liftoff.reduction.nastran import unit_system
+
+    n = table(where, spec, _NASTRAN, required=("file", "units"))
+    paths = {}
+    for key in _NASTRAN_FILES:
+        if key in n:
+            p = (base / string(where / key, n[key])).resolve()
+            if not p.is_file():
+                raise (where / key).error(f"file not found: {str(p)!r}")
+            paths[key] = str(p)
+    units, wu = n["units"], where / "units"
+    unit_system(units if isinstance(units, str) else table(wu, units, {"length", "mass", "time", "force"}),
+                f"{wu.source}: {wu.key}")           # its one-line error then names file and key
+    grids = table(where / "grids", n.get("grids", {}), set(n.get("grids", {})))
+    names: dict[int, str] = {}
+    for gid, name in grids.items():
+        if not str(gid).isdigit():
+            raise (where / "grids").error(f"key {gid!r} is not a grid ID (a positive integer)")
+        names[int(gid)] = unique_name(where / "grids" / str(gid), name, set(names.values()), "point")
+    options = {k: paths.get(k, n.get(k)) for k in ("asm", "pch", "op4", "bulk", "stiffness", "mass", "se")
+               if k in n}
+    for k in ("stiffness", "mass"):
+        if k in options:
+            string(where / k, options[k])
+    if "se" in options:
+        options["se"] = integer(where / "se", options["se"], 1)
+    recovery = []
+    for i, r in enumerate(array_of_tables(where / "recovery", n.get("recovery", []), "nastran.recovery")):
+        r = table(where / "recovery" / i, r, _NASTRAN_RECOVERY, required=("name",))
+        recovery.append(dict(r))
+    return NastranSource(paths["file"], units, names, options, tuple(recovery))
+
+
+def _sizes(where: Where, spec: dict, keys: set[str], base: Path = Path(".")) -> dict:
+    """mesh_size (m), n_modes, f_max (Hz) of a [model.component.*] / [model.pad] / [model.vehicle]
+    table, and a Nastran source if it has one."""
     c = table(where, spec, keys)
     out = {"params": c.get("params", {})}
+    if "nastran" in c:
+        out["nastran"] = _nastran(where / "nastran", c["nastran"], base)
+        if out["params"] or "mesh_size" in c:
+            raise (where / "nastran").error("a Nastran component takes no builder params or mesh_size")
     if "mesh_size" in c:
         out["mesh_size"] = number(where / "mesh_size", c["mesh_size"], positive=True)
     if "n_modes" in c:
@@ -149,24 +218,31 @@ def _sizes(where: Where, spec: dict, keys: set[str]) -> dict:
     return out
 
 
-def _fe_builders(where: Where, layout: StackLayout, sel: dict[str, dict], size: dict[str, float | None]) -> dict:
-    """Builder dataclasses of the FE components (gmsh geometry of meshes/)."""
+def _fe_builders(where: Where, layout: StackLayout, sel: dict[str, dict], size: dict[str, float | None],
+                 walls: str) -> dict:
+    """Builder dataclasses of the FE components (gmsh geometry of meshes/); ``walls`` the
+    vehicle walls' model ([model] walls: thickened solids or shells), overridable per
+    booster/orbiter in their params."""
     out = {}
     wc = where / "component"
-    if sel["core"]["params"]:
+    core = dict(sel["core"]["params"])
+    extra = sorted(set(core) - _CORE_PARAMS)
+    if extra:
         raise (wc / "core" / "params").error(
-            f"the core stage takes no builder parameters in the FE source (got {', '.join(sel['core']['params'])}); "
-            "change [model.vehicle.params] (StackLayout)")
+            f"unknown key {extra[0]!r}: the core stage takes only {', '.join(sorted(_CORE_PARAMS))} (shell walls); "
+            "its tank follows from [model.vehicle.params] (StackLayout)")
     try:
-        out["core"] = core_stage_params(layout, **({} if size["core"] is None else {"mesh_size": size["core"]}))
+        ratio = number(wc / "core" / "params" / "shell_bending_ratio", core.get("shell_bending_ratio", 1.0),
+                       positive=True)
+        out["core"] = core_stage_params(layout, **_size(size["core"]), walls=walls, shell_bending_ratio=ratio)
         out["core"].check()
     except InputError as exc:
         raise (wc / "core").wrap(exc) from None
     for name in ("srb_left", "srb_right"):
         out[name] = builder(wc / name / "params", BoosterParams, sel[name]["params"],
-                            {"side": name[4:], "layout": layout}, _size(size[name]))
+                            {"side": name[4:], "layout": layout}, {**_size(size[name]), "walls": walls})
     out["orbiter"] = builder(wc / "orbiter" / "params", OrbiterParams, sel["orbiter"]["params"], {"layout": layout},
-                             _size(size["orbiter"]))
+                             {**_size(size["orbiter"]), "walls": walls})
     out["pad"] = builder(where / "pad" / "params", PadParams, sel["pad"]["params"], {"layout": layout},
                          _size(size["pad"]))
     return out
@@ -222,8 +298,10 @@ def _materials(where: Where, spec: Any, source: str) -> dict[str, Material]:
     return out
 
 
-def model_config(where: Where, spec: Any) -> ModelConfig:
-    """``[model]`` -> :class:`ModelConfig` (every builder parameter checked)."""
+def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig:
+    """``[model]`` -> :class:`ModelConfig` (every builder parameter checked; Nastran files
+    relative to ``base``, the scenario's folder)."""
+    base = Path(base)
     m = table(where, spec, _MODEL)
     source = string(where / "source", m.get("source", "fe"))
     if source not in SOURCES:
@@ -241,15 +319,21 @@ def model_config(where: Where, spec: Any) -> ModelConfig:
         raise (where / "stick").error("[model.stick] is for source = \"stick\"")
     vehicle = _sizes(where / "vehicle", m.get("vehicle", {}), _VEHICLE)
     comps = table(where / "component", m.get("component", {}), set(VEHICLE))
-    sel = {name: _sizes(where / "component" / name, comps.get(name, {}), _COMP) for name in VEHICLE}
-    sel["pad"] = _sizes(where / "pad", m.get("pad", {}), _COMP)
+    sel = {name: _sizes(where / "component" / name, comps.get(name, {}), _COMP, base) for name in VEHICLE}
+    sel["pad"] = _sizes(where / "pad", m.get("pad", {}), _COMP, base)
     sizes = {name: sel[name].get("mesh_size", vehicle.get("mesh_size") if name != "pad" else None) or size
              for name in NAMES}
     layout = _layout(where / "vehicle" / "params", vehicle["params"], source)
-    builders = _fe_builders(where, layout, sel, sizes) if source == "fe" else \
+    walls = string(where / "walls", m.get("walls", "solid"))
+    if walls not in WALLS:
+        raise (where / "walls").error(f"must be one of {', '.join(WALLS)}, got {walls!r}")
+    if source == "stick" and "walls" in m:
+        raise (where / "walls").error("[model] walls is for source = \"fe\" (the stick model has beams)")
+    builders = _fe_builders(where, layout, sel, sizes, walls) if source == "fe" else \
         _stick_builders(where, layout, sel, m.get("stick", {}))
     components = {name: ComponentModel(name, builders[name], sizes[name], sel[name].get("n_modes"),
-                                       sel[name].get("f_max", None if "n_modes" in sel[name] else DEFAULT_F_MAX))
+                                       sel[name].get("f_max", None if "n_modes" in sel[name] else DEFAULT_F_MAX),
+                                       sel[name].get("nastran"))
                   for name in NAMES}
     s = table(where / "system", m.get("system", {}), _SYSTEM)
     system = SystemModel(**{k: integer(where / "system" / k, v, 1) if "n_modes" in k else

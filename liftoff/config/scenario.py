@@ -212,7 +212,7 @@ def _case(w: Where, d: dict, name: str, base: Path) -> Case:
     o = table(w / "output", d.get("output", {}), _OUTPUT)
     return Case(
         name, w.source,
-        model=model_config(w / "model", d.get("model", {})),
+        model=model_config(w / "model", d.get("model", {}), base),
         posts=_posts(w / "post", d.get("post", []), w / "post_defaults", d.get("post_defaults", {})),
         engines=_engines(w / "engine", d.get("engine", []), profiles),
         gravity=gravity(w / "gravity", d.get("gravity", {}), default=STANDARD_GRAVITY),

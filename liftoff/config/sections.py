@@ -27,7 +27,8 @@ GRAVITY_KEYS = {"accel"}
 LAW_KEYS = {"stiffness", "rigid", "axial", "normal_sign", "gap", "release_time", "normal", "friction", "damping",
             "latch_force"}
 SOFTENING_KEYS = {"enabled", "until", "labels"}
-CONTROL_KEYS = {"enabled", "gimbals", "start", "ramp"}
+CONTROL_KEYS = {"enabled", "gimbals", "start", "ramp", "law", "bandwidth_hz", "damping", "hold_start"}
+CONTROL_LAWS = ("moment", "attitude-hold")
 CRYO_KEYS = {"enabled", "component", "volumes", "delta_T", "alpha"}
 STANDARD_GRAVITY = (0.0, 0.0, -9.80665)
 
@@ -274,12 +275,20 @@ def softening(where: Where, spec: Any) -> Softening:
 @dataclass(frozen=True)
 class Control:
     """Control system (section 4.4, eq. 15-21): lateral forces at the ``gimbals`` DOFs that
-    cancel the applied moment about the c.g., switched on at ``start`` over ``ramp`` (s)."""
+    cancel the applied moment about the c.g., switched on at ``start`` over ``ramp`` (s).
+    ``law = "attitude-hold"`` adds, from ``hold_start`` (s; default ``start``), a PD law
+    on the vehicle's rigid-body attitude and rate through the same gimbals, with closed-loop
+    natural frequency ``bandwidth_hz`` and damping ratio ``damping`` (transient.effects.attitude_hold;
+    unused with law = "moment", so that a case can switch the law of a base that sets them)."""
 
     enabled: bool = False
     gimbals: tuple[str, ...] = ()
     start: float = -math.inf
     ramp: float = 0.0
+    law: str = "moment"
+    bandwidth_hz: float = 0.5
+    damping: float = 0.7
+    hold_start: float | None = None
 
 
 def control(where: Where, spec: Any) -> Control:
@@ -292,8 +301,17 @@ def control(where: Where, spec: Any) -> Control:
         if not isinstance(c["gimbals"], list) or len(c["gimbals"]) < 3:
             raise (where / "gimbals").error("expected >= 3 lateral gimbal DOF labels (e.g. 'srb_left_gimbal:Tx')")
         gimbals = labels(where / "gimbals", c["gimbals"])
-    return Control(enabled, gimbals, number(where / "start", c.get("start", -math.inf), allow_inf=True),
-                   number(where / "ramp", c.get("ramp", 0.0), nonneg=True))
+    law = string(where / "law", c.get("law", "moment"))
+    if law not in CONTROL_LAWS:
+        raise (where / "law").error(f"must be one of {', '.join(CONTROL_LAWS)}, got {law!r}")
+    bandwidth = number(where / "bandwidth_hz", c.get("bandwidth_hz", 0.5), positive=True)
+    damping = number(where / "damping", c.get("damping", 0.7), nonneg=True)
+    if damping >= 5:
+        raise (where / "damping").error(f"a damping ratio of {damping:g} is not a control design (use 0.5-1)")
+    start = number(where / "start", c.get("start", -math.inf), allow_inf=True)
+    hold_start = number(where / "hold_start", c["hold_start"]) if "hold_start" in c else None
+    return Control(enabled, gimbals, start, number(where / "ramp", c.get("ramp", 0.0), nonneg=True), law,
+                   bandwidth, damping, hold_start)
 
 
 @dataclass(frozen=True)

@@ -302,15 +302,16 @@ def _recoveries(where: Where, spec: Any, bodies: dict[str, ModalBody], base: Pat
 def parse_twobody(data: dict, base: Path, source: str = "scenario", *, method: str | None = None,
                   progress: bool = True) -> TwoBodyScenario:
     """A :class:`TwoBodyScenario` from a parsed TOML mapping; paths relative to ``base``;
-    ``method`` (the command line's --method) overrides ``[time] method``."""
+    ``method`` (the command line's --method) overrides ``[time] method``. Without
+    ``[[contact]]`` it is a plain modal transient (pyyeti's ``SolveUnc.tsolve``)."""
     top = Where(source)
-    table(top, data, _TOP, required=("bodies", "time", "contact"))
+    table(top, data, _TOP, required=("bodies", "time"))
     title = string(top / "title", data.get("title", Path(source).stem))
     description = string(top / "description", data.get("description", ""), nonempty=False)
     bodies = _bodies(top / "bodies", data["bodies"], base)
     body_a, body_b = bodies["a"], bodies["b"]
     t = time_span(top / "time", data["time"], method=method)
-    contacts = _contacts(top / "contact", data["contact"], body_a, body_b)
+    contacts = _contacts(top / "contact", data["contact"], body_a, body_b) if "contact" in data else []
     forcing = _forcing(top, data, bodies, base)
     initial = _initial(top / "initial", data.get("initial", {}), body_a, body_b)
     outputs, keep_modal = _outputs(top / "output", data.get("output", {}), body_a, body_b)

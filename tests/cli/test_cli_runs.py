@@ -263,3 +263,23 @@ def test_axial_by_name_auto_step_and_sections(case_dir: Path):
         assert p.h is None and p.tol == 0.5 and p.max_iter == 7
         axes.append(p.contacts[0].axial)
     assert axes == [1, 1, 1]
+
+
+def test_contact_free_modal_transient(case_dir: Path, capsys):
+    """Without [[contact]] the same engine runs a plain modal transient: the free-free two-mass
+    vehicle under a constant axial force F on its top mass accelerates as a rigid body,
+    x_cg = F t^2 / (2 (m1 + m2)) (the elastic mode averages out of the c.g.)."""
+    data = base_scenario()
+    for key in ("contact", "gravity"):
+        del data[key]
+    data["bodies"]["b"] = "ground"
+    data["force"] = [{"body": "a", "label": "top:Tz", "value": 100.0}]
+    data["initial"] = {"mode": "zero"}
+    data["output"] = {"a": ["top:Tz", "base:Tz"]}
+    out = case_dir / "free"
+    assert main(["transient", str(write_scenario(case_dir, data)), "--out", str(out), "--no-progress"]) == 0
+    with h5py.File(out / "results.h5") as f:
+        t, d = f["time"][()], f["body_a/displacement"][()]
+        assert f["contact/force"].shape == (t.size, 0)
+    x_cg = (M1 * d[:, 1] + M2 * d[:, 0]) / (M1 + M2)
+    assert np.allclose(x_cg, 100.0 * t ** 2 / (2 * (M1 + M2)), rtol=1e-9, atol=1e-15)

@@ -123,7 +123,7 @@ BAD = [
      "BoosterParams(left).case_thickness must be < srb_radius/2"),
     ("model.component.srb_left.params", {"side": "right"}, "model.component.srb_left.params: unknown key 'side'"),
     ("model.component.orbiter.params", {"wing_spam": 20.0}, "model.component.orbiter.params: unknown key 'wing_spam'"),
-    ("model.component.core.params", {"radius": 4.0}, "model.component.core.params: the core stage takes no builder"),
+    ("model.component.core.params", {"radius": 4.0}, "model.component.core.params: unknown key 'radius': the core stage takes only shell_bending_ratio"),
     ("model.stick", {"core_wall": 0.01}, "model.stick: [model.stick] is for source = \"stick\""),
 ]
 
@@ -235,3 +235,17 @@ def test_names_that_become_paths_are_plain(base, name):
     with pytest.raises(InputError, match=r"case\[0\]\.name: .*(not a plain name|non-empty)") as e:
         parse_scenario(d, "s.toml")
     assert "\n" not in str(e.value)
+
+
+def test_walls_as_shells_reach_every_vehicle_builder(base):
+    """[model] walls = "shell" switches the core tank, the booster cases and the orbiter skin
+    to shells (meshes builders' ``walls``); the core takes its bending ratio from its params."""
+    d = copy.deepcopy(base)
+    d["model"]["walls"] = "shell"
+    d["model"].setdefault("component", {}).setdefault("core", {})["params"] = {"shell_bending_ratio": 50.0}
+    comps = parse_scenario(d, "s.toml").cases[0].model.components
+    assert all(comps[n].builder.walls == "shell" for n in ("core", "srb_left", "srb_right", "orbiter"))
+    assert comps["core"].builder.shell_bending_ratio == 50.0
+    d["model"]["walls"] = "plates"
+    with pytest.raises(InputError, match=r"model\.walls: must be one of solid, shell"):
+        parse_scenario(d, "s.toml")

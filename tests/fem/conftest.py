@@ -108,7 +108,65 @@ def write_surface_only(path):
     return str(path)
 
 
-_WRITERS = {"box": write_box, "two_boxes": write_two_boxes, "ring": write_ring, "surface": write_surface_only}
+def write_shell_tube(path, R=0.1, L=1.0, n_around=24, n_along=20):
+    """Structured shell tube: a prism whose cross-section is the regular n_around-gon inscribed
+    in the circle of radius R (straight generators from z = 0 to L, n_along layers), surface
+    'tube'; its end polygons 'root' (z = 0) and 'tip' (z = L) as curve groups, and the band
+    0.4 L < z < 0.6 L as the surface group 'band' (also part of 'tube')."""
+    _start("tube")
+    try:
+        occ = gmsh.model.occ
+        c = occ.addCircle(0, 0, 0, R)
+        occ.synchronize()
+        gmsh.model.mesh.setTransfiniteCurve(c, n_around + 1)
+        curve, surfs = (1, c), []
+        for frac in (0.4, 0.2, 0.4):
+            out = occ.extrude([curve], 0, 0, frac * L, numElements=[round(frac * n_along)])
+            curve = next(d for d in out if d[0] == 1)
+            surfs.append(next(d for d in out if d[0] == 2)[1])
+        occ.synchronize()
+        gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, surfs), "tube")
+        gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, [surfs[1]]), "band")
+        gmsh.model.setPhysicalName(1, gmsh.model.addPhysicalGroup(1, [c]), "root")
+        gmsh.model.setPhysicalName(1, gmsh.model.addPhysicalGroup(1, [curve[1]]), "tip")
+        gmsh.model.mesh.generate(2)
+        gmsh.write(str(path))
+    finally:
+        gmsh.finalize()
+    return str(path)
+
+
+def write_glued_plate(path, a=0.2, L=1.0, b=0.2, d=0.1, h=0.05):
+    """A solid block [0,a]x[0,b]x[-d,0] ('block', bottom face 'base') with a plate surface
+    [0,L]x[0,b] at z = 0 ('plate') fragmented onto the block's top face (shared nodes) and
+    overhanging it; the plate's free edge x = L is the curve group 'tip'."""
+    _start("glued")
+    try:
+        occ = gmsh.model.occ
+        blk = occ.addBox(0, 0, -d, a, b, d)
+        plate = occ.addRectangle(0, 0, 0, L, b)
+        out, _ = occ.fragment([(3, blk)], [(2, plate)])
+        occ.synchronize()
+        vols = [t for dd, t in gmsh.model.getEntities(3)]
+        gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, vols), "block")
+        plate_faces = [s for _, s in gmsh.model.getEntities(2)
+                       if abs(occ.getCenterOfMass(2, s)[2]) < 1e-9]
+        base = [s for _, s in gmsh.model.getEntities(2) if abs(occ.getCenterOfMass(2, s)[2] + d) < 1e-9]
+        gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, plate_faces), "plate")
+        gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, base), "base")
+        tip = [c for _, c in gmsh.model.getEntities(1)
+               if abs(gmsh.model.getBoundingBox(1, c)[0] - L) < 1e-6 and abs(gmsh.model.getBoundingBox(1, c)[3] - L) < 1e-6]
+        gmsh.model.setPhysicalName(1, gmsh.model.addPhysicalGroup(1, tip), "tip")
+        gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
+        gmsh.model.mesh.generate(3)
+        gmsh.write(str(path))
+    finally:
+        gmsh.finalize()
+    return str(path)
+
+
+_WRITERS = {"box": write_box, "two_boxes": write_two_boxes, "ring": write_ring, "surface": write_surface_only,
+            "shell_tube": write_shell_tube, "glued_plate": write_glued_plate}
 
 
 @pytest.fixture(scope="session")

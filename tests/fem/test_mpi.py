@@ -14,13 +14,13 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 
 
-def _run(n, path, degree):
+def _run(n, path, degree, script="mpi_modes_script.py", extra=()):
     mpirun = shutil.which("mpirun")
     if mpirun is None:
         pytest.skip("mpirun not installed (Debian package openmpi-bin comes with python3-dolfinx-real)")
     env = dict(os.environ, PYTHONPATH=str(ROOT), OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                OMPI_MCA_rmaps_base_oversubscribe="1", PYVISTA_OFF_SCREEN="true")
-    cmd = [mpirun, "-n", str(n), sys.executable, str(HERE / "mpi_modes_script.py"), path, str(degree)]
+    cmd = [mpirun, "-n", str(n), sys.executable, str(HERE / script), path, *extra, str(degree)]
     res = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=300, cwd=ROOT)
     lines = [ln for ln in res.stdout.splitlines() if ln.startswith("RESULT ")]
     assert res.returncode == 0 and lines, f"mpirun failed ({res.returncode}): {res.stderr[-2000:]}"
@@ -41,3 +41,21 @@ def test_two_ranks_match_serial(msh):
     for run in (serial, parallel):      # gathered nodes, cells and field_map are consistent
         assert run["rot_err"] < 1e-12 and run["volume"] == pytest.approx(1.0 * 0.1 * 0.1, rel=1e-12)
     assert parallel["n_cells"] == serial["n_cells"]
+
+
+def test_two_ranks_match_serial_shells(msh):
+    """Shell and shell-on-solid models: nodes are gathered by position across ranks and parts."""
+    tube = msh("shell_tube", R=0.1, L=1.0, n_around=24, n_along=20)
+    glued = msh("glued_plate", a=0.2, L=1.0, b=0.2, d=0.1, h=0.05)
+    for degree in (1, 2):
+        serial = _run(1, tube, degree, "mpi_shell_script.py", (glued,))
+        parallel = _run(2, tube, degree, "mpi_shell_script.py", (glued,))
+        assert parallel["size"] == 2 and serial["n_dof"] == parallel["n_dof"]
+        assert parallel["n_rigid"] == serial["n_rigid"] == 6
+        assert np.allclose(parallel["freq"][6:], serial["freq"][6:], rtol=1e-8)
+        assert np.allclose(parallel["hybrid_freq"][6:], serial["hybrid_freq"][6:], rtol=1e-8)
+        assert parallel["mass"] == pytest.approx(serial["mass"], rel=1e-12)
+        assert parallel["hybrid_mass"] == pytest.approx(serial["hybrid_mass"], rel=1e-12)
+        assert np.allclose(parallel["tip"], serial["tip"], rtol=1e-8, atol=1e-14)
+        assert parallel["n_cells"] == serial["n_cells"]
+        assert serial["rot_err"] < 1e-12 and parallel["rot_err"] < 1e-12

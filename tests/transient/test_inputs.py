@@ -51,7 +51,6 @@ def _problem(**kw):
     (lambda: _problem(forcing=Forcing(modal=[ModalForce("a", [0.0, 1.0], np.zeros((2, 3)))])), "has 3 columns"),
     (lambda: _problem(contacts=[ContactPoint("c", ["block:Tz"], [None], rigid=True)], method="fixed-point"),
      "rigid contacts need method 'direct'"),
-    (lambda: _problem(contacts=[]), "no contact points"),
 ])
 def test_bad_input_is_a_one_line_input_error(make, match):
     with pytest.raises(InputError, match=match) as exc:

@@ -113,13 +113,14 @@ def test_cryo_preload_is_self_equilibrated(stack):
 
 
 def test_control_system_holds_attitude_in_flight(stack):
-    """After release, with the control system on, the applied forces have no moment about
-    the c.g. (eq. 15-21), so once the posts have separated the vehicle's rigid rotation
-    has no angular acceleration: it stays within its release value + rate * time. The
-    bound: |fitted angular acceleration| < 1e-6 of the uncontrolled run's."""
+    """After release, with the reference's control law on (eq. 15-21, law = "moment"), the
+    applied forces have no moment about the c.g., so once the posts have separated the
+    vehicle's rigid rotation has no angular acceleration: it stays within its release
+    value + rate * time. The bound: |fitted angular acceleration| < 1e-6 of the
+    uncontrolled run's."""
     out = {}
     for on in (True, False):
-        case = scenario(time={"t_end": 8.6}, control={"enabled": on})
+        case = scenario(time={"t_end": 8.6}, control={"enabled": on, "law": "moment"})
         cp = build_problem(case, stack, progress=False)
         res = solve(replace(cp.problem, progress=False))
         free = np.all(res.contact_state == 2, axis=1) & (res.time > 7.0)

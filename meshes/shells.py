@@ -1,0 +1,246 @@
+"""Shell-wall variants of the vehicle builders (``walls = "shell"``): the thin walls as
+mid-surfaces meshed with flat triangles for fem.shell, instead of thickened tetrahedra.
+
+What becomes a shell: the core-stage tank walls, domes and intertank skirt
+(:func:`build_shell_tank`), the booster case with its domes (the thick aft skirt with the
+hold-down posts stays a solid, tied to the case over a band of the case wall:
+:func:`build_shell_booster`), the orbiter's fuselage skin with its aft bulkhead and nose
+(the wing slab stays a solid, tied to the skin over its root: :func:`build_shell_orbiter`).
+
+Geometry: the mid-surface of the solid variant's wall (outer radius R, thickness t of the
+parameters: radius R - t/2, dome heights a - t/2), so that layout, patches, cavities and
+liquid masses are those of the solid variant. Section: the real material with the
+thickness that weighs the part's mass (or ``*_shell_thickness``, the material then scaled
+to the mass with E/rho kept, like ``spec.equivalent``). Group names are the solid
+variant's (a wall group is a surface group here) except the orbiter's wing volume
+``orbiter_wing``, split from ``orbiter_structure`` with the solid variant's share of the
+structure mass. Units SI.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from liftoff.core.errors import InputError
+
+from . import _occ
+from .spec import Geometry, Material, Patch, SmearedMass, equivalent
+from .tank import TankParams, tank_layout
+
+#: elements per 2 pi of curvature on shell walls (gmsh Mesh.MeshSizeFromCurvature), at most:
+#: 24 keeps the facets within 1 % of the radius (sag 1 - cos(pi/24)); at least 12 (sag 3.4 %)
+SHELL_CURVATURE_ELEMENTS = 24
+
+
+def shell_curvature_elements(radius: float, mesh_size: float) -> int:
+    """Elements per 2 pi of curvature for a shell wall of main radius ``radius``: what
+    ``mesh_size`` gives around that radius, kept within [12, SHELL_CURVATURE_ELEMENTS], so
+    that a coarse mesh_size coarsens the whole wall while the sharper curvature of dome
+    equators and noses stays resolved."""
+    return int(min(SHELL_CURVATURE_ELEMENTS, max(12, math.ceil(2 * math.pi * radius / mesh_size))))
+
+
+def shell_patch_tool(name: str, ref, axis_xy, r: float, z_lo_apex: float, z_hi_apex: float,
+                     cyl_ranges: list[tuple[float, float]], w: float, a_lo: float, a_hi: float) -> _occ.Tool:
+    """Tool imprinting patch ``name`` on a mid-surface of radius r (see TankParams.patches):
+    a cylinder about the axis cutting the apex cap of radius w, or a radial box on the wall."""
+    ref = np.asarray(ref, float)
+    d = ref[:2] - np.asarray(axis_xy, float)
+    if np.hypot(*d) < 1e-6:
+        top = ref[2] >= 0.5 * (z_lo_apex + z_hi_apex)
+        a = a_hi if top else a_lo
+        if w >= 0.9 * r:
+            raise InputError(f"patch {name}: apex patch of half-width {w} m too wide for the dome")
+        reach = 1.5 * a * (1 - math.sqrt(1 - (w / r) ** 2)) + 0.02 * r     # past the cap's drop
+        z = z_hi_apex if top else z_lo_apex
+        return _occ.cylinder_tool(name, axis_xy, w, *((z - reach, z + 1.0) if top else (z - 1.0, z + reach)))
+    z = float(ref[2])
+    if not any(lo + w <= z <= hi - w for lo, hi in cyl_ranges):
+        raise InputError(f"patch {name}: height z = {z} m is not on the cylindrical wall "
+                         f"(ranges {[(round(a, 3), round(b, 3)) for a, b in cyl_ranges]})")
+    return _occ.shell_wall_patch(name, axis_xy, math.atan2(d[1], d[0]), z, r, w, w)
+
+
+def shell_section(material: Material, area: float, dry_mass: float | None, thickness: float | None,
+                  default_thickness: float) -> tuple[Material, float]:
+    """(material, thickness) of a shell wall of mid-surface ``area`` (m^2): the given
+    thickness (material scaled to dry_mass, E/rho kept, if one is given), else the thickness
+    of ``material`` that weighs dry_mass, else ``default_thickness``."""
+    if thickness is not None:
+        return (material if dry_mass is None else equivalent(material, dry_mass, thickness * area)), float(thickness)
+    if dry_mass is not None:
+        return material, dry_mass / (material.rho * area)
+    return material, float(default_thickness)
+
+
+def build_shell_tank(p: TankParams, out_dir: Path) -> Geometry:
+    """build_tank for walls = "shell": the wall's mid-surface (module docstring)."""
+    lay = tank_layout(p)
+    R, t, w = p.radius, p.wall_thickness, p.patch_half_width
+    rm, wall = R - 0.5 * t, f"{p.name}_wall"
+    with _occ.gmsh_session(p.name):
+        faces = []
+        for c in lay:
+            faces += _occ.capsule_surface(rm, c.a_bottom - 0.5 * t, c.a_top - 0.5 * t, c.z_cyl_bottom, c.cyl_length,
+                                          p.axis_xy)
+        for lo, hi in zip(lay[:-1], lay[1:]):
+            faces += _occ.cylinder_surface(rm, lo.z_cyl_top, hi.z_cyl_bottom, p.axis_xy)
+        tools = [shell_patch_tool(n, ref, p.axis_xy, rm, p.z_bottom + 0.5 * t, lay[-1].z_cyl_top + lay[-1].a_top - 0.5 * t,
+                                  [(lay[0].z_cyl_bottom, lay[-1].z_cyl_top)], w, lay[0].a_bottom - 0.5 * t,
+                                  lay[-1].a_top - 0.5 * t) for n, ref in p.patches.items()]
+        tools += [_occ.plane_cut(c.z_fill) for c in lay if c.fill_height < (c.z_inner_top - c.z_inner_bottom)]
+        wall_faces = _occ.imprint_surfaces({wall: faces}, tools)[wall]
+        patches, smeared = [], []
+        for tl in tools:
+            if tl.name is None:
+                continue
+            pf = _occ.faces_inside(wall_faces, tl.bbox)
+            _occ.add_physical(2, tl.name, pf)
+            _occ.refine_faces(pf, min(p.mesh_size, 0.6 * w))
+            patches.append(Patch(tl.name, np.asarray(p.patches[tl.name], float)))
+        ax, ay = p.axis_xy
+        for c in lay:
+            zb = c.z_cyl_bottom - (c.a_bottom - 0.5 * t)
+            wet = _occ.faces_inside(wall_faces, (ax - rm, ay - rm, zb, ax + rm, ay + rm, c.z_fill), tol=1e-3 * R)
+            wet = _occ.faces_on(wet, _occ.capsule_distance(p.axis_xy, rm, c.z_cyl_bottom, c.z_cyl_top,
+                                                           c.a_bottom - 0.5 * t, c.a_top - 0.5 * t), tol=1e-4 * R)
+            _occ.add_physical(2, f"{p.name}_{c.name}_wetted", wet)
+            liquid = next(k for k in p.compartments if k.name == c.name)
+            smeared.append(SmearedMass(f"{p.name}_{c.name}_wetted", liquid.liquid_density * c.liquid_volume()))
+        _occ.add_physical(2, wall, wall_faces)
+        areas = _occ.physical_measures(2)
+        mat, ts = shell_section(p.material, areas[wall], p.dry_mass, p.shell_thickness, t)
+        n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size, shell_curvature_elements(rm, p.mesh_size))
+    geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), {wall: mat}, patches, [], smeared, [],
+                   {}, n_nodes, areas, shells={wall: ts}, shell_bending={wall: p.shell_bending_ratio})
+    geo.save(out_dir / f"{p.name}.json")
+    return geo
+
+
+def _patches_on(faces: list[int], tools, refs: dict, size_of) -> list[Patch]:
+    """Physical surface groups of the tools' patches on the candidate faces (refined)."""
+    found: dict[str, list[int]] = {}
+    for tl in tools:
+        found.setdefault(tl.name, []).extend(_occ.faces_inside(faces, tl.bbox))
+    out = []
+    for name, pf in found.items():
+        _occ.add_physical(2, name, pf)
+        _occ.refine_faces(pf, size_of(name))
+        out.append(Patch(name, np.asarray(refs[name], float)))
+    return out
+
+
+def _apex_tool(name: str, axis, w: float, r: float, a: float, z_apex: float, top: bool) -> _occ.Tool:
+    """Cylinder about the axis cutting a cap of radius w from a dome (mid-surface r, height a)."""
+    if w >= 0.9 * r:
+        raise InputError(f"patch {name}: apex patch of half-width {w} m too wide for the dome")
+    reach = 1.5 * a * (1 - math.sqrt(1 - (w / r) ** 2)) + 0.02 * r
+    return _occ.cylinder_tool(name, axis, w, *((z_apex - reach, z_apex + 1.0) if top else (z_apex - 1.0, z_apex + reach)))
+
+
+def booster_skirt_section(p) -> list[tuple[float, float]]:
+    """Meridian polygon of the solid aft skirt of a shell-cased booster: the solid variant's
+    skirt, its top end reaching the case mid-surface (radius R - t/2) over the joint band
+    [case_bottom_z, case_bottom_z + skirt_joint_height], where the two share nodes."""
+    R, t = p.layout.srb_radius, p.case_thickness
+    Rb, ts, hf = p.layout.srb_skirt_radius, p.layout.srb_skirt_thickness, p.skirt_foot_height
+    zc, zj = p.case_bottom_z, p.case_bottom_z + p.skirt_joint_height
+    return [(Rb - ts, 0.0), (Rb, 0.0), (Rb, hf), (R, zj), (R - 0.5 * t, zj), (R - 0.5 * t, zc), (Rb - ts, hf)]
+
+
+def build_shell_booster(p, out_dir: Path) -> Geometry:
+    """build_booster for walls = "shell": case (cylinder, aft dome, nose) as a shell surface
+    ``srb_<side>_case`` (also ``srb_<side>_case_inner``, the propellant's), aft skirt
+    ``srb_<side>_skirt`` a solid; same patches and masses as the solid variant."""
+    from .vehicle import AL2219, STEEL_D6AC, booster_point_masses
+
+    lay = p.layout
+    R, t = lay.srb_radius, p.case_thickness
+    rm, am_b, am_t = R - 0.5 * t, p.aft_dome_ratio * R - 0.5 * t, p.nose_ratio * R - 0.5 * t
+    axis = lay.srb_axis(p.side)
+    case_g, skirt_g = f"{p.name}_case", f"{p.name}_skirt"
+    w = p.attach_patch_half_width
+    with _occ.gmsh_session(p.name):
+        skirt = _occ.revolve_to_z(_occ.polygon(booster_skirt_section(p)), axis)
+        case = _occ.capsule_surface(rm, am_b, am_t, p.case_bottom_z, p.cyl_top_z - p.case_bottom_z, axis)
+        tools, refs = [], {}
+        for name, pt in lay.holddown_points(p.side).items():
+            tools.append(_occ.cylinder_tool(name, pt[:2], p.holddown_patch_radius, -1.0, 0.5 * p.skirt_foot_height))
+            refs[name] = pt
+        gimbal = f"{p.name}_gimbal"
+        tools.append(_apex_tool(gimbal, axis, w, rm, am_b, p.case_bottom_z - am_b, top=False))
+        refs[gimbal] = np.array([axis[0], axis[1], p.case_bottom_z - p.aft_dome_ratio * R])
+        for name, pt in lay.srb_attach_points(p.side).items():
+            d = pt[:2] - axis
+            tools.append(_occ.shell_wall_patch(name, axis, math.atan2(d[1], d[0]), pt[2], rm, w, w))
+            refs[name] = pt
+        vols, faces = _occ.imprint_parts({skirt_g: skirt}, {case_g: case}, tools)
+        cand = _occ.boundary_faces(vols[skirt_g]) + faces[case_g]
+        patches = _patches_on(cand, tools, refs, lambda n: min(p.mesh_size, 0.6 * (
+            p.holddown_patch_radius if "_hd_" in n else w)))
+        _occ.add_physical(2, f"{p.name}_case_inner", faces[case_g])
+        _occ.add_physical(2, case_g, faces[case_g])
+        _occ.add_physical(3, skirt_g, [tg for _, tg in vols[skirt_g]])
+        volume = _occ.group_volume(vols[skirt_g])
+        areas = _occ.physical_measures(2)
+        n_curv = max(shell_curvature_elements(rm, p.mesh_size),
+                     _occ.curvature_elements(lay.srb_skirt_thickness, lay.srb_skirt_radius))
+        n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size, n_curv)
+    case_mat, tc = shell_section(STEEL_D6AC, areas[case_g], p.case_mass, p.case_shell_thickness, t)
+    mats = {case_g: case_mat, skirt_g: equivalent(AL2219, p.skirt_mass, volume, "Al2219-equivalent-skirt")}
+    geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), mats, patches, booster_point_masses(p),
+                   [SmearedMass(f"{p.name}_case_inner", p.propellant_mass)], [], {skirt_g: volume}, n_nodes, areas,
+                   shells={case_g: tc}, shell_bending={case_g: p.case_shell_bending_ratio})
+    geo.save(out_dir / f"{p.name}.json")
+    return geo
+
+
+def build_shell_orbiter(p, out_dir: Path) -> Geometry:
+    """build_orbiter for walls = "shell": fuselage skin, aft bulkhead and nose as the shell
+    surface ``orbiter_structure``, the wing slab the solid ``orbiter_wing`` (cut at the skin's
+    mid-surface, so its root face is a band of the skin: shared nodes); same patches and
+    lumped masses as the solid variant, the structure mass split in its volume shares."""
+    from .vehicle import AL2219, orbiter_part_volumes, orbiter_point_masses
+
+    lay = p.layout
+    R, t, z0 = lay.orbiter_radius, p.wall_thickness, lay.orbiter_bottom_z
+    rm, am = R - 0.5 * t, p.nose_ratio * R - 0.5 * t
+    axis = np.array([0.0, lay.orbiter_axis_y])
+    skin, wing_g = "orbiter_structure", "orbiter_wing"
+    w = p.attach_patch_half_width
+    with _occ.gmsh_session(p.name):
+        inside = _occ.revolve_to_z(_occ.half(_occ.capsule_profile(rm, 0.0, am, z0 + 0.5 * t, p.cyl_length - 0.5 * t)),
+                                   axis)
+        box = _occ.occ.addBox(-0.5 * p.wing_span, axis[1] - 0.5 * p.wing_thickness, z0 + p.wing_bottom_offset,
+                              p.wing_span, p.wing_thickness, p.wing_root_chord)
+        wings, _ = _occ.occ.cut([(3, box)], inside, removeTool=False)
+        _occ.occ.synchronize()
+        faces = _occ.boundary_faces(inside)
+        _occ.occ.remove(inside)
+        _occ.occ.synchronize()
+        tools = [_occ.cylinder_tool("ssme_mount", axis, 1.0, z0 - 1.0, z0 + 0.5 * t + 0.25)]
+        refs = {"ssme_mount": np.array([axis[0], axis[1], z0 - p.ssme_cg_below_bulkhead]),
+                "payload_station": np.array([axis[0], axis[1], p.payload_z])}
+        tools += [_occ.shell_wall_patch("payload_station", axis, phi, p.payload_z, rm, 0.5, 0.5) for phi in (0.0, math.pi)]
+        for name, pt in lay.orbiter_attach_points().items():
+            d = pt[:2] - axis
+            tools.append(_occ.shell_wall_patch(name, axis, math.atan2(d[1], d[0]), pt[2], rm, w, w))
+            refs[name] = pt
+        vols, faces = _occ.imprint_parts({wing_g: wings}, {skin: faces}, tools)
+        patches = _patches_on(faces[skin], tools, refs, lambda n: min(p.mesh_size, 0.6 * w))
+        _occ.add_physical(2, skin, faces[skin])
+        _occ.add_physical(3, wing_g, [tg for _, tg in vols[wing_g]])
+        volume = _occ.group_volume(vols[wing_g])
+        areas = _occ.physical_measures(2)
+        n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size, shell_curvature_elements(rm, p.mesh_size))
+    v_fus, v_wing = orbiter_part_volumes(p)
+    m_wing = p.structure_mass * v_wing / (v_fus + v_wing)
+    skin_mat, ts = shell_section(AL2219, areas[skin], p.structure_mass - m_wing, p.skin_shell_thickness, t)
+    mats = {skin: skin_mat, wing_g: equivalent(AL2219, m_wing, volume, "Al2219-equivalent-wing")}
+    geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), mats, patches, orbiter_point_masses(p), [], [],
+                   {wing_g: volume}, n_nodes, areas, shells={skin: ts},
+                   shell_bending={skin: p.skin_shell_bending_ratio})
+    geo.save(out_dir / f"{p.name}.json")
+    return geo

@@ -1,0 +1,28 @@
+"""Run by test_mpi.py under `mpirun -n 2`: a free and a clamped shell tube and a shell
+glued on a solid (meshes on the command line); rank 0 prints one JSON line."""
+import json
+import sys
+
+import numpy as np
+from mpi4py import MPI
+
+from liftoff.fem import build_model, eigenmodes, mass_properties, point_load, static_solve
+from liftoff.meshes.spec import Geometry, Material, Patch
+
+tube, glued, degree = sys.argv[1], sys.argv[2], int(sys.argv[3])
+al = Material("al", 70e9, 0.3, 2700.0)
+out = {"size": MPI.COMM_WORLD.size}
+free = build_model(Geometry("tube", tube, {"tube": al}, shells={"tube": 0.005}, patches=[Patch("tip", (0, 0, 1.0))]))
+modes = eigenmodes(free, n_modes=12)
+cant = build_model(Geometry("tube", tube, {"tube": al}, shells={"tube": 0.005}, patches=[Patch("tip", (0, 0, 1.0))],
+                            clamped=["root"]))
+x = static_solve(cant, point_load(cant, "tip", force=(100.0, 0, 0), moment=(0, 0, 10.0)))
+hyb = build_model(Geometry("g", glued, {"plate": al, "block": al}, shells={"plate": 0.01}), degree)
+u = hyb.nodal_displacement(hyb.rigid_body_shape()[:, 5])
+out.update(freq=modes.freq_hz.tolist(), n_rigid=modes.n_rigid, mass=mass_properties(free).mass, n_dof=free.n_dof,
+           tip=[float(x[cant.dof_index(f"tip:{c}")]) for c in ("Tx", "Ty", "Tz", "Rx", "Ry", "Rz")],
+           hybrid_freq=eigenmodes(hyb, n_modes=10).freq_hz.tolist(), hybrid_mass=mass_properties(hyb).mass,
+           rot_err=float(np.abs(u - np.column_stack([-hyb.nodes[:, 1], hyb.nodes[:, 0], 0 * hyb.nodes[:, 0]])).max()),
+           n_cells=int(hyb.cells.shape[0]))
+if MPI.COMM_WORLD.rank == 0:
+    print("RESULT " + json.dumps(out), flush=True)

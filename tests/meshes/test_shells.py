@@ -1,0 +1,96 @@
+"""Shell-wall variants of the builders (walls = "shell", meshes.shells): the same groups,
+patches, cavities and masses as the solid variants, the wall as its mid-surface."""
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from liftoff.core.errors import InputError
+from liftoff.meshes import BoosterParams, Compartment, OrbiterParams, TankParams, build_booster, build_orbiter, \
+    build_tank
+from liftoff.meshes.tank import AL2219, tank_layout, wetted_area
+
+# OCC surfaces of revolution are exact; occ.getMass integrates them to ~1e-6 (as test_tank)
+CAD_RTOL = 1e-5
+
+
+def _small(fill=0.6, **kw):
+    comp = Compartment("lox", 1.5, 0.72, 1.6, fill, 1141.0)
+    return TankParams(radius=1.0, wall_thickness=0.1, compartments=(comp,), mesh_size=0.3,
+                      patches={"tank_bottom": (0, 0, 0), "tank_top": (0, 0, 0.72 + 1.5 + 1.6),
+                               "side": (1.0, 0.0, 1.5)}, patch_half_width=0.2, **kw)
+
+
+@pytest.mark.parametrize("fill", [0.12, 0.6, 0.93])
+def test_shell_tank_areas_masses_and_groups(fill, tmp_path, msh_groups):
+    p = _small(fill, walls="shell")
+    g = build_tank(p, tmp_path / "shell")
+    solid = build_tank(replace(p, walls="solid"), tmp_path / "solid")
+    c = tank_layout(p)[0]
+    rm, ab, at = 1.0 - 0.05, c.a_bottom - 0.05, c.a_top - 0.05            # mid-surface
+    assert g.shells == {"tank_wall": pytest.approx(p.dry_mass / (AL2219.rho * g.surface_areas["tank_wall"]))}
+    assert g.volumes["tank_wall"] == AL2219 and g.shell_bending == {"tank_wall": 1.0}
+    # the wall is the closed mid-surface capsule; the wetted part lies below the fill plane
+    assert g.surface_areas["tank_wall"] == pytest.approx(wetted_area(rm, ab, at, c.cyl_length, 1e9), rel=CAD_RTOL)
+    h = c.z_fill - (c.z_cyl_bottom - ab)
+    assert g.surface_areas["tank_lox_wetted"] == pytest.approx(wetted_area(rm, ab, at, c.cyl_length, h), rel=CAD_RTOL)
+    # liquid and total mass exactly those of the solid variant (the same cavity)
+    assert [s.mass for s in g.smeared_masses] == [s.mass for s in solid.smeared_masses]
+    assert g.nominal_mass() == pytest.approx(solid.nominal_mass(), rel=CAD_RTOL)
+    groups = msh_groups(g)
+    assert set(groups) == {(2, "tank_wall"), (2, "tank_lox_wetted"), (2, "tank_bottom"), (2, "tank_top"), (2, "side")}
+    for name in ("tank_bottom", "tank_top"):
+        nodes = groups[(2, name)]["nodes"]
+        assert len(nodes) >= 6 and np.all(np.hypot(nodes[:, 0], nodes[:, 1]) <= p.patch_half_width + 1e-6)
+    side = groups[(2, "side")]["nodes"]
+    assert np.allclose(np.hypot(side[:, 0], side[:, 1]), rm, rtol=1e-9)          # on the mid-surface
+    assert np.all(np.abs(side[:, 1]) <= 0.2 + 1e-6) and np.all(np.abs(side[:, 2] - 1.5) <= 0.2 + 1e-6)
+
+
+def test_shell_tank_thickness_options_and_bad_input(tmp_path):
+    g = build_tank(_small(walls="shell", shell_thickness=0.01, shell_bending_ratio=50.0), tmp_path)
+    mat = g.volumes["tank_wall"]
+    assert g.shells["tank_wall"] == 0.01 and g.shell_bending["tank_wall"] == 50.0
+    assert mat.rho * 0.01 * g.surface_areas["tank_wall"] == pytest.approx(5500.0, rel=1e-12)
+    assert mat.E / mat.rho == pytest.approx(AL2219.E / AL2219.rho, rel=1e-12)
+    with pytest.raises(InputError, match=r"walls must be one of 'solid', 'shell' \(got 'membrane'\)"):
+        build_tank(_small(walls="membrane"), tmp_path)
+    with pytest.raises(InputError, match="shell_bending_ratio must be a finite number > 0"):
+        build_tank(_small(walls="shell", shell_bending_ratio=0.0), tmp_path)
+
+
+@pytest.fixture(scope="module")
+def shell_vehicle(tmp_path_factory):
+    out = tmp_path_factory.mktemp("shell_vehicle")
+    return (build_booster(BoosterParams(side="right", walls="shell", mesh_size=1.0), out),
+            build_orbiter(OrbiterParams(walls="shell", mesh_size=1.0), out))
+
+
+def test_shell_booster_and_orbiter_groups_and_masses(shell_vehicle, tmp_path, msh_groups):
+    booster, orbiter = shell_vehicle
+    solid_b = build_booster(BoosterParams(side="right", mesh_size=1.0), tmp_path)
+    solid_o = build_orbiter(OrbiterParams(mesh_size=1.0), tmp_path)
+    for shell, solid in ((booster, solid_b), (orbiter, solid_o)):
+        assert {p.name for p in shell.patches} == {p.name for p in solid.patches}
+        for a, b in zip(shell.patches, solid.patches):
+            assert np.allclose(a.ref_point, b.ref_point)
+        assert shell.nominal_mass() == pytest.approx(solid.nominal_mass(), rel=CAD_RTOL)
+        assert [(s.surface, s.mass) for s in shell.smeared_masses] == [(s.surface, s.mass) for s in solid.smeared_masses]
+        assert [(q.name, q.mass) for q in shell.point_masses] == [(q.name, q.mass) for q in solid.point_masses]
+        names = {n for _, n in msh_groups(shell)}
+        assert {p.name for p in shell.patches} <= names
+    assert booster.shells == {"srb_right_case": pytest.approx(75_000.0 / (7850.0 * booster.surface_areas["srb_right_case"]))}
+    assert set(booster.volumes) == {"srb_right_case", "srb_right_skirt"}
+    assert (3, "srb_right_skirt") in msh_groups(booster) and (2, "srb_right_case_inner") in msh_groups(booster)
+    assert set(orbiter.volumes) == {"orbiter_structure", "orbiter_wing"}
+    assert (3, "orbiter_wing") in msh_groups(orbiter) and (2, "orbiter_structure") in msh_groups(orbiter)
+    # hold-down patches stay on the solid skirt's bottom; the gimbal cap on the case mid-surface
+    hd = msh_groups(booster)[(2, "srb_right_hd_1")]["nodes"]
+    assert np.all(hd[:, 2] <= 0.5 * BoosterParams().skirt_foot_height + 1e-6)
+    gimbal = msh_groups(booster)[(2, "srb_right_gimbal")]["nodes"]
+    axis = BoosterParams(side="right").layout.srb_axis("right")
+    assert np.all(np.hypot(gimbal[:, 0] - axis[0], gimbal[:, 1] - axis[1]) <= 0.45 + 1e-6)
+    assert math.isclose(gimbal[:, 2].min(), 2.6 - 0.7 * 1.855 + 0.075, rel_tol=1e-6)

@@ -1,0 +1,61 @@
+"""A `liftoff run` component from a Nastran Craig-Bampton model: the stick model's orbiter
+written as a DMIG punch in inch-pound-second units (reduction.nastran.write_dmig), read
+back through the scenario's [model.component.orbiter.nastran], gives the same vehicle
+and the same loads as the orbiter reduced in liftoff. Tolerance: the punch keeps 10
+significant digits (large-field DMIG), so frequencies and post forces agree to ~1e-8."""
+import tomllib
+
+import numpy as np
+import pytest
+
+from liftoff.config import Where, default_text, parse_scenario
+from liftoff.workflows.cache import StageCache
+from liftoff.workflows.loads import build_problem
+from liftoff.workflows.pipeline import build_stack
+
+from .test_run import STICK
+
+pytest.importorskip("pyyeti.nastran")
+
+
+def _case(model, tmp_path):
+    d = tomllib.loads(default_text())
+    d["model"] = model
+    d["time"]["t_end"] = 7.2
+    d["case"] = [{"name": "nominal"}]
+    return parse_scenario(d, "s.toml", tmp_path).cases[0]
+
+
+def test_orbiter_from_a_dmig_punch_in_inch_pound(tmp_path):
+    from liftoff.reduction.nastran import write_dmig
+    from liftoff.transient import solve
+
+    cache = StageCache(tmp_path / "cache")
+    case = _case(STICK, tmp_path)
+    stack = build_stack(case.model, cache, progress=False, where=Where("s.toml", "model"))
+    orbiter = stack.cbs["orbiter"]
+    ids = {p: 101 + k for k, p in enumerate(orbiter.boundary_points)}
+    write_dmig(orbiter, tmp_path / "orbiter.pch", units="in-lbf-s", grid_ids=ids)
+    model = {**STICK, "component": {"orbiter": {"f_max": 60.0, "nastran": {
+        "file": "orbiter.pch", "units": "in-lbf-s", "grids": {str(g): p for p, g in ids.items()}}}}}
+    case2 = _case(model, tmp_path)
+    stack2 = build_stack(case2.model, cache, progress=False, where=Where("s.toml", "model"))
+    assert stack2.cbs["orbiter"].source_units.startswith("in-lbf-s") and "orbiter" not in stack2.components
+    f1, f2 = stack.vehicle.omega[6:], stack2.vehicle.omega[6:]
+    assert f1.size == f2.size and np.abs(f2 / f1 - 1).max() < 1e-8
+    assert abs(stack2.vehicle.mass / stack.vehicle.mass - 1) < 1e-9
+    r1, r2 = (solve(build_problem(c, s, progress=False).problem) for c, s in ((case, stack), (case2, stack2)))
+    peak = np.abs(r1.contact_force).max()
+    assert np.abs(r2.contact_force - r1.contact_force).max() < 1e-7 * peak
+    assert np.array_equal(np.isnan(r1.separation_time), np.isnan(r2.separation_time))
+
+
+def test_bad_nastran_component_is_one_line(tmp_path):
+    for nastran, expect in (({"file": "none.pch", "units": "SI"}, "nastran.file: file not found"),
+                            ({"units": "SI"}, "missing required key 'file'"),
+                            ({"file": "s.toml", "units": "furlong-firkin"}, "nastran.units: unknown unit system"),
+                            ({"file": "s.toml", "units": "SI", "grids": {"x": "a"}}, "is not a grid ID")):
+        (tmp_path / "s.toml").write_text("")
+        with pytest.raises(Exception, match=expect) as e:
+            _case({**STICK, "component": {"orbiter": {"nastran": nastran}}}, tmp_path)
+        assert "\n" not in str(e.value) and "model.component.orbiter.nastran" in str(e.value)
