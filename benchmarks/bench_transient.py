@@ -29,8 +29,8 @@ import time
 
 import numpy as np
 
-from liftoff.transient import (ContactPoint, Forcing, ModalBody, PointForce, TabulatedForce,
-                       TransientProblem, solve)
+from liftoff.transient import (ContactPoint, Forcing, InitialState, ModalBody, PointForce, TabulatedForce,
+                               TransientProblem, solve, static_equilibrium)
 
 N_VEH, N_RIGID, N_PAD, N_POINTS = 200, 6, 100, 8
 H = 1.0e-4
@@ -157,6 +157,49 @@ def breakdown(n_steps: int, repeat: int) -> None:
         print(f"    {k:<46}{1e6 * v / n_steps:>8.1f} us")
 
 
+def resting(n_steps: int, mu: float, lateral: float) -> TransientProblem:
+    """The benchmark's bodies with the vehicle released at t0 and resting on its 8 points (static
+    state of the bolted stack), no thrust, a lateral force ``lateral`` (N) at the engine and
+    Coulomb friction ``mu`` on the posts (0: the reference's contact law)."""
+    p = problem(n_steps)
+    init = static_equilibrium(p.body_a, p.body_b, p.contacts, p.forcing)
+    p.initial = InitialState(init.q_a, init.v_a, init.q_b, init.v_b)
+    for c in p.contacts:
+        c.release_time = -math.inf
+        c.friction = mu
+    p.forcing = Forcing(constant=[PointForce("a", "engine:Tx", lateral)], gravity=(0.0, 0.0, -9.81))
+    return p
+
+
+def friction_breakdown(n_steps: int, repeat: int) -> None:
+    """Per-step cost of friction contacts (transient/contact_laws.py) against the reference's
+    contact law on the same bodies: all 8 points closed, sticking or slipping."""
+    weight = MASS_VEH * 9.81
+    bolted = problem(n_steps)
+    for c in bolted.contacts:
+        c.release_time = math.inf
+    lifting = problem(n_steps)
+    for c in lifting.contacts:
+        c.friction = 0.3
+    variants = {"bolted throughout (reference path, 24 rows)": (bolted, 0.0),
+                "resting, frictionless (reference path, 8 rows)": (resting(n_steps, 0.0, 1.0e4), 0.0),
+                "resting, mu = 0.5, sticking (24 rows)": (resting(n_steps, 0.5, 1.0e4), 0.5),
+                "resting, mu = 0.01, slipping (8 + 16 slip rows)": (resting(n_steps, 0.01, 0.05 * weight), 0.01),
+                "as benchmarked, mu = 0.3 (bolted, then lift-off)": (lifting, 0.3)}
+    best, res = {k: math.inf for k in variants}, {}
+    for _ in range(repeat):
+        for k, (pr, _mu) in variants.items():
+            w, c, res[k] = timed(lambda: solve(pr))
+            best[k] = min(best[k], c)
+    print(f"  friction ({n_steps} steps, CPU time per step, set-up included):")
+    for k, v in best.items():
+        mu, F = variants[k][1], res[k].contact_force.reshape(res[k].time.size, N_POINTS, 3)
+        N = F[:, :, 2]
+        slipping = (mu > 0) & (N > 0) & (np.hypot(F[:, :, 0], F[:, :, 1]) >= mu * N * (1 - 1e-6))
+        print(f"    {k:<50}{1e6 * v / n_steps:>8.1f} us   solves/step {res[k].iterations[1:].mean():.2f}   "
+              f"slipping point-steps {slipping.mean():.0%}")
+
+
 def products(nc: int = 3 * N_POINTS, n: int = N_VEH + N_PAD, steps: int = 20_000) -> None:
     """The two contact products of a coupled step, u = Phi_c q and P = Phi_c^T f (nc x n), timed
     as scalar numba loops (the kernel's style) and as BLAS calls inside numba."""
@@ -202,6 +245,8 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=100_000)
     ap.add_argument("--repeat", type=int, default=3, help="runs of each (interleaved); best is reported")
     ap.add_argument("--profile", action="store_true", help="also time the phases of the liftoff run")
+    ap.add_argument("--friction", action="store_true",
+                    help="also time friction contacts against the reference's contact law (per step)")
     args = ap.parse_args()
     from pyyeti import ode
 
@@ -235,6 +280,8 @@ def main() -> None:
     if args.profile:
         breakdown(min(args.steps, 20_000), args.repeat)
         products()
+    if args.friction:
+        friction_breakdown(min(args.steps, 20_000), args.repeat)
 
 
 if __name__ == "__main__":

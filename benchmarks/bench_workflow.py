@@ -1,6 +1,6 @@
 """Cold and warm wall time of `liftoff run` (the embedded default scenario), per stage.
 
-    python benchmarks/bench_workflow.py [--scenario FILE] [--keep DIR]
+    python benchmarks/bench_workflow.py [--scenario FILE | --example barge] [--keep DIR]
 
 Cold: a fresh, empty stage cache (meshing, FE assembly, Craig-Bampton, system modes all
 computed). Warm: the same command again on that cache (a second run that changes only
@@ -36,9 +36,9 @@ def stage_times(summary: Path) -> dict[str, float]:
     return out
 
 
-def run_once(scenario, out: Path, cache: Path) -> tuple[float, dict]:
-    cmd = [str(LIFTOFF), "run", *([str(scenario)] if scenario else []), "--out", str(out),
-           "--cache", str(cache), "--no-progress"]
+def run_once(scenario, out: Path, cache: Path, example: str | None = None) -> tuple[float, dict]:
+    cmd = [str(LIFTOFF), "run", *([str(scenario)] if scenario else []), *(["--example", example] if example else []),
+           "--out", str(out), "--cache", str(cache), "--no-progress"]
     t0 = time.perf_counter()
     proc = subprocess.run(cmd, capture_output=True, text=True, env={**os.environ, "PYVISTA_OFF_SCREEN": "true"})
     wall = time.perf_counter() - t0
@@ -50,15 +50,18 @@ def run_once(scenario, out: Path, cache: Path) -> tuple[float, dict]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--scenario", type=Path, default=None, help="scenario file (default: embedded)")
+    ap.add_argument("--example", choices=("barge",), default=None, help="an embedded example (liftoff run --example)")
     ap.add_argument("--keep", type=Path, default=None, help="keep outputs and cache in this directory")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory(prefix="liftoff-bench-") as tmp:
         base = args.keep or Path(tmp)
         cache = base / "cache"
-        cold_wall, cold = run_once(args.scenario, base / "cold", cache)
-        warm_wall, warm = run_once(args.scenario, base / "warm", cache)
-    print(f"liftoff run {args.scenario or '(embedded default)'}: {platform.processor() or platform.machine()}, "
-          f"{os.cpu_count()} CPUs, Python {platform.python_version()}")
+        cold_wall, cold = run_once(args.scenario, base / "cold", cache, args.example)
+        warm_wall, warm = run_once(args.scenario, base / "warm", cache, args.example)
+    what = args.scenario or (f"--example {args.example}" if args.example else "(embedded default)")
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    print(f"liftoff run {what}: {platform.processor() or platform.machine()}, "
+          f"{os.cpu_count()} CPUs, Python {platform.python_version()}, load average {load:.1f} at the end")
     print(f"{'stage':<40}{'cold (s)':>10}{'warm (s)':>10}")
     for name in cold:
         w = warm.get(name, warm.get(name.replace("(built)", "(hit)"), float("nan")))

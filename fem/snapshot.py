@@ -72,10 +72,12 @@ def auto_scale(parts: list[Part], fraction: float = 0.1) -> float:
 
 def snapshot_png(path, parts: Part | list[Part], title: str = "", scale: float | None = None, *,
                  fraction: float = 0.1, note: str = "", window_size=(1024, 768), view: str = "iso",
-                 azimuth: float = 0.0, elevation: float = 0.0) -> Path:
+                 azimuth: float = 0.0, elevation: float = 0.0, umax: float | None = None, zoom: float = 1.0) -> Path:
     """Write a PNG of the deformed parts; returns the path. ``scale=None``: the largest
     displacement drawn as ``fraction`` of the model size. ``view``: iso, xy, xz or yz, then
-    turned by ``azimuth`` and ``elevation`` (degrees). Line cells are drawn as thick lines."""
+    turned by ``azimuth`` and ``elevation`` (degrees) and zoomed by ``zoom``. ``umax``: the
+    top of the colour scale (m; default the picture's largest |u|), so that a series of
+    pictures shares one scale. Line cells are drawn as thick lines."""
     path = Path(path)
     if path.suffix.lower() != ".png":
         raise InputError(f"snapshot: {str(path)!r} must end in .png")
@@ -86,8 +88,10 @@ def snapshot_png(path, parts: Part | list[Part], title: str = "", scale: float |
         scale = auto_scale(parts, fraction)
     if not _RENDER_IN_PROCESS:
         return _render_in_subprocess(path, parts, dict(title=title, scale=scale, note=note, window_size=window_size,
-                                                       view=view, azimuth=azimuth, elevation=elevation))
-    umax = max(float(np.linalg.norm(p.displacement, axis=1).max()) for p in parts)
+                                                       view=view, azimuth=azimuth, elevation=elevation, umax=umax,
+                                                       zoom=zoom))
+    here = max(float(np.linalg.norm(p.displacement, axis=1).max()) for p in parts)
+    umax = here if umax is None else float(umax)
     pl = pyvista.Plotter(off_screen=True, window_size=list(window_size))
     pl.set_background("white")
     bar = {"title": "|u| (m)", "color": "black"}
@@ -101,7 +105,7 @@ def snapshot_png(path, parts: Part | list[Part], title: str = "", scale: float |
         pl.add_mesh(deformed, scalars="|u| (m)", cmap="viridis", clim=[0, umax or 1], scalar_bar_args=bar,
                     **({"line_width": 6} if line else {}))
     pl.add_text(title, position="upper_left", font_size=11, color="black")
-    pl.add_text(f"displacement scale x {scale:.3g}, max |u| = {umax:.3g} m" + (f" ({note})" if note else ""),
+    pl.add_text(f"displacement scale x {scale:.3g}, max |u| = {here:.3g} m" + (f" ({note})" if note else ""),
                 position="lower_left", font_size=9, color="black")
     if view == "iso":
         pl.view_isometric()
@@ -109,6 +113,8 @@ def snapshot_png(path, parts: Part | list[Part], title: str = "", scale: float |
         getattr(pl, f"view_{view}")()
     pl.camera.azimuth += azimuth
     pl.camera.elevation += elevation
+    if zoom != 1.0:
+        pl.camera.zoom(zoom)
     try:
         with atomic_path(path, suffix=".png") as tmp:
             pl.screenshot(str(tmp))

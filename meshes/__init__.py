@@ -1,4 +1,5 @@
-"""Parametric gmsh geometry (no dolfinx): propellant tank, twin-booster vehicle, launch pad.
+"""Parametric gmsh geometry (no dolfinx): propellant tank, twin-booster vehicle, launch pad;
+barge with its cargo tank and a pile-supported dock (meshes/barge.py).
 
 Every builder takes a parameter dataclass (SI, documented defaults, ``mesh_size`` in m),
 writes ``<out_dir>/<name>.msh`` with named physical groups plus a ``<name>.json``
@@ -11,6 +12,12 @@ from liftoff.core.lazy import lazy_exports
 
 _EXPORTS = {
     "StackLayout": ".layout",
+    "BargeParams": ".barge",
+    "CargoParams": ".barge",
+    "DockParams": ".barge",
+    "build_barge": ".barge",
+    "build_cargo": ".barge",
+    "build_dock": ".barge",
     "PadParams": ".pad",
     "StickParams": ".stick",
     "build_pad": ".pad",

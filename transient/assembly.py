@@ -3,7 +3,10 @@
 Contact rows: one row per coupled direction (``contact/label_a``), with the mode-shape
 rows Phi_ca, Phi_cb (zero row for ground), the compliance 1/K_C (0 for a rigid bolt)
 and the offset c (normal_sign * gap on the axial row), so that while coupled the force
-on A is f = -K_C (c + x_a - x_b) (eq. 3).
+on A is f = -K_C (c + x_a - x_b) (eq. 3). A contact with a ``normal`` couples the rows of
+its frame (normal, tangents), each a combination of the labelled rows. The contact laws
+beyond the reference's (friction, dashpots, latches; transient/contact_laws.py) add
+per-row damping time constants tau = c/K_C, friction coefficients and latch forces.
 """
 from __future__ import annotations
 
@@ -33,6 +36,10 @@ class ContactRows:
     release: np.ndarray    # (n_contacts,)
     axial_column: np.ndarray  # (n_contacts,)
     normal_sign: np.ndarray   # (n_contacts,)
+    tau: np.ndarray = None    # (n_c,) s, dashpot / K_C (0: no damping)
+    mu: np.ndarray = None     # (n_c,) friction coefficient of the row's contact on its tangent rows, else 0
+    latch: np.ndarray = None  # (n_contacts,) N, latch force (inf: no latch)
+    laws: bool = False        # any friction, damping or latch: the kernel's extended path
 
     @property
     def n(self) -> int:
@@ -44,31 +51,53 @@ class ContactRows:
         return tuple(d.label for d in self.directions)
 
 
+def _direction(c, ci: int, d: int, la: str, lb: str | None, oriented: bool, frame: np.ndarray) -> ContactDirection:
+    """What row d of contact c is: a labelled DOF, or (with a normal) n, t1, t2 ... over its labels."""
+    if not oriented:
+        return ContactDirection(c.name, ci, la, lb, COMPONENTS[split_label(la)[1]], d == c.axial, c.normal_sign)
+    comp = "n" if d == 0 else f"t{d}"
+    pa = {split_label(x)[0] for x in c.labels_a}
+    pb = {split_label(x)[0] for x in c.labels_b if x is not None}
+    name_a = pa.pop() if len(pa) == 1 else c.name
+    name_b = (pb.pop() if len(pb) == 1 else c.name) if pb else None
+    return ContactDirection(c.name, ci, f"{name_a}:{comp}", None if name_b is None else f"{name_b}:{comp}", comp,
+                            d == 0, c.normal_sign, tuple(float(x) for x in frame[d]))
+
+
 def contact_rows(body_a: ModalBody, body_b: ModalBody, contacts) -> ContactRows:
     """One row per coupled direction of every contact point, in contact order."""
     na, nb = body_a.n_modes, body_b.n_modes
-    dirs, Pa, Pb, comp, off, cidx, ax, sgn, axcol = [], [], [], [], [], [], [], [], []
+    dirs, Pa, Pb, comp, off, cidx, ax, sgn, axcol, tau, mu = [], [], [], [], [], [], [], [], [], [], []
     for ci, c in enumerate(contacts):
+        frame = c.frame()
+        oriented = getattr(c, "normal", None) is not None
+        rows_a = body_a.rows(c.labels_a)
+        rows_b = np.array([np.zeros(nb) if lb is None else body_b.phi[body_b.dof_index(lb)]
+                           for lb in c.labels_b]).reshape(c.n_dirs, nb)
         for d, (la, lb) in enumerate(zip(c.labels_a, c.labels_b)):
             if d == c.axial:
                 axcol.append(len(dirs))
-            dirs.append(ContactDirection(c.name, ci, la, lb, COMPONENTS[split_label(la)[1]], d == c.axial,
-                                         c.normal_sign))
-            Pa.append(body_a.phi[body_a.dof_index(la)])
-            Pb.append(np.zeros(nb) if lb is None else body_b.phi[body_b.dof_index(lb)])
+            dirs.append(_direction(c, ci, d, la, lb, oriented, frame))
+            Pa.append(frame[d] @ rows_a if oriented else rows_a[d])
+            Pb.append(frame[d] @ rows_b if oriented else rows_b[d])
             comp.append(0.0 if c.rigid else 1.0 / c.stiffness[d])
             off.append(c.normal_sign * c.gap if d == c.axial else 0.0)
             cidx.append(ci)
             ax.append(d == c.axial)
             sgn.append(c.normal_sign)
+            tau.append(0.0 if c.rigid else c.damping[d] / c.stiffness[d])
+            mu.append(c.friction if d != c.axial else 0.0)
     n = len(dirs)
+    latch = np.array([np.inf if c.latch_force is None else c.latch_force for c in contacts])
     return ContactRows(directions=tuple(dirs), names=tuple(c.name for c in contacts),
                        Phi_a=np.array(Pa).reshape(n, na), Phi_b=np.array(Pb).reshape(n, nb),
                        compliance=np.array(comp), offset=np.array(off), contact=np.array(cidx, dtype=np.int64),
                        axial=np.array(ax, dtype=np.bool_), sign=np.array(sgn),
                        release=np.array([c.release_time for c in contacts]),
                        axial_column=np.array(axcol, dtype=np.int64),
-                       normal_sign=np.array([c.normal_sign for c in contacts]))
+                       normal_sign=np.array([c.normal_sign for c in contacts]),
+                       tau=np.array(tau), mu=np.array(mu), latch=latch,
+                       laws=any(c.has_laws for c in contacts))
 
 
 @dataclass

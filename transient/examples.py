@@ -6,6 +6,9 @@
 * :func:`toy_vehicle`, :func:`toy_pad`, :func:`holddown_contacts`: a flexible free-free
   "vehicle" (6 rigid + elastic modes) standing on a grounded flexible "pad" at 2-4
   hold-down points.
+* :func:`module_truss`, :func:`docking_contacts`: two free-free flexible "modules" (6 rigid
+  + elastic modes each) meeting at a docking ring of latch points with inclined (guide
+  petal) contact normals.
 """
 from __future__ import annotations
 
@@ -179,3 +182,44 @@ def holddown_contacts(n_posts: int = 4, stiffness: float = 1e10, release_time: f
                          [f"pad_{i + 1}:Tz", f"pad_{i + 1}:Tx", f"pad_{i + 1}:Ty"], stiffness, axial=0,
                          normal_sign=1.0, release_time=release_time, rigid=rigid)
             for i in range(n_posts)]
+
+
+# ------------------------------------------------------------------ docking
+def module_truss(side: str, n_ring: int = 4, radius: float = 1.0, length: float = 4.0, mass: float = 6000.0,
+                 EA: float = 2e8) -> Truss:
+    """A free-free "module" along x: a docking ring of ``n_ring`` points at x = 0 (``<side>_dock_<i>``,
+    in the y-z plane), a back ring at x = -length (side 'a', the chaser) or +length (side 'b',
+    the target), a centre node; all ring nodes joined pairwise and to the centre. Masses: 10 %
+    on the docking ring, 30 % on the back ring, 60 % at the centre (kg)."""
+    if side not in ("a", "b"):
+        raise InputError(f"module_truss: side must be 'a' or 'b', got {side!r}")
+    sgn = -1.0 if side == "a" else 1.0
+    ang = 2 * np.pi * np.arange(n_ring) / n_ring
+    ring = np.column_stack([np.zeros(n_ring), radius * np.cos(ang), radius * np.sin(ang)])
+    back = ring + np.array([sgn * length, 0.0, 0.0])
+    coords = np.vstack([ring, back, [[sgn * length / 2, 0.0, 0.0]]])
+    names = [f"{side}_dock_{i + 1}" for i in range(n_ring)] + [f"{side}_back_{i + 1}" for i in range(n_ring)] \
+        + [f"{side}_centre"]
+    masses = np.concatenate([np.full(n_ring, 0.1 * mass / n_ring), np.full(n_ring, 0.3 * mass / n_ring), [0.6 * mass]])
+    nn = 2 * n_ring
+    bars = [(i, j, EA) for i in range(nn) for j in range(i + 1, nn)] + [(i, nn, EA) for i in range(nn)]
+    return Truss(names, coords, masses, bars)
+
+
+def docking_contacts(n_ring: int = 4, stiffness: float = 2e6, petal_angle: float = 30.0, gap: float = 0.02,
+                     friction: float = 0.0, damping: float = 0.0, latch_force: float | None = None) -> list[ContactPoint]:
+    """One contact per docking-ring point of :func:`module_truss` a (chaser, coming from -x) and b:
+    normal from b towards a, inclined by ``petal_angle`` (degrees) from -x towards the ring's
+    centre (a guide petal: a point of a that is off-centre outwards touches first and is
+    pushed back and inwards, a centring force);
+    never bolted unless latched (``latch_force``, N)."""
+    beta = math.radians(petal_angle)
+    out = []
+    for i in range(n_ring):
+        phi = 2 * np.pi * i / n_ring
+        n = [-math.cos(beta), -math.sin(beta) * math.cos(phi), -math.sin(beta) * math.sin(phi)]
+        la = [f"a_dock_{i + 1}:{c}" for c in COMPONENTS[:3]]
+        lb = [f"b_dock_{i + 1}:{c}" for c in COMPONENTS[:3]]
+        out.append(ContactPoint(f"latch_{i + 1}", la, lb, stiffness, gap=gap, release_time=-math.inf, normal=n,
+                                friction=friction, damping=damping, latch_force=latch_force))
+    return out

@@ -19,6 +19,10 @@ is affine in the contact force, e = e_free + W f (W the step flexibility), and
   the step); it is open from the next step on (or at once if g itself is tensile).
 * ``fixed-point``: the reference's iteration f <- -K_C (c + e_free + W f) with its
   convergence test |f_j - f_i| < tol (eq. 11).
+* contact laws beyond the reference's (friction, dashpots, latches: ``Contact.laws``; the
+  method in transient/contact_laws.py): ``_laws_candidates``, ``_solve_laws`` and
+  ``_laws_after_step`` at the end of this file, called from the same loop in place of the
+  candidate rows and ``_solve_direct``; problems without them never enter that branch.
 
 No Python objects, no I/O: named bundles of arrays in (:class:`Modal`, :class:`Contact`, ...),
 arrays out; status codes report failures.
@@ -30,7 +34,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-OK, NO_CONVERGENCE, CYCLING, SINGULAR = 0, 1, 2, 3
+OK, NO_CONVERGENCE, CYCLING, SINGULAR, FRICTION_SINGULAR = 0, 1, 2, 3, 4
 BOLTED, CLOSED, OPEN = 0, 1, 2
 
 
@@ -78,6 +82,13 @@ class Contact(NamedTuple):
     release: np.ndarray     # (ncon,) s
     W: np.ndarray           # (n2, n2) step matrix (n2 = nc, or 2 nc with rigid rows: unknowns [f1; g])
     C2: np.ndarray          # (n2,) its compliance diagonal
+    laws: bool              # friction, dashpots or latches present: the _solve_laws path
+    tau: np.ndarray         # (nc,) s, dashpot / K_C (W already holds + diag(tau) W_v)
+    Wv: np.ndarray          # (nc, n2) velocity step flexibility [W_Bcd, W_Acd] (0 rows: no dashpot)
+    mu: np.ndarray          # (nc,) friction coefficient on tangent rows of friction points, else 0
+    axrow: np.ndarray       # (nc,) the normal row of each row's contact point
+    axcol: np.ndarray       # (ncon,) the normal row of each contact point
+    latch: np.ndarray       # (ncon,) N, latch force (inf: none)
 
 
 class OutputRows(NamedTuple):
@@ -101,6 +112,10 @@ class State(NamedTuple):
     Pc: np.ndarray      # (n,) modal contact force at the step start (penalty rows)
     Pext: np.ndarray    # (n,) applied modal load at the step start
     ptr: np.ndarray     # (1,) int64, position in tk
+    anchor: np.ndarray  # (nc,) stick anchor of friction rows / latched laterals (contact_laws.py)
+    latched: np.ndarray  # (ncon,) bool, captured by a latch
+    slip: np.ndarray    # (nc,) bool, friction row slipping
+    sdir: np.ndarray    # (nc,) slip direction (unit per contact point)
 
 
 class Cache(NamedTuple):
@@ -290,9 +305,9 @@ def march(i0, i1, steps, modal, contact, rows_out, state, cache, hist):
     the helpers take plain arrays (no reference counting per step)."""
     t0, h, method, tol, max_iter = steps
     na, coef, w2, zw2, const, tk, Pk, U, V, since, until = modal
-    Phi_c, Cdiag, coff, dcontact, axial, nsign, release, W, C2 = contact
+    Phi_c, Cdiag, coff, dcontact, axial, nsign, release, W, C2, laws = contact[:10]  # the rest: _solve_laws
     L_a, kind_a, targ_a, L_b, kind_b, targ_b = rows_out
-    q, v, f, active, Pc, Pext, ptr = state
+    q, v, f, active, Pc, Pext, ptr = state[:7]
     keys, invs, used = cache
     Y_a, Y_b, Fc, states, iters, keep, Qa, Va, Aa, Qb, Vb, Ab = hist
     n, nc = q.size, f.size
@@ -317,30 +332,38 @@ def march(i0, i1, steps, modal, contact, rows_out, state, cache, hist):
         ptr[0] = _pre_step(coef, const, tk, Pk, ptr[0], tb, V.shape[0] > 0, fb, q, v, Pext, Pc, P1, qf, vf)
         # ---------------- candidate rows and free relative displacement
         e = np.dot(Phi_c, qf)  # one BLAS product
-        ed = np.dot(Phi_c, vf) if any_rigid else e
-        for c in range(release.size):
-            bolted[c] = tb < release[c]
-        for j in range(nc):
-            cand[j] = bolted[dcontact[j]] or axial[j]
-            free[j] = cand[j] and not bolted[dcontact[j]]  # may open or close in this step
-            if not bolted[dcontact[j]] and not axial[j]:
-                active[j] = False
-            elif bolted[dcontact[j]]:
-                active[j] = True
-            u[j] = coff[j] + e[j] if cand[j] else 0.0
-            if any_rigid:
-                u[nc + j] = ed[j] if (cand[j] and rigid[j]) else 0.0
-        # ---------------- contact solve
-        if method == 0:
-            st, it, info1, info2 = _solve_direct(W, C2, nsign, keys, invs, used, u, free, rigid, active, opening,
-                                                 max_iter, fn, g, rows2, cols2)
+        if laws:  # friction, dashpots, latches (transient/contact_laws.py)
+            ed = np.dot(Phi_c, vf)
+            _laws_candidates(tb, e, ed, contact, state, rigid, bolted, cand, free, u)
+            st, it, info1, info2 = _solve_laws(contact, state, cache, rigid, u, ed, free, opening, max_iter,
+                                                      fn, g, rows2, cols2)
         else:
-            st, it, info1, info2 = _solve_fixed_point(W, Cdiag, nsign, u, free, active, f, tol, max_iter, fn)
+            ed = np.dot(Phi_c, vf) if any_rigid else e
+            for c in range(release.size):
+                bolted[c] = tb < release[c]
+            for j in range(nc):
+                cand[j] = bolted[dcontact[j]] or axial[j]
+                free[j] = cand[j] and not bolted[dcontact[j]]  # may open or close in this step
+                if not bolted[dcontact[j]] and not axial[j]:
+                    active[j] = False
+                elif bolted[dcontact[j]]:
+                    active[j] = True
+                u[j] = coff[j] + e[j] if cand[j] else 0.0
+                if any_rigid:
+                    u[nc + j] = ed[j] if (cand[j] and rigid[j]) else 0.0
+            # ---------------- contact solve
+            if method == 0:
+                st, it, info1, info2 = _solve_direct(W, C2, nsign, keys, invs, used, u, free, rigid, active,
+                                                     opening, max_iter, fn, g, rows2, cols2)
+            else:
+                st, it, info1, info2 = _solve_fixed_point(W, Cdiag, nsign, u, free, active, f, tol, max_iter, fn)
         if st != OK:
             return st, i + 1, info1, info2
         # ---------------- end-of-step state with the contact force
         anyf, anyg = _contact_load(Phi_c, rigid, any_rigid, fn, g, f, Pf, Pg, Pc)
         _post_step(coef, qf, vf, P1, Pf, Pg, anyf, anyg, zw2, w2, q, v, acc)
+        if laws:
+            _laws_after_step(contact, state, fn, bolted, opening)
         # ---------------- outputs at t1
         r = i + 1
         _record_contact(r, it, fn, bolted, active, opening, dcontact, axial, Fc, states, iters)
@@ -539,3 +562,318 @@ def _outputs(L, kind, targ, q, v, acc, Y, r):
         for row in range(s0, s1):
             Y[r, targ[row]] += y[row - s0]
         s0 = s1
+
+
+# ------------------------------------------------------------------ contact laws beyond the reference's
+# Friction, dashpots and latches (the method: transient/contact_laws.py). Compiled here, beside
+# march, because numba's on-disk cache of march is keyed on this file only: a callee in another
+# file could change without march being recompiled.
+FRICTION_HYSTERESIS = 1e-9   # relative band on |f_T| / (mu N) between stick and slip
+SLIP_TURN_TOL = 1e-8         # slip direction converged when no component moves by more than this
+
+
+@njit(cache=True)
+def _laws_candidates(tb, e, ed, contact, state, rigid, bolted, cand, free, u):
+    """Rows that take part in the step's solve and their right-hand side u = c0 + e - a + tau e'
+    (and the rigid velocity rows); ``bolted`` includes latched points. ``contact``, ``state``:
+    the kernel's bundles (kernel.Contact, kernel.State), unpacked once here."""
+    coff, dcontact, axial, release, tau, mu = contact.offset, contact.contact, contact.axial, contact.release, \
+        contact.tau, contact.mu
+    active, anchor, latched = state.active, state.anchor, state.latched
+    nc = e.size
+    any_rigid = u.size > nc
+    for c in range(release.size):
+        bolted[c] = tb < release[c] or latched[c]
+    for j in range(nc):
+        c = dcontact[j]
+        if bolted[c]:
+            cand[j] = True
+            free[j] = False
+            active[j] = True
+        elif axial[j] or mu[j] > 0.0:
+            cand[j] = True     # normal rows may open or close; friction rows follow their normal
+            free[j] = True
+        else:
+            cand[j] = False
+            free[j] = False
+            active[j] = False
+        u[j] = coff[j] + e[j] - anchor[j] + tau[j] * ed[j] if cand[j] else 0.0
+        if any_rigid:
+            u[nc + j] = ed[j] if (cand[j] and rigid[j]) else 0.0
+
+
+@njit(cache=True)
+def _row_residual(W, u, fn, g, j, any_rigid):
+    """u_j + (W [f; g])_j: what the row's equation leaves over (its would-be compliance term)."""
+    nc = fn.size
+    s = u[j]
+    for l in range(nc):
+        s += W[j, l] * fn[l]
+        if any_rigid:
+            s += W[j, nc + l] * g[l]
+    return s
+
+
+@njit(cache=True)
+def _position(W, Wv, u, ed, tau, fn, g, j, any_rigid):
+    """Relative position along row j at the step end (c0 + e - a), i.e. the residual less its dashpot part."""
+    nc = fn.size
+    s = _row_residual(W, u, fn, g, j, any_rigid)
+    if tau[j] > 0.0:
+        v = ed[j]
+        for l in range(nc):
+            v += Wv[j, l] * fn[l]
+            if any_rigid:
+                v += Wv[j, nc + l] * g[l]
+        s -= tau[j] * v
+    return s
+
+
+@njit(cache=True)
+def _slip_update(W, Ainv, x2, nsign, active, slip, sdir, mu, axrow):
+    """Add the slip forces mu N d (linear in the unknown normal forces) to x2 = Ainv u by a
+    rank-k update: x2 += Z y, (I + Z[a, :]) y = -x2[a] over the k slipping points (normal rows a)."""
+    nc = mu.size
+    n2 = x2.size
+    ks = np.empty(nc, dtype=np.int64)
+    nk = 0
+    for a in range(nc):
+        for j in range(nc):
+            if axrow[j] == a and mu[j] > 0.0 and slip[j] and active[j]:
+                ks[nk] = a
+                nk += 1
+                break
+    if nk == 0:
+        return OK
+    Z = np.empty((n2, nk))
+    w = np.empty(n2)
+    for k in range(nk):
+        a = ks[k]
+        w[:] = 0.0
+        for j in range(nc):
+            if axrow[j] == a and mu[j] > 0.0 and slip[j] and active[j]:
+                alpha = mu[j] * nsign[a] * sdir[j]
+                for r in range(n2):
+                    w[r] += W[r, j] * alpha
+        Z[:, k] = np.dot(Ainv, w)
+    G = np.eye(nk)
+    rhs = np.empty(nk)
+    for k in range(nk):
+        rhs[k] = -x2[ks[k]]
+        for l in range(nk):
+            G[k, l] += Z[ks[k], l]
+    ok = True
+    try:
+        y = np.linalg.solve(G, rhs)
+    except Exception:  # noqa: BLE001 - numba: singular matrix
+        ok = False
+        y = np.zeros(nk)
+    if not ok or not np.all(np.isfinite(y)):
+        return FRICTION_SINGULAR
+    x2 += np.dot(Z, y)
+    return OK
+
+
+@njit(cache=True)
+def _follow_normals(free, active, opening, mu, axrow):
+    """Friction rows of released points are coupled while their normal row is closed (their
+    stick/slip state is kept while the normal changes within a step: a point that closes
+    while sliding keeps sliding, and is reset to stick only once it has been open at a step
+    end, _laws_after_step)."""
+    for j in range(mu.size):
+        if mu[j] > 0.0 and free[j]:
+            a = axrow[j]
+            active[j] = active[a] and not opening[a]
+
+
+@njit(cache=True)
+def _normal_flips(W, Wv, tau, nsign, u, ed, free, rigid, active, opening, mu, fn, g, single):
+    """The active-set rules of kernel._solve_direct for normal and rigid rows, with the dashpot's
+    position conditions; returns whether a row changed (one only when ``single``)."""
+    nc = fn.size
+    any_rigid = W.shape[0] > nc
+    changed = False
+    for j in range(nc):
+        if not free[j] or mu[j] > 0.0:
+            continue
+        if active[j] and rigid[j]:
+            if not opening[j] and nsign[j] * fn[j] < 0.0:  # closed -> opening
+                opening[j] = True
+                changed = True
+            elif opening[j] and nsign[j] * g[j] < 0.0:  # opening -> open
+                opening[j] = False
+                active[j] = False
+                changed = True
+            if changed and single:
+                return True
+            continue
+        if active[j]:
+            flip = nsign[j] * fn[j] < 0.0
+            if not flip and tau[j] > 0.0:
+                flip = nsign[j] * _position(W, Wv, u, ed, tau, fn, g, j, any_rigid) > 0.0
+        else:
+            flip = nsign[j] * _row_residual(W, u, fn, g, j, any_rigid) < 0.0
+            if flip and tau[j] > 0.0:
+                flip = nsign[j] * _position(W, Wv, u, ed, tau, fn, g, j, any_rigid) < 0.0
+        if flip:
+            active[j] = not active[j]
+            changed = True
+            if single:
+                return True
+    return changed
+
+
+@njit(cache=True)
+def _friction_checks(W, C2, nsign, u, free, axial, active, mu, axrow, slip, sdir, fn, g, single):
+    """Stick -> slip when |f_T| > mu N, slip -> stick when the elastic trial |g_T| < mu N, and
+    the slip direction d = g_T / |g_T|. Returns (changed state, turned direction)."""
+    nc = fn.size
+    any_rigid = W.shape[0] > nc
+    changed = False
+    turned = False
+    gT = np.empty(nc)
+    for a in range(nc):
+        if not (axial[a] and active[a] and free[a]):
+            continue
+        n_t = 0
+        slipping = False
+        lim = 0.0
+        for j in range(nc):
+            if axrow[j] == a and mu[j] > 0.0:
+                n_t += 1
+                slipping = slipping or slip[j]
+                lim = mu[j]
+        if n_t == 0:
+            continue
+        N = nsign[a] * fn[a]
+        if N < 0.0 and slipping:
+            continue           # the normal row opens (kernel rules)
+        lim *= max(N, 0.0)
+        if not slipping:
+            s = 0.0
+            for j in range(nc):
+                if axrow[j] == a and mu[j] > 0.0:
+                    s += fn[j] * fn[j]
+            s = np.sqrt(s)
+            if s > lim * (1.0 + FRICTION_HYSTERESIS) and s > 0.0:
+                for j in range(nc):
+                    if axrow[j] == a and mu[j] > 0.0:
+                        slip[j] = True
+                        sdir[j] = fn[j] / s
+                changed = True
+        else:
+            s = 0.0
+            for j in range(nc):
+                if axrow[j] == a and mu[j] > 0.0:
+                    gT[j] = -_row_residual(W, u, fn, g, j, any_rigid) / C2[j]
+                    s += gT[j] * gT[j]
+            s = np.sqrt(s)
+            if s <= lim * (1.0 - FRICTION_HYSTERESIS):
+                for j in range(nc):
+                    if axrow[j] == a and mu[j] > 0.0:
+                        slip[j] = False
+                changed = True
+            else:
+                for j in range(nc):
+                    if axrow[j] == a and mu[j] > 0.0:
+                        d = gT[j] / s
+                        if abs(d - sdir[j]) > SLIP_TURN_TOL:
+                            turned = True
+                        sdir[j] = d
+        if changed and single:
+            return True, turned
+    return changed, turned
+
+
+@njit(cache=True)
+def _solve_laws(contact, state, cache, rigid, u, ed, free, opening, max_iter, fn, g, rows2, cols2):
+    """Active-set solve with friction, dashpots and rigid rows (kernel._solve_direct's rules plus
+    the stick/slip states); returns (status, iterations, info1, info2). ``contact``, ``state``,
+    ``cache``: the kernel's bundles; the other arguments as in kernel._solve_direct."""
+    W, C2, Wv, tau, nsign, axial, mu, axrow = contact.W, contact.C2, contact.Wv, contact.tau, contact.sign, \
+        contact.axial, contact.mu, contact.axrow
+    active, slip, sdir = state.active, state.slip, state.sdir
+    keys, invs, used = cache
+    nc = fn.size
+    n2 = W.shape[0]
+    any_rigid = n2 > nc
+    it = 0
+    turns = 0
+    single = False
+    while True:
+        it += 1
+        _follow_normals(free, active, opening, mu, axrow)
+        for j in range(nc):
+            eq = active[j] and not slip[j]
+            rows2[j] = eq
+            cols2[j] = eq and not opening[j]
+            if any_rigid:
+                rows2[nc + j] = eq and rigid[j] and not opening[j]
+                cols2[nc + j] = eq and rigid[j]
+        slot, used[0], ok = _pattern_inverse(rows2, cols2, C2, W, keys, invs, used[0], used[1])
+        if not ok:
+            return SINGULAR, it, 0.0, 0.0
+        used[1] = slot
+        x2 = np.dot(invs[slot], u)
+        if _slip_update(W, invs[slot], x2, nsign, active, slip, sdir, mu, axrow) != OK:
+            return FRICTION_SINGULAR, it, 0.0, 0.0
+        for j in range(nc):
+            fn[j] = -x2[j]
+            g[j] = -x2[nc + j] if any_rigid else 0.0
+        for j in range(nc):  # slip rows: mu N d with the solved normal force
+            if slip[j] and active[j]:
+                fn[j] = mu[j] * nsign[axrow[j]] * fn[axrow[j]] * sdir[j]
+        # friction first, on the pattern that was solved (a point closing in stick with a large
+        # trial tangent force must slip before its normal is judged), then the normal rows
+        changed, turned = _friction_checks(W, C2, nsign, u, free, axial, active, mu, axrow, slip, sdir, fn, g,
+                                           single)
+        if not (changed and single):
+            changed = _normal_flips(W, Wv, tau, nsign, u, ed, free, rigid, active, opening, mu, fn, g,
+                                    single) or changed
+        if not changed and not turned:
+            return OK, it, 0.0, 0.0
+        if turned and not changed:
+            turns += 1
+            if turns > max_iter:
+                return CYCLING, it, float(it), 0.0
+        elif it > nc + 2:
+            single = True
+        if it > max_iter + 4 * nc + turns:
+            return CYCLING, it, float(it), 0.0
+
+
+@njit(cache=True)
+def _laws_after_step(contact, state, fn, bolted, opening):
+    """Anchors and latches at the step end: a slipping tangent row's anchor moves so that the
+    stick relation holds with the slip force; an open point's tangent anchors follow the
+    relative position (a new contact starts unstressed); a point closed with compression
+    >= latch force is latched (bolted from the next step), its frictionless laterals
+    anchored at the current relative position."""
+    Phi_c, Cdiag, tau, mu, axial, nsign = contact.Phi, contact.compliance, contact.tau, contact.mu, contact.axial, \
+        contact.sign
+    dcontact, axcol, latch = contact.contact, contact.axcol, contact.latch
+    active, latched, anchor, slip = state.active, state.latched, state.anchor, state.slip
+    e = np.dot(Phi_c, state.q)
+    ev = np.dot(Phi_c, state.v) if contact.Wv.shape[0] > 0 else e
+    nc = fn.size
+    for j in range(nc):
+        if mu[j] > 0.0 and not bolted[dcontact[j]]:
+            if active[j]:
+                if slip[j]:
+                    anchor[j] = e[j] + tau[j] * ev[j] + Cdiag[j] * fn[j]
+            else:
+                anchor[j] = e[j]
+                slip[j] = False
+    for c in range(latch.size):
+        if latched[c] or bolted[c] or not latch[c] < np.inf:
+            continue
+        a = axcol[c]
+        if active[a] and not opening[a] and nsign[a] * fn[a] >= latch[c]:
+            latched[c] = True
+            for j in range(nc):
+                if dcontact[j] == c and not axial[j]:
+                    if mu[j] == 0.0:
+                        anchor[j] = e[j]
+                    elif slip[j]:
+                        anchor[j] = e[j] + tau[j] * ev[j] + Cdiag[j] * fn[j]
+                    slip[j] = False

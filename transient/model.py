@@ -12,6 +12,7 @@ from typing import Sequence
 import numpy as np
 
 from liftoff.core.errors import InputError
+from liftoff.core.labels import split_label
 
 from .body import ModalBody
 from .result import COLUMNS
@@ -45,6 +46,21 @@ class ContactPoint:
     re-closes the axial direction only. While coupled, the force on A in direction i is
     ``-K_C (c_i + x_a - x_b)`` with ``c_axial = normal_sign gap`` and 0 laterally (a bolted
     point with a gap therefore starts preloaded).
+
+    Contact laws beyond the reference's (all off by default; transient/contact_laws.py):
+
+    * ``normal``: a direction over the point's DOFs (one entry per label, all translations),
+      e.g. ``(0.6, 0, 0.8)`` over ``p:Tx, p:Ty, p:Tz``; the coupled directions become the
+      normal and an orthonormal tangent basis (:func:`contact_frame`), ``axial`` is then the
+      normal (row 0) and the separation is ``s = gap + normal_sign n . (x_a - x_b)``.
+    * ``friction``: Coulomb coefficient mu on the tangent (non-axial) directions while the
+      released point is closed: stick (the tangent K_C as an elastic stick spring,
+      anchored where sticking began) or slip with ``|f_t| = mu N``.
+    * ``damping``: a dashpot (N s/m per direction) in parallel with K_C while coupled;
+      a closed normal carries ``max(0, K_C d + c d')`` and only while it penetrates.
+    * ``latch_force``: a capture latch: once the released point is closed with a normal
+      compression >= latch_force (N; 0: on first contact), it is bolted from the end of
+      that step on, laterals anchored where they were (docking capture).
     """
 
     name: str
@@ -56,6 +72,10 @@ class ContactPoint:
     gap: float = 0.0
     release_time: float = INF
     rigid: bool = False
+    normal: Sequence[float] | None = None
+    friction: float = 0.0
+    damping: float | Sequence[float] = 0.0
+    latch_force: float | None = None
 
     def __post_init__(self) -> None:
         who = f"contact {self.name!r}"
@@ -89,10 +109,67 @@ class ContactPoint:
                 raise InputError(f"{who}: stiffness must be positive, got {k.tolist()}")
         self.stiffness = k
         self.rigid = bool(self.rigid)
+        self._laws(who, n)
+
+    def _laws(self, who: str, n: int) -> None:
+        """Check and normalise normal, friction, damping and latch_force."""
+        translations = all(split_label(lab)[1] < 3 for lab in self.labels_a)
+        if self.normal is not None:
+            nv = np.asarray(self.normal, dtype=float).reshape(-1)
+            if nv.shape != (n,) or not np.all(np.isfinite(nv)) or not np.linalg.norm(nv) > 0:
+                raise InputError(f"{who}: normal must be {n} finite numbers (one per label), not all zero")
+            if not translations:
+                raise InputError(f"{who}: a normal needs translation labels (Tx, Ty, Tz) only")
+            if self.axial != 0:
+                raise InputError(f"{who}: with a normal, the normal is direction 0 (axial must be 0)")
+            self.normal = nv / np.linalg.norm(nv)
+        mu = float(self.friction)
+        if not (math.isfinite(mu) and mu >= 0):
+            raise InputError(f"{who}: friction coefficient must be >= 0, got {self.friction!r}")
+        if mu > 0 and (self.rigid or n < 2 or not translations):
+            raise InputError(f"{who}: friction needs a penalty (not rigid) contact with a normal and at least "
+                             "one tangent direction, all translations")
+        self.friction = mu
+        c = np.asarray(self.damping, dtype=float)
+        c = np.full(n, float(c)) if c.ndim == 0 else c.reshape(-1)
+        if c.shape != (n,) or not np.all(np.isfinite(c)) or np.any(c < 0):
+            raise InputError(f"{who}: damping must be one value or {n} values >= 0 (N s/m), got {self.damping!r}")
+        if self.rigid and np.any(c > 0):
+            raise InputError(f"{who}: a rigid contact takes no damping (the dashpot is in parallel with K_C)")
+        self.damping = c
+        if self.latch_force is not None:
+            lf = float(self.latch_force)
+            if not (math.isfinite(lf) and lf >= 0):
+                raise InputError(f"{who}: latch_force must be >= 0 N, got {self.latch_force!r}")
+            self.latch_force = lf
 
     @property
     def n_dirs(self) -> int:
         return len(self.labels_a)
+
+    @property
+    def has_laws(self) -> bool:
+        """True when the point uses friction, damping or a latch (the kernel's extended path)."""
+        return self.friction > 0 or bool(np.any(self.damping > 0)) or self.latch_force is not None
+
+    def frame(self) -> np.ndarray:
+        """(n_dirs, n_dirs) rows: the coupled directions over the labels (identity without a normal)."""
+        return np.eye(self.n_dirs) if self.normal is None else contact_frame(self.normal)
+
+
+def contact_frame(normal) -> np.ndarray:
+    """Orthonormal rows: the unit ``normal`` first, then tangents by Gram-Schmidt on the unit
+    vectors in label order (deterministic: a normal along the third label gives tangents
+    along the first and second)."""
+    n = np.asarray(normal, dtype=float)
+    rows = [n / np.linalg.norm(n)]
+    for e in np.eye(n.size):
+        v = e - sum((r @ e) * r for r in rows)
+        if np.linalg.norm(v) > 1e-8:
+            rows.append(v / np.linalg.norm(v))
+        if len(rows) == n.size:
+            break
+    return np.array(rows)
 
 
 @dataclass
@@ -330,6 +407,9 @@ class TransientProblem:
             if self.method == "fixed-point" and c.rigid:
                 raise InputError(f"contact {c.name!r}: rigid contacts need method 'direct' "
                                  "(the fixed-point iteration needs a finite K_C)")
+            if self.method == "fixed-point" and c.has_laws:
+                raise InputError(f"contact {c.name!r}: friction, damping and latches need method 'direct' "
+                                 "(the fixed-point iteration is the reference's contact law only)")
         f = self.forcing
         for p in f.constant + f.tables:
             self.body(p.body).dof_index(p.label)

@@ -53,6 +53,8 @@ class ContactDirection:
     component: str          # component of label_a: Tx Ty Tz Rx Ry Rz
     axial: bool             # the contact's normal direction (compression-only once released)
     normal_sign: float      # +1: A on the + side of B; normal_sign * force > 0 is compression
+    vector: tuple = ()      # oriented direction (ContactPoint.normal): its coefficients over the
+                            # contact's labels; component is then n, t1, t2 ... and label_a point:n ...
 
     @property
     def label(self) -> str:
@@ -62,7 +64,7 @@ class ContactDirection:
     @property
     def unit(self) -> str:
         """Unit of the contact force in this direction: N, or N m for a rotation."""
-        return "N m" if COMPONENTS.index(self.component) >= 3 else "N"
+        return "N m" if self.component in COMPONENTS[3:] else "N"
 
 
 @dataclass(frozen=True)
@@ -190,8 +192,22 @@ class TransientResult:
                 "axial": Dataset(np.array([d.axial for d in dirs], dtype=np.int8), "1", dims=("/contact/labels",),
                                  meaning="1 normal (axial) direction, 0 lateral"),
                 "normal_sign": Dataset([d.normal_sign for d in dirs], "1", dims=("/contact/labels",),
-                                       meaning="normal_sign * force > 0: compression")},
+                                       meaning="normal_sign * force > 0: compression"),
+                **self._vectors()},
         }
+
+    def _vectors(self) -> dict:
+        """``direction/vector`` (n_dirs, max labels), only when a contact has a normal: the
+        coefficients of each oriented direction over its contact's labels (NaN padding, and
+        NaN rows for directions that are plain labels)."""
+        dirs = self.contact_directions
+        if not any(d.vector for d in dirs):
+            return {}
+        width = max(len(d.vector) for d in dirs)
+        V = np.full((len(dirs), width), np.nan)
+        for j, d in enumerate(dirs):
+            V[j, :len(d.vector)] = d.vector
+        return {"vector": Dataset(V, "1", meaning="oriented direction over the contact's labels_a; NaN: none")}
 
     def _body_data(self, key: str) -> dict:
         labels = list(self.output_labels[key])
@@ -223,9 +239,11 @@ def load_result(path: str | os.PathLike) -> TransientResult:
     c = d["contact"]
     cd = c["direction"]
     strings = lambda a: tuple(str(s) for s in a)  # noqa: E731
-    dirs = tuple(ContactDirection(str(c["names"][i]), int(i), str(la), str(lb) or None, str(comp), bool(ax), float(s))
-                 for i, la, lb, comp, ax, s in zip(cd["contact_index"], cd["label_a"], cd["label_b"], cd["component"],
-                                                   cd["axial"], cd["normal_sign"]))
+    vec = cd.get("vector", np.full((len(cd["axial"]), 0), np.nan))
+    dirs = tuple(ContactDirection(str(c["names"][i]), int(i), str(la), str(lb) or None, str(comp), bool(ax), float(s),
+                                  tuple(float(x) for x in v if np.isfinite(x)))
+                 for i, la, lb, comp, ax, s, v in zip(cd["contact_index"], cd["label_a"], cd["label_b"],
+                                                      cd["component"], cd["axial"], cd["normal_sign"], vec))
     labels, disp, vel, acc, modal, rb = {}, {}, {}, {}, {}, {}
     for key in ("a", "b"):
         g = d[f"body_{key}"]

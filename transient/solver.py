@@ -13,10 +13,12 @@ from liftoff.core.errors import ConvergenceError, InputError
 from .assembly import contact_rows, feedback_factors, feedback_matrix, modal_load
 from .body import ModalBody
 from .coefficients import StepCoefficients, step_coefficients
+from .contact_laws import initial_slip
 from .kernel import (
     BOLTED,
     CLOSED,
     CYCLING,
+    FRICTION_SINGULAR,
     NO_CONVERGENCE,
     OPEN,
     SINGULAR,
@@ -225,6 +227,16 @@ def initial_contact_force(body_a, body_b, rows, forcing, state: InitialState, t0
     active |= rows.axial & ~bolted & ~pen & (rows.sign * u <= 0)
     f = np.zeros(rows.n)
     f[active & pen] = -u[active & pen] / rows.compliance[active & pen]
+    if rows.laws:  # dashpots: f = -K_C (u + tau u'), a closed normal not in tension; sliding friction points
+        from .contact_laws import initial_friction
+
+        ud = rows.Phi_a @ state.v_a - rows.Phi_b @ state.v_b
+        ap = active & pen
+        f[ap] -= rows.tau[ap] * ud[ap] / rows.compliance[ap]
+        tension = ap & rows.axial & ~bolted & (rows.sign * f < 0)
+        active &= ~tension
+        f[tension] = 0.0
+        initial_friction(rows, f, active, ud, bolted[rows.axial_column])
     rig = active & ~pen
     if rig.any():
         # rigid rows: zero relative acceleration at t0 given the penalty forces
@@ -358,17 +370,29 @@ def step_flexibility(coefs: tuple[StepCoefficients, StepCoefficients], rows, kin
 def _contact_inputs(rows, coefs) -> tuple[Contact, np.ndarray]:
     """The kernel's contact bundle and W, the step flexibility of the rows (end force -> end
     displacement). With rigid rows the unknowns are x = [f1; g] (kernel.py) and the step
-    matrix [[C + W_Bc, W_Ac], [W_Bcd, W_Acd]]; penalty only: C + W on f1 alone."""
+    matrix [[C + W_Bc, W_Ac], [W_Bcd, W_Acd]]; penalty only: C + W on f1 alone. Dashpots
+    (tau = c/K_C per row) add diag(tau) times the velocity flexibility to the penalty rows
+    (transient/contact_laws.py)."""
     W = step_flexibility(coefs, rows, "Bc")
-    if (rows.compliance == 0).any():
+    rigid = (rows.compliance == 0).any()
+    if rigid:
         W2 = np.block([[W, step_flexibility(coefs, rows, "Ac")],
                        [step_flexibility(coefs, rows, "Bcd"), step_flexibility(coefs, rows, "Acd")]])
         C2 = np.concatenate([rows.compliance, np.zeros(rows.n)])
     else:
         W2, C2 = W, rows.compliance.copy()
+    Wv = np.zeros((0, W2.shape[0]))
+    if rows.laws and (rows.tau > 0).any():
+        Wv = step_flexibility(coefs, rows, "Bcd")
+        if rigid:
+            Wv = np.hstack([Wv, step_flexibility(coefs, rows, "Acd")])
+        W2 = W2.copy()
+        W2[:rows.n] += rows.tau[:, None] * Wv
     Phi_c = np.ascontiguousarray(np.hstack([rows.Phi_a, -rows.Phi_b]))  # both bodies as one modal set
+    axrow = rows.axial_column[rows.contact]
     return Contact(Phi_c, rows.compliance, rows.offset, rows.contact, rows.axial, rows.sign, rows.release,
-                   np.ascontiguousarray(W2), C2), W
+                   np.ascontiguousarray(W2), C2, bool(rows.laws), rows.tau.copy(), np.ascontiguousarray(Wv),
+                   rows.mu.copy(), axrow, rows.axial_column.copy(), rows.latch.copy()), W
 
 
 def _modal_inputs(problem: TransientProblem, coefs, loads) -> Modal:
@@ -429,9 +453,11 @@ def _start(problem: TransientProblem, rows, contact: Contact, init: InitialState
     if hist.keep:
         hist.Qa[0], hist.Va[0], hist.Aa[0], hist.Qb[0], hist.Vb[0], hist.Ab[0] = q_a, v_a, a_a0, q_b, v_b, a_b0
     pen0 = np.where(rows.compliance > 0, f0, 0.0)  # rigid rows start each step from their own g
-    return State(np.concatenate([q_a, q_b]), np.concatenate([v_a, v_b]), f0.copy(), active0.copy(),
+    q0 = np.concatenate([q_a, q_b])
+    anchor, slip, sdir = initial_slip(rows, f0, contact.Phi @ q0, active0, bolted0)   # contact_laws.py
+    return State(q0, np.concatenate([v_a, v_b]), f0.copy(), active0.copy(),
                  contact.Phi.T @ pen0, np.concatenate([loads[0].at(t0), loads[1].at(t0)]),
-                 np.zeros(1, dtype=np.int64))
+                 np.zeros(1, dtype=np.int64), anchor, np.zeros(len(rows.names), dtype=np.bool_), slip, sdir)
 
 
 def _new_cache(n2: int, cap: int = 64) -> Cache:
@@ -519,6 +545,9 @@ def _failure(status: int, t_fail: float, info1: float, info2: float, radius) -> 
     if status == SINGULAR:
         raise InputError(f"singular contact system at t = {t_fail:.6g} s: rigid contact directions "
                          "are redundant or act on DOFs with no flexibility")
+    if status == FRICTION_SINGULAR:
+        raise ConvergenceError(f"the slip forces mu N make the contact system singular at t = {t_fail:.6g} s "
+                               "(friction coefficient too large for this contact geometry)")
     raise ConvergenceError(f"the time loop stopped at t = {t_fail:.6g} s with status {status}")
 
 
@@ -547,6 +576,16 @@ def contact_events(state: np.ndarray, time: np.ndarray) -> tuple[np.ndarray, np.
     return sep, rec
 
 
+def capture_times(state: np.ndarray, time: np.ndarray, rows) -> dict:
+    """{latch contact: first time it is bolted after having been free (None: never captured)}."""
+    out = {}
+    for c in np.flatnonzero(np.isfinite(rows.latch)):
+        s = state[:, c]
+        hit = np.flatnonzero((s[1:] == BOLTED) & (s[:-1] != BOLTED)) + 1
+        out[rows.names[c]] = float(time[hit[0]]) if hit.size else None
+    return out
+
+
 def _result(problem: TransientProblem, rows, step: StepChoice, plans, hist: History, n_patterns: int,
             started: float) -> TransientResult:
     """The TransientResult of a finished run: histories split per body, events, metadata."""
@@ -561,6 +600,8 @@ def _result(problem: TransientProblem, rows, step: StepChoice, plans, hist: Hist
             "f_h": step.f_h, "h_default": step.h_default, "n_steps": step.n_steps, "t0": problem.t0,
             "t_end": problem.t_end, "body_a": problem.body_a.name, "body_b": problem.body_b.name,
             "wall_time_s": _time.perf_counter() - started, "active_set_patterns": n_patterns}
+    if np.isfinite(rows.latch).any():
+        meta["capture_time"] = capture_times(hist.state, time, rows)
     items = {r.name: RecoveryItem(r.name, r.body, r.category, r.labels, r.units, r.description) for r in problem.recoveries}
     return TransientResult(
         time=time, contact_names=rows.names, contact_directions=rows.directions, contact_force=hist.Fc,

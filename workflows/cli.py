@@ -84,6 +84,10 @@ def summary(scenario, result, path: Path, wall: float) -> str:
         rel = {float("inf"): "never", float("-inf"): "unbolted"}.get(c["release_time"], f"{c['release_time']:.6g}")
         lines.append(f"  {c['name']:<16}{rel:>12}{sep:>16}{c['recontacts']:>12d}"
                      f"{c['peak_compression'] + 0.0:>22.6g}{c['peak_tension'] + 0.0:>18.6g}")
+    captured = result.metadata.get("capture_time") or {}
+    if captured:
+        lines.append("  latches  " + ", ".join(f"{k} {'captured at ' + format(t, '.6g') + ' s' if t is not None else 'open'}"
+                                             for k, t in captured.items()))
     lines.append(f"  results  {path}")
     return "\n".join(lines)
 

@@ -20,10 +20,12 @@ from liftoff.core.errors import InputError
 def geometry(comp: ComponentModel, workdir: Path):
     """The meshed Geometry of one component, built from its parameter dataclass."""
     from liftoff.meshes import BoosterParams, OrbiterParams, PadParams, build_booster, build_orbiter, build_pad
+    from liftoff.meshes.barge import BargeParams, CargoParams, DockParams, build_barge, build_cargo, build_dock
     from liftoff.meshes.tank import TankParams, build_tank
 
     builders = ((TankParams, build_tank), (BoosterParams, build_booster), (OrbiterParams, build_orbiter),
-                (PadParams, build_pad))
+                (PadParams, build_pad), (BargeParams, build_barge), (CargoParams, build_cargo),
+                (DockParams, build_dock))
     for cls, build in builders:
         if isinstance(comp.builder, cls):
             return build(comp.builder, workdir)

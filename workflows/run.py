@@ -168,10 +168,23 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--no-cache", action="store_true", help="do not read or write the stage cache")
     p.add_argument("--no-snapshots", action="store_true", help="skip the pyvista pictures")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.add_argument("--example", choices=("barge",), default=None,
+                   help="run an embedded example instead of the default lift-off scenario: 'barge' (a barge hitting "
+                        "a dock, with a dock-stiffness sweep; docs/barge.md)")
     p.set_defaults(func=_cli)
 
 
 def _cli(args: argparse.Namespace) -> int:
-    run(args.scenario, args.out, cache_dir=False if args.no_cache else args.cache,
-        progress=not args.no_progress, snapshots=not args.no_snapshots)
+    from liftoff.config.barge import scenario_kind
+
+    kw = dict(cache_dir=False if args.no_cache else args.cache, progress=not args.no_progress,
+              snapshots=not args.no_snapshots)
+    if args.example is not None and args.scenario is not None:
+        raise InputError("liftoff run: give a scenario file or --example, not both")
+    if args.example == "barge" or scenario_kind(args.scenario) == "barge":   # kind = "barge": workflows/barge.py
+        from .barge import run as run_barge
+
+        run_barge(args.scenario, args.out, **kw)
+        return 0
+    run(args.scenario, args.out, **kw)
     return 0

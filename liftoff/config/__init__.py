@@ -4,7 +4,9 @@ dataclasses and the transient model; no gmsh, no dolfinx).
 * ``liftoff transient`` files (two bodies, contacts, forces): :func:`load_twobody` ->
   :class:`TwoBodyScenario` holding a :class:`liftoff.transient.TransientProblem`;
 * ``liftoff run`` files (models, posts, engines, effects, cases): :func:`load_scenario`
-  -> :class:`Scenario` of :class:`Case` objects with a :class:`ModelConfig`;
+  -> :class:`Scenario` of :class:`Case` objects with a :class:`ModelConfig`; with
+  ``kind = "barge"`` (the barge impact, docs/barge.md) :func:`load_barge` ->
+  :class:`BargeScenario` of :class:`BargeCase` objects (:func:`scenario_kind` tells which);
 * the sections both share (time, forces, gravity, contact law, softening, control, cryo)
   in :mod:`.sections`, the value checks and the one error wording
   (``file: key.path: what``) in :mod:`.values`, file reading in :mod:`.files`.
@@ -36,6 +38,10 @@ _EXPORTS = {
     "load_scenario": ".scenario",
     "merge": ".scenario",
     "parse_scenario": ".scenario",
+    "BargeScenario": ".barge",
+    "BargeCase": ".barge",
+    "load_barge": ".barge",
+    "scenario_kind": ".barge",
     "TwoBodyScenario": ".twobody",
     "load_twobody": ".twobody",
     "parse_twobody": ".twobody",

@@ -48,13 +48,13 @@ from .values import Where, array_of_tables, boolean, number, string, strings, ta
 DEFAULT_NAME = "default_scenario.toml"
 
 _TOP = {"title", "description", "model", "profiles", "post_defaults", "post", "engine",
-        "gravity", "cryo", "control", "softening", "force", "time", "recovery", "output", "case"}
+        "gravity", "cryo", "control", "softening", "force", "time", "recovery", "output", "case", "kind"}
 _PROFILE = {"time", "value", "csv"}
 _POST = {"name", "vehicle", "pad"} | LAW_KEYS
 _ENGINE = {"name", "mount", "direction", "start", "time", "thrust", "profile", "scale"}
 _RECOVERY = {"attach", "stations", "top", "payload"}
 _OUTPUT = {"plots", "snapshots", "progress"}
-_CASE = _TOP - {"case"} | {"name"}
+_CASE = _TOP - {"case", "kind"} | {"name"}
 
 
 # --------------------------------------------------------------------- dataclasses
@@ -262,9 +262,11 @@ def parse_scenario(data: dict, source: str = "scenario", base: Path | str = ".")
     CSV paths relative to ``base``."""
     w, base = Where(source), Path(base)
     table(w, data, _TOP)
+    if data.get("kind", "liftoff") != "liftoff":   # "barge": liftoff.config.barge
+        raise (w / "kind").error(f"expected 'liftoff' for a lift-off scenario, got {data.get('kind')!r}")
     title = string(w / "title", data.get("title", "liftoff scenario"))
     description = string(w / "description", data.get("description", ""), nonempty=False)
-    common = {k: v for k, v in data.items() if k not in ("case", "title", "description")}
+    common = {k: v for k, v in data.items() if k not in ("case", "title", "description", "kind")}
     cases_raw = array_of_tables(w / "case", data.get("case", []), "case")
     base_case = _case(w, common, "base", base)  # errors in the base name the base key, not a case
     cases, names = [] if cases_raw else [base_case], set()

@@ -24,7 +24,8 @@ from .values import Where, boolean, choice, integer, label, labels, number, stri
 TIME_KEYS = {"t0", "t_end", "h", "method", "tol", "max_iter"}
 FORCE_KEYS = {"label", "value", "time", "csv", "scale"}
 GRAVITY_KEYS = {"accel"}
-LAW_KEYS = {"stiffness", "rigid", "axial", "normal_sign", "gap", "release_time"}
+LAW_KEYS = {"stiffness", "rigid", "axial", "normal_sign", "gap", "release_time", "normal", "friction", "damping",
+            "latch_force"}
 SOFTENING_KEYS = {"enabled", "until", "labels"}
 CONTROL_KEYS = {"enabled", "gimbals", "start", "ramp", "law", "bandwidth_hz", "damping", "hold_start"}
 CONTROL_LAWS = ("moment", "attitude-hold")
@@ -163,12 +164,17 @@ class ContactLaw:
     normal_sign: float = 1.0
     gap: float = 0.0
     release_time: float = math.inf
+    normal: tuple | None = None        # oriented normal over the directions (ContactPoint.normal)
+    friction: float = 0.0              # Coulomb coefficient on the tangent directions
+    damping: np.ndarray | float = 0.0  # N s/m (N m s/rad) per direction, a dashpot in parallel with K_C
+    latch_force: float | None = None   # N, capture latch (None: none)
 
     def contact(self, name: str, labels_a: Sequence[str], labels_b: Sequence[str | None]) -> ContactPoint:
         """The transient model's contact point with this law."""
         return ContactPoint(name, list(labels_a), list(labels_b), self.stiffness, axial=self.axial,
                             normal_sign=self.normal_sign, gap=self.gap, release_time=self.release_time,
-                            rigid=self.rigid)
+                            rigid=self.rigid, normal=self.normal, friction=self.friction, damping=self.damping,
+                            latch_force=self.latch_force)
 
 
 def axial_index(where: Where, value: Any, directions: Sequence[str]) -> int:
@@ -198,13 +204,49 @@ def contact_law(where: Where, spec: dict, directions: Sequence[str], default_axi
             np.full(n, number(where / "stiffness", s, nonneg=True))
         if not np.all(k > 0):
             raise (where / "stiffness").error("zero stiffness: give a positive coupling stiffness")
-    axial = axial_index(where / "axial", spec.get("axial", default_axial), directions)
     sign = number(where / "normal_sign", spec.get("normal_sign", 1.0))
     if sign not in (1.0, -1.0):
         raise (where / "normal_sign").error(f"must be 1 or -1, got {sign:g}")
     gap = number(where / "gap", spec.get("gap", 0.0), nonneg=True)
     release = number(where / "release_time", spec.get("release_time", math.inf), allow_inf=True)
-    return ContactLaw(k, rigid, axial, sign, gap, release)
+    return ContactLaw(k, rigid, *_orientation(where, spec, directions, default_axial), sign, gap, release,
+                      **_laws(where, spec, n, rigid))
+
+
+def _orientation(where: Where, spec: dict, directions: Sequence[str], default_axial: int | str) -> tuple:
+    """(axial, normal): the normal direction by ``axial`` (index, label or component), or an
+    oriented ``normal`` vector over the directions (then direction 0 of the contact's frame)."""
+    if "normal" not in spec:
+        return (axial_index(where / "axial", spec.get("axial", default_axial), directions),)
+    if "axial" in spec:
+        raise (where / "normal").error("give either axial (a direction) or normal (a vector), not both")
+    if any(d.rpartition(":")[2] not in ("Tx", "Ty", "Tz") for d in directions):
+        raise (where / "normal").error("a normal vector needs translation directions (Tx, Ty, Tz) only")
+    nv = vector(where / "normal", spec["normal"], length=len(directions))
+    if not np.linalg.norm(nv) > 0:
+        raise (where / "normal").error("the normal vector is zero")
+    return (0,)
+
+
+def _laws(where: Where, spec: dict, n: int, rigid: bool) -> dict:
+    """friction, damping, latch_force and the normal vector of a contact law (ContactPoint checks the rest)."""
+    out = {}
+    if "normal" in spec:
+        out["normal"] = tuple(float(x) for x in vector(where / "normal", spec["normal"], length=n))
+    if "friction" in spec:
+        out["friction"] = number(where / "friction", spec["friction"], nonneg=True)
+        if out["friction"] > 0 and (rigid or n < 2):
+            raise (where / "friction").error("friction needs a penalty contact (stiffness, not rigid) with a "
+                                             "normal and at least one tangent direction")
+    if "damping" in spec:
+        d = spec["damping"]
+        out["damping"] = vector(where / "damping", d, length=n, nonneg=True) if isinstance(d, list) else \
+            number(where / "damping", d, nonneg=True)
+        if rigid and np.any(np.asarray(out["damping"]) > 0):
+            raise (where / "damping").error("a rigid contact takes no damping (the dashpot is in parallel with K_C)")
+    if "latch_force" in spec:
+        out["latch_force"] = number(where / "latch_force", spec["latch_force"], nonneg=True)
+    return out
 
 
 # ---------------------------------------------------------------- effects (section 4)

@@ -174,8 +174,9 @@ def _contacts(where: Where, spec: Any, body_a: ModalBody, body_b: ModalBody) -> 
             labels_b = _on_body(w / "labels_b", c["labels_b"], body_b)
             if len(labels_b) != len(labels_a):
                 raise (w / "labels_b").error(f"has {len(labels_b)} labels but labels_a has {len(labels_a)}")
+        law = contact_law(w, c, labels_a)           # its errors name their key already
         try:
-            out.append(contact_law(w, c, labels_a).contact(name, labels_a, labels_b))
+            out.append(law.contact(name, labels_a, labels_b))
         except InputError as exc:
             raise w.wrap(exc) from None
     return out
