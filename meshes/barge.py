@@ -135,7 +135,7 @@ def barge_closed_form_volumes(p: BargeParams) -> dict[str, float]:
 
 def hull_axial_stiffness(p: BargeParams) -> float:
     """EA (N) of the hull girder in x: deck, bottom and sides with their equivalent moduli."""
-    L, B, D, w = p.length, p.beam, p.depth, p.wall
+    B, D, w = p.beam, p.depth, p.wall
     E = {g: p.plate_material(g, t).E for g, t in (("deck", p.deck_thickness), ("bottom", p.bottom_thickness),
                                                   ("sides", p.side_thickness))}
     return E["deck"] * B * w + E["bottom"] * B * w + E["sides"] * 2 * (D - 2 * w) * w

@@ -261,8 +261,9 @@ def run(scenario=None, out: Path | str = "out/barge", cache_dir=None, progress: 
 def _write(sc, models: dict, problems: dict, out: Path, plots: bool, pics: bool, stage_times: list, echo,
            t_start: float):
     """Per case the transient, results file, max/min table and plots; then the sweep, frames, summary."""
-    from liftoff.core.records import write_text
     from liftoff.transient import solve
+
+    from liftoff.core.records import write_text
 
     from . import barge_report as rep
     from .report import envelope, write_csv
