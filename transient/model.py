@@ -255,7 +255,11 @@ METHODS = ("direct", "fixed-point")
 
 @dataclass
 class TransientProblem:
-    """Everything :func:`transient.solve` needs. ``h=None``: 0.25/f_h (eq. 12)."""
+    """Everything :func:`transient.solve` needs. ``h=None``: the automatic step (0.25/f_h,
+    eq. 12, bounded by the bodies' highest frequency and the run; transient/stepping.py).
+    ``accuracy``: the step is halved until the estimated error of every peak contact force
+    is below this fraction of the largest one (transient/accuracy.py; None: off).
+    ``memory_limit``: bytes the run may use (None: 80 % of the memory available)."""
 
     body_a: ModalBody
     body_b: ModalBody
@@ -272,6 +276,8 @@ class TransientProblem:
     recoveries: list = field(default_factory=list)
     keep_modal: bool = False
     progress: bool = True
+    accuracy: float | None = None
+    memory_limit: float | None = None
 
     def __post_init__(self) -> None:
         self.contacts = list(self.contacts)
@@ -286,6 +292,10 @@ class TransientProblem:
             raise InputError(f"method must be one of {', '.join(METHODS)}, got {self.method!r}")
         if not (self.tol > 0 and math.isfinite(self.tol)):
             raise InputError(f"tol = {self.tol!r} N must be positive")
+        if self.accuracy is not None and not (0 < self.accuracy < 1):
+            raise InputError(f"accuracy = {self.accuracy!r} must be a fraction of the peak force in (0, 1)")
+        if self.memory_limit is not None and not self.memory_limit > 0:
+            raise InputError(f"memory_limit = {self.memory_limit!r} bytes must be positive")
         if int(self.max_iter) < 1:
             raise InputError(f"max_iter = {self.max_iter!r} must be at least 1")
         self.max_iter = int(self.max_iter)
