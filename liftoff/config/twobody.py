@@ -297,6 +297,22 @@ def _recoveries(where: Where, spec: Any, bodies: dict[str, ModalBody], base: Pat
     return out
 
 
+def check_step(where: Where, problem: TransientProblem) -> None:
+    """The run's step (transient/stepping.py) chosen now, so that a step beyond the stability
+    limit or the time axis's resolution names the file and ``[time]`` (warnings are given
+    again when the run starts)."""
+    import warnings
+
+    from liftoff.transient.stepping import choose_step
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            choose_step(problem)
+        except InputError as exc:
+            raise where.wrap(exc) from None
+
+
 # ---------------------------------------------------------------- entry points
 def parse_twobody(data: dict, base: Path, source: str = "scenario", *, method: str | None = None,
                   progress: bool = True) -> TwoBodyScenario:
@@ -317,9 +333,11 @@ def parse_twobody(data: dict, base: Path, source: str = "scenario", *, method: s
     try:
         problem = TransientProblem(body_a, body_b, contacts, forcing, t.t_end, h=t.h, t0=t.t0, method=t.method,
                                    tol=t.tol, max_iter=t.max_iter, initial=initial, outputs=outputs,
-                                   recoveries=recoveries, keep_modal=keep_modal, progress=progress)
+                                   recoveries=recoveries, keep_modal=keep_modal, progress=progress,
+                                   accuracy=t.accuracy)
     except InputError as exc:
         raise top.wrap(exc) from None
+    check_step(top / "time", problem)
     return TwoBodyScenario(path=base / source, title=title, description=description, problem=problem)
 
 
