@@ -43,7 +43,10 @@ def build_component(comp: ComponentModel, model: ModelConfig, workdir: Path):
                          "`make setup` or use source = 'stick'") from None
     from liftoff.reduction import Component
 
-    geo = geometry(comp, Path(workdir))
+    from liftoff.meshes._occ import element_limit
+
+    with element_limit(model.max_elements, f"component {comp.name!r}"):
+        geo = geometry(comp, Path(workdir))
     for vol, mat in model.materials.items():
         if vol in geo.volumes:
             geo.volumes[vol] = mat

@@ -83,8 +83,6 @@ def prepare(sc, cache: StageCache, progress: bool, echo, error_estimate: bool = 
     (transient/stepping.py) and refused beyond ``max_memory`` bytes."""
     from liftoff.transient import static_equilibrium
 
-    from liftoff.config import Where
-
     from .loads import build_problem, stack_mass_summary
     from .pipeline import build_stack
 
@@ -94,7 +92,7 @@ def prepare(sc, cache: StageCache, progress: bool, echo, error_estimate: bool = 
         if mkey not in stacks:
             n0 = len(cache.log)
             t0 = time.perf_counter()
-            stacks[mkey] = build_stack(case.model, cache, progress=progress, where=Where(case.source, "model"))
+            stacks[mkey] = build_stack(case.model, cache, progress=progress, where=case.at("model"))
             for stage, label, how, secs in cache.log[n0:]:
                 stage_times.append((f"{stage} {label} ({how})", secs))
             stage_times.append(("model stages total", time.perf_counter() - t0))

@@ -39,8 +39,13 @@ VEHICLE = ("core", "srb_left", "srb_right", "orbiter")
 NAMES = VEHICLE + ("pad",)
 DEFAULT_F_MAX = 60.0        # Hz, fixed-interface modes kept when neither n_modes nor f_max is given
 STICK_ELEMENT = 4.0         # m, default beam element length of the stick source
+# the most elements one component may have, estimated before it is built ([model] max_elements):
+# a million P1 tetrahedra (~0.6 M DOFs: the limit of a sparse direct solve on a workstation),
+# ten thousand beams (a stick model finer than that is meaningless and slow to assemble)
+MAX_ELEMENTS = {"fe": 1_000_000, "stick": 10_000}
 
-_MODEL = {"source", "mesh_size", "degree", "zeta", "vehicle", "pad", "component", "materials", "system", "stick"}
+_MODEL = {"source", "mesh_size", "degree", "zeta", "vehicle", "pad", "component", "materials", "system", "stick",
+          "max_elements"}
 _VEHICLE = {"mesh_size", "params"}
 _COMP = {"mesh_size", "n_modes", "f_max", "params"}
 _SYSTEM = {"n_modes", "f_max", "pad_n_modes", "pad_f_max"}
@@ -75,7 +80,9 @@ class SystemModel:
 class ModelConfig:
     """``[model]``: source ``fe`` (gmsh + dolfinx solids) or ``stick`` (beams), element
     ``degree``, modal damping ratio ``zeta`` of every elastic mode, the five components
-    (core, srb_left, srb_right, orbiter, pad), material replacements and system modes."""
+    (core, srb_left, srb_right, orbiter, pad), material replacements and system modes;
+    ``max_elements``: the most elements a component may have (estimated before it is built;
+    default MAX_ELEMENTS of the source)."""
 
     source: str
     degree: int
@@ -84,6 +91,7 @@ class ModelConfig:
     components: dict[str, ComponentModel]
     materials: dict[str, Material]
     system: SystemModel
+    max_elements: int = MAX_ELEMENTS["fe"]
 
 
 # ---------------------------------------------------------------- builder dataclasses
@@ -254,5 +262,6 @@ def model_config(where: Where, spec: Any) -> ModelConfig:
     s = table(where / "system", m.get("system", {}), _SYSTEM)
     system = SystemModel(**{k: integer(where / "system" / k, v, 1) if "n_modes" in k else
                             number(where / "system" / k, v, positive=True) for k, v in s.items()})
+    max_elements = integer(where / "max_elements", m.get("max_elements", MAX_ELEMENTS[source]), 1)
     return ModelConfig(source, degree, zeta, layout, components,
-                       _materials(where / "materials", m.get("materials", {}), source), system)
+                       _materials(where / "materials", m.get("materials", {}), source), system, max_elements)

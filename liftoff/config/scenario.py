@@ -136,6 +136,11 @@ class Case:
     recovery: RecoveryPoints
     output: OutputFlags
 
+    def at(self, key: str = "") -> Where:
+        """The key path of a check made once the models exist, naming file and case:
+        ``my.toml: case 'hot': post[2] 'left_3'.vehicle: ...``."""
+        return Where(f"{self.source}: case {self.name!r}", key)
+
 
 @dataclass
 class Scenario:

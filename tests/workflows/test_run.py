@@ -129,7 +129,7 @@ def test_cli_bad_scenario_one_line(tmp_path, capsys):
     p.write_text(_toml(d))
     assert main(["run", str(p), "--out", str(tmp_path / "o"), "--no-cache", "--no-progress"]) == 2
     err = capsys.readouterr().err.strip()
-    assert err.count("\n") == 0 and "bad.toml: post[2] 'left_3'.vehicle: point 'srb_left_hd_9'" in err
+    assert err.count("\n") == 0 and "bad.toml: case 'nominal': post[2] 'left_3'.vehicle: point 'srb_left_hd_9'" in err
     assert not list((tmp_path / "o").glob("results_*.h5"))
     p.write_text("[model]\nsource = 'nastran'\n")
     assert main(["run", str(p), "--out", str(tmp_path / "o")]) == 2
