@@ -216,7 +216,7 @@ def axis_length(name: str, p: StickParams) -> float:
 
 
 def build(name: str, params: StickParams | None = None, element_length: float = 4.0,
-          max_elements: int = 10_000) -> tuple[Component, dict]:
+          max_elements: int = 2_000) -> tuple[Component, dict]:
     """Component ``name`` (core, srb_left, srb_right, orbiter or pad) and its {volume: nodal
     load of a unit free axial strain}; the stick model's only 'volume' of a component is its
     wall, ``<name>_wall`` (as the FE core's). ResourceError when its axis would have more
