@@ -104,9 +104,11 @@ def _static_solve(na, rows, K0, P0, t, act):
     Ss = sc[:, None] * S * sc[None, :]
     sv = np.linalg.svd(Ss, compute_uv=False)
     if sv.size and (sv[-1] <= 1e-11 * sv[0] or not np.isfinite(sv[0])):
-        raise InputError(f"static equilibrium at t = {t:g} s is singular (scaled condition number "
-                         f"{sv[0] / max(sv[-1], 1e-300):.3g}): a free body is not held by enough closed/bolted "
-                         "contact directions (or rigid contacts are redundant)")
+        kmax = float(np.max(Kp)) if Kp.size else 0.0
+        raise InputError(f"static equilibrium at t = {t:g} s is singular or too ill-conditioned to solve (scaled "
+                         f"condition number {sv[0] / max(sv[-1], 1e-300):.3g}): a free body is not held by enough "
+                         "closed/bolted contact directions, rigid contacts are redundant, or the contact stiffness "
+                         f"(up to {kmax:.3g} N/m) is too many orders above the bodies' own")
     x = sc * np.linalg.solve(Ss, sc * rhs)
     q = x[:n]
     f = np.zeros(rows.n)
@@ -444,8 +446,8 @@ def _failure(status: int, t_fail: float, info1: float, info2: float, radius) -> 
         raise ConvergenceError(f"contact active set did not settle at t = {t_fail:.6g} s "
                                f"({int(info1)} active-set changes in one step)")
     if status == SINGULAR:
-        raise InputError(f"singular contact system at t = {t_fail:.6g} s: rigid contact directions "
-                         "are redundant or act on DOFs with no flexibility")
+        raise InputError(f"singular contact system at t = {t_fail:.6g} s: rigid contact directions are redundant "
+                         "or act on DOFs with no flexibility, or the step matrix is not finite")
     raise ConvergenceError(f"the time loop stopped at t = {t_fail:.6g} s with status {status}")
 
 

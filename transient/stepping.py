@@ -98,6 +98,11 @@ def coupling_margin(rows, omega: np.ndarray, zeta: np.ndarray, h: float) -> floa
     if not pen.any():
         return math.inf
     c = step_coefficients(omega, zeta, h)
+    bad = ~np.all(np.isfinite(c.packed()), axis=0)
+    if bad.any():
+        m = int(np.argmax(bad))
+        raise InputError(f"the step coefficients of mode {m} (omega = {omega[m]:.4g} rad/s, zeta = {zeta[m]:.4g}) "
+                         f"are not finite at h = {h:.4g} s")
     with np.errstate(all="ignore"):
         det = (c.F + 1.0) * (c.Gd + 1.0) - c.G * c.Fd
         r = ((c.Gd + 1.0) * (c.Bc - c.Ac) - c.G * (c.Bcd - c.Acd)) / det
