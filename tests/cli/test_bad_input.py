@@ -238,7 +238,7 @@ def test_body_file_arrays_exactly_as_documented(case_dir: Path, capsys, edit, ex
     (_set("gravity.accel", [0.0, 0.0, -1e308]), "gravity.accel[2]: magnitude -1e+308 is beyond 1e+100", 2),
     (_set("force[1].value", 1e308), "force[1] 'top:Tx'.value: magnitude 1e+308", 2),
     (_set("time.t_end", 1e308), "time.t_end: magnitude 1e+308", 2),
-    (_set("time.h", 0.005), "time: time step h = 0.005 s exceeds the stability limit of the penalty contact coupling", 2),
+    (_set("time.h", 0.002), "time: time step h = 0.002 s exceeds the stability limit of the penalty contact coupling", 2),
     (_both(_set("time.t0", 1e15), _set("time.t_end", 1e15 + 1.0)), "below the resolution of the time axis", 2),
 ], ids=["gravity-1e308", "force-1e308", "t_end-1e308", "h-unstable", "t0-1e15"])
 def test_overflowing_or_unstable_input(case_dir: Path, capsys, mutate, expect, status):
