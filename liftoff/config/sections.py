@@ -18,7 +18,7 @@ import numpy as np
 from liftoff.transient.effects import softening_matrix
 from liftoff.transient.model import METHODS, ContactPoint, ModalFeedback, PointForce, TabulatedForce
 
-from .files import read_csv_table
+from .files import file_path, read_csv_table
 from .values import Where, boolean, choice, integer, label, labels, number, string, strings, table, vector
 
 TIME_KEYS = {"t0", "t_end", "h", "method", "tol", "max_iter", "accuracy"}
@@ -90,7 +90,7 @@ def check_table(where_t: Where, where_v: Where, time: np.ndarray, values: np.nda
 
 def csv_table(where: Where, value: Any, base: Path, columns: int = 2) -> tuple[np.ndarray, np.ndarray]:
     """(time, values) of a CSV file named by ``value`` (relative to ``base``): time, then data columns."""
-    tab = read_csv_table(base / string(where, value), where, columns=columns)
+    tab = read_csv_table(file_path(where, value, base), where, columns=columns)
     time, values = tab[:, 0], (tab[:, 1] if columns == 2 else tab[:, 1:])
     check_table(where, where, time, values)
     return time, values

@@ -19,7 +19,7 @@ from liftoff.core.errors import InputError
 from liftoff.transient.body import ModalBody, ground, load_body
 from liftoff.transient.model import Forcing, InitialState, ModalForce, Recovery, TransientProblem
 
-from .files import read_toml
+from .files import file_path, read_toml
 from .sections import (
     FORCE_KEYS,
     LAW_KEYS,
@@ -88,6 +88,8 @@ def _bodies(where: Where, spec: Any, base: Path) -> dict[str, ModalBody]:
     for key in ("a", "b"):
         w = where / key
         name = string(w, spec[key])
+        if name != "ground":
+            file_path(w, name, base)
         if name == "ground":
             if key == "a":
                 raise w.error("body a cannot be 'ground' (use body b for a fixed support)")
@@ -289,7 +291,7 @@ def _recoveries(where: Where, spec: Any, bodies: dict[str, ModalBody], base: Pat
         name = unique_name(w / "name", r["name"], names, "recovery")
         key = _body_key(w / "body", r["body"], bodies)
         wf = w / "file"
-        arrays = _recovery_file(wf, base / string(wf, r["file"]), key, bodies[key].n_modes)
+        arrays = _recovery_file(wf, file_path(wf, r["file"], base), key, bodies[key].n_modes)
         try:
             out.append(Recovery(name, key, **arrays))
         except InputError as exc:
