@@ -16,6 +16,7 @@ def test_estimate_step_closed_forms():
     block = spring_block(m, 1.0)  # its own support spring is negligible against K_C
     c = [ContactPoint("c", ["block:Tz"], [None], k)]
     f_h, h = estimate_step(block, ground(), c)
+    # a 1 x 1 eigenvalue and a square root: a few roundings (1e-12 = 4500 eps); h: one division
     assert math.isclose(f_h, math.sqrt(k / m) / (2 * math.pi), rel_tol=1e-12)
     assert math.isclose(h, 0.25 / f_h, rel_tol=1e-15)
     # two equal rigid masses coupled by k: relative mode sqrt(2 k / m)
@@ -23,7 +24,7 @@ def test_estimate_step_closed_forms():
     rod_b = free_free_rod(1.0, 1e9, 1000.0, 1e-3, 1, name="s", end_labels=("b0", "b1"))
     c = [ContactPoint("c", ["end1:Tz"], ["b0:Tz"], k)]
     f_h, _ = estimate_step(rod, rod_b, c)
-    assert math.isclose(f_h, math.sqrt(2 * k / 1.0) / (2 * math.pi), rel_tol=1e-12)
+    assert math.isclose(f_h, math.sqrt(2 * k / 1.0) / (2 * math.pi), rel_tol=1e-12)   # 1 x 1 again
 
 
 def _problem(**kw):

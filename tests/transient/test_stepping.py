@@ -123,4 +123,5 @@ def test_memory_estimate_matches_the_arrays_of_a_run():
               r.acceleration["a"], r.rigid_body_motion_a] + list(r.modal.values())
     actual = sum(a.nbytes for a in arrays if a is not None)
     est = memory_estimate(p, n_t - 1)
+    # byte counts: integers below 2^53, exact in floats but for the 0.125 and 0.5 fractions' sums
     assert math.isclose(est["histories"] + est["modal histories (keep_modal)"], actual, rel_tol=1e-12)
