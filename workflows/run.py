@@ -105,7 +105,7 @@ def prepare(sc, cache: StageCache, progress: bool, echo, error_estimate: bool = 
             steps = _case_steps(pr)
             static_equilibrium(pr.body_a, pr.body_b, pr.contacts, pr.forcing, pr.t0)
         except InputError as exc:
-            raise InputError(f"{case.source}: case {case.name!r}: {exc}") from None
+            raise case.at().wrap(exc) from None
         memory[case.name] = (pr, steps)
         problems[case.name] = (cp, mkey)
         stage_times.append((f"loads [{case.name}]", time.perf_counter() - t0))
