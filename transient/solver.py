@@ -384,7 +384,8 @@ def _solve(problem: TransientProblem, step: StepChoice | None = None, runs: int 
     pa, pb, fo = problem.body_a, problem.body_b, problem.forcing
     rows = contact_rows(pa, pb, problem.contacts)
     step = step or choose_step(problem, rows)
-    check_memory(problem, step.n_steps, runs)
+    check_memory(problem, step.n_steps, runs, f" of h = {step.h:.3g} s; 0.25/f_h = {step.h_default:.3g} s with the "
+                                              f"contact frequency f_h = {step.f_h:.4g} Hz")
     init = initial_state(problem)
     f0, active0 = initial_contact_force(pa, pb, rows, fo, init, problem.t0)
     coefs = (step_coefficients(pa.omega, pa.zeta, step.h), step_coefficients(pb.omega, pb.zeta, step.h))

@@ -275,9 +275,10 @@ def memory_estimate(problem: TransientProblem, n_steps: int, runs: int = 1) -> d
             "dense statics": 8.0 * 5 * (n + nrig) ** 2}
 
 
-def check_memory(problem: TransientProblem, n_steps: int, runs: int = 1) -> float:
+def check_memory(problem: TransientProblem, n_steps: int, runs: int = 1, step: str = "") -> float:
     """The estimate of :func:`memory_estimate` (bytes); ResourceError beyond the limit
-    (``problem.memory_limit`` bytes, None: MEMORY_FRACTION of the memory available)."""
+    (``problem.memory_limit`` bytes, None: MEMORY_FRACTION of the memory available);
+    ``step``: how the step came about, for the message."""
     parts = memory_estimate(problem, n_steps, runs)
     total = sum(parts.values())
     limit = problem.memory_limit
@@ -286,7 +287,7 @@ def check_memory(problem: TransientProblem, n_steps: int, runs: int = 1) -> floa
     if total > limit:
         big = max(parts, key=parts.get)
         raise ResourceError(f"the transient needs about {total / 1e9:.3g} GB ({big} {parts[big] / 1e9:.3g} GB: "
-                            f"{n_steps + 1} time points) but the limit is {limit / 1e9:.3g} GB; use fewer steps "
+                            f"{n_steps + 1} time points{step}) but the limit is {limit / 1e9:.3g} GB; use fewer steps "
                             "(a larger h or a shorter run), fewer outputs or modes, or raise the limit "
                             "(--max-memory GB on the command line, memory_limit of TransientProblem)")
     return total
