@@ -50,7 +50,8 @@ class GrowthGuard:
         self.beta = float(norms.sum())
         self.until = float(np.max(modal.until)) if modal.until.size else -math.inf
         self.const, self.tk, self.Pk = modal.const, modal.tk, modal.Pk
-        self.distortion = 1.0 / max(1.0 + margin, 1e-3) if math.isfinite(margin) else 1.0
+        # the discrete invariant exceeds the energy by up to 1/(1 + margin) near the limit; never below 1
+        self.distortion = 1.0 / max(min(1.0 + margin, 1.0), 1e-3) if math.isfinite(margin) else 1.0
 
     def _energy(self, state) -> float:
         """Energy of a kernel state (module docstring)."""
