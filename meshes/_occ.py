@@ -11,13 +11,43 @@ from __future__ import annotations
 import importlib
 import math
 from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from liftoff.core.errors import InputError
+from liftoff.core.errors import InputError, ResourceError
 from liftoff.core.records import atomic_path
+
+# (most tetrahedra, what is meshed) for mesh_and_write; None: no limit (the builders alone)
+_ELEMENT_LIMIT: ContextVar[tuple[float, str] | None] = ContextVar("liftoff_element_limit", default=None)
+REGULAR_TET = 1.0 / (6.0 * math.sqrt(2.0))  # volume of a regular tetrahedron of edge h, over h^3
+
+
+@contextmanager
+def element_limit(max_elements: float, what: str):
+    """Refuse (ResourceError) to mesh, inside this block, a model whose tetrahedra would
+    number more than ``max_elements`` by the estimate of :func:`check_element_count`."""
+    token = _ELEMENT_LIMIT.set((float(max_elements), what))
+    try:
+        yield
+    finally:
+        _ELEMENT_LIMIT.reset(token)
+
+
+def check_element_count(mesh_size: float) -> float:
+    """The fewest tetrahedra of size <= mesh_size that fill the model's volumes,
+    V / (h^3 / (6 sqrt 2)) (regular tetrahedra of edge h: gmsh's are no larger); a
+    ResourceError beyond the limit of :func:`element_limit`, before gmsh meshes."""
+    volume = float(sum(occ.getMass(3, tag) for _, tag in gmsh.model.getEntities(3)))
+    estimate = volume / (REGULAR_TET * mesh_size ** 3)
+    limit = _ELEMENT_LIMIT.get()
+    if limit is not None and estimate > limit[0]:
+        raise ResourceError(f"{limit[1]}: mesh size {mesh_size:g} m would give at least {estimate:.3g} tetrahedra "
+                            f"(volume {volume:.4g} m^3), beyond the limit of {limit[0]:.3g}; use a larger mesh_size "
+                            "or raise [model] max_elements")
+    return estimate
 
 
 class _Lazy:
@@ -349,7 +379,9 @@ def curvature_elements(thickness: float, max_curvature_radius: float) -> int:
 
 def mesh_and_write(path: Path, mesh_size: float, curvature_n: int = 0) -> int:
     """Mesh in 3D (P1 tets, sizes <= mesh_size, and <= 2 pi rho / curvature_n on walls of
-    curvature radius rho when curvature_n > 0) and write ``path`` atomically. Returns node count."""
+    curvature radius rho when curvature_n > 0) and write ``path`` atomically. Returns node count.
+    The element count is estimated first (:func:`check_element_count`)."""
+    check_element_count(mesh_size)
     gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", int(curvature_n))
     gmsh.option.setNumber("Mesh.MeshSizeMax", mesh_size)
     gmsh.option.setNumber("Mesh.MeshSizeMin", 0.0)

@@ -125,7 +125,8 @@ def system_modes(assembly: Assembly, n_rigid: int = 6, f_max: float | None = Non
         res = np.linalg.norm(K @ R, axis=0) / (np.linalg.norm(K, 2) * np.linalg.norm(R, axis=0))
         if res.max() > RB_TOL:
             raise InputError(f"{who} is not free-free: K RB / (|K| |RB|) = {res.max():.1e} for rigid "
-                             f"motion {int(np.argmax(res))} (constrained or non-geometric stiffness)")
+                             f"motion {int(np.argmax(res))} (constrained or non-geometric stiffness, or the round-off of "
+                             "a very finely meshed, badly conditioned component)")
         MR = M @ R
         lam, vec = eigh_massless(K - MR @ MR.T, M, who)
         elastic = lam[6:]

@@ -43,6 +43,24 @@ from liftoff.core.records import read_record, write_record
 
 FORMAT = "liftoff-modal-body"
 VERSION = 1
+MAX_MAGNITUDE = 1e100  # no SI quantity of a body comes near it; squares and products of two stay finite
+
+
+def _real(who: str, name: str, value, ndim: int | None = None, shape: tuple | None = None) -> np.ndarray:
+    """``value`` as a float array: real numbers only (no complex, text or objects); with
+    ``ndim`` or ``shape`` exactly that (no silent reshaping, e.g. of a transposed phi)."""
+    arr = np.asarray(value)
+    if arr.dtype.kind == "c":
+        raise InputError(f"{who}: {name} is complex ({arr.dtype}); a modal body is real")
+    if arr.dtype.kind not in "biuf" and arr.size:
+        raise InputError(f"{who}: {name} is not numeric ({arr.dtype})")
+    arr = arr.astype(float)
+    if ndim is not None and arr.ndim != ndim:
+        raise InputError(f"{who}: {name} has shape {arr.shape}, expected {ndim} dimension(s)")
+    if shape is not None and arr.shape != shape and not (arr.size == 0 and 0 in shape):
+        raise InputError(f"{who}: {name} has shape {arr.shape}, expected {shape}"
+                         + (" (DOF labels x modes)" if name == "phi" else ""))
+    return arr.reshape(shape) if shape is not None and arr.size == 0 else arr
 
 
 @dataclass
@@ -61,18 +79,23 @@ class ModalBody:
     rigid_body_mass: np.ndarray = field(default_factory=lambda: np.zeros((6, 6)))
 
     def __post_init__(self) -> None:
-        self.omega = np.asarray(self.omega, dtype=float).reshape(-1)
+        who = f"body {self.name!r}"
+        self.omega = _real(who, "omega", self.omega, ndim=1)
         n = self.omega.size
-        self.zeta = np.broadcast_to(np.asarray(self.zeta, dtype=float), (n,)).copy()
+        self.zeta = _real(who, "zeta", self.zeta)
+        if self.zeta.ndim == 0:
+            self.zeta = np.full(n, float(self.zeta))
         self.dof_labels = tuple(str(s) for s in self.dof_labels)
-        self.phi = np.asarray(self.phi, dtype=float).reshape(len(self.dof_labels), n)
-        self.participation = np.asarray(self.participation, dtype=float)
+        self.phi = _real(who, "phi", self.phi, shape=(len(self.dof_labels), n))
+        self.participation = _real(who, "participation", self.participation)
         if self.participation.size == 0:
             self.participation = np.zeros((n, 6))
-        self.ref_point = np.asarray(self.ref_point, dtype=float)
+        self.ref_point = _real(who, "ref_point", self.ref_point)
         self.points = tuple(str(s) for s in self.points)
-        self.point_coords = np.asarray(self.point_coords, dtype=float).reshape(-1, 3)
-        self.rigid_body_mass = np.asarray(self.rigid_body_mass, dtype=float)
+        self.point_coords = _real(who, "point_coords", self.point_coords)
+        if self.point_coords.size == 0:
+            self.point_coords = np.zeros((0, 3))
+        self.rigid_body_mass = _real(who, "rigid_body_mass", self.rigid_body_mass)
         self.validate()
 
     # ------------------------------------------------------------------ checks
@@ -80,6 +103,13 @@ class ModalBody:
         """Raise InputError (one line, naming the culprit) on any inconsistency."""
         who = f"body {self.name!r}"
         n = self.omega.size
+        if self.zeta.shape != (n,):
+            raise InputError(f"{who}: zeta has shape {self.zeta.shape}, expected ({n},) or one value")
+        if self.phi.shape != (len(self.dof_labels), n):
+            raise InputError(f"{who}: phi has shape {self.phi.shape}, expected ({len(self.dof_labels)}, {n}) "
+                             "(DOF labels x modes)")
+        if self.point_coords.ndim != 2 or self.point_coords.shape[1] != 3:
+            raise InputError(f"{who}: point_coords has shape {self.point_coords.shape}, expected (n_points, 3)")
         if self.participation.shape != (n, 6):
             raise InputError(f"{who}: participation has shape {self.participation.shape}, expected ({n}, 6)")
         if self.ref_point.shape != (3,):
@@ -89,8 +119,12 @@ class ModalBody:
         if len(self.points) != self.point_coords.shape[0]:
             raise InputError(f"{who}: {len(self.points)} points but {self.point_coords.shape[0]} point_coords rows")
         for name in ("omega", "zeta", "phi", "participation", "ref_point", "point_coords", "rigid_body_mass"):
-            if not np.all(np.isfinite(getattr(self, name))):
+            arr = getattr(self, name)
+            if not np.all(np.isfinite(arr)):
                 raise InputError(f"{who}: {name} contains NaN or inf")
+            if arr.size and np.abs(arr).max() > MAX_MAGNITUDE:
+                raise InputError(f"{who}: {name} has a value of magnitude {np.abs(arr).max():.3g}, beyond "
+                                 f"{MAX_MAGNITUDE:g} (SI units): its products would overflow")
         if np.any(self.omega < 0):
             raise InputError(f"{who}: negative natural frequency in omega (mode {int(np.argmax(self.omega < 0))})")
         if np.any(self.zeta < 0):

@@ -20,10 +20,23 @@ from .result import COLUMNS
 INF = math.inf
 
 
+MAX_MAGNITUDE = 1e100  # as liftoff.config.values: beyond any SI quantity here, and overflow-safe when squared
+
+
 def _finite(name: str, value) -> np.ndarray:
-    arr = np.asarray(value, dtype=float)
+    """``value`` as a real float array of finite entries no larger than MAX_MAGNITUDE."""
+    arr = np.asarray(value)
+    if arr.dtype.kind == "c":
+        raise InputError(f"{name} is complex; expected real numbers")
+    try:
+        arr = arr.astype(float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} is not numeric") from None
     if not np.all(np.isfinite(arr)):
         raise InputError(f"{name} contains NaN or inf")
+    if arr.size and np.abs(arr).max() > MAX_MAGNITUDE:
+        raise InputError(f"{name} has a value of magnitude {np.abs(arr).max():.3g}, beyond {MAX_MAGNITUDE:g} "
+                         "(SI units): it would overflow inside")
     return arr
 
 
@@ -92,9 +105,7 @@ class ContactPoint:
         if self.normal_sign not in (1, -1, 1.0, -1.0):
             raise InputError(f"{who}: normal_sign must be +1 or -1, got {self.normal_sign!r}")
         self.normal_sign = float(self.normal_sign)
-        if not math.isfinite(float(self.gap)):
-            raise InputError(f"{who}: gap must be finite, got {self.gap!r}")
-        self.gap = float(self.gap)
+        self.gap = float(_finite(f"{who}: gap", self.gap))
         if math.isnan(float(self.release_time)):
             raise InputError(f"{who}: release_time is NaN")
         self.release_time = float(self.release_time)
@@ -105,6 +116,7 @@ class ContactPoint:
         if not self.rigid:
             if not np.all(np.isfinite(k)):
                 raise InputError(f"{who}: stiffness contains NaN or inf (use rigid=True for a rigid bolt)")
+            _finite(f"{who}: stiffness", k)
             if np.any(k <= 0):
                 raise InputError(f"{who}: stiffness must be positive, got {k.tolist()}")
         self.stiffness = k
@@ -344,7 +356,11 @@ METHODS = ("direct", "fixed-point")
 
 @dataclass
 class TransientProblem:
-    """Everything :func:`transient.solve` needs. ``h=None``: 0.25/f_h (eq. 12)."""
+    """Everything :func:`transient.solve` needs. ``h=None``: the automatic step (0.25/f_h,
+    eq. 12, bounded by the bodies' highest frequency and the run; transient/stepping.py).
+    ``accuracy``: the step is halved until the estimated error of every peak contact force
+    is below this fraction of the largest one (transient/accuracy.py; None: off).
+    ``memory_limit``: bytes the run may use (None: 80 % of the memory available)."""
 
     body_a: ModalBody
     body_b: ModalBody
@@ -361,6 +377,8 @@ class TransientProblem:
     recoveries: list = field(default_factory=list)
     keep_modal: bool = False
     progress: bool = True
+    accuracy: float | None = None
+    memory_limit: float | None = None
 
     def __post_init__(self) -> None:
         self.contacts = list(self.contacts)
@@ -369,12 +387,17 @@ class TransientProblem:
             raise InputError("body a must have modes (only body b may be ground)")
         if not (math.isfinite(self.t0) and math.isfinite(self.t_end) and self.t_end > self.t0):
             raise InputError(f"t_end = {self.t_end!r} s must be finite and greater than t0 = {self.t0!r} s")
+        _finite("t0", self.t0), _finite("t_end", self.t_end)
         if self.h is not None and not (math.isfinite(self.h) and self.h > 0):
             raise InputError(f"time step h = {self.h!r} s must be positive and finite")
         if self.method not in METHODS:
             raise InputError(f"method must be one of {', '.join(METHODS)}, got {self.method!r}")
         if not (self.tol > 0 and math.isfinite(self.tol)):
             raise InputError(f"tol = {self.tol!r} N must be positive")
+        if self.accuracy is not None and not (0 < self.accuracy < 1):
+            raise InputError(f"accuracy = {self.accuracy!r} must be a fraction of the peak force in (0, 1)")
+        if self.memory_limit is not None and not self.memory_limit > 0:
+            raise InputError(f"memory_limit = {self.memory_limit!r} bytes must be positive")
         if int(self.max_iter) < 1:
             raise InputError(f"max_iter = {self.max_iter!r} must be at least 1")
         self.max_iter = int(self.max_iter)

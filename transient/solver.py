@@ -1,9 +1,7 @@
 """Two-body transient driver: step size (2.5), static initial conditions (2.6), time loop (2.3-2.7)."""
 from __future__ import annotations
 
-import math
 import time as _time
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -14,6 +12,7 @@ from .assembly import contact_rows, feedback_factors, feedback_matrix, modal_loa
 from .body import ModalBody
 from .coefficients import StepCoefficients, step_coefficients
 from .contact_laws import initial_slip
+from .guard import GrowthGuard
 from .kernel import (
     BOLTED,
     CLOSED,
@@ -33,9 +32,9 @@ from .kernel import (
 )
 from .model import Forcing, InitialState, TransientProblem
 from .result import RecoveryItem, TransientResult
+from .stepping import STABILITY, StepChoice, check_memory, choose_step, estimate_step  # noqa: F401 (re-exported)
 
-CHUNK = 5000  # steps per compiled call (progress updated between chunks)
-STABILITY = math.sqrt(3) / math.pi  # 2 pi f_h h < 2 sqrt(3): stability of penalty coupling (0.551/f_h)
+CHUNK = 5000  # steps per compiled call (progress and the growth guard between chunks)
 
 
 # --------------------------------------------------------------------- statics
@@ -107,9 +106,11 @@ def _static_solve(na, rows, K0, P0, t, act):
     Ss = sc[:, None] * S * sc[None, :]
     sv = np.linalg.svd(Ss, compute_uv=False)
     if sv.size and (sv[-1] <= 1e-11 * sv[0] or not np.isfinite(sv[0])):
-        raise InputError(f"static equilibrium at t = {t:g} s is singular (scaled condition number "
-                         f"{sv[0] / max(sv[-1], 1e-300):.3g}): a free body is not held by enough closed/bolted "
-                         "contact directions (or rigid contacts are redundant)")
+        kmax = float(np.max(Kp)) if Kp.size else 0.0
+        raise InputError(f"static equilibrium at t = {t:g} s is singular or too ill-conditioned to solve (scaled "
+                         f"condition number {sv[0] / max(sv[-1], 1e-300):.3g}): a free body is not held by enough "
+                         "closed/bolted contact directions, rigid contacts are redundant, or the contact stiffness "
+                         f"(up to {kmax:.3g} N/m) is too many orders above the bodies' own")
     x = sc * np.linalg.solve(Ss, sc * rhs)
     q = x[:n]
     f = np.zeros(rows.n)
@@ -126,84 +127,6 @@ def static_equilibrium(body_a: ModalBody, body_b: ModalBody, contacts, forcing: 
                        t: float = 0.0) -> InitialState:
     """Modal displacements of both bodies in static equilibrium at time t (section 2.6), zero velocities."""
     return static_solution(body_a, body_b, contacts, forcing, t)[0]
-
-
-# ----------------------------------------------------------------- step size
-def estimate_step(body_a: ModalBody, body_b: ModalBody, contacts) -> tuple[float, float]:
-    """(f_h in Hz, h = 0.25/f_h in s) from the bodies reduced to the contact DOFs (eq. 12);
-    without contacts (a plain modal transient) f_h is the highest modal frequency.
-
-    Penalty directions: the interface masses (Phi_c Phi_c^T)^-1 of both bodies coupled by
-    K_C, i.e. omega_h^2 = lambda_max(K_C^1/2 (Phi_ca Phi_ca^T + Phi_cb Phi_cb^T) K_C^1/2)
-    (body stiffness negligible against K_C). Rigid directions: the highest frequency of the
-    coupled modal system with those directions constrained (conservative)."""
-    rows = contact_rows(body_a, body_b, contacts)
-    if rows.n == 0:       # a plain modal transient: resolve the highest mode instead
-        w = max(float(np.max(body_a.omega, initial=0.0)), float(np.max(body_b.omega, initial=0.0)))
-        f_h = w / (2 * math.pi)
-        return f_h, (0.25 / f_h if f_h > 0 else math.inf)     # rigid bodies only: any h is exact
-    W0 = rows.Phi_a @ rows.Phi_a.T + rows.Phi_b @ rows.Phi_b.T
-    pen = rows.compliance > 0
-    w2 = 0.0
-    if pen.any():
-        k = np.sqrt(1.0 / rows.compliance[pen])
-        w2 = max(w2, float(np.linalg.eigvalsh(k[:, None] * W0[np.ix_(pen, pen)] * k[None, :]).max()))
-    if (~pen).any():
-        D = np.hstack([rows.Phi_a, -rows.Phi_b])
-        Om2 = np.concatenate([body_a.omega ** 2, body_b.omega ** 2])
-        Kfull = np.diag(Om2)
-        if pen.any():
-            Kfull = Kfull + D[pen].T @ ((1.0 / rows.compliance[pen])[:, None] * D[pen])
-        u, s, vt = np.linalg.svd(D[~pen])
-        r = int(np.sum(s > 1e-12 * max(s[0], 1e-300)))
-        N = vt[r:].T
-        if N.shape[1]:
-            w2 = max(w2, float(np.linalg.eigvalsh(N.T @ Kfull @ N).max()))
-    if not w2 > 0:
-        raise InputError("cannot estimate the step size: the contact model has no frequency; give h explicitly")
-    f_h = math.sqrt(w2) / (2 * math.pi)
-    return f_h, 0.25 / f_h
-
-
-@dataclass
-class StepChoice:
-    """The fixed step of a run (section 2.5): h, the contact frequency f_h it came from and
-    the default 0.25/f_h (eq. 12), the number of steps from t0."""
-
-    h: float
-    f_h: float
-    h_default: float
-    n_steps: int
-    t0: float
-
-    @property
-    def time(self) -> np.ndarray:
-        """(n_steps + 1,) the time of every step (s)."""
-        return self.t0 + self.h * np.arange(self.n_steps + 1)
-
-
-def choose_step(problem: TransientProblem, rows) -> StepChoice:
-    """h = problem.h, or 0.25/f_h (eq. 12) when not given; warns when a given h is larger
-    than 0.25/f_h (and says so when it also exceeds the penalty stability limit)."""
-    f_h, h_default = estimate_step(problem.body_a, problem.body_b, problem.contacts)
-    h = h_default if problem.h is None else float(problem.h)
-    if not math.isfinite(h):
-        raise InputError("cannot choose the step: no contacts and no elastic modes; give h explicitly")
-    if problem.h is not None and h > h_default * (1 + 1e-9) and rows.n:   # no contacts: every h is exact
-        extra = ""
-        if (rows.compliance > 0).any() and h > STABILITY * h_default / 0.25:
-            extra = (f"; it also exceeds about {STABILITY:.2f}/f_h = {STABILITY / f_h:.4g} s, the stability limit "
-                     "of the penalty coupling (linear-acceleration scheme), so the run may diverge")
-        warnings.warn(f"time step h = {h:.4g} s is larger than 0.25/f_h = {h_default:.4g} s "
-                      f"(f_h = {f_h:.4g} Hz, eq. 12): the contact force may be under-resolved{extra}",
-                      stacklevel=4)
-    span = problem.t_end - problem.t0
-    n_steps = int(math.ceil(span / h - 1e-9))
-    if n_steps < 1:
-        raise InputError(f"time step h = {h:g} s is longer than the run ({span:g} s)")
-    if n_steps > 2e8:
-        raise InputError(f"{n_steps} steps of h = {h:g} s: too many; use a larger h or a shorter run")
-    return StepChoice(h, f_h, h_default, n_steps, float(problem.t0))
 
 
 # ------------------------------------------------------------- initial force
@@ -476,15 +399,23 @@ def solve(problem: TransientProblem) -> TransientResult:
     from threadpoolctl import threadpool_limits
 
     with threadpool_limits(limits=1, user_api="blas"):
+        if problem.accuracy is not None:  # the step is chosen by halving (transient/accuracy.py)
+            from .accuracy import solve_estimated
+
+            return solve_estimated(problem).result
         return _solve(problem)
 
 
-def _solve(problem: TransientProblem) -> TransientResult:
-    """Run the two-body transient (sections 2.3-2.7) and return its time histories."""
+def _solve(problem: TransientProblem, step: StepChoice | None = None, runs: int = 1) -> TransientResult:
+    """Run the two-body transient (sections 2.3-2.7) in the steps ``step`` (None: the
+    problem's, stepping.choose_step) and return its time histories; ``runs``: results held
+    in memory at once (for the memory estimate)."""
     started = _time.perf_counter()
     pa, pb, fo = problem.body_a, problem.body_b, problem.forcing
     rows = contact_rows(pa, pb, problem.contacts)
-    step = choose_step(problem, rows)
+    step = step or choose_step(problem, rows)
+    check_memory(problem, step.n_steps, runs, f" of h = {step.h:.3g} s; 0.25/f_h = {step.h_default:.3g} s with the "
+                                              f"contact frequency f_h = {step.f_h:.4g} Hz")
     init = initial_state(problem)
     f0, active0 = initial_contact_force(pa, pb, rows, fo, init, problem.t0)
     coefs = (step_coefficients(pa.omega, pa.zeta, step.h), step_coefficients(pb.omega, pb.zeta, step.h))
@@ -497,15 +428,19 @@ def _solve(problem: TransientProblem) -> TransientResult:
     steps = Stepping(float(problem.t0), float(step.h), 0 if problem.method == "direct" else 1,
                      float(problem.tol), int(problem.max_iter))
     out_rows = OutputRows(plans[0].L, plans[0].kind, plans[0].targ, plans[1].L, plans[1].kind, plans[1].targ)
-    inputs = (steps, _modal_inputs(problem, coefs, loads), contact, out_rows)
-    _drive(problem, step, inputs, state, cache, hist, lambda: _spectral_radius(W, rows, state.active))
+    modal = _modal_inputs(problem, coefs, loads)
+    inputs = (steps, modal, contact, out_rows)
+    guard = GrowthGuard(rows, modal, state, step.h, step.margin)
+    guard.start(step.t0, step.t_end)
+    _drive(problem, step, inputs, state, cache, hist, lambda: _spectral_radius(W, rows, state.active), guard)
     return _result(problem, rows, step, plans, hist, int(cache.used[0]), started)
 
 
 def _drive(problem: TransientProblem, step: StepChoice, inputs, state: State, cache: Cache, hist: History,
-           radius) -> None:
+           radius, guard: GrowthGuard) -> None:
     """March every step in compiled chunks of CHUNK steps (a progress bar between chunks);
-    a failed chunk raises (``radius()``: spectral radius of K_C W for the message)."""
+    a failed chunk raises (``radius()``: spectral radius of K_C W for the message), and so
+    does a chunk whose energy or contact forces outgrow the bounds of ``guard``."""
     bar = None
     if problem.progress and step.n_steps > 4 * CHUNK:
         from tqdm import tqdm
@@ -518,13 +453,12 @@ def _drive(problem: TransientProblem, step: StepChoice, inputs, state: State, ca
             status, at, info1, info2 = march(i, i1, *inputs, state, cache, hist)
             if status != 0:
                 _failure(status, step.t0 + at * step.h, info1, info2, radius)
-            if not np.all(np.isfinite(state.q)):
+            if not (np.all(np.isfinite(state.q)) and np.all(np.isfinite(state.v))):
                 bad = np.flatnonzero(~np.all(np.isfinite(hist.Fc[i + 1:i1 + 1]), axis=1))
                 t_bad = step.t0 + step.h * (i + 1 + (bad[0] if bad.size else 0))
-                raise ConvergenceError(
-                    f"the solution diverged (non-finite contact force) at t = {t_bad:.6g} s: h = {step.h:.4g} s; "
-                    f"the penalty coupling is stable only for h below about {STABILITY / step.f_h:.4g} s "
-                    f"({STABILITY:.2f}/f_h)")
+                raise ConvergenceError(f"the solution diverged (non-finite values) at t = {t_bad:.6g} s with "
+                                       f"h = {step.h:.4g} s; reduce h")
+            guard.check(step.t0 + step.h * i1, state, hist.Fc[i + 1:i1 + 1], step.t0 + step.h * np.arange(i + 1, i1 + 1))
             if bar is not None:
                 bar.update(i1 - i)
             i = i1
@@ -543,8 +477,8 @@ def _failure(status: int, t_fail: float, info1: float, info2: float, radius) -> 
         raise ConvergenceError(f"contact active set did not settle at t = {t_fail:.6g} s "
                                f"({int(info1)} active-set changes in one step)")
     if status == SINGULAR:
-        raise InputError(f"singular contact system at t = {t_fail:.6g} s: rigid contact directions "
-                         "are redundant or act on DOFs with no flexibility")
+        raise InputError(f"singular contact system at t = {t_fail:.6g} s: rigid contact directions are redundant "
+                         "or act on DOFs with no flexibility, or the step matrix is not finite")
     if status == FRICTION_SINGULAR:
         raise ConvergenceError(f"the slip forces mu N make the contact system singular at t = {t_fail:.6g} s "
                                "(friction coefficient too large for this contact geometry)")
@@ -562,8 +496,9 @@ def _spectral_radius(W, rows, active) -> float:
 
 # ------------------------------------------------------------------- result
 def contact_events(state: np.ndarray, time: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per contact point: time of the first opening (NaN if never) and the number of recontacts
-    (open -> closed), from the state histories (n_t, n_contacts)."""
+    """Per contact point: time of the first opening (NaN if never) and the number of recontacts,
+    the closings (open -> closed) after that first opening, from the state histories
+    (n_t, n_contacts). A contact that starts open and lands once has not recontacted."""
     ncon = state.shape[1]
     sep = np.full(ncon, np.nan)
     rec = np.zeros(ncon, dtype=np.int64)
@@ -572,7 +507,8 @@ def contact_events(state: np.ndarray, time: np.ndarray) -> tuple[np.ndarray, np.
         opened = np.flatnonzero((s[1:] == OPEN) & (s[:-1] != OPEN)) + 1
         if opened.size:
             sep[c] = time[opened[0]]
-        rec[c] = int(np.sum((s[1:] == CLOSED) & (s[:-1] == OPEN)))
+            closings = np.flatnonzero((s[1:] == CLOSED) & (s[:-1] == OPEN)) + 1
+            rec[c] = int(np.sum(closings > opened[0]))
     return sep, rec
 
 
@@ -597,7 +533,8 @@ def _result(problem: TransientProblem, rows, step: StepChoice, plans, hist: Hist
     if hist.keep:
         modal = {"q_a": hist.Qa, "v_a": hist.Va, "acc_a": hist.Aa, "q_b": hist.Qb, "v_b": hist.Vb, "acc_b": hist.Ab}
     meta = {"h": step.h, "method": problem.method, "tol": problem.tol, "max_iter": problem.max_iter,
-            "f_h": step.f_h, "h_default": step.h_default, "n_steps": step.n_steps, "t0": problem.t0,
+            "f_h": step.f_h, "h_default": step.h_default, "f_s": step.f_s, "h_requested": step.h_requested,
+            "stability_margin": step.margin, "n_steps": step.n_steps, "t0": problem.t0,
             "t_end": problem.t_end, "body_a": problem.body_a.name, "body_b": problem.body_b.name,
             "wall_time_s": _time.perf_counter() - started, "active_set_patterns": n_patterns}
     if np.isfinite(rows.latch).any():

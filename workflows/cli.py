@@ -8,6 +8,7 @@ diverged solution, 4 not enough resources (memory, disk), 1 an internal error (a
 the line asks to report it), 130/143 interrupted by SIGINT/SIGTERM.
 
     liftoff transient SCENARIO.toml --out DIR [--method direct|fixed-point] [--no-progress]
+                      [--no-error-estimate] [--max-memory GB]
 """
 from __future__ import annotations
 
@@ -50,27 +51,58 @@ def _add_transient(sub: argparse._SubParsersAction) -> None:
                    help="contact solve: direct active-set solve (default) or the reference's "
                         "fixed-point iteration; overrides [time] method")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_common(p)
     p.set_defaults(func=_run_transient)
+
+
+def add_common(p: argparse.ArgumentParser) -> None:
+    """Options shared by ``transient`` and ``run``: the error estimate and the memory limit."""
+    p.add_argument("--no-error-estimate", action="store_true",
+                   help="skip the second run at h/2 that estimates the error of every peak (Richardson); "
+                        "[time] accuracy needs it and keeps it")
+    p.add_argument("--max-memory", type=_positive, default=None, metavar="GB",
+                   help="memory the transient may use, in GB (default: 80 %% of the memory available)")
+
+
+def _positive(text: str) -> float:
+    try:
+        x = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (x > 0 and x < float("inf")):
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return x
 
 
 def _run_transient(args: argparse.Namespace) -> int:
     from liftoff.config import load_twobody
 
     scenario = load_twobody(args.scenario, method=args.method, progress=not args.no_progress)
-    from liftoff.transient import solve
+    from liftoff.transient import solve, solve_estimated
 
+    problem = scenario.problem
+    if args.max_memory is not None:
+        problem.memory_limit = args.max_memory * 1e9
     check_target(args.out)
     started = time.perf_counter()
-    result = solve(scenario.problem)
+    est = None
+    if args.no_error_estimate and problem.accuracy is None:
+        result = solve(problem)
+    else:
+        est = solve_estimated(problem)
+        result = est.result
     wall = time.perf_counter() - started
     with staged_output(args.out, command=f"liftoff transient {args.scenario}") as stage:
         result.save(stage / RESULTS_NAME)
-    print(summary(scenario, result, args.out / RESULTS_NAME, wall))
+    print(summary(scenario, result, args.out / RESULTS_NAME, wall, est))
     return EXIT_OK
 
 
-def summary(scenario, result, path: Path, wall: float) -> str:
-    """A short text summary: per contact, release, first separation and peak forces."""
+def summary(scenario, result, path: Path, wall: float, est=None) -> str:
+    """A short text summary: per contact, release, first separation and peak forces, with
+    the estimated error of each peak when ``est`` (transient.accuracy.Estimated) is given."""
+    from liftoff.transient.accuracy import error_estimate
+
     p = scenario.problem
     lines = [f"liftoff transient: {scenario.title}",
              f"  bodies   a = {p.body_a.name} ({p.body_a.n_modes} modes), "
@@ -78,12 +110,19 @@ def summary(scenario, result, path: Path, wall: float) -> str:
              f"  time     {result.time[0]:g} .. {result.time[-1]:g} s, {result.time.size - 1} steps of "
              f"h = {result.h:.4g} s, method {p.method}, {wall:.2f} s wall"]
     lines.append(f"  {'contact':<16}{'release (s)':>12}{'separation (s)':>16}{'recontacts':>12}"
-                 f"{'peak compression (N)':>22}{'peak tension (N)':>18}")
-    for c in result.contact_summary():
+                 f"{'peak compression (N)':>22}{'est. error':>12}{'peak tension (N)':>18}{'est. error':>12}")
+    fine = est.check.contact_summary() if est is not None else None
+    for i, c in enumerate(result.contact_summary()):
         sep = "never" if c["separation_time"] is None else f"{c['separation_time']:.6g}"
         rel = {float("inf"): "never", float("-inf"): "unbolted"}.get(c["release_time"], f"{c['release_time']:.6g}")
+        errs = ["-", "-"] if fine is None else [
+            f"{abs(error_estimate(c[k], fine[i][k])):.3g}" for k in ("peak_compression", "peak_tension")]
         lines.append(f"  {c['name']:<16}{rel:>12}{sep:>16}{c['recontacts']:>12d}"
-                     f"{c['peak_compression'] + 0.0:>22.6g}{c['peak_tension'] + 0.0:>18.6g}")
+                     f"{c['peak_compression'] + 0.0:>22.6g}{errs[0]:>12}{c['peak_tension'] + 0.0:>18.6g}{errs[1]:>12}")
+    if est is not None:
+        acc = "" if p.accuracy is None else f"; accuracy {p.accuracy:g} reached"
+        lines.append(f"  est. error: an estimate of each peak's error, 4/3 (peak at h/2 - peak at h) (Richardson, "
+                     f"order 2); worst {est.relative:.3g} of the largest contact force{acc}")
     captured = result.metadata.get("capture_time") or {}
     if captured:
         lines.append("  latches  " + ", ".join(f"{k} {'captured at ' + format(t, '.6g') + ' s' if t is not None else 'open'}"

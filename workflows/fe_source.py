@@ -43,9 +43,11 @@ def build_component(comp: ComponentModel, model: ModelConfig, workdir: Path):
     except ImportError as exc:
         raise InputError(f"model.source = 'fe' needs gmsh and dolfinx ({exc}); install them with "
                          "`make setup` or use source = 'stick'") from None
+    from liftoff.meshes._occ import element_limit
     from liftoff.reduction import Component
 
-    geo = geometry(comp, Path(workdir))
+    with element_limit(model.max_elements, f"component {comp.name!r}"):
+        geo = geometry(comp, Path(workdir))
     for vol, mat in model.materials.items():
         if vol in geo.volumes:
             geo.volumes[vol] = mat

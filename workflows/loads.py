@@ -69,7 +69,7 @@ def contacts(case: Case, stack: StackModel) -> list[ContactPoint]:
     """The hold-down posts (section 2.7) as contact points, vehicle = body a, pad = body b."""
     out = []
     for i, p in enumerate(case.posts):
-        w = (Where(case.source, "post") / i).named(p.name)
+        w = (case.at("post") / i).named(p.name)
         _check_point(stack.vehicle, p.vehicle, w / "vehicle")
         _check_point(stack.pad, p.pad, w / "pad")
         out.append(p.contact())
@@ -81,7 +81,7 @@ def applied_forces(case: Case, stack: StackModel) -> tuple[list[PointForce], lis
     or tables), all on the vehicle."""
     constant, tables = [], []
     for i, e in enumerate(case.engines):
-        _check_point(stack.vehicle, e.mount, (Where(case.source, "engine") / i).named(e.name) / "mount")
+        _check_point(stack.vehicle, e.mount, (case.at("engine") / i).named(e.name) / "mount")
         t, v = e.table()
         for c, d in zip(XYZ, e.direction):
             if d != 0.0:
@@ -90,7 +90,7 @@ def applied_forces(case: Case, stack: StackModel) -> tuple[list[PointForce], lis
         try:
             stack.vehicle.dof_index(f.label)
         except InputError as exc:
-            raise ((Where(case.source, "force") / i).named(f.label) / "label").wrap(exc) from None
+            raise ((case.at("force") / i).named(f.label) / "label").wrap(exc) from None
         (constant if f.time is None else tables).append(f.on("a"))
     return constant, tables
 
@@ -101,7 +101,7 @@ def control_table(case: Case, stack: StackModel, tables: list[TabulatedForce],
     applied tables, switched on at ``control.start`` over ``control.ramp`` seconds."""
     ctl = case.control
     body = stack.vehicle
-    _check_labels(body, ctl.gimbals, Where(case.source, "control.gimbals"))
+    _check_labels(body, ctl.gimbals, case.at("control.gimbals"))
     t0, t1 = case.time.t0, case.time.t_end
     pts = [np.array([t0, t1])] + [tb.time for tb in tables]
     start, ramp = ctl.start, ctl.ramp
@@ -119,7 +119,7 @@ def control_table(case: Case, stack: StackModel, tables: list[TabulatedForce],
     try:
         F = control_forces(body, gimbals, labels, P) if labels else np.zeros((grid.size, len(gimbals)))
     except InputError as exc:
-        raise Where(case.source, "control.gimbals").wrap(exc) from None
+        raise case.at("control.gimbals").wrap(exc) from None
     if np.isfinite(start):
         on = np.clip((grid - start) / max(ramp, 1e-6), 0.0, 1.0)
         F = F * on[:, None]
@@ -131,11 +131,11 @@ def softening(case: Case, stack: StackModel, soft: Softening | None = None) -> M
     each step until ``softening.until`` (``soft``: another softening spec than the case's)."""
     soft = soft or case.softening
     if soft.labels is not None:
-        _check_labels(stack.vehicle, soft.labels, Where(case.source, "softening.labels"))
+        _check_labels(stack.vehicle, soft.labels, case.at("softening.labels"))
     try:
         return soft.feedback(stack.vehicle, case.gravity)
     except InputError as exc:
-        raise Where(case.source, "softening").wrap(exc) from None
+        raise case.at("softening").wrap(exc) from None
 
 
 def _attach_component(stack: StackModel, point: str, where: Where) -> str:
@@ -154,7 +154,7 @@ def recoveries(case: Case, stack: StackModel) -> tuple[list[Recovery], dict, dic
     out, attach = [], {}
     for spec in case.recovery.attach:
         point, _, comp = spec.partition("@")
-        comp = comp or _attach_component(stack, point, Where(case.source, "recovery.attach"))
+        comp = comp or _attach_component(stack, point, case.at("recovery.attach"))
         labels = [f"{point}:{c}" for c in SIX]
         D, A = interface_force_recovery(stack.vehicle_asm, stack.vehicle_modes, comp, labels)
         name = f"attach_{point}"
@@ -172,7 +172,7 @@ def recoveries(case: Case, stack: StackModel) -> tuple[list[Recovery], dict, dic
         out.append(Recovery("modal_q_b", "b", [f"q{j}" for j in range(n_b)], disp=np.eye(n_b),
                             units="sqrt(kg) m", category="modal", description="modal coordinates of the pad"))
     outputs = []
-    w = Where(case.source, "recovery")
+    w = case.at("recovery")
     for key in ("top", "payload"):
         pt = getattr(case.recovery, key)
         if pt:
@@ -220,7 +220,7 @@ def build_problem(case: Case, stack: StackModel, progress: bool = True) -> CaseP
     forces, gravity softening, recoveries; static initial state (section 2.6)."""
     body = stack.vehicle
     cps = contacts(case, stack)
-    cryo = cryo_loads(stack, case.cryo, Where(case.source, "cryo"))
+    cryo = cryo_loads(stack, case.cryo, case.at("cryo"))
     constant, tables = applied_forces(case, stack)
     constant = [PointForce("a", lab, val) for lab, val in cryo.items()] + constant
     ctab = None

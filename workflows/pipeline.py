@@ -77,7 +77,7 @@ def build_component(model: ModelConfig, comp: ComponentModel, workdir: Path) -> 
     if model.source == "stick":
         from .stick import build
 
-        return build(comp.name, comp.builder, comp.mesh_size)
+        return build(comp.name, comp.builder, comp.mesh_size, model.max_elements)
     from . import fe_source
 
     return fe_source.build_component(comp, model, workdir)

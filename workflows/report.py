@@ -64,8 +64,24 @@ def maxmin(time: np.ndarray, its: list[Item], case: str) -> list[dict]:
     return rows
 
 
+def with_errors(rows: list[dict], rows_half: list[dict] | None) -> list[dict]:
+    """The max/min ``rows`` of a run at step h with ``max_err`` and ``min_err``: the estimated
+    error (value - reported, signed) of each extreme from the same rows of the run at h/2
+    (transient/accuracy.py: 4/3 (y_h/2 - y_h), Richardson, an estimate, not a bound); NaN
+    without ``rows_half``."""
+    from liftoff.transient.accuracy import error_estimate
+
+    half = {r["item"]: r for r in rows_half or []}
+    for r in rows:
+        o = half.get(r["item"])
+        r["max_err"] = error_estimate(r["max"], o["max"]) if o else float("nan")
+        r["min_err"] = error_estimate(r["min"], o["min"]) if o else float("nan")
+    return rows
+
+
 def envelope(per_case: dict[str, list[dict]]) -> list[dict]:
-    """Max of the maxima and min of the minima over cases, with the case of each."""
+    """Max of the maxima and min of the minima over cases, with the case (and the estimated
+    error, :func:`with_errors`) of each."""
     env: dict[str, dict] = {}
     for rows in per_case.values():
         for r in rows:
@@ -74,13 +90,24 @@ def envelope(per_case: dict[str, list[dict]]) -> list[dict]:
                 env[r["item"]] = dict(r)
                 continue
             if r["max"] > e["max"]:
-                e.update(max=r["max"], t_max=r["t_max"], case_max=r["case_max"])
+                e.update(max=r["max"], t_max=r["t_max"], case_max=r["case_max"], max_err=r.get("max_err", NAN))
             if r["min"] < e["min"]:
-                e.update(min=r["min"], t_min=r["t_min"], case_min=r["case_min"])
+                e.update(min=r["min"], t_min=r["t_min"], case_min=r["case_min"], min_err=r.get("min_err", NAN))
     return list(env.values())
 
 
-FIELDS = ("item", "unit", "max", "t_max", "case_max", "min", "t_min", "case_min")
+NAN = float("nan")
+FIELDS = ("item", "unit", "max", "max_err_est", "t_max", "case_max", "min", "min_err_est", "t_min", "case_min")
+_KEYS = {"max_err_est": "max_err", "min_err_est": "min_err"}
+CSV_HEADER = ("# liftoff max/min table; SI units (column 'unit'); times in s; max_err_est, min_err_est: estimated "
+              "error of the value (true - reported, Richardson from a second run at h/2; an estimate, not a bound; "
+              "empty when not estimated)\n")
+
+
+def _cell(value) -> str:
+    if isinstance(value, float):
+        return "" if value != value else f"{value:.6e}"
+    return value
 
 
 def write_csv(rows: list[dict], path: Path) -> Path:
@@ -88,8 +115,8 @@ def write_csv(rows: list[dict], path: Path) -> Path:
     w = csv.DictWriter(buf, fieldnames=FIELDS)
     w.writeheader()
     for r in rows:
-        w.writerow({k: (f"{r[k]:.6e}" if isinstance(r[k], float) else r[k]) for k in FIELDS})
-    write_text(path, "# liftoff max/min table; SI units (column 'unit'); times in s\n" + buf.getvalue())
+        w.writerow({k: _cell(r.get(_KEYS.get(k, k), NAN)) for k in FIELDS})
+    write_text(path, CSV_HEADER + buf.getvalue())
     return path
 
 
@@ -102,11 +129,18 @@ def format_table(rows: list[dict], select=None, limit: int = 60) -> str:
     """Fixed-width text of max/min rows; ``select(row)`` filters them."""
     sel = [r for r in rows if select is None or select(r)][:limit]
     w = max([len(r["item"]) for r in sel] + [10])
-    lines = [f"{'item':<{w}} {'unit':>7} {'max':>12} {'t (s)':>8} {'case':>12} {'min':>12} {'t (s)':>8} {'case':>12}"]
+    lines = [f"{'item':<{w}} {'unit':>7} {'max':>12} {'est.err':>9} {'t (s)':>8} {'case':>12} "
+             f"{'min':>12} {'est.err':>9} {'t (s)':>8} {'case':>12}"]
     for r in sel:
-        lines.append(f"{r['item']:<{w}} {r['unit']:>7} {r['max']:12.4e} {r['t_max']:8.4f} {r['case_max']:>12} "
-                     f"{r['min']:12.4e} {r['t_min']:8.4f} {r['case_min']:>12}")
+        lines.append(f"{r['item']:<{w}} {r['unit']:>7} {r['max']:12.4e} {_err(r.get('max_err')):>9} "
+                     f"{r['t_max']:8.4f} {r['case_max']:>12} {r['min']:12.4e} {_err(r.get('min_err')):>9} "
+                     f"{r['t_min']:8.4f} {r['case_min']:>12}")
     return "\n".join(lines)
+
+
+def _err(value) -> str:
+    """An estimated error as |value| (3 digits), '-' when not estimated."""
+    return "-" if value is None or value != value else f"{abs(value):.2e}"
 
 
 # ------------------------------------------------------------------ plots
@@ -285,6 +319,10 @@ def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[di
     for case, (res, cp) in results.items():
         lines.append(f"  case {case!r}: {res.time.size - 1} steps of h = {res.h:.3g} s "
                      f"({res.time[0]:g} .. {res.time[-1]:g} s)")
+        est = res.metadata.get("error_estimate")
+        if est:
+            lines.append(f"    peak post forces: estimated error (Richardson, second run at h/2) at most "
+                         f"{est['worst_relative']:.2g} of the largest post force")
         lines.append(f"    {'post':<10}{'release (s)':>12}{'separation (s)':>16}{'recontacts':>12}"
                      f"{'peak compr. (MN)':>18}{'peak tension (MN)':>19}")
         for c in res.contact_summary():
@@ -296,11 +334,12 @@ def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[di
                     and r["unit"] == "N"),
                    key=lambda r: -max(abs(r["max"]), abs(r["min"])))[:5]
     if peaks:
-        lines.append("  largest loads (envelope over cases):")
+        lines.append("  largest loads (envelope over cases; est. error: Richardson from a run at h/2, an estimate):")
         for r in peaks:
-            big, t, c = (r["max"], r["t_max"], r["case_max"]) if abs(r["max"]) >= abs(r["min"]) else \
-                (r["min"], r["t_min"], r["case_min"])
-            lines.append(f"    {r['item']:<40} {big / 1e6:10.3f} MN at t = {t:.4f} s ({c})")
+            big, t, c, e = (r["max"], r["t_max"], r["case_max"], r.get("max_err")) if abs(r["max"]) >= abs(r["min"]) \
+                else (r["min"], r["t_min"], r["case_min"], r.get("min_err"))
+            est = "" if e is None or e != e else f" (est. error {abs(e) / 1e6:.3g} MN)"
+            lines.append(f"    {r['item']:<40} {big / 1e6:10.3f} MN at t = {t:.4f} s ({c}){est}")
     lines.append("  wall time per stage:")
     for name, secs in stage_times:
         lines.append(f"    {name:<38}{secs:8.2f} s")

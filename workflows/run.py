@@ -44,9 +44,13 @@ class Prepared:
 
 
 def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None | bool = None,
-        progress: bool = True, plots: bool = True, snapshots: bool = True, echo=print) -> RunOutput:
+        progress: bool = True, plots: bool = True, snapshots: bool = True, echo=print,
+        error_estimate: bool = True, max_memory: float | None = None) -> RunOutput:
     """Run a scenario (path, parsed Scenario, or None for the default) into ``out``.
 
+    ``error_estimate``: every max/min value gets an estimated error from a second transient
+    at h/2 (transient/accuracy.py; always on for a case with ``[time] accuracy``);
+    ``max_memory``: bytes the transients may use (None: 80 % of the memory available).
     ``cache_dir``: None -> default (``$LIFTOFF_CACHE`` or DIR/../.liftoff-cache),
     False -> no cache, else that directory. Every case is built and checked before the
     first file is written; the files are written into a staging folder that replaces
@@ -62,33 +66,33 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
     if want_pics:  # pyvista (imported by fem.snapshot) before dolfinx (FENICSX-NOTES.md)
         import liftoff.fem.snapshot  # noqa: F401
     cache = StageCache(None if cache_dir is False else Path(cache_dir) if cache_dir else default_cache_dir(out))
-    prep = prepare(sc, cache, progress, echo)
+    prep = prepare(sc, cache, progress, echo, error_estimate, max_memory)
     with staged_output(out, command=f"liftoff run {sc.path}") as stage:
-        output = write_results(sc, prep, stage, plots, want_pics, echo, t_start)
+        output = write_results(sc, prep, stage, plots, want_pics, echo, t_start, error_estimate)
     output.out = out
     output.files = [out / Path(f).relative_to(stage) for f in output.files]
     echo(f"  outputs in {out}/ ({len(output.files)} files); cache {cache.root}")
     return output
 
 
-def prepare(sc, cache: StageCache, progress: bool, echo) -> Prepared:
-    """Model stages (cached) for every distinct model, then every case's problem and its
-    static initial state (section 2.6), so that bad input in any case stops the run before
-    any output."""
-    from liftoff.transient import estimate_step, static_equilibrium
-
-    from liftoff.config import Where
+def prepare(sc, cache: StageCache, progress: bool, echo, error_estimate: bool = True,
+            max_memory: float | None = None) -> Prepared:
+    """Model stages (cached) for every distinct model, then every case's problem, its step
+    (stability, time axis) and static initial state (section 2.6), so that bad input in any
+    case stops the run before any output; the memory of all cases' histories is estimated
+    (transient/stepping.py) and refused beyond ``max_memory`` bytes."""
+    from liftoff.transient import static_equilibrium
 
     from .loads import build_problem, stack_mass_summary
     from .pipeline import build_stack
 
-    stacks, problems, stage_times = {}, {}, []
+    stacks, problems, stage_times, memory = {}, {}, [], {}
     for case in sc.cases:
         mkey = stage_key("model", asdict(case.model))      # cases with equal models share one stack
         if mkey not in stacks:
             n0 = len(cache.log)
             t0 = time.perf_counter()
-            stacks[mkey] = build_stack(case.model, cache, progress=progress, where=Where(case.source, "model"))
+            stacks[mkey] = build_stack(case.model, cache, progress=progress, where=case.at("model"))
             for stage, label, how, secs in cache.log[n0:]:
                 stage_times.append((f"{stage} {label} ({how})", secs))
             stage_times.append(("model stages total", time.perf_counter() - t0))
@@ -96,20 +100,55 @@ def prepare(sc, cache: StageCache, progress: bool, echo) -> Prepared:
         t0 = time.perf_counter()
         cp = build_problem(case, stacks[mkey], progress=progress)
         pr = cp.problem
+        pr.memory_limit = max_memory
         try:
-            estimate_step(pr.body_a, pr.body_b, pr.contacts)
+            steps = _case_steps(pr)
             static_equilibrium(pr.body_a, pr.body_b, pr.contacts, pr.forcing, pr.t0)
         except InputError as exc:
-            raise InputError(f"{case.source}: case {case.name!r}: {exc}") from None
+            raise case.at().wrap(exc) from None
+        memory[case.name] = (pr, steps)
         problems[case.name] = (cp, mkey)
         stage_times.append((f"loads [{case.name}]", time.perf_counter() - t0))
+    _check_run_memory(memory, error_estimate, max_memory)
     return Prepared(stacks, problems, stage_times)
 
 
-def write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, echo, t_start: float) -> RunOutput:
-    """Table 1, then per case the transient, its results file, max/min table, plots and
-    snapshots; the envelope over cases and the summary. Everything goes to ``out``."""
-    from liftoff.transient import solve
+def _case_steps(problem) -> int:
+    """The number of steps of a case's transient (its step checked: stability, time axis)."""
+    import warnings
+
+    from liftoff.transient.stepping import choose_step
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # given again when the case runs
+        return choose_step(problem).n_steps
+
+
+def _check_run_memory(cases: dict, error_estimate: bool, max_memory: float | None) -> None:
+    """ResourceError when the histories of all cases (kept until the envelope is written),
+    plus the h/2 run of the error estimate of one, exceed the memory limit."""
+    from liftoff.transient.stepping import MEMORY_FRACTION, available_memory, memory_estimate
+
+    from liftoff.core.errors import ResourceError
+
+    need, extra = 0.0, 0.0
+    for pr, steps in cases.values():
+        need += sum(memory_estimate(pr, steps, 1).values())
+        if error_estimate or pr.accuracy is not None:
+            extra = max(extra, sum(memory_estimate(pr, steps, 2).values()))
+    limit = max_memory if max_memory is not None else MEMORY_FRACTION * available_memory()
+    if need + extra > limit:
+        raise ResourceError(f"the transients of the {len(cases)} cases need about {(need + extra) / 1e9:.3g} GB of "
+                            f"histories but the limit is {limit / 1e9:.3g} GB; use fewer steps (a larger h or a shorter "
+                            "run), fewer cases, outputs or modes, or raise the limit (--max-memory GB)")
+
+
+def write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, echo, t_start: float,
+                  error_estimate: bool = True) -> RunOutput:
+    """Table 1, then per case the transient (with its h/2 companion for the error estimates),
+    its results file, max/min table, plots and snapshots; the envelope over cases and the
+    summary. Everything goes to ``out``."""
+    from liftoff.transient import solve, solve_estimated
 
     from . import report
     from .loads import table1
@@ -127,12 +166,21 @@ def write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, e
             echo(tab1.table())
             stage_times.append(("Table 1", time.perf_counter() - t0))
         t0 = time.perf_counter()
-        res = solve(cp.problem)
-        stage_times.append((f"transient [{case.name}]", time.perf_counter() - t0))
+        half = None
+        if error_estimate or cp.problem.accuracy is not None:
+            est = solve_estimated(cp.problem)
+            res, half = est.result, est.check
+        else:
+            res = solve(cp.problem)
+        stage_times.append((f"transient [{case.name}]" + (" + h/2" if half is not None else ""),
+                            time.perf_counter() - t0))
         t0 = time.perf_counter()
         files.append(Path(res.save(out / f"results_{case.name}.h5")))
         results[case.name] = (res, cp)
         rows = report.maxmin(res.time, report.items(res, cp.attach), case.name)
+        if half is not None:
+            report.with_errors(rows, report.maxmin(half.time, report.items(half, cp.attach), case.name))
+            half = None  # only its peaks are kept
         per_case_rows[case.name] = rows
         files.append(report.write_csv(rows, out / f"maxmin_{case.name}.csv"))
         if plots and case.output.plots:
@@ -171,6 +219,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--example", choices=("barge",), default=None,
                    help="run an embedded example instead of the default lift-off scenario: 'barge' (a barge hitting "
                         "a dock, with a dock-stiffness sweep; docs/barge.md)")
+    from .cli import add_common
+
+    add_common(p)
     p.set_defaults(func=_cli)
 
 
@@ -186,5 +237,6 @@ def _cli(args: argparse.Namespace) -> int:
 
         run_barge(args.scenario, args.out, **kw)
         return 0
-    run(args.scenario, args.out, **kw)
+    run(args.scenario, args.out, error_estimate=not args.no_error_estimate,
+        max_memory=None if args.max_memory is None else args.max_memory * 1e9, **kw)
     return 0

@@ -23,7 +23,7 @@ from liftoff.meshes.stick import StickParams
 from liftoff.reduction.component import Component
 from liftoff.reduction.models import frame_element
 
-from liftoff.core.errors import InputError
+from liftoff.core.errors import InputError, ResourceError
 from liftoff.core.labels import COMPONENTS
 
 LINK = dict(E=2.0e11, A=0.5, I=0.05, mass_per_length=500.0, link=True)   # stiff steel links (skirts, fittings)
@@ -208,10 +208,19 @@ def stack_components(params: StickParams | None = None, element_length: float = 
     return {name: build(name, params, element_length)[0] for name in FRAMES}
 
 
-def build(name: str, params: StickParams | None = None, element_length: float = 4.0) -> tuple[Component, dict]:
+def axis_length(name: str, p: StickParams) -> float:
+    """Length (m) of the beam axis of component ``name`` (0 for the pad, whose grillage is
+    laid out on its pedestals and posts, not on the element length)."""
+    return {"core": p.core_top_z - p.layout.core_bottom_z, "srb_left": p.srb_length, "srb_right": p.srb_length,
+            "orbiter": p.orbiter_length}.get(name, 0.0)
+
+
+def build(name: str, params: StickParams | None = None, element_length: float = 4.0,
+          max_elements: int = 2_000) -> tuple[Component, dict]:
     """Component ``name`` (core, srb_left, srb_right, orbiter or pad) and its {volume: nodal
     load of a unit free axial strain}; the stick model's only 'volume' of a component is its
-    wall, ``<name>_wall`` (as the FE core's)."""
+    wall, ``<name>_wall`` (as the FE core's). ResourceError when its axis would have more
+    than ``max_elements`` beams."""
     p = params or StickParams()
     if not isinstance(p, StickParams):
         raise InputError(f"stick model: expected StickParams, got {type(p).__name__}")
@@ -220,6 +229,11 @@ def build(name: str, params: StickParams | None = None, element_length: float = 
     p.check()
     if not element_length > 0:
         raise InputError(f"stick model: element length must be positive, got {element_length}")
+    n = axis_length(name, p) / element_length
+    if n > max_elements:
+        raise ResourceError(f"stick component {name!r}: element length {element_length:g} m gives {n:.3g} beams on "
+                            f"its {axis_length(name, p):.4g} m axis, beyond the limit of {max_elements}; use a larger "
+                            "mesh_size or raise [model] max_elements")
     f = FRAMES[name](p, element_length)
     return f.component(f.clamped), {f"{name}_wall": f.thermal(f.clamped)}
 

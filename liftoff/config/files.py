@@ -14,7 +14,7 @@ import numpy as np
 
 from liftoff.core.errors import InputError
 
-from .values import Where
+from .values import Where, string
 
 
 def _text(raw: bytes, error) -> str:
@@ -35,12 +35,33 @@ def parse_toml(raw: bytes | str, source: str) -> dict:
         raise InputError(f"{source}: TOML syntax error: {' '.join(str(exc).split())}") from None
 
 
+def file_path(where: Where, value, base: Path) -> Path:
+    """The file a scenario names (``value``, relative to ``base``): a non-empty string without
+    NUL; a path that cannot be resolved (a symlink loop, too long) is an InputError."""
+    name = string(where, value)
+    if "\x00" in name or len(name) > 4096:
+        raise where.error(f"not a usable file name: {name[:60]!r}")
+    path = base / name
+    try:
+        path.resolve()
+        path.stat()
+    except FileNotFoundError:
+        pass                       # the reader says "not found", naming the file
+    except (OSError, RuntimeError, ValueError) as exc:
+        raise where.error(f"file {name[:200]!r} cannot be opened: {' '.join(str(exc).split())}") from None
+    return path
+
+
 def read_toml(path: str | Path) -> dict:
     """Read a scenario TOML file; errors are named by the file's name."""
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{path}: scenario file not found")
-    return parse_toml(path.read_bytes(), path.name)
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise InputError(f"{path}: cannot be read ({exc.strerror or exc})") from None
+    return parse_toml(raw, path.name)
 
 
 def read_csv_table(path: Path, where: Where, columns: int | None = None) -> np.ndarray:
@@ -51,7 +72,11 @@ def read_csv_table(path: Path, where: Where, columns: int | None = None) -> np.n
         raise where.error(f"CSV file not found: {str(path)!r}")
     rows: list[list[float]] = []
     header_allowed = True
-    text = _text(path.read_bytes(), lambda why: where.error(f"{path.name} is not a UTF-8 text file ({why})"))
+    try:
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise where.error(f"{path.name} cannot be read ({exc.strerror or exc})") from None
+    text = _text(raw, lambda why: where.error(f"{path.name} is not a UTF-8 text file ({why})"))
     for lineno, line in enumerate(text.splitlines(), start=1):
         text = line.split("#", 1)[0].strip()
         if not text:

@@ -40,9 +40,15 @@ VEHICLE = ("core", "srb_left", "srb_right", "orbiter")
 NAMES = VEHICLE + ("pad",)
 DEFAULT_F_MAX = 60.0        # Hz, fixed-interface modes kept when neither n_modes nor f_max is given
 STICK_ELEMENT = 4.0         # m, default beam element length of the stick source
+# the most elements one component may have, estimated before it is built ([model] max_elements):
+# a million P1 tetrahedra (~0.6 M DOFs: the limit of a sparse direct solve on a workstation),
+# two thousand beams per axis (2 cm on the 47 m core: finer is meaningless for a stick, and the
+# conditioning of K_ii, ~(L/h)^4, then puts the Craig-Bampton round-off above the free-free
+# check of reduction/system.py: K RB 2e-6 at 1 cm elements)
+MAX_ELEMENTS = {"fe": 1_000_000, "stick": 2_000}
 
 _MODEL = {"source", "mesh_size", "degree", "zeta", "vehicle", "pad", "component", "materials", "system", "stick",
-          "walls"}
+          "walls", "max_elements"}
 WALLS = ("solid", "shell")
 _CORE_PARAMS = {"shell_bending_ratio"}
 _VEHICLE = {"mesh_size", "params"}
@@ -104,7 +110,9 @@ class SystemModel:
 class ModelConfig:
     """``[model]``: source ``fe`` (gmsh + dolfinx solids) or ``stick`` (beams), element
     ``degree``, modal damping ratio ``zeta`` of every elastic mode, the five components
-    (core, srb_left, srb_right, orbiter, pad), material replacements and system modes."""
+    (core, srb_left, srb_right, orbiter, pad), material replacements and system modes;
+    ``max_elements``: the most elements a component may have (estimated before it is built;
+    default MAX_ELEMENTS of the source)."""
 
     source: str
     degree: int
@@ -113,6 +121,7 @@ class ModelConfig:
     components: dict[str, ComponentModel]
     materials: dict[str, Material]
     system: SystemModel
+    max_elements: int = MAX_ELEMENTS["fe"]
 
 
 # ---------------------------------------------------------------- builder dataclasses
@@ -338,5 +347,6 @@ def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig
     s = table(where / "system", m.get("system", {}), _SYSTEM)
     system = SystemModel(**{k: integer(where / "system" / k, v, 1) if "n_modes" in k else
                             number(where / "system" / k, v, positive=True) for k, v in s.items()})
+    max_elements = integer(where / "max_elements", m.get("max_elements", MAX_ELEMENTS[source]), 1)
     return ModelConfig(source, degree, zeta, layout, components,
-                       _materials(where / "materials", m.get("materials", {}), source), system)
+                       _materials(where / "materials", m.get("materials", {}), source), system, max_elements)

@@ -135,6 +135,12 @@ class Case:
     time: TimeSpan
     recovery: RecoveryPoints
     output: OutputFlags
+    from_case_table: bool = False   # a [[case]] of the file (not the base scenario alone)
+
+    def at(self, key: str = "") -> Where:
+        """The key path of a check made once the models exist, naming file and, for a
+        ``[[case]]``, the case: ``my.toml: case 'hot': post[2] 'left_3'.vehicle: ...``."""
+        return Where(f"{self.source}: case {self.name!r}" if self.from_case_table else self.source, key)
 
 
 @dataclass
@@ -277,6 +283,7 @@ def parse_scenario(data: dict, source: str = "scenario", base: Path | str = ".")
         over = {k: v for k, v in c.items() if k != "name"}
         merged = merge(common, over)
         cases.append(_case(wc, merged, name, base))
+        cases[-1].from_case_table = True
         _check_profiles_used(wc, over.get("profiles"), _used_profiles(merged))
     return Scenario(source, title, description, cases)
 

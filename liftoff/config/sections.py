@@ -18,10 +18,10 @@ import numpy as np
 from liftoff.transient.effects import softening_matrix
 from liftoff.transient.model import METHODS, ContactPoint, ModalFeedback, PointForce, TabulatedForce
 
-from .files import read_csv_table
+from .files import file_path, read_csv_table
 from .values import Where, boolean, choice, integer, label, labels, number, string, strings, table, vector
 
-TIME_KEYS = {"t0", "t_end", "h", "method", "tol", "max_iter"}
+TIME_KEYS = {"t0", "t_end", "h", "method", "tol", "max_iter", "accuracy"}
 FORCE_KEYS = {"label", "value", "time", "csv", "scale"}
 GRAVITY_KEYS = {"accel"}
 LAW_KEYS = {"stiffness", "rigid", "axial", "normal_sign", "gap", "release_time", "normal", "friction", "damping",
@@ -36,8 +36,11 @@ STANDARD_GRAVITY = (0.0, 0.0, -9.80665)
 # ---------------------------------------------------------------- time
 @dataclass(frozen=True)
 class TimeSpan:
-    """``[time]``: the run from ``t0`` to ``t_end`` (s) in steps ``h`` (s; None: 0.25/f_h,
-    eq. 12); contact solve ``method``; fixed-point tolerance ``tol`` (N) and ``max_iter``."""
+    """``[time]``: the run from ``t0`` to ``t_end`` (s) in steps ``h`` (s; None: automatic,
+    0.25/f_h of eq. 12 bounded by the bodies' highest frequency and the run); contact solve
+    ``method``; fixed-point tolerance ``tol`` (N) and ``max_iter``; ``accuracy``: halve the
+    step until the estimated error of every peak contact force is below this fraction of
+    the largest (None: the step as given; transient/accuracy.py)."""
 
     t_end: float
     t0: float = 0.0
@@ -45,6 +48,7 @@ class TimeSpan:
     method: str = "direct"
     tol: float = 1.0
     max_iter: int = 100
+    accuracy: float | None = None
 
 
 def time_span(where: Where, spec: Any, *, method: str | None = None) -> TimeSpan:
@@ -64,8 +68,13 @@ def time_span(where: Where, spec: Any, *, method: str | None = None) -> TimeSpan
         if h > t_end - t0:
             raise (where / "h").error(f"step {h:g} s is longer than the run ({t_end - t0:g} s)")
     meth = method if method is not None else choice(where / "method", t.get("method", "direct"), METHODS)
+    accuracy = None
+    if "accuracy" in t:
+        accuracy = number(where / "accuracy", t["accuracy"], positive=True)
+        if not accuracy < 1:
+            raise (where / "accuracy").error(f"a fraction of the peak force below 1 (e.g. 0.01 for 1 %), got {accuracy:g}")
     return TimeSpan(t_end, t0, h, meth, number(where / "tol", t.get("tol", 1.0), positive=True),
-                    integer(where / "max_iter", t.get("max_iter", 100), 1))
+                    integer(where / "max_iter", t.get("max_iter", 100), 1), accuracy)
 
 
 # ---------------------------------------------------------------- tables and forces
@@ -83,7 +92,7 @@ def check_table(where_t: Where, where_v: Where, time: np.ndarray, values: np.nda
 
 def csv_table(where: Where, value: Any, base: Path, columns: int = 2) -> tuple[np.ndarray, np.ndarray]:
     """(time, values) of a CSV file named by ``value`` (relative to ``base``): time, then data columns."""
-    tab = read_csv_table(base / string(where, value), where, columns=columns)
+    tab = read_csv_table(file_path(where, value, base), where, columns=columns)
     time, values = tab[:, 0], (tab[:, 1] if columns == 2 else tab[:, 1:])
     check_table(where, where, time, values)
     return time, values

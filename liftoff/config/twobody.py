@@ -19,7 +19,7 @@ from liftoff.core.errors import InputError
 from liftoff.transient.body import ModalBody, ground, load_body
 from liftoff.transient.model import Forcing, InitialState, ModalForce, Recovery, TransientProblem
 
-from .files import read_toml
+from .files import file_path, read_toml
 from .sections import (
     FORCE_KEYS,
     LAW_KEYS,
@@ -88,6 +88,8 @@ def _bodies(where: Where, spec: Any, base: Path) -> dict[str, ModalBody]:
     for key in ("a", "b"):
         w = where / key
         name = string(w, spec[key])
+        if name != "ground":
+            file_path(w, name, base)
         if name == "ground":
             if key == "a":
                 raise w.error("body a cannot be 'ground' (use body b for a fixed support)")
@@ -290,12 +292,28 @@ def _recoveries(where: Where, spec: Any, bodies: dict[str, ModalBody], base: Pat
         name = unique_name(w / "name", r["name"], names, "recovery")
         key = _body_key(w / "body", r["body"], bodies)
         wf = w / "file"
-        arrays = _recovery_file(wf, base / string(wf, r["file"]), key, bodies[key].n_modes)
+        arrays = _recovery_file(wf, file_path(wf, r["file"], base), key, bodies[key].n_modes)
         try:
             out.append(Recovery(name, key, **arrays))
         except InputError as exc:
             raise wf.wrap(exc) from None
     return out
+
+
+def check_step(where: Where, problem: TransientProblem) -> None:
+    """The run's step (transient/stepping.py) chosen now, so that a step beyond the stability
+    limit or the time axis's resolution names the file and ``[time]`` (warnings are given
+    again when the run starts)."""
+    import warnings
+
+    from liftoff.transient.stepping import choose_step
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            choose_step(problem)
+        except InputError as exc:
+            raise where.wrap(exc) from None
 
 
 # ---------------------------------------------------------------- entry points
@@ -319,9 +337,11 @@ def parse_twobody(data: dict, base: Path, source: str = "scenario", *, method: s
     try:
         problem = TransientProblem(body_a, body_b, contacts, forcing, t.t_end, h=t.h, t0=t.t0, method=t.method,
                                    tol=t.tol, max_iter=t.max_iter, initial=initial, outputs=outputs,
-                                   recoveries=recoveries, keep_modal=keep_modal, progress=progress)
+                                   recoveries=recoveries, keep_modal=keep_modal, progress=progress,
+                                   accuracy=t.accuracy)
     except InputError as exc:
         raise top.wrap(exc) from None
+    check_step(top / "time", problem)
     return TwoBodyScenario(path=base / source, title=title, description=description, problem=problem)
 
 

@@ -17,6 +17,9 @@ from liftoff.core.labels import split_label
 
 # wording of a vector of the wrong length ({got} entries, {length} expected)
 LENGTH_ENTRIES = "has {got} entries, expected {length}"
+# the largest magnitude of a finite number in a scenario: no SI quantity of a lift-off comes
+# near it, and squares and products of two such numbers stay finite (no overflow inside)
+MAX_MAGNITUDE = 1e100
 
 
 class Where:
@@ -72,14 +75,20 @@ def array_of_tables(where: Where, value: Any, what: str, *, nonempty: bool = Fal
 
 def number(where: Where, value: Any, *, positive: bool = False, nonneg: bool = False,
            allow_inf: bool = False) -> float:
-    """``value`` as a float: never NaN, finite unless ``allow_inf``, optionally > 0 or >= 0."""
+    """``value`` as a float: never NaN, finite unless ``allow_inf``, at most MAX_MAGNITUDE
+    when finite, optionally > 0 or >= 0."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise where.error(f"expected a number, got {type(value).__name__} {value!r}")
-    x = float(value)
+    try:
+        x = float(value)
+    except OverflowError:
+        raise where.error(f"the integer {value} is too large (at most {MAX_MAGNITUDE:g})") from None
     if math.isnan(x):
         raise where.error("value is NaN")
     if math.isinf(x) and not allow_inf:
         raise where.error(f"value is {x} (must be finite)")
+    if math.isfinite(x) and abs(x) > MAX_MAGNITUDE:
+        raise where.error(f"magnitude {x:g} is beyond {MAX_MAGNITUDE:g} (SI units; it would overflow inside)")
     if positive and not x > 0:
         raise where.error(f"must be positive, got {x:g}")
     if nonneg and x < 0:

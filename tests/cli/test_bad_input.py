@@ -217,6 +217,50 @@ def test_body_file_wrong_shape(case_dir: Path, capsys):
     _assert_clean_failure(code, capsys.readouterr().err, "vehicle.npz", case_dir / "out")
 
 
+def _edit_body(path: Path, **arrays) -> None:
+    """Rewrite a body file with some arrays replaced (as another tool might write it)."""
+    with np.load(path) as z:
+        data = {k: z[k] for k in z.files}
+    for key, fn in arrays.items():
+        data[key] = fn(data[key])
+    np.savez(path, **data)
+
+
+@pytest.mark.parametrize("edit, expect", [
+    (dict(phi=lambda a: a.T.copy()), "phi has shape (3, 4), expected (4, 3) (DOF labels x modes)"),
+    (dict(phi=lambda a: a.ravel()), "phi has shape (12,), expected (4, 3)"),
+    (dict(phi=lambda a: a[None]), "phi has shape (1, 4, 3), expected (4, 3)"),
+    (dict(phi=lambda a: a + 0j), "phi is complex"),
+    (dict(omega=lambda a: a[None]), "omega has shape (1, 3), expected 1 dimension(s)"),
+    (dict(omega=lambda a: a.astype(str)), "omega is not numeric"),
+    (dict(version=lambda a: np.array(999)), "version 999 is not supported"),
+    (dict(omega=lambda a: a * 0 + 1e308), "omega has a value of magnitude 1e+308, beyond 1e+100"),
+    (dict(phi=lambda a: a * 1e300), "phi has a value of magnitude"),
+], ids=["phi-transposed", "phi-1d", "phi-3d", "phi-complex", "omega-2d", "omega-text", "version-999",
+        "omega-1e308", "phi-1e300"])
+def test_body_file_arrays_exactly_as_documented(case_dir: Path, capsys, edit, expect):
+    """A body file's arrays must have the documented shapes and real dtype: a transposed phi
+    (5 x 30 stored as 30 x 5) used to be reshaped silently and give another answer."""
+    _edit_body(case_dir / "vehicle.npz", **edit)
+    code = main(["transient", str(_break(case_dir, None, None)), "--out", str(case_dir / "out")])
+    _assert_clean_failure(code, capsys.readouterr().err, expect, case_dir / "out")
+
+
+@pytest.mark.parametrize("mutate, expect, status", [
+    (_set("gravity.accel", [0.0, 0.0, -1e308]), "gravity.accel[2]: magnitude -1e+308 is beyond 1e+100", 2),
+    (_set("force[1].value", 1e308), "force[1] 'top:Tx'.value: magnitude 1e+308", 2),
+    (_set("time.t_end", 1e308), "time.t_end: magnitude 1e+308", 2),
+    (_set("time.h", 0.002), "time: time step h = 0.002 s exceeds the stability limit of the penalty contact coupling", 2),
+    (_both(_set("time.t0", 1e15), _set("time.t_end", 1e15 + 1.0)), "below the resolution of the time axis", 2),
+], ids=["gravity-1e308", "force-1e308", "t_end-1e308", "h-unstable", "t0-1e15"])
+def test_overflowing_or_unstable_input(case_dir: Path, capsys, mutate, expect, status):
+    """Magnitudes that would overflow inside, a step beyond the stability limit (it used to
+    run and save 1e22 N contact forces) and a time axis that cannot resolve the step are
+    refused with one line naming file and key."""
+    code = main(["transient", str(_break(case_dir, mutate, None)), "--out", str(case_dir / "out")])
+    _assert_clean_failure(code, capsys.readouterr().err, expect, case_dir / "out", status)
+
+
 def test_out_is_a_file(case_dir: Path, capsys):
     (case_dir / "taken").write_text("")
     code = main(["transient", str(_break(case_dir, None, None)), "--out", str(case_dir / "taken")])
@@ -238,9 +282,10 @@ def test_console_script_bad_label(case_dir: Path):
 
 
 def test_fixed_point_divergence_is_an_error(case_dir: Path):
-    """Fixed-point iteration with rho(K_C W) >> 1 (K_C = 1e12 N/m, h = 1e-4 s, 40 kg: K_C h^2/(6 m) ~ 40)
-    must stop with an error naming the time, not write a result."""
-    scenario = _break(case_dir, _set("contact[0].stiffness", [1e12, 1e12]), None)
+    """Fixed-point iteration with rho(K_C W) = 1.6 > 1 (K_C = 8e9 N/m, h = 1e-4 s) must stop with
+    an error naming the time, not write a result. (The direct solve is stable at this step:
+    stepping.coupling_margin = -0.8 > -1; a stiffer K_C would be refused before the run.)"""
+    scenario = _break(case_dir, _set("contact[0].stiffness", [8e9, 8e9]), None)
     proc = _subprocess(["transient", str(scenario), "--out", "out", "--no-progress",
                         "--method", "fixed-point"], case_dir)
     _assert_clean_failure(proc.returncode, proc.stderr, "", case_dir / "out", status=3)   # no convergence

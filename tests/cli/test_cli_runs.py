@@ -16,6 +16,8 @@ from liftoff.workflows.cli import main
 
 from .conftest import M1, M2, base_scenario, write_scenario
 
+from ..roundoff import sum_rtol
+
 REPO = Path(__file__).resolve().parents[2]
 EXAMPLES = REPO / "examples"
 G = 9.81
@@ -187,12 +189,16 @@ def test_ground_rigid_bolt_modal_force_and_recovery(case_dir: Path, capsys):
             runs[variant] = {k: f[k][()] for k in ("contact/force", "body_a/displacement", "recovered/top_z")}
             assert f["recovered/top_z"].attrs["units"] == "m"
     for k in runs["force"]:
-        # the same modal load, summed in a different order: agreement to round-off
-        np.testing.assert_allclose(runs["modal"][k], runs["force"][k], rtol=1e-9, atol=1e-12 * np.abs(runs["force"][k]).max())
+        # the same modal load, summed in a different order: round-off, accumulated over the steps
+        n_t = runs["force"][k].shape[0]
+        np.testing.assert_allclose(runs["modal"][k], runs["force"][k], rtol=1e-9,
+                                   atol=sum_rtol(n_t) * np.abs(runs["force"][k]).max())
     # rigid bolt on ground: static preload = weight (exact Lagrange multiplier)
     assert runs["force"]["contact/force"][0, 1] == pytest.approx((M1 + M2) * G, rel=1e-9)
-    np.testing.assert_allclose(runs["force"]["recovered/top_z"][:, 0], runs["force"]["body_a/displacement"][:, 0],
-                               rtol=1e-12, atol=1e-15)
+    # the same 3-term dot product (3 modes) in another order; its terms (rigid drift and elastic
+    # part) are within 1e2 of the result here
+    x = runs["force"]["body_a/displacement"][:, 0]
+    np.testing.assert_allclose(runs["force"]["recovered/top_z"][:, 0], x, rtol=0, atol=100 * sum_rtol(3) * np.abs(x).max())
 
 
 def test_gravity_softening_is_wired_and_softens():

@@ -33,7 +33,7 @@ def test_example_files_match_builders(name: str, tmp_path: Path):
         assert a.dof_labels == b.dof_labels
         # 1e-9: the same closed forms / the same eigh, up to LAPACK rounding
         np.testing.assert_allclose(a.omega, b.omega, rtol=1e-9, atol=1e-6 * max(b.omega.max(), 1.0))
-        np.testing.assert_allclose(a.zeta, b.zeta, rtol=1e-12)
+        np.testing.assert_allclose(a.zeta, b.zeta, rtol=1e-12)      # written as given: no arithmetic
         pa, pb = a.phi @ a.phi.T, b.phi @ b.phi.T
         np.testing.assert_allclose(pa, pb, rtol=0, atol=1e-9 * np.abs(pb).max())
         np.testing.assert_allclose(a.rigid_body_mass, b.rigid_body_mass, rtol=1e-9,

@@ -46,6 +46,7 @@ def test_volumes_and_mass(pad, msh_groups):
         # flat faces are meshed exactly; the exhaust-hole cylinders are faceted (< 0.1 %)
         assert msh_groups(pad)[(3, name)]["measure"] == pytest.approx(v, rel=1e-3)
     mlp = sum(pad.volumes[g].rho * pad.group_volumes[g] for g in ("pad_deck", "pad_posts"))
+    # rho = mass / volume per group, then rho V summed over two groups: a few roundings (1e-12 = 4500 eps)
     assert mlp == pytest.approx(3_730_000.0, rel=1e-12)  # MLP ~3,730 t (docs/meshes.md)
     deck = pad.volumes["pad_deck"]
-    assert deck.E == pytest.approx(6 * 200e9 * p.deck_flange_thickness / p.deck_thickness, rel=1e-12)
+    assert deck.E == pytest.approx(6 * 200e9 * p.deck_flange_thickness / p.deck_thickness, rel=1e-12)  # 3 roundings

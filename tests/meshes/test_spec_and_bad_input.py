@@ -116,3 +116,31 @@ def test_default_stack_rejects_bad_mesh_size(tmp_path):
 def test_builders_reject_wrong_parameter_type(tmp_path):
     with pytest.raises(InputError, match="TankParams"):
         build_tank(PadParams(), tmp_path)
+
+
+def test_a_mesh_too_fine_is_refused_before_gmsh_meshes(tmp_path):
+    """FE mesh size 0.01 m used to mesh for ever: the element count is estimated from the
+    CAD volume before gmsh meshes (at least V / (h^3 / (6 sqrt 2)) tetrahedra) and refused
+    beyond the limit with a ResourceError naming the estimate and the key that raises it;
+    the same tank at its own mesh size meshes, and its tetrahedra are at least the estimate."""
+    import time
+
+    from liftoff.core.errors import ResourceError
+    from liftoff.meshes._occ import REGULAR_TET, element_limit
+    from liftoff.meshes.tank import TankParams, build_tank
+
+    p = TankParams(radius=1.0, wall_thickness=0.1, compartments=(Compartment("lox", 1.5, 0.72, 1.6, 0.5, 1141.0),),
+                   patches={}, mesh_size=0.01)
+    t0 = time.perf_counter()
+    with element_limit(1e6, "component 'tank'"):
+        with pytest.raises(ResourceError, match=r"component 'tank': mesh size 0.01 m would give at least .* "
+                                                r"tetrahedra .* \[model\] max_elements"):
+            build_tank(p, tmp_path)
+    assert time.perf_counter() - t0 < 30 and not list(tmp_path.glob("*.msh"))
+    with element_limit(1e6, "component 'tank'"):
+        g = build_tank(TankParams(radius=1.0, wall_thickness=0.1, compartments=p.compartments, patches={},
+                                  mesh_size=0.5), tmp_path)
+    import meshio
+
+    cells = sum(len(c.data) for c in meshio.read(g.msh_path).cells if c.type == "tetra")
+    assert cells >= g.group_volumes["tank_wall"] / (REGULAR_TET * 0.5 ** 3)

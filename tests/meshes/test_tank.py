@@ -68,14 +68,14 @@ def test_wetted_area_and_liquid_mass(fill, tmp_path):
     assert g.surface_areas["tank_lox_wetted"] == pytest.approx(area, rel=CAD_RTOL)
     if fill == 1.0:
         full = wetted_area(c.r_inner, c.a_bottom_inner, c.a_top_inner, c.cyl_length, 1e9)
-        assert area == pytest.approx(full, rel=1e-12)
+        assert area == pytest.approx(full, rel=1e-12)      # the same closed form: a few roundings
     # liquid mass vs quadrature of the cavity's cross-sections (quad to 1e-12; 1e-9)
     v_ind = _independent_liquid_volume(c.r_inner, c.a_bottom_inner, c.a_top_inner, c.cyl_length, c.fill_height)
     (sm,) = g.smeared_masses
     assert sm.surface == "tank_lox_wetted"
     assert sm.mass == pytest.approx(1141.0 * v_ind, rel=1e-9)
     assert sm.mass == pytest.approx(1141.0 * liquid_volume(c.r_inner, c.a_bottom_inner, c.a_top_inner,
-                                                          c.cyl_length, c.fill_height), rel=1e-12)
+                                                          c.cyl_length, c.fill_height), rel=1e-12)  # same formula
 
 
 def test_wetted_nodes_stop_at_fill_level(tmp_path, msh_groups):
@@ -93,11 +93,12 @@ def test_default_tank_mass(default_tank):
     p, g = default_tank
     c = tank_layout(p)[0]
     liquid = 1141.0 * liquid_volume(c.r_inner, c.a_bottom_inner, c.a_top_inner, c.cyl_length, c.fill_height)
+    # rho = m / V, then rho V (and E = rho (E/rho)): a few roundings each; 1e-12 is 4500 eps
     assert g.nominal_mass() == pytest.approx(p.dry_mass + liquid, rel=1e-12)
     # density adjusted to the dry mass, E scaled with it (E/rho of Al 2219 kept)
     mat = g.volumes["tank_wall"]
     assert mat.rho * g.group_volumes["tank_wall"] == pytest.approx(p.dry_mass, rel=1e-12)
-    assert mat.E / mat.rho == pytest.approx(73.8e9 / 2840.0, rel=1e-12)
+    assert mat.E / mat.rho == pytest.approx(73.8e9 / 2840.0, rel=1e-12)    # E = rho (E/rho): 3 roundings
 
 
 def test_two_compartments_closed_form(tmp_path):

@@ -115,6 +115,7 @@ def test_core_smeared_mass_is_liquid_volume_times_density(stack):
     p = core_stage_params()
     sm = {s.surface: s.mass for s in stack["core"].smeared_masses}
     for c, comp in zip(tank_layout(p), p.compartments):
+        # the same closed form times the density: a few roundings (1e-12 = 4500 eps)
         assert sm[f"core_{c.name}_wetted"] == pytest.approx(comp.liquid_density * c.liquid_volume(), rel=1e-12)
         assert stack["core"].surface_areas[f"core_{c.name}_wetted"] == pytest.approx(c.wetted_area(), rel=CAD_RTOL)
 
@@ -123,6 +124,7 @@ def test_equivalent_materials_keep_specific_stiffness(stack):
     """Thickened walls: rho = mass / volume and E/rho of the real alloy kept."""
     g = stack["srb_left"]
     case = g.volumes["srb_left_case"]
+    # rho = m / V then rho V, E = rho (E/rho): a few roundings each (1e-12 = 4500 eps)
     assert case.rho * g.group_volumes["srb_left_case"] == pytest.approx(BoosterParams().case_mass, rel=1e-12)
     assert case.E / case.rho == pytest.approx(205e9 / 7850.0, rel=1e-12)
     core = stack["core"].volumes["core_wall"]

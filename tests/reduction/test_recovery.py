@@ -1,6 +1,4 @@
 """Data recovery (interface forces, displacements, full field) against monolithic models."""
-import importlib.util
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -150,10 +148,9 @@ def test_interface_force_truncated_models(frame):
 
 
 def test_field_recovery_matches_monolithic_modes():
-    spec = importlib.util.spec_from_file_location("ta", Path(__file__).with_name("test_assembly.py"))
-    ta = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(ta)
-    A, B, full = ta.two_blocks()
+    from .test_assembly import two_blocks
+
+    A, B, full = two_blocks()
     asm = assemble([craig_bampton(A, six_labels("foot") + six_labels("joint"), n_modes=A.n_dof),
                     craig_bampton(B, six_labels("joint") + six_labels("top"), n_modes=B.n_dof)], "blocks")
     sysm = system_modes(asm)

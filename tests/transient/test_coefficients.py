@@ -76,6 +76,8 @@ def test_coefficients_extreme_overdamped_against_mpmath():
         for key, val in ref.items():
             val = float(mp.re(val))
             got = getattr(c, key)[0]
+            # closed forms of a few tens of operations without cancellation, or a series summed
+            # to machine precision (coefficients.py): tens of eps; 1e-12 is 4500 eps
             assert abs(got - val) <= 1e-12 * abs(val), (w, z, h, key, got, val)
 
 
@@ -84,6 +86,7 @@ def test_rigid_coefficients_are_polynomials():
     h = 0.01
     c = step_coefficients([0.0], [0.0], h)
     assert c.F[0] == 1 and c.G[0] == h and c.Fd[0] == 0 and c.Gd[0] == 1
+    # I1/h and I0 - I1/h from h^3/3, h^2/2: three roundings at most (3 eps = 6.7e-16)
     assert np.isclose(c.Ac[0], h * h / 3, rtol=1e-15) and np.isclose(c.Bc[0], h * h / 6, rtol=1e-15)
     assert np.isclose(c.Acd[0], h / 2, rtol=1e-15) and np.isclose(c.Bcd[0], h / 2, rtol=1e-15)
 

@@ -153,7 +153,7 @@ def test_block_slides_to_rest(v0):
     i = int(np.flatnonzero(vel <= 0)[0])                           # first step end at rest
     # slip at constant deceleration mu g is integrated exactly; the stop falls inside step i:
     # time within one step, distance within the stick spring's mu N / K_t
-    assert abs(r.time[i] - t_stop) <= r.h
+    assert abs(r.time[i] - t_stop) <= r.h * (1 + 1e-9)     # the stop may fall on a step end (rounding of t)
     assert along[i] == pytest.approx(dist, abs=MU * MB * G / KT + 1e-12)
     # deceleration mu g while sliding: force = mu N opposite to the velocity
     F = r.contact_force

@@ -72,8 +72,9 @@ def test_drop_on_one_sided_spring():
     assert abs(t_lift - tl) < 0.05 * h
     # separation time is the first step end at which the spring is found open
     assert tl <= t_sep <= tl + h * (1 + 1e-9)
-    # second bounce: energy is conserved, the mass returns after 2 v_i / g
-    assert r.recontact_count[0] == 2
+    # second bounce: energy is conserved, the mass returns after 2 v_i / g; the first landing
+    # of a contact that starts open is not a recontact, the second one is
+    assert r.recontact_count[0] == 1
     s = r.contact_state[:, 0]
     second = np.flatnonzero((s[1:] == 1) & (s[:-1] == 2))[1] + 1
     assert abs(r.time[second] - t2) <= h * 1.01

@@ -16,6 +16,7 @@ def test_estimate_step_closed_forms():
     block = spring_block(m, 1.0)  # its own support spring is negligible against K_C
     c = [ContactPoint("c", ["block:Tz"], [None], k)]
     f_h, h = estimate_step(block, ground(), c)
+    # a 1 x 1 eigenvalue and a square root: a few roundings (1e-12 = 4500 eps); h: one division
     assert math.isclose(f_h, math.sqrt(k / m) / (2 * math.pi), rel_tol=1e-12)
     assert math.isclose(h, 0.25 / f_h, rel_tol=1e-15)
     # two equal rigid masses coupled by k: relative mode sqrt(2 k / m)
@@ -23,7 +24,7 @@ def test_estimate_step_closed_forms():
     rod_b = free_free_rod(1.0, 1e9, 1000.0, 1e-3, 1, name="s", end_labels=("b0", "b1"))
     c = [ContactPoint("c", ["end1:Tz"], ["b0:Tz"], k)]
     f_h, _ = estimate_step(rod, rod_b, c)
-    assert math.isclose(f_h, math.sqrt(2 * k / 1.0) / (2 * math.pi), rel_tol=1e-12)
+    assert math.isclose(f_h, math.sqrt(2 * k / 1.0) / (2 * math.pi), rel_tol=1e-12)   # 1 x 1 again
 
 
 def _problem(**kw):
@@ -59,28 +60,55 @@ def test_bad_input_is_a_one_line_input_error(make, match):
 
 
 def test_large_step_warns():
-    p = _problem(h=0.05)
+    p = _problem(h=0.012)  # above 0.25/f_h = 7.0e-3 s, below the stability limit 2 sqrt(3)/omega_h = 1.55e-2 s
     with warnings.catch_warnings(record=True) as w:
         warnings.simplefilter("always")
         solve(p)
     assert any("larger than 0.25/f_h" in str(x.message) for x in w)
 
 
-def test_divergence_beyond_the_penalty_stability_limit_is_an_error():
-    """A rigid mass on a bolted penalty spring is Newmark's linear-acceleration scheme:
-    stable for omega h < 2 sqrt(3). At omega h = 5 it diverges; that must be an error, not a result."""
-    m, k = 1.0, 1e6
+def _bolted_mass(h, n_steps=3000):
+    """A rigid 1 kg mass bolted to ground by a 1e6 N/m penalty spring, under gravity."""
     mass = free_free_rod(1.0, 1e9, 1000.0, 1e-3, 1, name="m")  # rigid mode only, 1 kg
-    c = [ContactPoint("bolt", ["end0:Tz"], [None], k)]
-    h = 5.0 / math.sqrt(k / m)
-    p = TransientProblem(mass, ground(), c, Forcing(gravity=(0, 0, -9.81)), t_end=3000 * h, h=h, initial="zero",
-                         progress=False)
-    with pytest.warns(UserWarning, match="stability limit"):
-        with pytest.raises(ConvergenceError, match=r"diverged .* at t = .* stable only for h below"):
-            solve(p)
-    # just inside the limit (omega h = 3.4) the same run is bounded
-    p.h = 3.4 / math.sqrt(k / m)
+    c = [ContactPoint("bolt", ["end0:Tz"], [None], 1e6)]
+    return TransientProblem(mass, ground(), c, Forcing(gravity=(0, 0, -9.81)), t_end=n_steps * h, h=h, initial="zero",
+                            progress=False)
+
+
+def test_a_step_beyond_the_penalty_stability_limit_is_refused():
+    """A rigid mass on a bolted penalty spring is Newmark's linear-acceleration scheme:
+    stable for omega h < 2 sqrt(3); the criterion of stepping.coupling_margin is exact here
+    (margin = -(omega h)^2/12). A step beyond the limit is refused before the run, naming the
+    limit; just inside it the same run is bounded."""
+    from liftoff.transient.assembly import contact_rows
+    from liftoff.transient.stepping import coupling_margin
+
+    w = 1e3  # rad/s: sqrt(1e6 N/m / 1 kg)
+    p = _bolted_mass(5.0 / w)
+    rows = contact_rows(p.body_a, p.body_b, p.contacts)
+    for wh in (0.5, 2.0, 3.4, 5.0):
+        # 1e-12: the step coefficients are summed to machine precision (coefficients.py)
+        assert math.isclose(coupling_margin(rows, p.body_a.omega, p.body_a.zeta, wh / w), -wh ** 2 / 12, rel_tol=1e-12)
+    with pytest.raises(InputError, match=r"exceeds the stability limit .* about 0.003464 s") as exc:
+        solve(p)
+    assert "\n" not in str(exc.value)
+    p.h = 3.4 / w
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         r = solve(p)
-    assert np.abs(r.contact_force).max() < 3 * m * 9.81
+    assert np.abs(r.contact_force).max() < 3 * 9.81
+
+
+def test_growth_guard_stops_a_diverging_run(monkeypatch):
+    """The second line of defence (transient/guard.py): with the up-front stability check
+    switched off, the run at omega h = 5 grows geometrically (by ~3.7 a step: 300 steps stay
+    finite, the non-finite check alone would pass them) and the energy bound stops it (a
+    ConvergenceError, not a result); the bounded run at omega h = 3.4 passes the guard."""
+    from liftoff.transient import stepping
+
+    monkeypatch.setattr(stepping, "coupling_margin", lambda *args: 0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(ConvergenceError, match=r"the solution diverged: .* at t = "):
+            solve(_bolted_mass(5.0 / 1e3, 300))
+        solve(_bolted_mass(3.4 / 1e3))

@@ -44,6 +44,7 @@ def test_contact_directions_are_the_contact_points(run):
     s = r.contact_summary()
     for c, row in enumerate(s):
         assert row["axial_column"] == 3 * c and row["columns"] == [3 * c, 3 * c + 1, 3 * c + 2]
+        # the maximum of the same numbers (normal_sign * force with sign +1 is exact)
         assert row["peak_compression"] == pytest.approx(max(r.contact_force[:, 3 * c].max(), 0.0), rel=1e-15)
 
 

@@ -158,7 +158,7 @@ def _monolithic_errors(problem, divisions=(2, 4, 8)):
         return np.concatenate([y[n:], load(t) - C @ y[n:] - K @ y[:n]])
 
     h0 = estimate_step(a, b, problem.contacts)[1]
-    # the last step may end up to one step after t_end: integrate past it (never extrapolate)
+    # integrated a step past t_end, so that the reference never extrapolates
     ref = solve_ivp(rhs, (problem.t0, problem.t_end + h0), np.concatenate([q0, np.zeros(n)]), method="DOP853",
                     dense_output=True, rtol=1e-10, atol=1e-12 * np.abs(q0).max())
     errs = []

@@ -129,7 +129,7 @@ def test_cli_bad_scenario_one_line(tmp_path, capsys):
     p.write_text(_toml(d))
     assert main(["run", str(p), "--out", str(tmp_path / "o"), "--no-cache", "--no-progress"]) == 2
     err = capsys.readouterr().err.strip()
-    assert err.count("\n") == 0 and "bad.toml: post[2] 'left_3'.vehicle: point 'srb_left_hd_9'" in err
+    assert err.count("\n") == 0 and "bad.toml: case 'nominal': post[2] 'left_3'.vehicle: point 'srb_left_hd_9'" in err
     assert not list((tmp_path / "o").glob("results_*.h5"))
     p.write_text("[model]\nsource = 'nastran'\n")
     assert main(["run", str(p), "--out", str(tmp_path / "o")]) == 2
@@ -196,3 +196,30 @@ def test_step_by_step_script_is_what_run_does(tmp_path, capsys):
     assert res.contact_force.shape == ref.contact_force.shape
     np.testing.assert_allclose(res.contact_force, ref.contact_force, rtol=0,
                                atol=1e-9 * np.abs(ref.contact_force).max())
+
+
+@pytest.mark.parametrize("over, code, expect", [
+    ({"case": [{"name": "a"}, {"name": "b", "post": [{"name": "left_1", "vehicle": "nowhere",
+                                                    "pad": "pad_post_left_1"}]}]},
+     2, "s.toml: case 'b': post[0] 'left_1'.vehicle: point 'nowhere' is not on the vehicle model"),
+    ({"case": [{"name": "a"}, {"name": "b", "time": {"h": 0.01}}]},
+     2, "s.toml: case 'b': time step h = 0.01 s exceeds the stability limit"),
+    ({"time": {"t_end": 8.0, "h": 1e-8}}, 4, "GB of histories but the limit is"),
+    ({"model": {**STICK, "mesh_size": 0.001}}, 4, "stick component 'core': element length 0.001 m gives 4.69e+04 beams"),
+], ids=["case-2-point", "case-2-unstable-h", "memory", "stick-elements"])
+def test_run_refuses_before_any_output(tmp_path, capsys, over, code, expect):
+    """A bad case 2, an unstable step, a run too large for memory or a model too fine for the
+    element limit: one line naming file, case and key, the right exit status, and nothing in
+    the output folder (checked before the first file is written)."""
+    d = tomllib.loads(default_text())
+    d["model"] = STICK
+    d["time"]["t_end"] = 7.0
+    d.update(over)
+    p = tmp_path / "s.toml"
+    p.write_text(_toml(d))
+    out = tmp_path / "o"
+    assert main(["run", str(p), "--out", str(out), "--cache", str(tmp_path / "c"), "--no-progress",
+                 "--no-snapshots"]) == code
+    err = [ln for ln in capsys.readouterr().err.strip().splitlines() if not ln.startswith("liftoff: warning: ")]
+    assert len(err) == 1 and expect in err[0], err
+    assert not out.exists() or not any(out.iterdir())

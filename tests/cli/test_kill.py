@@ -1,0 +1,72 @@
+"""Killed `liftoff transient` runs (issue 16): SIGTERM exits 143 and cleans up, SIGKILL
+leaves at most a staging folder that the next run removes; in both cases the output folder
+keeps the previous run's complete, manifest-checked result (workflows/outdir.py)."""
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from liftoff.workflows.outdir import MANIFEST, verify
+
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "vehicle_on_pad"
+
+
+def _cmd(*args):
+    exe = os.path.join(os.path.dirname(sys.executable), "liftoff")
+    return [exe, *args] if os.path.exists(exe) else [sys.executable, "-m", "liftoff.workflows.cli", *args]
+
+
+def _scenario(tmp_path: Path, h: float) -> Path:
+    """The vehicle_on_pad example with its files copied, at step h (s)."""
+    for f in EXAMPLE.iterdir():
+        if f.suffix in (".npz", ".csv"):
+            (tmp_path / f.name).write_bytes(f.read_bytes())
+    text = (EXAMPLE / "scenario.toml").read_text()
+    text = re.sub(r"(?m)^t_end = 1.2.*$", f"t_end = 1.2\nh = {h!r}", text)
+    p = tmp_path / f"h{h:g}.toml"
+    p.write_text(text)
+    return p
+
+
+def _handles_sigterm(pid: int) -> bool:
+    """The process has installed its SIGTERM handler (Linux: bit 15 of SigCgt in /proc)."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return False
+    caught = int(re.search(r"SigCgt:\s*([0-9a-f]+)", status).group(1), 16)
+    return bool(caught & (1 << (signal.SIGTERM - 1)))
+
+
+def _leftovers(tmp_path: Path):
+    return [p.name for p in tmp_path.iterdir() if ".liftoff-tmp-" in p.name or p.name.endswith(".tmp")]
+
+
+def test_sigterm_and_sigkill_during_a_transient(tmp_path: Path):
+    out = tmp_path / "out"
+    first = subprocess.run(_cmd("transient", str(_scenario(tmp_path, 4e-4)), "--out", str(out), "--no-progress"),
+                           capture_output=True, text=True, timeout=300)
+    assert first.returncode == 0, first.stderr
+    before = (out / MANIFEST).read_text()
+    slow = _scenario(tmp_path, 1e-5)           # 120,000 steps, 3 runs with the error estimate: seconds
+    for sig, code in ((signal.SIGTERM, 143), (signal.SIGKILL, -9)):
+        proc = subprocess.Popen(_cmd("transient", str(slow), "--out", str(out), "--no-progress"),
+                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        t0 = time.time()                       # wait for the handler (imports take seconds under load)
+        while not _handles_sigterm(proc.pid) and proc.poll() is None and time.time() - t0 < 120:
+            time.sleep(0.02)
+        time.sleep(0.5)                        # statics, marching
+        assert proc.poll() is None, "the run ended before it was killed"
+        proc.send_signal(sig)
+        err = proc.communicate(timeout=120)[1]
+        assert proc.returncode == code, err
+        assert (out / MANIFEST).read_text() == before and verify(out) == []
+        if sig == signal.SIGTERM:
+            assert "terminated (SIGTERM), no results written" in err and not _leftovers(tmp_path)
+    again = subprocess.run(_cmd("transient", str(_scenario(tmp_path, 5e-4)), "--out", str(out), "--no-progress"),
+                           capture_output=True, text=True, timeout=300)
+    assert again.returncode == 0, again.stderr
+    assert not _leftovers(tmp_path) and verify(out) == [] and (out / MANIFEST).read_text() != before

@@ -1,0 +1,127 @@
+"""The step rule, the stability criterion and the run-size guard (transient/stepping.py).
+
+References: the number of steps and the step are integer arithmetic on t_end - t0; the
+stability limit is checked against the solver's own behaviour on the vehicle-on-pad
+example (bounded just below the limit, diverging just above it), independently of the
+criterion that computes it; the memory estimate against the arrays the solver allocates.
+"""
+import math
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from liftoff.config import load_twobody
+from liftoff.transient import (ContactPoint, ConvergenceError, Forcing, InputError, ResourceError, TransientProblem,
+                               choose_step, estimate_step, ground, solve)
+from liftoff.transient.assembly import contact_rows
+from liftoff.transient.examples import spring_block
+from liftoff.transient.stepping import coupling_margin, memory_estimate, stability_limit
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+
+def _block(t_end=0.1, h=None, k=1e5, t0=0.0, **kw):
+    """A 2 kg block on a 100 N/m spring (1.1 Hz) on a penalty contact of k N/m to ground (f_h = 35.6 Hz at 1e5)."""
+    block = spring_block(2.0, 100.0)
+    return TransientProblem(block, ground(), [ContactPoint("c", ["block:Tz"], [None], k)], Forcing(), t_end=t_end,
+                            h=h, t0=t0, progress=False, **kw)
+
+
+def test_automatic_steps_end_exactly_at_t_end():
+    p = _block(t_end=0.1)
+    f_h, h_max = estimate_step(p.body_a, p.body_b, p.contacts)
+    step = choose_step(p)
+    assert step.n_steps == math.ceil(0.1 / h_max) and step.h <= h_max and step.h == 0.1 / step.n_steps
+    r = solve(p)
+    assert r.time[-1] == 0.1 and r.time.size == step.n_steps + 1 and np.all(np.diff(r.time) > 0)
+
+
+def test_a_run_shorter_than_the_step_is_one_step_to_t_end():
+    """t_end = 1e-12 s used to give a result at 5e-4 s (one eq.-12 step past t_end)."""
+    r = solve(_block(t_end=1e-12))
+    assert r.time.tolist() == [0.0, 1e-12]
+
+
+def test_a_soft_contact_does_not_give_an_absurd_step():
+    """K_C = 1e-6 N/m: eq. 12 alone gives h = 0.25/f_h = 2.2e3 s; the step is bounded by the
+    body's own frequency (sqrt(100/2) rad/s: 0.25/f_s = 0.222 s) and the run."""
+    p = _block(t_end=1.2, k=1e-6)
+    step = choose_step(p)
+    f_s = math.sqrt(50.0) / (2 * math.pi)
+    assert step.h_default > 2e3 and step.n_steps == math.ceil(1.2 / (0.25 / f_s)) and step.h == 1.2 / step.n_steps
+    assert solve(p).time[-1] == 1.2
+
+
+def test_a_given_step_that_does_not_divide_the_run_is_rounded_down():
+    with pytest.warns(UserWarning, match=r"does not divide the run .* 34 equal steps of 0.00294118 s"):
+        step = choose_step(_block(t_end=0.1, h=0.003))
+    assert step.n_steps == 34 and step.h == 0.1 / 34 and step.h_requested == 0.003
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")          # a step that divides the run up to round-off: no warning
+        assert choose_step(_block(t_end=1.2, h=1e-4)).n_steps == 12000
+
+
+def test_the_time_axis_must_resolve_the_step():
+    """t0 = 1e15 s: floats there are 0.125 s apart; a 1e-3 s step would give a time axis with
+    repeated and non-increasing entries."""
+    with pytest.raises(InputError, match=r"below the resolution of the time axis: floats near t = 1e\+15 s are 0.125 s"):
+        choose_step(_block(t0=1e15, t_end=1e15 + 1.0, h=1e-3))
+    assert choose_step(_block(t0=1e5, t_end=1e5 + 0.1, h=1e-3)).n_steps == 100   # 1.5e-11 s apart: fine
+
+
+def test_stability_limit_against_the_solver_itself(monkeypatch):
+    """vehicle_on_pad: the criterion puts the limit at 0.80 x 0.551/f_h (the bodies' stiffness
+    lowers it from the rigid-body value). With the up-front check off, the solver stays
+    bounded at 0.98 x the limit (peak post force as at the default step, +-2 %) and diverges
+    at 1.05 x the limit (the growth guard stops it)."""
+    from liftoff.transient import stepping
+
+    sc = load_twobody(EXAMPLES / "vehicle_on_pad" / "scenario.toml", progress=False)
+    p = sc.problem
+    rows = contact_rows(p.body_a, p.body_b, p.contacts)
+    om, ze = np.r_[p.body_a.omega, p.body_b.omega], np.r_[p.body_a.zeta, p.body_b.zeta]
+    f_h, h0 = estimate_step(p.body_a, p.body_b, p.contacts)
+    rigid = stepping.STABILITY / f_h
+    limit = stability_limit(rows, om, ze, h0, rigid)
+    print(f"\nf_h {f_h:.1f} Hz, rigid-body limit {rigid:.4g} s, criterion {limit:.4g} s ({limit / rigid:.3f})")
+    assert coupling_margin(rows, om, ze, rigid) < -1 < coupling_margin(rows, om, ze, h0)
+    assert 0.75 < limit / rigid < 0.85
+    peak = np.abs(solve(p).contact_force).max()
+    monkeypatch.setattr(stepping, "coupling_margin", lambda *args: 0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        p.h = 0.98 * limit
+        r = solve(p)
+        assert abs(np.abs(r.contact_force).max() / peak - 1) < 0.02
+        p.h = 1.05 * limit
+        with pytest.raises(ConvergenceError, match="diverged"):
+            solve(p)
+
+
+def test_memory_guard_names_the_estimate_and_the_override():
+    """1e8 steps of the block: ~7 GB of histories by the estimate; refused under a 1 GB limit
+    before anything is allocated, accepted (estimate only) with the limit raised."""
+    p = _block(t_end=1e4, h=1e-4, memory_limit=1e9)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(ResourceError, match=r"needs about .* GB .* limit is 1 GB.*--max-memory"):
+            solve(p)
+    est = memory_estimate(p, 100_000_000)
+    # contact force (1 column) + time + iterations (int32) + state (int8) + rigid-body motion of the block (6)
+    assert math.isclose(est["histories"], 8.0 * (1e8 + 1) * (1 + 1 + 0.5 + 0.125 + 6), rel_tol=1e-12)
+
+
+def test_memory_estimate_matches_the_arrays_of_a_run():
+    """The histories the estimate counts are the arrays of a result (within the 6-column rigid-body
+    block the estimate counts for a body with modes)."""
+    p = _block(t_end=0.05, h=1e-4, outputs={"a": ["block:Tz"]}, keep_modal=True)
+    r = solve(p)
+    n_t = r.time.size
+    arrays = [r.time, r.contact_force, r.contact_state, r.iterations, r.displacement["a"], r.velocity["a"],
+              r.acceleration["a"], r.rigid_body_motion_a] + list(r.modal.values())
+    actual = sum(a.nbytes for a in arrays if a is not None)
+    est = memory_estimate(p, n_t - 1)
+    # byte counts: integers below 2^53, exact in floats but for the 0.125 and 0.5 fractions' sums
+    assert math.isclose(est["histories"] + est["modal histories (keep_modal)"], actual, rel_tol=1e-12)

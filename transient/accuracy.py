@@ -1,0 +1,110 @@
+"""Error estimates of peak values by step halving, and a step chosen for an accuracy.
+
+The scheme is second order in h (section 2.3; tests/transient/test_monolithic.py), so a
+value y computed with step h and again with h/2 has y_h - y ~ C h^2 and
+y_{h/2} - y ~ C h^2/4 (Richardson). The error of the value reported, y_h, is then
+estimated as
+
+    err(y_h) ~ y - y_h ~ 4/3 (y_{h/2} - y_h).
+
+It is an estimate, not a bound: it assumes the asymptotic range of the scheme. Through
+an impact or an active-set change mid-step the error depends on where in the step the
+event falls, so with only a few steps per contact period the estimate is indicative
+(tests/transient/test_accuracy.py measures it on a mass dropped on a one-sided spring).
+The second run costs twice the first; a run with its estimate costs three times one run.
+
+With ``problem.accuracy`` set, the step is halved (from the automatic or given step,
+which stays the stability bound) until the estimated error of every peak (maximum and
+minimum) of every contact force direction is below ``accuracy`` times the largest
+absolute contact force of its unit (N, N m) in the run.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from liftoff.core.errors import ConvergenceError
+
+from .assembly import contact_rows
+from .model import TransientProblem
+from .result import TransientResult
+from .stepping import choose_step
+
+RICHARDSON = 4.0 / 3.0   # err(y_h) ~ RICHARDSON (y_{h/2} - y_h) for a second-order scheme
+MAX_HALVINGS = 12        # the accuracy loop stops (ConvergenceError) after this many halvings
+
+
+def peak_errors(y_h: np.ndarray, y_half: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(error of the max, error of the min) of each column of y_h (n_t, k), estimated from
+    the same histories at h/2 (module docstring): y - y_h, signed."""
+    y_h, y_half = np.asarray(y_h), np.asarray(y_half)
+    if y_h.shape[0] == 0:
+        return np.zeros(y_h.shape[1:]), np.zeros(y_h.shape[1:])
+    return RICHARDSON * (y_half.max(axis=0) - y_h.max(axis=0)), RICHARDSON * (y_half.min(axis=0) - y_h.min(axis=0))
+
+
+def error_estimate(value_h: float, value_half: float) -> float:
+    """The estimated error y - y_h of one peak value (module docstring)."""
+    return RICHARDSON * (float(value_half) - float(value_h))
+
+
+@dataclass
+class Estimated:
+    """A run at step h (``result``, the one reported and saved) and the same run at h/2
+    (``check``), with the estimated errors of the peak contact forces (signed, per column,
+    N or N m) and the worst of them relative to the largest force of its unit."""
+
+    result: TransientResult
+    check: TransientResult
+    force_max_error: np.ndarray
+    force_min_error: np.ndarray
+    relative: float
+
+    def metadata(self) -> dict:
+        """What the result file keeps of the estimate (JSON-able)."""
+        return {"method": "Richardson, order 2, from a second run at h/2: err = 4/3 (y_h/2 - y_h); an estimate",
+                "h_check": self.check.h, "contact_force_max_error": self.force_max_error.tolist(),
+                "contact_force_min_error": self.force_min_error.tolist(), "worst_relative": self.relative}
+
+
+def _relative(result: TransientResult, emax: np.ndarray, emin: np.ndarray) -> float:
+    """The worst |error| of a contact-force peak over the largest |force| of its unit."""
+    units = np.array([d.unit for d in result.contact_directions])
+    worst = 0.0
+    for u in set(units.tolist()):
+        cols = units == u
+        scale = float(np.abs(result.contact_force[:, cols]).max()) if result.contact_force.size else 0.0
+        err = float(max(np.abs(emax[cols]).max(), np.abs(emin[cols]).max()))
+        if scale > 0:
+            worst = max(worst, err / scale)
+    return worst
+
+
+def _estimate(coarse: TransientResult, fine: TransientResult) -> Estimated:
+    emax, emin = peak_errors(coarse.contact_force, fine.contact_force)
+    est = Estimated(coarse, fine, emax, emin, _relative(coarse, emax, emin))
+    coarse.metadata["error_estimate"] = est.metadata()
+    return est
+
+
+def solve_estimated(problem: TransientProblem) -> Estimated:
+    """Run ``problem`` at its step h and at h/2; with ``problem.accuracy``, halve h until
+    the estimated peak errors meet it (module docstring). The result at h is reported."""
+    from .solver import _solve
+
+    rows = contact_rows(problem.body_a, problem.body_b, problem.contacts)
+    step = choose_step(problem, rows)
+    coarse = _solve(problem, step, runs=3)
+    for k in range(MAX_HALVINGS + 1):
+        fine = _solve(problem, step.halved(), runs=3)
+        est = _estimate(coarse, fine)
+        if problem.accuracy is None or est.relative <= problem.accuracy:
+            coarse.metadata["accuracy"] = problem.accuracy
+            coarse.metadata["halvings"] = k
+            return est
+        if k == MAX_HALVINGS:
+            break
+        coarse, step = fine, step.halved()
+    raise ConvergenceError(f"accuracy {problem.accuracy:g} not reached after {MAX_HALVINGS} halvings of the step: "
+                           f"estimated peak contact-force error {est.relative:.3g} of the peak at h = {step.h:.4g} s")

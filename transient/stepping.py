@@ -1,0 +1,299 @@
+"""The fixed step of a run (section 2.5): its size, its stability and the run's size.
+
+Rules (documented in docs/transient.md, "Step size"):
+
+* automatic step: h_max = min(0.25/f_h (eq. 12), 0.25/f_s, t_end - t0), f_h the contact
+  frequency (:func:`estimate_step`), f_s the highest natural frequency of the two bodies;
+  the run then takes n = ceil((t_end - t0)/h_max) equal steps of h = (t_end - t0)/n, so
+  that the last step ends exactly at t_end;
+* a given h is a largest step: when it does not divide t_end - t0 the run takes the same
+  n = ceil((t_end - t0)/h) equal steps of (t_end - t0)/n (<= h), with a warning;
+* the penalty coupling is stable while every eigenvalue of K_C^1/2 H(-1) K_C^1/2 exceeds
+  -1 (:func:`coupling_margin`); a given h beyond that limit is refused, an automatic one
+  is halved until stable;
+* the time axis must resolve the step: the spacing of floats at max(|t0|, |t_end|) must
+  be below 1e-6 h;
+* the run's memory (histories, step matrices, dense statics) is estimated before it
+  starts (:func:`memory_estimate`) and refused beyond ``memory_limit`` (default: 80 % of
+  the memory available when the run starts) with a :class:`ResourceError`.
+"""
+from __future__ import annotations
+
+import math
+import os
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from liftoff.core.errors import InputError, ResourceError
+
+from .assembly import contact_rows
+from .body import ModalBody
+from .coefficients import step_coefficients
+from .model import TransientProblem
+
+STABILITY = math.sqrt(3) / math.pi  # rigid bodies: 2 pi f_h h < 2 sqrt(3) (0.551/f_h), the linear-acceleration limit
+TIME_RESOLUTION = 1e-6              # the float spacing of the time axis must stay below this fraction of h
+MEMORY_FRACTION = 0.8               # default memory limit: this fraction of the memory available at the start
+DIVIDES = 1e-6                      # a step that overshoots t_end by less than this fraction of h divides the span
+
+
+# ----------------------------------------------------------------- frequencies
+def estimate_step(body_a: ModalBody, body_b: ModalBody, contacts) -> tuple[float, float]:
+    """(f_h in Hz, h = 0.25/f_h in s) from the bodies reduced to the contact DOFs (eq. 12);
+    without contacts (a plain modal transient) f_h is the highest modal frequency.
+
+    Penalty directions: the interface masses (Phi_c Phi_c^T)^-1 of both bodies coupled by
+    K_C, i.e. omega_h^2 = lambda_max(K_C^1/2 (Phi_ca Phi_ca^T + Phi_cb Phi_cb^T) K_C^1/2)
+    (body stiffness negligible against K_C). Rigid directions: the highest frequency of the
+    coupled modal system with those directions constrained (conservative)."""
+    rows = contact_rows(body_a, body_b, contacts)
+    if rows.n == 0:       # a plain modal transient: resolve the highest mode instead
+        f_h = highest_frequency(body_a, body_b)
+        return f_h, (0.25 / f_h if f_h > 0 else math.inf)     # rigid bodies only: any h is exact
+    W0 = rows.Phi_a @ rows.Phi_a.T + rows.Phi_b @ rows.Phi_b.T
+    pen = rows.compliance > 0
+    w2 = 0.0
+    with np.errstate(all="ignore"):
+        if pen.any():
+            k = np.sqrt(1.0 / rows.compliance[pen])
+            w2 = max(w2, float(np.linalg.eigvalsh(k[:, None] * W0[np.ix_(pen, pen)] * k[None, :]).max()))
+        if (~pen).any():
+            D = np.hstack([rows.Phi_a, -rows.Phi_b])
+            Kfull = np.diag(np.concatenate([body_a.omega ** 2, body_b.omega ** 2]))
+            if pen.any():
+                Kfull = Kfull + D[pen].T @ ((1.0 / rows.compliance[pen])[:, None] * D[pen])
+            u, s, vt = np.linalg.svd(D[~pen])
+            r = int(np.sum(s > 1e-12 * max(s[0], 1e-300)))
+            N = vt[r:].T
+            if N.shape[1]:
+                w2 = max(w2, float(np.linalg.eigvalsh(N.T @ Kfull @ N).max()))
+    if not math.isfinite(w2):
+        raise InputError("cannot estimate the step size: the contact frequency overflows (stiffness "
+                         f"{np.max(1.0 / rows.compliance[pen]) if pen.any() else 0:.3g} N/m against mode-shape "
+                         f"entries up to {np.abs(W0).max() ** 0.5:.3g})")
+    if not w2 > 0:
+        raise InputError("cannot estimate the step size: the contact model has no frequency; give h explicitly")
+    f_h = math.sqrt(w2) / (2 * math.pi)
+    return f_h, 0.25 / f_h
+
+
+def highest_frequency(body_a: ModalBody, body_b: ModalBody) -> float:
+    """f_s (Hz): the highest natural frequency of the two bodies (0 if all modes are rigid)."""
+    w = np.concatenate([body_a.omega, body_b.omega])
+    return float(w.max()) / (2 * math.pi) if w.size else 0.0
+
+
+def coupling_margin(rows, omega: np.ndarray, zeta: np.ndarray, h: float) -> float:
+    """lambda_min(K^1/2 Phi_c diag(r(h)) Phi_c^T K^1/2) over the penalty rows, all coupled.
+
+    A step alternating in sign, x_k = (-1)^k x, solves the step recursion of a mode
+    (eq. 9-10: s1 = A s0 + a P0 + b P1, s = (q, v)) when s = (A + I)^-1 (b - a) P: its
+    displacement is r(h) P with r = ((Gd + 1)(Bc - Ac) - G (Bcd - Acd)) / det(A + I). The
+    penalty rows f = -K_C e then have such a solution, and the scheme a root at -1, when an
+    eigenvalue of K^1/2 Phi diag(r) Phi^T K^1/2 is -1: the step is stable while the margin
+    is > -1 (a rigid mass: r = -h^2/12, margin -omega^2 h^2/12, Newmark's linear-acceleration
+    limit omega h < 2 sqrt(3)). Coupling fewer rows (released or open) gives a principal
+    submatrix, whose smallest eigenvalue is not smaller (Cauchy interlacing): the
+    all-coupled set is the worst one. Rigid rows are left out. Returns +inf when there is
+    no penalty row."""
+    pen = rows.compliance > 0
+    if not pen.any():
+        return math.inf
+    c = step_coefficients(omega, zeta, h)
+    bad = ~np.all(np.isfinite(c.packed()), axis=0)
+    if bad.any():
+        m = int(np.argmax(bad))
+        raise InputError(f"the step coefficients of mode {m} (omega = {omega[m]:.4g} rad/s, zeta = {zeta[m]:.4g}) "
+                         f"are not finite at h = {h:.4g} s")
+    with np.errstate(all="ignore"):
+        det = (c.F + 1.0) * (c.Gd + 1.0) - c.G * c.Fd
+        r = ((c.Gd + 1.0) * (c.Bc - c.Ac) - c.G * (c.Bcd - c.Acd)) / det
+        Phi = np.hstack([rows.Phi_a, -rows.Phi_b])[pen]
+        k = np.sqrt(1.0 / rows.compliance[pen])
+        H = k[:, None] * ((Phi * r) @ Phi.T) * k[None, :]
+        if not np.all(np.isfinite(H)):
+            return -math.inf
+        return float(np.linalg.eigvalsh(0.5 * (H + H.T)).min())
+
+
+def stability_limit(rows, omega, zeta, h_stable: float, h_unstable: float) -> float:
+    """A step between h_stable (margin > -1) and h_unstable (margin <= -1) at the edge of
+    stability, by bisection (30 halvings: 1e-9 of the bracket)."""
+    lo, hi = h_stable, h_unstable
+    for _ in range(30):
+        mid = 0.5 * (lo + hi)
+        if coupling_margin(rows, omega, zeta, mid) > -1.0:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+# ----------------------------------------------------------------- the step
+@dataclass
+class StepChoice:
+    """The fixed step of a run (section 2.5): n_steps equal steps of h from t0 to t_end.
+
+    f_h: the contact frequency (Hz) and h_default = 0.25/f_h (eq. 12); f_s: the highest
+    natural frequency of the bodies (Hz); h_requested: the step given (None: automatic);
+    margin: :func:`coupling_margin` at h (> -1: stable)."""
+
+    h: float
+    f_h: float
+    h_default: float
+    n_steps: int
+    t0: float
+    t_end: float
+    f_s: float = 0.0
+    h_requested: float | None = None
+    margin: float = math.inf
+
+    @property
+    def time(self) -> np.ndarray:
+        """(n_steps + 1,) the time of every step end (s); the last one is t_end exactly."""
+        t = self.t0 + self.h * np.arange(self.n_steps + 1)
+        t[-1] = self.t_end
+        return t
+
+    def halved(self) -> "StepChoice":
+        """The same run in steps of h/2 (twice as many)."""
+        return StepChoice(0.5 * self.h, self.f_h, self.h_default, 2 * self.n_steps, self.t0, self.t_end, self.f_s,
+                          self.h_requested, self.margin)
+
+
+def _modes(problem: TransientProblem) -> tuple[np.ndarray, np.ndarray]:
+    pa, pb = problem.body_a, problem.body_b
+    return np.concatenate([pa.omega, pb.omega]), np.concatenate([pa.zeta, pb.zeta])
+
+
+def _steps(span: float, h_max: float) -> int:
+    """The number of equal steps of at most h_max (up to DIVIDES of a step) that span the run."""
+    n = math.ceil(span / h_max - DIVIDES)
+    return max(int(n), 1)
+
+
+def _check_resolution(t0: float, t_end: float, h: float) -> None:
+    ulp = float(np.spacing(max(abs(t0), abs(t_end))))
+    if not ulp <= TIME_RESOLUTION * h:
+        raise InputError(f"time step h = {h:.4g} s is below the resolution of the time axis: floats near "
+                         f"t = {max(abs(t0), abs(t_end)):.6g} s are {ulp:.3g} s apart (more than {TIME_RESOLUTION:g} h); "
+                         "start the run near t0 = 0 (shift the times of the scenario)")
+
+
+def choose_step(problem: TransientProblem, rows=None) -> StepChoice:
+    """The step of ``problem`` by the rules of the module docstring. Warns when a given h is
+    larger than 0.25/f_h (eq. 12) or does not divide the run; InputError when it exceeds
+    the stability limit of the penalty coupling or the resolution of the time axis."""
+    rows = rows if rows is not None else contact_rows(problem.body_a, problem.body_b, problem.contacts)
+    f_h, h_default = estimate_step(problem.body_a, problem.body_b, problem.contacts)
+    f_s = highest_frequency(problem.body_a, problem.body_b)
+    t0, t_end = float(problem.t0), float(problem.t_end)
+    span = t_end - t0
+    if not math.isfinite(span):
+        raise InputError(f"the run from t0 = {t0:g} s to t_end = {t_end:g} s is too long for floats")
+    omega, zeta = _modes(problem)
+    if problem.h is None:
+        if not math.isfinite(h_default):
+            raise InputError("cannot choose the step: no contacts and no elastic modes; give h explicitly")
+        h_max = min(h_default, 0.25 / f_s if f_s > 0 else math.inf, span)
+        n = _steps(span, h_max)
+        margin = coupling_margin(rows, omega, zeta, span / n)
+        for _ in range(60):  # the automatic step is halved until the coupling is stable
+            if margin > -1.0:
+                break
+            n *= 2
+            margin = coupling_margin(rows, omega, zeta, span / n)
+        _check_resolution(t0, t_end, span / n)
+        return StepChoice(span / n, f_h, h_default, n, t0, t_end, f_s, None, margin)
+    h_req = float(problem.h)
+    n = _steps(span, h_req)
+    h = span / n
+    _check_resolution(t0, t_end, h)
+    margin = coupling_margin(rows, omega, zeta, h)
+    if not margin > -1.0:
+        h_ok = _stable_below(rows, omega, zeta, min(h_default, h), h)
+        raise InputError(f"time step h = {h:.4g} s exceeds the stability limit of the penalty contact coupling, "
+                         f"about {h_ok:.4g} s for these bodies and contact stiffnesses ({STABILITY:.3f}/f_h = "
+                         f"{STABILITY / f_h:.4g} s for rigid bodies, f_h = {f_h:.4g} Hz): the run would diverge; "
+                         f"give h below {h_ok:.4g} s or h = \"auto\"")
+    if h > h_default * (1 + 1e-9) and rows.n:     # without contacts every h is exact
+        warnings.warn(f"time step h = {h:.4g} s is larger than 0.25/f_h = {h_default:.4g} s (f_h = {f_h:.4g} Hz, "
+                      "eq. 12): the contact force may be under-resolved", stacklevel=4)
+    if abs(h - h_req) > 1e-9 * h_req:
+        warnings.warn(f"time step h = {h_req:.6g} s does not divide the run ({span:.6g} s): using {n} equal steps "
+                      f"of {h:.6g} s so that the last one ends at t_end = {t_end:.6g} s", stacklevel=4)
+    return StepChoice(h, f_h, h_default, n, t0, t_end, f_s, h_req, margin)
+
+
+def _stable_below(rows, omega, zeta, h_try: float, h_bad: float) -> float:
+    """The first edge of stability above a stable step below h_bad: from h_try (halved
+    until stable) up in steps of 5 % to the first unstable step, then bisection (the
+    margin need not be monotone in h; this is the edge nearest the stable step)."""
+    lo = min(h_try, 0.5 * h_bad)
+    for _ in range(60):
+        if coupling_margin(rows, omega, zeta, lo) > -1.0:
+            break
+        lo *= 0.5
+    hi = lo
+    while hi < h_bad:
+        hi = min(1.05 * hi, h_bad)
+        if not coupling_margin(rows, omega, zeta, hi) > -1.0:
+            return stability_limit(rows, omega, zeta, hi / 1.05, hi)
+    return stability_limit(rows, omega, zeta, lo, h_bad)
+
+
+# ----------------------------------------------------------------- run size
+def available_memory() -> float:
+    """Bytes of memory available now (Linux MemAvailable; else the physical memory)."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024.0
+    except OSError:
+        pass
+    try:
+        return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        return math.inf
+
+
+def memory_estimate(problem: TransientProblem, n_steps: int, runs: int = 1) -> dict[str, float]:
+    """Bytes the transient needs, by item: time histories (n_t x columns, 8 bytes each;
+    ``runs`` of them held at once, e.g. 3 for a run with its h/2 error-estimate run), the
+    modal histories of ``keep_modal``, the active-set cache of the step matrix (64
+    patterns) and the dense static solve (about five (n + n_rigid)^2 arrays)."""
+    pa, pb = problem.body_a, problem.body_b
+    n_t = float(n_steps) + 1.0
+    nc = sum(c.n_dirs for c in problem.contacts)
+    nrig = sum(c.n_dirs for c in problem.contacts if c.rigid)
+    cols = nc + 1 + 0.125 * len(problem.contacts) + 0.5  # forces, time, state (int8), iterations (int32)
+    for key, body in (("a", pa), ("b", pb)):
+        cols += 3 * len(problem.outputs.get(key, ())) + (6 if body.n_modes else 0)
+    cols += sum(len(r.labels) for r in problem.recoveries)
+    n = pa.n_modes + pb.n_modes
+    n2 = 2 * nc if nrig else nc
+    return {"histories": 8.0 * n_t * cols * runs,
+            "modal histories (keep_modal)": 8.0 * n_t * 3 * n * runs if problem.keep_modal else 0.0,
+            "active-set cache": 8.0 * 64 * n2 * n2,
+            "dense statics": 8.0 * 5 * (n + nrig) ** 2}
+
+
+def check_memory(problem: TransientProblem, n_steps: int, runs: int = 1, step: str = "") -> float:
+    """The estimate of :func:`memory_estimate` (bytes); ResourceError beyond the limit
+    (``problem.memory_limit`` bytes, None: MEMORY_FRACTION of the memory available);
+    ``step``: how the step came about, for the message."""
+    parts = memory_estimate(problem, n_steps, runs)
+    total = sum(parts.values())
+    limit = problem.memory_limit
+    if limit is None:
+        limit = MEMORY_FRACTION * available_memory()
+    if total > limit:
+        big = max(parts, key=parts.get)
+        raise ResourceError(f"the transient needs about {total / 1e9:.3g} GB ({big} {parts[big] / 1e9:.3g} GB: "
+                            f"{n_steps + 1} time points{step}) but the limit is {limit / 1e9:.3g} GB; use fewer steps "
+                            "(a larger h or a shorter run), fewer outputs or modes, or raise the limit "
+                            "(--max-memory GB on the command line, memory_limit of TransientProblem)")
+    return total
