@@ -115,11 +115,18 @@ def modal_load(body: ModalBody, key: str, forcing: Forcing) -> ModalLoad:
 def feedback_factors(n: int, key: str, forcing: Forcing, t0: float):
     """Feedback matrices of a body as rank-factored terms: (U (n, r), V (r, n), until (r,)).
 
-    Each matrix is factored by SVD (singular values below 1e-14 of the largest dropped:
-    exact to rounding), so force = sum_k U[:, k] (V[k] . q) over the terms with t < until[k]."""
+    A feedback given with its ``factors`` is used as it is (O(n r)); any other matrix is
+    factored by SVD (singular values below 1e-14 of the largest dropped: exact to rounding),
+    so force = sum_k U[:, k] (V[k] . q) over the terms with t < until[k]."""
     Us, Vs, untils = [np.zeros((n, 0))], [np.zeros((0, n))], [np.zeros(0)]
     for fb in forcing.feedback:
         if fb.body != key or n == 0:
+            continue
+        if fb.factors is not None:
+            U, V = fb.factors
+            Us.append(U)
+            Vs.append(V)
+            untils.append(np.full(U.shape[1], fb.until))
             continue
         U, s, Vt = np.linalg.svd(fb.matrix)
         r = int(np.sum(s > 1e-14 * max(s[0], 1e-300))) if s.size else 0
@@ -127,6 +134,13 @@ def feedback_factors(n: int, key: str, forcing: Forcing, t0: float):
         Vs.append(Vt[:r])
         untils.append(np.full(r, fb.until))
     return np.hstack(Us), np.vstack(Vs), np.concatenate(untils)
+
+
+def feedback_at(n: int, key: str, forcing: Forcing, t: float):
+    """(U, V) of the feedback terms of a body active at time t (t < until): force U (V q)."""
+    U, V, until = feedback_factors(n, key, forcing, t)
+    on = t < until
+    return U[:, on], V[on]
 
 
 def feedback_matrix(n: int, key: str, forcing: Forcing, t: float) -> np.ndarray:
