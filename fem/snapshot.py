@@ -165,6 +165,7 @@ def animation_gif(path, frames: list[list[Part]], titles: list[str], scale: floa
                     mesh.point_data["|u| (m)"] = np.linalg.norm(part.displacement, axis=1)
                 label.SetText(2, title)
                 pl.write_frame()
+            pl.close()                      # finishes the GIF file before it is renamed into place
     finally:
         pl.close()
     return path

@@ -188,7 +188,10 @@ class Scenario:
             if n_cases:
                 raise InputError(f"{self.path}: --cases {n_cases}: the scenario has no [dispersion] section")
             return self
-        return replace(self, dispersion=replace(self.dispersion, n_cases=int(n_cases)))
+        sc = replace(self, dispersion=replace(self.dispersion, n_cases=int(n_cases)))
+        if n_cases:
+            sc.dispersion.check(sc._source_raw(), Where(self.path, "dispersion"))
+        return sc
 
 
 # --------------------------------------------------------------------- sections
@@ -343,7 +346,8 @@ def parse_scenario(data: dict, source: str = "scenario", base: Path | str = ".",
         if disp.source is not None and disp.source not in overrides:
             raise (w / "dispersion" / "from").error(f"no [[case]] named {disp.source!r} "
                                                      f"(cases: {', '.join(overrides) or 'none'})")
-        disp.check(sc._source_raw(), w / "dispersion")
+        if disp.n_cases:       # targets are checked when cases are generated (a scenario may drop a target's table)
+            disp.check(sc._source_raw(), w / "dispersion")
     return sc
 
 
