@@ -19,6 +19,7 @@ when the campaign starts (from its N), so both are O(items), not O(cases).
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 
@@ -31,7 +32,9 @@ def k_factor(p: float, c: float, n: int) -> float:
 
     if n < 2:
         return math.nan
-    return float(nct.ppf(c, n - 1, math.sqrt(n) * norm.ppf(p)) / math.sqrt(n))
+    with np.errstate(divide="ignore", over="ignore"), warnings.catch_warnings():   # scipy's boost at n = 2
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return float(nct.ppf(c, n - 1, math.sqrt(n) * norm.ppf(p)) / math.sqrt(n))
 
 
 def order_rank(p: float, c: float, n: int) -> int:
