@@ -277,13 +277,12 @@ def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, sta
     from .campaign import summarize
 
     t0 = time.perf_counter()
-    res = solved if solved is not None else solve(replace(cp.problem, keep_modal="q"))
-    stage_times.append((f"transient [{name}]", time.perf_counter() - t0))
+    res, secs = solved if solved is not None else (solve(replace(cp.problem, keep_modal="q")), None)
+    stage_times.append((f"transient [{name}]", time.perf_counter() - t0 if secs is None else secs))
     t0 = time.perf_counter()
     files = [Path(res.save(out / f"results_{name}.h5"))]
-    s = summarize(res, cp, name, -1, sc.post)
-    if not generated:
-        agg.add(s, generated=False)
+    if not generated:                   # a generated case's summary comes from its record
+        agg.add(summarize(res, cp, name, -1, sc.post), generated=False)
     rows = report.maxmin(res.time, report.items(res, cp.attach), name)
     files.append(report.write_csv(rows, out / f"maxmin_{name}.csv"))
     if plots:
@@ -316,9 +315,9 @@ def _generated_outputs(sc, prep: Prepared, camp: _Campaign, agg, out: Path, stag
     stack = prep.stacks[prep.gen_model]
     for idx in keep:
         task = campaign.CaseTask(ref, idx, str(camp.cache.root), prep.gen_model)
-        res, cp, case, _ = campaign.solve_generated(task, keep_modal="q")
+        res, cp, case, secs = campaign.solve_generated(task, keep_modal="q")
         if idx == gov:
-            _, f = _full_case(sc, stack, cp, case.name, out, plots, pics, stage_times, agg, True, solved=res)
+            _, f = _full_case(sc, stack, cp, case.name, out, plots, pics, stage_times, agg, True, solved=(res, secs))
             files += f
             results[case.name] = (res, cp)
         else:

@@ -151,3 +151,14 @@ def test_cli_campaign(tmp_path, campaign4, capsys):
     assert "campaign: 2 generated cases (0 run, 2 reused" in text
     assert main(["run", str(p), "--out", str(tmp_path / "d"), "--no-cache", "--cases", "-1"]) == 2
     assert "--cases -1: must be 0 or more" in capsys.readouterr().err
+
+
+def test_dask_local_cluster_gives_the_same_envelope(tmp_path, campaign4):
+    """The same 4 generated cases on a local Dask cluster (one worker process): the same
+    envelope as the process pool's, exactly (the same cases, fed in the same order)."""
+    pytest.importorskip("distributed")
+    tmp, p, first = campaign4
+    out = run(p, tmp_path / "dask", cache_dir=tmp / "cache", n_cases=4,
+              options=Options(workers=1, dask="local", campaign=tmp_path / "camp"), **QUIET)
+    assert (out.campaign.ran, out.campaign.reused) == (4, 0)
+    assert out.envelope == first.envelope
