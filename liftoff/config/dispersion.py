@@ -310,12 +310,13 @@ class Dispersion:
                                                      for x in vals):
                         raise wt.error(f"{lab}: {value!r} is not a number or an array of numbers")
 
-    def generate(self, raw: dict, index: int, where: Where) -> tuple[dict, dict]:
-        """(scenario mapping of case ``index``, {column: value drawn, 'database': file})."""
+    def generate(self, raw: dict, index: int, where: Where, columns=None) -> tuple[dict, dict]:
+        """(scenario mapping of case ``index``, {column: value drawn, 'database': file});
+        ``columns``: :meth:`columns` of ``raw`` if already expanded."""
         out = copy.deepcopy(raw)
         info: dict[str, Any] = {}
         shared: dict[str, float] = {}
-        for v, lab, steps in self.columns(raw, where):
+        for v, lab, steps in columns if columns is not None else self.columns(raw, where):
             if v.independent:
                 x = v.draw(self.seed, index, lab)
             else:

@@ -174,7 +174,12 @@ class Scenario:
         """(scenario mapping, {variable: value drawn}) of generated case ``index``."""
         if not 0 <= index < self.n_generated:
             raise InputError(f"{self.path}: generated case index {index} out of range 0..{self.n_generated - 1}")
-        return self.dispersion.generate(self._source_raw(), index, Where(self.path, "dispersion"))
+        key = (self.dispersion, id(self.common))
+        if getattr(self, "_expanded", (None,))[0] != key:     # targets expanded once per scenario
+            raw = self._source_raw()
+            self._expanded = (key, raw, self.dispersion.columns(raw, Where(self.path, "dispersion")))
+        _, raw, cols = self._expanded
+        return self.dispersion.generate(raw, index, Where(self.path, "dispersion"), cols)
 
     def generated_case(self, index: int) -> Case:
         """The validated Case of generated case ``index`` (name :func:`case_name`)."""

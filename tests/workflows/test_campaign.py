@@ -162,3 +162,35 @@ def test_dask_local_cluster_gives_the_same_envelope(tmp_path, campaign4):
               options=Options(workers=1, dask="local", campaign=tmp_path / "camp"), **QUIET)
     assert (out.campaign.ran, out.campaign.reused) == (4, 0)
     assert out.envelope == first.envelope
+
+
+def test_mpi_futures_gives_the_same_envelope(tmp_path, campaign4):
+    """The command line under mpiexec (mpi4py.futures, 2 ranks: the command and one
+    worker): the same envelope as the process pool's."""
+    import csv
+    import os
+    import shutil
+    import subprocess
+    import sys
+
+    if shutil.which("mpiexec") is None:
+        pytest.skip("no mpiexec")
+    tmp, p, first = campaign4
+    root = ["--allow-run-as-root"] if os.geteuid() == 0 else []
+    cmd = ["mpiexec", *root, "--oversubscribe", "-n", "2", sys.executable, "-m", "mpi4py.futures", "-m",
+           "liftoff.workflows.cli", "run", str(p), "--out", str(tmp_path / "mpi"), "--cache", str(tmp / "cache"),
+           "--cases", "4", "--mpi", "--workers", "1", "--campaign", str(tmp_path / "camp"), "--no-progress",
+           "--no-snapshots"]
+    # a clean environment: the FE tests of this session initialise MPI in-process, and the
+    # variables that leaves behind would make mpiexec's children attach to it
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "OPAL_", "PMI_"))}
+    env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300, env=env)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    assert "generated cases (4 run, 0 reused)" in proc.stdout
+    lines = [ln for ln in (tmp_path / "mpi" / "maxmin_envelope.csv").read_text().splitlines() if ln[:1] != "#"]
+    rows = list(csv.DictReader(lines))
+    assert [(r["item"], r["case_max"], r["case_min"]) for r in rows] == \
+        [(r["item"], r["case_max"], r["case_min"]) for r in first.envelope]
+    for r, f in zip(rows, first.envelope):
+        assert float(r["max"]) == pytest.approx(f["max"], rel=1e-6, abs=1e-6 * abs(f["max"]) + 1e-12)
