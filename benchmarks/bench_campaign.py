@@ -10,7 +10,9 @@ envelope histories and the governing case's reports) with a fresh campaign folde
 case is reused. The stage cache is warmed first by one run without generated cases.
 Memory: the sum of the resident sets of the command and all its descendants, sampled every
 0.2 s (psutil); the peak of that sum is reported (it counts pages shared between
-processes, such as the numpy and numba libraries, once per process: an upper bound).
+processes, such as the numpy and numba libraries, once per process: an upper bound);
+CPU: user + system seconds of the same processes (its ratio to the wall time shows how
+many cores the run actually got on a shared machine).
 --dask repeats the N cases on a local Dask cluster of --workers processes; --scaling M runs
 M cases on 1 and on --workers workers; --flat M runs M cases to compare the peak memory
 with N's. The machine's load average is printed before and after each run: the machine is
@@ -59,13 +61,23 @@ def measure(args: list[str], tag: str) -> dict:
     proc = subprocess.Popen([str(LIFTOFF), "run", *args], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                             text=True, env={**os.environ, "PYVISTA_OFF_SCREEN": "true"})
     ps = psutil.Process(proc.pid)
-    peak = {"total": 0, "main": 0, "samples": []}
+    peak = {"total": 0, "main": 0, "samples": [], "cpu": {}}
 
     def sample():
         while proc.poll() is None:
             tot, own = tree_rss(ps)
             peak["total"], peak["main"] = max(peak["total"], tot), max(peak["main"], own)
             peak["samples"].append((time.perf_counter() - t0, tot))
+            try:
+                kids = ps.children(recursive=True)
+            except psutil.NoSuchProcess:
+                kids = []
+            for p in [ps] + kids:          # CPU seconds, last seen per process (workers exit before the end)
+                try:
+                    c = p.cpu_times()
+                    peak["cpu"][p.pid] = c.user + c.system
+                except psutil.NoSuchProcess:
+                    pass
             time.sleep(0.2)
 
     th = threading.Thread(target=sample, daemon=True)
@@ -77,13 +89,15 @@ def measure(args: list[str], tag: str) -> dict:
         sys.exit(f"bench_campaign: {tag} failed ({proc.returncode}):\n{out[-3000:]}")
     stage = next((ln.strip() for ln in out.splitlines() if "generated cases (" in ln and " run, " in ln), "")
     return {"tag": tag, "wall": wall, "peak_total": peak["total"] / 2 ** 30, "peak_main": peak["main"] / 2 ** 30,
-            "load": (load0, os.getloadavg()), "stage": stage, "samples": peak["samples"]}
+            "load": (load0, os.getloadavg()), "stage": stage, "samples": peak["samples"],
+            "cpu": sum(peak["cpu"].values())}
 
 
 def report(r: dict) -> None:
     (a0, _, _), (a1, _, _) = r["load"]
     print(f"  {r['tag']:<44} wall {r['wall']:7.1f} s   peak memory {r['peak_total']:.2f} GB (main process "
-          f"{r['peak_main']:.2f} GB)   load average {a0:.1f} -> {a1:.1f}   [{r['stage']}]", flush=True)
+          f"{r['peak_main']:.2f} GB)   CPU {r['cpu']:.0f} s (x{r['cpu'] / r['wall']:.2f} of wall)   "
+          f"load average {a0:.1f} -> {a1:.1f}   [{r['stage']}]", flush=True)
 
 
 def main() -> None:
