@@ -108,12 +108,17 @@ def main() -> None:
     ap.add_argument("--scaling", type=int, default=0, metavar="M", help="M cases on 1 and on --workers workers")
     ap.add_argument("--flat", type=int, default=0, metavar="M", help="M cases, to compare peak memory")
     ap.add_argument("--cache", type=Path, default=ROOT / "out" / ".liftoff-cache")
+    ap.add_argument("--scenario", type=Path, default=None, help="another scenario than the embedded default")
+    ap.add_argument("--scaling-workers", default="", metavar="1,2,4",
+                    help="worker counts for --scaling (default: 1 and --workers)")
+    ap.add_argument("--no-snapshots", action="store_true", help="pass --no-snapshots (no pyvista)")
     args = ap.parse_args()
     print(f"bench_campaign: {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, "
           f"{psutil.virtual_memory().total / 2 ** 30:.0f} GB, Python {platform.python_version()}; cache {args.cache}")
     with tempfile.TemporaryDirectory(prefix="liftoff-bench-campaign-") as tmp:
         tmp = Path(tmp)
-        common = ["--cache", str(args.cache), "--no-progress"]
+        common = [*([str(args.scenario)] if args.scenario else []), "--cache", str(args.cache), "--no-progress",
+                  *(["--no-snapshots"] if args.no_snapshots else [])]
         report(measure(["--out", str(tmp / "warm"), *common], "warm-up (named cases only)"))
 
         def one(n, workers, extra=(), tag=""):
@@ -134,11 +139,15 @@ def main() -> None:
             print(f"  peak memory {args.flat} -> {args.cases} cases: {r['peak_total']:.2f} -> "
                   f"{runs[0]['peak_total']:.2f} GB")
         if args.scaling:
-            r1 = one(args.scaling, 1, tag=f"{args.scaling} cases, 1 worker")
-            report(r1)
-            r2 = one(args.scaling, args.workers, tag=f"{args.scaling} cases, {args.workers} workers")
-            report(r2)
-            print(f"  scaling 1 -> {args.workers} workers: {r1['wall'] / r2['wall']:.2f}x on the whole command")
+            counts = [int(w) for w in args.scaling_workers.split(",")] if args.scaling_workers else [1, args.workers]
+            rs = []
+            for w in counts:
+                rs.append(one(args.scaling, w, tag=f"{args.scaling} cases, {w} worker{'s' if w > 1 else ''}"))
+                report(rs[-1])
+            gen = [float(r["stage"].split()[-2]) if r["stage"] else float("nan") for r in rs]
+            for w, r, g in zip(counts[1:], rs[1:], gen[1:]):
+                print(f"  scaling 1 -> {w} workers: {rs[0]['wall'] / r['wall']:.2f}x on the whole command, "
+                      f"{gen[0] / g:.2f}x on the generated cases")
 
 
 if __name__ == "__main__":

@@ -86,7 +86,7 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
         sc = load_scenario(scenario, n_cases=n_cases)
     check_target(out)
     want_pics = snapshots and any(c.output.snapshots for c in sc.cases)
-    if want_pics or sc.n_generated or _fields_wanted(sc, opt):  # pyvista (fem.snapshot) before dolfinx (FENICSX-NOTES.md)
+    if want_pics or _fields_wanted(sc, opt):  # pyvista (fem.snapshot) before dolfinx (FENICSX-NOTES.md)
         import liftoff.fem.snapshot  # noqa: F401
     with _run_cache(cache_dir, out, sc.n_generated) as cache:
         prep = prepare(sc, cache, progress, echo)
