@@ -24,9 +24,9 @@ $(STAMP): pyproject.toml constraints.txt
 	@test -x $(PY) || $(SYSPY) -m venv --system-site-packages $(VENV)
 	@echo "liftoff setup: pip install into $(VENV) (numpy pinned to Debian's build)"
 	@$(PY) -m pip uninstall -q -y liftoff 2>/dev/null || true   # the distribution's name before 0.2
-	@$(PY) -m pip install -q --disable-pip-version-check -c constraints.txt -e '.[viz,test,nastran]'
+	@$(PY) -m pip install -q --disable-pip-version-check -c constraints.txt -e '.[viz,test,nastran,dask]'
 	@$(PY) -m pip install -q --disable-pip-version-check -c constraints.txt --no-deps pyyeti
-	@$(PY) -c "import numpy, dolfinx, numba, h5py, pyvista; assert numpy.__version__.startswith('1.24'), numpy.__version__"
+	@$(PY) -c "import numpy, dolfinx, numba, h5py, pyvista, distributed, imageio; assert numpy.__version__.startswith('1.24'), numpy.__version__"
 	@touch $(STAMP)
 
 test: $(STAMP)

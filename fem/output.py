@@ -14,9 +14,12 @@ from liftoff.core.errors import InputError
 from liftoff.core.records import atomic_path
 
 
-def write_vtu(path, nodes: np.ndarray, cells: np.ndarray, cell_type: str,
-              point_data: dict[str, np.ndarray], field_data: dict | None = None) -> Path:
-    """Write a .vtu with nodal fields ``point_data`` (each (n_nodes,) or (n_nodes, k))."""
+def write_vtu(path, nodes: np.ndarray, cells, cell_type: str | None,
+              point_data: dict[str, np.ndarray], field_data: dict | None = None,
+              cell_data: dict[str, list] | None = None) -> Path:
+    """Write a .vtu with nodal fields ``point_data`` (each (n_nodes,) or (n_nodes, k)).
+    ``cell_type=None``: ``cells`` is a list of (cell_type, cells) blocks (several meshes
+    in one file); ``cell_data``: name -> one array per block."""
     import meshio
 
     path = Path(path)
@@ -26,8 +29,10 @@ def write_vtu(path, nodes: np.ndarray, cells: np.ndarray, cell_type: str,
     for k, v in point_data.items():
         if np.asarray(v).shape[0] != nodes.shape[0]:
             raise InputError(f"write_vtu: field {k!r} has {np.asarray(v).shape[0]} rows, mesh has {nodes.shape[0]} nodes")
-    mesh = meshio.Mesh(nodes, [(cell_type, np.asarray(cells, np.int64))],
+    blocks = [(cell_type, cells)] if cell_type is not None else list(cells)
+    mesh = meshio.Mesh(nodes, [(ct, np.asarray(c, np.int64)) for ct, c in blocks],
                        point_data={k: np.asarray(v, float) for k, v in point_data.items()},
+                       cell_data={k: [np.asarray(a) for a in v] for k, v in (cell_data or {}).items()},
                        field_data=field_data or {})
     with atomic_path(path, suffix=".vtu") as tmp:
         meshio.write(str(tmp), mesh, file_format="vtu")

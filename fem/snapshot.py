@@ -123,6 +123,60 @@ def snapshot_png(path, parts: Part | list[Part], title: str = "", scale: float |
     return path
 
 
+def animation_gif(path, frames: list[list[Part]], titles: list[str], scale: float | None = None, *,
+                  fraction: float = 0.1, note: str = "", fps: int = 8, window_size=(640, 800), view: str = "yz",
+                  azimuth: float = 0.0, elevation: float = 0.0) -> Path:
+    """An animated GIF of deformed parts, one picture per frame (same parts, meshes and
+    camera in every frame; the colour scale and ``scale`` are those of the largest frame).
+    Needs imageio (pyvista's GIF writer)."""
+    path = Path(path)
+    if path.suffix.lower() != ".gif":
+        raise InputError(f"animation: {str(path)!r} must end in .gif")
+    if not frames or len(titles) != len(frames):
+        raise InputError(f"animation: {len(frames)} frames and {len(titles)} titles")
+    if scale is None:       # the largest displacement of any frame drawn as ``fraction`` of the model size
+        size = max(float(np.ptp(np.vstack([p.nodes for p in frames[0]]), axis=0).max()), 1e-9)
+        big = max(float(np.linalg.norm(p.displacement, axis=1).max()) for f in frames for p in f)
+        scale = fraction * size / big if big > 0 else 1.0
+    if not _RENDER_IN_PROCESS:
+        return _render_in_subprocess(path, [p for f in frames for p in f],
+                                     dict(kind="gif", n_frames=len(frames), titles=titles, scale=scale, note=note,
+                                          fps=fps, window_size=window_size, view=view, azimuth=azimuth,
+                                          elevation=elevation))
+    umax = max(float(np.linalg.norm(p.displacement, axis=1).max()) for f in frames for p in f) or 1.0
+    pl = pyvista.Plotter(off_screen=True, window_size=list(window_size))
+    pl.set_background("white")
+    meshes = []
+    for part in frames[0]:
+        base = part.grid()
+        line = part.cell_type == "line"
+        pl.add_mesh(base if line else base.extract_feature_edges(), color="lightgrey", line_width=2 if line else 1)
+        deformed = base.copy()
+        deformed.point_data["|u| (m)"] = np.zeros(part.nodes.shape[0])
+        pl.add_mesh(deformed, scalars="|u| (m)", cmap="viridis", clim=[0, umax],
+                    scalar_bar_args={"title": "|u| (m)", "color": "black"}, **({"line_width": 6} if line else {}))
+        meshes.append(deformed)
+    getattr(pl, "view_isometric" if view == "iso" else f"view_{view}")()
+    pl.camera.azimuth += azimuth
+    pl.camera.elevation += elevation
+    pl.add_text(f"displacement scale x {scale:.3g}" + (f" ({note})" if note else ""), position="lower_left",
+                font_size=9, color="black")
+    label = pl.add_text("", position="upper_left", font_size=11, color="black")
+    try:
+        with atomic_path(path, suffix=".gif") as tmp:
+            pl.open_gif(str(tmp), fps=fps)
+            for parts, title in zip(frames, titles):
+                for mesh, part in zip(meshes, parts):
+                    mesh.points = part.nodes + scale * part.displacement
+                    mesh.point_data["|u| (m)"] = np.linalg.norm(part.displacement, axis=1)
+                label.SetText(2, title)
+                pl.write_frame()
+            pl.close()                      # finishes the GIF file before it is renamed into place
+    finally:
+        pl.close()
+    return path
+
+
 def snapshot_mode(path, model, modes, j: int, scale: float | None = None) -> Path | None:
     """Picture of mode ``j`` of an FE model (rank 0 draws; other ranks return None)."""
     u = model.nodal_displacement(modes.shapes[:, j])
@@ -158,7 +212,12 @@ def _main(npz: str) -> None:
         parts = [Part(z[f"nodes_{k}"], z[f"cells_{k}"], z[f"cell_type_{k}"].item(), z[f"u_{k}"]) for k in range(n)]
         options = json.loads(z["options"].item())
         options["window_size"] = tuple(options["window_size"])
-        snapshot_png(z["path"].item(), parts, **options)
+        if options.pop("kind", "png") == "gif":
+            k = options.pop("n_frames")
+            per = len(parts) // k
+            animation_gif(z["path"].item(), [parts[i * per:(i + 1) * per] for i in range(k)], **options)
+        else:
+            snapshot_png(z["path"].item(), parts, **options)
 
 
 if __name__ == "__main__":

@@ -91,6 +91,13 @@ def _estimate(coarse: TransientResult, fine: TransientResult) -> Estimated:
 def solve_estimated(problem: TransientProblem) -> Estimated:
     """Run ``problem`` at its step h and at h/2; with ``problem.accuracy``, halve h until
     the estimated peak errors meet it (module docstring). The result at h is reported."""
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1, user_api="blas"):   # as solve(): the same arithmetic, bit for bit
+        return _solve_estimated(problem)
+
+
+def _solve_estimated(problem: TransientProblem) -> Estimated:
     from .solver import _solve
 
     rows = contact_rows(problem.body_a, problem.body_b, problem.contacts)

@@ -146,11 +146,19 @@ def feedback_factors(n: int, key: str, forcing: Forcing, t0: float):
     until (r,)) acting on [q; v].
 
     Each [matrix, rate_matrix] is factored by SVD (singular values below 1e-14 of the
-    largest dropped: exact to rounding), so force = sum_k U[:, k] (V[k] . [q; v]) over the
-    terms with since[k] <= t < until[k]."""
+    largest dropped: exact to rounding); a feedback given with its ``factors`` (and no rate
+    matrix) is used as it is (O(n r), no SVD of an n x n matrix). Then force = sum_k
+    U[:, k] (V[k] . [q; v]) over the terms with since[k] <= t < until[k]."""
     Us, Vs, sinces, untils = [np.zeros((n, 0))], [np.zeros((0, 2 * n))], [np.zeros(0)], [np.zeros(0)]
     for fb in forcing.feedback:
         if fb.body != key or n == 0:
+            continue
+        if fb.factors is not None and fb.rate_matrix is None:
+            U, V = fb.factors
+            Us.append(U)
+            Vs.append(np.hstack([V, np.zeros_like(V)]))
+            sinces.append(np.full(U.shape[1], fb.since))
+            untils.append(np.full(U.shape[1], fb.until))
             continue
         rate = np.zeros_like(fb.matrix) if fb.rate_matrix is None else fb.rate_matrix
         U, s, Vt = np.linalg.svd(np.hstack([fb.matrix, rate]), full_matrices=False)
@@ -160,6 +168,14 @@ def feedback_factors(n: int, key: str, forcing: Forcing, t0: float):
         sinces.append(np.full(r, fb.since))
         untils.append(np.full(r, fb.until))
     return np.hstack(Us), np.vstack(Vs), np.concatenate(sinces), np.concatenate(untils)
+
+
+def feedback_at(n: int, key: str, forcing: Forcing, t: float):
+    """(U, V) of the feedback terms of a body active at time t (since <= t < until):
+    force U (V [q; v]); statics uses the displacement part V[:, :n]."""
+    U, V, since, until = feedback_factors(n, key, forcing, t)
+    on = (since <= t) & (t < until)
+    return U[:, on], V[on]
 
 
 def feedback_matrix(n: int, key: str, forcing: Forcing, t: float, rate: bool = False) -> np.ndarray:

@@ -149,6 +149,18 @@ def cg_motion_matrix(body: ModalBody, boundary_labels=None, cg=None) -> np.ndarr
     return T2 @ body.rows(labels)
 
 
+def softening_factors(body: ModalBody, gravity, boundary_labels=None, cg=None) -> tuple[np.ndarray, np.ndarray]:
+    """KSOF of eq. 27 in rank-3 factored form (U (n, 3), V (3, n)), KSOF = U V:
+    U = ERVr^T FGM, V = ERVt (see :func:`softening_matrix`)."""
+    m, cg0 = center_of_gravity(body)
+    if cg is None:
+        cg = cg0
+    ERV = cg_motion_matrix(body, boundary_labels, cg)
+    FG = m * np.asarray(gravity, dtype=float)[:3]
+    FGM = -skew(FG)
+    return ERV[3:].T @ FGM, ERV[:3]
+
+
 def softening_matrix(body: ModalBody, gravity, boundary_labels=None, cg=None) -> np.ndarray:
     """KSOF (n, n) of eq. 27 as a feedback force: F_SOF = KSOF q (eq. 26).
 
@@ -157,13 +169,8 @@ def softening_matrix(body: ModalBody, gravity, boundary_labels=None, cg=None) ->
     lateral c.g. offset gives a moment that increases it); F_SOF = ERVr^T M_G. In statics
     the effective stiffness is diag(omega^2) - KSOF.
     """
-    m, cg0 = center_of_gravity(body)
-    if cg is None:
-        cg = cg0
-    ERV = cg_motion_matrix(body, boundary_labels, cg)
-    FG = m * np.asarray(gravity, dtype=float)[:3]
-    FGM = -skew(FG)
-    return ERV[3:].T @ FGM @ ERV[:3]
+    U, V = softening_factors(body, gravity, boundary_labels, cg)
+    return U @ V
 
 
 # ---------------------------------------------------------------- cryo preload

@@ -535,11 +535,17 @@ def _record_contact(r, it, fn, bolted, active, opening, dcontact, axial, Fc, sta
 
 @njit(cache=True)
 def _record_modal(r, na, q, v, acc, Qa, Va, Aa, Qb, Vb, Ab):
-    """Row r of the modal histories of both bodies."""
+    """Row r of the modal histories of both bodies (velocity and acceleration only where
+    their arrays have rows: keep_modal = "q" keeps the displacements alone)."""
+    full = Va.shape[0] > r
     for m in range(na):
-        Qa[r, m] = q[m]; Va[r, m] = v[m]; Aa[r, m] = acc[m]
+        Qa[r, m] = q[m]
+        if full:
+            Va[r, m] = v[m]; Aa[r, m] = acc[m]
     for m in range(q.size - na):
-        Qb[r, m] = q[na + m]; Vb[r, m] = v[na + m]; Ab[r, m] = acc[na + m]
+        Qb[r, m] = q[na + m]
+        if full:
+            Vb[r, m] = v[na + m]; Ab[r, m] = acc[na + m]
 
 
 @njit(cache=True)

@@ -242,13 +242,17 @@ class ModalFeedback:
     over it (eq. 26; a control law's proportional and derivative parts).
 
     Active while ``since <= t < until``; in :func:`static_equilibrium` it enters as
-    ``-matrix`` in the stiffness (the 'softening stiffness' KSOF of eq. 27)."""
+    ``-matrix`` in the stiffness (the 'softening stiffness' KSOF of eq. 27). ``factors =
+    (U, V)`` (n x r, r x n, ``matrix = U @ V``) give the displacement part in rank-factored
+    form, so that the solver never factors an n x n matrix (KSOF has rank 3, eq. 27);
+    without them the solver finds factors by an SVD (cubic in n)."""
 
     body: str
     matrix: np.ndarray
     until: float = INF
     rate_matrix: np.ndarray | None = None
     since: float = -INF
+    factors: tuple | None = None
 
     def __post_init__(self) -> None:
         who = f"modal feedback on body {self.body!r}"
@@ -263,6 +267,16 @@ class ModalFeedback:
         self.until, self.since = float(self.until), float(self.since)
         if math.isnan(self.since) or math.isnan(self.until) or not self.since < self.until:
             raise InputError(f"{who}: since = {self.since!r} s must be before until = {self.until!r} s")
+        if self.factors is not None:
+            U, V = (_finite(f"{who}: factors", x) for x in self.factors)
+            n = self.matrix.shape[0]
+            if U.ndim != 2 or V.ndim != 2 or U.shape[0] != n or V.shape != (U.shape[1], n):
+                raise InputError(f"{who}: factors of shapes {U.shape}, {V.shape}, expected (n, r), (r, n) with n = {n}")
+            x = np.cos(np.arange(n) + 0.5)          # one product checks U V = matrix (O(n^2), not O(n^3))
+            y, z = self.matrix @ x, U @ (V @ x)
+            if not np.allclose(y, z, rtol=1e-9, atol=1e-12 * max(float(np.abs(y).max(initial=0.0)), 1e-300)):
+                raise InputError(f"{who}: factors U V differ from the matrix")
+            self.factors = (U, V)
 
     def active(self, t: float) -> bool:
         return self.since <= t < self.until
@@ -375,7 +389,7 @@ class TransientProblem:
     initial: object = "static"
     outputs: dict = field(default_factory=dict)
     recoveries: list = field(default_factory=list)
-    keep_modal: bool = False
+    keep_modal: bool | str = False  # True: q, v, acc of both bodies; "q": q only
     progress: bool = True
     accuracy: float | None = None
     memory_limit: float | None = None
@@ -401,6 +415,8 @@ class TransientProblem:
         if int(self.max_iter) < 1:
             raise InputError(f"max_iter = {self.max_iter!r} must be at least 1")
         self.max_iter = int(self.max_iter)
+        if self.keep_modal not in (True, False, "q"):
+            raise InputError(f"keep_modal must be true, false or 'q' (modal displacements only), got {self.keep_modal!r}")
         if isinstance(self.initial, str):
             if self.initial not in ("static", "zero"):
                 raise InputError(f"initial must be 'static', 'zero' or an InitialState, got {self.initial!r}")

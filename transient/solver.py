@@ -2,13 +2,14 @@
 from __future__ import annotations
 
 import time as _time
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
 from liftoff.core.errors import ConvergenceError, InputError
 
-from .assembly import contact_rows, feedback_factors, feedback_matrix, modal_load
+from .assembly import contact_rows, feedback_at, feedback_factors, modal_load
 from .body import ModalBody
 from .coefficients import StepCoefficients, step_coefficients
 from .contact_laws import initial_slip
@@ -56,7 +57,8 @@ def static_solution(body_a: ModalBody, body_b: ModalBody, contacts, forcing: For
     Bolted points (t < release_time) couple all directions; released points couple their
     axial direction while it is in compression (a released point found in tension is opened
     and the problem solved again). f (n_dirs,) is the contact force on A (N) on every
-    direction (0 where not coupled). Feedback matrices enter the stiffness as -matrix (eq. 27)."""
+    direction (0 where not coupled). Feedback matrices enter the stiffness as -matrix (eq. 27).
+    The solve is reduced to the interface (:func:`_static_solve`): linear in the number of modes."""
     if not isinstance(forcing, Forcing):
         raise InputError("forcing must be a Forcing object")
     rows = contact_rows(body_a, body_b, contacts)
@@ -64,13 +66,16 @@ def static_solution(body_a: ModalBody, body_b: ModalBody, contacts, forcing: For
     released = ~(t < rows.release[rows.contact])
     # stiffness and load of the bodies alone: the same for every active set tried below
     na, nb = body_a.n_modes, body_b.n_modes
-    K0 = np.zeros((na + nb, na + nb))
-    K0[:na, :na] = np.diag(body_a.omega ** 2) - feedback_matrix(na, "a", forcing, t)
-    if nb:
-        K0[na:, na:] = np.diag(body_b.omega ** 2) - feedback_matrix(nb, "b", forcing, t)
+    lam = np.concatenate([body_a.omega ** 2, body_b.omega ** 2])
+    (Ua, Va), (Ub, Vb) = feedback_at(na, "a", forcing, t), feedback_at(nb, "b", forcing, t)
+    Va, Vb = Va[:, :na], Vb[:, :nb]               # statics: the displacement part of the feedback
+    U = np.zeros((na + nb, Ua.shape[1] + Ub.shape[1]))
+    V = np.zeros((U.shape[1], na + nb))
+    U[:na, :Ua.shape[1]], V[:Ua.shape[1], :na] = Ua, Va
+    U[na:, Ua.shape[1]:], V[Ua.shape[1]:, na:] = Ub, Vb
     P0 = np.concatenate([modal_load(body_a, "a", forcing).at(t), modal_load(body_b, "b", forcing).at(t)])
     for _ in range(rows.n + 1):
-        state, f = _static_solve(na, rows, K0, P0, t, act)
+        state, f = _static_solve(na, rows, (lam, U, V), P0, t, act)
         tension = act & released & (rows.sign * f < 0)
         if not tension.any():
             return state, f
@@ -78,49 +83,80 @@ def static_solution(body_a: ModalBody, body_b: ModalBody, contacts, forcing: For
     raise ConvergenceError(f"static equilibrium at t = {t:g} s: the released contact set did not settle")
 
 
-def _static_solve(na, rows, K0, P0, t, act):
-    """One static solve with the rows ``act`` coupled; K0, P0: stiffness and load of the bodies alone."""
-    n = K0.shape[0]
+def _static_solve(na, rows, body_terms, P0, t, act):
+    """One static solve with the rows ``act`` coupled, reduced to the interface.
+
+    The stiffness is K = diag(lam) - U V (bodies and feedback) plus the active penalty rows
+    Dp^T K_C Dp, with the rigid rows Dr q = -c_r as constraints. The unknowns kept are
+    z = [g; s; lam_r] (penalty forces on A, feedback coordinates s = V q, rigid-row forces)
+    and the rigid-body modal coordinates q_R (lam = 0); the elastic ones are
+    q_E = diag(lam_E)^-1 (P_E + A_E z) with A = [Dp^T, U, Dr^T], T = [Dp; V; Dr]:
+
+        [C + T_E diag(1/lam_E) A_E   T_R] [z  ]   [-c - T_E diag(1/lam_E) P_E]
+        [A_R                          0 ] [q_R] = [-P_R                      ]
+
+    (C = diag(1/K_C, -1, 0)): size (rows + rank of the feedback + rigid modes), built in
+    O(n m^2). Its LU factors (partial pivoting, rows and columns equilibrated) give the
+    singularity test: a pivot below 1e-11 of the largest means a body not held by enough
+    closed/bolted contact directions or redundant rigid contacts."""
+    lam, U, V = body_terms
+    n = lam.size
     nb = n - na
     D = _coupled_operator(rows, act)
-    comp = rows.compliance[act]
-    off = rows.offset[act]
+    comp, off = rows.compliance[act], rows.offset[act]
     pen, rig = comp > 0, comp == 0
-    Kp = 1.0 / comp[pen]
-    Dp = D[pen]
-    K = K0 + Dp.T @ (Kp[:, None] * Dp)
-    P = P0 - Dp.T @ (Kp * off[pen])
-    Dr = D[rig]
-    nr = Dr.shape[0]
-    S = np.zeros((n + nr, n + nr))
-    S[:n, :n] = K
-    S[:n, n:] = Dr.T
-    S[n:, :n] = Dr
-    rhs = np.concatenate([P, -off[rig]])
-    # Jacobi-type scaling so that the singularity test does not depend on units
-    d = np.abs(np.diag(K)).copy()
-    sc = np.where(d > 0, 1.0 / np.sqrt(np.where(d > 0, d, 1.0)), 1.0)
-    if nr:
-        rn = np.linalg.norm(Dr * sc[None, :], axis=1)
-        sc = np.concatenate([sc, np.where(rn > 0, 1.0 / np.where(rn > 0, rn, 1.0), 1.0)])
-    Ss = sc[:, None] * S * sc[None, :]
-    sv = np.linalg.svd(Ss, compute_uv=False)
-    if sv.size and (sv[-1] <= 1e-11 * sv[0] or not np.isfinite(sv[0])):
-        kmax = float(np.max(Kp)) if Kp.size else 0.0
-        raise InputError(f"static equilibrium at t = {t:g} s is singular or too ill-conditioned to solve (scaled "
-                         f"condition number {sv[0] / max(sv[-1], 1e-300):.3g}): a free body is not held by enough "
-                         "closed/bolted contact directions, rigid contacts are redundant, or the contact stiffness "
-                         f"(up to {kmax:.3g} N/m) is too many orders above the bodies' own")
-    x = sc * np.linalg.solve(Ss, sc * rhs)
-    q = x[:n]
+    npen, nfb = int(pen.sum()), V.shape[0]
+    T = np.vstack([D[pen], V, D[rig]])
+    A = np.hstack([D[pen].T, U, D[rig].T])
+    C = np.concatenate([comp[pen], -np.ones(nfb), np.zeros(int(rig.sum()))])
+    c = np.concatenate([off[pen], np.zeros(nfb), off[rig]])
+    E = lam > 1e-12 * max(float(lam.max(initial=0.0)), 1e-300)
+    R = np.flatnonzero(~E)
+    Li = 1.0 / lam[E]
+    m, nr = C.size, R.size
+    M = np.zeros((m + nr, m + nr))
+    M[:m, :m] = np.diag(C) + T[:, E] @ (Li[:, None] * A[E])
+    M[:m, m:] = T[:, R]
+    M[m:, :m] = A[R]
+    rhs = np.concatenate([-c - T[:, E] @ (Li * P0[E]), -P0[R]])
+    kmax = float(np.max(1.0 / comp[pen])) if pen.any() else 0.0
+    x = _pivoted_solve(M, rhs, t, kmax) if m + nr else np.zeros(0)
+    z = x[:m]
+    q = np.zeros(n)
+    q[E] = Li * (P0[E] + A[E] @ z)
+    q[R] = x[m:]
     f = np.zeros(rows.n)
     idx = np.flatnonzero(act)
     fa = np.zeros(idx.size)
-    fa[pen] = -Kp * (off[pen] + Dp @ q)
-    fa[rig] = -x[n:]
+    fa[pen] = z[:npen]
+    fa[rig] = z[npen + nfb:]
     f[idx] = fa
     state = InitialState(q[:na], np.zeros(na), q[na:], np.zeros(nb))
     return state, f
+
+
+def _pivoted_solve(M: np.ndarray, rhs: np.ndarray, t: float, kmax: float = 0.0) -> np.ndarray:
+    """Solve M x = rhs by LU with partial pivoting after equilibrating rows and columns (so
+    the test does not depend on units); InputError when a pivot falls below 1e-11 of the
+    largest (singular statics) or is not finite."""
+    import scipy.linalg as sla
+
+    r = np.abs(M).max(axis=1)
+    r = np.where(r > 0, 1.0 / np.where(r > 0, r, 1.0), 1.0)
+    Ms = r[:, None] * M
+    cs = np.abs(Ms).max(axis=0)
+    cs = np.where(cs > 0, 1.0 / np.where(cs > 0, cs, 1.0), 1.0)
+    Ms *= cs[None, :]
+    with warnings.catch_warnings():          # an exactly zero pivot is reported below, as an InputError
+        warnings.simplefilter("ignore", sla.LinAlgWarning)
+        lu, piv = sla.lu_factor(Ms, check_finite=False)
+    d = np.abs(np.diag(lu))
+    if not np.all(np.isfinite(d)) or d.min() <= 1e-11 * d.max():
+        raise InputError(f"static equilibrium at t = {t:g} s is singular or too ill-conditioned to solve "
+                         f"(smallest LU pivot {d.min() / max(d.max(), 1e-300):.3g} of the largest): a free body is "
+                         "not held by enough closed/bolted contact directions, rigid contacts are redundant, or the "
+                         f"contact stiffness (up to {kmax:.3g} N/m) is too many orders above the bodies' own")
+    return cs * sla.lu_solve((lu, piv), r * rhs, check_finite=False)
 
 
 def static_equilibrium(body_a: ModalBody, body_b: ModalBody, contacts, forcing: Forcing,
@@ -135,8 +171,8 @@ def _acceleration(body: ModalBody, key: str, forcing: Forcing, load, t: float, q
     body's ModalLoad) + feedback + contact force Pc, less damping and stiffness."""
     if body.n_modes == 0:
         return np.zeros(0)
-    n = body.n_modes
-    P = load.at(t) + feedback_matrix(n, key, forcing, t) @ q + feedback_matrix(n, key, forcing, t, rate=True) @ v + Pc
+    U, V = feedback_at(body.n_modes, key, forcing, t)
+    P = load.at(t) + U @ (V @ np.concatenate([q, v])) + Pc
     return P - 2 * body.zeta * body.omega * v - body.omega ** 2 * q
 
 
@@ -348,11 +384,14 @@ def _modal_inputs(problem: TransientProblem, coefs, loads) -> Modal:
 
 
 def _histories(problem: TransientProblem, rows, n_t: int, plans) -> History:
-    """Zeroed time histories; the modal ones only with ``keep_modal``."""
+    """Zeroed time histories; the modal ones only with ``keep_modal`` (True: q, v, acc of
+    both bodies; "q": the modal displacements alone, O(n) per step)."""
     keep = bool(problem.keep_modal)
+    full = problem.keep_modal is True
     na, nb = problem.body_a.n_modes, problem.body_b.n_modes
-    Qa, Va, Aa = (np.zeros((n_t if keep else 0, na)) for _ in range(3))
-    Qb, Vb, Ab = (np.zeros((n_t if keep else 0, nb)) for _ in range(3))
+    Qa, Qb = np.zeros((n_t if keep else 0, na)), np.zeros((n_t if keep else 0, nb))
+    Va, Aa = (np.zeros((n_t if full else 0, na)) for _ in range(2))
+    Vb, Ab = (np.zeros((n_t if full else 0, nb)) for _ in range(2))
     return History(np.zeros((n_t, plans[0].ntarg)), np.zeros((n_t, plans[1].ntarg)), np.zeros((n_t, rows.n)),
                    np.zeros((n_t, len(rows.names)), dtype=np.int8), np.zeros(n_t, dtype=np.int32), keep,
                    Qa, Va, Aa, Qb, Vb, Ab)
@@ -374,7 +413,9 @@ def _start(problem: TransientProblem, rows, contact: Contact, init: InitialState
         if not bolted0[c] and active0[rows.axial_column[c]]:
             hist.state[0, c] = CLOSED
     if hist.keep:
-        hist.Qa[0], hist.Va[0], hist.Aa[0], hist.Qb[0], hist.Vb[0], hist.Ab[0] = q_a, v_a, a_a0, q_b, v_b, a_b0
+        hist.Qa[0], hist.Qb[0] = q_a, q_b
+        if hist.Va.shape[0]:
+            hist.Va[0], hist.Aa[0], hist.Vb[0], hist.Ab[0] = v_a, a_a0, v_b, a_b0
     pen0 = np.where(rows.compliance > 0, f0, 0.0)  # rigid rows start each step from their own g
     q0 = np.concatenate([q_a, q_b])
     anchor, slip, sdir = initial_slip(rows, f0, contact.Phi @ q0, active0, bolted0)   # contact_laws.py
@@ -532,6 +573,7 @@ def _result(problem: TransientProblem, rows, step: StepChoice, plans, hist: Hist
     modal = {}
     if hist.keep:
         modal = {"q_a": hist.Qa, "v_a": hist.Va, "acc_a": hist.Aa, "q_b": hist.Qb, "v_b": hist.Vb, "acc_b": hist.Ab}
+        modal = {k: v for k, v in modal.items() if v.shape[0]}
     meta = {"h": step.h, "method": problem.method, "tol": problem.tol, "max_iter": problem.max_iter,
             "f_h": step.f_h, "h_default": step.h_default, "f_s": step.f_s, "h_requested": step.h_requested,
             "stability_margin": step.margin, "n_steps": step.n_steps, "t0": problem.t0,

@@ -61,14 +61,8 @@ def estimate_step(body_a: ModalBody, body_b: ModalBody, contacts) -> tuple[float
             w2 = max(w2, float(np.linalg.eigvalsh(k[:, None] * W0[np.ix_(pen, pen)] * k[None, :]).max()))
         if (~pen).any():
             D = np.hstack([rows.Phi_a, -rows.Phi_b])
-            Kfull = np.diag(np.concatenate([body_a.omega ** 2, body_b.omega ** 2]))
-            if pen.any():
-                Kfull = Kfull + D[pen].T @ ((1.0 / rows.compliance[pen])[:, None] * D[pen])
-            u, s, vt = np.linalg.svd(D[~pen])
-            r = int(np.sum(s > 1e-12 * max(s[0], 1e-300)))
-            N = vt[r:].T
-            if N.shape[1]:
-                w2 = max(w2, float(np.linalg.eigvalsh(N.T @ Kfull @ N).max()))
+            Om2 = np.concatenate([body_a.omega ** 2, body_b.omega ** 2])
+            w2 = max(w2, _constrained_max_eig(Om2, D[pen], 1.0 / rows.compliance[pen], D[~pen]))
     if not math.isfinite(w2):
         raise InputError("cannot estimate the step size: the contact frequency overflows (stiffness "
                          f"{np.max(1.0 / rows.compliance[pen]) if pen.any() else 0:.3g} N/m against mode-shape "
@@ -77,6 +71,39 @@ def estimate_step(body_a: ModalBody, body_b: ModalBody, contacts) -> tuple[float
         raise InputError("cannot estimate the step size: the contact model has no frequency; give h explicitly")
     f_h = math.sqrt(w2) / (2 * math.pi)
     return f_h, 0.25 / f_h
+
+
+DENSE_EIG = 400  # modes: below this the constrained eigenproblem is solved densely
+
+
+def _constrained_max_eig(Om2: np.ndarray, Dp: np.ndarray, kp: np.ndarray, Dr: np.ndarray) -> float:
+    """Largest eigenvalue of K = diag(Om2) + Dp^T diag(kp) Dp (mass-normalised modes) on the
+    null space of the rigid rows Dr. Small problems: dense, on an orthonormal null-space
+    basis. Otherwise Lanczos (scipy eigsh, rtol 1e-10, fixed start vector) on the operator
+    P K P with the projector P = I - Dr^+ Dr applied through Dr's rows: O(n) per product,
+    no n x n matrix."""
+    n = Om2.size
+    if n <= DENSE_EIG:
+        Kfull = np.diag(Om2) + Dp.T @ (kp[:, None] * Dp)
+        u, s, vt = np.linalg.svd(Dr)
+        r = int(np.sum(s > 1e-12 * max(s[0], 1e-300)))
+        N = vt[r:].T
+        return float(np.linalg.eigvalsh(N.T @ Kfull @ N).max()) if N.shape[1] else 0.0
+    from scipy.sparse.linalg import LinearOperator, eigsh
+
+    Q, s, _ = np.linalg.svd(Dr.T, full_matrices=False)       # (n, n_r): orthonormal basis of Dr's rows
+    Q = Q[:, s > 1e-12 * max(s[0], 1e-300)]
+
+    def project(x):
+        return x - Q @ (Q.T @ x)
+
+    def matvec(x):
+        y = project(np.ravel(x))
+        return project(Om2 * y + Dp.T @ (kp * (Dp @ y)))
+
+    op = LinearOperator((n, n), matvec=matvec, dtype=float)
+    v0 = project(np.cos(np.arange(n) + 0.5))
+    return float(eigsh(op, k=1, which="LA", tol=1e-10, v0=v0, return_eigenvectors=False)[0])
 
 
 def highest_frequency(body_a: ModalBody, body_b: ModalBody) -> float:

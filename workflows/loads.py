@@ -25,6 +25,7 @@ from liftoff.transient import (
     TransientProblem,
 )
 from liftoff.transient.effects import center_of_gravity, cg_motion_matrix, control_forces
+from threadpoolctl import threadpool_limits
 
 from liftoff.config.scenario import Case
 from liftoff.config.sections import Softening
@@ -78,7 +79,7 @@ def contacts(case: Case, stack: StackModel) -> list[ContactPoint]:
 
 def applied_forces(case: Case, stack: StackModel) -> tuple[list[PointForce], list[TabulatedForce]]:
     """Engine thrust (per direction component, tables) and the [[force]] entries (constant
-    or tables), all on the vehicle."""
+    or tables; a force that is zero at every time is left out), all on the vehicle."""
     constant, tables = [], []
     for i, e in enumerate(case.engines):
         _check_point(stack.vehicle, e.mount, (case.at("engine") / i).named(e.name) / "mount")
@@ -91,6 +92,8 @@ def applied_forces(case: Case, stack: StackModel) -> tuple[list[PointForce], lis
             stack.vehicle.dof_index(f.label)
         except InputError as exc:
             raise ((case.at("force") / i).named(f.label) / "label").wrap(exc) from None
+        if (f.value if f.time is None else np.abs(f.table).max()) == 0.0:
+            continue                       # zero everywhere (e.g. a wind at scale 0): nothing to apply
         (constant if f.time is None else tables).append(f.on("a"))
     return constant, tables
 
@@ -147,7 +150,9 @@ def _attach_component(stack: StackModel, point: str, where: Where) -> str:
 
 
 def recoveries(case: Case, stack: StackModel) -> tuple[list[Recovery], dict, dict]:
-    """Interface forces at attach points, c.g. motion (eq. 23), top/payload/stations motion."""
+    """Interface forces at attach points, c.g. motion (eq. 23), top/payload/stations motion.
+    (The modal coordinates the full-field pictures need are kept by the transient's
+    ``keep_modal = "q"`` storage, O(n) per step, not by identity-matrix recoveries.)"""
     from liftoff.reduction import interface_force_recovery
 
     body = stack.vehicle
@@ -165,12 +170,6 @@ def recoveries(case: Case, stack: StackModel) -> tuple[list[Recovery], dict, dic
     out.append(Recovery("cg_motion", "a", SIX, disp=cg_motion_matrix(body), units=("m",) * 3 + ("rad",) * 3,
                         category="cg_motion", description="vehicle c.g. motion (eq. 23)"))
     out += component_recoveries(stack)
-    n_a, n_b = body.n_modes, stack.pad.n_modes
-    out.append(Recovery("modal_q_a", "a", [f"q{j}" for j in range(n_a)], disp=np.eye(n_a), units="sqrt(kg) m",
-                        category="modal", description="modal coordinates of the vehicle"))
-    if n_b:
-        out.append(Recovery("modal_q_b", "b", [f"q{j}" for j in range(n_b)], disp=np.eye(n_b),
-                            units="sqrt(kg) m", category="modal", description="modal coordinates of the pad"))
     outputs = []
     w = case.at("recovery")
     for key in ("top", "payload"):
@@ -215,9 +214,12 @@ def attitude_feedback(case: Case, stack: StackModel) -> ModalFeedback:
         raise Where(case.source, "control").wrap(exc) from None
 
 
-def build_problem(case: Case, stack: StackModel, progress: bool = True) -> CaseProblem:
+@threadpool_limits.wrap(limits=1, user_api="blas")   # the same arithmetic in any process (campaign workers)
+def build_problem(case: Case, stack: StackModel, progress: bool = True, keep_modal: bool | str = False) -> CaseProblem:
     """The two-body transient of one case: posts, cryo preload, thrust and forces, control
-    forces, gravity softening, recoveries; static initial state (section 2.6)."""
+    forces, gravity softening, recoveries; static initial state (section 2.6).
+    ``keep_modal``: the transient's modal storage ("q": modal displacements, for full-field
+    pictures and ParaView output)."""
     body = stack.vehicle
     cps = contacts(case, stack)
     cryo = cryo_loads(stack, case.cryo, case.at("cryo"))
@@ -237,7 +239,8 @@ def build_problem(case: Case, stack: StackModel, progress: bool = True) -> CaseP
     t = case.time
     problem = TransientProblem(body, stack.pad, cps, forcing, t_end=t.t_end, h=t.h, t0=t.t0, method=t.method,
                                tol=t.tol, max_iter=t.max_iter, initial="static", outputs=outputs,
-                               recoveries=recs, progress=progress and case.output.progress)
+                               recoveries=recs, keep_modal=keep_modal,
+                               progress=progress and case.output.progress)
     return CaseProblem(case, problem, cryo, ctab, soft, attach, gravity_only=Forcing(gravity=case.gravity))
 
 

@@ -32,6 +32,7 @@ from liftoff.reduction import (
 )
 from liftoff.transient.body import ModalBody
 from liftoff.transient.effects import center_of_gravity
+from threadpoolctl import threadpool_limits
 
 from liftoff.config.model import VEHICLE, ComponentModel, ModelConfig
 from liftoff.config.sections import Cryo
@@ -177,6 +178,17 @@ def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, wh
             cbs[name], ckeys[name] = cb_stage(model, name, comps[name], k, cache)
     t1 = time.perf_counter()
     _check_materials(model, thermal, where or Where("scenario", "model"))
+    vasm, vmodes, vehicle, pasm, pmodes, pad, unit = _bodies(model, cbs, ckeys, thermal, cache)
+    t2 = time.perf_counter()
+    return StackModel(comps, cbs, vasm, vmodes, vehicle, pasm, pmodes, pad, unit,
+                      timings={"components+CB (s)": t1 - t0, "system modes (s)": t2 - t1})
+
+
+@threadpool_limits.wrap(limits=1, user_api="blas")   # the same arithmetic in any process (campaign workers)
+def _bodies(model: ModelConfig, cbs: dict, ckeys: dict, thermal: dict, cache: StageCache):
+    """Assemblies, system modes (cached) and the two modal bodies; the unit thermal loads
+    reduced to each component's boundary."""
+    names = list(VEHICLE) + ["pad"]
     sysp = model.system
     vasm = assemble([cbs[n] for n in VEHICLE], "vehicle")
     vmodes = modes_stage(vasm, 6, sysp.f_max, [ckeys[n] for n in VEHICLE], cache, "vehicle")
@@ -194,9 +206,7 @@ def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, wh
     for name in names:
         cb = cbs[name]
         unit[name] = {vol: cb.boundary_load(f) for vol, f in thermal[name].items()}
-    t2 = time.perf_counter()
-    return StackModel(comps, cbs, vasm, vmodes, vehicle, pasm, pmodes, pad, unit,
-                      timings={"components+CB (s)": t1 - t0, "system modes (s)": t2 - t1})
+    return vasm, vmodes, vehicle, pasm, pmodes, pad, unit
 
 
 def _check_materials(model: ModelConfig, thermal: dict[str, dict], where: Where) -> None:

@@ -276,9 +276,11 @@ def deformed_fields(stack, result, i: int) -> list:
     from liftoff.reduction import field_recovery
 
     out = []
-    qa = result.recovered["modal_q_a"][i].copy()
+    if "q_a" not in result.modal:
+        raise ValueError("deformed_fields needs the modal displacements: solve with keep_modal = 'q'")
+    qa = result.modal["q_a"][i].copy()
     qa[: np.sum(stack.vehicle.omega == 0)] = 0.0            # elastic deformation only
-    qb = result.recovered["modal_q_b"][i] if "modal_q_b" in result.recovered else np.zeros(0)
+    qb = result.modal["q_b"][i] if "q_b" in result.modal else np.zeros(0)
     for name, comp in stack.components.items():
         if comp.field_map is None or comp.nodes is None:
             continue
@@ -344,4 +346,56 @@ def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[di
     for name, secs in stage_times:
         lines.append(f"    {name:<38}{secs:8.2f} s")
     lines.append(f"    {'total':<38}{wall:8.2f} s")
+    return "\n".join(lines)
+
+
+# ------------------------------------------------------------------ spectra, comparisons
+def spectra(result, cp, post, out: Path, case: str) -> list[Path]:
+    """spectra_<case>.h5 (PSD, FFT amplitude and SRS of the selected items) and
+    psd_<case>.csv, per [postprocess.psd] / [postprocess.srs]; nothing when neither is set."""
+    from liftoff.core.records import Dataset, write_record
+
+    from .spectra import fft_amplitude, psd, srs, srs_frequencies
+
+    if post.psd is None and post.srs is None:
+        return []
+    its = items(result, cp.attach)
+    h, data, paths = result.h, {}, []
+    if post.psd is not None:
+        sel = [it for it in its if it.category in post.psd.categories]
+        V = np.column_stack([it.values for it in sel])
+        f, P = psd(V, h, post.psd.segment)
+        fa, A = fft_amplitude(V, h)
+        data["psd"] = {"items": np.array([it.name for it in sel], dtype=str), "freq": Dataset(f, "Hz"),
+                       "value": Dataset(P, "units^2/Hz of each item", dims=("freq", "items")),
+                       "item_units": np.array([it.unit for it in sel], dtype=str)}
+        data["fft"] = {"items": np.array([it.name for it in sel], dtype=str), "freq": Dataset(fa, "Hz"),
+                       "amplitude": Dataset(A, "units of each item", dims=("freq", "items"))}
+        head = f"# liftoff PSD (Welch, {post.psd.segment:g} s segments, Hann) of case {case}; units^2/Hz of each item\n"
+        lines = [",".join(["freq_Hz"] + [f"{it.name} [{it.unit}^2/Hz]" for it in sel])]
+        lines += [",".join([f"{x:.6e}" for x in row]) for row in np.column_stack([f, P])]
+        paths.append(write_text(out / f"psd_{case}.csv", head + "\n".join(lines) + "\n"))
+    if post.srs is not None:
+        sel = [it for it in its if it.category in post.srs.categories]
+        freq = srs_frequencies(post.srs.f_min, post.srs.f_max, post.srs.n_freq)
+        V = np.column_stack([it.values for it in sel])
+        data["srs"] = {"items": np.array([it.name for it in sel], dtype=str), "freq": Dataset(freq, "Hz"),
+                       "q": Dataset(np.array(post.srs.q), "1"),
+                       "value": Dataset(np.stack([srs(V, h, freq, q) for q in post.srs.q]),
+                                        "units of each item (absolute acceleration)", dims=("q", "freq", "items"))}
+    paths.insert(0, write_record(out / f"spectra_{case}.h5", "liftoff-spectra", 1, data, units="SI per item",
+                                 attrs={"case": case, "h": h}))
+    return paths
+
+
+def format_changes(rows: list[dict], limit: int = 12) -> str:
+    """The force items with the largest percent changes against an earlier run."""
+    sel = [r for r in rows if is_force(r)]
+    big = sorted(sel, key=lambda r: -max(abs(np.nan_to_num(r["max_change_pct"])), abs(np.nan_to_num(r["min_change_pct"]))))
+    w = max([len(r["item"]) for r in big[:limit]] + [10])
+    lines = [f"Largest changes against the earlier run ({len(rows)} items compared, compare.csv):",
+             f"{'item':<{w}} {'max':>12} {'old':>12} {'%':>8} {'min':>12} {'old':>12} {'%':>8}"]
+    for r in big[:limit]:
+        lines.append(f"{r['item']:<{w}} {r['max']:12.4e} {r['max_old']:12.4e} {r['max_change_pct']:8.2f} "
+                     f"{r['min']:12.4e} {r['min_old']:12.4e} {r['min_change_pct']:8.2f}")
     return "\n".join(lines)

@@ -9,13 +9,16 @@ Outputs are listed in docs/workflow.md.
 from __future__ import annotations
 
 import argparse
+import tempfile
 import time
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from liftoff.core.errors import InputError
 from liftoff.core.records import write_text
 
+from . import report
 from .cache import StageCache, default_cache_dir, stage_key
 from .outdir import check_target, staged_output
 
@@ -25,78 +28,133 @@ class RunOutput:
     out: Path
     scenario: object
     stacks: dict
-    results: dict                       # case -> (TransientResult, CaseProblem)
+    results: dict                       # case -> (TransientResult, CaseProblem): named and governing cases
     table1: object
     envelope: list
     stage_times: list
     files: list = field(default_factory=list)
     summary: str = ""
+    campaign: object = None             # CampaignRun of the generated cases, or None
+    aggregate: object = None            # the Aggregate (envelope, statistics, SRS)
 
 
 @dataclass
 class Prepared:
-    """Everything a run needs before it writes a file: the reduced stacks and every case's
-    validated transient problem (points, labels, loads and statics checked up front)."""
+    """Everything a run needs before it writes a file: the reduced stacks and every named
+    case's validated transient problem (points, labels, loads and statics checked up front);
+    every generated case parsed and the first one built on its model (``gen_model``: its
+    model key, None without generated cases)."""
 
     stacks: dict                        # model key -> StackModel
     problems: dict                      # case name -> (CaseProblem, model key)
     stage_times: list
+    gen_model: str | None = None
+
+
+@dataclass
+class Options:
+    """How ``liftoff run`` runs the generated cases and what it writes besides the tables."""
+
+    workers: int = 2
+    dask: str | None = None
+    mpi: bool = False
+    executor: object = None             # any concurrent.futures.Executor (Python API), else from the above
+    campaign: Path | None = None        # records folder (default DIR.campaign beside DIR)
+    keep_histories: bool = False        # results_<case>.h5 of every envelope-setting generated case
+    fields: bool | None = None          # ParaView .pvd/.vtu + GIF of the governing case (None: [postprocess.fields])
+    compare: Path | None = None         # an earlier run's folder or max/min CSV
 
 
 def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None | bool = None,
         progress: bool = True, plots: bool = True, snapshots: bool = True, echo=print,
-        error_estimate: bool = True, max_memory: float | None = None) -> RunOutput:
+        n_cases: int | None = None, options: Options | None = None, error_estimate: bool = True,
+        max_memory: float | None = None) -> RunOutput:
     """Run a scenario (path, parsed Scenario, or None for the default) into ``out``.
 
-    ``error_estimate``: every max/min value gets an estimated error from a second transient
-    at h/2 (transient/accuracy.py; always on for a case with ``[time] accuracy``);
-    ``max_memory``: bytes the transients may use (None: 80 % of the memory available).
     ``cache_dir``: None -> default (``$LIFTOFF_CACHE`` or DIR/../.liftoff-cache),
-    False -> no cache, else that directory. Every case is built and checked before the
-    first file is written; the files are written into a staging folder that replaces
-    ``out`` as a whole at the end (workflows/outdir.py), so a failed run leaves ``out``
-    as it was."""
+    False -> no cache, else that directory. ``n_cases``: generated cases (``[dispersion]``),
+    run on the executor of ``options`` with per-case records in a campaign folder. Every
+    named case is built and checked before the first file is written; the files are
+    written into a staging folder that replaces ``out`` as a whole at the end
+    (workflows/outdir.py), so a failed run leaves ``out`` as it was. ``error_estimate``:
+    every named case runs again at h/2 (transient/accuracy.py) so that each max/min carries
+    an estimated error; ``max_memory`` (bytes) overrides the memory limit of the histories."""
     from liftoff.config import Scenario, load_scenario
 
     t_start = time.perf_counter()
-    out = Path(out)
-    sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
+    out, opt = Path(out), options or Options()
+    if isinstance(scenario, Scenario):
+        sc = scenario.with_generated(n_cases) if n_cases is not None else scenario
+    else:
+        sc = load_scenario(scenario, n_cases=n_cases)
     check_target(out)
     want_pics = snapshots and any(c.output.snapshots for c in sc.cases)
-    if want_pics:  # pyvista (imported by fem.snapshot) before dolfinx (FENICSX-NOTES.md)
+    if want_pics or _fields_wanted(sc, opt):  # pyvista (fem.snapshot) before dolfinx (FENICSX-NOTES.md)
         import liftoff.fem.snapshot  # noqa: F401
-    cache = StageCache(None if cache_dir is False else Path(cache_dir) if cache_dir else default_cache_dir(out))
-    prep = prepare(sc, cache, progress, echo, error_estimate, max_memory)
-    with staged_output(out, command=f"liftoff run {sc.path}") as stage:
-        output = write_results(sc, prep, stage, plots, want_pics, echo, t_start, error_estimate)
+    with _run_cache(cache_dir, out, sc.n_generated) as cache:
+        prep = prepare(sc, cache, progress, echo, error_estimate, max_memory)
+        with _executor(opt, sc.n_generated) as (executor, how):
+            camp = _run_generated(sc, prep, cache, executor, how, out, opt, progress, echo)
+            with staged_output(out, command=f"liftoff run {sc.path}") as stage:
+                output = write_results(sc, prep, stage, plots, want_pics, echo, t_start,
+                                       _Campaign(camp, executor, cache, opt), error_estimate)
     output.out = out
     output.files = [out / Path(f).relative_to(stage) for f in output.files]
     echo(f"  outputs in {out}/ ({len(output.files)} files); cache {cache.root}")
     return output
 
 
+def _fields_wanted(sc, opt: Options) -> bool:
+    return sc.post.fields.enabled if opt.fields is None else bool(opt.fields)
+
+
+@contextmanager
+def _run_cache(cache_dir, out: Path, n_generated: int):
+    """The stage cache of a run; with generated cases and no cache, a temporary one (the
+    workers load the model from it by path)."""
+    root = None if cache_dir is False else Path(cache_dir) if cache_dir else default_cache_dir(out)
+    if root is None and n_generated:
+        with tempfile.TemporaryDirectory(prefix="liftoff-cache-") as tmp:
+            yield StageCache(Path(tmp))
+        return
+    yield StageCache(root)
+
+
+@contextmanager
+def _executor(opt: Options, n_generated: int):
+    if not n_generated:
+        yield None, ""
+    elif opt.executor is not None:
+        yield opt.executor, type(opt.executor).__name__
+    else:
+        from .executors import make_executor
+
+        with make_executor(opt.workers, opt.dask, opt.mpi) as pair:
+            yield pair
+
+
+@dataclass
+class _Campaign:
+    run: object                          # CampaignRun or None
+    executor: object
+    cache: StageCache
+    options: Options
+
+
 def prepare(sc, cache: StageCache, progress: bool, echo, error_estimate: bool = True,
             max_memory: float | None = None) -> Prepared:
-    """Model stages (cached) for every distinct model, then every case's problem, its step
-    (stability, time axis) and static initial state (section 2.6), so that bad input in any
-    case stops the run before any output; the memory of all cases' histories is estimated
+    """Model stages (cached) for every distinct model, then every named case's problem, its
+    step (stability, time axis) and static initial state (section 2.6), then every
+    generated case parsed (its draws checked) and the first one built, so that bad input
+    stops the run before any output; the memory of the named cases' histories is estimated
     (transient/stepping.py) and refused beyond ``max_memory`` bytes."""
     from liftoff.transient import static_equilibrium
 
-    from .loads import build_problem, stack_mass_summary
-    from .pipeline import build_stack
+    from .loads import build_problem
 
     stacks, problems, stage_times, memory = {}, {}, [], {}
     for case in sc.cases:
-        mkey = stage_key("model", asdict(case.model))      # cases with equal models share one stack
-        if mkey not in stacks:
-            n0 = len(cache.log)
-            t0 = time.perf_counter()
-            stacks[mkey] = build_stack(case.model, cache, progress=progress, where=case.at("model"))
-            for stage, label, how, secs in cache.log[n0:]:
-                stage_times.append((f"{stage} {label} ({how})", secs))
-            stage_times.append(("model stages total", time.perf_counter() - t0))
-            echo(stack_mass_summary(stacks[mkey]))
+        mkey = _stack_for(case, stacks, cache, progress, echo, stage_times)
         t0 = time.perf_counter()
         cp = build_problem(case, stacks[mkey], progress=progress)
         pr = cp.problem
@@ -110,7 +168,23 @@ def prepare(sc, cache: StageCache, progress: bool, echo, error_estimate: bool = 
         problems[case.name] = (cp, mkey)
         stage_times.append((f"loads [{case.name}]", time.perf_counter() - t0))
     _check_run_memory(memory, error_estimate, max_memory)
-    return Prepared(stacks, problems, stage_times)
+    gen_model = None
+    if sc.n_generated:
+        t0 = time.perf_counter()
+        first = sc.generated_case(0)
+        gen_model = _stack_for(first, stacks, cache, progress, echo, stage_times)
+        for i in range(1, sc.n_generated):
+            if stage_key("model", asdict(sc.generated_case(i).model)) != gen_model:
+                raise InputError(f"{sc.path}: case d{i:04d}: its [model] differs from the first generated case's")
+        cp = build_problem(first, stacks[gen_model], progress=False)
+        pr = cp.problem
+        try:
+            _case_steps(pr)
+            static_equilibrium(pr.body_a, pr.body_b, pr.contacts, pr.forcing, pr.t0)
+        except InputError as exc:
+            raise first.at().wrap(exc) from None
+        stage_times.append((f"generated cases checked ({sc.n_generated})", time.perf_counter() - t0))
+    return Prepared(stacks, problems, stage_times, gen_model)
 
 
 def _case_steps(problem) -> int:
@@ -125,8 +199,8 @@ def _case_steps(problem) -> int:
 
 
 def _check_run_memory(cases: dict, error_estimate: bool, max_memory: float | None) -> None:
-    """ResourceError when the histories of all cases (kept until the envelope is written),
-    plus the h/2 run of the error estimate of one, exceed the memory limit."""
+    """ResourceError when the histories of all named cases (kept until the envelope is
+    written), plus the h/2 run of the error estimate of one, exceed the memory limit."""
     from liftoff.transient.stepping import MEMORY_FRACTION, available_memory, memory_estimate
 
     from liftoff.core.errors import ResourceError
@@ -143,61 +217,222 @@ def _check_run_memory(cases: dict, error_estimate: bool, max_memory: float | Non
                             "run), fewer cases, outputs or modes, or raise the limit (--max-memory GB)")
 
 
-def write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, echo, t_start: float,
-                  error_estimate: bool = True) -> RunOutput:
-    """Table 1, then per case the transient (with its h/2 companion for the error estimates),
-    its results file, max/min table, plots and snapshots; the envelope over cases and the
-    summary. Everything goes to ``out``."""
-    from liftoff.transient import solve, solve_estimated
+def _stack_for(case, stacks: dict, cache: StageCache, progress: bool, echo, stage_times: list) -> str:
+    """The model key of a case, its stack built (cached) if not yet in ``stacks``."""
+    from .loads import stack_mass_summary
+    from .pipeline import build_stack
 
-    from . import report
-    from .loads import table1
+    mkey = stage_key("model", asdict(case.model))      # cases with equal models share one stack
+    if mkey not in stacks:
+        n0 = len(cache.log)
+        t0 = time.perf_counter()
+        stacks[mkey] = build_stack(case.model, cache, progress=progress, where=case.at("model"))
+        for stage, label, how, secs in cache.log[n0:]:
+            stage_times.append((f"{stage} {label} ({how})", secs))
+        stage_times.append(("model stages total", time.perf_counter() - t0))
+        echo(stack_mass_summary(stacks[mkey]))
+    return mkey
+
+
+def _run_generated(sc, prep: Prepared, cache: StageCache, executor, how: str, out: Path, opt: Options,
+                   progress: bool, echo):
+    """The generated cases on the executor (records in the campaign folder), or None."""
+    if not sc.n_generated:
+        return None
+    from . import campaign
+
+    folder = Path(opt.campaign) if opt.campaign else out.absolute().parent / f"{out.name}.campaign"
+    campaign.prime(sc, str(cache.root), prep.gen_model, prep.stacks[prep.gen_model])
+    echo(f"  running generated cases on {how}")
+    camp = campaign.run_campaign(sc, campaign.ScenarioRef.of(sc), cache.root, prep.gen_model, executor, folder,
+                                 progress=progress, echo=echo)
+    prep.stage_times.append((f"generated cases ({camp.ran} run, {camp.reused} reused)", camp.wall))
+    return camp
+
+
+def write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, echo, t_start: float,
+                  camp: _Campaign | None = None, error_estimate: bool = True) -> RunOutput:
+    """Table 1, then per named case the transient, its results file, max/min table, plots,
+    snapshots and spectra; the generated cases' records; the envelope over all cases,
+    statistics, SRS, design loads; the governing generated case's histories and pictures;
+    ParaView output; the comparison and the summary. Everything goes to ``out``."""
+    from .aggregate import Aggregate
 
     stage_times = list(prep.stage_times)
-    results, files, per_case_rows, tab1 = {}, [], {}, None
+    results, files, tab1 = {}, [], None
+    agg = Aggregate(sc.n_generated)
     for case in sc.cases:
         cp, mkey = prep.problems[case.name]
         stack = prep.stacks[mkey]
         if tab1 is None:
-            t0 = time.perf_counter()
-            tab1 = table1(stack, cp, case)
-            files += [write_text(out / "table1.txt", tab1.table() + "\n"),
-                      write_text(out / "table1.csv", "# c.g. motion under static loads; m and rad\n" + tab1.csv())]
-            echo(tab1.table())
-            stage_times.append(("Table 1", time.perf_counter() - t0))
-        t0 = time.perf_counter()
-        half = None
-        if error_estimate or cp.problem.accuracy is not None:
-            est = solve_estimated(cp.problem)
-            res, half = est.result, est.check
-        else:
-            res = solve(cp.problem)
-        stage_times.append((f"transient [{case.name}]" + (" + h/2" if half is not None else ""),
-                            time.perf_counter() - t0))
-        t0 = time.perf_counter()
-        files.append(Path(res.save(out / f"results_{case.name}.h5")))
+            tab1, f1 = _table1(stack, cp, case, out, echo, stage_times)
+            files += f1
+        res, f2 = _full_case(sc, stack, cp, case.name, out, plots and case.output.plots,
+                             want_pics and case.output.snapshots, stage_times, agg, generated=False,
+                             error_estimate=error_estimate)
+        files += f2
         results[case.name] = (res, cp)
-        rows = report.maxmin(res.time, report.items(res, cp.attach), case.name)
-        if half is not None:
-            report.with_errors(rows, report.maxmin(half.time, report.items(half, cp.attach), case.name))
-            half = None  # only its peaks are kept
-        per_case_rows[case.name] = rows
-        files.append(report.write_csv(rows, out / f"maxmin_{case.name}.csv"))
-        if plots and case.output.plots:
-            files += report.plots(res, cp, out, case.name)
-        if want_pics and case.output.snapshots:
-            files += report.snapshots(stack, res, cp, out, case.name)
-        stage_times.append((f"reports [{case.name}]", time.perf_counter() - t0))
-    env = report.envelope(per_case_rows)
-    files.append(report.write_csv(env, out / "maxmin_envelope.csv"))
+    camp_run = camp.run if camp else None
+    if camp_run is not None:
+        from .campaign import feed_records
+
+        t0 = time.perf_counter()
+        files.append(feed_records(sc, camp_run, agg, out / "cases.csv"))
+        files += _generated_outputs(sc, prep, camp, agg, out, stage_times, results, plots, want_pics)
+        stage_times.append(("campaign tables and histories", time.perf_counter() - t0))
+    files += _loads_tables(sc, agg, out, echo, camp)
+    files += _fields(sc, prep, results, agg, out, camp, stage_times)
+    env = agg.envelope_rows()
+    first = next(iter(prep.stacks.values()))
+    text = report.summary(sc, first, results, stage_times, env, time.perf_counter() - t_start)
+    if camp_run is not None:
+        text += "\n" + _campaign_text(sc, camp_run, agg)
+    files.append(write_text(out / "summary.txt", text + "\n"))
+    echo(text)
+    return RunOutput(out, sc, prep.stacks, results, tab1, env, stage_times, files, text, camp_run, agg)
+
+
+def _table1(stack, cp, case, out: Path, echo, stage_times: list):
+    from .loads import table1
+
+    t0 = time.perf_counter()
+    tab1 = table1(stack, cp, case)
+    files = [write_text(out / "table1.txt", tab1.table() + "\n"),
+             write_text(out / "table1.csv", "# c.g. motion under static loads; m and rad\n" + tab1.csv())]
+    echo(tab1.table())
+    stage_times.append(("Table 1", time.perf_counter() - t0))
+    return tab1, files
+
+
+def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, stage_times: list, agg,
+               generated: bool, solved=None, error_estimate: bool = False):
+    """A case with full outputs: the transient (modal displacements kept; with
+    ``error_estimate`` or an ``accuracy`` setting also at h/2, so that each max/min carries
+    an estimated error), its results file, max/min table, plots, snapshots and spectra;
+    its summary fed to ``agg`` (named cases; a generated case's summary comes from its record)."""
+    from dataclasses import replace
+
+    from liftoff.transient import solve, solve_estimated
+
+    from .campaign import summarize
+
+    t0 = time.perf_counter()
+    half, problem = None, replace(cp.problem, keep_modal="q")
+    if solved is not None:
+        res, secs = solved
+    elif error_estimate or problem.accuracy is not None:
+        est, secs = solve_estimated(problem), None
+        res, half = est.result, est.check
+    else:
+        res, secs = solve(problem), None
+    stage_times.append((f"transient [{name}]" + (" + h/2" if half is not None else ""),
+                        time.perf_counter() - t0 if secs is None else secs))
+    t0 = time.perf_counter()
+    files = [Path(res.save(out / f"results_{name}.h5"))]
+    if not generated:                   # a generated case's summary comes from its record
+        agg.add(summarize(res, cp, name, -1, sc.post, check=half), generated=False)
+    rows = report.maxmin(res.time, report.items(res, cp.attach), name)
+    if half is not None:
+        report.with_errors(rows, report.maxmin(half.time, report.items(half, cp.attach), name))
+    files.append(report.write_csv(rows, out / f"maxmin_{name}.csv"))
+    if plots:
+        files += report.plots(res, cp, out, name)
+    if pics:
+        files += report.snapshots(stack, res, cp, out, name)
+    files += report.spectra(res, cp, sc.post, out, name)
+    stage_times.append((f"reports [{name}]", time.perf_counter() - t0))
+    return res, files
+
+
+def _generated_outputs(sc, prep: Prepared, camp: _Campaign, agg, out: Path, stage_times: list, results: dict,
+                       plots: bool, pics: bool) -> list:
+    """cases.csv, envelope_histories.h5 (the history of each envelope value set by a
+    generated case, re-run on the executor), and the governing generated case in full:
+    results, max/min, plots, snapshots, spectra (with --keep-histories every
+    envelope-setting generated case's results file)."""
+    from . import campaign
+
+    files = []
+    env = agg.envelope_rows()
+    setters = campaign.envelope_setters(sc, env)
+    ref = campaign.ScenarioRef.of(sc)
+    files.append(campaign.write_envelope_histories(env, setters, ref, str(camp.cache.root), prep.gen_model,
+                                                   camp.executor, out / "envelope_histories.h5"))
+    gov = campaign.governing_case(sc, env)
+    if gov is None:
+        return files
+    keep = sorted(setters) if camp.options.keep_histories else [gov]
+    stack = prep.stacks[prep.gen_model]
+    for idx in keep:
+        task = campaign.CaseTask(ref, idx, str(camp.cache.root), prep.gen_model)
+        res, cp, case, secs = campaign.solve_generated(task, keep_modal="q")
+        if idx == gov:
+            _, f = _full_case(sc, stack, cp, case.name, out, plots, pics, stage_times, agg, True, solved=(res, secs))
+            files += f
+            results[case.name] = (res, cp)
+        else:
+            files.append(Path(res.save(out / f"results_{case.name}.h5")))
+    return files
+
+
+def _loads_tables(sc, agg, out: Path, echo, camp) -> list:
+    """maxmin_envelope.csv, statistics, SRS, design loads and the comparison table."""
+    from . import aggregate
+
+    env = agg.envelope_rows()
+    files = [report.write_csv(env, out / "maxmin_envelope.csv")]
     echo("Max/min envelope over cases (posts: force on vehicle, Tz > 0 compression; full table in "
          "maxmin_envelope.csv):")
     echo(report.format_table(env, select=report.is_force, limit=40))
-    first = next(iter(prep.stacks.values()))
-    text = report.summary(sc, first, results, stage_times, env, time.perf_counter() - t_start)
-    files.append(write_text(out / "summary.txt", text + "\n"))
-    echo(text)
-    return RunOutput(out, sc, prep.stacks, results, tab1, env, stage_times, files, text)
+    if agg.n >= 2:
+        files += aggregate.write_statistics(agg, out)
+    if sc.post.srs is not None:
+        from .spectra import srs_frequencies
+
+        s = sc.post.srs
+        f = aggregate.write_srs(agg, srs_frequencies(s.f_min, s.f_max, s.n_freq), s.q, out)
+        files += [f] if f else []
+    f = aggregate.write_design(agg, sc.post.uncertainty, out)
+    files += [f] if f else []
+    compare = camp.options.compare if camp else None
+    if compare is not None:
+        path, rows = aggregate.write_compare(env, aggregate.read_maxmin(Path(compare)), out)
+        files.append(path)
+        echo(report.format_changes(rows, limit=12))
+    return files
+
+
+def _fields(sc, prep: Prepared, results: dict, agg, out: Path, camp, stage_times: list) -> list:
+    """ParaView series and GIF of the governing case (the case setting the most force
+    envelope values), when asked."""
+    opt = camp.options if camp else Options()
+    if not _fields_wanted(sc, opt) or not results:
+        return []
+    from . import fields
+    from .campaign import governing_case
+
+    t0 = time.perf_counter()
+    name = governing_case(sc, agg.envelope_rows(), named=True)
+    res, cp = results.get(name) or next(iter(results.values()))
+    name = cp.case.name
+    stack = prep.stacks[prep.gen_model] if name not in prep.problems else prep.stacks[prep.problems[name][1]]
+    n = sc.post.fields.frames
+    files = fields.write_pvd(stack, res, out, name, n)
+    if sc.post.fields.gif:
+        g = fields.write_gif(stack, res, out, name, n)
+        files += [g] if g else []
+    stage_times.append((f"ParaView fields and animation [{name}]", time.perf_counter() - t0))
+    return files
+
+
+def _campaign_text(sc, camp_run, agg) -> str:
+    lines = [f"  campaign: {sc.n_generated} generated cases ({camp_run.ran} run, {camp_run.reused} reused from "
+             f"{camp_run.folder}), seed {sc.dispersion.seed}"]
+    if agg.n >= 2:
+        lines.append(f"    statistics over {agg.n} cases: P99/90 k = {agg.k:.4f}; order statistic: "
+                     + (f"{agg.r}-th largest" if agg.r else "none (fewer than 230 cases)")
+                     + " (statistics.csv)")
+    return "\n".join(lines)
 
 
 # ------------------------------------------------------------------ command line
@@ -222,6 +457,25 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     from .cli import add_common
 
     add_common(p)
+    g = p.add_argument_group("load campaigns (docs/workflow.md, Campaigns)")
+    g.add_argument("--cases", type=int, default=None, metavar="N",
+                   help="generated (dispersed) cases to run besides the named ones (overrides [dispersion] n_cases)")
+    g.add_argument("--workers", type=int, default=2, metavar="N",
+                   help="local worker processes for the generated cases (0: in this process) [2]")
+    g.add_argument("--dask", default=None, metavar="ADDRESS",
+                   help="run the generated cases on a Dask scheduler (tcp://host:8786), or 'local' for a "
+                        "LocalCluster of --workers processes")
+    g.add_argument("--mpi", action="store_true",
+                   help="run them on mpi4py.futures (start as mpiexec -n K python -m mpi4py.futures "
+                        "-m liftoff.workflows.cli run ... --mpi)")
+    g.add_argument("--campaign", type=Path, default=None, metavar="DIR",
+                   help="per-case records, so that a restarted run skips finished cases (default DIR.campaign)")
+    g.add_argument("--keep-histories", action="store_true",
+                   help="write results_<case>.h5 of every envelope-setting generated case")
+    g.add_argument("--fields", action="store_true", default=None,
+                   help="ParaView .pvd/.vtu series and GIF of the governing case ([postprocess.fields])")
+    g.add_argument("--compare", type=Path, default=None, metavar="PATH",
+                   help="an earlier run's folder or max/min CSV: writes compare.csv (percent change)")
     p.set_defaults(func=_cli)
 
 
@@ -237,6 +491,10 @@ def _cli(args: argparse.Namespace) -> int:
 
         run_barge(args.scenario, args.out, **kw)
         return 0
-    run(args.scenario, args.out, error_estimate=not args.no_error_estimate,
+    opt = Options(workers=args.workers, dask=args.dask, mpi=args.mpi, campaign=args.campaign,
+                  keep_histories=args.keep_histories, fields=args.fields, compare=args.compare)
+    if args.cases is not None and args.cases < 0:
+        raise InputError(f"--cases {args.cases}: must be 0 or more")
+    run(args.scenario, args.out, n_cases=args.cases, options=opt, error_estimate=not args.no_error_estimate,
         max_memory=None if args.max_memory is None else args.max_memory * 1e9, **kw)
     return 0

@@ -12,18 +12,22 @@ scenario deep-merged over the base (tables merge key by key; arrays of tables wi
 from __future__ import annotations
 
 import copy
-from dataclasses import dataclass
+import re
+from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from liftoff.core.errors import InputError
 from liftoff.core.labels import TRANSLATIONS, point_labels
 from liftoff.transient.model import ContactPoint
 
+from .dispersion import Dispersion, case_name, dispersion
 from .files import parse_toml, read_toml
 from .model import ModelConfig, model_config
+from .postprocess import PostProcess, postprocess
 from .sections import (
     FORCE_KEYS,
     LAW_KEYS,
@@ -48,13 +52,15 @@ from .values import Where, array_of_tables, boolean, number, string, strings, ta
 DEFAULT_NAME = "default_scenario.toml"
 
 _TOP = {"title", "description", "model", "profiles", "post_defaults", "post", "engine",
-        "gravity", "cryo", "control", "softening", "force", "time", "recovery", "output", "case", "kind"}
+        "gravity", "cryo", "control", "softening", "force", "time", "recovery", "output", "case", "kind",
+        "dispersion", "postprocess"}
+_SCENARIO_ONLY = ("case", "title", "description", "kind", "dispersion", "postprocess")  # not per case
 _PROFILE = {"time", "value", "csv"}
 _POST = {"name", "vehicle", "pad"} | LAW_KEYS
 _ENGINE = {"name", "mount", "direction", "start", "time", "thrust", "profile", "scale"}
 _RECOVERY = {"attach", "stations", "top", "payload"}
 _OUTPUT = {"plots", "snapshots", "progress"}
-_CASE = _TOP - {"case", "kind"} | {"name"}
+_CASE = _TOP - set(_SCENARIO_ONLY) | {"name"}
 
 
 # --------------------------------------------------------------------- dataclasses
@@ -145,10 +151,57 @@ class Case:
 
 @dataclass
 class Scenario:
+    """A validated scenario: its named ``cases`` and, with ``[dispersion]``, the generated
+    ones (:meth:`generated_case`), each rebuilt from ``common`` (the scenario mapping less
+    the scenario-level sections) and its index alone; ``post``: ``[postprocess]``."""
+
     path: str
     title: str
     description: str
     cases: list[Case]
+    common: dict = field(default_factory=dict)
+    overrides: dict = field(default_factory=dict)      # named case -> its [[case]] overrides
+    base: Path = Path(".")
+    dispersion: Dispersion | None = None
+    post: PostProcess = field(default_factory=PostProcess)
+    data: dict = field(default_factory=dict)           # the scenario mapping as read (workers rebuild from it)
+
+    @property
+    def n_generated(self) -> int:
+        return self.dispersion.n_cases if self.dispersion else 0
+
+    def _source_raw(self) -> dict:
+        """The mapping generated cases start from: the base, or the named case ``from``."""
+        src = self.dispersion.source if self.dispersion else None
+        return self.common if src is None else merge(self.common, self.overrides.get(src, {}))
+
+    def generated_raw(self, index: int) -> tuple[dict, dict]:
+        """(scenario mapping, {variable: value drawn}) of generated case ``index``."""
+        if not 0 <= index < self.n_generated:
+            raise InputError(f"{self.path}: generated case index {index} out of range 0..{self.n_generated - 1}")
+        key = (self.dispersion, id(self.common))
+        if getattr(self, "_expanded", (None,))[0] != key:     # targets expanded once per scenario
+            raw = self._source_raw()
+            self._expanded = (key, raw, self.dispersion.columns(raw, Where(self.path, "dispersion")))
+        _, raw, cols = self._expanded
+        return self.dispersion.generate(raw, index, Where(self.path, "dispersion"), cols)
+
+    def generated_case(self, index: int) -> Case:
+        """The validated Case of generated case ``index`` (name :func:`case_name`)."""
+        raw, _ = self.generated_raw(index)
+        name = case_name(index)
+        return _case(Where(self.path, f"case {name}"), raw, name, self.base)
+
+    def with_generated(self, n_cases: int) -> Scenario:
+        """This scenario with ``n_cases`` generated cases (the command line's --cases)."""
+        if self.dispersion is None:
+            if n_cases:
+                raise InputError(f"{self.path}: --cases {n_cases}: the scenario has no [dispersion] section")
+            return self
+        sc = replace(self, dispersion=replace(self.dispersion, n_cases=int(n_cases)))
+        if n_cases:
+            sc.dispersion.check(sc._source_raw(), Where(self.path, "dispersion"))
+        return sc
 
 
 # --------------------------------------------------------------------- sections
@@ -201,8 +254,15 @@ def _engines(w: Where, engines: Any, profiles: dict) -> list[Engine]:
 
 
 def _forces(w: Where, forces: Any, base: Path) -> list[Force]:
-    return [force(w / i, table(w / i, f, FORCE_KEYS, required=("label",)), base)
-            for i, f in enumerate(array_of_tables(w, forces, "force"))]
+    """``[[force]]``: the shared force keys plus an optional ``name`` (so that cases and
+    dispersions address a force by name: ``force[wind_x].scale``)."""
+    out, names = [], set()
+    for i, f in enumerate(array_of_tables(w, forces, "force")):
+        f = table(w / i, f, FORCE_KEYS | {"name"}, required=("label",))
+        if "name" in f:
+            unique_name(w / i / "name", f["name"], names, "force")
+        out.append(force(w / i, {k: v for k, v in f.items() if k != "name"}, base))
+    return out
 
 
 def _recovery(w: Where, spec: Any) -> RecoveryPoints:
@@ -263,19 +323,19 @@ def merge(base: dict, over: dict) -> dict:
 
 
 # --------------------------------------------------------------------- entry points
-def parse_scenario(data: dict, source: str = "scenario", base: Path | str = ".") -> Scenario:
+def parse_scenario(data: dict, source: str = "scenario", base: Path | str = ".", n_cases: int | None = None) -> Scenario:
     """Validate a scenario mapping (as read from TOML): one Case per [[case]] (or 'base');
-    CSV paths relative to ``base``."""
+    CSV paths relative to ``base``; ``n_cases`` overrides ``[dispersion] n_cases``."""
     w, base = Where(source), Path(base)
     table(w, data, _TOP)
     if data.get("kind", "liftoff") != "liftoff":   # "barge": liftoff.config.barge
         raise (w / "kind").error(f"expected 'liftoff' for a lift-off scenario, got {data.get('kind')!r}")
     title = string(w / "title", data.get("title", "liftoff scenario"))
     description = string(w / "description", data.get("description", ""), nonempty=False)
-    common = {k: v for k, v in data.items() if k not in ("case", "title", "description", "kind")}
+    common = {k: v for k, v in data.items() if k not in _SCENARIO_ONLY}
     cases_raw = array_of_tables(w / "case", data.get("case", []), "case")
     base_case = _case(w, common, "base", base)  # errors in the base name the base key, not a case
-    cases, names = [] if cases_raw else [base_case], set()
+    cases, names, overrides = [] if cases_raw else [base_case], set(), {}
     for i, c in enumerate(cases_raw):
         wc = w / "case" / i
         c = table(wc, c, _CASE, required=("name",))
@@ -285,7 +345,23 @@ def parse_scenario(data: dict, source: str = "scenario", base: Path | str = ".")
         cases.append(_case(wc, merged, name, base))
         cases[-1].from_case_table = True
         _check_profiles_used(wc, over.get("profiles"), _used_profiles(merged))
-    return Scenario(source, title, description, cases)
+        overrides[name] = over
+    post = postprocess(w / "postprocess", data.get("postprocess", {}))
+    if n_cases and "dispersion" not in data:
+        raise InputError(f"{source}: --cases {n_cases}: the scenario has no [dispersion] section")
+    disp = dispersion(w / "dispersion", data["dispersion"], base, n_cases) if "dispersion" in data else None
+    sc = Scenario(source, title, description, cases, common, overrides, base, disp, post, copy.deepcopy(data))
+    if disp is not None:
+        for i, c in enumerate(cases_raw):
+            if re.fullmatch(r"d\d{4,}", str(c.get("name", ""))):
+                raise (w / "case" / i / "name").error(f"{c['name']!r} is the name of a generated case "
+                                                        "(d0000, d0001, ...): give the named case another name")
+        if disp.source is not None and disp.source not in overrides:
+            raise (w / "dispersion" / "from").error(f"no [[case]] named {disp.source!r} "
+                                                     f"(cases: {', '.join(overrides) or 'none'})")
+        if disp.n_cases:       # targets are checked when cases are generated (a scenario may drop a target's table)
+            disp.check(sc._source_raw(), w / "dispersion")
+    return sc
 
 
 def default_text() -> str:
@@ -293,10 +369,11 @@ def default_text() -> str:
     return resources.files("liftoff.config").joinpath(DEFAULT_NAME).read_text(encoding="utf-8")
 
 
-def load_scenario(path: str | Path | None = None) -> Scenario:
-    """Read and validate a scenario file; ``None`` gives the embedded default."""
+def load_scenario(path: str | Path | None = None, n_cases: int | None = None) -> Scenario:
+    """Read and validate a scenario file; ``None`` gives the embedded default; ``n_cases``:
+    the number of generated cases (overrides ``[dispersion] n_cases``)."""
     if path is None:
         source = f"<default {DEFAULT_NAME}>"
-        return parse_scenario(parse_toml(default_text(), source), source)
+        return parse_scenario(parse_toml(default_text(), source), source, n_cases=n_cases)
     path = Path(path)
-    return parse_scenario(read_toml(path), path.name, path.resolve().parent)
+    return parse_scenario(read_toml(path), path.name, path.resolve().parent, n_cases)

@@ -15,7 +15,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from liftoff.transient.effects import softening_matrix
+from liftoff.transient.effects import softening_factors
 from liftoff.transient.model import METHODS, ContactPoint, ModalFeedback, PointForce, TabulatedForce
 
 from .files import file_path, read_csv_table
@@ -270,8 +270,8 @@ class Softening:
 
     def feedback(self, body, accel) -> ModalFeedback:
         """KSOF of eq. 27 for ``body`` under gravity ``accel`` as a held modal feedback (eq. 26)."""
-        ksof = softening_matrix(body, accel, boundary_labels=None if self.labels is None else list(self.labels))
-        return ModalFeedback("a", ksof, until=self.until)
+        U, V = softening_factors(body, accel, boundary_labels=None if self.labels is None else list(self.labels))
+        return ModalFeedback("a", U @ V, until=self.until, factors=(U, V))
 
 
 def softening(where: Where, spec: Any) -> Softening:

@@ -1,0 +1,154 @@
+"""Load campaign of the default lift-off: N dispersed cases, warm stage cache, wall time and
+peak memory of the whole process tree (the command, its workers, a Dask scheduler).
+
+    .venv/bin/python benchmarks/bench_campaign.py [--cases 1000] [--workers 2] [--dask] [--scaling 200]
+                                                  [--flat 250] [--cache DIR]
+
+Each measurement is one `liftoff run --cases N` process (the default scenario: its two named
+cases with plots and snapshots, then the N generated cases, envelopes, statistics, SRS,
+envelope histories and the governing case's reports) with a fresh campaign folder, so no
+case is reused. The stage cache is warmed first by one run without generated cases.
+Memory: the sum of the resident sets of the command and all its descendants, sampled every
+0.2 s (psutil); the peak of that sum is reported (it counts pages shared between
+processes, such as the numpy and numba libraries, once per process: an upper bound);
+CPU: user + system seconds of the same processes (its ratio to the wall time shows how
+many cores the run actually got on a shared machine).
+--dask repeats the N cases on a local Dask cluster of --workers processes; --scaling M runs
+M cases on 1 and on --workers workers; --flat M runs M cases to compare the peak memory
+with N's. The machine's load average is printed before and after each run: the machine is
+shared, so repeat on a quiet machine for figures to quote.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+import psutil
+
+ROOT = Path(__file__).resolve().parent.parent
+LIFTOFF = Path(sys.executable).with_name("liftoff")
+
+
+def tree_rss(proc: psutil.Process) -> tuple[int, int]:
+    """(sum of RSS over the process and its descendants, RSS of the process) in bytes."""
+    try:
+        procs = [proc] + proc.children(recursive=True)
+    except psutil.NoSuchProcess:
+        return 0, 0
+    total = 0
+    for p in procs:
+        try:
+            total += p.memory_info().rss
+        except psutil.NoSuchProcess:
+            pass
+    try:
+        own = proc.memory_info().rss
+    except psutil.NoSuchProcess:
+        own = 0
+    return total, own
+
+
+def measure(args: list[str], tag: str) -> dict:
+    load0 = os.getloadavg()
+    t0 = time.perf_counter()
+    proc = subprocess.Popen([str(LIFTOFF), "run", *args], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            text=True, env={**os.environ, "PYVISTA_OFF_SCREEN": "true"})
+    ps = psutil.Process(proc.pid)
+    peak = {"total": 0, "main": 0, "samples": [], "cpu": {}}
+
+    def sample():
+        while proc.poll() is None:
+            tot, own = tree_rss(ps)
+            peak["total"], peak["main"] = max(peak["total"], tot), max(peak["main"], own)
+            peak["samples"].append((time.perf_counter() - t0, tot))
+            try:
+                kids = ps.children(recursive=True)
+            except psutil.NoSuchProcess:
+                kids = []
+            for p in [ps] + kids:          # CPU seconds, last seen per process (workers exit before the end)
+                try:
+                    c = p.cpu_times()
+                    peak["cpu"][p.pid] = c.user + c.system
+                except psutil.NoSuchProcess:
+                    pass
+            time.sleep(0.2)
+
+    th = threading.Thread(target=sample, daemon=True)
+    th.start()
+    out, _ = proc.communicate()
+    wall = time.perf_counter() - t0
+    th.join()
+    if proc.returncode != 0:
+        sys.exit(f"bench_campaign: {tag} failed ({proc.returncode}):\n{out[-3000:]}")
+    stage = next((ln.strip() for ln in out.splitlines() if "generated cases (" in ln and " run, " in ln), "")
+    return {"tag": tag, "wall": wall, "peak_total": peak["total"] / 2 ** 30, "peak_main": peak["main"] / 2 ** 30,
+            "load": (load0, os.getloadavg()), "stage": stage, "samples": peak["samples"],
+            "cpu": sum(peak["cpu"].values())}
+
+
+def report(r: dict) -> None:
+    (a0, _, _), (a1, _, _) = r["load"]
+    print(f"  {r['tag']:<44} wall {r['wall']:7.1f} s   peak memory {r['peak_total']:.2f} GB (main process "
+          f"{r['peak_main']:.2f} GB)   CPU {r['cpu']:.0f} s (x{r['cpu'] / r['wall']:.2f} of wall)   "
+          f"load average {a0:.1f} -> {a1:.1f}   [{r['stage']}]", flush=True)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--cases", type=int, default=1000)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--dask", action="store_true", help="also on a local Dask cluster")
+    ap.add_argument("--scaling", type=int, default=0, metavar="M", help="M cases on 1 and on --workers workers")
+    ap.add_argument("--flat", type=int, default=0, metavar="M", help="M cases, to compare peak memory")
+    ap.add_argument("--cache", type=Path, default=ROOT / "out" / ".liftoff-cache")
+    ap.add_argument("--scenario", type=Path, default=None, help="another scenario than the embedded default")
+    ap.add_argument("--scaling-workers", default="", metavar="1,2,4",
+                    help="worker counts for --scaling (default: 1 and --workers)")
+    ap.add_argument("--no-snapshots", action="store_true", help="pass --no-snapshots (no pyvista)")
+    args = ap.parse_args()
+    print(f"bench_campaign: {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, "
+          f"{psutil.virtual_memory().total / 2 ** 30:.0f} GB, Python {platform.python_version()}; cache {args.cache}")
+    with tempfile.TemporaryDirectory(prefix="liftoff-bench-campaign-") as tmp:
+        tmp = Path(tmp)
+        common = [*([str(args.scenario)] if args.scenario else []), "--cache", str(args.cache), "--no-progress",
+                  *(["--no-snapshots"] if args.no_snapshots else [])]
+        report(measure(["--out", str(tmp / "warm"), *common], "warm-up (named cases only)"))
+
+        def one(n, workers, extra=(), tag=""):
+            out = tmp / f"o_{tag}"
+            return measure(["--out", str(out), "--campaign", str(tmp / f"c_{tag}"), "--cases", str(n),
+                            "--workers", str(workers), *extra, *common], tag)
+
+        runs = [one(args.cases, args.workers, tag=f"{args.cases} cases, process pool of {args.workers}")]
+        report(runs[-1])
+        if args.dask:
+            runs.append(one(args.cases, args.workers, ("--dask", "local"),
+                            tag=f"{args.cases} cases, Dask local cluster of {args.workers}"))
+            report(runs[-1])
+            print(f"  Dask / process pool: {runs[-1]['wall'] / runs[0]['wall']:.2f}")
+        if args.flat:
+            r = one(args.flat, args.workers, tag=f"{args.flat} cases, process pool of {args.workers}")
+            report(r)
+            print(f"  peak memory {args.flat} -> {args.cases} cases: {r['peak_total']:.2f} -> "
+                  f"{runs[0]['peak_total']:.2f} GB")
+        if args.scaling:
+            counts = [int(w) for w in args.scaling_workers.split(",")] if args.scaling_workers else [1, args.workers]
+            rs = []
+            for w in counts:
+                rs.append(one(args.scaling, w, tag=f"{args.scaling} cases, {w} worker{'s' if w > 1 else ''}"))
+                report(rs[-1])
+            gen = [float(r["stage"].split()[-2]) if r["stage"] else float("nan") for r in rs]
+            for w, r, g in zip(counts[1:], rs[1:], gen[1:]):
+                print(f"  scaling 1 -> {w} workers: {rs[0]['wall'] / r['wall']:.2f}x on the whole command, "
+                      f"{gen[0] / g:.2f}x on the generated cases")
+
+
+if __name__ == "__main__":
+    main()

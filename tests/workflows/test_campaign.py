@@ -1,0 +1,205 @@
+"""Load campaigns on the stick model: the runner's envelope equals that of the same cases run
+one by one; a restarted campaign skips the cases already done; statistics equal the batch
+formulas; envelope histories, ParaView output, the comparison table and the command line."""
+import pickle
+
+import numpy as np
+import pytest
+
+from liftoff.transient import solve
+from liftoff.workflows import report
+from liftoff.workflows.executors import InlineExecutor
+from liftoff.workflows.loads import build_problem
+from liftoff.workflows.run import Options, run
+
+from .test_run import STICK, _scenario
+
+QUIET = dict(progress=False, plots=False, snapshots=False, echo=lambda *a, **k: None)
+
+
+@pytest.fixture(scope="module")
+def campaign4(tmp_path_factory):
+    """Two named cases + 4 generated ones on 2 worker processes (t_end 7.2 s)."""
+    tmp = tmp_path_factory.mktemp("campaign")
+    p = _scenario(tmp, STICK, t_end=7.2)
+    out = run(p, tmp / "out", cache_dir=tmp / "cache", n_cases=4, options=Options(workers=2), **QUIET)
+    return tmp, p, out
+
+
+def _same(env_a, env_b) -> bool:
+    """Envelope rows equal to the bit (NaN, an estimate not made, equal to NaN)."""
+    norm = lambda rows: [{k: ("nan" if isinstance(v, float) and v != v else v) for k, v in r.items()} for r in rows]  # noqa: E731
+    return norm(env_a) == norm(env_b)
+
+
+def _one_by_one(out):
+    """Max/min of every case solved here, in this process, without the runner."""
+    sc, stack = out.scenario, next(iter(out.stacks.values()))
+    per_case = {}
+    for case in list(sc.cases) + [sc.generated_case(i) for i in range(sc.n_generated)]:
+        cp = build_problem(case, stack, progress=False)
+        res = solve(cp.problem)
+        per_case[case.name] = report.maxmin(res.time, report.items(res, cp.attach), case.name)
+    return per_case
+
+
+def test_campaign_envelope_equals_cases_run_one_by_one(campaign4):
+    _, _, out = campaign4
+    per_case = _one_by_one(out)
+    ref = report.envelope(per_case)
+    assert [r["item"] for r in out.envelope] == [r["item"] for r in ref]
+    keys = ("item", "unit", "max", "t_max", "case_max", "min", "t_min", "case_min", "category")
+    for a, b in zip(out.envelope, ref):                         # (the error estimates are not part of it)
+        assert {k: a[k] for k in keys} == {k: b[k] for k in keys}, (a, b)   # values, times and cases, exactly
+    assert {r["case_max"] for r in ref} & {"d0000", "d0001", "d0002", "d0003"}    # dispersions matter
+    # statistics over the 4 generated cases = the batch formulas on the per-case maxima
+    from liftoff.workflows.stats import k_factor
+
+    st = out.aggregate.statistics()
+    mx = np.array([[r["max"] for r in per_case[f"d000{i}"]] for i in range(4)])
+    mn = np.array([[r["min"] for r in per_case[f"d000{i}"]] for i in range(4)])
+    k = k_factor(0.99, 0.90, 4)
+    scale = np.abs(mx).max(axis=0) + 1e-30
+    np.testing.assert_allclose(st["mean_max"], mx.mean(axis=0), rtol=1e-12, atol=1e-12 * scale.max())
+    np.testing.assert_allclose(st["normal_max"], mx.mean(axis=0) + k * mx.std(axis=0, ddof=1),
+                               rtol=1e-10, atol=1e-10 * scale.max())
+    np.testing.assert_allclose(st["normal_min"], mn.mean(axis=0) - k * mn.std(axis=0, ddof=1),
+                               rtol=1e-10, atol=1e-10 * np.abs(mn).max())
+
+
+def test_campaign_outputs(campaign4):
+    import h5py
+
+    tmp, _, out = campaign4
+    d = tmp / "out"
+    for name in ("cases.csv", "statistics.csv", "statistics.h5", "envelope_histories.h5", "srs.csv",
+                 "design_loads.csv", "maxmin_envelope.csv"):
+        assert (d / name).is_file(), name
+    gov = [f.name for f in d.glob("results_d*.h5")]
+    assert len(gov) == 1                                    # only the governing generated case in full
+    rows = (d / "cases.csv").read_text().splitlines()
+    assert rows[1].startswith("index,name,srb_ignition_delay[engine[srb_left].start]") and len(rows) == 6
+    # each envelope value set by a generated case: that case's history, at its time, is the value
+    env = {r["item"]: r for r in out.envelope}
+    with h5py.File(d / "envelope_histories.h5", "r") as f:
+        n = 0
+        for side in ("max", "min"):
+            for key, ds in f[side].items():
+                r = env[ds.attrs["item"]]
+                t = f["time"][ds.attrs["case"]][()]
+                j = int(np.argmin(np.abs(t - r[f"t_{side}"])))
+                assert ds[j] == r[side] and ds.attrs["case"] == r[f"case_{side}"]
+                n += 1
+        assert n > 0
+
+
+def test_tasks_carry_no_model(campaign4):
+    """A task names the scenario, the case index and the cache folder; the model stays in
+    the cache (a task pickles to a few kB, the stack to megabytes)."""
+    from liftoff.workflows.campaign import CaseTask, ScenarioRef
+
+    _, _, out = campaign4
+    t = CaseTask(ScenarioRef.of(out.scenario), 3, "/cache", "key")
+    stack = next(iter(out.stacks.values()))
+    assert len(pickle.dumps(t)) < 30_000 < len(pickle.dumps(stack.vehicle))
+
+
+def test_restart_skips_done_cases(campaign4):
+    """A second run reuses every record; more cases run only the new ones; a changed
+    scenario (seed) runs them all again; the envelope equals the first run's."""
+    tmp, p, first = campaign4
+    opts = Options(executor=InlineExecutor(), campaign=tmp / "out.campaign")
+    again = run(p, tmp / "again", cache_dir=tmp / "cache", n_cases=4, options=opts, **QUIET)
+    assert (again.campaign.ran, again.campaign.reused) == (0, 4)
+    assert _same(again.envelope, first.envelope)
+    more = run(p, tmp / "more", cache_dir=tmp / "cache", n_cases=6, options=opts, **QUIET)
+    assert (more.campaign.ran, more.campaign.reused) == (2, 4)
+    text = p.read_text()
+    assert '"seed" = 20261122' in text
+    p2 = p.with_name("seed5.toml")
+    p2.write_text(text.replace('"seed" = 20261122', '"seed" = 5'))
+    other = run(p2, tmp / "other", cache_dir=tmp / "cache", n_cases=4, options=opts, **QUIET)
+    assert (other.campaign.ran, other.campaign.reused) == (4, 0)
+
+
+def test_fields_and_compare(tmp_path, campaign4):
+    """ParaView series (.pvd + .vtu frames with total and elastic displacement) and the
+    GIF of the governing case; a comparison against the campaign's envelope."""
+    import meshio
+
+    tmp, p, first = campaign4
+    out = run(p, tmp_path / "f", cache_dir=tmp / "cache", n_cases=0,
+              options=Options(fields=True, compare=tmp / "out"), **QUIET)
+    gov = out.results[next(iter(out.results))][1].case.name
+    pvd = (tmp_path / "f" / f"fields_{gov}.pvd").read_text()
+    frames = sorted((tmp_path / "f").glob(f"fields_{gov}_*.vtu"))
+    assert len(frames) == 48 and pvd.count("<DataSet") == 48 and frames[-1].name in pvd
+    m = meshio.read(frames[-1])
+    assert {"displacement", "elastic"} <= set(m.point_data) and m.point_data["displacement"].shape[1] == 3
+    # the stack has lifted off at the last frame: total motion up, elastic part small
+    assert np.median(m.point_data["displacement"][:, 2]) > 10 * np.abs(m.point_data["elastic"][:, 2]).max() or \
+        np.abs(m.point_data["displacement"]).max() > np.abs(m.point_data["elastic"]).max()
+    assert (tmp_path / "f" / f"animation_{gov}.gif").stat().st_size > 10_000
+    rows = (tmp_path / "f" / "compare.csv").read_text().splitlines()
+    assert rows[1].startswith("item,unit,max,max_old,max_change_pct")
+    # the named cases against the envelope of named + generated cases: never above it
+    env = {r["item"]: r for r in first.envelope}
+    for r in out.envelope:
+        assert r["max"] <= env[r["item"]]["max"] and r["min"] >= env[r["item"]]["min"]
+
+
+def test_cli_campaign(tmp_path, campaign4, capsys):
+    from liftoff.workflows.cli import main
+
+    tmp, p, _ = campaign4
+    assert main(["run", str(p), "--out", str(tmp_path / "c"), "--cache", str(tmp / "cache"), "--no-progress",
+                 "--no-snapshots", "--cases", "2", "--workers", "0", "--campaign", str(tmp / "out.campaign")]) == 0
+    text = capsys.readouterr().out
+    assert "campaign: 2 generated cases (0 run, 2 reused" in text
+    assert main(["run", str(p), "--out", str(tmp_path / "d"), "--no-cache", "--cases", "-1"]) == 2
+    assert "--cases -1: must be 0 or more" in capsys.readouterr().err
+
+
+def test_dask_local_cluster_gives_the_same_envelope(tmp_path, campaign4):
+    """The same 4 generated cases on a local Dask cluster (one worker process): the same
+    envelope as the process pool's, exactly (the same cases, fed in the same order)."""
+    pytest.importorskip("distributed")
+    tmp, p, first = campaign4
+    out = run(p, tmp_path / "dask", cache_dir=tmp / "cache", n_cases=4,
+              options=Options(workers=1, dask="local", campaign=tmp_path / "camp"), **QUIET)
+    assert (out.campaign.ran, out.campaign.reused) == (4, 0)
+    assert _same(out.envelope, first.envelope)
+
+
+def test_mpi_futures_gives_the_same_envelope(tmp_path, campaign4):
+    """The command line under mpiexec (mpi4py.futures, 2 ranks: the command and one
+    worker): the same envelope as the process pool's."""
+    import csv
+    import os
+    import shutil
+    import subprocess
+    import sys
+
+    if shutil.which("mpiexec") is None:
+        pytest.skip("no mpiexec")
+    tmp, p, first = campaign4
+    root = ["--allow-run-as-root"] if os.geteuid() == 0 else []
+    cmd = ["mpiexec", *root, "--oversubscribe", "-n", "2", sys.executable, "-m", "mpi4py.futures", "-m",
+           "liftoff.workflows.cli", "run", str(p), "--out", str(tmp_path / "mpi"), "--cache", str(tmp / "cache"),
+           "--cases", "4", "--mpi", "--workers", "1", "--campaign", str(tmp_path / "camp"), "--no-progress",
+           "--no-snapshots"]
+    # a clean environment: the FE tests of this session initialise MPI in-process, and the
+    # variables that leaves behind would make mpiexec's children attach to it
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "OPAL_", "PMI_"))}
+    env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300, env=env)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    assert "generated cases (4 run, 0 reused)" in proc.stdout
+    lines = [ln for ln in (tmp_path / "mpi" / "maxmin_envelope.csv").read_text().splitlines() if ln[:1] != "#"]
+    rows = list(csv.DictReader(lines))
+    assert [(r["item"], r["case_max"], r["case_min"]) for r in rows] == \
+        [(r["item"], r["case_max"], r["case_min"]) for r in first.envelope]
+    for r, f in zip(rows, first.envelope):
+        assert float(r["max"]) == pytest.approx(f["max"], rel=1e-6, abs=1e-6 * abs(f["max"]) + 1e-12)
+
+

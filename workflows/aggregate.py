@@ -1,0 +1,226 @@
+"""Envelopes and statistics over the cases of a run, fed one case summary at a time.
+
+* the envelope (max of the maxima, min of the minima, each with its time and case) over
+  every case, named and generated (the first case fed wins a tie, and cases are fed in a
+  fixed order: named cases, then generated ones by index);
+* over the generated (dispersed) cases: mean and std of each item's maxima and minima,
+  the P99/90 normal tolerance bounds mean + k std and mean - k std (k :func:`.stats.k_factor`),
+  and the distribution-free P99/90 order statistic (:func:`.stats.order_rank`), as pyyeti's
+  cla computes them;
+* the SRS of the selected items: envelope over cases with the case of each point, and
+  the same statistics per Q and frequency.
+
+Memory is O(items x r + SRS points), whatever the number of cases. Files: CSV for people,
+HDF5 (format ``liftoff-statistics``) for programs; SI units per item.
+"""
+from __future__ import annotations
+
+import csv
+import io
+from pathlib import Path
+
+import numpy as np
+
+from liftoff.core.errors import InputError
+from liftoff.core.records import Dataset, write_record, write_text
+
+from .stats import P99_90, Largest, Running, k_factor, order_rank
+
+
+class Aggregate:
+    """Streaming envelope and statistics; ``n_stat``: the number of generated cases that
+    will be fed (it fixes the order statistic's rank)."""
+
+    def __init__(self, n_stat: int, p: float = P99_90[0], c: float = P99_90[1]):
+        self.p, self.c, self.n_stat = p, c, n_stat
+        self.k = k_factor(p, c, n_stat)
+        self.r = order_rank(p, c, n_stat)
+        self.items: tuple | None = None
+        self.case_names: list[str] = []                 # generated cases fed, in order (index -> name)
+
+    def _init(self, s) -> None:
+        self.items, self.units, self.categories = s.items, s.units, s.categories
+        n = len(s.items)
+        self.mx, self.mn = np.full(n, -np.inf), np.full(n, np.inf)
+        self.t_mx, self.t_mn = np.zeros(n), np.zeros(n)
+        self.c_mx, self.c_mn = [""] * n, [""] * n
+        self.e_mx, self.e_mn = np.full(n, np.nan), np.full(n, np.nan)     # estimated errors of the envelope
+        self.run_mx, self.run_mn = Running(n), Running(n)
+        self.top_mx, self.top_mn = Largest(n, self.r), Largest(n, self.r)
+        self.srs_items = s.srs_items
+        if s.srs is not None:
+            self.srs_env = np.full(s.srs.shape, -np.inf)
+            self.srs_case = np.full(s.srs.shape, "", dtype=object)
+            self.srs_run = Running(s.srs.shape)
+        else:
+            self.srs_env = None
+
+    def add(self, s, generated: bool) -> None:
+        """Feed one :class:`~.campaign.CaseSummary`."""
+        if self.items is None:
+            self._init(s)
+        if s.items != self.items or s.srs_items != self.srs_items:
+            raise InputError(f"case {s.name}: its recovery items differ from those of the first case")
+        up = s.mx > self.mx
+        self.mx[up], self.t_mx[up] = s.mx[up], s.t_mx[up]
+        self.e_mx[up] = s.err_mx[up] if s.err_mx is not None else np.nan
+        for j in np.flatnonzero(up):
+            self.c_mx[j] = s.name
+        dn = s.mn < self.mn
+        self.mn[dn], self.t_mn[dn] = s.mn[dn], s.t_mn[dn]
+        self.e_mn[dn] = s.err_mn[dn] if s.err_mn is not None else np.nan
+        for j in np.flatnonzero(dn):
+            self.c_mn[j] = s.name
+        if self.srs_env is not None and s.srs is not None:
+            better = s.srs > self.srs_env
+            self.srs_env[better] = s.srs[better]
+            self.srs_case[better] = s.name
+        if generated:
+            k = len(self.case_names)
+            self.case_names.append(s.name)
+            self.run_mx.add(s.mx)
+            self.run_mn.add(s.mn)
+            self.top_mx.add(s.mx, k)
+            self.top_mn.add(-s.mn, k)
+            if self.srs_env is not None and s.srs is not None:
+                self.srs_run.add(s.srs)
+
+    # ------------------------------------------------------------ tables
+    def envelope_rows(self) -> list[dict]:
+        """Rows of the max/min envelope (report.write_csv layout)."""
+        return [{"item": it, "unit": u, "max": float(self.mx[j]), "t_max": float(self.t_mx[j]),
+                 "case_max": self.c_mx[j], "min": float(self.mn[j]), "t_min": float(self.t_mn[j]),
+                 "case_min": self.c_mn[j], "category": cat, "max_err": float(self.e_mx[j]),
+                 "min_err": float(self.e_mn[j])}
+                for j, (it, u, cat) in enumerate(zip(self.items, self.units, self.categories))]
+
+    @property
+    def n(self) -> int:
+        return self.run_mx.n if self.items is not None else 0
+
+    def statistics(self) -> dict:
+        """Arrays per item over the generated cases: mean/std of maxima and minima, P99/90
+        normal bounds, order-statistic bounds and their cases."""
+        omx, cmx = self.top_mx.rth()
+        omn, cmn = self.top_mn.rth()
+        name = lambda c: self.case_names[c] if c >= 0 else ""  # noqa: E731
+        return {"mean_max": self.run_mx.mean, "std_max": self.run_mx.std, "normal_max": self.run_mx.bound(self.k),
+                "order_max": omx, "order_case_max": [name(c) for c in cmx],
+                "mean_min": self.run_mn.mean, "std_min": self.run_mn.std, "normal_min": self.run_mn.bound(-self.k),
+                "order_min": -omn, "order_case_min": [name(c) for c in cmn]}
+
+
+STAT_FIELDS = ("item", "unit", "category", "mean_max", "std_max", "normal_max", "order_max", "order_case_max",
+               "mean_min", "std_min", "normal_min", "order_min", "order_case_min")
+
+
+def _csv(rows: list[dict], fields, head: str, path: Path) -> Path:
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=list(fields), extrasaction="ignore")
+    w.writeheader()
+    for r in rows:
+        w.writerow({k: (f"{v:.6e}" if isinstance(v, float) else v) for k, v in r.items()})
+    return write_text(path, head + buf.getvalue())
+
+
+def write_statistics(agg: Aggregate, out: Path) -> list[Path]:
+    """statistics.csv and statistics.h5 over the generated cases."""
+    st = agg.statistics()
+    rows = [{"item": it, "unit": u, "category": cat, **{k: (v[j] if isinstance(v, list) else float(v[j]))
+                                                      for k, v in st.items()}}
+            for j, (it, u, cat) in enumerate(zip(agg.items, agg.units, agg.categories))]
+    head = (f"# liftoff statistics over {agg.n} dispersed cases; SI units (column 'unit'); "
+            f"P{agg.p * 100:g}/{agg.c * 100:g}: normal bound mean +- k std with k = {agg.k:.6g} (one-sided "
+            f"tolerance factor), order statistic = the {agg.r}-th largest maximum / smallest minimum "
+            f"({'none: too few cases' if agg.r == 0 else 'distribution-free'})\n")
+    paths = [_csv(rows, STAT_FIELDS, head, out / "statistics.csv")]
+    data = {"items": np.array(agg.items, dtype=str),
+            "units": np.array(agg.units, dtype=str), "categories": np.array(agg.categories, dtype=str)}
+    for key, v in st.items():
+        data[key] = Dataset(np.array(v, dtype=str) if isinstance(v, list) else v, "per item (see units)",
+                            dims=("items",))
+    if agg.srs_env is not None and agg.srs_run.n:
+        data["srs"] = {"items": np.array(agg.srs_items, dtype=str), "envelope": agg.srs_env,
+                       "mean": agg.srs_run.mean, "std": agg.srs_run.std, "normal": agg.srs_run.bound(agg.k)}
+    paths.append(write_record(out / "statistics.h5", "liftoff-statistics", 1, data, units="SI per item",
+                              attrs={"n_cases": agg.n, "p": agg.p, "c": agg.c, "k": agg.k, "r": agg.r}))
+    return paths
+
+
+def write_srs(agg: Aggregate, freq: np.ndarray, q: tuple, out: Path) -> Path | None:
+    """srs.csv: per item, Q and frequency the envelope over every case (and its case) and,
+    over the generated cases, mean, std and P99/90 normal bound."""
+    if agg.srs_env is None:
+        return None
+    stats = agg.srs_run.n >= 2
+    rows = []
+    for iq, qv in enumerate(q):
+        for j, it in enumerate(agg.srs_items):
+            unit = agg.units[agg.items.index(it)]
+            for k, f in enumerate(freq):
+                r = {"item": it, "unit": unit, "Q": float(qv), "freq_Hz": float(f), "envelope": float(agg.srs_env[iq, k, j]),
+                     "case": agg.srs_case[iq, k, j]}
+                if stats:
+                    r.update(mean=float(agg.srs_run.mean[iq, k, j]), std=float(agg.srs_run.std[iq, k, j]),
+                             normal_P9990=float(agg.srs_run.bound(agg.k)[iq, k, j]))
+                rows.append(r)
+    fields = ["item", "unit", "Q", "freq_Hz", "envelope", "case"] + (["mean", "std", "normal_P9990"] if stats else [])
+    head = ("# liftoff shock response spectra (absolute acceleration, peak) of the items' histories; units of the "
+            f"item; envelope over all cases{'; statistics over the dispersed cases' if stats else ''}\n")
+    return _csv(rows, fields, head, out / "srs.csv")
+
+
+def write_design(agg: Aggregate, factors: dict, out: Path) -> Path | None:
+    """design_loads.csv: per item of a category with an uncertainty factor, the basis
+    (P99/90 normal bound over >= 2 dispersed cases, else the envelope) times the factor."""
+    if not factors:
+        return None
+    st = agg.statistics() if agg.n >= 2 else None
+    rows = []
+    for j, (it, u, cat) in enumerate(zip(agg.items, agg.units, agg.categories)):
+        if cat not in factors:
+            continue
+        mx, mn = (st["normal_max"][j], st["normal_min"][j]) if st else (agg.mx[j], agg.mn[j])
+        f = factors[cat]
+        rows.append({"item": it, "unit": u, "category": cat, "basis": "P99/90 normal" if st else "envelope",
+                     "max": float(mx), "min": float(mn), "factor": float(f), "design_max": float(f * mx),
+                     "design_min": float(f * mn)})
+    head = "# liftoff design loads: basis x uncertainty factor of the item's category; SI units (column 'unit')\n"
+    return _csv(rows, ("item", "unit", "category", "basis", "max", "min", "factor", "design_max", "design_min"),
+                head, out / "design_loads.csv")
+
+
+def read_maxmin(path: Path) -> dict[str, dict]:
+    """Rows of a max/min CSV written by liftoff (or a run folder's maxmin_envelope.csv) by item."""
+    path = Path(path)
+    if path.is_dir():
+        path = path / "maxmin_envelope.csv"
+    if not path.is_file():
+        raise InputError(f"--compare {str(path)!r}: no such max/min table")
+    lines = [ln for ln in path.read_text().splitlines() if ln and not ln.startswith("#")]
+    try:
+        rows = {r["item"]: {"max": float(r["max"]), "min": float(r["min"]), "unit": r.get("unit", "")}
+                for r in csv.DictReader(lines)}
+    except (KeyError, ValueError, TypeError) as exc:
+        raise InputError(f"--compare {str(path)!r}: not a liftoff max/min table ({exc})") from None
+    return rows
+
+
+def pct_change(new: float, old: float) -> float:
+    """(new - old) / |old| in percent (pyyeti rptpct's 'percent difference'); NaN when old is 0."""
+    return (new - old) / abs(old) * 100.0 if old != 0 else (0.0 if new == 0 else float("nan"))
+
+
+def write_compare(rows_new: list[dict], old: dict, out: Path) -> tuple[Path, list[dict]]:
+    """compare.csv: max and min of every item against an earlier run's, with % change."""
+    rows = []
+    for r in rows_new:
+        o = old.get(r["item"])
+        if o is None:
+            continue
+        rows.append({"item": r["item"], "unit": r["unit"], "max": r["max"], "max_old": o["max"],
+                     "max_change_pct": pct_change(r["max"], o["max"]), "min": r["min"], "min_old": o["min"],
+                     "min_change_pct": pct_change(r["min"], o["min"]), "category": r.get("category", "")})
+    fields = ("item", "unit", "max", "max_old", "max_change_pct", "min", "min_old", "min_change_pct")
+    head = "# liftoff comparison with an earlier run's max/min; change = (new - old) / |old| x 100 %\n"
+    return _csv(rows, fields, head, out / "compare.csv"), rows

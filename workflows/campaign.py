@@ -1,0 +1,407 @@
+"""The case runner of a load campaign: generated cases run on any concurrent.futures.Executor.
+
+A task (:class:`CaseTask`) is small: the scenario (its mapping and folder), the case
+index, the stage cache's folder and the model's key. A worker rebuilds the case from
+the scenario and its index (:meth:`liftoff.config.Scenario.generated_case`), loads the
+reduced model from the stage cache by path (every model stage is a cache hit: the main
+process built them first), solves the transient without any modal history and sends
+back a :class:`CaseSummary` (max/min with times of every item, SRS of the selected
+items, post events: a few kB), never the histories. Workers keep the last scenario and
+model they loaded, so each is read once per worker.
+
+The main process writes each summary to the campaign folder as one record
+(``cases/<name>-<key>.npz``, the key a hash of the case's scenario mapping, model and
+code), so a restarted campaign skips the cases already done, and then reads the records
+back in case order to build envelopes and statistics (:mod:`.aggregate`), memory flat
+in the number of cases.
+"""
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import time
+from concurrent.futures import FIRST_COMPLETED, wait
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Iterable
+
+import numpy as np
+
+from liftoff.core.errors import ConvergenceError, InputError
+from liftoff.core.records import read_record, write_record
+
+RECORD_FORMAT = "liftoff-campaign-case"
+RECORD_VERSION = 1
+CODE = ("liftoff.transient", "liftoff.workflows", "liftoff.config", "liftoff.core")
+
+
+@dataclass(frozen=True)
+class ScenarioRef:
+    """How a worker finds the scenario: its TOML mapping, name, folder (CSV and database
+    files are read relative to it), the number of generated cases, and a digest."""
+
+    data: dict
+    source: str
+    base: str
+    n_cases: int
+    digest: str
+
+    @classmethod
+    def of(cls, sc) -> ScenarioRef:
+        data = sc.data
+        digest = hashlib.sha256(json.dumps(data, sort_keys=True, default=repr).encode()).hexdigest()[:16]
+        return cls(data, sc.path, str(sc.base), sc.n_generated, digest)
+
+    def load(self):
+        from liftoff.config.scenario import parse_scenario
+
+        return parse_scenario(self.data, self.source, Path(self.base), n_cases=self.n_cases)
+
+
+@dataclass(frozen=True)
+class CaseTask:
+    """One generated case for a worker; ``columns``: item names whose histories to send
+    back (the envelope-setting cases), else a summary."""
+
+    scenario: ScenarioRef
+    index: int
+    cache: str
+    model_key: str
+    columns: tuple[str, ...] = ()
+
+
+@dataclass
+class CaseSummary:
+    """What a case sends back: per item max/min and their times, SRS of the selected items
+    (n_q, n_freq, n_srs_items), and per post the first separation, recontacts and peak
+    compression."""
+
+    name: str
+    index: int
+    items: tuple[str, ...]
+    units: tuple[str, ...]
+    categories: tuple[str, ...]
+    mx: np.ndarray
+    t_mx: np.ndarray
+    mn: np.ndarray
+    t_mn: np.ndarray
+    srs_items: tuple[str, ...] = ()
+    srs: np.ndarray | None = None
+    posts: tuple[str, ...] = ()
+    separation: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    recontacts: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    compression: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    n_steps: int = 0
+    h: float = 0.0
+    wall: float = 0.0
+    err_mx: np.ndarray | None = None       # estimated error of each max/min (Richardson, a run at h/2)
+    err_mn: np.ndarray | None = None
+
+
+# ------------------------------------------------------------------ one case
+def summarize(result, cp, name: str, index: int, post, wall: float = 0.0, check=None) -> CaseSummary:
+    """The compact summary of a solved case (the same for named and generated cases); with
+    ``check`` (the same case at h/2) each max/min carries its estimated error."""
+    from liftoff.transient.accuracy import error_estimate
+
+    from . import report
+
+    its = report.items(result, cp.attach)
+    t = result.time
+    V = np.column_stack([it.values for it in its])
+    imax, imin = np.argmax(V, axis=0), np.argmin(V, axis=0)
+    cols = np.arange(V.shape[1])
+    srs_items, srs_arr = (), None
+    if post.srs is not None:
+        from .spectra import srs, srs_frequencies
+
+        sel = [j for j, it in enumerate(its) if it.category in post.srs.categories]
+        srs_items = tuple(its[j].name for j in sel)
+        freq = srs_frequencies(post.srs.f_min, post.srs.f_max, post.srs.n_freq)
+        srs_arr = np.stack([srs(V[:, sel], result.h, freq, q) for q in post.srs.q]) if sel else None
+    cs = result.contact_summary()
+    return CaseSummary(
+        name, index, tuple(it.name for it in its), tuple(it.unit for it in its), tuple(it.category for it in its),
+        V[imax, cols].copy(), t[imax].copy(), V[imin, cols].copy(), t[imin].copy(), srs_items, srs_arr,
+        tuple(c["name"] for c in cs), np.array([np.nan if c["separation_time"] is None else c["separation_time"]
+                                                 for c in cs]),
+        np.array([c["recontacts"] for c in cs], dtype=np.int64), np.array([c["peak_compression"] for c in cs]),
+        int(t.size - 1), float(result.h), float(wall), *_errors(its, report.items(check, cp.attach), error_estimate)
+        if check is not None else (None, None))
+
+
+def _errors(its, its_half, estimate) -> tuple[np.ndarray, np.ndarray]:
+    """Estimated errors of each item's max and min from its history at h/2."""
+    mx = np.array([estimate(a.values.max(), b.values.max()) for a, b in zip(its, its_half)])
+    mn = np.array([estimate(a.values.min(), b.values.min()) for a, b in zip(its, its_half)])
+    return mx, mn
+
+
+_MEMO: dict = {}
+
+
+def _worker_state(task: CaseTask):
+    """(scenario, stack) of a task, loaded once per worker process (the last one kept)."""
+    from liftoff.config import Where
+
+    from .cache import StageCache
+    from .pipeline import build_stack
+
+    key = (task.scenario.digest, task.scenario.n_cases, task.cache, task.model_key)
+    if _MEMO.get("key") != key:
+        _MEMO.clear()
+        sc = task.scenario.load()
+        case0 = sc.generated_case(task.index)
+        stack = build_stack(case0.model, StageCache(Path(task.cache)), progress=False,
+                            where=Where(case0.source, "model"))
+        _MEMO.update(key=key, scenario=sc, stack=stack)
+    return _MEMO["scenario"], _MEMO["stack"]
+
+
+def solve_generated(task: CaseTask, keep_modal: bool | str = False):
+    """(result, CaseProblem, Case, wall s) of generated case ``task.index``."""
+    from dataclasses import asdict
+
+    from liftoff.transient import solve
+
+    from .cache import stage_key
+    from .loads import build_problem
+
+    sc, stack = _worker_state(task)
+    case = sc.generated_case(task.index)
+    if stage_key("model", asdict(case.model)) != task.model_key:
+        raise InputError(f"{sc.path}: case {case.name}: its [model] differs from the campaign's")
+    t0 = time.perf_counter()
+    try:
+        cp = build_problem(case, stack, progress=False, keep_modal=keep_modal)
+        return solve(cp.problem), cp, case, time.perf_counter() - t0
+    except (InputError, ConvergenceError) as exc:
+        msg = str(exc) if case.name in str(exc) else f"{sc.path}: case {case.name}: {exc}"
+        raise type(exc)(msg) from None
+
+
+def run_case(task: CaseTask):
+    """Worker entry point: the summary of one generated case, or (time, {item: history})
+    of the items in ``task.columns``."""
+    res, cp, case, wall = solve_generated(task)
+    if task.columns:
+        from . import report
+
+        its = {it.name: it.values for it in report.items(res, cp.attach)}
+        return task.index, res.time, {c: its[c] for c in task.columns}
+    sc = _MEMO["scenario"]
+    return summarize(res, cp, case.name, task.index, sc.post, wall)
+
+
+# ------------------------------------------------------------------ records
+def case_key(sc, index: int, model_key: str) -> str:
+    """Hash of everything a generated case's summary depends on: its scenario mapping, the
+    model, the post-processing settings and the code of the packages that compute it."""
+    from .cache import _canonical, code_version
+
+    raw, _ = sc.generated_raw(index)
+    payload = json.dumps({"case": _canonical(raw), "model": model_key, "post": repr(sc.post),
+                          "code": code_version(*CODE)}, sort_keys=True, default=repr)
+    return hashlib.sha256(payload.encode()).hexdigest()[:16]
+
+
+def record_path(folder: Path, name: str, key: str) -> Path:
+    return Path(folder) / "cases" / f"{name}-{key}.npz"
+
+
+def save_summary(s: CaseSummary, path: Path, key: str) -> Path:
+    data = {k: getattr(s, k) for k in ("mx", "t_mx", "mn", "t_mn", "separation", "recontacts", "compression")}
+    data.update(items=np.array(s.items, dtype=str), units=np.array(s.units, dtype=str),
+                categories=np.array(s.categories, dtype=str), posts=np.array(s.posts, dtype=str),
+                srs_items=np.array(s.srs_items, dtype=str), scalars=np.array([s.index, s.n_steps, s.h, s.wall]))
+    if s.srs is not None:
+        data["srs"] = s.srs
+    return write_record(path, RECORD_FORMAT, RECORD_VERSION, data, units="SI per item (column units); s",
+                        attrs={"name": s.name, "metadata": json.dumps({"key": key})}, suffixes=(".npz",))
+
+
+def load_summary(path: Path) -> CaseSummary:
+    rec = read_record(path, RECORD_FORMAT, (RECORD_VERSION,), what="campaign record")
+    d = rec.data
+    tup = lambda a: tuple(str(x) for x in np.atleast_1d(a))  # noqa: E731
+    index, n_steps, h, wall = d["scalars"]
+    return CaseSummary(str(rec.attrs["name"]), int(index), tup(d["items"]), tup(d["units"]), tup(d["categories"]),
+                       d["mx"], d["t_mx"], d["mn"], d["t_mn"], tup(d["srs_items"]) if d["srs_items"].size else (),
+                       d.get("srs"), tup(d["posts"]), d["separation"], d["recontacts"], d["compression"],
+                       int(n_steps), float(h), float(wall))
+
+
+# ------------------------------------------------------------------ the loop
+def run_tasks(executor, tasks: Iterable[CaseTask], on_result: Callable, window: int) -> None:
+    """Submit ``tasks`` to ``executor`` with at most ``window`` in flight, calling
+    ``on_result`` on each result as it arrives (any order); the first failure cancels the
+    rest and is raised."""
+    it = iter(tasks)
+    pending = {executor.submit(run_case, t) for t in itertools.islice(it, window)}
+    try:
+        while pending:
+            done, pending = wait(pending, return_when=FIRST_COMPLETED)
+            for fut in done:
+                on_result(fut.result())
+                nxt = next(it, None)
+                if nxt is not None:
+                    pending.add(executor.submit(run_case, nxt))
+    finally:
+        for fut in pending:
+            fut.cancel()
+
+
+@dataclass
+class CampaignRun:
+    """What :func:`run_campaign` did: records by index, how many ran and were reused."""
+
+    folder: Path
+    records: dict            # index -> record path
+    ran: int
+    reused: int
+    wall: float
+
+
+def run_campaign(sc, ref: ScenarioRef, cache_root: Path, model_key: str, executor, folder: Path,
+                 progress: bool = True, window: int = 0, echo=print) -> CampaignRun:
+    """Run every generated case of ``sc`` not already recorded in ``folder`` on ``executor``."""
+    t0 = time.perf_counter()
+    folder = Path(folder)
+    (folder / "cases").mkdir(parents=True, exist_ok=True)
+    records, todo = {}, []
+    for i in range(sc.n_generated):
+        from liftoff.config.dispersion import case_name
+
+        p = record_path(folder, case_name(i), case_key(sc, i, model_key))
+        records[i] = p
+        if not p.is_file():
+            todo.append(i)
+    reused = sc.n_generated - len(todo)
+    echo(f"  campaign: {sc.n_generated} generated cases, {reused} done before (records in {folder}), "
+         f"{len(todo)} to run")
+    bar = None
+    if progress and todo:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(todo), unit="case", desc="cases", leave=False)
+
+    def store(s: CaseSummary) -> None:
+        save_summary(s, records[s.index], records[s.index].stem.rsplit("-", 1)[1])
+        if bar is not None:
+            bar.update(1)
+
+    tasks = (CaseTask(ref, i, str(cache_root), model_key) for i in todo)
+    try:
+        run_tasks(executor, tasks, store, window or 4 * max(1, getattr(executor, "_max_workers", 2) or 2))
+    finally:
+        if bar is not None:
+            bar.close()
+    return CampaignRun(folder, records, len(todo), reused, time.perf_counter() - t0)
+
+
+# ------------------------------------------------------------------ after the cases
+def prime(sc, cache_root: str, model_key: str, stack) -> None:
+    """Give this process's worker state the scenario and the stack it already holds (the
+    main process runs cases too: the governing case, an in-process executor)."""
+    ref = ScenarioRef.of(sc)
+    _MEMO.clear()
+    _MEMO.update(key=(ref.digest, ref.n_cases, str(cache_root), model_key), scenario=sc, stack=stack)
+
+
+def generated_index(sc, name: str) -> int | None:
+    """The index of a generated case's name (d0017 -> 17), None for a named case."""
+    if name in sc.overrides or not (name[:1] == "d" and name[1:].isdigit()):
+        return None
+    i = int(name[1:])
+    return i if i < sc.n_generated else None
+
+
+def feed_records(sc, camp: CampaignRun, agg, path: Path) -> Path:
+    """Feed every generated case's record to ``agg`` in index order and write cases.csv:
+    per case its draws, the database file, post events and wall time."""
+    import csv as _csv
+
+    from liftoff.core.records import atomic_path
+
+    with atomic_path(path, suffix=".csv") as tmp, open(tmp, "w", newline="") as fh:
+        fh.write(f"# liftoff generated cases of {sc.path}: seed {sc.dispersion.seed}; case i draws from "
+                 "SeedSequence([seed, i, crc32(variable)]); times in s, forces in N\n")
+        w = None
+        for i in range(sc.n_generated):
+            s = load_summary(camp.records[i])
+            agg.add(s, generated=True)
+            _, info = sc.generated_raw(i)
+            row = {"index": i, "name": s.name, **info, "h": s.h, "n_steps": s.n_steps,
+                   "first_separation": float(np.nanmin(s.separation)) if s.separation.size else float("nan"),
+                   "last_separation": float(np.nanmax(s.separation)) if s.separation.size else float("nan"),
+                   "max_recontacts": int(s.recontacts.max(initial=0)),
+                   "peak_post_compression": float(s.compression.max(initial=0.0)), "wall_s": s.wall}
+            if w is None:
+                w = _csv.DictWriter(fh, fieldnames=list(row))
+                w.writeheader()
+            w.writerow({k: (f"{v:.9g}" if isinstance(v, float) else v) for k, v in row.items()})
+    return path
+
+
+def envelope_setters(sc, env: list[dict]) -> dict[int, list[tuple[int, str]]]:
+    """{generated case index: [(item row, 'max' | 'min'), ...]} of the envelope values it sets."""
+    out: dict[int, list] = {}
+    for j, r in enumerate(env):
+        for side in ("max", "min"):
+            i = generated_index(sc, r[f"case_{side}"])
+            if i is not None:
+                out.setdefault(i, []).append((j, side))
+    return out
+
+
+def governing_case(sc, env: list[dict], named: bool = False):
+    """The case that sets the most envelope values of the force items (posts, attach
+    forces; N), the first in case order on a tie: a generated case's index (None if none
+    sets one), or with ``named`` any case's name."""
+    from .report import is_force
+
+    count: dict[str, int] = {}
+    for r in env:
+        if is_force(r):
+            for side in ("max", "min"):
+                count[r[f"case_{side}"]] = count.get(r[f"case_{side}"], 0) + 1
+    order = [c.name for c in sc.cases] + [case_name_of(i) for i in range(sc.n_generated)] if named else \
+        [case_name_of(i) for i in range(sc.n_generated)]
+    best = max((c for c in count if c in set(order)), key=lambda c: (count[c], -order.index(c)), default=None)
+    if best is None:
+        return None
+    return best if named else generated_index(sc, best)
+
+
+def case_name_of(i: int) -> str:
+    from liftoff.config.dispersion import case_name
+
+    return case_name(i)
+
+
+def write_envelope_histories(env: list[dict], setters: dict, ref: ScenarioRef, cache_root: str, model_key: str,
+                             executor, path: Path) -> Path:
+    """envelope_histories.h5: for each envelope value a generated case sets, that case's
+    history of the item (the cases re-run on ``executor``, only those columns sent back)."""
+    from liftoff.core.records import Dataset
+
+    data: dict = {"items": np.array([r["item"] for r in env], dtype=str),
+                  "units": np.array([r["unit"] for r in env], dtype=str), "time": {}, "max": {}, "min": {}}
+
+    def store(res) -> None:
+        index, t, cols = res
+        name = case_name_of(index)
+        data["time"][name] = Dataset(t, "s")
+        for j, side in setters[index]:
+            r = env[j]
+            data[side][f"{j:04d}"] = Dataset(cols[r["item"]], r["unit"], item=r["item"], case=name,
+                                             t_extreme=r[f"t_{side}"], time=f"/time/{name}")
+
+    tasks = (CaseTask(ref, i, cache_root, model_key, tuple(env[j]["item"] for j, _ in setters[i]))
+             for i in sorted(setters))
+    run_tasks(executor, tasks, store, 4 * max(1, getattr(executor, "_max_workers", 2) or 2))
+    return write_record(path, "liftoff-envelope-histories", 1, data, units="SI per item (attribute units); s",
+                        attrs={"layout": "max/<row>, min/<row>: history of item <row> (items[row]) in the case that "
+                                         "sets its envelope value, on time/<case>; rows set by named cases are in "
+                                         "their results_<case>.h5"})
