@@ -11,6 +11,7 @@ Public API (SI units throughout)::
     mass_properties(model, about=(0, 0, 0)) -> MassProperties
     write_vtu(path, nodes, cells, cell_type, point_data) / write_modes_vtu(model, modes, path)
     fem.snapshot.snapshot_png(path, nodes, cells, cell_type, displacement, title, scale=None)
+    petsc_solver(comm=MPI.COMM_WORLD, tol=1e-10) -> PetscSolver   # reduction.craig_bampton(solver=...)
 
 Import pyvista (fem.snapshot) before dolfinx when both are used (FENICSX-NOTES.md).
 Only this package and meshes/ import gmsh or dolfinx; PETSc/SLEPc live in petsc_backend.
@@ -23,6 +24,8 @@ _EXPORTS = {
     "build_model": ".model",
     "Modes": ".modes",
     "eigenmodes": ".modes",
+    "PetscSolver": ".petsc_cb",
+    "petsc_solver": ".petsc_cb",
     "write_modes_vtu": ".output",
     "write_vtu": ".output",
     "MassProperties": ".static",
