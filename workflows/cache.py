@@ -21,6 +21,8 @@ import numpy as np
 
 from liftoff.core.records import read_record, write_record
 
+from .parallel import SERIAL, on_root
+
 _CODE_CACHE: dict[tuple[str, ...], str] = {}
 ARRAYS_FORMAT = "liftoff-stage-arrays"
 
@@ -70,10 +72,15 @@ def stage_key(stage: str, params: dict, code: tuple[str, ...] = (), inputs: tupl
 
 @dataclass
 class StageCache:
-    """Cache directory (None: no caching) plus a record of hits, misses and wall times."""
+    """Cache directory (None: no caching) plus a record of hits, misses and wall times.
+
+    ``comm``: the processes of the run (workflows/parallel.py). Rank 0 decides hit or
+    miss and alone writes entries; every rank loads a hit, and a miss is built by every
+    rank (collectively for the distributed FE stages)."""
 
     root: Path | None
     log: list = field(default_factory=list)
+    comm: Any = field(default=SERIAL, repr=False)
 
     def path(self, stage: str, key: str, suffix: str) -> Path | None:
         if self.root is None:
@@ -84,18 +91,20 @@ class StageCache:
                      save: Callable[[Any, Path], Any], load: Callable[[Path], Any], label: str = "") -> Any:
         """Load the product of ``stage`` under ``key`` if present, else build and save it."""
         p = self.path(stage, key, suffix)
+        comm = self.comm
         t0 = time.perf_counter()
-        if p is not None and p.is_file():
+        if on_root(comm, lambda: p is not None and p.is_file()):
             try:
-                out = load(p)
+                out, ok = load(p), True
+            except Exception:  # unreadable (e.g. interrupted write by an older version): rebuild
+                out, ok = None, False
+            if all(comm.allgather(ok)):
                 self.log.append((stage, label, "hit", time.perf_counter() - t0))
                 return out
-            except Exception:  # unreadable (e.g. interrupted write by an older version): rebuild
-                p.unlink(missing_ok=True)
+            on_root(comm, lambda: p.unlink(missing_ok=True), share=False)
         out = build()
         if p is not None:
-            p.parent.mkdir(parents=True, exist_ok=True)
-            save(out, p)
+            on_root(comm, lambda: (p.parent.mkdir(parents=True, exist_ok=True), save(out, p)), share=False)
         self.log.append((stage, label, "built", time.perf_counter() - t0))
         return out
 

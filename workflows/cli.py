@@ -6,6 +6,9 @@ iterations end with one line ``liftoff: error: ...`` on stderr and exit status 2
 never a traceback and never a results file.
 
     liftoff transient SCENARIO.toml --out DIR [--method direct|fixed-point] [--no-progress]
+
+Under ``mpirun -n N`` (or ``liftoff run --ranks N``) every rank prints its own error line
+and exits at once (workflows/parallel.py: errors are raised on every rank).
 """
 from __future__ import annotations
 
@@ -60,6 +63,14 @@ def _add_transient(sub: argparse._SubParsersAction) -> None:
 
 
 def _run_transient(args: argparse.Namespace) -> int:
+    """Serial: under mpirun, rank 0 runs it and the other ranks wait."""
+    from liftoff.workflows.parallel import root_only, world
+
+    root_only(world(), lambda: _transient(args))
+    return EXIT_OK
+
+
+def _transient(args: argparse.Namespace) -> None:
     from liftoff.config import load_twobody
 
     scenario = load_twobody(args.scenario, method=args.method, progress=not args.no_progress)
@@ -71,7 +82,6 @@ def _run_transient(args: argparse.Namespace) -> int:
     wall = time.perf_counter() - started
     path = Path(result.save(out / RESULTS_NAME))
     print(summary(scenario, result, path, wall))
-    return EXIT_OK
 
 
 def summary(scenario, result, path: Path, wall: float) -> str:
@@ -119,15 +129,26 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.func(args)
     except (InputError, ConvergenceError, OSError) as exc:
-        print(f"liftoff: error: {_one_line(exc)}", file=sys.stderr)
-        return EXIT_INPUT
+        return _fail(f"liftoff: error: {_one_line(exc)}", EXIT_INPUT)
     except MemoryError:
-        print("liftoff: error: out of memory: use fewer steps or outputs (keep_modal = false keeps memory "
-              "independent of the number of modes)", file=sys.stderr)
-        return EXIT_INPUT
+        return _fail("liftoff: error: out of memory: use fewer steps or outputs (keep_modal = false keeps memory "
+                     "independent of the number of modes)", EXIT_INPUT)
     except KeyboardInterrupt:
-        print("liftoff: interrupted, no results written", file=sys.stderr)
-        return 130
+        return _fail("liftoff: interrupted, no results written", 130)
+
+
+def _fail(line: str, status: int) -> int:
+    """Print the one-line error. Under mpirun every rank prints its own and leaves at once,
+    without MPI_Finalize: its barrier would wait forever for a rank that is still inside a
+    collective operation when the error is this rank's alone (mpirun then stops the others)."""
+    from liftoff.workflows.parallel import launched_size
+
+    print(line, file=sys.stderr)
+    if launched_size() > 1:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(status)
+    return status
 
 
 if __name__ == "__main__":

@@ -5,7 +5,8 @@ The builder parameters arrive checked, as the builders' own dataclasses
 PadParams, all on the scenario's StackLayout, so that interface points coincide);
 ``[model.materials.<volume>]`` replaces the material of a physical volume group. The unit
 thermal load (alpha * delta_T = 1) of every volume group is returned for the cryo preload
-(section 4.3).
+(section 4.3). Under mpirun, rank 0 meshes with gmsh and the dolfinx model is built over
+all ranks (fem.build_model on MPI.COMM_WORLD); the Component is gathered on every rank.
 """
 from __future__ import annotations
 
@@ -43,7 +44,9 @@ def build_component(comp: ComponentModel, model: ModelConfig, workdir: Path):
                          "`make setup` or use source = 'stick'") from None
     from liftoff.reduction import Component
 
-    geo = geometry(comp, Path(workdir))
+    from .parallel import on_root, world
+
+    geo = on_root(world(), lambda: geometry(comp, Path(workdir)))   # gmsh on rank 0; its .msh is read there
     for vol, mat in model.materials.items():
         if vol in geo.volumes:
             geo.volumes[vol] = mat

@@ -90,11 +90,12 @@ def component_stage(model: ModelConfig, name: str, cache: StageCache, workdir: P
     thermal_path = cache.path("thermal", key, ".npz")
 
     def build():
-        comp_, thermal = build_component(model, comp, workdir)
-        if thermal_path is not None:
-            thermal_path.parent.mkdir(parents=True, exist_ok=True)
-            save_arrays({f"vol_{k}": v for k, v in thermal.items()}, thermal_path)
-        return comp_, thermal
+        return build_component(model, comp, workdir)
+
+    def save(out, p):
+        save_component(out[0], p)
+        thermal_path.parent.mkdir(parents=True, exist_ok=True)
+        save_arrays({f"vol_{k}": v for k, v in out[1].items()}, thermal_path)
 
     def load(p):
         comp_ = load_component(p)
@@ -103,17 +104,32 @@ def component_stage(model: ModelConfig, name: str, cache: StageCache, workdir: P
         th = {k[4:]: v for k, v in load_arrays(thermal_path).items()}
         return comp_, th
 
-    out, thermal = cache.get_or_build(model.source, key, ".npz", build,
-                                      lambda out, p: save_component(out[0], p), load, label=name)
+    out, thermal = cache.get_or_build(model.source, key, ".npz", build, save, load, label=name)
     return out, thermal, key
 
 
+def cb_solver(model: ModelConfig):
+    """(solver, its code modules, its name) of the Craig-Bampton stage: PETSc/MUMPS/SLEPc,
+    distributed over the run's processes, for FE components (fem.petsc_solver); the
+    default numpy/scipy solver for the stick model's small matrices."""
+    if model.source == "stick":
+        return None, (), "scipy"
+    from liftoff.fem import petsc_solver
+
+    return petsc_solver(), ("liftoff.fem.petsc_cb", "liftoff.fem.petsc_backend"), "petsc"
+
+
 def cb_stage(model: ModelConfig, name: str, comp: Component, comp_key: str, cache: StageCache) -> tuple[CBModel, str]:
+    """The CB model of a component (from the cache, or reduced with :func:`cb_solver`: a
+    cached Component is enough, the PETSc matrices are built from it)."""
     sel = model.components[name]
-    params = {"boundary": points_labels(boundary_points(comp)), "n_modes": sel.n_modes, "f_max": sel.f_max}
-    key = stage_key("cb", params, ("liftoff.reduction", "liftoff.core"), (comp_key,))
+    solver, solver_code, solver_name = cb_solver(model)
+    params = {"boundary": points_labels(boundary_points(comp)), "n_modes": sel.n_modes, "f_max": sel.f_max,
+              "solver": solver_name}
+    key = stage_key("cb", params, ("liftoff.reduction", "liftoff.core", *solver_code), (comp_key,))
     cb = cache.get_or_build("cb", key, ".npz",
-                            lambda: craig_bampton(comp, params["boundary"], params["n_modes"], params["f_max"]),
+                            lambda: craig_bampton(comp, params["boundary"], params["n_modes"], params["f_max"],
+                                                  solver=solver),
                             lambda out, p: out.save(p, recovery=True), load_cb, label=name)
     return cb, key
 
@@ -146,7 +162,8 @@ def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, wh
     comps, cbs, ckeys, thermal = {}, {}, {}, {}
     names = list(VEHICLE) + ["pad"]
     with tempfile.TemporaryDirectory(prefix="liftoff-geom-") as work:
-        bar = tqdm(names, desc="model stages", unit="component", disable=not progress, leave=False)
+        bar = tqdm(names, desc="model stages", unit="component", disable=not progress or cache.comm.rank != 0,
+                   leave=False)
         for name in bar:
             bar.set_postfix_str(name)
             comps[name], thermal[name], k = component_stage(model, name, cache, Path(work))
