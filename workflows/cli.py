@@ -143,11 +143,12 @@ def _fail(line: str, status: int) -> int:
     collective operation when the error is this rank's alone (mpirun then stops the others)."""
     from liftoff.workflows.parallel import launched_size
 
-    print(line, file=sys.stderr)
     if launched_size() > 1:
         sys.stdout.flush()
         sys.stderr.flush()
+        os.write(2, (line + "\n").encode())    # one write: lines of several ranks do not interleave
         os._exit(status)
+    print(line, file=sys.stderr)
     return status
 
 
