@@ -113,13 +113,17 @@ def interior_matrices(comm: MPI.Comm, K: sp.csr_matrix, M: sp.csr_matrix, interi
     n_i = interior.size
     r0, r1 = row_range(comm, n_i)
     rows = interior[r0:r1]
-    Kr, Mr = sp.csr_matrix(K)[rows], sp.csr_matrix(M)[rows]
-    Kib_loc = np.asarray(Kr[:, boundary].todense())
-    Kii = pb.csr_matrix(comm, rows.size, rows.size, n_i, Kr[:, interior])
-    Mii = pb.csr_matrix(comm, rows.size, rows.size, n_i, Mr[:, interior])
-    for A in (Kii, Mii):
-        A.setOption(PETSc.Mat.Option.SYMMETRIC, True)
-    return Kii, Mii, Kib_loc
+    mats, Kib_loc = [], None
+    for A in (K, M):          # one matrix at a time: its local copies live only until PETSc has its own
+        A_rows = sp.csr_matrix(A)[rows]
+        if Kib_loc is None:
+            Kib_loc = np.asarray(A_rows[:, boundary].todense())
+        A_ii = A_rows[:, interior]
+        del A_rows
+        mats.append(pb.csr_matrix(comm, rows.size, rows.size, n_i, A_ii))
+        del A_ii
+        mats[-1].setOption(PETSc.Mat.Option.SYMMETRIC, True)
+    return mats[0], mats[1], Kib_loc
 
 
 @contextmanager
