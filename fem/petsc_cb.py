@@ -74,12 +74,12 @@ class PetscSolver:
                 _set_up(eps, who)
                 timings["factor_s"] = time.perf_counter() - t0
                 t0 = time.perf_counter()
+                lam, phi_loc = eigenpairs(eps, Mii, want, who) if want else (np.zeros(0), np.zeros((Kib_loc.shape[0], 0)))
+                timings["eigensolve_s"] = time.perf_counter() - t0
+                t0 = time.perf_counter()
                 psi_loc = -_factor_solve(eps.getST().getKSP(), Kib_loc, n_i)
                 timings["constraint_solve_s"] = time.perf_counter() - t0
                 _check_finite(self.comm, psi_loc, who)
-                t0 = time.perf_counter()
-                lam, phi_loc = eigenpairs(eps, Mii, want, who) if want else (np.zeros(0), np.zeros((psi_loc.shape[0], 0)))
-                timings["eigensolve_s"] = time.perf_counter() - t0
         finally:
             Kii.destroy()
             Mii.destroy()
