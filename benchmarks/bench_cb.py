@@ -94,10 +94,17 @@ def _gather_sum(comm, x: float) -> float:
 
 
 def _build(h: float, work: Path) -> Path:
-    """The core stage at mesh size h as a saved Component (built once)."""
+    """The core stage at mesh size h as a saved Component (built once, in a child process:
+    the driver stays small while the measurements run)."""
     path = work / f"core_h{h:g}.npz"
-    if path.is_file():
-        return path
+    if not path.is_file():
+        subprocess.run([sys.executable, str(HERE), "--child", "build", "--component", str(path),
+                        "--mesh-size", str(h)], check=True, env=dict(os.environ, PYVISTA_OFF_SCREEN="true"))
+    return path
+
+
+def _build_child(h: float, path: Path) -> None:
+    work = path.parent
     os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
     import pyvista  # noqa: F401  (before dolfinx)
 
@@ -113,7 +120,6 @@ def _build(h: float, work: Path) -> Path:
     comp.save(path)
     print(f"core stage h = {h:g} m: {comp.n_dof} DOFs; gmsh {t1 - t0:.0f} s, FE model {time.perf_counter() - t1:.0f} s",
           flush=True)
-    return path
 
 
 # ------------------------------------------------------------------ the driver
@@ -144,13 +150,14 @@ def best(runs: list[dict]) -> dict:
     return out
 
 
-def bench(sizes, ranks, modes, repeat, work: Path, scipy_too: bool, timeout: float) -> list[dict]:
+def bench(sizes, ranks, modes, repeat, work: Path, scipy_too: bool, timeout: float,
+          what=("eig", "cb")) -> list[dict]:
     rows = []
     for h in sizes:
         path = _build(h, work)
         for r in ranks:
             row = {"h": h, "ranks": r}
-            for mode in ("eig", "cb") + (("scipy",) if scipy_too and r == 1 else ()):
+            for mode in tuple(what) + (("scipy",) if scipy_too and r == 1 else ()):
                 row[mode] = best([measure(mode, path, modes, r, timeout) for _ in range(repeat)])
             rows.append(row)
             print(_row_text(row), flush=True)
@@ -158,7 +165,13 @@ def bench(sizes, ranks, modes, repeat, work: Path, scipy_too: bool, timeout: flo
 
 
 def _row_text(row: dict) -> str:
-    e, c = row["eig"], row["cb"]
+    e, c = row.get("eig", {"error": "not measured"}), row.get("cb", {"error": "not measured"})
+    if "error" in c:
+        return f"| h = {row['h']:g} m | {row['ranks']} | failed: {c.get('error')} |"
+    if "error" in e:
+        return (f"| {c['n_dof']:,} | {row['ranks']} | {c['wall_s']:.1f} | {c.get('factor_s', 0):.1f} | "
+                f"{c.get('constraint_solve_s', 0):.2f} | {c.get('eigensolve_s', 0):.1f} | - | - | "
+                f"{c['peak_rss_gb']:.2f} | - | - | {c['loaded_rss_gb']:.2f} |")
     if "error" in e or "error" in c:
         return f"| h = {row['h']:g} m | {row['ranks']} | failed: {e.get('error') or c.get('error')} |"
     extra = ""
@@ -182,18 +195,23 @@ def main(argv=None) -> None:
     ap.add_argument("--modes", type=int, default=40)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--scipy", action="store_true", help="also the scipy CB (1 rank)")
+    ap.add_argument("--measure", nargs="+", choices=("eig", "cb"), default=("eig", "cb"),
+                    help="what to measure (default both)")
     ap.add_argument("--work", type=Path, default=Path("out/bench_cb"))
     ap.add_argument("--timeout", type=float, default=3600.0, help="per measurement (s)")
-    ap.add_argument("--child", choices=("eig", "cb", "scipy"), help=argparse.SUPPRESS)
+    ap.add_argument("--child", choices=("eig", "cb", "scipy", "build"), help=argparse.SUPPRESS)
     ap.add_argument("--component", help=argparse.SUPPRESS)
+    ap.add_argument("--mesh-size", type=float, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
+    if args.child == "build":
+        return _build_child(args.mesh_size, Path(args.component))
     if args.child:
         return _child(args.child, args.component, args.modes)
     args.work.mkdir(parents=True, exist_ok=True)
     load0 = os.getloadavg()[0]
     print(f"load average at start {load0:.1f}; {args.modes} fixed-interface modes; best of {args.repeat}\n{HEADER}",
           flush=True)
-    rows = bench(args.sizes, args.ranks, args.modes, args.repeat, args.work, args.scipy, args.timeout)
+    rows = bench(args.sizes, args.ranks, args.modes, args.repeat, args.work, args.scipy, args.timeout, args.measure)
     result = {"load_average": [load0, os.getloadavg()[0]], "modes": args.modes, "repeat": args.repeat, "rows": rows}
     out = args.work / "bench_cb.json"
     old = json.loads(out.read_text()) if out.is_file() else {"runs": []}
