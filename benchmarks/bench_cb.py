@@ -16,7 +16,8 @@ ranks), which loads the component and does one of:
 
 Peak memory is the peak resident set size (VmHWM, reset once the component is loaded, so
 the component counts but not the transient copies made while reading it) of each rank,
-summed over ranks. Wall times are the minimum over ``--repeat`` runs. Writes ``WORK/bench_cb.json``
+summed over ranks. Wall times (and the CPU times of the ranks, summed, which other jobs on a shared
+machine disturb less) are the minimum over ``--repeat`` runs. Writes ``WORK/bench_cb.json``
 and prints a Markdown table.
 
     .venv/bin/python benchmarks/bench_cb.py                    # 26 k, 113 k, 250 k DOFs, 1 and 2 ranks
@@ -51,7 +52,7 @@ def _child(mode: str, path: str, n_modes: int) -> None:
     out = {"n_dof": comp.n_dof, "n_boundary": len(bl), "loaded_rss_gb": _gather_sum(comm, _rss("VmRSS"))}
     _reset_peak()          # the peak from here on: the component stays resident, its reading is not counted
     comm.barrier()
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     if mode == "eig":
         from liftoff.fem.petsc_cb import eigensolve_alone, interior_matrices
 
@@ -59,7 +60,7 @@ def _child(mode: str, path: str, n_modes: int) -> None:
         i = np.setdiff1d(np.arange(comp.n_dof), b)
         Kii, Mii, _ = interior_matrices(comm, comp.K, comp.M, i, b)
         comm.barrier()
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         lam, timings = eigensolve_alone(Kii, Mii, n_modes)
         out.update(timings, freq_hz=(np.sqrt(lam) / (2 * np.pi)).tolist())
     elif mode in ("cb", "scipy"):
@@ -67,8 +68,10 @@ def _child(mode: str, path: str, n_modes: int) -> None:
 
         cb = craig_bampton(comp, bl, n_modes=n_modes, solver=petsc_solver() if mode == "cb" else None)
         out.update(cb.timings, freq_hz=cb.fixed_freq_hz.tolist())
+    cpu = time.process_time() - c0        # CPU time of this rank (robust to other jobs on the machine)
     comm.barrier()
     out["wall_s"] = time.perf_counter() - t0
+    out["cpu_s"] = _gather_sum(comm, cpu)
     peak = comm.gather(_rss("VmHWM"), root=0)
     maxrss = _gather_sum(comm, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024 / 1e9)
     if comm.rank == 0:
