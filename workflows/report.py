@@ -143,6 +143,73 @@ def _err(value) -> str:
     return "-" if value is None or value != value else f"{abs(value):.2e}"
 
 
+# ------------------------------------------------------------------ twang
+def release_time(cp) -> float | None:
+    """The first hold-down release (booster ignition in the lift-off scenario), None if none."""
+    rel = [p.release_time for p in cp.case.posts if np.isfinite(p.release_time)]
+    return min(rel) if rel else None
+
+
+@dataclass
+class Twang:
+    """Lateral (x, y) motion of the recovery's ``top`` point (the tank tip), m.
+
+    ``pad``: in the pad frame (the pad's foundation is the ground), from its position at t0
+    (the static state on the pad before main-engine start): the twang as engineers quote
+    it. ``rel_cg``: the top's lateral displacement less the c.g.'s (eq. 23), as before.
+    Peaks are taken before the first hold-down release ``t_ign`` (the whole run without
+    one); ``at_ign``: the pad-frame twang at ``t_ign``, interpolated in time."""
+
+    point: str
+    time: np.ndarray
+    pad: np.ndarray
+    rel_cg: np.ndarray
+    t_ign: float | None
+
+    def _peak(self, xy: np.ndarray) -> int:
+        n = self.time.size if self.t_ign is None else max(int(np.searchsorted(self.time, self.t_ign, "right")), 1)
+        return int(np.argmax(np.hypot(xy[:n, 0], xy[:n, 1])))
+
+    @property
+    def i_peak(self) -> int:
+        return self._peak(self.pad)
+
+    @property
+    def i_peak_cg(self) -> int:
+        return self._peak(self.rel_cg)
+
+    @property
+    def at_ign(self) -> np.ndarray | None:
+        if self.t_ign is None or not self.time[0] <= self.t_ign <= self.time[-1]:
+            return None
+        return np.array([np.interp(self.t_ign, self.time, self.pad[:, j]) for j in range(2)])
+
+    def line(self) -> str:
+        """One summary line: pad-frame peak and value at ignition, relative-to-c.g. peak."""
+        i, k = self.i_peak, self.i_peak_cg
+        peak = float(np.hypot(*self.pad[i]))
+        out = (f"twang at {self.point} (pad frame, from t0): peak {peak:.3f} m at t = {self.time[i]:.2f} s "
+               f"(x {self.pad[i, 0]:+.3f}, y {self.pad[i, 1]:+.3f} m)")
+        ign = self.at_ign
+        if ign is not None:
+            v = float(np.hypot(*ign))
+            out += (f"; at booster ignition (t = {self.t_ign:.2f} s) {v:.3f} m"
+                    + (f" = {100 * v / peak:.0f} % of the peak" if peak > 0 else ""))
+        return out + f"; relative to the c.g.: peak {float(np.hypot(*self.rel_cg[k])):.3f} m at t = {self.time[k]:.2f} s"
+
+
+def twang(result, cp) -> Twang | None:
+    """The twang of a lift-off case (None without a ``[recovery] top`` point)."""
+    top = cp.case.recovery.top
+    if not top:
+        return None
+    labels = result.output_labels["a"]
+    cg_item = result.items("cg_motion")[0]
+    cg = result.recovered[cg_item.name][:, _translations(cg_item)[:2]]
+    u = result.displacement["a"][:, [labels.index(lab) for lab in point_labels(top, TRANSLATIONS[:2])]]
+    return Twang(top, result.time, u - u[0], u - cg, release_time(cp))
+
+
 # ------------------------------------------------------------------ plots
 def plots(result, cp, out: Path, case: str) -> list[Path]:
     """PNG time histories: post forces, attach forces, c.g./top motion, payload acceleration."""
@@ -200,21 +267,27 @@ def plots(result, cp, out: Path, case: str) -> list[Path]:
     for j in cgc:
         axs[0].plot(t, cg[:, j], lw=0.9, label=f"c.g. {cg_item.labels[j]} ({cg_item.units[j]})")
     labels = result.output_labels["a"]
-    top = cp.case.recovery.top
-    if top:
-        for j, lab in zip(cgc[:2], point_labels(top, TRANSLATIONS[:2])):
-            col = labels.index(lab)
-            axs[1].plot(t, result.displacement["a"][:, col] - cg[:, j], lw=0.9,
-                        label=f"{lab} rel. to c.g. ({cg_item.units[j]})")
+    tw = twang(result, cp)
+    if tw is not None:
+        on = slice(None) if tw.t_ign is None else t <= tw.t_ign   # on the pad (then it flies)
+        for j, c in enumerate("xy"):
+            axs[1].plot(t[on], tw.pad[on, j], lw=1.2, label=f"{tw.point} {c}, pad frame (from t0; to release)")
+        for j, c in enumerate("xy"):
+            axs[1].plot(t, tw.rel_cg[:, j], lw=0.8, ls=":", label=f"{tw.point} {c} rel. to c.g.")
+        i = tw.i_peak
+        axs[1].plot(t[i], tw.pad[i, 1], "kv", ms=6, label=f"peak {np.hypot(*tw.pad[i]):.2f} m")
+        if tw.at_ign is not None:
+            axs[1].plot(tw.t_ign, tw.at_ign[1], "ko", mfc="none", ms=6,
+                        label=f"at ignition {np.hypot(*tw.at_ign):.2f} m")
     if result.rigid_body_motion_a is not None:
         for j in range(3):
             axs[2].plot(t, np.degrees(result.rigid_body_motion_a[:, 3 + j]), lw=0.9, label=f"R{'xyz'[j]}")
         axs[2].legend(fontsize=7)
     axs[0].set_ylabel("c.g. motion (m)")
-    axs[1].set_ylabel("top-of-stack lateral (m)")
+    axs[1].set_ylabel("tank-tip lateral (m)")
     axs[2].set_ylabel("attitude, rigid-body\nrotation (deg)")
     axs[1].legend(fontsize=7)
-    finish(fig, list(axs), "motion", "C.g. motion, top-of-stack deflection, attitude")
+    finish(fig, list(axs), "motion", "C.g. motion, tank-tip twang, attitude")
 
     pay = cp.case.recovery.payload
     if pay:
@@ -242,16 +315,9 @@ def snapshot_times(result, cp) -> dict[str, int]:
     i_rel = int(np.searchsorted(t, t_rel))
     i_rel = min(i_rel, t.size - 1)
     out = {"release": i_rel}
-    top = cp.case.recovery.top
-    if top:
-        labels = result.output_labels["a"]
-        cg_item = result.items("cg_motion")[0]
-        cg, (cx, cy) = result.recovered[cg_item.name], _translations(cg_item)[:2]
-        lx, ly = point_labels(top, TRANSLATIONS[:2])
-        dx = result.displacement["a"][:, labels.index(lx)] - cg[:, cx]
-        dy = result.displacement["a"][:, labels.index(ly)] - cg[:, cy]
-        lat = np.hypot(dx, dy)[: max(i_rel, 1)]
-        out["max_twang"] = int(np.argmax(lat))
+    tw = twang(result, cp)
+    if tw is not None:
+        out["max_twang"] = int(np.argmax(np.hypot(*tw.rel_cg[: max(i_rel, 1)].T)))
     # the largest load event: the biggest change of a post axial force or of an attach force
     # magnitude from its static preload at t0 (the preloads themselves peak at t0)
     best, idx = -1.0, 0
@@ -325,6 +391,9 @@ def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[di
         if est:
             lines.append(f"    peak post forces: estimated error (Richardson, second run at h/2) at most "
                          f"{est['worst_relative']:.2g} of the largest post force")
+        tw = twang(res, cp)
+        if tw is not None:
+            lines.append(f"    {tw.line()}")
         lines.append(f"    {'post':<10}{'release (s)':>12}{'separation (s)':>16}{'recontacts':>12}"
                      f"{'peak compr. (MN)':>18}{'peak tension (MN)':>19}")
         for c in res.contact_summary():

@@ -3,6 +3,7 @@ stage cache (a loads-only change skips the model stages; a model change does not
 `liftoff run` command line (bad input: exit 2, one line, naming the key)."""
 import csv
 import importlib.util
+import re
 import tomllib
 from dataclasses import replace
 
@@ -85,6 +86,40 @@ def _check_outputs(out, cases, all_cases=None):
     t1 = (out / "table1.txt").read_text()
     assert "gravity + softening + cryo" in t1
     assert "wall time per stage" in (out / "summary.txt").read_text()
+    _check_twang(out, cases)
+
+
+TWANG = re.compile(r"twang at stack_top \(pad frame, from t0\): peak ([0-9.]+) m at t = ([0-9.]+) s .*"
+                   r"at booster ignition \(t = ([0-9.]+) s\) ([0-9.]+) m.*relative to the c\.g\.: peak ([0-9.]+) m")
+
+
+def _check_twang(out, cases):
+    """The summary's twang (issue 15) against the results file: the tank tip's lateral
+    displacement from t0 (pad frame) and less the c.g.'s, peaks before the first release."""
+    found, case = {}, None
+    for line in (out / "summary.txt").read_text().splitlines():
+        head = re.match(r"  case '(.+)':", line)
+        case = head.group(1) if head else case
+        if TWANG.search(line):
+            found[case] = TWANG.search(line)
+    for c in cases:
+        m = found[c]
+        res = load_result(out / f"results_{c}.h5")
+        lab = list(res.output_labels["a"])
+        u = res.displacement["a"][:, [lab.index("stack_top:Tx"), lab.index("stack_top:Ty")]]
+        u = u - u[0]
+        t_rel = float(np.min(res.release_time))
+        before = res.time <= t_rel
+        mag = np.hypot(u[:, 0], u[:, 1])
+        i = int(np.argmax(np.where(before, mag, -1.0)))
+        assert float(m.group(1)) == pytest.approx(mag[i], abs=6e-4)         # printed to 1 mm
+        assert float(m.group(2)) == pytest.approx(res.time[i], abs=6e-3)
+        assert float(m.group(3)) == pytest.approx(t_rel, abs=6e-3)
+        at = np.hypot(*[np.interp(t_rel, res.time, u[:, j]) for j in range(2)])
+        assert float(m.group(4)) == pytest.approx(at, abs=6e-4)
+        cg = res.recovered["cg_motion"][:, :2]
+        rel = np.hypot(*(res.displacement["a"][:, [lab.index("stack_top:Tx"), lab.index("stack_top:Ty")]] - cg).T)
+        assert float(m.group(5)) == pytest.approx(rel[before].max(), abs=6e-4)
 
 
 def test_stick_scenario_end_to_end_and_cache(tmp_path, capsys):
