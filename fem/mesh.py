@@ -147,7 +147,7 @@ def _read_rank0(path: str, shells: tuple[str, ...], liquids: tuple[str, ...] = (
             raise InputError(f"mesh {path!r}: liquid {missing[0]!r} is not a physical volume "
                              f"(has: {', '.join(sorted(vol_names)) or 'none'})")
         vols = [g for g in groups if g[0] == 3 and g[2] not in liquids]
-        if not vols and not shells:
+        if not vols and not shells and not liquids:
             raise InputError(f"mesh {path!r} has no volume (3-D) physical group and no shell surface: "
                              "nothing to model")
         parts = {"solid": None, "shell": None, "liquid": None}

@@ -1,0 +1,392 @@
+"""Hydroelastic liquid: an incompressible, inviscid liquid in a tank as an added-mass
+operator on the wall's DOFs, applied by one sparse fluid solve (issue 10; DESIGN.md).
+
+Small motion about rest, p the liquid's perturbation pressure, n the liquid's outward
+normal, u the wall displacement on the wetted surface (Morand & Ohayon, Fluid-Structure
+Interaction, Wiley 1995, ch. 5, the "incompressible liquid, p = 0 free surface" limit):
+
+    lap p = 0 in the liquid,   p = 0 on the free surface,   dp/dn = -rho u''.n on the wall   (1)
+
+Galerkin with P_k pressure shape functions N_i (k = 1 or 2, on the liquid's tetrahedra)
+and the wall's translations interpolated in a P_c vector space psi_j on the same mesh
+(the *coupling space*; its nodes on the wetted faces are nodes of the structure):
+
+    H p = -rho G u'',   H_ij = int grad N_i . grad N_j dV,   G_ij = int_wet N_i psi_j.n dS   (2)
+
+(rows and columns of the free-surface pressure DOFs removed). The pressure load on the wall
+is f = G^T p, so the structure sees the **added mass**
+
+    M_a = rho G^T H^-1 G,     (M + M_a) x'' + K x = f_ext                                 (3)
+
+symmetric positive semi-definite. It is never formed: M_a x is one solve with the MUMPS
+Cholesky factor of H (factored once). A set of vectors X is one multi-right-hand-side
+solve (X^T M_a X = rho (G X)^T H^-1 (G X)), so a Craig-Bampton mass Psi^T (M + M_a) Psi
+costs one solve. On a coarse mesh the discrete M_a is below the exact one (the Galerkin
+pressure minimises the liquid's energy functional over a subspace).
+
+Recovery rows (linear in the model's DOFs; the transient multiplies them by q, q''):
+
+* pressure at a liquid node x_k (the tank bottom), from the accelerations:
+  p_k = e_k^T p = -rho (H^-1 e_k)^T G x''  (one solve per point, H symmetric);       (4)
+  a uniform apparent acceleration a (gravity: a = -g) of the tank is the rigid translation
+  field x'' = RB_t a in (4); for a flat free surface it gives the hydrostatic head
+  rho |a| (z_free - z_k) exactly (p linear in z is in every P_k space);
+* volume change of a closed cavity (the ullage's, the liquid being incompressible):
+  dV = int_cavity u . n_c dS, n_c out of the cavity (away from ``center``)             (5)
+  summed over the cavity wall's flat triangles with the rule exact for P1 (vertices) or
+  P2 (edge midpoints) displacements.
+
+The gravity free surface (slosh) and compressibility are not in (1): p = 0 is the
+high-frequency limit, right for the wall's bulge modes (several Hz) above the slosh modes
+(below 1 Hz for metre-size tanks). Serial (one process) only. Units SI (m, kg, Pa, m^3).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+from petsc4py import PETSc
+
+from liftoff.core.errors import InputError
+
+from . import petsc_backend as pb
+
+
+@dataclass
+class LiquidOperator:
+    """The liquid of one compartment, factored (module docstring, eq. 2-4).
+
+    ``G`` maps the coupling space's wetted DOFs (``c_coords``, ``c_comp``) to the kept
+    pressure DOFs; after :meth:`couple`, ``Gm`` maps the structure's DOFs."""
+
+    name: str
+    density: float                 # kg/m^3
+    G: sp.csr_matrix               # (n_p, n_c) m^2
+    H: PETSc.Mat                   # (n_p, n_p) kept pressure DOFs
+    ksp: PETSc.KSP                 # MUMPS Cholesky factor of H
+    p_coords: np.ndarray           # (n_p, 3) m
+    c_coords: np.ndarray           # (n_c, 3) m: coupling DOF positions (on the wetted faces)
+    c_comp: np.ndarray             # (n_c,) 0, 1, 2 = x, y, z
+    volume: float                  # m^3, of the meshed liquid
+    centroid: np.ndarray           # (3,) m, of the meshed liquid
+    points: dict = field(default_factory=dict)   # pressure point name -> kept pressure DOF
+    Gm: sp.csr_matrix | None = None              # (n_p, n_dof) after couple()
+
+    @property
+    def mass(self) -> float:
+        return self.density * self.volume
+
+    @property
+    def n_p(self) -> int:
+        return self.G.shape[0]
+
+    # ---- solves ------------------------------------------------------------------------
+    def solve(self, B: np.ndarray) -> np.ndarray:
+        """H^-1 B for B (n_p,) or (n_p, k): one (multi-right-hand-side) solve of the factor."""
+        B = np.asarray(B, float)
+        one = B.ndim == 1
+        B2 = B.reshape(self.n_p, -1)
+        if B2.shape[1] == 0:
+            return B2.copy()
+        n = self.n_p
+        Bp = PETSc.Mat().createDense((n, B2.shape[1]), array=np.asfortranarray(B2).copy(), comm=PETSc.COMM_SELF)
+        Xp = Bp.duplicate()
+        try:
+            self.ksp.getPC().getFactorMatrix().matSolve(Bp, Xp)
+            X = np.array(Xp.getDenseArray(), copy=True)
+        finally:
+            Bp.destroy()
+            Xp.destroy()
+        return X[:, 0] if one else X
+
+    def _g(self, coupled: bool) -> sp.csr_matrix:
+        if not coupled:
+            return self.G
+        if self.Gm is None:
+            raise RuntimeError(f"liquid {self.name!r}: couple() it to a structure first")
+        return self.Gm
+
+    def apply(self, X: np.ndarray, coupled: bool = True) -> np.ndarray:
+        """M_a X (eq. 3) for X (n, ) or (n, k) over the structure's DOFs (``coupled``) or the
+        coupling space's columns: one solve."""
+        G = self._g(coupled)
+        return self.density * (G.T @ self.solve(G @ np.asarray(X, float)))
+
+    def project(self, X: np.ndarray, coupled: bool = True) -> np.ndarray:
+        """X^T M_a X (k x k), one multi-right-hand-side solve."""
+        GX = self._g(coupled) @ np.asarray(X, float).reshape(self._g(coupled).shape[1], -1)
+        Y = self.solve(GX)
+        out = self.density * (GX.T @ Y)
+        return 0.5 * (out + out.T)
+
+    def pressure_rows(self, names=None) -> np.ndarray:
+        """(n_points, n_dof) rows r_k with p_k = r_k . x'' (eq. 4, Pa per m/s^2)."""
+        names = list(self.points) if names is None else list(names)
+        E = np.zeros((self.n_p, len(names)))
+        for j, nm in enumerate(names):
+            if nm not in self.points:
+                raise InputError(f"liquid {self.name!r} has no pressure point {nm!r} "
+                                 f"(has: {', '.join(self.points) or 'none'})")
+            E[self.points[nm], j] = 1.0
+        return -self.density * (self._g(True).T @ self.solve(E)).T
+
+    # ---- coupling to a structure ----------------------------------------------------------
+    def couple(self, nodes: np.ndarray, T: sp.csr_matrix, tol: float | None = None) -> sp.csr_matrix:
+        """Tie the coupling DOFs to the structure: ``nodes`` (n_nodes, 3) and the field map
+        ``T`` (3 n_nodes x n_dof, nodal translations = T x). Every wetted coupling node must
+        be a structure node (the liquid shares the wetted faces' nodes with the wall).
+        Sets and returns Gm = G C (n_p x n_dof)."""
+        from scipy.spatial import cKDTree
+
+        nodes = np.asarray(nodes, float)
+        if tol is None:
+            span = float(np.ptp(np.vstack([nodes, self.c_coords]), axis=0).max()) if nodes.size else 1.0
+            tol = 1e-7 * max(span, 1e-300)
+        dist, idx = cKDTree(nodes).query(self.c_coords)
+        bad = np.flatnonzero(dist > tol)
+        if bad.size:
+            raise InputError(f"liquid {self.name!r}: wetted node at {np.round(self.c_coords[bad[0]], 6).tolist()} m "
+                             "is not a node of the structure (the liquid must share the wetted surface's nodes "
+                             "with the wall)")
+        C = sp.csr_matrix(T)[3 * idx + self.c_comp]
+        self.Gm = sp.csr_matrix(self.G @ C)
+        self.Gm.eliminate_zeros()
+        return self.Gm
+
+    def destroy(self) -> None:
+        self.ksp.destroy()
+        self.H.destroy()
+
+
+# ---- building -----------------------------------------------------------------------------
+def _facets(tm, name: str, liquid: str, what: str) -> np.ndarray:
+    tags = tm.surface_tags.get(name)
+    if tags is None:
+        raise InputError(f"liquid {liquid!r}: {what} {name!r} is not a physical surface of mesh {tm.path!r}")
+    return np.asarray(tags.indices[tags.values == 1], np.int32)
+
+
+def _factor(H: sp.csr_matrix, name: str) -> tuple[PETSc.Mat, PETSc.KSP]:
+    """MUMPS Cholesky factor of the (SPD) kept block of H; InputError if it is singular."""
+    A = pb.csr_matrix(PETSc.COMM_SELF, H.shape[0], H.shape[0], H.shape[0], H)
+    A.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+    ksp = PETSc.KSP().create(PETSc.COMM_SELF)
+    ksp.setOperators(A)
+    pb._mumps_cholesky(ksp)
+    try:
+        ksp.setUp()
+        F = ksp.getPC().getFactorMatrix()
+        ok = F.getMumpsInfog(1) >= 0
+    except PETSc.Error:
+        ok = False
+    if not ok:
+        ksp.destroy()
+        A.destroy()
+        raise InputError(f"liquid {name!r}: the liquid's Laplacian is singular (a liquid region without a free "
+                         "surface, p = 0)")
+    return A, ksp
+
+
+def liquid_operator(tm, name: str, density: float, wetted: str, free_surface: str | None = None,
+                    dirichlet: np.ndarray | None = None, degree: int = 1, coupling_degree: int = 1,
+                    points: dict | None = None) -> LiquidOperator:
+    """Assemble and factor the liquid of ``tm`` (a fem.mesh.TaggedMesh of tetrahedra;
+    eq. 2): pressure P_``degree``, wall translations P_``coupling_degree`` on the facets of
+    the surface group ``wetted``; p = 0 on the surface group ``free_surface`` and/or at the
+    pressure DOFs ``dirichlet`` (indices into the P_k space, e.g. a symmetry axis);
+    ``points``: {name: (x, y, z)} pressure recovery points, each at a pressure DOF."""
+    import ufl
+    from dolfinx import fem
+    from scipy.spatial import cKDTree
+
+    if tm.mesh.comm.size > 1:
+        raise InputError(f"liquid {name!r}: hydroelastic liquids run on one process (got {tm.mesh.comm.size})")
+    if not (np.isfinite(density) and density > 0):
+        raise InputError(f"liquid {name!r}: density {density!r} kg/m^3 must be > 0")
+    if degree not in (1, 2) or coupling_degree not in (1, 2):
+        raise InputError(f"liquid {name!r}: degrees must be 1 or 2 (got {degree}, {coupling_degree})")
+    mesh = tm.mesh
+    wet = _facets(tm, wetted, name, "wetted surface")
+    if mesh.comm.allreduce(wet.size) == 0:
+        raise InputError(f"liquid {name!r} does not touch the wall: its wetted surface {wetted!r} has no faces")
+    Q = fem.FunctionSpace(mesh, ("CG", degree))
+    p, q = ufl.TrialFunction(Q), ufl.TestFunction(Q)
+    H = pb.gather_csr(pb.assemble_matrix(ufl.inner(ufl.grad(p), ufl.grad(q)) * ufl.dx))
+    fixed = [] if dirichlet is None else [np.asarray(dirichlet, np.int64)]
+    if free_surface is not None:
+        free = _facets(tm, free_surface, name, "free surface")
+        fixed.append(np.asarray(fem.locate_dofs_topological(Q, 2, free), np.int64))
+    fixed = np.unique(np.concatenate(fixed)) if fixed else np.zeros(0, np.int64)
+    if fixed.size == 0:
+        raise InputError(f"liquid {name!r} has no free surface (p = 0): its free surface "
+                         f"{free_surface!r} has no faces")
+    keep = np.setdiff1d(np.arange(H.shape[0]), fixed)
+    wet_tags = dolfinx_meshtags(mesh, wet)
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=wet_tags)(1)
+    Vc = fem.VectorFunctionSpace(mesh, ("CG", coupling_degree))
+    u = ufl.TrialFunction(Vc)
+    G = pb.gather_csr(pb.assemble_matrix(q * ufl.dot(u, ufl.FacetNormal(mesh)) * ds))
+    blocks = np.asarray(fem.locate_dofs_topological(Vc, 2, wet), np.int64)
+    cols = (3 * blocks[:, None] + np.arange(3)).ravel()
+    G = sp.csr_matrix(G[keep][:, cols])
+    G.eliminate_zeros()
+    Xc = Vc.tabulate_dof_coordinates()
+    Xp = Q.tabulate_dof_coordinates()[keep]
+    one = fem.Constant(mesh, 1.0)
+    x = ufl.SpatialCoordinate(mesh)
+    vol = fem.assemble_scalar(fem.form(one * ufl.dx))
+    cg = np.array([fem.assemble_scalar(fem.form(x[i] * ufl.dx)) for i in range(3)]) / vol
+    Hk, ksp = _factor(sp.csr_matrix(H[keep][:, keep]), name)
+    pts = {}
+    if points:
+        tree, scale = cKDTree(Xp), float(np.ptp(Xp, axis=0).max())
+        for nm, xyz in points.items():
+            d, i = tree.query(np.asarray(xyz, float))
+            if d > 1e-6 * scale:
+                raise InputError(f"liquid {name!r}: pressure point {nm!r} at {np.round(xyz, 6).tolist()} m is not a "
+                                 "node of the liquid mesh (or lies on its free surface, p = 0)")
+            pts[nm] = int(i)
+    return LiquidOperator(name, float(density), G, Hk, ksp, Xp, np.repeat(Xc[blocks], 3, axis=0),
+                          np.tile(np.arange(3), blocks.size), float(vol), cg, pts)
+
+
+def dolfinx_meshtags(mesh, facets: np.ndarray, value: int = 1):
+    """MeshTags over the facets (dim 2), all ``value``."""
+    from dolfinx import mesh as dmesh
+
+    f = np.unique(np.asarray(facets, np.int32))
+    return dmesh.meshtags(mesh, 2, f, np.full(f.size, value, np.int32))
+
+
+def rigid_translation(op: LiquidOperator, direction) -> np.ndarray:
+    """The coupling-space vector of a rigid translation of the wall along ``direction``."""
+    return np.asarray(direction, float)[op.c_comp]
+
+
+# ---- cavity volume (eq. 5) ------------------------------------------------------------------
+def surface_triangles(tm, name: str) -> np.ndarray:
+    """(n_tri, 3, 3) vertex coordinates (m) of the 2-D entities of surface group ``name``
+    (tet facets of a solid part, or triangles of a shell part)."""
+    from dolfinx import cpp
+
+    tags = tm.surface_tags.get(name)
+    if tags is None:
+        raise InputError(f"surface {name!r} is not a physical surface of mesh {tm.path!r}")
+    ents = np.asarray(tags.indices[tags.values == 1], np.int32)
+    mesh = tm.mesh
+    mesh.topology.create_connectivity(2, mesh.topology.dim)
+    geo = cpp.mesh.entities_to_geometry(mesh, 2, ents, False)
+    return mesh.geometry.x[np.asarray(geo)[:, :3]].reshape(-1, 3, 3)
+
+
+def cavity_volume_row(tris: np.ndarray, center, nodes: np.ndarray, T: sp.csr_matrix,
+                      what: str = "cavity") -> np.ndarray:
+    """Row r (n_dof,) with dV = r . x (eq. 5) over the flat triangles ``tris`` (n, 3, 3),
+    normals away from ``center`` (a point inside the convex cavity); nodes/T as in
+    LiquidOperator.couple. Uses the edge midpoints (exact for P2) when they are nodes, else
+    the vertices (exact for P1)."""
+    from scipy.spatial import cKDTree
+
+    tris = np.asarray(tris, float)
+    if tris.shape[0] == 0:
+        raise InputError(f"{what}: the cavity surface has no triangles")
+    a = 0.5 * np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
+    out = np.einsum("ij,ij->i", a, tris.mean(axis=1) - np.asarray(center, float)) < 0
+    a[out] *= -1.0
+    tree = cKDTree(nodes)
+    tol = 1e-7 * float(np.ptp(nodes, axis=0).max())
+    mids = 0.5 * (tris + tris[:, [1, 2, 0]])
+    dm, im = tree.query(mids.reshape(-1, 3))
+    if np.all(dm <= tol):
+        idx = im
+    else:
+        dv, idx = tree.query(tris.reshape(-1, 3))
+        if np.any(dv > tol):
+            raise InputError(f"{what}: a cavity triangle's vertex is not a node of the structure")
+    w = np.repeat(a / 3.0, 3, axis=0)                      # (3 n_tri, 3): area vector / 3 per node
+    rows = (3 * np.asarray(idx)[:, None] + np.arange(3)).ravel()
+    coef = sp.csr_matrix((w.ravel(), (np.zeros(rows.size, np.int64), rows)), shape=(1, T.shape[0]))
+    return np.asarray((coef @ T).todense()).ravel()
+
+
+# ---- M + M_a as a PETSc operator ------------------------------------------------------------------
+class _MassWithLiquid:
+    """PETSc shell context: y = M x + sum_l rho_l G_l^T H_l^-1 G_l x[dofs] (eq. 3)."""
+
+    def __init__(self, M: PETSc.Mat, ops: list, dofs: np.ndarray | None):
+        self.M, self.ops, self.dofs = M, ops, dofs
+
+    def mult(self, mat, x, y):
+        self.M.mult(x, y)
+        xa = x.getArray(readonly=True)
+        acc = np.zeros(xa.size)
+        for op in self.ops:
+            G = op.Gm if self.dofs is None else op.Gm[:, self.dofs]
+            acc += op.density * (G.T @ op.solve(G @ xa))
+        y.axpy(1.0, PETSc.Vec().createWithArray(acc, comm=PETSc.COMM_SELF))
+
+
+def mass_with_liquid(M: PETSc.Mat, ops: list, dofs: np.ndarray | None = None) -> PETSc.Mat:
+    """M + sum M_a (eq. 3) as a PETSc shell matrix (serial); ``dofs``: the structure DOFs
+    that M's rows are (e.g. the interior DOFs of a Craig-Bampton component), None = all."""
+    n = M.getSize()[0]
+    ctx = _MassWithLiquid(M, list(ops), None if dofs is None else np.asarray(dofs, np.int64))
+    A = PETSc.Mat().createPython(((n, n), (n, n)), ctx, comm=PETSc.COMM_SELF)
+    A.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+    A.setUp()
+    return A
+
+
+def wet_eigensolve(K: PETSc.Mat, M: PETSc.Mat, ops: list, n_modes: int, dofs: np.ndarray | None = None,
+                   tol: float = 1e-10, max_it: int = 500, what: str = "model") -> tuple[np.ndarray, np.ndarray]:
+    """The ``n_modes`` lowest eigenpairs of K phi = lambda (M + M_a) phi for a K that is
+    positive definite (a clamped model or the fixed-interface block of a component):
+    SLEPc Krylov-Schur, shift-invert at sigma = 0 with a MUMPS Cholesky factor of K, the
+    mass applied as a shell operator (mass_with_liquid: one fluid solve per product).
+    Returns (lambda ascending, Phi with Phi^T (M + M_a) Phi = I), serial."""
+    from slepc4py import SLEPc
+
+    from liftoff.core.errors import ConvergenceError
+
+    B = mass_with_liquid(M, ops, dofs)
+    eps = SLEPc.EPS().create(PETSc.COMM_SELF)
+    try:
+        eps.setOperators(K, B)
+        eps.setProblemType(SLEPc.EPS.ProblemType.GHEP)
+        n = K.getSize()[0]
+        eps.setDimensions(n_modes, min(n, max(2 * n_modes + 1, n_modes + 24)), PETSc.DECIDE)
+        eps.setType(SLEPc.EPS.Type.KRYLOVSCHUR)
+        st = eps.getST()
+        st.setType(SLEPc.ST.Type.SINVERT)
+        st.setShift(0.0)
+        st.setMatMode(SLEPc.ST.MatMode.INPLACE)
+        pb._mumps_cholesky(st.getKSP())
+        eps.setTarget(0.0)
+        eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
+        eps.setTolerances(tol, max_it)
+        eps.setPurify(False)
+        try:
+            eps.solve()
+        except PETSc.Error as exc:
+            raise InputError(f"{what}: the wet eigensolve failed to factor K (PETSc error {exc.ierr}): "
+                             "K is singular (a floating part, or a free-free model: clamp it or reduce it)") from None
+        nconv = eps.getConverged()
+        if nconv < n_modes:
+            raise ConvergenceError(f"{what}: SLEPc converged {nconv} of {n_modes} wet eigenpairs")
+        v, Bv = K.createVecRight(), K.createVecRight()
+        lam = np.array([eps.getEigenvalue(j).real for j in range(nconv)])
+        order = np.argsort(lam, kind="stable")[:n_modes]
+        cols = []
+        for j in order:
+            eps.getEigenvector(int(j), v)
+            B.mult(v, Bv)
+            cols.append(np.array(v.getArray(readonly=True)) / np.sqrt(v.dot(Bv).real))
+        return lam[order], np.column_stack(cols)
+    finally:
+        eps.destroy()
+        B.destroy()
+
+
+__all__ = ["LiquidOperator", "liquid_operator", "rigid_translation", "surface_triangles", "cavity_volume_row",
+           "mass_with_liquid", "wet_eigensolve"]
