@@ -268,16 +268,24 @@ def rigid_translation(op: LiquidOperator, direction) -> np.ndarray:
 def surface_triangles(tm, name: str) -> np.ndarray:
     """(n_tri, 3, 3) vertex coordinates (m) of the 2-D entities of surface group ``name``
     (tet facets of a solid part, or triangles of a shell part)."""
-    from dolfinx import cpp
-
     tags = tm.surface_tags.get(name)
     if tags is None:
         raise InputError(f"surface {name!r} is not a physical surface of mesh {tm.path!r}")
     ents = np.asarray(tags.indices[tags.values == 1], np.int32)
     mesh = tm.mesh
-    mesh.topology.create_connectivity(2, mesh.topology.dim)
-    geo = cpp.mesh.entities_to_geometry(mesh, 2, ents, False)
-    return mesh.geometry.x[np.asarray(geo)[:, :3]].reshape(-1, 3, 3)
+    tdim = mesh.topology.dim
+    nv = tdim + 1                                       # vertices per (simplex) cell
+    mesh.topology.create_connectivity(tdim, 0)
+    c2v = mesh.topology.connectivity(tdim, 0).array.reshape(-1, nv)
+    geo = np.asarray(mesh.geometry.dofmap.array).reshape(c2v.shape[0], -1)[:, :nv]   # vertices first
+    v2x = np.zeros(int(c2v.max()) + 1 if c2v.size else 0, np.int64)
+    v2x[c2v.ravel()] = geo.ravel()
+    if tdim == 2:
+        verts = c2v[ents]
+    else:
+        mesh.topology.create_connectivity(2, 0)
+        verts = mesh.topology.connectivity(2, 0).array.reshape(-1, 3)[ents]
+    return mesh.geometry.x[v2x[verts]].reshape(-1, 3, 3)
 
 
 def cavity_volume_row(tris: np.ndarray, center, nodes: np.ndarray, T: sp.csr_matrix,
