@@ -13,6 +13,9 @@ and the wall's translations interpolated in a P_c vector space psi_j on the same
 
     H p = -rho G u'',   H_ij = int grad N_i . grad N_j dV,   G_ij = int_wet N_i psi_j.n dS   (2)
 
+(coded with H/rho in place of H, so that several liquids of different densities, in
+separate regions, share one operator and one factor)
+
 (rows and columns of the free-surface pressure DOFs removed). The pressure load on the wall
 is f = G^T p, so the structure sees the **added mass**
 
@@ -61,21 +64,19 @@ class LiquidOperator:
     pressure DOFs; after :meth:`couple`, ``Gm`` maps the structure's DOFs."""
 
     name: str
-    density: float                 # kg/m^3
+    density: dict                  # liquid volume group -> kg/m^3
     G: sp.csr_matrix               # (n_p, n_c) m^2
-    H: PETSc.Mat                   # (n_p, n_p) kept pressure DOFs
+    H: PETSc.Mat                   # (n_p, n_p) kept pressure DOFs of int grad N_i . grad N_j / rho dV
     ksp: PETSc.KSP                 # MUMPS Cholesky factor of H
     p_coords: np.ndarray           # (n_p, 3) m
     c_coords: np.ndarray           # (n_c, 3) m: coupling DOF positions (on the wetted faces)
     c_comp: np.ndarray             # (n_c,) 0, 1, 2 = x, y, z
     volume: float                  # m^3, of the meshed liquid
     centroid: np.ndarray           # (3,) m, of the meshed liquid
+    mass: float                    # kg, of the meshed liquid
+    volumes: dict = field(default_factory=dict)  # liquid volume group -> meshed volume m^3
     points: dict = field(default_factory=dict)   # pressure point name -> kept pressure DOF
     Gm: sp.csr_matrix | None = None              # (n_p, n_dof) after couple()
-
-    @property
-    def mass(self) -> float:
-        return self.density * self.volume
 
     @property
     def n_p(self) -> int:
@@ -111,13 +112,13 @@ class LiquidOperator:
         """M_a X (eq. 3) for X (n, ) or (n, k) over the structure's DOFs (``coupled``) or the
         coupling space's columns: one solve."""
         G = self._g(coupled)
-        return self.density * (G.T @ self.solve(G @ np.asarray(X, float)))
+        return G.T @ self.solve(G @ np.asarray(X, float))
 
     def project(self, X: np.ndarray, coupled: bool = True) -> np.ndarray:
         """X^T M_a X (k x k), one multi-right-hand-side solve."""
         GX = self._g(coupled) @ np.asarray(X, float).reshape(self._g(coupled).shape[1], -1)
         Y = self.solve(GX)
-        out = self.density * (GX.T @ Y)
+        out = GX.T @ Y
         return 0.5 * (out + out.T)
 
     def pressure_rows(self, names=None) -> np.ndarray:
@@ -129,7 +130,7 @@ class LiquidOperator:
                 raise InputError(f"liquid {self.name!r} has no pressure point {nm!r} "
                                  f"(has: {', '.join(self.points) or 'none'})")
             E[self.points[nm], j] = 1.0
-        return -self.density * (self._g(True).T @ self.solve(E)).T
+        return -(self._g(True).T @ self.solve(E)).T
 
     # ---- coupling to a structure ----------------------------------------------------------
     def couple(self, nodes: np.ndarray, T: sp.csr_matrix, tol: float | None = None) -> sp.csr_matrix:
@@ -188,55 +189,79 @@ def _factor(H: sp.csr_matrix, name: str) -> tuple[PETSc.Mat, PETSc.KSP]:
     return A, ksp
 
 
-def liquid_operator(tm, name: str, density: float, wetted: str, free_surface: str | None = None,
-                    dirichlet: np.ndarray | None = None, degree: int = 1, coupling_degree: int = 1,
-                    points: dict | None = None) -> LiquidOperator:
+def _densities(tm, name: str, density) -> tuple[dict, object]:
+    """{volume group: rho} and a DG0 function 1/rho on the liquid's cells."""
+    from dolfinx import fem
+
+    groups = dict(density) if isinstance(density, dict) else {g: density for g in tm.volume_ids}
+    for g, rho in groups.items():
+        if g not in tm.volume_ids:
+            raise InputError(f"liquid {name!r}: {g!r} is not a liquid volume of mesh {tm.path!r} "
+                             f"(has: {', '.join(tm.volume_ids) or 'none'})")
+        if isinstance(rho, bool) or not isinstance(rho, (int, float, np.floating)) or not (np.isfinite(rho) and rho > 0):
+            raise InputError(f"liquid {g if isinstance(density, dict) else name!r}: density {rho!r} kg/m^3 must be > 0")
+    missing = [g for g in tm.volume_ids if g not in groups]
+    if missing:
+        raise InputError(f"liquid {name!r}: no density for liquid volume {missing[0]!r}")
+    Q0 = fem.FunctionSpace(tm.mesh, ("DG", 0))
+    inv = fem.Function(Q0)
+    for g, gid in tm.volume_ids.items():
+        inv.x.array[Q0.dofmap.list.array[tm.cell_tags.find(gid)]] = 1.0 / float(groups[g])
+    return {g: float(r) for g, r in groups.items()}, inv
+
+
+def _union(tm, names, name: str, what: str) -> np.ndarray:
+    names = [names] if isinstance(names, str) else list(names)
+    return np.unique(np.concatenate([_facets(tm, n, name, what) for n in names] + [np.zeros(0, np.int32)]))
+
+
+def liquid_operator(tm, name: str, density, wetted, free_surface=None, dirichlet: np.ndarray | None = None,
+                    degree: int = 1, coupling_degree: int = 1, points: dict | None = None) -> LiquidOperator:
     """Assemble and factor the liquid of ``tm`` (a fem.mesh.TaggedMesh of tetrahedra;
-    eq. 2): pressure P_``degree``, wall translations P_``coupling_degree`` on the facets of
-    the surface group ``wetted``; p = 0 on the surface group ``free_surface`` and/or at the
-    pressure DOFs ``dirichlet`` (indices into the P_k space, e.g. a symmetry axis);
-    ``points``: {name: (x, y, z)} pressure recovery points, each at a pressure DOF."""
+    eq. 2, with H_ij = int grad N_i . grad N_j / rho dV so that liquids of different
+    densities share one operator: M_a = G^T H^-1 G, p = -H^-1 G x''): ``density`` (kg/m^3,
+    or {liquid volume group: density}); pressure P_``degree``, wall translations
+    P_``coupling_degree`` on the facets of the surface group(s) ``wetted``; p = 0 on the
+    surface group(s) ``free_surface`` and/or at the pressure DOFs ``dirichlet`` (indices
+    into the P_k space, e.g. a symmetry axis); ``points``: {name: (x, y, z)} pressure
+    recovery points, each at a pressure DOF."""
     import ufl
     from dolfinx import fem
     from scipy.spatial import cKDTree
 
     if tm.mesh.comm.size > 1:
         raise InputError(f"liquid {name!r}: hydroelastic liquids run on one process (got {tm.mesh.comm.size})")
-    if not (np.isfinite(density) and density > 0):
-        raise InputError(f"liquid {name!r}: density {density!r} kg/m^3 must be > 0")
     if degree not in (1, 2) or coupling_degree not in (1, 2):
         raise InputError(f"liquid {name!r}: degrees must be 1 or 2 (got {degree}, {coupling_degree})")
+    rho, inv_rho = _densities(tm, name, density)
     mesh = tm.mesh
-    wet = _facets(tm, wetted, name, "wetted surface")
-    if mesh.comm.allreduce(wet.size) == 0:
+    wet = _union(tm, wetted, name, "wetted surface")
+    if wet.size == 0:
         raise InputError(f"liquid {name!r} does not touch the wall: its wetted surface {wetted!r} has no faces")
     Q = fem.FunctionSpace(mesh, ("CG", degree))
     p, q = ufl.TrialFunction(Q), ufl.TestFunction(Q)
-    H = pb.gather_csr(pb.assemble_matrix(ufl.inner(ufl.grad(p), ufl.grad(q)) * ufl.dx))
+    H = pb.gather_csr(pb.assemble_matrix(inv_rho * ufl.inner(ufl.grad(p), ufl.grad(q)) * ufl.dx))
     fixed = [] if dirichlet is None else [np.asarray(dirichlet, np.int64)]
     if free_surface is not None:
-        free = _facets(tm, free_surface, name, "free surface")
-        fixed.append(np.asarray(fem.locate_dofs_topological(Q, 2, free), np.int64))
+        fixed.append(np.asarray(fem.locate_dofs_topological(Q, 2, _union(tm, free_surface, name, "free surface")),
+                                np.int64))
     fixed = np.unique(np.concatenate(fixed)) if fixed else np.zeros(0, np.int64)
     if fixed.size == 0:
         raise InputError(f"liquid {name!r} has no free surface (p = 0): its free surface "
                          f"{free_surface!r} has no faces")
     keep = np.setdiff1d(np.arange(H.shape[0]), fixed)
-    wet_tags = dolfinx_meshtags(mesh, wet)
-    ds = ufl.Measure("ds", domain=mesh, subdomain_data=wet_tags)(1)
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=dolfinx_meshtags(mesh, wet))(1)
     Vc = fem.VectorFunctionSpace(mesh, ("CG", coupling_degree))
-    u = ufl.TrialFunction(Vc)
-    G = pb.gather_csr(pb.assemble_matrix(q * ufl.dot(u, ufl.FacetNormal(mesh)) * ds))
+    G = pb.gather_csr(pb.assemble_matrix(q * ufl.dot(ufl.TrialFunction(Vc), ufl.FacetNormal(mesh)) * ds))
     blocks = np.asarray(fem.locate_dofs_topological(Vc, 2, wet), np.int64)
-    cols = (3 * blocks[:, None] + np.arange(3)).ravel()
-    G = sp.csr_matrix(G[keep][:, cols])
+    G = sp.csr_matrix(G[keep][:, (3 * blocks[:, None] + np.arange(3)).ravel()])
     G.eliminate_zeros()
-    Xc = Vc.tabulate_dof_coordinates()
-    Xp = Q.tabulate_dof_coordinates()[keep]
-    one = fem.Constant(mesh, 1.0)
-    x = ufl.SpatialCoordinate(mesh)
-    vol = fem.assemble_scalar(fem.form(one * ufl.dx))
-    cg = np.array([fem.assemble_scalar(fem.form(x[i] * ufl.dx)) for i in range(3)]) / vol
+    Xc, Xp = Vc.tabulate_dof_coordinates(), Q.tabulate_dof_coordinates()[keep]
+    x, dx = ufl.SpatialCoordinate(mesh), ufl.Measure("dx", domain=mesh, subdomain_data=tm.cell_tags)
+    vols = {g: fem.assemble_scalar(fem.form(fem.Constant(mesh, 1.0) * dx(gid))) for g, gid in tm.volume_ids.items()}
+    vol = sum(vols.values())
+    mass = sum(rho[g] * v for g, v in vols.items())
+    cg = np.array([fem.assemble_scalar(fem.form(x[i] / inv_rho * ufl.dx)) for i in range(3)]) / mass
     Hk, ksp = _factor(sp.csr_matrix(H[keep][:, keep]), name)
     pts = {}
     if points:
@@ -247,8 +272,8 @@ def liquid_operator(tm, name: str, density: float, wetted: str, free_surface: st
                 raise InputError(f"liquid {name!r}: pressure point {nm!r} at {np.round(xyz, 6).tolist()} m is not a "
                                  "node of the liquid mesh (or lies on its free surface, p = 0)")
             pts[nm] = int(i)
-    return LiquidOperator(name, float(density), G, Hk, ksp, Xp, np.repeat(Xc[blocks], 3, axis=0),
-                          np.tile(np.arange(3), blocks.size), float(vol), cg, pts)
+    return LiquidOperator(name, rho, G, Hk, ksp, Xp, np.repeat(Xc[blocks], 3, axis=0), np.tile(np.arange(3), blocks.size),
+                          float(vol), cg, float(mass), vols, pts)
 
 
 def dolfinx_meshtags(mesh, facets: np.ndarray, value: int = 1):
@@ -331,7 +356,7 @@ class _MassWithLiquid:
         acc = np.zeros(xa.size)
         for op in self.ops:
             G = op.Gm if self.dofs is None else op.Gm[:, self.dofs]
-            acc += op.density * (G.T @ op.solve(G @ xa))
+            acc += G.T @ op.solve(G @ xa)
         y.axpy(1.0, PETSc.Vec().createWithArray(acc, comm=PETSc.COMM_SELF))
 
 
@@ -396,5 +421,37 @@ def wet_eigensolve(K: PETSc.Mat, M: PETSc.Mat, ops: list, n_modes: int, dofs: np
         B.destroy()
 
 
+
+
+# ---- a model's liquids ----------------------------------------------------------------------------
+def model_liquid(tm, geometry, parts, nodes: np.ndarray, T: sp.csr_matrix, coupling_degree: int,
+                 degree: int = 1) -> tuple[LiquidOperator, dict]:
+    """The liquids of a ``meshes.spec.Geometry`` (its ``liquids``: one operator for all, each
+    with its density), coupled to the structure's ``nodes`` and field map ``T``; and the
+    volume-change row (eq. 5) of each liquid's cavity, {liquid group: row}, from the
+    cavity's triangles on the structural ``parts`` (solid facets or shell cells)."""
+    liquids = geometry.liquids
+    for g, liq in liquids.items():
+        if g not in tm.volume_ids:
+            raise InputError(f"liquid {g!r} is not a physical volume of mesh {tm.path!r}")
+        if liq.wetted not in tm.surface_tags or not np.any(tm.surface_tags[liq.wetted].values == 1):
+            raise InputError(f"liquid {g!r} does not touch the wall: no face of its wetted surface {liq.wetted!r} "
+                             "lies on the liquid")
+    points = {n: xyz for liq in liquids.values() for n, xyz in liq.points.items()}
+    op = liquid_operator(tm, f"{geometry.name} liquids", {g: liq.density for g, liq in liquids.items()},
+                         [liq.wetted for liq in liquids.values()], [liq.free_surface for liq in liquids.values()],
+                         None, degree, coupling_degree, points)
+    op.couple(nodes, T)
+    rows = {}
+    for g, liq in liquids.items():
+        if liq.cavity is None:
+            continue
+        tris = [surface_triangles(p.tagged, liq.cavity) for p in parts if liq.cavity in p.tagged.surface_tags]
+        if not tris:
+            raise InputError(f"liquid {g!r}: cavity surface {liq.cavity!r} is not a physical surface of the structure")
+        rows[g] = cavity_volume_row(np.vstack(tris), liq.center, nodes, T, f"liquid {g!r}")
+    return op, rows
+
+
 __all__ = ["LiquidOperator", "liquid_operator", "rigid_translation", "surface_triangles", "cavity_volume_row",
-           "mass_with_liquid", "wet_eigensolve"]
+           "mass_with_liquid", "wet_eigensolve", "model_liquid"]

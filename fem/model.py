@@ -92,6 +92,8 @@ class FEModel:
     cell_type: str                 # "tetra", "tetra10", "triangle6" (shells) or "triangle" (P1 + shells)
     T: sp.csr_matrix               # field map (3 n_nodes x n_dof): nodal translations = T x
     clamped: tuple[str, ...] = ()
+    liquid: object = None          # fem.liquid.LiquidOperator of the geometry's liquids (coupled), or None
+    liquid_volume_rows: dict = field(default_factory=dict)   # liquid group -> cavity volume-change row (m^3/m)
     _cache: dict = field(default_factory=dict, repr=False)
 
     @property
@@ -366,12 +368,15 @@ def _slots(nodes: _Nodes, role: np.ndarray) -> np.ndarray:
 
 
 def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
-                lumped_smeared_mass: bool = False) -> FEModel:
+                lumped_smeared_mass: bool = False, liquid_degree: int = 1) -> FEModel:
     """FE model of a ``meshes.spec.Geometry`` (or the path of its JSON file).
 
     ``degree``: 1 or 2 (Lagrange, solid part; shells are P2 x CR). ``lumped_smeared_mass``:
     non-structural surface mass on solids lumped to the nodes by row sums (P1 only: P2 row
-    sums vanish at vertices) instead of the consistent surface mass.
+    sums vanish at vertices) instead of the consistent surface mass. Hydroelastic liquids
+    (``Geometry.liquids``) become ``FEModel.liquid`` (fem.liquid: pressure P_``liquid_degree``,
+    coupled through the wall's P1 (P1 solids) or P2 translations), an added mass that K and M
+    do not hold.
     """
     if isinstance(geometry, (str, Path)):
         from liftoff.meshes.spec import Geometry
@@ -381,7 +386,9 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
         raise InputError(f"model {name!r}: degree {degree!r} not supported (use 1 or 2)")
     if lumped_smeared_mass and degree != 1:
         raise InputError(f"model {name!r}: lumped smeared mass needs degree 1")
-    meshes = dict(zip(("solid", "shell"), read_mesh_parts(geometry.msh_path, comm, tuple(geometry.shells))))
+    solid_tm, shell_tm, liquid_tm = read_mesh_parts(geometry.msh_path, comm, tuple(geometry.shells),
+                                                    liquids=tuple(geometry.liquids))
+    meshes = {"solid": solid_tm, "shell": shell_tm}
     solids = [g for g in geometry.volumes if g not in geometry.shells]
     if meshes["solid"] is None and solids:
         raise InputError(f"volume group {solids[0]!r} is not a physical volume of mesh {geometry.msh_path!r} "
@@ -410,9 +417,16 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
     dof_comp = np.concatenate([dof_comp, np.tile(np.arange(6), len(patches))]).astype(np.int64)
     dof_node = np.concatenate([dof_node, -np.ones(6 * len(patches), dtype=np.int64)])
     cells, cell_type = _output_cells(part_cells)
+    liquid, rows = None, {}
+    if liquid_tm is not None:
+        from .liquid import model_liquid
+
+        liquid, rows = model_liquid(liquid_tm, geometry, parts, nodes.xyz, T,
+                                    2 if solid_tm is None or degree == 2 else 1, liquid_degree)
     return FEModel(name=name, comm=comm, parts=tuple(parts), degree=degree, K=K, M=M, points=tuple(pnames),
                    point_coords=ref_coords, dof_coords=dof_coords, dof_comp=dof_comp, dof_node=dof_node,
-                   nodes=nodes.xyz, cells=cells, cell_type=cell_type, T=T, clamped=clamped)
+                   nodes=nodes.xyz, cells=cells, cell_type=cell_type, T=T, clamped=clamped, liquid=liquid,
+                   liquid_volume_rows=rows)
 
 
 def _reduce(comm, parts, nodes, role, slot, ref_coords, n_keep, n_dof):
