@@ -77,6 +77,7 @@ class LiquidOperator:
     volumes: dict = field(default_factory=dict)  # liquid volume group -> meshed volume m^3
     points: dict = field(default_factory=dict)   # pressure point name -> kept pressure DOF
     Gm: sp.csr_matrix | None = None              # (n_p, n_dof) after couple()
+    Hs: sp.csr_matrix | None = None              # H as scipy CSR (for reduction.liquid.LiquidMass)
 
     @property
     def n_p(self) -> int:
@@ -154,6 +155,16 @@ class LiquidOperator:
         self.Gm = sp.csr_matrix(self.G @ C)
         self.Gm.eliminate_zeros()
         return self.Gm
+
+    def liquid_fields(self, volume_rows: dict) -> dict:
+        """Keyword fields of ``reduction.liquid.LiquidMass`` (sparse H and G over the
+        structure's DOFs, pressure points, the cavity volume rows {name: row})."""
+        names = tuple(volume_rows)
+        V = sp.csr_matrix(np.vstack([volume_rows[k] for k in names])) if names else \
+            sp.csr_matrix((0, self._g(True).shape[1]))
+        return dict(H=self.Hs, G=self._g(True), pressure_points=tuple(self.points),
+                    pressure_dofs=np.array(list(self.points.values()), np.int64), volume_names=names,
+                    volume_rows=V, mass=self.mass, centroid=self.centroid.copy())
 
     def destroy(self) -> None:
         self.ksp.destroy()
@@ -273,7 +284,7 @@ def liquid_operator(tm, name: str, density, wetted, free_surface=None, dirichlet
                                  "node of the liquid mesh (or lies on its free surface, p = 0)")
             pts[nm] = int(i)
     return LiquidOperator(name, rho, G, Hk, ksp, Xp, np.repeat(Xc[blocks], 3, axis=0), np.tile(np.arange(3), blocks.size),
-                          float(vol), cg, float(mass), vols, pts)
+                          float(vol), cg, float(mass), vols, pts, Hs=sp.csr_matrix(H[keep][:, keep]))
 
 
 def dolfinx_meshtags(mesh, facets: np.ndarray, value: int = 1):

@@ -155,11 +155,17 @@ class FEModel:
         return (self.field_map() @ np.asarray(x, float)).reshape(-1, 3)
 
     def component_fields(self) -> dict:
-        """Keyword fields of ``reduction.component.Component`` (all but ``name``)."""
+        """Keyword fields of ``reduction.component.Component`` (all but ``name`` and
+        ``liquid``; :meth:`liquid_fields` gives the latter's)."""
         K, M = self.matrices()
         return dict(K=K, M=M, dof_labels=self.dof_labels, label_dofs=self.label_dofs,
                     points=self.points, point_coords=self.point_coords.copy(), nodes=self.nodes.copy(),
                     cells=self.cells.copy(), cell_type=self.cell_type, field_map=self.field_map())
+
+    def liquid_fields(self) -> dict | None:
+        """Keyword fields of ``reduction.liquid.LiquidMass`` of the model's hydroelastic
+        liquids (cavity volume rows named by liquid group), or None without liquids."""
+        return None if self.liquid is None else self.liquid.liquid_fields(self.liquid_volume_rows)
 
 
 # ---- parts -------------------------------------------------------------------------------

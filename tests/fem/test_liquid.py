@@ -355,3 +355,21 @@ def test_tank_fixed_interface_modes_include_the_liquid(tank_model):
     assert X.T @ (M @ X) + m.liquid.project(X) == pytest.approx(np.eye(8), abs=1e-8)
     dv = m.liquid_volume_rows["tank_lox_liquid"] @ X
     assert np.abs(dv).max() > 1e-3
+
+
+def test_component_carries_the_liquid_sparse(tank_model, tmp_path):
+    """fem -> reduction: the Component keeps H and G (sparse, no dense M_a) through its file;
+    reduction.liquid (SuperLU) gives fem.liquid's (MUMPS) added mass, pressure and volume rows."""
+    from liftoff.reduction.component import Component, load_component
+    from liftoff.reduction.liquid import LiquidMass
+
+    _, _, m = tank_model
+    c = Component(name="tank", **m.component_fields(), liquid=LiquidMass(**m.liquid_fields()))
+    c2 = load_component(c.save(tmp_path / "tank.npz"))
+    assert sp.issparse(c2.liquid.G) and sp.issparse(c2.liquid.H)
+    RB = m.rigid_body_shape()
+    ref = m.liquid.project(RB)
+    assert c2.liquid.project(RB) == pytest.approx(ref, abs=1e-9 * np.abs(ref).max())
+    assert c2.liquid.pressure_rows() == pytest.approx(m.liquid.pressure_rows(), rel=1e-9, abs=1e-12)
+    assert c2.liquid.volume_rows.toarray()[0] == pytest.approx(m.liquid_volume_rows["tank_lox_liquid"])
+    assert c2.liquid.mass == pytest.approx(m.liquid.mass) and c2.liquid.volume_names == ("tank_lox_liquid",)
