@@ -52,6 +52,11 @@ def build_component(comp: ComponentModel, model: ModelConfig, workdir: Path):
         if vol in geo.volumes:
             geo.volumes[vol] = mat
     fe = build_model(geo, model.degree)
-    component = Component(name=comp.name, **fe.component_fields())
+    liquid = fe.liquid_fields()
+    if liquid is not None:
+        from liftoff.reduction.liquid import LiquidMass
+
+        liquid = LiquidMass(**liquid)
+    component = Component(name=comp.name, **fe.component_fields(), liquid=liquid)
     thermal = {vol: np.asarray(thermal_load(fe, [vol], 1.0, 1.0), float) for vol in geo.volumes}
     return component, thermal
