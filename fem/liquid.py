@@ -435,10 +435,26 @@ def wet_eigensolve(K: PETSc.Mat, M: PETSc.Mat, ops: list, n_modes: int, dofs: np
 
 
 # ---- a model's liquids ----------------------------------------------------------------------------
+def _cad_ratio(tm, geometry, group: str) -> float:
+    """CAD volume / meshed volume of a liquid group (1 without a CAD volume): the density is
+    scaled by it so that the meshed liquid carries the liquid's exact mass (the faceted
+    mesh of a curved tank holds a little less volume than the CAD cavity)."""
+    import ufl
+    from dolfinx import fem
+
+    cad = geometry.group_volumes.get(group)
+    if not cad:
+        return 1.0
+    dx = ufl.Measure("dx", domain=tm.mesh, subdomain_data=tm.cell_tags)
+    v = fem.assemble_scalar(fem.form(fem.Constant(tm.mesh, 1.0) * dx(tm.volume_ids[group])))
+    return float(cad) / float(v) if v > 0 else 1.0
+
+
 def model_liquid(tm, geometry, parts, nodes: np.ndarray, T: sp.csr_matrix, coupling_degree: int,
                  degree: int = 1) -> tuple[LiquidOperator, dict]:
     """The liquids of a ``meshes.spec.Geometry`` (its ``liquids``: one operator for all, each
-    with its density), coupled to the structure's ``nodes`` and field map ``T``; and the
+    with its density scaled to carry the CAD volume's mass, :func:`_cad_ratio`), coupled to
+    the structure's ``nodes`` and field map ``T``; and the
     volume-change row (eq. 5) of each liquid's cavity, {liquid group: row}, from the
     cavity's triangles on the structural ``parts`` (solid facets or shell cells)."""
     liquids = geometry.liquids
@@ -449,7 +465,8 @@ def model_liquid(tm, geometry, parts, nodes: np.ndarray, T: sp.csr_matrix, coupl
             raise InputError(f"liquid {g!r} does not touch the wall: no face of its wetted surface {liq.wetted!r} "
                              "lies on the liquid")
     points = {n: xyz for liq in liquids.values() for n, xyz in liq.points.items()}
-    op = liquid_operator(tm, f"{geometry.name} liquids", {g: liq.density for g, liq in liquids.items()},
+    density = {g: liq.density * _cad_ratio(tm, geometry, g) for g, liq in liquids.items()}
+    op = liquid_operator(tm, f"{geometry.name} liquids", density,
                          [liq.wetted for liq in liquids.values()], [liq.free_surface for liq in liquids.values()],
                          None, degree, coupling_degree, points)
     op.couple(nodes, T)
