@@ -434,6 +434,50 @@ def wet_eigensolve(K: PETSc.Mat, M: PETSc.Mat, ops: list, n_modes: int, dofs: np
 
 
 
+def count_below_wet(comm, Kii: sp.spmatrix, Mii: sp.spmatrix, Gi: sp.spmatrix, H: sp.spmatrix, lam: float,
+                    who: str = "component") -> int:
+    """Number of eigenvalues mu <= ``lam`` of K_ii x = mu (M_ii + G_i^T H^-1 G_i) x, by
+    Sylvester's law of inertia without forming M_a: the sparse symmetric matrix
+
+        A = [[K_ii - lam M_ii, G_i^T], [G_i, H / lam]]
+
+    has the Schur complement K_ii - lam (M_ii + G_i^T H^-1 G_i) of its positive definite
+    (2,2) block, so (Haynsworth) its negative and null pivots are that complement's: one
+    MUMPS LDL^T factor of A (``comm``: rows split evenly). H here is the liquid's Laplacian
+    already divided by rho (reduction.liquid.LiquidMass.H), G_i its coupling over the
+    interior DOFs."""
+    if not lam > 0:
+        raise InputError(f"{who}: the wet mode count needs a positive eigenvalue bound (got {lam!r})")
+    A = sp.bmat([[sp.csr_matrix(Kii) - lam * sp.csr_matrix(Mii), sp.csr_matrix(Gi).T],
+                 [sp.csr_matrix(Gi), sp.csr_matrix(H) / lam]], format="csr")
+    n, size, rank = A.shape[0], comm.size, comm.rank
+    r0 = rank * (n // size) + min(rank, n % size)
+    r1 = r0 + n // size + (1 if rank < n % size else 0)
+    Ap = pb.csr_matrix(comm, r1 - r0, r1 - r0, n, A[r0:r1])
+    Ap.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+    ksp = PETSc.KSP().create(comm)
+    prefix = f"liftoff_wetcount{id(ksp)}_"
+    opts = PETSc.Options()
+    values = {"mat_mumps_icntl_24": 1, **({"mat_mumps_icntl_13": 1} if size > 1 else {})}
+    for k, v in values.items():
+        opts.setValue(prefix + k, v)
+    try:
+        ksp.setOptionsPrefix(prefix)
+        ksp.setOperators(Ap)
+        pb._mumps_cholesky(ksp)
+        try:
+            ksp.setUp()
+        except PETSc.Error as exc:
+            raise InputError(f"{who}: factorisation of the wet count matrix failed (PETSc error {exc.ierr})") from None
+        nneg, nzero, _ = ksp.getPC().getFactorMatrix().getInertia()
+        return int(nneg) + int(nzero)
+    finally:
+        for k in values:
+            opts.delValue(prefix + k)
+        ksp.destroy()
+        Ap.destroy()
+
+
 # ---- a model's liquids ----------------------------------------------------------------------------
 def _cad_ratio(tm, geometry, group: str) -> float:
     """CAD volume / meshed volume of a liquid group (1 without a CAD volume): the density is
@@ -482,4 +526,4 @@ def model_liquid(tm, geometry, parts, nodes: np.ndarray, T: sp.csr_matrix, coupl
 
 
 __all__ = ["LiquidOperator", "liquid_operator", "rigid_translation", "surface_triangles", "cavity_volume_row",
-           "mass_with_liquid", "wet_eigensolve", "model_liquid"]
+           "mass_with_liquid", "wet_eigensolve", "model_liquid", "count_below_wet"]

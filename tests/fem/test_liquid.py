@@ -378,3 +378,22 @@ def test_component_carries_the_liquid_sparse(tank_model, tmp_path):
     assert c2.liquid.pressure_rows() == pytest.approx(m.liquid.pressure_rows(), rel=1e-9, abs=1e-12)
     assert c2.liquid.volume_rows.toarray()[0] == pytest.approx(m.liquid_volume_rows["tank_lox_liquid"])
     assert c2.liquid.mass == pytest.approx(m.liquid.mass) and c2.liquid.volume_names == ("tank_lox_liquid",)
+
+
+def test_wet_mode_count_by_inertia(tank_model):
+    """The number of wet eigenvalues below a bound from the inertia of the sparse augmented
+    matrix [[K - lam M, G^T], [G, H/lam]] (Haynsworth) equals the count of the eigensolve."""
+    from liftoff.fem import petsc_backend as pb
+    from liftoff.fem.liquid import count_below_wet, wet_eigensolve
+    from liftoff.reduction.liquid import LiquidMass
+
+    _, _, m = tank_model
+    K, M = m.matrices()
+    inner = np.setdiff1d(np.arange(m.n_dof), m.label_dofs)
+    Ki, Mi = (pb.csr_matrix(MPI.COMM_SELF, inner.size, inner.size, inner.size, A[inner][:, inner]) for A in (K, M))
+    wet, _ = wet_eigensolve(Ki, Mi, [m.liquid], 8, dofs=inner)
+    lm = LiquidMass(**m.liquid_fields())
+    Kii, Mii, Gi = K[inner][:, inner], M[inner][:, inner], lm.G[:, inner]
+    for k in (1, 4, 7):
+        lam = 0.5 * (wet[k - 1] + wet[k])
+        assert count_below_wet(MPI.COMM_SELF, Kii, Mii, Gi, lm.H, lam) == k
