@@ -78,6 +78,8 @@ class LiquidOperator:
     points: dict = field(default_factory=dict)   # pressure point name -> kept pressure DOF
     Gm: sp.csr_matrix | None = None              # (n_p, n_dof) after couple()
     Hs: sp.csr_matrix | None = None              # H as scipy CSR (for reduction.liquid.LiquidMass)
+    groups: tuple = ()                           # liquid volume groups, in volume_ids order
+    p_group: np.ndarray | None = None            # (n_p,) index into groups of each kept pressure DOF
 
     @property
     def n_p(self) -> int:
@@ -164,7 +166,8 @@ class LiquidOperator:
             sp.csr_matrix((0, self._g(True).shape[1]))
         return dict(H=self.Hs, G=self._g(True), pressure_points=tuple(self.points),
                     pressure_dofs=np.array(list(self.points.values()), np.int64), volume_names=names,
-                    volume_rows=V, mass=self.mass, centroid=self.centroid.copy())
+                    volume_rows=V, mass=self.mass, centroid=self.centroid.copy(), liquids=self.groups,
+                    pressure_liquid=self.p_group)
 
     def destroy(self) -> None:
         self.ksp.destroy()
@@ -283,8 +286,13 @@ def liquid_operator(tm, name: str, density, wetted, free_surface=None, dirichlet
                 raise InputError(f"liquid {name!r}: pressure point {nm!r} at {np.round(xyz, 6).tolist()} m is not a "
                                  "node of the liquid mesh (or lies on its free surface, p = 0)")
             pts[nm] = int(i)
+    groups = tuple(tm.volume_ids)
+    p_group = np.zeros(Q.dofmap.index_map.size_local * Q.dofmap.index_map_bs, np.int64)
+    for k, gid in enumerate(tm.volume_ids.values()):          # a pressure DOF belongs to one liquid
+        p_group[np.unique(Q.dofmap.list.array.reshape(-1, Q.dofmap.dof_layout.num_dofs)[tm.cell_tags.find(gid)])] = k
     return LiquidOperator(name, rho, G, Hk, ksp, Xp, np.repeat(Xc[blocks], 3, axis=0), np.tile(np.arange(3), blocks.size),
-                          float(vol), cg, float(mass), vols, pts, Hs=sp.csr_matrix(H[keep][:, keep]))
+                          float(vol), cg, float(mass), vols, pts, Hs=sp.csr_matrix(H[keep][:, keep]), groups=groups,
+                          p_group=p_group[keep])
 
 
 def dolfinx_meshtags(mesh, facets: np.ndarray, value: int = 1):

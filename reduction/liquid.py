@@ -38,6 +38,8 @@ class LiquidMass:
     volume_rows: sp.csr_matrix | None = None     # (n_v, n_dof) m^3 per m
     mass: float = 0.0                    # kg, the liquids' mass
     centroid: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    liquids: tuple[str, ...] = ()        # the liquids (volume groups); H is block diagonal over them
+    pressure_liquid: np.ndarray | None = None    # (n_p,) index into liquids of each pressure DOF
     _lu: object = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -51,6 +53,13 @@ class LiquidMass:
             self.volume_rows = sp.csr_matrix((0, self.G.shape[1]))
         self.volume_rows = sp.csr_matrix(self.volume_rows, dtype=float)
         self.centroid = np.asarray(self.centroid, float).reshape(3)
+        self.liquids = tuple(str(s) for s in self.liquids)
+        if self.pressure_liquid is None:
+            self.pressure_liquid = np.zeros(n_p, np.int64)
+        self.pressure_liquid = np.asarray(self.pressure_liquid, np.int64).reshape(-1)
+        if self.pressure_liquid.size != n_p or (n_p and self.liquids and self.pressure_liquid.max() >= len(self.liquids)):
+            raise InputError(f"liquid: pressure_liquid must give one of the {len(self.liquids)} liquids per "
+                             f"pressure DOF ({n_p})")
         if self.H.shape != (n_p, n_p) or self.G.shape[0] != n_p:
             raise InputError(f"liquid: H {self.H.shape} must be square with G's {self.G.shape[0]} rows")
         if len(self.pressure_points) != self.pressure_dofs.size or \
@@ -107,6 +116,42 @@ class LiquidMass:
         E[self.pressure_dofs, np.arange(self.pressure_dofs.size)] = 1.0
         return -(self.G.T @ self.solve(E)).T
 
+    def axial_inertia_rows(self, rigid: np.ndarray) -> np.ndarray:
+        """(n_liquids, n_dof) rows f_c = (M_a,c r)^T with F_c = f_c . x'' the force that
+        accelerates liquid c (N) along the rigid translation field ``rigid`` (n_dof,: a unit
+        translation of the component); M_a,c = G_c^T H_c^-1 G_c uses liquid c's pressure DOFs
+        only (H is block diagonal over the liquids). Under x'' = a r, F_c = m_c a for any tank
+        along its axis (the whole liquid moves axially with the tank, fem.liquid)."""
+        Y = self.solve(self.G @ np.asarray(rigid, float))            # H^-1 G r, all liquids at once
+        rows = []
+        for c in range(max(len(self.liquids), 1)):
+            on = (self.pressure_liquid == c).astype(float)
+            rows.append(self.G.T @ (on * Y))
+        return np.vstack(rows)
+
+    def cb_recovery(self, fim: np.ndarray, cm: np.ndarray, prefix: str = "", rigid: np.ndarray | None = None) -> tuple:
+        """The liquid's recovery items over a CB model's DOFs [q; x_b] (u = fim q + cm x_b):
+        ``<prefix>ullage_volume`` (disp rows, m^3: each cavity's volume change),
+        ``<prefix>liquid_pressure`` (acc rows, Pa: the pressure at each pressure point from
+        the accelerations; the head under gravity is the same row times the rigid
+        translation -g) and, with ``rigid`` (the component's unit axial translation),
+        ``<prefix>liquid_axial_inertia`` (acc rows, N, :meth:`axial_inertia_rows`). Empty
+        items are left out."""
+        from .craig_bampton import CBRecovery
+
+        T = np.hstack([fim, cm])
+        out = []
+        if self.volume_names:
+            out.append(CBRecovery(f"{prefix}ullage_volume", self.volume_names, ("m^3",) * len(self.volume_names),
+                                  disp=np.asarray(self.volume_rows @ T)))
+        if self.pressure_points:
+            out.append(CBRecovery(f"{prefix}liquid_pressure", self.pressure_points,
+                                  ("Pa",) * len(self.pressure_points), acc=self.pressure_rows() @ T))
+        if rigid is not None and self.liquids:
+            out.append(CBRecovery(f"{prefix}liquid_axial_inertia", self.liquids, ("N",) * len(self.liquids),
+                                  acc=self.axial_inertia_rows(rigid) @ T))
+        return tuple(out)
+
     # ---- file fields (reduction.component) ----------------------------------------------
     def record(self) -> dict:
         from .component import _csr_record
@@ -116,7 +161,8 @@ class LiquidMass:
                 "liquid_pressure_points": np.array(self.pressure_points, dtype="U"),
                 "liquid_pressure_dofs": self.pressure_dofs,
                 "liquid_volume_names": np.array(self.volume_names, dtype="U"),
-                "liquid_mass": np.array(self.mass), "liquid_centroid": self.centroid}
+                "liquid_mass": np.array(self.mass), "liquid_centroid": self.centroid,
+                "liquid_liquids": np.array(self.liquids, dtype="U"), "liquid_pressure_liquid": self.pressure_liquid}
 
     @classmethod
     def from_record(cls, z: dict) -> "LiquidMass | None":
@@ -126,4 +172,5 @@ class LiquidMass:
             return None
         return cls(_csr_from(z["liquid_H"]), _csr_from(z["liquid_G"]), tuple(z["liquid_pressure_points"]),
                    z["liquid_pressure_dofs"], tuple(z["liquid_volume_names"]), _csr_from(z["liquid_volume_rows"]),
-                   float(z["liquid_mass"]), z["liquid_centroid"])
+                   float(z["liquid_mass"]), z["liquid_centroid"], tuple(z.get("liquid_liquids", ())),
+                   z.get("liquid_pressure_liquid"))

@@ -397,3 +397,17 @@ def test_wet_mode_count_by_inertia(tank_model):
     for k in (1, 4, 7):
         lam = 0.5 * (wet[k - 1] + wet[k])
         assert count_below_wet(MPI.COMM_SELF, Kii, Mii, Gi, lm.H, lam) == k
+
+
+def test_axial_inertia_rows_give_each_liquid_mass(tank_model):
+    """F_c = (M_a,c r)^T x'' under a rigid axial acceleration a is m_c a (divergence theorem,
+    exact in P1); the liquids' rows sum to the whole added mass's."""
+    from liftoff.reduction.liquid import LiquidMass
+
+    _, g, m = tank_model
+    lm = LiquidMass(**m.liquid_fields())
+    rz = m.rigid_body_shape()[:, 2]
+    rows = lm.axial_inertia_rows(rz)
+    assert lm.liquids == ("tank_lox_liquid",) and rows.shape == (1, m.n_dof)
+    assert rows @ (2.0 * rz) == pytest.approx([2.0 * 1141.0 * g.group_volumes["tank_lox_liquid"]], rel=1e-10)
+    assert rows.sum(axis=0) == pytest.approx(lm.apply(rz), rel=1e-9, abs=1e-9 * np.abs(rows).max())
