@@ -390,6 +390,47 @@ def mass_with_liquid(M: PETSc.Mat, ops: list, dofs: np.ndarray | None = None) ->
     return A
 
 
+class _DistributedWetMass:
+    """PETSc shell context over a distributed M_ii: y = M_ii x + G_i^T H^-1 G_i x, the
+    liquid part computed on every process from the gathered x (the liquid's H is factored
+    on each process: it is small beside the structure) and each process keeping its rows."""
+
+    def __init__(self, Mii: PETSc.Mat, H: sp.spmatrix, Gi: sp.spmatrix):
+        self.M, self.Gi = Mii, sp.csr_matrix(Gi)
+        self.A, self.ksp = _factor(sp.csr_matrix(H), "liquid")
+        self.comm = Mii.getComm().tompi4py()
+        self.r0, self.r1 = Mii.getOwnershipRange()
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        x, y = self.A.createVecRight(), self.A.createVecLeft()
+        y.setArray(np.asarray(b, float))
+        self.ksp.solve(y, x)
+        return np.array(x.getArray(readonly=True))
+
+    def mult(self, mat, x, y):
+        self.M.mult(x, y)
+        xa = np.array(x.getArray(readonly=True))
+        full = np.concatenate(self.comm.allgather(xa)) if self.comm.size > 1 else xa
+        add = self.Gi.T @ self.solve(self.Gi @ full)
+        y.setArray(np.array(y.getArray(readonly=True)) + add[self.r0:self.r1])
+
+    def destroy(self, mat=None) -> None:       # PETSc calls it when the shell matrix is destroyed
+        self.ksp.destroy()
+        self.A.destroy()
+
+
+def wet_mass(Mii: PETSc.Mat, H: sp.spmatrix, Gi: sp.spmatrix) -> tuple[PETSc.Mat, object]:
+    """M_ii + G_i^T H^-1 G_i as a PETSc shell matrix with M_ii's (distributed) layout, for
+    any process count (reduction.liquid.LiquidMass's H and G restricted to the interior
+    columns); returns (shell, context); destroying the shell frees the liquid's factor."""
+    ctx = _DistributedWetMass(Mii, H, Gi)
+    (m, n), (M_, N_) = Mii.getLocalSize(), Mii.getSize()
+    B = PETSc.Mat().createPython(((m, M_), (n, N_)), ctx, comm=Mii.getComm())
+    B.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+    B.setUp()
+    return B, ctx
+
+
 def wet_eigensolve(K: PETSc.Mat, M: PETSc.Mat, ops: list, n_modes: int, dofs: np.ndarray | None = None,
                    tol: float = 1e-10, max_it: int = 500, what: str = "model") -> tuple[np.ndarray, np.ndarray]:
     """The ``n_modes`` lowest eigenpairs of K phi = lambda (M + M_a) phi for a K that is
@@ -534,4 +575,4 @@ def model_liquid(tm, geometry, parts, nodes: np.ndarray, T: sp.csr_matrix, coupl
 
 
 __all__ = ["LiquidOperator", "liquid_operator", "rigid_translation", "surface_triangles", "cavity_volume_row",
-           "mass_with_liquid", "wet_eigensolve", "model_liquid", "count_below_wet"]
+           "mass_with_liquid", "wet_eigensolve", "model_liquid", "count_below_wet", "wet_mass"]

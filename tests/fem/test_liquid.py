@@ -411,3 +411,31 @@ def test_axial_inertia_rows_give_each_liquid_mass(tank_model):
     assert lm.liquids == ("tank_lox_liquid",) and rows.shape == (1, m.n_dof)
     assert rows @ (2.0 * rz) == pytest.approx([2.0 * 1141.0 * g.group_volumes["tank_lox_liquid"]], rel=1e-10)
     assert rows.sum(axis=0) == pytest.approx(lm.apply(rz), rel=1e-9, abs=1e-9 * np.abs(rows).max())
+
+
+def test_wet_mass_shell_from_the_component_matrices(tank_model):
+    """fem.liquid.wet_mass (M_ii + G_i^T H^-1 G_i from reduction.liquid's sparse H and G, any
+    process layout) multiplies as M_ii + M_a of the model's operator."""
+    from liftoff.fem import petsc_backend as pb
+    from liftoff.fem.liquid import wet_mass
+    from liftoff.reduction.liquid import LiquidMass
+
+    _, _, m = tank_model
+    K, M = m.matrices()
+    inner = np.setdiff1d(np.arange(m.n_dof), m.label_dofs)
+    lm = LiquidMass(**m.liquid_fields())
+    Mi = pb.csr_matrix(MPI.COMM_SELF, inner.size, inner.size, inner.size, M[inner][:, inner])
+    B, _ = wet_mass(Mi, lm.H, lm.G[:, inner])
+    x = np.random.default_rng(0).standard_normal(inner.size)
+    xv, yv = Mi.createVecRight(), Mi.createVecLeft()
+    xv.setArray(x)
+    B.mult(xv, yv)
+    ref = M[inner][:, inner] @ x + m.liquid.apply(_embed(x, inner, m.n_dof))[inner]
+    assert np.array(yv.getArray()) == pytest.approx(ref, rel=1e-9, abs=1e-9 * np.abs(ref).max())
+    B.destroy()
+
+
+def _embed(x, idx, n):
+    out = np.zeros(n)
+    out[idx] = x
+    return out
