@@ -439,3 +439,32 @@ def _embed(x, idx, n):
     out = np.zeros(n)
     out[idx] = x
     return out
+
+
+def test_two_liquids_one_operator(tmp_path):
+    """Two compartments (an intertank between them), two liquids of different densities in
+    one operator: each liquid's axial inertia is its own CAD mass, the bottom pressures
+    are their own heads, and the LH2-like liquid does not see the LOX-like one (H block
+    diagonal: the axial inertia rows of a liquid vanish on the other's wall)."""
+    from liftoff.fem import build_model
+    from liftoff.meshes.tank import Compartment, TankParams, build_tank, inner_cavities
+    from liftoff.reduction.liquid import LiquidMass
+
+    comps = (Compartment("a", 1.5, 0.7, 0.7, 0.6, 70.85), Compartment("b", 1.0, 0.7, 1.0, 0.5, 1141.0))
+    p = TankParams(radius=1.0, wall_thickness=0.1, compartments=comps, intertank_length=2.0, patches={},
+                   mesh_size=0.4, liquid="hydroelastic")
+    g = build_tank(p, tmp_path)
+    m = build_model(g)
+    lm = LiquidMass(**m.liquid_fields())
+    rz = m.rigid_body_shape()[:, 2]
+    rows = lm.axial_inertia_rows(rz)
+    masses = [c.liquid_density * g.group_volumes[f"tank_{c.name}_liquid"] for c in comps]
+    assert lm.liquids == ("tank_a_liquid", "tank_b_liquid")
+    assert rows @ rz == pytest.approx(masses, rel=1e-10)
+    assert lm.mass == pytest.approx(sum(masses), rel=1e-12)
+    heads = lm.pressure_rows() @ (9.80665 * rz)
+    for c, cav, h in zip(comps, inner_cavities(p), heads):
+        rho = m.liquid.density[f"tank_{c.name}_liquid"]
+        assert h == pytest.approx(rho * 9.80665 * (cav.z_fill - cav.z_bottom), rel=1e-10)
+    wet_a = np.abs(rows[0]) > 0
+    assert np.abs(rows[1][wet_a]).max() < 1e-12 * np.abs(rows[1]).max()
