@@ -15,6 +15,8 @@ _EXPORTS = {
     "save_component": ".component",
     "CBModel": ".craig_bampton",
     "craig_bampton": ".craig_bampton",
+    "CBSolver": ".craig_bampton",
+    "scipy_solver": ".craig_bampton",
     "load_cb": ".craig_bampton",
     "save_cb": ".craig_bampton",
     "acceleration_recovery": ".recovery",

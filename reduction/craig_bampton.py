@@ -17,6 +17,7 @@ import re
 import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Callable, Protocol
 
 import numpy as np
 import scipy.linalg as sla
@@ -203,14 +204,118 @@ class CBModel:
         return load_cb(path)
 
 
+# ------------------------------------------------------------------------ solvers
+class CBSolver(Protocol):
+    """The linear algebra of a Craig-Bampton reduction, injected into :func:`craig_bampton`
+    (scikit-fem style ``solver=``): ONE factorisation of K_ii serves both the constraint
+    modes and the shift-invert fixed-interface eigensolve.
+
+    Called on every process with the component's whole K and M (scipy CSR), the interior
+    and boundary DOF indices and the mode selection; returns, on every process,
+    ``(lam, phi, psi, timings)``: the lowest fixed-interface eigenvalues omega^2 (rad^2/s^2,
+    ascending; the first ``n_modes``, those <= (2 pi f_max)^2, or both), their modes
+    Phi (n_i x n_q, Phi^T M_ii Phi = I), the constraint modes Psi = -K_ii^-1 K_ib
+    (n_i x n_b) and a dict of wall times (s). ``who`` names the component in messages and
+    ``dof_name(dof)`` a DOF (its label if it has one). A band (``n_modes`` None) holding more than
+    ``band_limit`` modes is an InputError; so is a singular K_ii (the component floats
+    once its boundary is fixed). :func:`scipy_solver` is the default; ``liftoff.fem``
+    provides the PETSc/SLEPc one (``fem.petsc_cb.petsc_solver``)."""
+
+    def __call__(self, K: sp.csr_matrix, M: sp.csr_matrix, interior: np.ndarray, boundary: np.ndarray, *,
+                 n_modes: int | None, f_max: float | None, band_limit: int, who: str,
+                 dof_name: Callable[[int], str] = str) -> tuple: ...
+
+
+@dataclass(frozen=True)
+class ScipySolver:
+    """SuperLU factor of K_ii (``ordering``: COLAMD, MMD_AT_PLUS_A, ...) shared by the
+    constraint-mode solves and ARPACK shift-invert at sigma = 0 (dense ``eigh`` for
+    interiors of at most DENSE_LIMIT DOFs or when (nearly) all modes are asked for);
+    a band grows the mode count until it is covered. Serial."""
+
+    ordering: str = ORDERING
+
+    def __call__(self, K, M, interior, boundary, *, n_modes, f_max, band_limit, who, dof_name=str):
+        timings = {}
+        t0 = time.perf_counter()
+        K, M = K.tocsc(), M.tocsc()
+        Ki, Mi = K[interior], M[interior]                                  # interior rows, sliced once
+        Kii, Kib, Mii = Ki[:, interior].tocsc(), Ki[:, boundary], Mi[:, interior].tocsc()
+        timings["partition_s"] = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        lu = _factor(Kii, who, lambda j: dof_name(int(interior[j])), self.ordering)
+        timings["factor_s"] = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        psi = -lu.solve(np.asarray(Kib.todense()))                        # constraint modes
+        timings["constraint_solve_s"] = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        lam, phi = fixed_interface_eig(Kii, Mii, lu, n_modes, f_max, who, band_limit)
+        timings["eigensolve_s"] = time.perf_counter() - t0
+        return lam, phi, psi, timings
+
+
+def scipy_solver(ordering: str = ORDERING) -> ScipySolver:
+    """The numpy/scipy CB solver (default of :func:`craig_bampton`)."""
+    return ScipySolver(ordering)
+
+
 # ------------------------------------------------------------------------ reduction
 def craig_bampton(component: Component, boundary_labels, n_modes: int | None = None,
-                  f_max: float | None = None, ordering: str = ORDERING) -> CBModel:
+                  f_max: float | None = None, solver: CBSolver | None = None) -> CBModel:
     """Craig-Bampton model of ``component`` with the given boundary DOF labels, keeping
     fixed-interface modes by count (``n_modes``), by band (below ``f_max`` Hz), or both
     (the first n_modes below f_max). n_modes=0 gives a Guyan (static) reduction.
-    ``ordering``: SuperLU fill-reducing ordering of K_ii (COLAMD, MMD_AT_PLUS_A, ...)."""
+    ``solver``: the factorisation + eigensolver (:class:`CBSolver`); default
+    :func:`scipy_solver`, ``liftoff.fem.petsc_solver()`` for PETSc/SLEPc under MPI."""
     who = f"component {component.name!r}"
+    boundary_labels = _check_request(who, boundary_labels, n_modes, f_max)
+    b = component.dofs_of(boundary_labels)
+    n = component.n_dof
+    is_b = np.zeros(n, bool)
+    is_b[b] = True
+    i = np.flatnonzero(~is_b)
+    if i.size == 0:
+        raise InputError(f"{who}: every DOF is a boundary DOF; nothing to reduce")
+    solver = scipy_solver() if solver is None else solver
+    lam, phi, psi, timings = solver(component.K, component.M, i, b, n_modes=n_modes, f_max=f_max,
+                                    band_limit=BAND_MODE_LIMIT, who=who, dof_name=lambda d: _dof_name(component, d))
+    timings = dict(timings)
+    lam, phi = _select(np.asarray(lam, float), np.asarray(phi, float), n_modes, f_max)
+    psi = np.asarray(psi, float)
+    if phi.shape != (i.size, lam.size) or psi.shape != (i.size, b.size):
+        raise InputError(f"{who}: CB solver {type(solver).__name__} returned modes {phi.shape} and "
+                         f"constraint modes {psi.shape}, expected ({i.size}, {lam.size}) and ({i.size}, {b.size})")
+    _check_not_floating(lam, component.K.diagonal()[i], component.M.diagonal()[i], who)
+
+    t0 = time.perf_counter()
+    nq, nb = lam.size, b.size
+    fim = np.zeros((n, nq))
+    fim[i] = phi
+    cm = np.zeros((n, nb))
+    cm[i] = psi
+    cm[b, np.arange(nb)] = 1.0
+    del phi, psi
+    # eq. 13 with T_c = cm: K_B = K_bb + K_bi Psi = (K T_c)_b,  M_B = T_c^T M T_c,
+    # C_M = Phi^T (M_ii Psi + M_ib) = fim^T (M T_c)  (fim is zero on the boundary rows)
+    K_B = np.asarray(component.K[b] @ cm)
+    M_cm = np.asarray(component.M @ cm)
+    M_B = cm.T @ M_cm
+    C_M = fim.T @ M_cm
+    del M_cm
+    Mcb = np.block([[np.eye(nq), C_M], [C_M.T, M_B]])
+    Kcb = np.zeros((nq + nb, nq + nb))
+    Kcb[:nq, :nq] = np.diag(lam)
+    Kcb[nq:, nq:] = K_B
+    timings["matrices_s"] = time.perf_counter() - t0
+    return CBModel(name=component.name, boundary_labels=boundary_labels,
+                   fixed_omega=np.sqrt(lam), M=0.5 * (Mcb + Mcb.T), K=0.5 * (Kcb + Kcb.T),
+                   points=component.points, point_coords=component.point_coords.copy(),
+                   dof_labels=component.dof_labels,
+                   label_transform=np.hstack([fim[component.label_dofs], cm[component.label_dofs]]),
+                   n_dof=n, constraint_modes=cm, fixed_interface_modes=fim, timings=timings)
+
+
+def _check_request(who: str, boundary_labels, n_modes, f_max) -> tuple[str, ...]:
     boundary_labels = tuple(str(s) for s in boundary_labels)
     if not boundary_labels:
         raise InputError(f"{who}: no boundary labels given")
@@ -223,55 +328,19 @@ def craig_bampton(component: Component, boundary_labels, n_modes: int | None = N
         raise InputError(f"{who}: n_modes must be >= 0, got {n_modes}")
     if f_max is not None and not f_max > 0:
         raise InputError(f"{who}: f_max must be > 0 Hz, got {f_max}")
-    b = component.dofs_of(boundary_labels)
-    n = component.n_dof
-    is_b = np.zeros(n, bool)
-    is_b[b] = True
-    i = np.flatnonzero(~is_b)
-    timings = {}
-    t0 = time.perf_counter()
-    K, M = component.K.tocsc(), component.M.tocsc()
-    Ki, Mi = K[i], M[i]                                               # interior rows, sliced once
-    Kii, Kib = Ki[:, i].tocsc(), Ki[:, b]
-    Mii, Mib = Mi[:, i].tocsc(), Mi[:, b]
-    timings["partition_s"] = time.perf_counter() - t0
+    return boundary_labels
 
-    t0 = time.perf_counter()
-    lu = _factor(Kii, component, i, ordering)
-    timings["factor_s"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    psi = -lu.solve(np.asarray(Kib.todense()))                       # constraint modes, interior rows
-    timings["constraint_solve_s"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    lam, phi = fixed_interface_eig(Kii, Mii, lu, n_modes, f_max, who)
-    timings["eigensolve_s"] = time.perf_counter() - t0
-    _check_not_floating(lam, Kii, Mii, who)
 
-    t0 = time.perf_counter()
-    Kbb = np.asarray(K[b][:, b].todense())
-    Mbb = np.asarray(M[b][:, b].todense())
-    Mii_psi = np.asarray(Mii @ psi)
-    Mib_d = np.asarray(Mib.todense())
-    K_B = Kbb + np.asarray(Kib.T @ psi)
-    M_B = Mbb + Mib_d.T @ psi + psi.T @ Mib_d + psi.T @ Mii_psi
-    C_M = phi.T @ (Mii_psi + Mib_d)
-    nq, nb = lam.size, b.size
-    Mcb = np.block([[np.eye(nq), C_M], [C_M.T, M_B]])
-    Kcb = np.zeros((nq + nb, nq + nb))
-    Kcb[:nq, :nq] = np.diag(lam)
-    Kcb[nq:, nq:] = K_B
-    fim = np.zeros((n, nq))
-    fim[i] = phi
-    cm = np.zeros((n, nb))
-    cm[i] = psi
-    cm[b, np.arange(nb)] = 1.0
-    timings["matrices_s"] = time.perf_counter() - t0
-    return CBModel(name=component.name, boundary_labels=boundary_labels,
-                   fixed_omega=np.sqrt(lam), M=0.5 * (Mcb + Mcb.T), K=0.5 * (Kcb + Kcb.T),
-                   points=component.points, point_coords=component.point_coords.copy(),
-                   dof_labels=component.dof_labels,
-                   label_transform=np.hstack([fim[component.label_dofs], cm[component.label_dofs]]),
-                   n_dof=n, constraint_modes=cm, fixed_interface_modes=fim, timings=timings)
+def _select(lam: np.ndarray, phi: np.ndarray, n_modes, f_max) -> tuple[np.ndarray, np.ndarray]:
+    """The selection rule, whatever the solver returned: ascending, first n_modes, <= f_max."""
+    order = np.argsort(lam, kind="stable")
+    lam, phi = lam[order], phi[:, order]
+    keep = np.ones(lam.size, bool)
+    if n_modes is not None:
+        keep &= np.arange(lam.size) < n_modes
+    if f_max is not None:
+        keep &= lam <= (2 * np.pi * f_max) ** 2
+    return lam[keep], phi[:, keep]
 
 
 def _dof_name(component: Component, dof: int) -> str:
@@ -279,12 +348,10 @@ def _dof_name(component: Component, dof: int) -> str:
     return component.dof_labels[hit[0]] if hit.size else f"DOF {dof}"
 
 
-def _factor(Kii: sp.csc_matrix, component: Component, interior: np.ndarray, ordering: str = ORDERING):
+def _factor(Kii: sp.csc_matrix, who: str, name_of, ordering: str = ORDERING):
     """Sparse LU of K_ii (SuperLU, symmetric mode, no pivoting: K_ii is SPD for a
-    restrained component); singular K_ii -> InputError."""
-    who = f"component {component.name!r}"
-    if Kii.shape[0] == 0:
-        raise InputError(f"{who}: every DOF is a boundary DOF; nothing to reduce")
+    restrained component); singular K_ii -> InputError naming the DOF (``name_of(j)``
+    for interior index j)."""
     try:
         lu = spla.splu(Kii, permc_spec=ordering, diag_pivot_thresh=0.0,
                        options={"SymmetricMode": True})
@@ -297,16 +364,16 @@ def _factor(Kii: sp.csc_matrix, component: Component, interior: np.ndarray, orde
     diag = np.abs(Kii.diagonal())[lu.perm_c]
     ratio = pivots / np.maximum(diag, 1e-300)
     if ratio.size and ratio.min() < 1e-10:
-        worst = interior[lu.perm_c[np.argmin(ratio)]]
         raise InputError(f"{who} floats (or has a mechanism) once its boundary DOFs are fixed: "
-                         f"K_ii is singular near {_dof_name(component, worst)} (pivot/diagonal "
+                         f"K_ii is singular near {name_of(lu.perm_c[np.argmin(ratio)])} (pivot/diagonal "
                          f"{ratio.min():.1e}); add boundary DOFs that restrain it")
     return lu
 
 
-def fixed_interface_eig(Kii, Mii, lu, n_modes, f_max, who="component"):
+def fixed_interface_eig(Kii, Mii, lu, n_modes, f_max, who="component", band_limit=None):
     """Lowest fixed-interface eigenpairs (omega^2, M_ii-normalised modes), by count and/or
     band, from shift-invert at zero shift with the factor ``lu`` of K_ii."""
+    band_limit = BAND_MODE_LIMIT if band_limit is None else band_limit
     n_i = Kii.shape[0]
     lam_max = None if f_max is None else (2 * np.pi * f_max) ** 2
     want = n_i if n_modes is None else min(n_modes, n_i)
@@ -328,31 +395,33 @@ def fixed_interface_eig(Kii, Mii, lu, n_modes, f_max, who="component"):
             if k >= n_i - 2:
                 raise InputError(f"{who}: f_max covers (nearly) all {n_i} fixed-interface modes; "
                                  "give n_modes instead")
-            if n_modes is None and k >= BAND_MODE_LIMIT:
+            if n_modes is None and k >= band_limit:
                 # A band that holds this many modes of a solid mesh is mostly local wall modes;
                 # growing the Lanczos basis further costs GBs (k x n_i vectors and ARPACK work).
-                raise InputError(f"{who}: more than {BAND_MODE_LIMIT} fixed-interface modes lie below "
-                                 f"f_max = {f_max:g} Hz (mode {k} at {np.sqrt(lam[-1]) / (2 * np.pi):.1f} Hz); "
-                                 "lower f_max or give n_modes")
+                raise InputError(band_error(who, band_limit, f_max, f"mode {k} at "
+                                            f"{np.sqrt(lam[-1]) / (2 * np.pi):.1f} Hz"))
             k = min(2 * k, want, n_i - 2)
             if n_modes is None:
-                k = min(k, BAND_MODE_LIMIT)
-    keep = np.arange(lam.size) < want
-    if lam_max is not None:
-        keep &= lam <= lam_max
-    lam, phi = lam[keep], phi[:, keep]
+                k = min(k, band_limit)
+    lam, phi = _select(lam, phi, want, f_max)
     norms = np.sqrt(np.einsum("ij,ij->j", phi, Mii @ phi))
     phi = phi / norms
     return lam, phi
 
 
-def _check_not_floating(lam, Kii, Mii, who):
+def band_error(who: str, band_limit: int, f_max: float, found: str) -> str:
+    """The one-line message of a band holding more than ``band_limit`` modes."""
+    return (f"{who}: more than {band_limit} fixed-interface modes lie below f_max = {f_max:g} Hz "
+            f"({found}); lower f_max or give n_modes")
+
+
+def _check_not_floating(lam, k_diag, m_diag, who):
     if lam.size == 0:
         return
-    # a floating part left after the pivot test of _factor has an eigenvalue at round-off,
-    # ~eps lambda_max ~ 1e-16 scale; a restrained but finely meshed component has
+    # a floating part left after the pivot test of the factorisation has an eigenvalue at
+    # round-off, ~eps lambda_max ~ 1e-16 scale; a restrained but finely meshed component has
     # lambda_1/scale ~ (h/L)^4 (a 47 m beam in 1 cm elements: 9e-13), hence 1e-14
-    scale = Kii.diagonal().sum() / max(Mii.diagonal().sum(), 1e-300)
+    scale = k_diag.sum() / max(m_diag.sum(), 1e-300)
     if lam[0] < 1e-14 * abs(scale):
         raise InputError(f"{who} floats (or has a mechanism) once its boundary DOFs are fixed: "
                          f"lowest fixed-interface eigenvalue {lam[0]:.3e} is zero; add boundary DOFs")

@@ -14,7 +14,7 @@ import json
 import os
 import time
 import warnings
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
@@ -23,6 +23,8 @@ from typing import Any, Callable
 import numpy as np
 
 from liftoff.core.records import TEMP_TAG, file_sha256, read_record, sweep_stale, write_record, write_text
+
+from .parallel import SERIAL, on_root
 
 _CODE_CACHE: dict[tuple[str, ...], str] = {}
 ARRAYS_FORMAT = "liftoff-stage-arrays"
@@ -88,10 +90,15 @@ class StageCache:
     file copied over it) is rebuilt with a warning. Builds of one key are serialised by a
     lock file, so concurrent runs on one cache write each entry once. A cache folder
     that cannot be written (read-only, full disk) is a warning: the run goes on without it.
+
+    ``comm``: the processes of the run (workflows/parallel.py). Rank 0 checks the entry
+    (holding the lock) and alone writes; every rank loads a hit, and a miss is built by
+    every rank (collectively for the distributed FE stages).
     """
 
     root: Path | None
     log: list = field(default_factory=list)
+    comm: Any = field(default=SERIAL, repr=False)
 
     def path(self, stage: str, key: str, suffix: str) -> Path | None:
         if self.root is None:
@@ -102,19 +109,21 @@ class StageCache:
                      save: Callable[[Any, Path], Any], load: Callable[[Path], Any], label: str = "") -> Any:
         """Load the product of ``stage`` under ``key`` if its entry checks, else build and save it."""
         t0 = time.perf_counter()
+        comm = self.comm
         p = self.path(stage, key, suffix)
-        if p is not None and not self._usable(p.parent):
-            p = None
+        if p is not None and not on_root(comm, lambda: self._usable(p.parent)):
+            p, self.root = None, None
         if p is None:
             out = build()
         else:
-            with _locked(p.with_name(f"{key}.lock")):
-                out = self._load(p, key, load, label or stage)
+            with _locked(p.with_name(f"{key}.lock")) if comm.rank == 0 else nullcontext():
+                out = self._load_all(p, key, load, label or stage)
                 if out is not None:
                     self.log.append((stage, label, "hit", time.perf_counter() - t0))
                     return out
                 out = build()
-                self._save(out, p, key, stage, save)
+                on_root(comm, lambda: self._save(out, p, key, stage, save), share=False)
+                self.root = comm.bcast(self.root if comm.rank == 0 else None)
         self.log.append((stage, label, "built", time.perf_counter() - t0))
         return out
 
@@ -130,6 +139,21 @@ class StageCache:
         warnings.warn(f"stage cache {str(self.root)!r}: {reason}; running without the cache", stacklevel=3)
         self.root = None
         return False
+
+    def _load_all(self, p: Path, key: str, load: Callable[[Path], Any], what: str):
+        """The product on every rank, or None on every rank (rank 0 checks the entry)."""
+        comm = self.comm
+        if comm.size == 1:
+            return self._load(p, key, load, what)
+        out = on_root(comm, lambda: self._load(p, key, load, what), share=False)
+        if not comm.bcast(out is not None if comm.rank == 0 else None):
+            return None
+        if comm.rank != 0:
+            try:
+                out = load(p)
+            except Exception:  # noqa: BLE001 - a rank that cannot read it: all ranks rebuild
+                out = None
+        return out if all(comm.allgather(out is not None)) else None
 
     def _load(self, p: Path, key: str, load: Callable[[Path], Any], what: str):
         record = p.with_name(f"{key}.entry.json")

@@ -9,10 +9,14 @@ the line asks to report it), 130/143 interrupted by SIGINT/SIGTERM.
 
     liftoff transient SCENARIO.toml --out DIR [--method direct|fixed-point] [--no-progress]
                       [--no-error-estimate] [--max-memory GB]
+
+Under ``mpirun -n N`` (or ``liftoff run --ranks N``) every rank prints its own error line
+and exits at once (workflows/parallel.py: errors are raised on every rank).
 """
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 import warnings
@@ -75,6 +79,14 @@ def _positive(text: str) -> float:
 
 
 def _run_transient(args: argparse.Namespace) -> int:
+    """Serial: under mpirun, rank 0 runs it and the other ranks wait."""
+    from liftoff.workflows.parallel import root_only, world
+
+    root_only(world(), lambda: _transient(args))
+    return EXIT_OK
+
+
+def _transient(args: argparse.Namespace) -> None:
     from liftoff.config import load_twobody
 
     scenario = load_twobody(args.scenario, method=args.method, progress=not args.no_progress)
@@ -162,7 +174,11 @@ class _Terminated(BaseException):
     """SIGTERM, raised in the main thread so that every cleanup (finally) runs."""
 
 
+_SIGNALLED: list[int] = []     # SIGTERM seen (its exception may surface as another one)
+
+
 def _on_sigterm(signum, frame):
+    _SIGNALLED.append(signum)
     raise _Terminated()
 
 
@@ -194,6 +210,9 @@ def main(argv: list[str] | None = None) -> int:
         print("liftoff: terminated (SIGTERM), no results written", file=sys.stderr)
         return EXIT_SIGTERM
     except Exception as exc:  # a bug: still one line, and a way to report it
+        if _SIGNALLED:        # SIGTERM inside a C extension's import surfaces as "ImportError: initialization failed"
+            print("liftoff: terminated (SIGTERM), no results written", file=sys.stderr)
+            return EXIT_SIGTERM
         return _fail(EXIT_INTERNAL, f"internal error ({type(exc).__name__}: {exc}); please report it with the "
                                     "command and input that caused it")
     finally:
@@ -201,7 +220,18 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _fail(code: int, exc) -> int:
-    print(f"liftoff: error: {_one_line(exc if isinstance(exc, BaseException) else Exception(exc))}", file=sys.stderr)
+    """Print the one-line error. Under mpirun every rank prints its own and leaves at once,
+    without MPI_Finalize: its barrier would wait forever for a rank that is still inside a
+    collective operation when the error is this rank's alone (mpirun then stops the others)."""
+    from liftoff.workflows.parallel import launched_size
+
+    line = f"liftoff: error: {_one_line(exc if isinstance(exc, BaseException) else Exception(exc))}"
+    if launched_size() > 1:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os.write(2, (line + "\n").encode())    # one write: lines of several ranks do not interleave
+        os._exit(code)
+    print(line, file=sys.stderr)
     return code
 
 

@@ -5,7 +5,8 @@ The builder parameters arrive checked, as the builders' own dataclasses
 PadParams, all on the scenario's StackLayout, so that interface points coincide);
 ``[model.materials.<volume>]`` replaces the material of a physical volume group. The unit
 thermal load (alpha * delta_T = 1) of every volume group is returned for the cryo preload
-(section 4.3).
+(section 4.3). Under mpirun, rank 0 meshes with gmsh and the dolfinx model is built over
+all ranks (fem.build_model on MPI.COMM_WORLD); the Component is gathered on every rank.
 """
 from __future__ import annotations
 
@@ -46,12 +47,19 @@ def build_component(comp: ComponentModel, model: ModelConfig, workdir: Path):
     from liftoff.meshes._occ import element_limit
     from liftoff.reduction import Component
 
-    with element_limit(model.max_elements, f"component {comp.name!r}"):
-        geo = geometry(comp, Path(workdir))
+    from .parallel import on_root, world
+
+    def mesh():
+        with element_limit(model.max_elements, f"component {comp.name!r}"):
+            return geometry(comp, Path(workdir))
+
+    geo = on_root(world(), mesh)   # gmsh on rank 0; its .msh is read there
     for vol, mat in model.materials.items():
         if vol in geo.volumes:
             geo.volumes[vol] = mat
-    fe = build_model(geo, model.degree)
+    from liftoff.fem.parallel import fe_comm
+
+    fe = build_model(geo, model.degree, comm=fe_comm(world()))
     liquid = fe.liquid_fields()
     if liquid is not None:
         from liftoff.reduction.liquid import LiquidMass

@@ -41,15 +41,10 @@ def main(argv=None) -> None:
     from liftoff.reduction import assemble, craig_bampton, system_modes
     from liftoff.transient import Forcing, PointForce, TabulatedForce, TransientProblem, estimate_step, solve
     from liftoff.transient.effects import center_of_gravity, cg_static_report
-    from liftoff.workflows.loads import (
-        applied_forces,
-        attitude_feedback,
-        contacts,
-        control_table,
-        recoveries,
-        softening,
-    )
-    from liftoff.workflows.pipeline import VEHICLE, StackModel, boundary_points, build_component, cryo_loads
+    from liftoff.workflows.loads import applied_forces, attitude_feedback, contacts, control_table
+    from liftoff.workflows.loads import recoveries, softening
+    from liftoff.workflows.pipeline import VEHICLE, StackModel, boundary_points, build_component, cb_solver
+    from liftoff.workflows.pipeline import cryo_loads
 
     from liftoff.core.labels import points_labels
 
@@ -67,11 +62,13 @@ def main(argv=None) -> None:
     for name, c in comps.items():
         print(f"{name:10s} {c.n_dof:7d} DOFs, points: {', '.join(boundary_points(c))}")
 
-    # 3. Craig-Bampton (section 3.0, eq. 13): every named point stays discrete.
+    # 3. Craig-Bampton (section 3.0, eq. 13): every named point stays discrete. FE
+    #    components use the PETSc/SLEPc solver (fem.petsc_solver), the stick model scipy's.
     cbs = {}
+    solver = cb_solver(model)[0]
     for name, c in comps.items():
         cm = model.components[name]
-        cbs[name] = craig_bampton(c, points_labels(boundary_points(c)), cm.n_modes, cm.f_max)
+        cbs[name] = craig_bampton(c, points_labels(boundary_points(c)), cm.n_modes, cm.f_max, solver=solver)
         print(f"{name:10s} CB: {cbs[name].n_modes} fixed-interface modes up to {cbs[name].fixed_freq_hz[-1]:.1f} Hz")
 
     # 4. Vehicle: overlay the components on shared points, free-free system modes (eq. 4);

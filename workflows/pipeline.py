@@ -41,6 +41,7 @@ from liftoff.core.labels import named_points, points_labels
 from liftoff.core.records import TEMP_TAG, file_sha256, sweep_stale
 
 from .cache import StageCache, load_arrays, save_arrays, stage_key
+from .parallel import on_root
 
 
 @dataclass
@@ -106,12 +107,31 @@ def component_stage(model: ModelConfig, name: str, cache: StageCache, workdir: P
     return out, thermal, key
 
 
+def cb_solver(model: ModelConfig):
+    """(solver, its code modules, its name) of the Craig-Bampton stage: PETSc/MUMPS/SLEPc,
+    distributed over the run's processes, for FE components (fem.petsc_solver); the
+    default numpy/scipy solver for the stick model's small matrices."""
+    if model.source == "stick":
+        return None, (), "scipy"
+    from liftoff.fem import petsc_solver
+    from liftoff.fem.parallel import fe_comm
+
+    from .parallel import world
+
+    return petsc_solver(fe_comm(world())), ("liftoff.fem.petsc_cb", "liftoff.fem.petsc_backend"), "petsc"
+
+
 def cb_stage(model: ModelConfig, name: str, comp: Component, comp_key: str, cache: StageCache) -> tuple[CBModel, str]:
+    """The CB model of a component (from the cache, or reduced with :func:`cb_solver`: a
+    cached Component is enough, the PETSc matrices are built from it)."""
     sel = model.components[name]
-    params = {"boundary": points_labels(boundary_points(comp)), "n_modes": sel.n_modes, "f_max": sel.f_max}
-    key = stage_key("cb", params, ("liftoff.reduction", "liftoff.core"), (comp_key,))
+    solver, solver_code, solver_name = cb_solver(model)
+    params = {"boundary": points_labels(boundary_points(comp)), "n_modes": sel.n_modes, "f_max": sel.f_max,
+              "solver": solver_name}
+    key = stage_key("cb", params, ("liftoff.reduction", "liftoff.core", *solver_code), (comp_key,))
     cb = cache.get_or_build("cb", key, ".npz",
-                            lambda: craig_bampton(comp, params["boundary"], params["n_modes"], params["f_max"]),
+                            lambda: craig_bampton(comp, params["boundary"], params["n_modes"], params["f_max"],
+                                                  solver=solver),
                             lambda out, p: out.save(p, recovery=True), load_cb, label=name)
     return cb, key
 
@@ -165,9 +185,10 @@ def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, wh
     t0 = time.perf_counter()
     comps, cbs, ckeys, thermal = {}, {}, {}, {}
     names = list(VEHICLE) + ["pad"]
-    sweep_stale(tempfile.gettempdir())          # geometry folders of killed runs
+    on_root(cache.comm, lambda: sweep_stale(tempfile.gettempdir()), share=False)   # geometry folders of killed runs
     with tempfile.TemporaryDirectory(prefix=f"liftoff-geom{TEMP_TAG}{os.getpid()}-") as work:
-        bar = tqdm(names, desc="model stages", unit="component", disable=not progress, leave=False)
+        bar = tqdm(names, desc="model stages", unit="component", disable=not progress or cache.comm.rank != 0,
+                   leave=False)
         for name in bar:
             bar.set_postfix_str(name)
             if model.components[name].nastran is not None:

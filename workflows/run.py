@@ -78,26 +78,44 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
     written into a staging folder that replaces ``out`` as a whole at the end
     (workflows/outdir.py), so a failed run leaves ``out`` as it was. ``error_estimate``:
     every named case runs again at h/2 (transient/accuracy.py) so that each max/min carries
-    an estimated error; ``max_memory`` (bytes) overrides the memory limit of the histories."""
+    an estimated error; ``max_memory`` (bytes) overrides the memory limit of the histories.
+
+    Under ``mpirun -n N`` every rank calls this: the model stages are built by all ranks
+    together (workflows/parallel.py), the cases and every file by rank 0, which returns the
+    RunOutput (the other ranks return None)."""
     from liftoff.config import Scenario, load_scenario
+
+    from .parallel import SERIAL, on_root, world
 
     t_start = time.perf_counter()
     out, opt = Path(out), options or Options()
+    comm = SERIAL if opt.mpi else world()      # --mpi: the other ranks serve the case pool
+    if comm.rank != 0:
+        echo, progress = (lambda *a, **k: None), False
     if isinstance(scenario, Scenario):
         sc = scenario.with_generated(n_cases) if n_cases is not None else scenario
     else:
         sc = load_scenario(scenario, n_cases=n_cases)
-    check_target(out)
+    on_root(comm, lambda: check_target(out), share=False)
     want_pics = snapshots and any(c.output.snapshots for c in sc.cases)
     if want_pics or _fields_wanted(sc, opt):  # pyvista (fem.snapshot) before dolfinx (FENICSX-NOTES.md)
         import liftoff.fem.snapshot  # noqa: F401
-    with _run_cache(cache_dir, out, sc.n_generated) as cache:
-        prep = prepare(sc, cache, progress, echo, error_estimate, max_memory)
-        with _executor(opt, sc.n_generated) as (executor, how):
-            camp = _run_generated(sc, prep, cache, executor, how, out, opt, progress, echo)
-            with staged_output(out, command=f"liftoff run {sc.path}") as stage:
-                output = write_results(sc, prep, stage, plots, want_pics, echo, t_start,
-                                       _Campaign(camp, executor, cache, opt), error_estimate)
+    from .parallel import root_only
+
+    with _run_cache(cache_dir, out, sc.n_generated, comm) as cache:
+        prep = prepare(sc, cache, progress, echo, error_estimate, max_memory)     # model stages: every rank
+        return root_only(comm, lambda: _cases_and_files(sc, prep, cache, opt, out, plots, want_pics, progress,
+                                                        echo, t_start, error_estimate))
+
+
+def _cases_and_files(sc, prep: Prepared, cache: StageCache, opt: Options, out: Path, plots: bool,
+                     want_pics: bool, progress: bool, echo, t_start: float, error_estimate: bool) -> RunOutput:
+    """Rank 0: the generated cases on their executor, then every output, staged into ``out``."""
+    with _executor(opt, sc.n_generated) as (executor, how):
+        camp = _run_generated(sc, prep, cache, executor, how, out, opt, progress, echo)
+        with staged_output(out, command=f"liftoff run {sc.path}") as stage:
+            output = write_results(sc, prep, stage, plots, want_pics, echo, t_start,
+                                   _Campaign(camp, executor, cache, opt), error_estimate)
     output.out = out
     output.files = [out / Path(f).relative_to(stage) for f in output.files]
     echo(f"  outputs in {out}/ ({len(output.files)} files); cache {cache.root}")
@@ -109,15 +127,15 @@ def _fields_wanted(sc, opt: Options) -> bool:
 
 
 @contextmanager
-def _run_cache(cache_dir, out: Path, n_generated: int):
+def _run_cache(cache_dir, out: Path, n_generated: int, comm):
     """The stage cache of a run; with generated cases and no cache, a temporary one (the
-    workers load the model from it by path)."""
+    workers load the model from it by path; under mpirun rank 0's, shared with the others)."""
     root = None if cache_dir is False else Path(cache_dir) if cache_dir else default_cache_dir(out)
     if root is None and n_generated:
         with tempfile.TemporaryDirectory(prefix="liftoff-cache-") as tmp:
-            yield StageCache(Path(tmp))
+            yield StageCache(Path(comm.bcast(tmp if comm.rank == 0 else None)), comm=comm)
         return
-    yield StageCache(root)
+    yield StageCache(root, comm=comm)
 
 
 @contextmanager
@@ -476,11 +494,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="ParaView .pvd/.vtu series and GIF of the governing case ([postprocess.fields])")
     g.add_argument("--compare", type=Path, default=None, metavar="PATH",
                    help="an earlier run's folder or max/min CSV: writes compare.csv (percent change)")
+    p.add_argument("--ranks", type=int, default=None, metavar="N",
+                   help="run on N MPI processes: launches `mpirun -n N liftoff run ...` (the same as "
+                        "starting it under mpirun yourself); the FE stages are distributed over them")
     p.set_defaults(func=_cli)
 
 
 def _cli(args: argparse.Namespace) -> int:
     from liftoff.config.barge import scenario_kind
+
+    from .parallel import launched_size
 
     kw = dict(cache_dir=False if args.no_cache else args.cache, progress=not args.no_progress,
               snapshots=not args.no_snapshots)
@@ -491,6 +514,13 @@ def _cli(args: argparse.Namespace) -> int:
 
         run_barge(args.scenario, args.out, **kw)
         return 0
+    if args.ranks is not None:
+        if args.ranks < 1:
+            raise InputError(f"--ranks: {args.ranks} must be >= 1")
+        if launched_size() > 1 and args.ranks != launched_size():
+            raise InputError(f"--ranks {args.ranks} inside `mpirun -n {launched_size()}`: give one of the two")
+        if args.ranks > 1 and launched_size() == 1:
+            return launch(args.ranks, _child_args(args))
     opt = Options(workers=args.workers, dask=args.dask, mpi=args.mpi, campaign=args.campaign,
                   keep_histories=args.keep_histories, fields=args.fields, compare=args.compare)
     if args.cases is not None and args.cases < 0:
@@ -498,3 +528,62 @@ def _cli(args: argparse.Namespace) -> int:
     run(args.scenario, args.out, n_cases=args.cases, options=opt, error_estimate=not args.no_error_estimate,
         max_memory=None if args.max_memory is None else args.max_memory * 1e9, **kw)
     return 0
+
+
+def _child_args(args: argparse.Namespace) -> list[str]:
+    argv = ["run"] + ([str(args.scenario)] if args.scenario is not None else []) + ["--out", str(args.out)]
+    argv += ["--cache", str(args.cache)] if args.cache is not None else []
+    return argv + [flag for flag, on in (("--no-cache", args.no_cache), ("--no-snapshots", args.no_snapshots),
+                                         ("--no-progress", args.no_progress)) if on]
+
+
+def launch(ranks: int, argv: list[str]) -> int:
+    """``mpirun --quiet -n ranks python -m liftoff.workflows.cli ARGV``; returns its exit
+    status. Every rank reports an error (it may be its own); the copies of an error line
+    are printed once."""
+    import os
+    import shutil
+    import subprocess
+    import sys
+
+    from liftoff.core.errors import InputError
+
+    mpirun = shutil.which("mpirun")
+    if mpirun is None:
+        raise InputError("--ranks: mpirun not found (Debian package openmpi-bin, installed with python3-dolfinx-real)")
+    cmd = [mpirun, "--quiet", "-n", str(ranks)] + (["--oversubscribe"] if ranks > (os.cpu_count() or 1) else [])
+    env = dict(os.environ)
+    if hasattr(os, "geteuid") and os.geteuid() == 0:   # containers: Open MPI refuses root otherwise
+        env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+    proc = subprocess.Popen(cmd + [sys.executable, "-m", "liftoff.workflows.cli", *argv], stderr=subprocess.PIPE,
+                            env=env)
+    _forward_stderr(proc.stderr.fileno(), sys.stderr)
+    return proc.wait()
+
+
+def _forward_stderr(fd: int, dest) -> None:
+    """Copy the ranks' stderr to ``dest`` as it comes (progress bars included), dropping
+    repeated ``liftoff: error:`` lines."""
+    import os
+
+    seen, pending = set(), b""
+    while True:
+        chunk = os.read(fd, 65536)
+        if not chunk:
+            break
+        lines = (pending + chunk).split(b"\n")
+        pending = lines.pop()
+        for line in lines:
+            if line.startswith(b"liftoff: error:"):
+                if line in seen:
+                    continue
+                seen.add(line)
+            dest.write(line.decode(errors="replace") + "\n")
+        if b"\r" in pending and not pending.startswith(b"liftoff:"):    # a progress bar redrawn in place
+            cut = pending.rindex(b"\r") + 1
+            dest.write(pending[:cut].decode(errors="replace"))
+            pending = pending[cut:]
+        dest.flush()
+    if pending:
+        dest.write(pending.decode(errors="replace"))
+        dest.flush()

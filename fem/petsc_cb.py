@@ -1,0 +1,307 @@
+"""The PETSc/SLEPc Craig-Bampton solver: ``reduction.craig_bampton(..., solver=petsc_solver())``.
+
+It does the linear algebra of a Craig-Bampton reduction (section 3.0, eq. 13 of Prabhakar &
+Palermo) distributed over the processes of ``comm``; the CB matrices themselves are formed
+by ``reduction.craig_bampton`` (one CB method, the solver injected):
+
+* the interior block K_ii, M_ii of the component's K and M (boundary DOFs removed) as
+  distributed PETSc AIJ matrices, the interior rows split evenly over the processes;
+* ONE MUMPS Cholesky (LDL^T) factor of K_ii. It is the shift-invert operator (sigma = 0)
+  of the SLEPc Krylov-Schur fixed-interface eigensolve K_ii Phi = M_ii Phi omega^2, and it
+  gives the constraint modes Psi = -K_ii^-1 K_ib in one multi-right-hand-side solve
+  (``MatMatSolve`` of the factor: petsc4py 3.18 has no KSP.matSolve);
+* a band (``f_max`` without ``n_modes``): the number of eigenvalues below
+  (2 pi f_max)^2 is the number of negative pivots of an LDL^T factor of
+  K_ii - (2 pi f_max)^2 M_ii (Sylvester's law of inertia, MUMPS INFOG(12)); that many
+  modes are then computed with the shared factor ("target and count": no growing
+  mode count, and a mode missed by the Krylov solver is detected);
+* Phi (mass-normalised) and Psi gathered on every process (the CB model keeps them for
+  recovery); the small CB matrices are then the same on every process.
+
+Errors: K_ii singular or indefinite (the component floats once its boundary is fixed:
+MUMPS null or negative pivots) is an InputError; unconverged or missed eigenpairs a
+ConvergenceError. Both are raised on every process (no deadlock). Units SI.
+"""
+from __future__ import annotations
+
+import itertools
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from liftoff.core.errors import ConvergenceError, InputError
+
+from . import petsc_backend as pb
+
+_PREFIXES = itertools.count()
+
+
+@dataclass(frozen=True)
+class PetscSolver:
+    """CB solver on PETSc/MUMPS/SLEPc over ``comm`` (see the module docstring).
+    ``tol``: SLEPc relative residual tolerance; ``ncv``: Krylov subspace size for
+    ``nev`` wanted modes, max(2 nev + 1, nev + 24) by default."""
+
+    comm: MPI.Comm = field(default_factory=lambda: MPI.COMM_WORLD)
+    tol: float = 1e-10
+    max_it: int = 500
+
+    def __call__(self, K: sp.csr_matrix, M: sp.csr_matrix, interior: np.ndarray, boundary: np.ndarray, *,
+                 n_modes: int | None, f_max: float | None, band_limit: int, who: str, dof_name=str):
+        timings = {}
+        t0 = time.perf_counter()
+        Kii, Mii, Kib_loc = interior_matrices(self.comm, K, M, interior, boundary)
+        timings["partition_s"] = time.perf_counter() - t0
+        n_i = Kii.getSize()[0]
+        want = n_i if n_modes is None else min(n_modes, n_i)
+        try:
+            if n_modes is None and want:
+                t0 = time.perf_counter()
+                lam_max = (2 * np.pi * f_max) ** 2
+                count = count_below(Kii, Mii, lam_max, who)
+                timings["count_s"] = time.perf_counter() - t0
+                if count > band_limit:
+                    from_count = f"{count} by the inertia of K_ii - (2 pi f_max)^2 M_ii"
+                    raise InputError(_band_error(who, band_limit, f_max, from_count))
+                want = count
+            with _solver(Kii, Mii, max(want, 1), self.tol, self.max_it, who) as eps:
+                t0 = time.perf_counter()
+                _set_up(eps, who)
+                timings["factor_s"] = time.perf_counter() - t0
+                t0 = time.perf_counter()
+                lam, phi_loc = eigenpairs(eps, Mii, want, who) if want else (np.zeros(0), np.zeros((Kib_loc.shape[0], 0)))
+                timings["eigensolve_s"] = time.perf_counter() - t0
+                t0 = time.perf_counter()
+                psi_loc = -_factor_solve(eps.getST().getKSP(), Kib_loc, n_i)
+                timings["constraint_solve_s"] = time.perf_counter() - t0
+                _check_finite(self.comm, psi_loc, who)
+        finally:
+            Kii.destroy()
+            Mii.destroy()
+        if n_modes is None and lam.size and lam[-1] > lam_max * (1 + 1e-8):
+            raise ConvergenceError(f"{who}: SLEPc returned a mode at {np.sqrt(lam[-1]) / (2 * np.pi):.6g} Hz "
+                                   f"above f_max = {f_max:g} Hz although {want} modes lie below it: "
+                                   "a mode of a near-multiple cluster was missed")
+        t0 = time.perf_counter()
+        phi, psi = gather_rows(self.comm, phi_loc), gather_rows(self.comm, psi_loc)
+        timings["gather_s"] = time.perf_counter() - t0
+        return lam, phi, psi, timings
+
+
+def petsc_solver(comm: MPI.Comm | None = None, tol: float = 1e-10) -> PetscSolver:
+    """The PETSc/SLEPc CB solver over ``comm`` (default MPI.COMM_WORLD)."""
+    return PetscSolver(MPI.COMM_WORLD if comm is None else comm, tol)
+
+
+# ------------------------------------------------------------------ pieces
+def row_range(comm: MPI.Comm, n: int) -> tuple[int, int]:
+    """PETSc's default contiguous split of n rows: this process owns rows r0..r1-1."""
+    size, rank = comm.size, comm.rank
+    r0 = rank * (n // size) + min(rank, n % size)
+    return r0, r0 + n // size + (1 if rank < n % size else 0)
+
+
+def interior_matrices(comm: MPI.Comm, K: sp.csr_matrix, M: sp.csr_matrix, interior: np.ndarray,
+                      boundary: np.ndarray) -> tuple[PETSc.Mat, PETSc.Mat, np.ndarray]:
+    """Distributed K_ii, M_ii (PETSc AIJ, interior numbering) and this process's rows of
+    K_ib (dense, n_local x n_b), from the whole scipy K, M present on every process."""
+    n_i = interior.size
+    r0, r1 = row_range(comm, n_i)
+    rows = interior[r0:r1]
+    mats, Kib_loc = [], None
+    for A in (K, M):          # one matrix at a time: its local copies live only until PETSc has its own
+        A_rows = sp.csr_matrix(A)[rows]
+        if Kib_loc is None:
+            Kib_loc = np.asarray(A_rows[:, boundary].todense())
+        A_ii = A_rows[:, interior]
+        del A_rows
+        mats.append(pb.csr_matrix(comm, rows.size, rows.size, n_i, A_ii))
+        del A_ii
+        mats[-1].setOption(PETSc.Mat.Option.SYMMETRIC, True)
+    return mats[0], mats[1], Kib_loc
+
+
+@contextmanager
+def _mumps_options(comm: MPI.Comm, inertia: bool = True):
+    """A fresh options prefix for one MUMPS factor. With ``inertia``: null-pivot detection
+    (ICNTL(24)) and, in parallel, no ScaLAPACK at the root node (ICNTL(13)), which MUMPS
+    needs to report the inertia (MatGetInertia)."""
+    prefix = f"liftoff_cb{next(_PREFIXES)}_"
+    opts = PETSc.Options()
+    values = {"mat_mumps_icntl_24": 1} if inertia else {}
+    if inertia and comm.size > 1:
+        values["mat_mumps_icntl_13"] = 1
+    for k, v in values.items():
+        opts.setValue(prefix + k, v)
+    try:
+        yield prefix
+    finally:
+        for k in values:
+            opts.delValue(prefix + k)
+
+
+def _factor_error(what: str, who: str, detail: str) -> InputError:
+    return InputError(f"{who} floats (or has a mechanism) once its boundary DOFs are fixed: {what} "
+                      f"({detail}); add boundary DOFs that restrain it")
+
+
+def _inertia(F: PETSc.Mat) -> tuple[int, int, int]:
+    nneg, nzero, npos = F.getInertia()
+    return int(nneg), int(nzero), int(npos)
+
+
+def count_below(Kii: PETSc.Mat, Mii: PETSc.Mat, lam: float, who: str = "component") -> int:
+    """Number of eigenvalues of K_ii x = mu M_ii x with mu <= ``lam``: the negative (and
+    null) pivots of a MUMPS LDL^T factor of K_ii - lam M_ii (Sylvester's law of inertia)."""
+    comm = Kii.getComm().tompi4py()
+    A = Kii.copy()
+    A.axpy(-lam, Mii, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+    ksp = PETSc.KSP().create(comm)
+    try:
+        with _mumps_options(comm) as prefix:
+            ksp.setOptionsPrefix(prefix)
+            ksp.setOperators(A)
+            pb._mumps_cholesky(ksp)
+            try:
+                ksp.setUp()
+            except PETSc.Error as exc:
+                raise InputError(f"{who}: factorisation of K_ii - (2 pi f_max)^2 M_ii failed "
+                                 f"(PETSc error {exc.ierr})") from None
+            F = ksp.getPC().getFactorMatrix()
+            if F.getMumpsInfog(1) < 0:
+                raise InputError(f"{who}: MUMPS failed to factor K_ii - (2 pi f_max)^2 M_ii "
+                                 f"(INFOG(1) = {F.getMumpsInfog(1)})")
+            nneg, nzero, _ = _inertia(F)
+    finally:
+        ksp.destroy()
+        A.destroy()
+    return nneg + nzero
+
+
+@contextmanager
+def _solver(Kii: PETSc.Mat, Mii: PETSc.Mat, nev: int, tol: float, max_it: int, who: str):
+    """SLEPc GHEP, Krylov-Schur, shift-invert at sigma = 0 with a MUMPS factor of K_ii."""
+    from slepc4py import SLEPc
+
+    comm = Kii.getComm().tompi4py()
+    n = Kii.getSize()[0]
+    eps = SLEPc.EPS().create(comm)
+    with _mumps_options(comm) as prefix:
+        try:
+            eps.setOperators(Kii, Mii)
+            eps.setProblemType(SLEPc.EPS.ProblemType.GHEP)
+            eps.setDimensions(nev, min(n, max(2 * nev + 1, nev + 24)), PETSc.DECIDE)
+            eps.setType(SLEPc.EPS.Type.KRYLOVSCHUR)
+            st = eps.getST()
+            st.setType(SLEPc.ST.Type.SINVERT)
+            st.setShift(0.0)
+            st.setMatMode(SLEPc.ST.MatMode.INPLACE)   # sigma = 0: factor K_ii itself, no copy
+            ksp = st.getKSP()
+            ksp.setOptionsPrefix(prefix)
+            pb._mumps_cholesky(ksp)
+            eps.setTarget(0.0)
+            eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
+            eps.setTolerances(tol, max_it)
+            # no purification: it costs one more solve per eigenvector and serves a singular
+            # M, while M_ii is positive definite (the Ritz vectors meet tol as they are)
+            eps.setPurify(False)
+            yield eps
+        finally:
+            eps.destroy()
+
+
+def _set_up(eps, who: str) -> None:
+    """Factor K_ii (EPSSetUp); a null or negative pivot means K_ii is singular."""
+    try:
+        eps.setUp()
+    except PETSc.Error as exc:
+        raise _factor_error("factorisation of K_ii failed", who, f"PETSc error {exc.ierr}") from None
+    F = eps.getST().getKSP().getPC().getFactorMatrix()
+    if F.getMumpsInfog(1) < 0:
+        raise _factor_error("MUMPS failed to factor K_ii", who, f"INFOG(1) = {F.getMumpsInfog(1)}")
+    nneg, nzero, _ = _inertia(F)
+    if nneg or nzero:
+        raise _factor_error("K_ii is singular", who, f"{nzero} null and {nneg} negative pivots")
+
+
+def _factor_solve(ksp: PETSc.KSP, B_loc: np.ndarray, n: int) -> np.ndarray:
+    """X = A^-1 B for the factored operator of ``ksp`` and the dense right-hand sides
+    B (this process's rows), in one MatMatSolve; returns this process's rows of X."""
+    comm = ksp.getComm()
+    m, k = B_loc.shape
+    if k == 0:
+        return np.zeros((m, 0))
+    B = PETSc.Mat().createDense(((m, n), (PETSc.DECIDE, k)), comm=comm)
+    B.setUp()
+    B.getDenseArray()[:] = B_loc
+    B.assemble()
+    X = B.duplicate()
+    try:
+        ksp.getPC().getFactorMatrix().matSolve(B, X)
+        return np.array(X.getDenseArray(), copy=True)
+    finally:
+        B.destroy()
+        X.destroy()
+
+
+def _check_finite(comm: MPI.Comm, x: np.ndarray, who: str) -> None:
+    if not comm.allreduce(bool(np.all(np.isfinite(x))), op=MPI.LAND):
+        raise _factor_error("K_ii is singular", who, "constraint modes not finite")
+
+
+def eigenpairs(eps, Mii: PETSc.Mat, want: int, who: str = "component") -> tuple[np.ndarray, np.ndarray]:
+    """Solve; the ``want`` lowest eigenvalues (ascending) and this process's rows of their
+    M_ii-normalised eigenvectors."""
+    try:
+        eps.solve()
+    except PETSc.Error as exc:
+        raise ConvergenceError(f"{who}: SLEPc fixed-interface eigensolve failed (PETSc error {exc.ierr})") from None
+    nconv = eps.getConverged()
+    if nconv < want:
+        raise ConvergenceError(f"{who}: SLEPc converged {nconv} of {want} fixed-interface eigenpairs "
+                               f"({eps.getIterationNumber()} iterations)")
+    v, Mv = Mii.createVecRight(), Mii.createVecLeft()
+    lam = np.array([eps.getEigenvalue(j).real for j in range(nconv)])
+    order = np.argsort(lam, kind="stable")[:want]
+    cols = []
+    for j in order:
+        eps.getEigenvector(int(j), v)
+        Mii.mult(v, Mv)
+        cols.append(np.array(v.getArray(readonly=True)) / np.sqrt(v.dot(Mv).real))
+    phi = np.column_stack(cols) if cols else np.zeros((v.getLocalSize(), 0))
+    return lam[order], phi
+
+
+def gather_rows(comm: MPI.Comm, local: np.ndarray) -> np.ndarray:
+    """Row blocks of the processes stacked in rank order, on every process."""
+    if comm.size == 1:
+        return local
+    return np.vstack(comm.allgather(np.ascontiguousarray(local)))
+
+
+def _band_error(who: str, band_limit: int, f_max: float, found: str) -> str:
+    return (f"{who}: more than {band_limit} fixed-interface modes lie below f_max = {f_max:g} Hz "
+            f"({found}); lower f_max or give n_modes")
+
+
+# ------------------------------------------------------------------ benchmark helper
+def eigensolve_alone(Kii: PETSc.Mat, Mii: PETSc.Mat, n_modes: int, tol: float = 1e-10,
+                     max_it: int = 500) -> tuple[np.ndarray, dict]:
+    """The fixed-interface eigensolve by itself, as any modal reduction needs it (factor
+    K_ii, Krylov-Schur, the ``n_modes`` lowest eigenpairs, vectors left on their ranks):
+    (eigenvalues, timings). What a CB reduction costs is measured against this
+    (benchmarks/bench_cb.py)."""
+    timings = {}
+    with _solver(Kii, Mii, n_modes, tol, max_it, "fixed-interface eigensolve") as eps:
+        t0 = time.perf_counter()
+        eps.setUp()
+        timings["factor_s"] = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        lam, _ = eigenpairs(eps, Mii, n_modes)
+        timings["eigensolve_s"] = time.perf_counter() - t0
+    return lam, timings

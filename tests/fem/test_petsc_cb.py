@@ -1,0 +1,165 @@
+"""The PETSc/SLEPc Craig-Bampton solver (fem.petsc_cb) against the scipy one and dense
+eigensolutions: reduction.craig_bampton with ``solver=fem.petsc_solver()``.
+
+Tolerances. Both solvers factor the same K_ii (MUMPS LDL^T / SuperLU): the constraint
+modes, hence K_B and M_B, agree to cond(K_ii) x machine epsilon (cond ~ 1e6-1e8 here;
+required 1e-8, measured ~1e-14). SLEPc stops at a relative residual of 1e-10 and ARPACK
+at machine precision; for a symmetric definite pencil the eigenvalue error is of the
+order of the residual squared over the gap, so frequencies agree far below 1e-10
+(measured ~1e-14); eigenvectors, hence C_M, to residual/relative gap (gaps >= 1e-2
+here: required 1e-8)."""
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+pytest.importorskip("slepc4py")
+from liftoff.core.errors import InputError  # noqa: E402
+from liftoff.fem import petsc_solver  # noqa: E402
+from liftoff.reduction import Component, assemble, craig_bampton, system_modes  # noqa: E402
+from liftoff.reduction.models import chain_component, hex_block, six_labels, spider_component  # noqa: E402
+
+pytestmark = pytest.mark.fem
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
+BOX = dict(L=1.0, W=0.1, H=0.07, n=(24, 3, 2))
+
+
+def block(cells=(3, 4, 20), size=(0.1, 0.13, 0.6)):
+    """Aluminium hex8 block with spiders on both ends (no repeated frequencies: 0.1 x 0.13)."""
+    K, M, nodes = hex_block(cells, size)
+    c = (size[0] / 2, size[1] / 2)
+    ends = {"root": (np.flatnonzero(nodes[:, 2] < 1e-9), (*c, 0.0)),
+            "tip": (np.flatnonzero(nodes[:, 2] > size[2] - 1e-9), (*c, size[2]))}
+    return spider_component("block", K, M, nodes, ends), six_labels("root") + six_labels("tip")
+
+
+def compare(ref, cb, M):
+    """(freq, K, M) relative differences, mode signs aligned by Phi_petsc^T M Phi_scipy."""
+    s = np.sign(np.einsum("ij,ij->j", cb.fixed_interface_modes, M @ ref.fixed_interface_modes))
+    S = np.diag(np.r_[s, np.ones(cb.n_boundary)])
+    df = np.abs(cb.fixed_omega / ref.fixed_omega - 1).max() if ref.n_modes else 0.0
+    return (df, np.abs(cb.K - ref.K).max() / np.abs(ref.K).max(),
+            np.abs(S @ cb.M @ S - ref.M).max() / np.abs(ref.M).max())
+
+
+@pytest.mark.parametrize("select", [dict(n_modes=12), dict(f_max=20000.0), dict(n_modes=5, f_max=20000.0),
+                                    dict(n_modes=0)])
+def test_petsc_cb_equals_scipy_cb(select):
+    comp, bl = block()
+    ref = craig_bampton(comp, bl, **select)
+    cb = craig_bampton(comp, bl, solver=petsc_solver(), **select)
+    assert cb.n_modes == ref.n_modes and cb.boundary_labels == ref.boundary_labels
+    df, dK, dM = compare(ref, cb, comp.M)
+    print(f"{select}: {cb.n_modes} modes, freq {df:.1e}, K {dK:.1e}, M {dM:.1e}")
+    assert df < 1e-10 and dK < 1e-8 and dM < 1e-8
+    assert np.allclose(cb.label_transform[:, cb.n_modes:], ref.label_transform[:, ref.n_modes:], atol=1e-10)
+    assert {"factor_s", "constraint_solve_s", "eigensolve_s"} <= set(cb.timings)
+
+
+def test_all_fixed_interface_modes_give_the_full_model():
+    # CB with every fixed-interface mode is an exact change of basis: the free-free
+    # system modes equal the full model's (dense eigh). SLEPc residual 1e-10 -> ~1e-9
+    # on the frequencies of this ill-conditioned solid (tolerance as the scipy test's 1e-8).
+    comp, bl = block((2, 2, 10), (0.1, 0.13, 0.6))
+    cb = craig_bampton(comp, bl, n_modes=comp.n_dof, solver=petsc_solver())
+    assert cb.n_modes == comp.n_dof - len(bl)
+    f_cb = system_modes(assemble([cb], "block")).freq_hz[6:]
+    lam = sla.eigh(comp.K.toarray(), comp.M.toarray(), eigvals_only=True)[6:]
+    f_ref = np.sqrt(lam) / (2 * np.pi)
+    err = np.abs(f_cb / f_ref - 1)
+    print(f"{comp.n_dof} DOFs, all {cb.n_modes} modes: worst {err.max():.1e}, first 20 {err[:20].max():.1e}")
+    assert err.max() < 1e-8
+
+
+@pytest.mark.parametrize("k", [0, 7, 30])
+def test_band_returns_exactly_the_modes_below_f_max(k):
+    # dense eigensolution of K_ii, M_ii; f_max halfway between modes k and k+1 (k = 0:
+    # below the first mode: a band with no mode), then just above mode k+1 (relative gap
+    # 1e-6 >> SLEPc's accuracy): mode k+1 is in the band
+    comp, bl = block()
+    i = np.setdiff1d(np.arange(comp.n_dof), comp.dofs_of(bl))
+    lam = sla.eigh(comp.K[i][:, i].toarray(), comp.M[i][:, i].toarray(), eigvals_only=True)
+    f = np.sqrt(lam) / (2 * np.pi)
+    assert f[k + 1] / f[k] - 1 > 1e-3                # a clean cut (no near-double mode)
+    f_max = 0.5 * (f[k - 1] + f[k]) if k else 0.5 * f[0]
+    cb = craig_bampton(comp, bl, f_max=f_max, solver=petsc_solver())
+    assert cb.n_modes == k and np.allclose(cb.fixed_freq_hz, f[:k], rtol=1e-10)
+    cb = craig_bampton(comp, bl, f_max=f[k] * (1 + 1e-6), solver=petsc_solver())
+    assert cb.n_modes == k + 1 and np.allclose(cb.fixed_freq_hz, f[: k + 1], rtol=1e-10)
+    assert "count_s" in cb.timings
+
+
+def test_band_with_too_many_modes_is_a_clear_error(monkeypatch):
+    # the mode count comes from the inertia, before any eigensolve (limit lowered to 20)
+    import importlib
+
+    monkeypatch.setattr(importlib.import_module("liftoff.reduction.craig_bampton"), "BAND_MODE_LIMIT", 20)
+    comp, bl = block()
+    with pytest.raises(InputError, match=r"component 'block'.*more than 20 fixed-interface modes.*f_max = 1e\+06 Hz"):
+        craig_bampton(comp, bl, f_max=1e6, solver=petsc_solver())
+
+
+def test_floating_component_is_an_input_error():
+    # held by three translations only: the beam can spin about its end (K_ii singular:
+    # MUMPS null/negative pivots); two beams, one held: the other floats
+    sec = dict(E=70e9, nu=0.33, A=4e-4, Iy=6e-8, Iz=1.1e-7, J=1.2e-7, rho=2700.0)
+    x = np.linspace(0, 1.0, 9)
+    beam = chain_component("beam", np.c_[x, 0 * x, 0 * x], 0, **sec)
+    for select in (dict(n_modes=3), dict(n_modes=0), dict(f_max=1000.0)):
+        with pytest.raises(InputError, match="component 'beam' floats") as e:
+            craig_bampton(beam, ["n0:Tx", "n0:Ty", "n0:Tz"], solver=petsc_solver(), **select)
+        assert "\n" not in str(e.value)
+    other = chain_component("b", np.c_[x + 2, 0 * x, 0 * x], 9, **sec)
+    both = Component("two", sp.block_diag([beam.K, other.K]), sp.block_diag([beam.M, other.M]),
+                     beam.dof_labels + other.dof_labels, np.r_[beam.label_dofs, other.label_dofs + beam.n_dof],
+                     beam.points + other.points, np.vstack([beam.point_coords, other.point_coords]))
+    with pytest.raises(InputError, match="component 'two' floats"):
+        craig_bampton(both, six_labels("n0"), n_modes=4, solver=petsc_solver())
+
+
+# ------------------------------------------------------------------ FE component, MPI
+def _mpirun(n, path, f_max):
+    mpirun = shutil.which("mpirun")
+    if mpirun is None:
+        pytest.skip("mpirun not installed (Debian package openmpi-bin comes with python3-dolfinx-real)")
+    env = dict(os.environ, PYTHONPATH=str(ROOT), OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+               OMPI_MCA_rmaps_base_oversubscribe="1", PYVISTA_OFF_SCREEN="true")
+    cmd = [mpirun, "-n", str(n), sys.executable, str(HERE / "mpi_cb_script.py"), path,
+           *(str(BOX[k]) for k in "LWH"), str(f_max)]
+    res = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=300, cwd=ROOT)
+    lines = [ln for ln in res.stdout.splitlines() if ln.startswith("RESULT ")]
+    assert res.returncode == 0 and lines, f"mpirun failed ({res.returncode}): {res.stderr[-2000:]}"
+    return json.loads(lines[0][7:])
+
+
+@pytest.mark.slow
+def test_fe_component_serial_and_two_ranks(msh):
+    # the same gmsh box built and reduced on 1 and on 2 processes; on each, the PETSc CB
+    # equals the scipy CB of the same (gathered) component, and the two runs agree with
+    # each other (the interior DOF order differs, the CB matrices do not; mode signs
+    # aside, so K_B, M_B and the frequencies are compared)
+    path = msh("box", **BOX)
+    runs = [_mpirun(n, path, 3000.0) for n in (1, 2)]
+    assert [r["size"] for r in runs] == [1, 2] and runs[0]["n_dof"] == runs[1]["n_dof"]
+    for r in runs:
+        for key in ("count", "band"):
+            c = r[key]
+            print(f"{r['size']} rank(s), {key}: {c['n']} modes, freq {c['freq_err']:.1e}, K {c['K_err']:.1e}, "
+                  f"M {c['M_err']:.1e}, T_c {c['T_err']:.1e}")
+            assert c["n"][0] == c["n"][1] and c["freq_err"] < 1e-10 and c["K_err"] < 1e-8 and c["M_err"] < 1e-8
+            assert c["T_err"] < 1e-8
+    assert runs[0]["band"]["n"][0] >= 3
+    for key in ("count", "band"):
+        a, b = runs[0][key], runs[1][key]
+        assert np.allclose(a["freq"], b["freq"], rtol=1e-10)
+        for m in ("K_B", "M_B"):
+            A, B = np.array(a[m]), np.array(b[m])
+            assert np.abs(A - B).max() < 1e-8 * np.abs(A).max()

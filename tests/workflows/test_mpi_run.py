@@ -1,0 +1,94 @@
+"""`liftoff run --ranks 2` (mpirun) against the serial run: the FE stages distributed over
+two processes give the serial results within solver tolerance, only rank 0 writes, the
+stage cache works across runs (a CB-stage miss with a component-stage hit), and errors
+end every rank with one line and exit status 2, without hanging."""
+import importlib.util
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from liftoff.transient import load_result
+from liftoff.workflows.cli import main
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parents[1]
+HAVE_FE = all(importlib.util.find_spec(m) is not None for m in ("dolfinx", "gmsh", "slepc4py"))
+pytestmark = [pytest.mark.slow, pytest.mark.fem,
+              pytest.mark.skipif(not HAVE_FE or shutil.which("mpirun") is None, reason="needs dolfinx and mpirun")]
+MODEL = {"source": "fe", "zeta": 0.01,
+         "component": {"core": {"mesh_size": 1.2, "n_modes": 8, "f_max": 40.0},
+                       "srb_left": {"n_modes": 6, "f_max": 40.0}, "srb_right": {"n_modes": 6, "f_max": 40.0},
+                       "orbiter": {"n_modes": 6, "f_max": 40.0}},
+         "pad": {"mesh_size": 2.4, "n_modes": 8, "f_max": 60.0},
+         "system": {"f_max": 40.0, "pad_f_max": 60.0}}
+
+
+def _scenario(tmp_path, model, **kw):
+    """The scenario writer of test_run.py (the default scenario with another [model])."""
+    spec = importlib.util.spec_from_file_location("liftoff_test_run", HERE / "test_run.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod._scenario(tmp_path, model, **kw)
+
+
+def _liftoff(*args, mpirun=False, timeout=600):
+    env = dict(os.environ, PYTHONPATH=str(ROOT), PYVISTA_OFF_SCREEN="true", OMPI_ALLOW_RUN_AS_ROOT="1",
+               OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_rmaps_base_oversubscribe="1")
+    cmd = [sys.executable, "-m", "liftoff.workflows.cli", *map(str, args)]
+    if mpirun:
+        cmd = [shutil.which("mpirun"), "--quiet", "-n", "2", *cmd]
+    return subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=timeout, cwd=ROOT)
+
+
+def test_two_ranks_give_the_serial_run(tmp_path, capsys):
+    p = _scenario(tmp_path, MODEL, t_end=7.5, cases=[{"name": "nominal"}])
+    assert main(["run", str(p), "--out", str(tmp_path / "serial"), "--cache", str(tmp_path / "c1"),
+                 "--no-progress", "--no-snapshots"]) == 0
+    capsys.readouterr()
+    res = _liftoff("run", p, "--out", tmp_path / "two", "--cache", tmp_path / "c2", "--no-progress",
+                   "--ranks", "2")
+    assert res.returncode == 0, res.stderr[-3000:]
+    assert res.stdout.count("wall time per stage") == 1          # rank 0 speaks, rank 1 is silent
+    a, b = load_result(tmp_path / "serial" / "results_nominal.h5"), load_result(tmp_path / "two" / "results_nominal.h5")
+    # CB models from the same meshes on 1 and 2 processes: MUMPS/SLEPc round-off and the
+    # eigensolver tolerance (relative residual 1e-10) only
+    err = np.abs(a.contact_force - b.contact_force).max() / np.abs(a.contact_force).max()
+    print(f"2 ranks vs serial: post forces {err:.1e} of the peak")
+    assert a.contact_force.shape == b.contact_force.shape and err < 1e-7
+    assert (tmp_path / "two" / "table1.txt").read_text() == (tmp_path / "serial" / "table1.txt").read_text()
+    for d, n in (("fe", 5), ("cb", 5), ("system", 2)):   # one entry per product (rank 0's), no stray files
+        names = sorted(f.name for f in (tmp_path / "c2" / d).iterdir() if not f.name.endswith(".lock"))
+        keys = {name.split(".")[0] for name in names}
+        assert len(keys) == n and all(f"{k}.entry.json" in names for k in keys), names
+        assert all(name.endswith((".npz", ".entry.json")) for name in names), names
+    assert (tmp_path / "two" / "snapshot_release_nominal.png").stat().st_size > 20_000
+    # CB stage missing, component stage cached: the PETSc matrices are built from the
+    # cached components
+    shutil.rmtree(tmp_path / "c2" / "cb")
+    shutil.rmtree(tmp_path / "c2" / "system")
+    res = _liftoff("run", p, "--out", tmp_path / "again", "--cache", tmp_path / "c2", "--no-progress",
+                   "--no-snapshots", mpirun=True)
+    assert res.returncode == 0, res.stderr[-3000:]
+    assert "fe core (hit)" in res.stdout and "cb core (built)" in res.stdout
+    c = load_result(tmp_path / "again" / "results_nominal.h5")
+    assert np.abs(c.contact_force - b.contact_force).max() < 1e-7 * np.abs(b.contact_force).max()
+
+
+def test_errors_under_two_ranks_are_one_line(tmp_path):
+    bad = _scenario(tmp_path, dict(MODEL, bogus=1), name="bad.toml")
+    for how in ({"mpirun": True}, {}):            # mpirun yourself: one line per rank; --ranks: once
+        args = ["run", bad, "--out", tmp_path / "o", "--no-progress"] + ([] if how else ["--ranks", "2"])
+        res = _liftoff(*args, timeout=120, **how)
+        lines = res.stderr.strip().splitlines()
+        assert res.returncode == 2 and lines and set(lines) == {lines[0]}, res.stderr[-2000:]
+        assert lines[0].startswith("liftoff: error: ") and "bogus" in lines[0]
+        assert len(lines) == (2 if how else 1)
+    # an error that only rank 0 meets (it alone creates the output directory) reaches rank 1
+    (tmp_path / "file").write_text("")
+    res = _liftoff("run", bad, "--out", tmp_path / "file", "--no-progress", "--ranks", "2", timeout=120)
+    assert res.returncode == 2 and res.stderr.count("liftoff: error:") == 1, res.stderr[-2000:]
