@@ -88,7 +88,8 @@ def build_component(model: ModelConfig, comp: ComponentModel, workdir: Path) -> 
 def component_stage(model: ModelConfig, name: str, cache: StageCache, workdir: Path) -> tuple[Component, dict, str]:
     comp = model.components[name]
     code = (("liftoff.workflows.stick", "liftoff.meshes", "liftoff.reduction", "liftoff.core") if model.source == "stick"
-            else ("liftoff.meshes", "liftoff.fem", "liftoff.reduction.component", "liftoff.workflows.fe_source",
+            else ("liftoff.meshes", "liftoff.fem", "liftoff.reduction.component", "liftoff.reduction.liquid",
+                  "liftoff.workflows.fe_source",
                   "liftoff.core"))
     key = stage_key("component", _component_key(model, comp), code)
 
