@@ -41,7 +41,8 @@ Recovery rows (linear in the model's DOFs; the transient multiplies them by q, q
 
 The gravity free surface (slosh) and compressibility are not in (1): p = 0 is the
 high-frequency limit, right for the wall's bulge modes (several Hz) above the slosh modes
-(below 1 Hz for metre-size tanks). Serial (one process) only. Units SI (m, kg, Pa, m^3).
+(below 1 Hz for metre-size tanks). The operator is serial: under MPI every process holds the
+whole liquid (small beside the structure; fem.model). Units SI (m, kg, Pa, m^3).
 """
 from __future__ import annotations
 
@@ -568,6 +569,13 @@ def model_liquid(tm, geometry, parts, nodes: np.ndarray, T: sp.csr_matrix, coupl
         if liq.cavity is None:
             continue
         tris = [surface_triangles(p.tagged, liq.cavity) for p in parts if liq.cavity in p.tagged.surface_tags]
+        comm = parts[0].tagged.mesh.comm
+        if comm.size > 1:                   # each process has its own triangles of a distributed wall,
+            tris = [t for ts in comm.allgather(tris) for t in ts]
+            if tris:                        # and ghost cells repeat some: keep one of each
+                allt = np.vstack(tris)
+                _, first = np.unique(np.round(allt.mean(axis=1), 9), axis=0, return_index=True)   # centroids
+                tris = [allt[np.sort(first)]]
         if not tris:
             raise InputError(f"liquid {g!r}: cavity surface {liq.cavity!r} is not a physical surface of the structure")
         rows[g] = cavity_volume_row(np.vstack(tris), liq.center, nodes, T, f"liquid {g!r}")

@@ -427,6 +427,10 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
     if liquid_tm is not None:
         from .liquid import model_liquid
 
+        if comm.size > 1:       # the liquid is small: every process holds all of it (serial operator)
+            liquid_tm = read_mesh_parts(geometry.msh_path, MPI.COMM_SELF, tuple(geometry.shells),
+                                        liquids=tuple(geometry.liquids))[2]
+
         liquid, rows = model_liquid(liquid_tm, geometry, parts, nodes.xyz, T,
                                     2 if solid_tm is None or degree == 2 else 1, liquid_degree)
     return FEModel(name=name, comm=comm, parts=tuple(parts), degree=degree, K=K, M=M, points=tuple(pnames),

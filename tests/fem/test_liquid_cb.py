@@ -5,6 +5,8 @@ stay static, and the liquid's recovery rows ride along.
 References, independent of the CB code: the full model's wet eigensolve (fem.liquid, SLEPc
 with M + M_a as a shell operator) and closed forms (the liquid's axial mass rho V and its
 head rho g h, exact on the mesh; fem/liquid.py)."""
+from pathlib import Path
+
 import numpy as np
 import pytest
 from mpi4py import MPI
@@ -114,3 +116,19 @@ def test_cb_reproduces_the_wet_model_with_a_free_interface(tank):
     ref = _wet_modes(m, top, 3)
     assert np.all(lam >= ref * (1 - 1e-9))
     assert lam == pytest.approx(ref, rel=3e-4)
+
+
+@pytest.mark.slow
+def test_two_ranks_match_serial(tank):
+    """mpirun -n 2: the structure distributed, the liquid held whole on every rank (fem.model):
+    the same wet fixed-interface frequencies (SLEPc tolerance 1e-10), liquid mass, head and
+    cavity volume row as one rank."""
+    from .test_mpi import _run
+
+    _, g, _, _ = tank
+    path = str(g.save(Path(g.msh_path).with_suffix(".json")))
+    serial, parallel = _run(1, path, 1, "mpi_liquid_script.py"), _run(2, path, 1, "mpi_liquid_script.py")
+    assert parallel["size"] == 2 and parallel["n_p"] == serial["n_p"]
+    assert np.allclose(parallel["freq"], serial["freq"], rtol=1e-8)
+    for k in ("axial", "head", "dv"):
+        assert np.allclose(parallel[k], serial[k], rtol=1e-9), k
