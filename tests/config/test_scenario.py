@@ -253,10 +253,10 @@ def test_walls_as_shells_reach_every_vehicle_builder(base):
 
 def test_liquid_option_reaches_the_core_tank(base):
     """[model] liquid = "hydroelastic" meshes the core stage's propellants as liquid volumes
-    (meshes.tank, fem.liquid); "smeared" (wetted-wall mass) stays available; anything else
+    (meshes.tank, fem.liquid; the default scenario's); "smeared" (wetted-wall mass) stays available; anything else
     is a one-line error naming the key."""
     d = copy.deepcopy(base)
-    assert parse_scenario(d, "s.toml").cases[0].model.components["core"].builder.liquid in ("smeared", "hydroelastic")
+    assert parse_scenario(d, "s.toml").cases[0].model.components["core"].builder.liquid == "hydroelastic"   # default
     for liquid in ("hydroelastic", "smeared"):
         d["model"]["liquid"] = liquid
         assert parse_scenario(d, "s.toml").cases[0].model.components["core"].builder.liquid == liquid
