@@ -59,7 +59,8 @@ from . import petsc_backend as pb
 
 @dataclass
 class LiquidOperator:
-    """The liquid of one compartment, factored (module docstring, eq. 2-4).
+    """The liquid(s) of a mesh, factored (module docstring, eq. 2-4): one compartment or
+    several (block-diagonal H, one density each).
 
     ``G`` maps the coupling space's wetted DOFs (``c_coords``, ``c_comp``) to the kept
     pressure DOFs; after :meth:`couple`, ``Gm`` maps the structure's DOFs."""
@@ -368,14 +369,14 @@ class _MassWithLiquid:
     """PETSc shell context: y = M x + sum_l rho_l G_l^T H_l^-1 G_l x[dofs] (eq. 3)."""
 
     def __init__(self, M: PETSc.Mat, ops: list, dofs: np.ndarray | None):
-        self.M, self.ops, self.dofs = M, ops, dofs
+        self.M, self.ops = M, ops
+        self.G = [sp.csr_matrix(op.Gm if dofs is None else op.Gm[:, dofs]) for op in ops]   # sliced once
 
     def mult(self, mat, x, y):
         self.M.mult(x, y)
         xa = x.getArray(readonly=True)
         acc = np.zeros(xa.size)
-        for op in self.ops:
-            G = op.Gm if self.dofs is None else op.Gm[:, self.dofs]
+        for op, G in zip(self.ops, self.G):
             acc += G.T @ op.solve(G @ xa)
         y.axpy(1.0, PETSc.Vec().createWithArray(acc, comm=PETSc.COMM_SELF))
 
