@@ -106,9 +106,12 @@ class LiquidMass:
 
     def operator(self, M: sp.spmatrix, dofs=None) -> spla.LinearOperator:
         """M + M_a (restricted to ``dofs``) as a scipy LinearOperator (M already restricted)."""
-        M = sp.csr_matrix(M)
-        return spla.LinearOperator(M.shape, matvec=lambda x: M @ x + self.apply(x, dofs),
-                                   matmat=lambda X: M @ X + self.apply(X, dofs), dtype=float)
+        M, G = sp.csr_matrix(M), sp.csr_matrix(self._g(dofs))      # sliced once
+
+        def mass(X):
+            return M @ X + G.T @ self.solve(G @ X)
+
+        return spla.LinearOperator(M.shape, matvec=mass, matmat=mass, dtype=float)
 
     def pressure_rows(self) -> np.ndarray:
         """(n_points, n_dof): p_k = r_k . x'' (Pa per m/s^2)."""
