@@ -468,3 +468,20 @@ def test_two_liquids_one_operator(tmp_path):
         assert h == pytest.approx(rho * 9.80665 * (cav.z_fill - cav.z_bottom), rel=1e-10)
     wet_a = np.abs(rows[0]) > 0
     assert np.abs(rows[1][wet_a]).max() < 1e-12 * np.abs(rows[1]).max()
+
+
+@pytest.mark.parametrize("liquid_degree", [1, 2])
+def test_p2_structure_couples_through_edge_midpoints(tank_model, liquid_degree):
+    """P2 solid walls: the liquid couples through the P2 wall translations (edge midpoints
+    are structure nodes); the axial added mass and the head stay exact (p linear in z)."""
+    from liftoff.fem import build_model
+    from liftoff.meshes.tank import inner_cavities
+
+    p, g, _ = tank_model
+    m = build_model(g, degree=2, liquid_degree=liquid_degree)
+    rz = m.rigid_body_shape()[:, 2]
+    assert m.liquid.project(rz)[0, 0] == pytest.approx(1141.0 * g.group_volumes["tank_lox_liquid"], rel=1e-10)
+    cav = inner_cavities(p)[0]
+    rho = m.liquid.density["tank_lox_liquid"]
+    assert (m.liquid.pressure_rows() @ (9.80665 * rz))[0] == pytest.approx(rho * 9.80665 * (cav.z_fill - cav.z_bottom),
+                                                                           rel=1e-10)
