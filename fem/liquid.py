@@ -583,5 +583,73 @@ def model_liquid(tm, geometry, parts, nodes: np.ndarray, T: sp.csr_matrix, coupl
     return op, rows
 
 
+def _exp_weights(a: np.ndarray, z: np.ndarray, z_target: float, what: str) -> np.ndarray:
+    """Positive weights a_i exp(k z_i), sum 1, whose weighted mean of z is ``z_target`` (k by
+    bisection; the mean is increasing in k)."""
+    lo_z, hi_z = float(z.min()), float(z.max())
+    if not lo_z < z_target < hi_z:
+        raise InputError(f"{what}: the convective mass's height {z_target:.4g} m lies outside its wetted wall "
+                         f"({lo_z:.4g} .. {hi_z:.4g} m)")
+    zs = (z - lo_z) / (hi_z - lo_z)
+    t = (z_target - lo_z) / (hi_z - lo_z)
+
+    def mean(k):
+        e = a * np.exp(k * (zs - 1.0 if k > 0 else zs))
+        return e / e.sum()
+
+    lo, hi = -800.0, 800.0
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if mean(mid) @ zs < t else (lo, mid)
+    return mean(0.5 * (lo + hi))
+
+
+def convective_mass(op: LiquidOperator, tm, geometry, nodes: np.ndarray, T: sp.csr_matrix,
+                    rb: np.ndarray) -> sp.csr_matrix:
+    """Lateral (x, y) lumped mass M_c on each liquid's wetted nodes that carries the part of
+    the liquid the p = 0 model leaves free laterally (its convective, sloshing part), with
+    the first moment that puts the liquid's rigid-body mass and c.g. where a rigid liquid
+    would: for liquid c (axis along z), RB^T (M_a,c + M_c,c) RB has the translational masses
+    m_c and the lateral first moments m_c z_c (z_c the liquid's centroid). Weights
+    w_i = A_i e^{k z_i} (A_i the nodal wetted area, k such that the weights' mean height is
+    the deficit's), positive; M_c = T_x^T W T_x + T_y^T W T_y. The slosh-frequency-to-infinity
+    limit for the convective part (the smeared model's assumption for the whole liquid);
+    ``rb``: the model DOFs' rigid-body shape about the origin (n_dof, 6)."""
+    import ufl
+    from dolfinx import fem
+    from scipy.spatial import cKDTree
+
+    out = sp.csr_matrix((T.shape[1], T.shape[1]))
+    GR = op.Gm @ rb[:, [0, 1, 3, 4]]
+    Y = op.solve(GR)
+    x = ufl.SpatialCoordinate(tm.mesh)
+    dx = ufl.Measure("dx", domain=tm.mesh, subdomain_data=tm.cell_tags)
+    tree = cKDTree(nodes)
+    for c, g in enumerate(op.groups):
+        liq = geometry.liquids[g]
+        on = (op.p_group == c).astype(float)[:, None]
+        Mi = (on * GR).T @ Y                              # impulsive: [Tx, Ty, Rx, Ry] block of liquid c
+        gid = tm.volume_ids[g]
+        vol = fem.assemble_scalar(fem.form(fem.Constant(tm.mesh, 1.0) * dx(gid)))
+        zc = fem.assemble_scalar(fem.form(x[2] * dx(gid))) / vol
+        m = op.density[g] * vol
+        tris = surface_triangles(tm, liq.wetted)
+        area = np.repeat(0.5 * np.linalg.norm(np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0]), axis=1) / 3, 3)
+        dist, idx = tree.query(tris.reshape(-1, 3))
+        if np.any(dist > 1e-7 * float(np.ptp(nodes, axis=0).max())):
+            raise InputError(f"liquid {g!r}: a wetted vertex is not a node of the structure")
+        node, inv = np.unique(idx, return_inverse=True)
+        a = np.bincount(inv, weights=area)
+        # per direction: the convective part and its first moment (Tx-Ry: + sum m z, Ty-Rx: - sum m z)
+        for k, (dm, ds) in enumerate(((m - Mi[0, 0], m * zc - Mi[0, 3]), (m - Mi[1, 1], m * zc + Mi[1, 2]))):
+            if dm <= 1e-9 * m:
+                continue
+            w = dm * _exp_weights(a, nodes[node, 2], ds / dm, f"liquid {g!r}")
+            Tk = sp.csr_matrix(T)[3 * node + k]
+            out = out + Tk.T @ sp.diags(w) @ Tk
+    return sp.csr_matrix(out)
+
+
 __all__ = ["LiquidOperator", "liquid_operator", "rigid_translation", "surface_triangles", "cavity_volume_row",
-           "mass_with_liquid", "wet_eigensolve", "model_liquid", "count_below_wet", "wet_mass"]
+           "mass_with_liquid", "wet_eigensolve", "model_liquid", "count_below_wet", "wet_mass",
+           "convective_mass"]

@@ -374,7 +374,7 @@ def _slots(nodes: _Nodes, role: np.ndarray) -> np.ndarray:
 
 
 def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
-                lumped_smeared_mass: bool = False, liquid_degree: int = 1) -> FEModel:
+                lumped_smeared_mass: bool = False, liquid_degree: int = 1, convective: str = "free") -> FEModel:
     """FE model of a ``meshes.spec.Geometry`` (or the path of its JSON file).
 
     ``degree``: 1 or 2 (Lagrange, solid part; shells are P2 x CR). ``lumped_smeared_mass``:
@@ -382,8 +382,12 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
     sums vanish at vertices) instead of the consistent surface mass. Hydroelastic liquids
     (``Geometry.liquids``) become ``FEModel.liquid`` (fem.liquid: pressure P_``liquid_degree``,
     coupled through the wall's P1 (P1 solids) or P2 translations), an added mass that K and M
-    do not hold.
+    do not hold; ``convective``: ``"free"`` (the p = 0 liquid's sloshing part moves freely of
+    the tank laterally) or ``"wall"`` (that part is lumped on the wetted wall laterally, in
+    M, so that the liquid's rigid-body mass and c.g. are a rigid liquid's).
     """
+    if convective not in ("free", "wall"):
+        raise InputError(f"model: convective must be 'free' or 'wall' (got {convective!r})")
     if isinstance(geometry, (str, Path)):
         from liftoff.meshes.spec import Geometry
         geometry = Geometry.load(geometry)
@@ -425,18 +429,29 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
     cells, cell_type = _output_cells(part_cells)
     liquid, rows = None, {}
     if liquid_tm is not None:
-        from .liquid import model_liquid
-
-        if comm.size > 1:       # the liquid is small: every process holds all of it (serial operator)
-            liquid_tm = read_mesh_parts(geometry.msh_path, MPI.COMM_SELF, tuple(geometry.shells),
-                                        liquids=tuple(geometry.liquids))[2]
-
-        liquid, rows = model_liquid(liquid_tm, geometry, parts, nodes.xyz, T,
-                                    2 if solid_tm is None or degree == 2 else 1, liquid_degree)
+        liquid, rows = _liquid(comm, geometry, liquid_tm, parts, nodes.xyz, T, M, dof_coords, dof_comp,
+                               2 if solid_tm is None or degree == 2 else 1, liquid_degree, convective)
     return FEModel(name=name, comm=comm, parts=tuple(parts), degree=degree, K=K, M=M, points=tuple(pnames),
                    point_coords=ref_coords, dof_coords=dof_coords, dof_comp=dof_comp, dof_node=dof_node,
                    nodes=nodes.xyz, cells=cells, cell_type=cell_type, T=T, clamped=clamped, liquid=liquid,
                    liquid_volume_rows=rows)
+
+
+def _liquid(comm, geometry, liquid_tm, parts, nodes, T, M, dof_coords, dof_comp, coupling_degree: int,
+            liquid_degree: int, convective: str):
+    """The model's liquids (fem.liquid.model_liquid) and, with ``convective = "wall"``, their
+    convective part as lateral mass on the wetted wall added to M (fem.liquid.convective_mass)."""
+    from liftoff.core.rigid import dof_rb
+
+    from .liquid import convective_mass, model_liquid
+
+    if comm.size > 1:       # the liquid is small: every process holds all of it (serial operator)
+        liquid_tm = read_mesh_parts(geometry.msh_path, MPI.COMM_SELF, tuple(geometry.shells),
+                                    liquids=tuple(geometry.liquids))[2]
+    liquid, rows = model_liquid(liquid_tm, geometry, parts, nodes, T, coupling_degree, liquid_degree)
+    if convective == "wall":
+        pb.add_csr(M, convective_mass(liquid, liquid_tm, geometry, nodes, T, dof_rb(dof_coords, dof_comp)))
+    return liquid, rows
 
 
 def _reduce(comm, parts, nodes, role, slot, ref_coords, n_keep, n_dof):

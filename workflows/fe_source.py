@@ -59,7 +59,7 @@ def build_component(comp: ComponentModel, model: ModelConfig, workdir: Path):
             geo.volumes[vol] = mat
     from liftoff.fem.parallel import fe_comm
 
-    fe = build_model(geo, model.degree, comm=fe_comm(world()))
+    fe = build_model(geo, model.degree, comm=fe_comm(world()), convective=model.convective)
     liquid = fe.liquid_fields()
     if liquid is not None:
         from liftoff.reduction.liquid import LiquidMass

@@ -70,7 +70,8 @@ def _component_key(model: ModelConfig, comp: ComponentModel) -> dict:
     """Everything a component stage depends on (its cache key's parameters)."""
     return {"source": model.source, "name": comp.name, "mesh_size": comp.mesh_size, "degree": model.degree,
             "builder": {type(comp.builder).__name__: asdict(comp.builder)},
-            "materials": {vol: asdict(m) for vol, m in model.materials.items()}}
+            "materials": {vol: asdict(m) for vol, m in model.materials.items()},
+            **({"convective": model.convective} if getattr(comp.builder, "liquid", "") == "hydroelastic" else {})}
 
 
 def build_component(model: ModelConfig, comp: ComponentModel, workdir: Path) -> tuple[Component, dict]:

@@ -48,9 +48,10 @@ STICK_ELEMENT = 4.0         # m, default beam element length of the stick source
 MAX_ELEMENTS = {"fe": 1_000_000, "stick": 2_000}
 
 _MODEL = {"source", "mesh_size", "degree", "zeta", "vehicle", "pad", "component", "materials", "system", "stick",
-          "walls", "max_elements", "liquid"}
+          "walls", "max_elements", "liquid", "convective"}
 WALLS = ("solid", "shell")
 LIQUIDS = ("smeared", "hydroelastic")     # [model] liquid: the core stage's propellants (meshes.tank)
+CONVECTIVE = ("wall", "free")             # [model] convective: a hydroelastic liquid's sloshing part (fem.liquid)
 _CORE_PARAMS = {"shell_bending_ratio"}
 _VEHICLE = {"mesh_size", "params"}
 _COMP = {"mesh_size", "n_modes", "f_max", "params", "nastran"}
@@ -123,6 +124,7 @@ class ModelConfig:
     materials: dict[str, Material]
     system: SystemModel
     max_elements: int = MAX_ELEMENTS["fe"]
+    convective: str = "wall"      # hydroelastic liquids: their sloshing part on the wetted wall, or "free"
 
 
 # ---------------------------------------------------------------- builder dataclasses
@@ -345,6 +347,9 @@ def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig
         raise (where / "liquid").error(f"must be one of {', '.join(LIQUIDS)}, got {liquid!r}")
     if source == "stick" and "liquid" in m:
         raise (where / "liquid").error("[model] liquid is for source = \"fe\" (the stick model has lumped masses)")
+    convective = string(where / "convective", m.get("convective", "wall"))
+    if convective not in CONVECTIVE:
+        raise (where / "convective").error(f"must be one of {', '.join(CONVECTIVE)}, got {convective!r}")
     builders = _fe_builders(where, layout, sel, sizes, walls, liquid) if source == "fe" else \
         _stick_builders(where, layout, sel, m.get("stick", {}))
     components = {name: ComponentModel(name, builders[name], sizes[name], sel[name].get("n_modes"),
@@ -356,4 +361,5 @@ def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig
                             number(where / "system" / k, v, positive=True) for k, v in s.items()})
     max_elements = integer(where / "max_elements", m.get("max_elements", MAX_ELEMENTS[source]), 1)
     return ModelConfig(source, degree, zeta, layout, components,
-                       _materials(where / "materials", m.get("materials", {}), source), system, max_elements)
+                       _materials(where / "materials", m.get("materials", {}), source), system, max_elements,
+                       convective)

@@ -264,3 +264,16 @@ def test_liquid_option_reaches_the_core_tank(base):
     with pytest.raises(InputError, match=r"model\.liquid: must be one of smeared, hydroelastic") as e:
         parse_scenario(d, "s.toml")
     assert "\n" not in str(e.value)
+
+
+def test_convective_option(base):
+    """[model] convective: a hydroelastic liquid's sloshing part lumped on the wetted wall
+    ("wall", the default) or left free laterally ("free"); anything else is one line."""
+    d = copy.deepcopy(base)
+    assert parse_scenario(d, "s.toml").cases[0].model.convective == "wall"
+    d["model"]["convective"] = "free"
+    assert parse_scenario(d, "s.toml").cases[0].model.convective == "free"
+    d["model"]["convective"] = "glued"
+    with pytest.raises(InputError, match=r"model\.convective: must be one of wall, free") as e:
+        parse_scenario(d, "s.toml")
+    assert "\n" not in str(e.value)
