@@ -554,6 +554,9 @@ def model_liquid(tm, geometry, parts, nodes: np.ndarray, T: sp.csr_matrix, coupl
     cavity's triangles on the structural ``parts`` (solid facets or shell cells)."""
     liquids = geometry.liquids
     for g, liq in liquids.items():
+        if liq.slosh_modes:
+            raise InputError(f"liquid {g!r}: slosh_modes = {liq.slosh_modes}: gravity slosh is not modelled "
+                             "(p = 0 on the free surface, docs/hydro.md); use 0")
         if g not in tm.volume_ids:
             raise InputError(f"liquid {g!r} is not a physical volume of mesh {tm.path!r}")
         if liq.wetted not in tm.surface_tags or not np.any(tm.surface_tags[liq.wetted].values == 1):

@@ -485,3 +485,16 @@ def test_p2_structure_couples_through_edge_midpoints(tank_model, liquid_degree):
     rho = m.liquid.density["tank_lox_liquid"]
     assert (m.liquid.pressure_rows() @ (9.80665 * rz))[0] == pytest.approx(rho * 9.80665 * (cav.z_fill - cav.z_bottom),
                                                                            rel=1e-10)
+
+
+def test_slosh_modes_are_refused_not_ignored(tank_model):
+    """Liquid.slosh_modes > 0 asks for gravity slosh, which is not modelled: one-line error."""
+    from dataclasses import replace
+
+    from liftoff.fem import build_model
+
+    _, g, _ = tank_model
+    g2 = replace(g, liquids={k: replace(v, slosh_modes=2) for k, v in g.liquids.items()})
+    with pytest.raises(InputError, match="slosh_modes = 2: gravity slosh is not modelled") as e:
+        build_model(g2)
+    assert "'tank_lox_liquid'" in str(e.value) and "\n" not in str(e.value)
