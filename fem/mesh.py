@@ -8,7 +8,9 @@ smeared-mass surface at once. A file may hold two parts that share nodes:
 
 * the **solid** part: tetrahedra of the physical VOLUME groups;
 * the **shell** part: the flat 3-node triangles of the physical SURFACE groups named in
-  ``shells`` (a triangle mesh in 3-D, for fem.shell).
+  ``shells`` (a triangle mesh in 3-D, for fem.shell);
+* the **liquid** part: the tetrahedra of the physical VOLUME groups named in ``liquids``
+  (fem.liquid; they are not structure, and share the wetted faces' nodes with it).
 
 Each part is a :class:`TaggedMesh` whose ``surface_tags`` tag the part's 2-D entities (tet
 facets, or shell cells) of every surface group, and ``curve_tags`` (shell part only) its
@@ -112,7 +114,7 @@ def _rows_in(rows: np.ndarray, table: np.ndarray) -> np.ndarray:
     return np.isin(a.view(view).ravel(), b.view(view).ravel())
 
 
-def _read_rank0(path: str, shells: tuple[str, ...]):
+def _read_rank0(path: str, shells: tuple[str, ...], liquids: tuple[str, ...] = ()):
     """On the reading rank: nodes, the solid and shell parts, and the groups' entities."""
     import gmsh
 
@@ -139,11 +141,16 @@ def _read_rank0(path: str, shells: tuple[str, ...]):
         if missing:
             raise InputError(f"mesh {path!r}: shell surface {missing[0]!r} is not a physical surface "
                              f"(has: {', '.join(sorted(surf_names)) or 'none'})")
-        vols = [g for g in groups if g[0] == 3]
-        if not vols and not shells:
+        vol_names = {n for d, _, n in groups if d == 3}
+        missing = [v for v in liquids if v not in vol_names]
+        if missing:
+            raise InputError(f"mesh {path!r}: liquid {missing[0]!r} is not a physical volume "
+                             f"(has: {', '.join(sorted(vol_names)) or 'none'})")
+        vols = [g for g in groups if g[0] == 3 and g[2] not in liquids]
+        if not vols and not shells and not liquids:
             raise InputError(f"mesh {path!r} has no volume (3-D) physical group and no shell surface: "
                              "nothing to model")
-        parts = {"solid": None, "shell": None}
+        parts = {"solid": None, "shell": None, "liquid": None}
         if vols:
             ct, cells, vals = _cell_groups(gmsh, path, vols, "volume")
             if ct is None:
@@ -156,6 +163,12 @@ def _read_rank0(path: str, shells: tuple[str, ...]):
                 raise InputError(f"mesh {path!r}: shell surfaces must be meshed with flat 3-node triangles "
                                  f"(gmsh element type 2, got {ct})")
             parts["shell"] = (ct, cells, vals, list(shells))
+        if liquids:
+            lg = [next(g for g in groups if g[0] == 3 and g[2] == v) for v in liquids]
+            ct, cells, vals = _cell_groups(gmsh, path, lg, "liquid volume")
+            if ct is None:
+                raise InputError(f"mesh {path!r}: the liquid volumes hold no 3-D elements (was it meshed in 3-D?)")
+            parts["liquid"] = (ct, cells, vals, list(liquids))
         entities = {d: {n: _elements(gmsh, d, t) for dd, t, n in groups if dd == d} for d in (1, 2)}
         return x, parts, entities
     finally:
@@ -167,9 +180,9 @@ def _read_rank0(path: str, shells: tuple[str, ...]):
 
 
 def _part_entities(kind: str, cells: np.ndarray, entities: dict, hybrid: bool) -> dict:
-    """The groups' entities that belong to a part: in a file with both parts, surface
-    triangles that are tet faces (solid) or shell cells (shell), curve segments that are
-    shell edges; curves are tagged on the shell part only."""
+    """The groups' entities that belong to a part: in a file with several parts, surface
+    triangles that are tet faces (solid, liquid) or shell cells (shell), curve segments that
+    are shell edges; curves are tagged on the shell part only."""
     out = {2: dict(entities[2]), 1: dict(entities[1]) if kind == "shell" else {}}
     if hybrid:
         for d in (2, 1) if kind == "shell" else (2,):
@@ -210,16 +223,17 @@ def _tagged_mesh(comm, rank: int, path: str, x, cell_type: int, cells, cell_vals
     return TaggedMesh(mesh, cell_tags, {n: i for i, n in enumerate(names)}, groups[2], path, groups[1])
 
 
-def read_mesh_parts(path, comm: MPI.Comm = MPI.COMM_WORLD, shells=(), rank: int = 0):
-    """(solid TaggedMesh or None, shell TaggedMesh or None) of ``path``; ``shells``: the
-    physical surface groups modelled as shells. See the module docstring."""
-    path, shells = str(path), tuple(str(s) for s in shells)
+def read_mesh_parts(path, comm: MPI.Comm = MPI.COMM_WORLD, shells=(), rank: int = 0, liquids=()):
+    """(solid, shell, liquid) TaggedMesh or None each, of ``path``; ``shells``: the physical
+    surface groups modelled as shells, ``liquids``: the physical volume groups that are
+    liquid. See the module docstring."""
+    path, shells, liquids = str(path), tuple(str(s) for s in shells), tuple(str(v) for v in liquids)
     payload, err = None, None
     if comm.rank == rank:
         try:
             if not Path(path).is_file():
                 raise InputError(f"mesh file not found: {path!r}")
-            payload = _read_rank0(path, shells)
+            payload = _read_rank0(path, shells, liquids)
         except InputError as exc:
             err = str(exc)
         except Exception as exc:  # gmsh raises plain Exception on unreadable files
@@ -230,14 +244,14 @@ def read_mesh_parts(path, comm: MPI.Comm = MPI.COMM_WORLD, shells=(), rank: int 
     meta = None
     if comm.rank == rank:
         x, parts, entities = payload
-        hybrid = all(p is not None for p in parts.values())
+        hybrid = sum(p is not None for p in parts.values()) > 1
         ents = {k: _part_entities(k, p[1], entities, hybrid) for k, p in parts.items() if p is not None}
         meta = {k: None if p is None else (p[0], p[1].shape[1], p[3],
                                            {d: {n: (t, e.shape[1]) for n, (t, e) in ents[k][d].items()} for d in (1, 2)})
                 for k, p in parts.items()}
     meta = comm.bcast(meta, root=rank)
     out = []
-    for kind in ("solid", "shell"):
+    for kind in ("solid", "shell", "liquid"):
         if meta[kind] is None:
             out.append(None)
             continue
@@ -253,13 +267,12 @@ def read_mesh_parts(path, comm: MPI.Comm = MPI.COMM_WORLD, shells=(), rank: int 
             x, cells, vals = np.zeros((0, 3)), np.zeros((0, nn), np.int64), np.zeros(0, np.int32)
             e = {d: {n: (t, np.zeros((0, w), np.int64)) for n, (t, w) in emeta[d].items()} for d in (1, 2)}
         out.append(_tagged_mesh(comm, rank, path, x, cell_type, cells, vals, names, e))
-    return out[0], out[1]
+    return out[0], out[1], out[2]
 
 
 def read_msh(path, comm: MPI.Comm = MPI.COMM_WORLD, rank: int = 0) -> TaggedMesh:
     """The solid part of ``path`` (InputError if it has no 3-D physical group)."""
-    solid, _ = read_mesh_parts(path, comm, (), rank)
-    return solid
+    return read_mesh_parts(path, comm, (), rank)[0]
 
 
 def triangle_mesh(comm: MPI.Comm, x: np.ndarray, cells: np.ndarray, rank: int = 0):

@@ -92,6 +92,8 @@ class FEModel:
     cell_type: str                 # "tetra", "tetra10", "triangle6" (shells) or "triangle" (P1 + shells)
     T: sp.csr_matrix               # field map (3 n_nodes x n_dof): nodal translations = T x
     clamped: tuple[str, ...] = ()
+    liquid: object = None          # fem.liquid.LiquidOperator of the geometry's liquids (coupled), or None
+    liquid_volume_rows: dict = field(default_factory=dict)   # liquid group -> cavity volume-change row (m^3/m)
     _cache: dict = field(default_factory=dict, repr=False)
 
     @property
@@ -153,11 +155,17 @@ class FEModel:
         return (self.field_map() @ np.asarray(x, float)).reshape(-1, 3)
 
     def component_fields(self) -> dict:
-        """Keyword fields of ``reduction.component.Component`` (all but ``name``)."""
+        """Keyword fields of ``reduction.component.Component`` (all but ``name`` and
+        ``liquid``; :meth:`liquid_fields` gives the latter's)."""
         K, M = self.matrices()
         return dict(K=K, M=M, dof_labels=self.dof_labels, label_dofs=self.label_dofs,
                     points=self.points, point_coords=self.point_coords.copy(), nodes=self.nodes.copy(),
                     cells=self.cells.copy(), cell_type=self.cell_type, field_map=self.field_map())
+
+    def liquid_fields(self) -> dict | None:
+        """Keyword fields of ``reduction.liquid.LiquidMass`` of the model's hydroelastic
+        liquids (cavity volume rows named by liquid group), or None without liquids."""
+        return None if self.liquid is None else self.liquid.liquid_fields(self.liquid_volume_rows)
 
 
 # ---- parts -------------------------------------------------------------------------------
@@ -366,13 +374,20 @@ def _slots(nodes: _Nodes, role: np.ndarray) -> np.ndarray:
 
 
 def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
-                lumped_smeared_mass: bool = False) -> FEModel:
+                lumped_smeared_mass: bool = False, liquid_degree: int = 1, convective: str = "free") -> FEModel:
     """FE model of a ``meshes.spec.Geometry`` (or the path of its JSON file).
 
     ``degree``: 1 or 2 (Lagrange, solid part; shells are P2 x CR). ``lumped_smeared_mass``:
     non-structural surface mass on solids lumped to the nodes by row sums (P1 only: P2 row
-    sums vanish at vertices) instead of the consistent surface mass.
+    sums vanish at vertices) instead of the consistent surface mass. Hydroelastic liquids
+    (``Geometry.liquids``) become ``FEModel.liquid`` (fem.liquid: pressure P_``liquid_degree``,
+    coupled through the wall's P1 (P1 solids) or P2 translations), an added mass that K and M
+    do not hold; ``convective``: ``"free"`` (the p = 0 liquid's sloshing part moves freely of
+    the tank laterally) or ``"wall"`` (that part is lumped on the wetted wall laterally, in
+    M, so that the liquid's rigid-body mass and c.g. are a rigid liquid's).
     """
+    if convective not in ("free", "wall"):
+        raise InputError(f"model: convective must be 'free' or 'wall' (got {convective!r})")
     if isinstance(geometry, (str, Path)):
         from liftoff.meshes.spec import Geometry
         geometry = Geometry.load(geometry)
@@ -381,7 +396,9 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
         raise InputError(f"model {name!r}: degree {degree!r} not supported (use 1 or 2)")
     if lumped_smeared_mass and degree != 1:
         raise InputError(f"model {name!r}: lumped smeared mass needs degree 1")
-    meshes = dict(zip(("solid", "shell"), read_mesh_parts(geometry.msh_path, comm, tuple(geometry.shells))))
+    solid_tm, shell_tm, liquid_tm = read_mesh_parts(geometry.msh_path, comm, tuple(geometry.shells),
+                                                    liquids=tuple(geometry.liquids))
+    meshes = {"solid": solid_tm, "shell": shell_tm}
     solids = [g for g in geometry.volumes if g not in geometry.shells]
     if meshes["solid"] is None and solids:
         raise InputError(f"volume group {solids[0]!r} is not a physical volume of mesh {geometry.msh_path!r} "
@@ -410,9 +427,31 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
     dof_comp = np.concatenate([dof_comp, np.tile(np.arange(6), len(patches))]).astype(np.int64)
     dof_node = np.concatenate([dof_node, -np.ones(6 * len(patches), dtype=np.int64)])
     cells, cell_type = _output_cells(part_cells)
+    liquid, rows = None, {}
+    if liquid_tm is not None:
+        liquid, rows = _liquid(comm, geometry, liquid_tm, parts, nodes.xyz, T, M, dof_coords, dof_comp,
+                               2 if solid_tm is None or degree == 2 else 1, liquid_degree, convective)
     return FEModel(name=name, comm=comm, parts=tuple(parts), degree=degree, K=K, M=M, points=tuple(pnames),
                    point_coords=ref_coords, dof_coords=dof_coords, dof_comp=dof_comp, dof_node=dof_node,
-                   nodes=nodes.xyz, cells=cells, cell_type=cell_type, T=T, clamped=clamped)
+                   nodes=nodes.xyz, cells=cells, cell_type=cell_type, T=T, clamped=clamped, liquid=liquid,
+                   liquid_volume_rows=rows)
+
+
+def _liquid(comm, geometry, liquid_tm, parts, nodes, T, M, dof_coords, dof_comp, coupling_degree: int,
+            liquid_degree: int, convective: str):
+    """The model's liquids (fem.liquid.model_liquid) and, with ``convective = "wall"``, their
+    convective part as lateral mass on the wetted wall added to M (fem.liquid.convective_mass)."""
+    from liftoff.core.rigid import dof_rb
+
+    from .liquid import convective_mass, model_liquid
+
+    if comm.size > 1:       # the liquid is small: every process holds all of it (serial operator)
+        liquid_tm = read_mesh_parts(geometry.msh_path, MPI.COMM_SELF, tuple(geometry.shells),
+                                    liquids=tuple(geometry.liquids))[2]
+    liquid, rows = model_liquid(liquid_tm, geometry, parts, nodes, T, coupling_degree, liquid_degree)
+    if convective == "wall":
+        pb.add_csr(M, convective_mass(liquid, liquid_tm, geometry, nodes, T, dof_rb(dof_coords, dof_comp)))
+    return liquid, rows
 
 
 def _reduce(comm, parts, nodes, role, slot, ref_coords, n_keep, n_dof):

@@ -81,6 +81,17 @@ def add_block(A: PETSc.Mat, rows: np.ndarray, block: np.ndarray) -> None:
     A.assemble()
 
 
+def add_csr(A: PETSc.Mat, B: sp.spmatrix) -> None:
+    """A += B for a scipy matrix B present (whole) on every rank: each rank adds its own
+    rows (new non-zeros allowed)."""
+    r0, r1 = A.getOwnershipRange()
+    Bl = sp.coo_matrix(sp.csr_matrix(B)[r0:r1])
+    A.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
+    for i, j, v in zip(Bl.row + r0, Bl.col, Bl.data):
+        A.setValue(int(i), int(j), float(v), addv=PETSc.InsertMode.ADD_VALUES)
+    A.assemble()
+
+
 def gather_csr(A: PETSc.Mat) -> sp.csr_matrix:
     """The whole distributed matrix as scipy CSR on every rank."""
     comm = A.getComm().tompi4py()

@@ -52,10 +52,17 @@ class PetscSolver:
     max_it: int = 500
 
     def __call__(self, K: sp.csr_matrix, M: sp.csr_matrix, interior: np.ndarray, boundary: np.ndarray, *,
-                 n_modes: int | None, f_max: float | None, band_limit: int, who: str, dof_name=str):
+                 n_modes: int | None, f_max: float | None, band_limit: int, who: str, dof_name=str,
+                 added_mass=None):
         timings = {}
         t0 = time.perf_counter()
         Kii, Mii, Kib_loc = interior_matrices(self.comm, K, M, interior, boundary)
+        B = None
+        if added_mass is not None:          # hydroelastic liquid: M_ii + M_a,ii as a shell (fem.liquid)
+            from .liquid import wet_mass
+
+            Gi = added_mass.G[:, interior]
+            B, _ = wet_mass(Mii, added_mass.H, Gi)
         timings["partition_s"] = time.perf_counter() - t0
         n_i = Kii.getSize()[0]
         want = n_i if n_modes is None else min(n_modes, n_i)
@@ -63,24 +70,32 @@ class PetscSolver:
             if n_modes is None and want:
                 t0 = time.perf_counter()
                 lam_max = (2 * np.pi * f_max) ** 2
-                count = count_below(Kii, Mii, lam_max, who)
+                if B is None:
+                    count = count_below(Kii, Mii, lam_max, who)
+                else:
+                    from .liquid import count_below_wet
+
+                    count = count_below_wet(self.comm, K[interior][:, interior], M[interior][:, interior], Gi,
+                                            added_mass.H, lam_max, who)
                 timings["count_s"] = time.perf_counter() - t0
                 if count > band_limit:
                     from_count = f"{count} by the inertia of K_ii - (2 pi f_max)^2 M_ii"
                     raise InputError(_band_error(who, band_limit, f_max, from_count))
                 want = count
-            with _solver(Kii, Mii, max(want, 1), self.tol, self.max_it, who) as eps:
+            with _solver(Kii, Mii if B is None else B, max(want, 1), self.tol, self.max_it, who) as eps:
                 t0 = time.perf_counter()
                 _set_up(eps, who)
                 timings["factor_s"] = time.perf_counter() - t0
                 t0 = time.perf_counter()
-                lam, phi_loc = eigenpairs(eps, Mii, want, who) if want else (np.zeros(0), np.zeros((Kib_loc.shape[0], 0)))
+                lam, phi_loc = eigenpairs(eps, Mii if B is None else B, want, who) if want else (np.zeros(0), np.zeros((Kib_loc.shape[0], 0)))
                 timings["eigensolve_s"] = time.perf_counter() - t0
                 t0 = time.perf_counter()
                 psi_loc = -_factor_solve(eps.getST().getKSP(), Kib_loc, n_i)
                 timings["constraint_solve_s"] = time.perf_counter() - t0
                 _check_finite(self.comm, psi_loc, who)
         finally:
+            if B is not None:
+                B.destroy()
             Kii.destroy()
             Mii.destroy()
         if n_modes is None and lam.size and lam[-1] > lam_max * (1 + 1e-8):

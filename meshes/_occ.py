@@ -184,7 +184,10 @@ def imprint_parts(volumes: dict[str, list], faces: dict[str, list[int]], tools: 
     imprinted. Returns the new (volume dimTags per group, face tags per group); everything
     else (tool pieces) is removed."""
     order = [(g, d) for g, ds in volumes.items() for d in ds] + [(g, (2, f)) for g, fs in faces.items() for f in fs]
-    out, outmap = occ.fragment([d for _, d in order], [t.dimtag for t in tools])
+    if tools:
+        out, outmap = occ.fragment([d for _, d in order], [t.dimtag for t in tools])
+    else:                                      # fragment the parts among themselves
+        out, outmap = occ.fragment([d for _, d in order[:1]], [d for _, d in order[1:]])
     new_v: dict[str, list] = {g: [] for g in volumes}
     new_f: dict[str, list[int]] = {g: [] for g in faces}
     for (g, d), children in zip(order, outmap[: len(order)]):
@@ -212,6 +215,50 @@ def imprint_parts(volumes: dict[str, list], faces: dict[str, list[int]], tools: 
 def imprint_surfaces(groups: dict[str, list[int]], tools: list["Tool"]) -> dict[str, list[int]]:
     """imprint_parts for shell faces only: the new face tags per group."""
     return imprint_parts({}, groups, tools)[1]
+
+
+# ---- liquids ----------------------------------------------------------------------------------
+def liquid_solid(r: float, a_bottom: float, a_top: float, z0: float, length: float, z_fill: float,
+                 axis_xy=(0.0, 0.0)) -> list:
+    """The liquid of a capsule cavity (cylinder of radius r from z0 to z0 + length, domes of
+    heights a_bottom, a_top; 0 = flat) filled up to the height z_fill: volume dimTags."""
+    big = 1e4
+    profile = capsule_profile(r, a_bottom, a_top, z0, length)
+    below, _ = occ.intersect(profile, [(2, occ.addRectangle(-big, -big, 0, 2 * big, z_fill + big))])
+    return revolve_to_z(half(below), axis_xy)
+
+
+def add_liquids(volumes: dict[str, list], faces: dict[str, list[int]],
+                liquids: dict[str, list]) -> tuple[dict, dict, dict]:
+    """Fragment the structure (volume dimTags and shell face tags per group) with the
+    liquid volumes (dimTags per liquid group): the liquids then share the faces they touch
+    with the walls (conforming: common nodes). Returns (structural volumes, shell faces,
+    liquid volumes), each per group, with the new tags."""
+    new_v, new_f = imprint_parts({**volumes, **liquids}, faces, [])
+    return {g: new_v[g] for g in volumes}, new_f, {g: new_v[g] for g in liquids}
+
+
+def liquid_faces(liquid: list, wall_faces: set[int], name: str) -> tuple[list[int], list[int]]:
+    """(wetted, free) faces of a liquid volume: its boundary faces that are wall faces (the
+    wetted surface) and the others (its free surface). InputError if either is empty."""
+    bnd = boundary_faces(liquid)
+    wet = [f for f in bnd if f in wall_faces]
+    free = [f for f in bnd if f not in wall_faces]
+    if not wet:
+        raise InputError(f"liquid {name!r}: the liquid volume does not touch the wall (no shared face)")
+    if not free:
+        raise InputError(f"liquid {name!r}: the liquid fills its cavity completely (no free surface; "
+                         "a hydroelastic liquid needs an ullage above it)")
+    return wet, free
+
+
+def point_at(xyz, tol: float) -> int:
+    """Tag of the model point (vertex) at xyz (InputError if there is none)."""
+    x, y, z = (float(v) for v in xyz)
+    hits = gmsh.model.getEntitiesInBoundingBox(x - tol, y - tol, z - tol, x + tol, y + tol, z + tol, 0)
+    if not hits:
+        raise InputError(f"no geometry vertex at {[round(v, 6) for v in (x, y, z)]} m (pressure point)")
+    return int(hits[0][1])
 
 
 # ---- patch tools ---------------------------------------------------------------------------

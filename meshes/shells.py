@@ -26,6 +26,7 @@ import numpy as np
 from liftoff.core.errors import InputError
 
 from . import _occ
+from ._occ import occ
 from .spec import Geometry, Material, Patch, SmearedMass, equivalent
 from .tank import TankParams, tank_layout
 
@@ -75,11 +76,33 @@ def shell_section(material: Material, area: float, dry_mass: float | None, thick
     return material, float(default_thickness)
 
 
+def mid_cavities(p: TankParams) -> list:
+    """The cavities bounded by the shell's mid-surface (radius R - t/2, dome heights a - t/2).
+    Smeared liquids keep the solid variant's fill heights; a hydroelastic liquid is filled to
+    the height at which it holds the solid variant's liquid volume (the same liquid mass)."""
+    from .tank import Cavity, fill_height, inner_cavities
+
+    t = p.wall_thickness
+    out = []
+    for c, inner in zip(tank_layout(p), inner_cavities(p)):
+        cav = Cavity(c.name, p.radius - 0.5 * t, c.a_bottom - 0.5 * t, c.a_top - 0.5 * t, c.z_cyl_bottom,
+                     c.z_cyl_top, c.z_fill)
+        if p.liquid == "hydroelastic":
+            cav.z_fill = cav.z_bottom + fill_height(cav.r, cav.a_bottom, cav.a_top, cav.z_cyl_top - cav.z_cyl_bottom,
+                                                    inner.liquid_volume())
+        out.append(cav)
+    return out
+
+
 def build_shell_tank(p: TankParams, out_dir: Path) -> Geometry:
-    """build_tank for walls = "shell": the wall's mid-surface (module docstring)."""
+    """build_tank for walls = "shell": the wall's mid-surface (module docstring), with the
+    hydroelastic liquids meshed against it (meshes.tank.compartment_groups)."""
+    from .tank import compartment_groups
+
     lay = tank_layout(p)
     R, t, w = p.radius, p.wall_thickness, p.patch_half_width
     rm, wall = R - 0.5 * t, f"{p.name}_wall"
+    cavities = mid_cavities(p)
     with _occ.gmsh_session(p.name):
         faces = []
         for c in lay:
@@ -90,25 +113,27 @@ def build_shell_tank(p: TankParams, out_dir: Path) -> Geometry:
         tools = [shell_patch_tool(n, ref, p.axis_xy, rm, p.z_bottom + 0.5 * t, lay[-1].z_cyl_top + lay[-1].a_top - 0.5 * t,
                                   [(lay[0].z_cyl_bottom, lay[-1].z_cyl_top)], w, lay[0].a_bottom - 0.5 * t,
                                   lay[-1].a_top - 0.5 * t) for n, ref in p.patches.items()]
-        tools += [_occ.plane_cut(c.z_fill) for c in lay if c.fill_height < (c.z_inner_top - c.z_inner_bottom)]
+        tools += [_occ.plane_cut(cav.z_fill) for c, cav in zip(lay, cavities)
+                  if c.fill_height < (c.z_inner_top - c.z_inner_bottom)]
         wall_faces = _occ.imprint_surfaces({wall: faces}, tools)[wall]
+        liquids = {}
+        if p.liquid == "hydroelastic":
+            liquids = {f"{p.name}_{c.name}_liquid": _occ.liquid_solid(c.r, c.a_bottom, c.a_top, c.z_cyl_bottom,
+                                                                      c.z_cyl_top - c.z_cyl_bottom, c.z_fill, p.axis_xy)
+                       for c in cavities}
+            occ.synchronize()
+            _, new_faces, liquids = _occ.add_liquids({}, {wall: wall_faces}, liquids)
+            wall_faces = new_faces[wall]
         patches = _occ.patch_groups(wall_faces, tools, p.patches, lambda _: min(p.mesh_size, 0.6 * w))
-        smeared = []
-        ax, ay = p.axis_xy
-        for c in lay:
-            zb = c.z_cyl_bottom - (c.a_bottom - 0.5 * t)
-            wet = _occ.faces_inside(wall_faces, (ax - rm, ay - rm, zb, ax + rm, ay + rm, c.z_fill), tol=1e-3 * R)
-            wet = _occ.faces_on(wet, _occ.capsule_distance(p.axis_xy, rm, c.z_cyl_bottom, c.z_cyl_top,
-                                                           c.a_bottom - 0.5 * t, c.a_top - 0.5 * t), tol=1e-4 * R)
-            _occ.add_physical(2, f"{p.name}_{c.name}_wetted", wet)
-            liquid = next(k for k in p.compartments if k.name == c.name)
-            smeared.append(SmearedMass(f"{p.name}_{c.name}_wetted", liquid.liquid_density * c.liquid_volume()))
+        smeared, specs = compartment_groups(p, cavities, wall_faces, liquids)
         _occ.add_physical(2, wall, wall_faces)
         areas = _occ.physical_measures(2)
+        volumes = {g: _occ.group_volume(v) for g, v in liquids.items()}
         mat, ts = shell_section(p.material, areas[wall], p.dry_mass, p.shell_thickness, t)
         n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size, shell_curvature_elements(rm, p.mesh_size))
     geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), {wall: mat}, patches, [], smeared, [],
-                   {}, n_nodes, areas, shells={wall: ts}, shell_bending={wall: p.shell_bending_ratio})
+                   volumes, n_nodes, areas, shells={wall: ts}, shell_bending={wall: p.shell_bending_ratio},
+                   liquids=specs)
     geo.save(out_dir / f"{p.name}.json")
     return geo
 

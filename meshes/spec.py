@@ -19,11 +19,18 @@ Contract (DESIGN.md, issue 3). Units SI throughout: m, kg, Pa, kg/m^3, kg m^2.
 - ``smeared_masses``: non-structural mass spread uniformly (per unit area) over a
   physical surface group (propellant on the wetted wall).
 - ``clamped``: surface groups fixed to ground (pad pedestal bottoms); empty for free-free.
+- ``liquids``: physical VOLUME group name -> :class:`Liquid`: an incompressible, inviscid
+  liquid (fem.liquid) meshed with tetrahedra that share the ``wetted`` surface with the
+  structure (a solid wall's inner face, or a shell surface); its ``free_surface`` (p = 0)
+  faces the empty ullage. A liquid group is not a structural volume (it has no entry
+  in ``volumes``).
 
 JSON sidecar layout (``format = "liftoff-geometry"``, ``version = 1``, ``units = "SI"``):
 the fields above as plain JSON; ``msh_path`` is stored relative to the sidecar's folder
 when the mesh lies in or below it, and is returned absolute by :meth:`Geometry.load`.
-Optional extras: ``shells`` and ``shell_bending`` (absent = no shells), ``group_volumes``
+Optional extras: ``shells`` and ``shell_bending`` (absent = no shells), ``liquids``
+(absent = none; each ``{density, wetted, free_surface, cavity, center, points,
+slosh_modes, gravity}``), ``group_volumes``
 (CAD volume of each physical volume group, m^3, from ``gmsh.model.occ.getMass``),
 ``surface_areas`` (CAD area of each physical surface group, m^2) and ``mesh_nodes`` (node
 count of the written mesh).
@@ -157,6 +164,68 @@ class SmearedMass:
 
 
 @dataclass
+class Liquid:
+    """An incompressible, inviscid liquid filling a physical volume group (fem.liquid).
+
+    ``density`` (kg/m^3); ``wetted``: the surface group it shares with the structure (the
+    added mass couples through it); ``free_surface``: its surface facing the ullage, p = 0
+    (the liquid's perturbation pressure; hydrostatic head added by the run);
+    ``cavity``: the whole inner wall of its compartment (wetted and dry), whose volume change
+    is the ullage volume change (None: no ullage output); ``center``: a point inside that
+    convex cavity (m; orients the cavity's normals outwards); ``points``: pressure recovery
+    points {name: (x, y, z) m} (the tank bottom), each at a node of the liquid mesh;
+    ``slosh_modes``: the lowest gravity slosh modes kept (0: the free surface stays at p = 0,
+    the high-frequency limit); ``gravity``: the apparent acceleration (m/s^2, along the free
+    surface's outward normal reversed) of those slosh modes."""
+
+    density: float
+    wetted: str
+    free_surface: str
+    cavity: str | None = None
+    center: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    points: dict = field(default_factory=dict)
+    slosh_modes: int = 0
+    gravity: float = 9.80665
+
+    def __post_init__(self) -> None:
+        self.check()
+
+    def check(self, where: str = "liquid") -> None:
+        """One-line InputError naming ``where`` and the bad value."""
+        try:
+            self.density = float(self.density)
+        except (TypeError, ValueError):
+            raise InputError(f"{where}: density {self.density!r} kg/m^3 is not a number") from None
+        if not (math.isfinite(self.density) and self.density > 0):
+            raise InputError(f"{where}: density {self.density!r} kg/m^3 must be > 0")
+        for key in ("wetted", "free_surface") + (("cavity",) if self.cavity is not None else ()):
+            _check_name(f"{where}: {key} surface", getattr(self, key))
+        self.center = np.asarray(self.center, float).reshape(-1)
+        if self.center.shape != (3,) or not np.all(np.isfinite(self.center)):
+            raise InputError(f"{where}: center must be 3 finite coordinates (m)")
+        pts = {}
+        for name, xyz in dict(self.points).items():
+            _check_name(f"{where}: pressure point", name)
+            xyz = np.asarray(xyz, float).reshape(-1)
+            if xyz.shape != (3,) or not np.all(np.isfinite(xyz)):
+                raise InputError(f"{where}: pressure point {name!r} must be 3 finite coordinates (m)")
+            pts[name] = xyz
+        self.points = pts
+        if isinstance(self.slosh_modes, bool) or not isinstance(self.slosh_modes, (int, np.integer)) \
+                or self.slosh_modes < 0:
+            raise InputError(f"{where}: slosh_modes must be an integer >= 0 (got {self.slosh_modes!r})")
+        self.slosh_modes = int(self.slosh_modes)
+        require_positive(where, gravity=self.gravity)
+        self.gravity = float(self.gravity)
+
+    def to_dict(self) -> dict:
+        return {"density": self.density, "wetted": self.wetted, "free_surface": self.free_surface,
+                "cavity": self.cavity, "center": self.center.tolist(),
+                "points": {k: v.tolist() for k, v in self.points.items()}, "slosh_modes": self.slosh_modes,
+                "gravity": self.gravity}
+
+
+@dataclass
 class Geometry:
     """A meshed component: ``.msh`` path, materials per volume group, patches and masses (SI)."""
 
@@ -172,11 +241,19 @@ class Geometry:
     surface_areas: dict[str, float] = field(default_factory=dict)  # CAD areas of surface groups (m^2)
     shells: dict[str, float] = field(default_factory=dict)         # shell surface group -> thickness (m)
     shell_bending: dict[str, float] = field(default_factory=dict)  # shell surface group -> 12 I / t^3
+    liquids: dict[str, Liquid] = field(default_factory=dict)      # liquid volume group -> Liquid
 
     def __post_init__(self) -> None:
         self.msh_path = str(self.msh_path)
         if not self.volumes:
             raise InputError(f"geometry {self.name!r}: no volume groups")
+        for g, liq in self.liquids.items():
+            _check_name("liquid volume", g)
+            if not isinstance(liq, Liquid):
+                raise InputError(f"geometry {self.name!r}: liquids[{g!r}] is not a Liquid")
+            liq.check(f"geometry {self.name!r}: liquid {g!r}")
+            if g in self.volumes:
+                raise InputError(f"geometry {self.name!r}: {g!r} is both a structural volume and a liquid")
         for g, t in self.shells.items():
             _check_name("shell surface", g)
             require_positive(f"geometry {self.name!r}: shells", **{g: t})
@@ -205,15 +282,16 @@ class Geometry:
         raise InputError(f"geometry {self.name!r} has no patch {name!r}")
 
     def nominal_mass(self) -> float:
-        """Sum of rho * CAD volume over volume groups, rho * thickness * CAD area over shell
-        surfaces, + smeared + point masses (kg)."""
-        missing = [g for g in self.volumes if g not in self.shells and g not in self.group_volumes]
+        """Sum of rho * CAD volume over volume groups and liquids, rho * thickness * CAD area
+        over shell surfaces, + smeared + point masses (kg)."""
+        missing = [g for g in (*self.volumes, *self.liquids) if g not in self.shells and g not in self.group_volumes]
         missing += [g for g in self.shells if g not in self.surface_areas]
         if missing:
             raise InputError(f"geometry {self.name!r}: no CAD volume/area recorded for groups {missing}")
         structural = sum(m.rho * (self.shells[g] * self.surface_areas[g] if g in self.shells else self.group_volumes[g])
                          for g, m in self.volumes.items())
-        return structural + sum(s.mass for s in self.smeared_masses) + sum(p.mass for p in self.point_masses)
+        liquid = sum(liq.density * self.group_volumes[g] for g, liq in self.liquids.items())
+        return structural + liquid + sum(s.mass for s in self.smeared_masses) + sum(p.mass for p in self.point_masses)
 
     # ---- JSON sidecar ----------------------------------------------------------------
     def to_dict(self, base: Path | None = None) -> dict:
@@ -239,6 +317,7 @@ class Geometry:
             "surface_areas": dict(self.surface_areas),
             "shells": dict(self.shells),
             "shell_bending": dict(self.shell_bending),
+            "liquids": {g: liq.to_dict() for g, liq in self.liquids.items()},
         }
 
     def save(self, path) -> Path:
@@ -275,6 +354,7 @@ class Geometry:
                 surface_areas={g: float(v) for g, v in d.get("surface_areas", {}).items()},
                 shells={g: float(v) for g, v in d.get("shells", {}).items()},
                 shell_bending={g: float(v) for g, v in d.get("shell_bending", {}).items()},
+                liquids={g: Liquid(**v) for g, v in d.get("liquids", {}).items()},
             )
         except (KeyError, TypeError) as e:
             raise InputError(f"{path}: malformed {FORMAT} file ({e!r})") from None

@@ -2,10 +2,16 @@
 compartments stacked on one axis and joined by cylindrical intertank skirts (an external-
 tank-like core stage is two compartments: LH2 aft, LOX forward).
 
-The liquid is *not* modelled as a solid: it is non-structural mass spread uniformly over the
+Liquid (``TankParams.liquid``): ``"smeared"``, non-structural mass spread uniformly over the
 wetted inner wall up to the fill level (``SmearedMass`` on the group
-``<tank>_<compartment>_wetted``), mass = liquid density x liquid volume (closed form below).
-A hydroelastic model is later work. Units SI. See docs/meshes.md.
+``<tank>_<compartment>_wetted``), mass = liquid density x liquid volume (closed form below);
+or ``"hydroelastic"``, the liquid meshed with tetrahedra inside each compartment up to its
+fill level (volume group ``<tank>_<compartment>_liquid``, a ``spec.Liquid``), sharing the
+wetted surface ``<tank>_<compartment>_wetted`` with the wall (the solid wall's inner face,
+or the shell surface); its free surface ``<tank>_<compartment>_free_surface`` faces the
+empty ullage; ``<tank>_<compartment>_cavity`` is the compartment's whole inner wall (ullage
+volume) and the point group ``<tank>_<compartment>_bottom`` the liquid's lowest point
+(tank-bottom pressure). fem.liquid turns it into an added mass. Units SI. See docs/meshes.md.
 
 Walls (``TankParams.walls``): ``"solid"``, a thick wall of tetrahedra (outer radius R,
 thickness ``wall_thickness``, thickened: density and E scaled to the dry mass); or
@@ -28,7 +34,10 @@ from liftoff.core.errors import InputError
 
 from . import _occ
 from ._occ import occ
-from .spec import Geometry, Material, SmearedMass, check_walls, equivalent, require_positive
+from .spec import Geometry, Liquid, Material, SmearedMass, check_walls, equivalent, require_positive
+
+#: liquid models of a tank (TankParams.liquid)
+LIQUIDS = ("smeared", "hydroelastic")
 
 #: Aluminium alloy 2219 (the Shuttle external tank's alloy): E 73.8 GPa, nu 0.33, 2840 kg/m^3
 AL2219 = Material("Al2219", 73.8e9, 0.33, 2840.0)
@@ -82,10 +91,18 @@ class TankParams:
     walls: str = "solid"                  # "solid" (thickened tetrahedra) or "shell" (mid-surface)
     shell_thickness: float | None = None  # shell walls: None = the thickness of `material` that weighs dry_mass
     shell_bending_ratio: float = 1.0      # shell walls: 12 I / t^3 (frames, stringers smeared; 1 = bare skin)
+    liquid: str = "smeared"               # "smeared" (wetted-wall mass) or "hydroelastic" (liquid volumes, fem.liquid)
+    slosh_modes: int = 0                  # hydroelastic: gravity slosh modes kept per compartment (0: p = 0 free surface)
 
     def check(self) -> None:
         o = f"TankParams({self.name})"
         check_walls(o, self.walls)
+        if self.liquid not in LIQUIDS:
+            raise InputError(f"{o}.liquid must be one of {', '.join(map(repr, LIQUIDS))} (got {self.liquid!r})")
+        if isinstance(self.slosh_modes, bool) or not isinstance(self.slosh_modes, (int, float)) \
+                or self.slosh_modes != int(self.slosh_modes) or self.slosh_modes < 0:
+            raise InputError(f"{o}.slosh_modes must be an integer >= 0 (got {self.slosh_modes!r})")
+        self.slosh_modes = int(self.slosh_modes)
         if self.shell_thickness is not None:
             require_positive(o, shell_thickness=self.shell_thickness)
         require_positive(o, shell_bending_ratio=self.shell_bending_ratio)
@@ -100,6 +117,9 @@ class TankParams:
             raise InputError(f"{o}.wall_thickness {self.wall_thickness} m must be < radius/2")
         for c in self.compartments:
             c.check(o)
+            if self.liquid == "hydroelastic" and c.fill_level >= 1.0:
+                raise InputError(f"{o}.{c.name}.fill_level {c.fill_level!r} reaches the tank top: a hydroelastic "
+                                 "liquid needs an ullage above its free surface (fill_level < 1)")
             for which in ("dome_bottom", "dome_top"):
                 if getattr(c, which) * self.radius <= 2 * self.wall_thickness:
                     raise InputError(f"{o}.{c.name}.{which}: dome height must exceed 2 x wall_thickness")
@@ -278,11 +298,90 @@ def patch_tool(name: str, ref, axis_xy, r_out: float, r_in: float, z_lo_apex: fl
     return _occ.wall_patch(name, axis_xy, math.atan2(d[1], d[0]), z, r_out, r_in, w, w)
 
 
+@dataclass
+class Cavity:
+    """The liquid's cavity in one compartment (m, global z): radius, dome heights and
+    cylinder of the surface the liquid touches (the solid wall's inner face, or the shell's
+    mid-surface), and its fill height z_fill."""
+
+    name: str
+    r: float
+    a_bottom: float
+    a_top: float
+    z_cyl_bottom: float
+    z_cyl_top: float
+    z_fill: float
+
+    @property
+    def z_bottom(self) -> float:
+        return self.z_cyl_bottom - self.a_bottom
+
+    def distance(self, axis_xy):
+        return _occ.capsule_distance(axis_xy, self.r, self.z_cyl_bottom, self.z_cyl_top, self.a_bottom, self.a_top)
+
+    def liquid_volume(self) -> float:
+        return liquid_volume(self.r, self.a_bottom, self.a_top, self.z_cyl_top - self.z_cyl_bottom,
+                             self.z_fill - self.z_bottom)
+
+
+def inner_cavities(p: TankParams) -> list[Cavity]:
+    """The cavities bounded by the solid wall's inner faces (fill heights of tank_layout)."""
+    return [Cavity(c.name, c.r_inner, c.a_bottom_inner, c.a_top_inner, c.z_cyl_bottom, c.z_cyl_top, c.z_fill)
+            for c in tank_layout(p)]
+
+
+def fill_height(r: float, a_b: float, a_t: float, length: float, volume: float) -> float:
+    """Height h above the bottom apex of the capsule (r, a_b, a_t, length) below which it
+    holds ``volume`` (m^3): the inverse of :func:`liquid_volume` (bisection to 1e-12 m)."""
+    lo, hi = 0.0, a_b + length + a_t
+    if not 0.0 < volume < liquid_volume(r, a_b, a_t, length, hi):
+        raise InputError(f"a liquid volume of {volume:.6g} m^3 does not fit below the top of its cavity")
+    while hi - lo > 1e-12 * (1.0 + hi):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if liquid_volume(r, a_b, a_t, length, mid) < volume else (lo, mid)
+    return 0.5 * (lo + hi)
+
+
+def compartment_groups(p: TankParams, cavities: list[Cavity], wall_faces: list[int], liquids: dict):
+    """Physical groups of each compartment on the meshed wall: ``<name>_<c>_wetted`` and
+    either its smeared liquid mass (``liquids`` empty) or, for hydroelastic liquids
+    (``liquids``: liquid group -> volume dimTags), the liquid volume, its free surface,
+    the compartment's whole cavity wall and its bottom point. Returns (smeared masses,
+    {liquid group: spec.Liquid})."""
+    ax, ay = p.axis_xy
+    tol = 1e-3 * p.radius
+    smeared, specs, on_wall = [], {}, set(wall_faces)
+    for cav in cavities:
+        liquid = next(k for k in p.compartments if k.name == cav.name)
+        base = f"{p.name}_{cav.name}"
+        box = (ax - cav.r, ay - cav.r, cav.z_bottom, ax + cav.r, ay + cav.r, cav.z_cyl_top + cav.a_top)
+        cavity = _occ.faces_on(_occ.faces_inside(wall_faces, box, tol=tol), cav.distance(p.axis_xy), tol=1e-4 * p.radius)
+        if not liquids:
+            wet = _occ.faces_inside(cavity, box[:5] + (cav.z_fill,), tol=tol)
+            _occ.add_physical(2, f"{base}_wetted", wet)
+            smeared.append(SmearedMass(f"{base}_wetted", liquid.liquid_density * cav.liquid_volume()))
+            continue
+        group = f"{base}_liquid"
+        wet, free = _occ.liquid_faces(liquids[group], on_wall, group)
+        _occ.add_physical(3, group, [t for _, t in liquids[group]])
+        _occ.add_physical(2, f"{base}_wetted", wet)
+        _occ.add_physical(2, f"{base}_free_surface", free)
+        _occ.add_physical(2, f"{base}_cavity", cavity)
+        bottom = (ax, ay, cav.z_bottom)
+        _occ.add_physical(0, f"{base}_bottom", [_occ.point_at(bottom, tol)])
+        specs[group] = Liquid(liquid.liquid_density, f"{base}_wetted", f"{base}_free_surface", f"{base}_cavity",
+                              (ax, ay, 0.5 * (cav.z_bottom + cav.z_cyl_top + cav.a_top)),
+                              {f"{base}_bottom": bottom}, p.slosh_modes)
+    return smeared, specs
+
+
 def build_tank(p: TankParams, out_dir) -> Geometry:
     """Build, mesh and write ``<out_dir>/<name>.msh`` (+ ``.json`` sidecar); return the Geometry.
 
     Physical groups: ``<name>_wall`` (volume, or surface for shell walls); surfaces
-    ``<name>_<compartment>_wetted`` and one per patch."""
+    ``<name>_<compartment>_wetted`` and one per patch; hydroelastic liquids add the volume
+    ``<name>_<compartment>_liquid``, the surfaces ``..._free_surface`` and ``..._cavity``
+    and the point ``..._bottom`` (module docstring)."""
     if not isinstance(p, TankParams):
         raise InputError(f"build_tank expects TankParams, got {type(p).__name__}")
     p.check()
@@ -293,6 +392,7 @@ def build_tank(p: TankParams, out_dir) -> Geometry:
     lay = tank_layout(p)
     R, t, w = p.radius, p.wall_thickness, p.patch_half_width
     wall = f"{p.name}_wall"
+    cavities = inner_cavities(p)
     with _occ.gmsh_session(p.name):
         vols = _occ.revolve_to_z(_profile(p), p.axis_xy)
         occ.synchronize()
@@ -305,32 +405,31 @@ def build_tank(p: TankParams, out_dir) -> Geometry:
                 occ.translate([tl.dimtag], p.axis_xy[0], p.axis_xy[1], 0)
         occ.synchronize()
         groups = _occ.imprint({wall: vols}, tools)
+        liquids = {}
+        if p.liquid == "hydroelastic":
+            liquids = {f"{p.name}_{c.name}_liquid": _occ.liquid_solid(c.r, c.a_bottom, c.a_top, c.z_cyl_bottom,
+                                                                      c.z_cyl_top - c.z_cyl_bottom, c.z_fill, p.axis_xy)
+                       for c in cavities}
+            occ.synchronize()
+            groups, _, liquids = _occ.add_liquids(groups, {}, liquids)
         bfaces = _occ.boundary_faces(groups[wall])
         patches = _occ.patch_groups(bfaces, tools, p.patches, lambda _: min(p.mesh_size, 0.6 * w))
-        smeared = []
-        ax, ay = p.axis_xy
-        for c in lay:
-            box = (ax - c.r_inner, ay - c.r_inner, c.z_inner_bottom, ax + c.r_inner, ay + c.r_inner, c.z_fill)
-            wet = _occ.faces_inside(bfaces, box, tol=1e-3 * R)
-            on_cavity = _occ.capsule_distance(p.axis_xy, c.r_inner, c.z_cyl_bottom, c.z_cyl_top,
-                                              c.a_bottom_inner, c.a_top_inner)
-            wet = _occ.faces_on(wet, on_cavity, tol=1e-4 * R)
-            _occ.add_physical(2, f"{p.name}_{c.name}_wetted", wet)
-            liquid = next(k for k in p.compartments if k.name == c.name)
-            smeared.append(SmearedMass(f"{p.name}_{c.name}_wetted", liquid.liquid_density * c.liquid_volume()))
+        smeared, specs = compartment_groups(p, cavities, bfaces, liquids)
         _occ.add_physical(3, wall, [tg for _, tg in groups[wall]])
         volume = _occ.group_volume(groups[wall])
         mat = p.material if p.dry_mass is None else equivalent(p.material, p.dry_mass, volume)
         areas = _occ.physical_measures(2)
+        volumes = {wall: volume, **{g: _occ.group_volume(v) for g, v in liquids.items()}}
         rho_max = max([R] + [R * R / c.a_bottom for c in lay] + [R * R / c.a_top for c in lay]
                       + [c.a_bottom ** 2 / R for c in lay] + [c.a_top ** 2 / R for c in lay])
         n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size,
                                       _occ.curvature_elements(t, rho_max))
     geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), {wall: mat}, patches, [], smeared, [],
-                   {wall: volume}, n_nodes, areas)
+                   volumes, n_nodes, areas, liquids=specs)
     geo.save(out_dir / f"{p.name}.json")
     return geo
 
 
-__all__ = ["AL2219", "Compartment", "TankParams", "build_tank", "tank_layout", "tank_height", "wall_volume",
-           "liquid_volume", "wetted_area", "capsule_volume", "dome_volume", "CompartmentLayout"]
+__all__ = ["AL2219", "LIQUIDS", "Cavity", "Compartment", "TankParams", "build_tank", "tank_layout", "tank_height",
+           "wall_volume", "liquid_volume", "wetted_area", "capsule_volume", "dome_volume", "CompartmentLayout",
+           "inner_cavities", "fill_height", "compartment_groups"]

@@ -43,12 +43,13 @@ def _point_inertia(m: float, offsets) -> np.ndarray:
 
 # ---- core stage ---------------------------------------------------------------------------
 def core_stage_params(layout: StackLayout | None = None, mesh_size: float = 0.9, walls: str = "solid",
-                      shell_bending_ratio: float = 1.0) -> TankParams:
+                      shell_bending_ratio: float = 1.0, liquid: str = "smeared") -> TankParams:
     """External-tank-like core stage: LH2 tank (aft), intertank skirt, LOX tank (forward),
     Al 2219 wall thickened to 0.15 m (``walls="solid"``) or its mid-surface as an Al 2219
     shell of the thickness that weighs the dry mass, 6.8 mm (``walls="shell"``, bending
     stiffness ratio 12 I/t^3 ``shell_bending_ratio``), dry mass 26.5 t, propellants as
-    wetted-wall mass."""
+    wetted-wall mass (``liquid="smeared"``) or as hydroelastic liquid volumes
+    (``liquid="hydroelastic"``, fem.liquid)."""
     lay = layout or StackLayout()
     lay.check()
     patches = {}
@@ -61,7 +62,7 @@ def core_stage_params(layout: StackLayout | None = None, mesh_size: float = 0.9,
                       Compartment("lox", 4.65, 0.72, 1.6, 0.90, 1141.0)),
         intertank_length=6.9, z_bottom=lay.core_bottom_z, axis_xy=(0.0, 0.0),
         material=replace(AL2219), dry_mass=26_500.0, patches=patches, patch_half_width=0.5,
-        mesh_size=mesh_size, walls=walls, shell_bending_ratio=shell_bending_ratio)
+        mesh_size=mesh_size, walls=walls, shell_bending_ratio=shell_bending_ratio, liquid=liquid)
     p.patches["stack_top"] = np.array([0.0, 0.0, lay.core_bottom_z + tank_height(p)])
     return p
 

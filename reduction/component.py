@@ -29,6 +29,9 @@ nodes               (n_nodes, 3)     mesh node coordinates (m)            [optio
 cells               (n_cells, k)     cell connectivity into nodes         [optional]
 cell_type           str              meshio cell type, e.g. "tetra"       [optional]
 field_map/*         CSR arrays       (3 n_nodes, n) DOF vector -> nodal u [optional]
+liquid_*            CSR and arrays   hydroelastic liquid (reduction.liquid):  [optional]
+                                     H, G, volume_rows (CSR), pressure_points,
+                                     pressure_dofs, volume_names, mass, centroid
 ==================  ===============  ================================================
 """
 from __future__ import annotations
@@ -62,6 +65,7 @@ class Component:
     cells: np.ndarray | None = None
     cell_type: str = ""
     field_map: sp.csr_matrix | None = None
+    liquid: object = None          # reduction.liquid.LiquidMass: the added mass of the liquids, or None
 
     def __post_init__(self) -> None:
         self.K = sp.csr_matrix(self.K, dtype=float)
@@ -100,6 +104,8 @@ class Component:
             raise InputError(f"{who}: {len(self.points)} points but {self.point_coords.shape[0]} coordinates")
         if self.field_map is not None and self.field_map.shape[1] != n:
             raise InputError(f"{who}: field_map has {self.field_map.shape[1]} columns, expected {n}")
+        if self.liquid is not None and self.liquid.n_dof != n:
+            raise InputError(f"{who}: the liquid's coupling has {self.liquid.n_dof} columns, expected {n}")
 
     def dofs_of(self, labels) -> np.ndarray:
         """Indices into K of the given DOF labels; InputError naming the first unknown label."""
@@ -142,10 +148,14 @@ def save_component(c: Component, path) -> Path:
         data["cell_type"] = np.array(c.cell_type)
     if c.field_map is not None:
         data["field_map"] = _csr_record(c.field_map)
+    if c.liquid is not None:
+        data.update(c.liquid.record())
     return write_record(path, FORMAT, VERSION, data, units="SI", attrs={"name": c.name}, suffixes=(".npz",))
 
 
 def load_component(path) -> Component:
+    from .liquid import LiquidMass
+
     rec = read_record(path, FORMAT, (VERSION,), what="component file")
     z = rec.data
     try:
@@ -155,7 +165,8 @@ def load_component(path) -> Component:
             points=tuple(z["points"]), point_coords=z["point_coords"],
             nodes=z.get("nodes"), cells=z.get("cells"),
             cell_type=str(z["cell_type"]) if "cell_type" in z else "",
-            field_map=_csr_from(z["field_map"]) if "field_map" in z else None)
+            field_map=_csr_from(z["field_map"]) if "field_map" in z else None,
+            liquid=LiquidMass.from_record(z))
     except InputError:
         raise
     except Exception as exc:

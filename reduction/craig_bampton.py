@@ -235,7 +235,8 @@ class ScipySolver:
 
     ordering: str = ORDERING
 
-    def __call__(self, K, M, interior, boundary, *, n_modes, f_max, band_limit, who, dof_name=str):
+    def __call__(self, K, M, interior, boundary, *, n_modes, f_max, band_limit, who, dof_name=str,
+                 added_mass=None):
         timings = {}
         t0 = time.perf_counter()
         K, M = K.tocsc(), M.tocsc()
@@ -249,6 +250,8 @@ class ScipySolver:
         psi = -lu.solve(np.asarray(Kib.todense()))                        # constraint modes
         timings["constraint_solve_s"] = time.perf_counter() - t0
         t0 = time.perf_counter()
+        if added_mass is not None:          # hydroelastic liquid: M_ii + G_i^T H^-1 G_i (reduction.liquid)
+            Mii = added_mass.operator(Mii, interior)
         lam, phi = fixed_interface_eig(Kii, Mii, lu, n_modes, f_max, who, band_limit)
         timings["eigensolve_s"] = time.perf_counter() - t0
         return lam, phi, psi, timings
@@ -277,8 +280,10 @@ def craig_bampton(component: Component, boundary_labels, n_modes: int | None = N
     if i.size == 0:
         raise InputError(f"{who}: every DOF is a boundary DOF; nothing to reduce")
     solver = scipy_solver() if solver is None else solver
+    liquid = component.liquid              # hydroelastic liquid (reduction.liquid.LiquidMass) or None
     lam, phi, psi, timings = solver(component.K, component.M, i, b, n_modes=n_modes, f_max=f_max,
-                                    band_limit=BAND_MODE_LIMIT, who=who, dof_name=lambda d: _dof_name(component, d))
+                                    band_limit=BAND_MODE_LIMIT, who=who, dof_name=lambda d: _dof_name(component, d),
+                                    **({} if liquid is None else {"added_mass": liquid}))
     timings = dict(timings)
     lam, phi = _select(np.asarray(lam, float), np.asarray(phi, float), n_modes, f_max)
     psi = np.asarray(psi, float)
@@ -299,6 +304,8 @@ def craig_bampton(component: Component, boundary_labels, n_modes: int | None = N
     # C_M = Phi^T (M_ii Psi + M_ib) = fim^T (M T_c)  (fim is zero on the boundary rows)
     K_B = np.asarray(component.K[b] @ cm)
     M_cm = np.asarray(component.M @ cm)
+    if liquid is not None:                 # M + M_a (one multi-right-hand-side fluid solve)
+        M_cm = M_cm + liquid.apply(cm)
     M_B = cm.T @ M_cm
     C_M = fim.T @ M_cm
     del M_cm
@@ -312,7 +319,13 @@ def craig_bampton(component: Component, boundary_labels, n_modes: int | None = N
                    points=component.points, point_coords=component.point_coords.copy(),
                    dof_labels=component.dof_labels,
                    label_transform=np.hstack([fim[component.label_dofs], cm[component.label_dofs]]),
-                   n_dof=n, constraint_modes=cm, fixed_interface_modes=fim, timings=timings)
+                   n_dof=n, constraint_modes=cm, fixed_interface_modes=fim, timings=timings,
+                   recovery=() if liquid is None else liquid.cb_recovery(fim, cm, rigid=cm @ _axial(boundary_labels)))
+
+
+def _axial(boundary_labels) -> np.ndarray:
+    """The boundary DOFs' values in a unit rigid translation along z (the tank axis)."""
+    return np.array([1.0 if split_label(lab)[1] == 2 else 0.0 for lab in boundary_labels])
 
 
 def _check_request(who: str, boundary_labels, n_modes, f_max) -> tuple[str, ...]:
@@ -382,7 +395,7 @@ def fixed_interface_eig(Kii, Mii, lu, n_modes, f_max, who="component", band_limi
     # dense only for small interiors or an explicit request for (nearly) all modes; a band
     # alone (n_modes None) must never fall through to a dense n_i x n_i eigensolve
     if n_i <= DENSE_LIMIT or (n_modes is not None and want >= n_i - 1):
-        lam, phi = sla.eigh(Kii.toarray(), Mii.toarray())
+        lam, phi = sla.eigh(Kii.toarray(), Mii.toarray() if sp.issparse(Mii) else Mii @ np.eye(n_i))
     else:
         op = spla.LinearOperator(Kii.shape, matvec=lu.solve, dtype=float)
         k = want if lam_max is None else min(want, 20)

@@ -107,7 +107,7 @@ def summarize(result, cp, name: str, index: int, post, wall: float = 0.0, check=
 
     from . import report
 
-    its = report.items(result, cp.attach)
+    its = report.items(result, cp.attach, report.liquid_heads(cp))
     t = result.time
     V = np.column_stack([it.values for it in its])
     imax, imin = np.argmax(V, axis=0), np.argmin(V, axis=0)
@@ -127,7 +127,7 @@ def summarize(result, cp, name: str, index: int, post, wall: float = 0.0, check=
         tuple(c["name"] for c in cs), np.array([np.nan if c["separation_time"] is None else c["separation_time"]
                                                  for c in cs]),
         np.array([c["recontacts"] for c in cs], dtype=np.int64), np.array([c["peak_compression"] for c in cs]),
-        int(t.size - 1), float(result.h), float(wall), *_errors(its, report.items(check, cp.attach), error_estimate)
+        int(t.size - 1), float(result.h), float(wall), *_errors(its, report.items(check, cp.attach, report.liquid_heads(cp)), error_estimate)
         if check is not None else (None, None))
 
 
@@ -188,7 +188,7 @@ def run_case(task: CaseTask):
     if task.columns:
         from . import report
 
-        its = {it.name: it.values for it in report.items(res, cp.attach)}
+        its = {it.name: it.values for it in report.items(res, cp.attach, report.liquid_heads(cp))}
         return task.index, res.time, {c: its[c] for c in task.columns}
     sc = _MEMO["scenario"]
     return summarize(res, cp, case.name, task.index, sc.post, wall)

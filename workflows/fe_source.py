@@ -59,7 +59,12 @@ def build_component(comp: ComponentModel, model: ModelConfig, workdir: Path):
             geo.volumes[vol] = mat
     from liftoff.fem.parallel import fe_comm
 
-    fe = build_model(geo, model.degree, comm=fe_comm(world()))
-    component = Component(name=comp.name, **fe.component_fields())
+    fe = build_model(geo, model.degree, comm=fe_comm(world()), convective=model.convective)
+    liquid = fe.liquid_fields()
+    if liquid is not None:
+        from liftoff.reduction.liquid import LiquidMass
+
+        liquid = LiquidMass(**liquid)
+    component = Component(name=comp.name, **fe.component_fields(), liquid=liquid)
     thermal = {vol: np.asarray(thermal_load(fe, [vol], 1.0, 1.0), float) for vol in geo.volumes}
     return component, thermal

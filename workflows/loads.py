@@ -261,8 +261,13 @@ def table1(stack: StackModel, cp: CaseProblem, case: Case):
 
 
 def stack_mass_summary(stack: StackModel) -> str:
+    from liftoff.transient.effects import rigid_mass
+
     m, cg = center_of_gravity(stack.vehicle)
+    m_z = float(rigid_mass(stack.vehicle)[2, 2])
+    axial = "" if abs(m_z - m) <= 1e-6 * m else \
+        f" (axial {m_z / 1e3:.1f} t: a hydroelastic liquid's sloshing part is not carried laterally, docs/hydro.md)"
     return (f"vehicle: {stack.vehicle.n_modes} modes ({np.sum(stack.vehicle.omega > 0)} elastic, first "
             f"{stack.vehicle.omega[6] / 2 / np.pi if stack.vehicle.n_modes > 6 else float('nan'):.2f} Hz), "
-            f"mass {m / 1e3:.1f} t, c.g. {np.round(cg, 2).tolist()} m; pad: {stack.pad.n_modes} modes "
+            f"mass {m / 1e3:.1f} t{axial}, c.g. {np.round(cg, 2).tolist()} m; pad: {stack.pad.n_modes} modes "
             f"(first {stack.pad.omega[0] / 2 / np.pi:.2f} Hz)")

@@ -70,7 +70,8 @@ def _component_key(model: ModelConfig, comp: ComponentModel) -> dict:
     """Everything a component stage depends on (its cache key's parameters)."""
     return {"source": model.source, "name": comp.name, "mesh_size": comp.mesh_size, "degree": model.degree,
             "builder": {type(comp.builder).__name__: asdict(comp.builder)},
-            "materials": {vol: asdict(m) for vol, m in model.materials.items()}}
+            "materials": {vol: asdict(m) for vol, m in model.materials.items()},
+            **({"convective": model.convective} if getattr(comp.builder, "liquid", "") == "hydroelastic" else {})}
 
 
 def build_component(model: ModelConfig, comp: ComponentModel, workdir: Path) -> tuple[Component, dict]:
@@ -88,7 +89,8 @@ def build_component(model: ModelConfig, comp: ComponentModel, workdir: Path) -> 
 def component_stage(model: ModelConfig, name: str, cache: StageCache, workdir: Path) -> tuple[Component, dict, str]:
     comp = model.components[name]
     code = (("liftoff.workflows.stick", "liftoff.meshes", "liftoff.reduction", "liftoff.core") if model.source == "stick"
-            else ("liftoff.meshes", "liftoff.fem", "liftoff.reduction.component", "liftoff.workflows.fe_source",
+            else ("liftoff.meshes", "liftoff.fem", "liftoff.reduction.component", "liftoff.reduction.liquid",
+                  "liftoff.workflows.fe_source",
                   "liftoff.core"))
     key = stage_key("component", _component_key(model, comp), code)
 

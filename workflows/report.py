@@ -30,9 +30,10 @@ class Item:
     category: str = ""
 
 
-def items(result, attach: dict) -> list[Item]:
+def items(result, attach: dict, heads: dict | None = None) -> list[Item]:
     """Every reported history: post forces, recovered items (attach forces, c.g. motion; not
-    the modal coordinates), output points. Names, units and kinds come from the result's
+    the modal coordinates), output points, and with ``heads`` (:func:`liquid_heads`) the
+    total tank pressures and ullage volumes. Names, units and kinds come from the result's
     contact directions and recovery items; ``attach``: recovery name -> (point, component)."""
     out = []
     for j, d in enumerate(result.contact_directions):
@@ -51,7 +52,85 @@ def items(result, attach: dict) -> list[Item]:
     for j, lab in enumerate(result.output_labels["a"]):
         out.append(Item(f"disp {lab}", dunits[j], result.displacement["a"][:, j], "displacement"))
         out.append(Item(f"acc {lab}", aunits[j], result.acceleration["a"][:, j], "acceleration"))
+    if heads is not None:
+        out += tank_items(result, heads)
     return out
+
+
+# ------------------------------------------------------------------ hydroelastic tanks
+LIQUID_PRESSURE, ULLAGE = "_liquid_pressure", "_ullage_volume"     # component recovery names end so
+
+
+def liquid_heads(cp) -> dict[str, np.ndarray]:
+    """{recovery name: head (Pa) per column} of the liquids' pressure items: the pressure
+    rows (over the vehicle's modes) times the modal acceleration of a uniform acceleration
+    -g, Phi^T M RB (-g) (eq. 14; exact for the rigid-body part, which is all a uniform field
+    has): the hydrostatic head under gravity, which the total tank pressure adds to the
+    dynamic pressure from the accelerations (reduction.liquid)."""
+    pr = cp.problem
+    g = np.asarray(pr.forcing.gravity, float).reshape(-1)[:3]
+    out = {}
+    for r in pr.recoveries:
+        if r.name.endswith(LIQUID_PRESSURE) and r.acc is not None and r.body == "a":
+            out[r.name] = r.acc @ pr.body_a.modal_gravity(-g)
+    return out
+
+
+def tank_items(result, heads: dict) -> list[Item]:
+    """Total tank pressure (dynamic + head) and ullage volume change histories."""
+    out = []
+    for it in result.recovery_items.values():
+        if it.name in heads:
+            arr = result.recovered[it.name] + heads[it.name]
+            out += [Item(f"tank pressure {lab}", "Pa", arr[:, j], "tank_pressure") for j, lab in enumerate(it.labels)]
+        elif it.name.endswith(ULLAGE):
+            arr = result.recovered[it.name]
+            out += [Item(f"ullage volume change {lab}", "m^3", arr[:, j], "ullage_volume")
+                    for j, lab in enumerate(it.labels)]
+    return out
+
+
+def bulge_modes(cbs: dict, threshold: float = 0.25) -> list[dict]:
+    """Each hydroelastic tank's first bulge mode from its component's CB model: the lowest
+    fixed-interface mode whose ullage volume change (per unit modal coordinate) is at least
+    ``threshold`` of the largest among the kept modes; its frequency (Hz), that volume
+    change (m^3), and the axial effective mass of the liquid in it, (Phi_j^T M_a,c r)^2 (kg,
+    r the unit axial translation; modes normalised with M + M_a), beside the liquid's mass."""
+    rows = []
+    for name, cb in cbs.items():
+        rec = {it.name: it for it in getattr(cb, "recovery", ())}
+        if "ullage_volume" not in rec or "liquid_axial_inertia" not in rec or not cb.n_modes:
+            continue
+        nq = cb.n_modes
+        dv, f = rec["ullage_volume"].disp[:, :nq], rec["liquid_axial_inertia"].acc
+        x = np.concatenate([np.zeros(nq), [1.0 if lab.endswith(":Tz") else 0.0 for lab in cb.boundary_labels]])
+        labels = list(rec["liquid_axial_inertia"].labels)
+        for k, tank in enumerate(rec["ullage_volume"].labels):
+            if not np.abs(dv[k]).max() > 0 or tank not in labels:
+                continue
+            j = int(np.flatnonzero(np.abs(dv[k]) >= threshold * np.abs(dv[k]).max())[0])
+            c = labels.index(tank)
+            rows.append({"component": name, "tank": tank, "mode": j + 1, "hz": float(cb.fixed_freq_hz[j]),
+                         "dv_m3": float(dv[k, j]), "m_eff_kg": float(f[c, j] ** 2),
+                         "m_liquid_kg": float(f[c] @ x)})
+    return rows
+
+
+def tank_plots(result, cp, out: Path, case: str, finish) -> None:
+    """ullage_volume_<case>.png and tank_pressure_<case>.png (the reference's figures 5, 6)."""
+    import matplotlib.pyplot as plt
+
+    its = tank_items(result, liquid_heads(cp))
+    for cat, name, title, scale, unit in (("ullage_volume", "ullage_volume", "Ullage volume change", 1e3, "litre"),
+                                          ("tank_pressure", "tank_pressure", "Tank-bottom pressure", 1e-3, "kPa")):
+        sel = [it for it in its if it.category == cat]
+        if not sel:
+            continue
+        fig, axs = plt.subplots(len(sel), 1, figsize=(10, 3 + 2.5 * len(sel)), sharex=True, squeeze=False)
+        for ax, it in zip(axs[:, 0], sel):
+            ax.plot(result.time, it.values * scale, lw=0.8, label=it.name)
+            ax.set_ylabel(f"{it.name.split()[-1]} ({unit})")
+        finish(fig, list(axs[:, 0]), name, title)
 
 
 def maxmin(time: np.ndarray, its: list[Item], case: str) -> list[dict]:
@@ -296,6 +375,7 @@ def plots(result, cp, out: Path, case: str) -> list[Path]:
             axs.plot(t, result.acceleration["a"][:, labels.index(lab)], lw=0.8, label=lab)
         axs.set_ylabel(f"{pay} acceleration (m/s^2)")
         finish(fig, [axs], "payload_acc", "Payload-station acceleration")
+    tank_plots(result, cp, out, case, finish)
     return paths
 
 
@@ -411,6 +491,12 @@ def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[di
                 else (r["min"], r["t_min"], r["case_min"], r.get("min_err"))
             est = "" if e is None or e != e else f" (est. error {abs(e) / 1e6:.3g} MN)"
             lines.append(f"    {r['item']:<40} {big / 1e6:10.3f} MN at t = {t:.4f} s ({c}){est}")
+    bulges = bulge_modes(getattr(stack, "cbs", {}))
+    if bulges:
+        lines.append("  hydroelastic tanks, first bulge mode (fixed-interface; volume change per unit modal coordinate):")
+        for b in bulges:
+            lines.append(f"    {b['tank']:<24} {b['hz']:7.2f} Hz (mode {b['mode']}), dV {b['dv_m3']:.3g} m^3, axial "
+                         f"effective liquid mass {b['m_eff_kg'] / 1e3:.0f} t of {b['m_liquid_kg'] / 1e3:.0f} t")
     lines.append("  wall time per stage:")
     for name, secs in stage_times:
         lines.append(f"    {name:<38}{secs:8.2f} s")

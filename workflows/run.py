@@ -349,9 +349,10 @@ def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, sta
     files = [Path(res.save(out / f"results_{name}.h5"))]
     if not generated:                   # a generated case's summary comes from its record
         agg.add(summarize(res, cp, name, -1, sc.post, check=half), generated=False)
-    rows = report.maxmin(res.time, report.items(res, cp.attach), name)
+    heads = report.liquid_heads(cp)
+    rows = report.maxmin(res.time, report.items(res, cp.attach, heads), name)
     if half is not None:
-        report.with_errors(rows, report.maxmin(half.time, report.items(half, cp.attach), name))
+        report.with_errors(rows, report.maxmin(half.time, report.items(half, cp.attach, heads), name))
     files.append(report.write_csv(rows, out / f"maxmin_{name}.csv"))
     if plots:
         files += report.plots(res, cp, out, name)

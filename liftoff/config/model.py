@@ -48,8 +48,10 @@ STICK_ELEMENT = 4.0         # m, default beam element length of the stick source
 MAX_ELEMENTS = {"fe": 1_000_000, "stick": 2_000}
 
 _MODEL = {"source", "mesh_size", "degree", "zeta", "vehicle", "pad", "component", "materials", "system", "stick",
-          "walls", "max_elements"}
+          "walls", "max_elements", "liquid", "convective"}
 WALLS = ("solid", "shell")
+LIQUIDS = ("smeared", "hydroelastic")     # [model] liquid: the core stage's propellants (meshes.tank)
+CONVECTIVE = ("wall", "free")             # [model] convective: a hydroelastic liquid's sloshing part (fem.liquid)
 _CORE_PARAMS = {"shell_bending_ratio"}
 _VEHICLE = {"mesh_size", "params"}
 _COMP = {"mesh_size", "n_modes", "f_max", "params", "nastran"}
@@ -122,6 +124,7 @@ class ModelConfig:
     materials: dict[str, Material]
     system: SystemModel
     max_elements: int = MAX_ELEMENTS["fe"]
+    convective: str = "wall"      # hydroelastic liquids: their sloshing part on the wetted wall, or "free"
 
 
 # ---------------------------------------------------------------- builder dataclasses
@@ -228,7 +231,7 @@ def _sizes(where: Where, spec: dict, keys: set[str], base: Path = Path(".")) -> 
 
 
 def _fe_builders(where: Where, layout: StackLayout, sel: dict[str, dict], size: dict[str, float | None],
-                 walls: str) -> dict:
+                 walls: str, liquid: str = "smeared") -> dict:
     """Builder dataclasses of the FE components (gmsh geometry of meshes/); ``walls`` the
     vehicle walls' model ([model] walls: thickened solids or shells), overridable per
     booster/orbiter in their params."""
@@ -243,7 +246,8 @@ def _fe_builders(where: Where, layout: StackLayout, sel: dict[str, dict], size: 
     try:
         ratio = number(wc / "core" / "params" / "shell_bending_ratio", core.get("shell_bending_ratio", 1.0),
                        positive=True)
-        out["core"] = core_stage_params(layout, **_size(size["core"]), walls=walls, shell_bending_ratio=ratio)
+        out["core"] = core_stage_params(layout, **_size(size["core"]), walls=walls, shell_bending_ratio=ratio,
+                                        liquid=liquid)
         out["core"].check()
     except InputError as exc:
         raise (wc / "core").wrap(exc) from None
@@ -338,7 +342,15 @@ def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig
         raise (where / "walls").error(f"must be one of {', '.join(WALLS)}, got {walls!r}")
     if source == "stick" and "walls" in m:
         raise (where / "walls").error("[model] walls is for source = \"fe\" (the stick model has beams)")
-    builders = _fe_builders(where, layout, sel, sizes, walls) if source == "fe" else \
+    liquid = string(where / "liquid", m.get("liquid", "smeared"))
+    if liquid not in LIQUIDS:
+        raise (where / "liquid").error(f"must be one of {', '.join(LIQUIDS)}, got {liquid!r}")
+    if source == "stick" and "liquid" in m:
+        raise (where / "liquid").error("[model] liquid is for source = \"fe\" (the stick model has lumped masses)")
+    convective = string(where / "convective", m.get("convective", "wall"))
+    if convective not in CONVECTIVE:
+        raise (where / "convective").error(f"must be one of {', '.join(CONVECTIVE)}, got {convective!r}")
+    builders = _fe_builders(where, layout, sel, sizes, walls, liquid) if source == "fe" else \
         _stick_builders(where, layout, sel, m.get("stick", {}))
     components = {name: ComponentModel(name, builders[name], sizes[name], sel[name].get("n_modes"),
                                        sel[name].get("f_max", None if "n_modes" in sel[name] else DEFAULT_F_MAX),
@@ -349,4 +361,5 @@ def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig
                             number(where / "system" / k, v, positive=True) for k, v in s.items()})
     max_elements = integer(where / "max_elements", m.get("max_elements", MAX_ELEMENTS[source]), 1)
     return ModelConfig(source, degree, zeta, layout, components,
-                       _materials(where / "materials", m.get("materials", {}), source), system, max_elements)
+                       _materials(where / "materials", m.get("materials", {}), source), system, max_elements,
+                       convective)

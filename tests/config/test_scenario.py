@@ -249,3 +249,31 @@ def test_walls_as_shells_reach_every_vehicle_builder(base):
     d["model"]["walls"] = "plates"
     with pytest.raises(InputError, match=r"model\.walls: must be one of solid, shell"):
         parse_scenario(d, "s.toml")
+
+
+def test_liquid_option_reaches_the_core_tank(base):
+    """[model] liquid = "hydroelastic" meshes the core stage's propellants as liquid volumes
+    (meshes.tank, fem.liquid; the default scenario's); "smeared" (wetted-wall mass) stays available; anything else
+    is a one-line error naming the key."""
+    d = copy.deepcopy(base)
+    assert parse_scenario(d, "s.toml").cases[0].model.components["core"].builder.liquid == "hydroelastic"   # default
+    for liquid in ("hydroelastic", "smeared"):
+        d["model"]["liquid"] = liquid
+        assert parse_scenario(d, "s.toml").cases[0].model.components["core"].builder.liquid == liquid
+    d["model"]["liquid"] = "frozen"
+    with pytest.raises(InputError, match=r"model\.liquid: must be one of smeared, hydroelastic") as e:
+        parse_scenario(d, "s.toml")
+    assert "\n" not in str(e.value)
+
+
+def test_convective_option(base):
+    """[model] convective: a hydroelastic liquid's sloshing part lumped on the wetted wall
+    ("wall", the default) or left free laterally ("free"); anything else is one line."""
+    d = copy.deepcopy(base)
+    assert parse_scenario(d, "s.toml").cases[0].model.convective == "wall"
+    d["model"]["convective"] = "free"
+    assert parse_scenario(d, "s.toml").cases[0].model.convective == "free"
+    d["model"]["convective"] = "glued"
+    with pytest.raises(InputError, match=r"model\.convective: must be one of wall, free") as e:
+        parse_scenario(d, "s.toml")
+    assert "\n" not in str(e.value)

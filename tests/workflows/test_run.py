@@ -171,6 +171,24 @@ def test_cli_bad_scenario_one_line(tmp_path, capsys):
     assert "bad.toml: model.source" in capsys.readouterr().err
 
 
+def test_cli_bad_liquid_one_line(tmp_path, capsys):
+    """[model] liquid: an unknown model, or a liquid for the stick source, exits 2 with one line
+    naming the file and the key, before any output."""
+    d = tomllib.loads(default_text())
+    d["model"]["liquid"] = "frozen"
+    p = tmp_path / "bad.toml"
+    p.write_text(_toml(d))
+    assert main(["run", str(p), "--out", str(tmp_path / "o"), "--no-cache", "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "bad.toml: model.liquid: must be one of smeared, hydroelastic" in err
+    d["model"] = dict(STICK, liquid="hydroelastic")
+    p.write_text(_toml(d))
+    assert main(["run", str(p), "--out", str(tmp_path / "o"), "--no-cache", "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "bad.toml: model.liquid: [model] liquid is for source = \"fe\"" in err
+    assert not (tmp_path / "o").exists() or not list((tmp_path / "o").iterdir())
+
+
 @pytest.mark.fem
 @pytest.mark.slow
 @pytest.mark.skipif(not HAVE_FE, reason="needs dolfinx and gmsh")
