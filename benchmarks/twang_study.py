@@ -43,7 +43,7 @@ MATERIALS = {"core_wall": (3.412074e9, 0.33, 131.3047), "srb_case": (17.357e9, 0
 #: the builder's booster case modulus: the whole 75 t case_mass as a 19.6 mm D6AC wall (before issue 15)
 E_CASE_BUILDER = 26.75306e9
 K_POST = (2.0e9, 2.0e9, 5.0e9)
-SSME_SCALE, SSME_DIR = 1.668e6, [0.0, -7.38, 24.09]
+SSME_SCALE, SSME_DIR = 1.668e6, [0.0, -7.38, 24.21]
 
 
 def scaled(group: str, factor: float) -> dict:
