@@ -97,7 +97,7 @@ def mid_cavities(p: TankParams) -> list:
 def build_shell_tank(p: TankParams, out_dir: Path) -> Geometry:
     """build_tank for walls = "shell": the wall's mid-surface (module docstring), with the
     hydroelastic liquids meshed against it (meshes.tank.compartment_groups)."""
-    from .tank import compartment_groups
+    from .tank import compartment_groups, inner_cavities
 
     lay = tank_layout(p)
     R, t, w = p.radius, p.wall_thickness, p.patch_half_width
@@ -125,7 +125,7 @@ def build_shell_tank(p: TankParams, out_dir: Path) -> Geometry:
             _, new_faces, liquids = _occ.add_liquids({}, {wall: wall_faces}, liquids)
             wall_faces = new_faces[wall]
         patches = _occ.patch_groups(wall_faces, tools, p.patches, lambda _: min(p.mesh_size, 0.6 * w))
-        smeared, specs = compartment_groups(p, cavities, wall_faces, liquids)
+        smeared, specs = compartment_groups(p, cavities, wall_faces, liquids, inner_cavities(p))
         _occ.add_physical(2, wall, wall_faces)
         areas = _occ.physical_measures(2)
         volumes = {g: _occ.group_volume(v) for g, v in liquids.items()}

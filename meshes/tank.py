@@ -342,16 +342,18 @@ def fill_height(r: float, a_b: float, a_t: float, length: float, volume: float) 
     return 0.5 * (lo + hi)
 
 
-def compartment_groups(p: TankParams, cavities: list[Cavity], wall_faces: list[int], liquids: dict):
+def compartment_groups(p: TankParams, cavities: list[Cavity], wall_faces: list[int], liquids: dict,
+                       mass_cavities: list[Cavity] | None = None):
     """Physical groups of each compartment on the meshed wall: ``<name>_<c>_wetted`` and
-    either its smeared liquid mass (``liquids`` empty) or, for hydroelastic liquids
+    either its smeared liquid mass (``liquids`` empty; the liquid volume of ``mass_cavities``
+    if given: a shell's mid-surface cavity is larger than the liquid the tank holds) or, for hydroelastic liquids
     (``liquids``: liquid group -> volume dimTags), the liquid volume, its free surface,
     the compartment's whole cavity wall and its bottom point. Returns (smeared masses,
     {liquid group: spec.Liquid})."""
     ax, ay = p.axis_xy
     tol = 1e-3 * p.radius
     smeared, specs, on_wall = [], {}, set(wall_faces)
-    for cav in cavities:
+    for i, cav in enumerate(cavities):
         liquid = next(k for k in p.compartments if k.name == cav.name)
         base = f"{p.name}_{cav.name}"
         box = (ax - cav.r, ay - cav.r, cav.z_bottom, ax + cav.r, ay + cav.r, cav.z_cyl_top + cav.a_top)
@@ -359,7 +361,8 @@ def compartment_groups(p: TankParams, cavities: list[Cavity], wall_faces: list[i
         if not liquids:
             wet = _occ.faces_inside(cavity, box[:5] + (cav.z_fill,), tol=tol)
             _occ.add_physical(2, f"{base}_wetted", wet)
-            smeared.append(SmearedMass(f"{base}_wetted", liquid.liquid_density * cav.liquid_volume()))
+            held = (mass_cavities or cavities)[i].liquid_volume()
+            smeared.append(SmearedMass(f"{base}_wetted", liquid.liquid_density * held))
             continue
         group = f"{base}_liquid"
         wet, free = _occ.liquid_faces(liquids[group], on_wall, group)
