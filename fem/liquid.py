@@ -442,7 +442,6 @@ def wet_eigensolve(K: PETSc.Mat, M: PETSc.Mat, ops: list, n_modes: int, dofs: np
     Returns (lambda ascending, Phi with Phi^T (M + M_a) Phi = I), serial."""
     from slepc4py import SLEPc
 
-    from liftoff.core.errors import ConvergenceError
 
     B = mass_with_liquid(M, ops, dofs)
     eps = SLEPc.EPS().create(PETSc.COMM_SELF)
@@ -466,18 +465,9 @@ def wet_eigensolve(K: PETSc.Mat, M: PETSc.Mat, ops: list, n_modes: int, dofs: np
         except PETSc.Error as exc:
             raise InputError(f"{what}: the wet eigensolve failed to factor K (PETSc error {exc.ierr}): "
                              "K is singular (a floating part, or a free-free model: clamp it or reduce it)") from None
-        nconv = eps.getConverged()
-        if nconv < n_modes:
-            raise ConvergenceError(f"{what}: SLEPc converged {nconv} of {n_modes} wet eigenpairs")
-        v, Bv = K.createVecRight(), K.createVecRight()
-        lam = np.array([eps.getEigenvalue(j).real for j in range(nconv)])
-        order = np.argsort(lam, kind="stable")[:n_modes]
-        cols = []
-        for j in order:
-            eps.getEigenvector(int(j), v)
-            B.mult(v, Bv)
-            cols.append(np.array(v.getArray(readonly=True)) / np.sqrt(v.dot(Bv).real))
-        return lam[order], np.column_stack(cols)
+        from .petsc_cb import solved_pairs
+
+        return solved_pairs(eps, B, n_modes, f"{what}: SLEPc (wet modes)")
     finally:
         eps.destroy()
         B.destroy()

@@ -276,17 +276,24 @@ def eigenpairs(eps, Mii: PETSc.Mat, want: int, who: str = "component") -> tuple[
         eps.solve()
     except PETSc.Error as exc:
         raise ConvergenceError(f"{who}: SLEPc fixed-interface eigensolve failed (PETSc error {exc.ierr})") from None
+    return solved_pairs(eps, Mii, want, f"{who}: SLEPc")
+
+
+def solved_pairs(eps, B: PETSc.Mat, want: int, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """After ``eps.solve()``: the ``want`` lowest eigenvalues (ascending) and this process's
+    rows of their B-normalised eigenvectors (ConvergenceError naming ``what`` if fewer
+    converged)."""
     nconv = eps.getConverged()
     if nconv < want:
-        raise ConvergenceError(f"{who}: SLEPc converged {nconv} of {want} fixed-interface eigenpairs "
+        raise ConvergenceError(f"{what} converged {nconv} of {want} fixed-interface eigenpairs "
                                f"({eps.getIterationNumber()} iterations)")
-    v, Mv = Mii.createVecRight(), Mii.createVecLeft()
+    v, Mv = B.createVecRight(), B.createVecLeft()
     lam = np.array([eps.getEigenvalue(j).real for j in range(nconv)])
     order = np.argsort(lam, kind="stable")[:want]
     cols = []
     for j in order:
         eps.getEigenvector(int(j), v)
-        Mii.mult(v, Mv)
+        B.mult(v, Mv)
         cols.append(np.array(v.getArray(readonly=True)) / np.sqrt(v.dot(Mv).real))
     phi = np.column_stack(cols) if cols else np.zeros((v.getLocalSize(), 0))
     return lam[order], phi

@@ -26,7 +26,6 @@ import numpy as np
 from liftoff.core.errors import InputError
 
 from . import _occ
-from ._occ import occ
 from .spec import Geometry, Material, Patch, SmearedMass, equivalent
 from .tank import TankParams, tank_layout
 
@@ -97,7 +96,7 @@ def mid_cavities(p: TankParams) -> list:
 def build_shell_tank(p: TankParams, out_dir: Path) -> Geometry:
     """build_tank for walls = "shell": the wall's mid-surface (module docstring), with the
     hydroelastic liquids meshed against it (meshes.tank.compartment_groups)."""
-    from .tank import compartment_groups, inner_cavities
+    from .tank import compartment_groups, inner_cavities, liquid_solids
 
     lay = tank_layout(p)
     R, t, w = p.radius, p.wall_thickness, p.patch_half_width
@@ -116,12 +115,8 @@ def build_shell_tank(p: TankParams, out_dir: Path) -> Geometry:
         tools += [_occ.plane_cut(cav.z_fill) for c, cav in zip(lay, cavities)
                   if c.fill_height < (c.z_inner_top - c.z_inner_bottom)]
         wall_faces = _occ.imprint_surfaces({wall: faces}, tools)[wall]
-        liquids = {}
-        if p.liquid == "hydroelastic":
-            liquids = {f"{p.name}_{c.name}_liquid": _occ.liquid_solid(c.r, c.a_bottom, c.a_top, c.z_cyl_bottom,
-                                                                      c.z_cyl_top - c.z_cyl_bottom, c.z_fill, p.axis_xy)
-                       for c in cavities}
-            occ.synchronize()
+        liquids = liquid_solids(p, cavities)
+        if liquids:
             _, new_faces, liquids = _occ.add_liquids({}, {wall: wall_faces}, liquids)
             wall_faces = new_faces[wall]
         patches = _occ.patch_groups(wall_faces, tools, p.patches, lambda _: min(p.mesh_size, 0.6 * w))

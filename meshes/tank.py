@@ -342,6 +342,18 @@ def fill_height(r: float, a_b: float, a_t: float, length: float, volume: float) 
     return 0.5 * (lo + hi)
 
 
+def liquid_solids(p: TankParams, cavities: list[Cavity]) -> dict:
+    """The OCC liquid volumes of a hydroelastic tank, one per cavity filled to its level
+    (``{<name>_<compartment>_liquid: dimTags}``; empty for smeared liquids)."""
+    if p.liquid != "hydroelastic":
+        return {}
+    out = {f"{p.name}_{c.name}_liquid": _occ.liquid_solid(c.r, c.a_bottom, c.a_top, c.z_cyl_bottom,
+                                                          c.z_cyl_top - c.z_cyl_bottom, c.z_fill, p.axis_xy)
+           for c in cavities}
+    occ.synchronize()
+    return out
+
+
 def compartment_groups(p: TankParams, cavities: list[Cavity], wall_faces: list[int], liquids: dict,
                        mass_cavities: list[Cavity] | None = None):
     """Physical groups of each compartment on the meshed wall: ``<name>_<c>_wetted`` and
@@ -408,12 +420,8 @@ def build_tank(p: TankParams, out_dir) -> Geometry:
                 occ.translate([tl.dimtag], p.axis_xy[0], p.axis_xy[1], 0)
         occ.synchronize()
         groups = _occ.imprint({wall: vols}, tools)
-        liquids = {}
-        if p.liquid == "hydroelastic":
-            liquids = {f"{p.name}_{c.name}_liquid": _occ.liquid_solid(c.r, c.a_bottom, c.a_top, c.z_cyl_bottom,
-                                                                      c.z_cyl_top - c.z_cyl_bottom, c.z_fill, p.axis_xy)
-                       for c in cavities}
-            occ.synchronize()
+        liquids = liquid_solids(p, cavities)
+        if liquids:
             groups, _, liquids = _occ.add_liquids(groups, {}, liquids)
         bfaces = _occ.boundary_faces(groups[wall])
         patches = _occ.patch_groups(bfaces, tools, p.patches, lambda _: min(p.mesh_size, 0.6 * w))
