@@ -491,31 +491,15 @@ def count_below_wet(comm, Kii: sp.spmatrix, Mii: sp.spmatrix, Gi: sp.spmatrix, H
         raise InputError(f"{who}: the wet mode count needs a positive eigenvalue bound (got {lam!r})")
     A = sp.bmat([[sp.csr_matrix(Kii) - lam * sp.csr_matrix(Mii), sp.csr_matrix(Gi).T],
                  [sp.csr_matrix(Gi), sp.csr_matrix(H) / lam]], format="csr")
-    n, size, rank = A.shape[0], comm.size, comm.rank
-    r0 = rank * (n // size) + min(rank, n % size)
-    r1 = r0 + n // size + (1 if rank < n % size else 0)
+    from .petsc_cb import nonpositive_pivots, row_range
+
+    n = A.shape[0]
+    r0, r1 = row_range(comm, n)
     Ap = pb.csr_matrix(comm, r1 - r0, r1 - r0, n, A[r0:r1])
-    Ap.setOption(PETSc.Mat.Option.SYMMETRIC, True)
-    ksp = PETSc.KSP().create(comm)
-    prefix = f"liftoff_wetcount{id(ksp)}_"
-    opts = PETSc.Options()
-    values = {"mat_mumps_icntl_24": 1, **({"mat_mumps_icntl_13": 1} if size > 1 else {})}
-    for k, v in values.items():
-        opts.setValue(prefix + k, v)
     try:
-        ksp.setOptionsPrefix(prefix)
-        ksp.setOperators(Ap)
-        pb._mumps_cholesky(ksp)
-        try:
-            ksp.setUp()
-        except PETSc.Error as exc:
-            raise InputError(f"{who}: factorisation of the wet count matrix failed (PETSc error {exc.ierr})") from None
-        nneg, nzero, _ = ksp.getPC().getFactorMatrix().getInertia()
-        return int(nneg) + int(nzero)
+        Ap.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+        return nonpositive_pivots(Ap, "the wet count matrix", who)
     finally:
-        for k in values:
-            opts.delValue(prefix + k)
-        ksp.destroy()
         Ap.destroy()
 
 

@@ -173,9 +173,18 @@ def _inertia(F: PETSc.Mat) -> tuple[int, int, int]:
 def count_below(Kii: PETSc.Mat, Mii: PETSc.Mat, lam: float, who: str = "component") -> int:
     """Number of eigenvalues of K_ii x = mu M_ii x with mu <= ``lam``: the negative (and
     null) pivots of a MUMPS LDL^T factor of K_ii - lam M_ii (Sylvester's law of inertia)."""
-    comm = Kii.getComm().tompi4py()
     A = Kii.copy()
-    A.axpy(-lam, Mii, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+    try:
+        A.axpy(-lam, Mii, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        return nonpositive_pivots(A, "K_ii - (2 pi f_max)^2 M_ii", who)
+    finally:
+        A.destroy()
+
+
+def nonpositive_pivots(A: PETSc.Mat, what: str, who: str) -> int:
+    """The negative and null pivots of one MUMPS LDL^T factor of the symmetric ``A`` (its
+    inertia: the number of its eigenvalues <= 0); ``what`` names A in the errors."""
+    comm = A.getComm().tompi4py()
     ksp = PETSc.KSP().create(comm)
     try:
         with _mumps_options(comm) as prefix:
@@ -185,16 +194,13 @@ def count_below(Kii: PETSc.Mat, Mii: PETSc.Mat, lam: float, who: str = "componen
             try:
                 ksp.setUp()
             except PETSc.Error as exc:
-                raise InputError(f"{who}: factorisation of K_ii - (2 pi f_max)^2 M_ii failed "
-                                 f"(PETSc error {exc.ierr})") from None
+                raise InputError(f"{who}: factorisation of {what} failed (PETSc error {exc.ierr})") from None
             F = ksp.getPC().getFactorMatrix()
             if F.getMumpsInfog(1) < 0:
-                raise InputError(f"{who}: MUMPS failed to factor K_ii - (2 pi f_max)^2 M_ii "
-                                 f"(INFOG(1) = {F.getMumpsInfog(1)})")
+                raise InputError(f"{who}: MUMPS failed to factor {what} (INFOG(1) = {F.getMumpsInfog(1)})")
             nneg, nzero, _ = _inertia(F)
     finally:
         ksp.destroy()
-        A.destroy()
     return nneg + nzero
 
 
