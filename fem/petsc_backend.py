@@ -190,24 +190,29 @@ def eigensolve(K: PETSc.Mat, M: PETSc.Mat, n_modes: int, sigma: float, tol: floa
     return lam[order], Phi
 
 
-def solve(K: PETSc.Mat, f: np.ndarray, fixed: np.ndarray, what: str = "model") -> np.ndarray:
-    """Solve K u = f with u[fixed] = 0 (direct, MUMPS Cholesky); u gathered on every rank."""
-    comm = K.getComm()
-    A = K.copy()
-    rows = np.asarray(fixed, dtype=PETSc.IntType)
-    b = vec_from_global(A, np.where(np.isin(np.arange(f.size), rows), 0.0, f))
-    r0, r1 = A.getOwnershipRange()
-    A.zeroRowsColumns(rows[(rows >= r0) & (rows < r1)], diag=1.0)
-    ksp = PETSc.KSP().create(comm)
+def direct_solve(A: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec, what: str = "model") -> None:
+    """x = A^-1 b (MUMPS Cholesky, A symmetric); a factorisation failure is an InputError."""
+    ksp = PETSc.KSP().create(A.getComm())
     ksp.setOperators(A)
     _mumps_cholesky(ksp)
-    x = A.createVecRight()
     try:
         ksp.solve(b, x)
     except PETSc.Error as exc:
         raise InputError(f"{what}: static solve failed to factor K (PETSc error {exc.ierr}): "
                          "the model is singular (floating part, missing tie or missing supports)") from None
+    finally:
+        ksp.destroy()
+
+
+def solve(K: PETSc.Mat, f: np.ndarray, fixed: np.ndarray, what: str = "model") -> np.ndarray:
+    """Solve K u = f with u[fixed] = 0 (direct, MUMPS Cholesky); u gathered on every rank."""
+    A = K.copy()
+    rows = np.asarray(fixed, dtype=PETSc.IntType)
+    b = vec_from_global(A, np.where(np.isin(np.arange(f.size), rows), 0.0, f))
+    r0, r1 = A.getOwnershipRange()
+    A.zeroRowsColumns(rows[(rows >= r0) & (rows < r1)], diag=1.0)
+    x = A.createVecRight()
+    direct_solve(A, b, x, what)
     u = gather_vec(x)
-    ksp.destroy()
     A.destroy()
     return u

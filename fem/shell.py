@@ -199,6 +199,73 @@ def thermal_load_form(W, f: ShellFields, cell_tags, strain_by_id: dict[int, floa
     return sum(f.t * f.E / (1 - f.nu) * float(s) * ufl.tr(ev) * dx(int(i)) for i, s in strain_by_id.items())
 
 
+def membrane_resultants(u, f: ShellFields, mesh):
+    """Membrane stress resultants N = t C eps(u) (2 x 2, N/m, facet frame) of the
+    translations ``u`` (the prestress of :func:`geometric_stiffness_form`)."""
+    P = _in_plane(local_frame(mesh))
+    return f.t * _plane_stress(f.E, f.nu, ufl.sym(ufl.dot(P.T, ufl.dot(ufl.grad(u), P))))
+
+
+def geometric_stiffness_form(W, N0, dx=None):
+    """Initial-stress (geometric) stiffness of the membrane prestress ``N0`` (2 x 2, N/m, facet
+    frame): K_G(u, v) = int N0_ab (du/ds_a) . (dv/ds_b) dA, with d/ds_a = grad . P e_a the
+    tangential derivatives of all three translations (the second-order membrane strain of
+    a plate or shell under initial stress; Cook, Malkus, Plesha & Witt, Concepts and
+    Applications of FE Analysis, 4th ed., sect. 18.2; bending and shear prestress left
+    out). N0 > 0 is tension and stiffens."""
+    P = _in_plane(local_frame(W.mesh))
+    u, _ = ufl.split(ufl.TrialFunction(W))
+    v, _ = ufl.split(ufl.TestFunction(W))
+    dx = dx or ufl.dx(domain=W.mesh)
+    return ufl.inner(ufl.dot(ufl.dot(ufl.grad(u), P), N0), ufl.dot(ufl.grad(v), P)) * dx
+
+
+def _outward(mesh, center):
+    """The facet normal e3 turned outwards from ``center`` (convex surface around it)."""
+    e3 = local_frame(mesh)[2]
+    x = ufl.SpatialCoordinate(mesh)
+    c = ufl.as_vector([float(v) for v in center])
+    return ufl.sign(ufl.dot(e3, x - c)) * e3, x - c
+
+
+def pressure_load_form(W, pressure: float, center, dx):
+    """L(v) = int p n . v dA: a uniform gauge pressure ``pressure`` (Pa) inside the closed
+    surface of measure ``dx`` around ``center`` (n outward), pushing the wall out."""
+    n, _ = _outward(W.mesh, center)
+    v, _ = ufl.split(ufl.TestFunction(W))
+    return float(pressure) * ufl.dot(n, v) * dx
+
+
+def volume_hessian_form(W, center, dx):
+    """Second variation d^2V[u, v] of the volume enclosed by the closed surface of measure
+    ``dx`` (convex around ``center``) in the translations u, v: with x(xi) the facet
+    parametrisation (x_,a = J e_a) and V = 1/3 int x . (x_,1 x x_,2) dxi,
+
+        d^2V[u, v] = 1/3 int [u.(v_,1 x X_,2 + X_,1 x v_,2) + v.(u_,1 x X_,2 + X_,1 x u_,2)
+                              + X.(u_,1 x v_,2 + v_,1 x u_,2)] dxi,
+
+    X measured from ``center`` (on a closed surface the result does not depend on the
+    origin; the centre keeps round-off small). The load stiffness of a uniform follower
+    pressure p is -p d^2V (Hibbitt, Int. J. Solids Struct. 1979; Bonet & Wood, Nonlinear
+    Continuum Mechanics for FEA, sect. 8.3.3): with it, K + K_G + K_L of a pressurised
+    closed vessel leaves rigid rotations free."""
+    mesh = W.mesh
+    n, X = _outward(mesh, center)
+    J = ufl.Jacobian(mesh)
+    t1 = ufl.as_vector([J[0, 0], J[1, 0], J[2, 0]])
+    t2 = ufl.as_vector([J[0, 1], J[1, 1], J[2, 1]])
+    area = ufl.cross(t1, t2)
+    orient = ufl.sign(ufl.dot(area, n))          # +1 where (t1, t2) already runs outwards
+    jac = ufl.sqrt(ufl.dot(area, area))          # dA = jac dxi
+    u, _ = ufl.split(ufl.TrialFunction(W))
+    v, _ = ufl.split(ufl.TestFunction(W))
+    u1, u2 = ufl.dot(ufl.grad(u), t1), ufl.dot(ufl.grad(u), t2)
+    v1, v2 = ufl.dot(ufl.grad(v), t1), ufl.dot(ufl.grad(v), t2)
+    integrand = (ufl.dot(u, ufl.cross(v1, t2) + ufl.cross(t1, v2)) + ufl.dot(v, ufl.cross(u1, t2) + ufl.cross(t1, u2))
+                 + ufl.dot(X, ufl.cross(u1, v2) + ufl.cross(v1, u2)))
+    return orient / 3.0 * integrand / jac * dx
+
+
 def dof_table(W) -> tuple[np.ndarray, np.ndarray]:
     """Coordinates (n, 3) and component (n,) 0..5 = Tx..Rz of this rank's DOFs of the mixed
     space (owned and ghost, local numbering; the rotation DOFs sit at edge midpoints)."""

@@ -176,7 +176,9 @@ class Liquid:
     points {name: (x, y, z) m} (the tank bottom), each at a node of the liquid mesh;
     ``slosh_modes``: the lowest gravity slosh modes kept (0: the free surface stays at p = 0,
     the high-frequency limit); ``gravity``: the apparent acceleration (m/s^2, along the free
-    surface's outward normal reversed) of those slosh modes."""
+    surface's outward normal reversed) of those slosh modes; ``ullage_pressure``: the gauge
+    pressure (Pa) of the ullage gas, uniform on the whole ``cavity`` wall (needs it): the
+    pressure prestress of a shell wall (fem.prestress; 0 = none)."""
 
     density: float
     wetted: str
@@ -186,6 +188,7 @@ class Liquid:
     points: dict = field(default_factory=dict)
     slosh_modes: int = 0
     gravity: float = 9.80665
+    ullage_pressure: float = 0.0
 
     def __post_init__(self) -> None:
         self.check()
@@ -217,12 +220,23 @@ class Liquid:
         self.slosh_modes = int(self.slosh_modes)
         require_positive(where, gravity=self.gravity)
         self.gravity = float(self.gravity)
+        try:
+            self.ullage_pressure = float(self.ullage_pressure)
+        except (TypeError, ValueError):
+            raise InputError(f"{where}: ullage_pressure {self.ullage_pressure!r} Pa is not a number") from None
+        if not (math.isfinite(self.ullage_pressure) and self.ullage_pressure >= 0):
+            raise InputError(f"{where}: ullage_pressure {self.ullage_pressure!r} Pa must be >= 0 (gauge)")
+        if self.ullage_pressure > 0 and self.cavity is None:
+            raise InputError(f"{where}: ullage_pressure needs the cavity surface it acts on")
 
     def to_dict(self) -> dict:
-        return {"density": self.density, "wetted": self.wetted, "free_surface": self.free_surface,
-                "cavity": self.cavity, "center": self.center.tolist(),
-                "points": {k: v.tolist() for k, v in self.points.items()}, "slosh_modes": self.slosh_modes,
-                "gravity": self.gravity}
+        out = {"density": self.density, "wetted": self.wetted, "free_surface": self.free_surface,
+               "cavity": self.cavity, "center": self.center.tolist(),
+               "points": {k: v.tolist() for k, v in self.points.items()}, "slosh_modes": self.slosh_modes,
+               "gravity": self.gravity}
+        if self.ullage_pressure:         # written only when set: unpressurised files stay as they were
+            out["ullage_pressure"] = self.ullage_pressure
+        return out
 
 
 @dataclass

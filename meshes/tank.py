@@ -56,10 +56,14 @@ class Compartment:
     dome_top: float = 1.6
     fill_level: float = 0.97
     liquid_density: float = 1141.0  # LOX at its boiling point, kg/m^3
+    ullage_pressure: float = 0.0    # gauge pressure of the ullage gas, Pa (shell walls, hydroelastic: prestress)
 
     def check(self, owner: str) -> None:
         require_positive(f"{owner}.{self.name}", cyl_length=self.cyl_length, dome_bottom=self.dome_bottom,
                          dome_top=self.dome_top, liquid_density=self.liquid_density)
+        u = self.ullage_pressure
+        if isinstance(u, bool) or not isinstance(u, (int, float)) or not (math.isfinite(u) and u >= 0):
+            raise InputError(f"{owner}.{self.name}.ullage_pressure must be a gauge pressure >= 0 Pa (got {u!r})")
         f = self.fill_level
         if not (isinstance(f, (int, float)) and 0.0 < f <= 1.0):
             raise InputError(f"{owner}.{self.name}.fill_level must be in (0, 1] (got {f!r})")
@@ -117,6 +121,9 @@ class TankParams:
             raise InputError(f"{o}.wall_thickness {self.wall_thickness} m must be < radius/2")
         for c in self.compartments:
             c.check(o)
+            if c.ullage_pressure > 0 and (self.walls != "shell" or self.liquid != "hydroelastic"):
+                raise InputError(f"{o}.{c.name}.ullage_pressure: the pressure prestress needs walls = 'shell' and "
+                                 f"liquid = 'hydroelastic' (got {self.walls!r}, {self.liquid!r}); set it to 0")
             if self.liquid == "hydroelastic" and c.fill_level >= 1.0:
                 raise InputError(f"{o}.{c.name}.fill_level {c.fill_level!r} reaches the tank top: a hydroelastic "
                                  "liquid needs an ullage above its free surface (fill_level < 1)")
@@ -386,7 +393,7 @@ def compartment_groups(p: TankParams, cavities: list[Cavity], wall_faces: list[i
         _occ.add_physical(0, f"{base}_bottom", [_occ.point_at(bottom, tol)])
         specs[group] = Liquid(liquid.liquid_density, f"{base}_wetted", f"{base}_free_surface", f"{base}_cavity",
                               (ax, ay, 0.5 * (cav.z_bottom + cav.z_cyl_top + cav.a_top)),
-                              {f"{base}_bottom": bottom}, p.slosh_modes)
+                              {f"{base}_bottom": bottom}, p.slosh_modes, ullage_pressure=liquid.ullage_pressure)
     return smeared, specs
 
 

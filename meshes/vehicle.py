@@ -42,6 +42,12 @@ def _point_inertia(m: float, offsets) -> np.ndarray:
 
 
 # ---- core stage ---------------------------------------------------------------------------
+PSI = 6894.757
+#: ullage gauge pressures at lift-off, the lower ends of the external tank's operating ranges
+#: (NSTS 1988 News Reference Manual, "External Tank": LO2 20-22 psig, LH2 32-34 psig), Pa
+ULLAGE_PRESSURE = {"lh2": 32.0 * PSI, "lox": 20.0 * PSI}
+
+
 def core_stage_params(layout: StackLayout | None = None, mesh_size: float = 0.9, walls: str = "solid",
                       shell_bending_ratio: float = 1.0, liquid: str = "smeared") -> TankParams:
     """External-tank-like core stage: LH2 tank (aft), intertank skirt, LOX tank (forward),
@@ -49,17 +55,19 @@ def core_stage_params(layout: StackLayout | None = None, mesh_size: float = 0.9,
     shell of the thickness that weighs the dry mass, 6.8 mm (``walls="shell"``, bending
     stiffness ratio 12 I/t^3 ``shell_bending_ratio``), dry mass 26.5 t, propellants as
     wetted-wall mass (``liquid="smeared"``) or as hydroelastic liquid volumes
-    (``liquid="hydroelastic"``, fem.liquid)."""
+    (``liquid="hydroelastic"``, fem.liquid). Shell walls with hydroelastic liquids carry the
+    ullage pressures :data:`ULLAGE_PRESSURE` as a prestress (fem.prestress)."""
     lay = layout or StackLayout()
     lay.check()
     patches = {}
     for side in ("left", "right"):
         patches.update(lay.srb_attach_points(side))
     patches.update(lay.orbiter_attach_points())
+    pressure = ULLAGE_PRESSURE if (walls, liquid) == ("shell", "hydroelastic") else {"lh2": 0.0, "lox": 0.0}
     p = TankParams(
         name="core", radius=lay.core_radius, wall_thickness=0.15,
-        compartments=(Compartment("lh2", 25.6, 0.72, 0.72, 0.97, 70.85),
-                      Compartment("lox", 4.65, 0.72, 1.6, 0.90, 1141.0)),
+        compartments=(Compartment("lh2", 25.6, 0.72, 0.72, 0.97, 70.85, ullage_pressure=pressure["lh2"]),
+                      Compartment("lox", 4.65, 0.72, 1.6, 0.90, 1141.0, ullage_pressure=pressure["lox"])),
         intertank_length=6.9, z_bottom=lay.core_bottom_z, axis_xy=(0.0, 0.0),
         material=replace(AL2219), dry_mass=26_500.0, patches=patches, patch_half_width=0.5,
         mesh_size=mesh_size, walls=walls, shell_bending_ratio=shell_bending_ratio, liquid=liquid)

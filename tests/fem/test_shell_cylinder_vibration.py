@@ -65,10 +65,14 @@ def test_flugge_reference_limits():
     assert abs(np.linalg.det(K[1:, 1:])) < 1e-15
 
 
-def _fe_modes(n_th: int, n_x: int, n_modes: int = 12):
+def _fe_modes(n_th: int, n_x: int, n_modes: int = 12, extra_stiffness=None):
+    """Frequencies (Hz), modes, DOF coordinates and components of the half cylinder;
+    ``extra_stiffness(case)``: a scipy matrix added to K (the prestress test's K_G)."""
     g, cells = param_grid(n_x, n_th)
     x, th = L * g[:, 0], np.pi * g[:, 1]                # th = 0 .. pi: the half z >= 0
     case = ShellCase(np.column_stack([x, R * np.cos(th), R * np.sin(th)]), cells, E, NU, T, rho=RHO)
+    if extra_stiffness is not None:
+        case.K = case.K + extra_stiffness(case)
     c = case.coords
     tol = 1e-9 * L
     ends = (np.abs(c[:, 0]) < tol) | (np.abs(c[:, 0] - L) < tol)
