@@ -49,21 +49,24 @@ ULLAGE_PRESSURE = {"lh2": 32.0 * PSI, "lox": 20.0 * PSI}
 
 
 def core_stage_params(layout: StackLayout | None = None, mesh_size: float = 0.9, walls: str = "solid",
-                      shell_bending_ratio: float = 1.0, liquid: str = "smeared") -> TankParams:
+                      shell_bending_ratio: float = 1.0, liquid: str = "smeared",
+                      ullage_pressure: dict | None = None) -> TankParams:
     """External-tank-like core stage: LH2 tank (aft), intertank skirt, LOX tank (forward),
     Al 2219 wall thickened to 0.15 m (``walls="solid"``) or its mid-surface as an Al 2219
     shell of the thickness that weighs the dry mass, 6.8 mm (``walls="shell"``, bending
     stiffness ratio 12 I/t^3 ``shell_bending_ratio``), dry mass 26.5 t, propellants as
     wetted-wall mass (``liquid="smeared"``) or as hydroelastic liquid volumes
-    (``liquid="hydroelastic"``, fem.liquid). Shell walls with hydroelastic liquids carry the
-    ullage pressures :data:`ULLAGE_PRESSURE` as a prestress (fem.prestress)."""
+    (``liquid="hydroelastic"``, fem.liquid). Shell walls with hydroelastic liquids carry
+    ullage pressures as a prestress (fem.prestress): ``ullage_pressure`` {"lh2": Pa, "lox":
+    Pa} gauge, by default :data:`ULLAGE_PRESSURE` there and none otherwise."""
     lay = layout or StackLayout()
     lay.check()
     patches = {}
     for side in ("left", "right"):
         patches.update(lay.srb_attach_points(side))
     patches.update(lay.orbiter_attach_points())
-    pressure = ULLAGE_PRESSURE if (walls, liquid) == ("shell", "hydroelastic") else {"lh2": 0.0, "lox": 0.0}
+    pressure = ullage_pressure if ullage_pressure is not None else \
+        ULLAGE_PRESSURE if (walls, liquid) == ("shell", "hydroelastic") else {"lh2": 0.0, "lox": 0.0}
     p = TankParams(
         name="core", radius=lay.core_radius, wall_thickness=0.15,
         compartments=(Compartment("lh2", 25.6, 0.72, 0.72, 0.97, 70.85, ullage_pressure=pressure["lh2"]),

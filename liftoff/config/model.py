@@ -52,7 +52,7 @@ _MODEL = {"source", "mesh_size", "degree", "zeta", "vehicle", "pad", "component"
 WALLS = ("solid", "shell")
 LIQUIDS = ("smeared", "hydroelastic")     # [model] liquid: the core stage's propellants (meshes.tank)
 CONVECTIVE = ("wall", "free")             # [model] convective: a hydroelastic liquid's sloshing part (fem.liquid)
-_CORE_PARAMS = {"shell_bending_ratio"}
+_CORE_PARAMS = {"shell_bending_ratio", "ullage_pressure"}
 _VEHICLE = {"mesh_size", "params"}
 _COMP = {"mesh_size", "n_modes", "f_max", "params", "nastran"}
 _NASTRAN = {"file", "units", "grids", "asm", "pch", "op4", "bulk", "stiffness", "mass", "se", "recovery"}
@@ -243,11 +243,12 @@ def _fe_builders(where: Where, layout: StackLayout, sel: dict[str, dict], size: 
         raise (wc / "core" / "params").error(
             f"unknown key {extra[0]!r}: the core stage takes only {', '.join(sorted(_CORE_PARAMS))} (shell walls); "
             "its tank follows from [model.vehicle.params] (StackLayout)")
+    ratio = number(wc / "core" / "params" / "shell_bending_ratio", core.get("shell_bending_ratio", 1.0),
+                   positive=True)
+    ullage = _ullage(wc / "core" / "params", core)
     try:
-        ratio = number(wc / "core" / "params" / "shell_bending_ratio", core.get("shell_bending_ratio", 1.0),
-                       positive=True)
         out["core"] = core_stage_params(layout, **_size(size["core"]), walls=walls, shell_bending_ratio=ratio,
-                                        liquid=liquid)
+                                        liquid=liquid, ullage_pressure=ullage)
         out["core"].check()
     except InputError as exc:
         raise (wc / "core").wrap(exc) from None
@@ -259,6 +260,15 @@ def _fe_builders(where: Where, layout: StackLayout, sel: dict[str, dict], size: 
     out["pad"] = builder(where / "pad" / "params", PadParams, sel["pad"]["params"], {"layout": layout},
                          _size(size["pad"]))
     return out
+
+
+def _ullage(where: Where, core: dict) -> dict | None:
+    """[model.component.core.params] ullage_pressure = {lh2 = Pa, lox = Pa} (gauge), or None."""
+    if "ullage_pressure" not in core:
+        return None
+    w = where / "ullage_pressure"
+    t = table(w, core["ullage_pressure"], {"lh2", "lox"}, ("lh2", "lox"))
+    return {k: number(w / k, v, nonneg=True) for k, v in t.items()}
 
 
 def _size(size: float | None) -> dict:

@@ -123,7 +123,13 @@ BAD = [
      "BoosterParams(left).case_thickness must be < srb_radius/2"),
     ("model.component.srb_left.params", {"side": "right"}, "model.component.srb_left.params: unknown key 'side'"),
     ("model.component.orbiter.params", {"wing_spam": 20.0}, "model.component.orbiter.params: unknown key 'wing_spam'"),
-    ("model.component.core.params", {"radius": 4.0}, "model.component.core.params: unknown key 'radius': the core stage takes only shell_bending_ratio"),
+    ("model.component.core.params", {"radius": 4.0}, "model.component.core.params: unknown key 'radius': the core stage takes only shell_bending_ratio, ullage_pressure"),
+    ("model.component.core.params", {"ullage_pressure": {"lh2": 1e5}},
+     "model.component.core.params.ullage_pressure: missing required key 'lox'"),
+    ("model.component.core.params", {"ullage_pressure": {"lh2": -1.0, "lox": 0.0}},
+     "model.component.core.params.ullage_pressure.lh2: negative value -1"),
+    ("model.component.core.params", {"ullage_pressure": {"lh2": 1e5, "lox": 1e5}},
+     "model.component.core: TankParams(core).lh2.ullage_pressure: the pressure prestress needs walls = 'shell'"),
     ("model.stick", {"core_wall": 0.01}, "model.stick: [model.stick] is for source = \"stick\""),
 ]
 
@@ -246,6 +252,13 @@ def test_walls_as_shells_reach_every_vehicle_builder(base):
     comps = parse_scenario(d, "s.toml").cases[0].model.components
     assert all(comps[n].builder.walls == "shell" for n in ("core", "srb_left", "srb_right", "orbiter"))
     assert comps["core"].builder.shell_bending_ratio == 50.0
+    # shells with hydroelastic propellants carry the external tank's ullage pressures (fem.prestress)
+    d["model"]["liquid"] = "hydroelastic"
+    core = parse_scenario(d, "s.toml").cases[0].model.components["core"].builder
+    assert [c.ullage_pressure for c in core.compartments] == pytest.approx([32 * 6894.757, 20 * 6894.757])
+    d["model"]["component"]["core"]["params"]["ullage_pressure"] = {"lh2": 0.0, "lox": 1.0e5}
+    core = parse_scenario(d, "s.toml").cases[0].model.components["core"].builder
+    assert [c.ullage_pressure for c in core.compartments] == [0.0, 1.0e5]
     d["model"]["walls"] = "plates"
     with pytest.raises(InputError, match=r"model\.walls: must be one of solid, shell"):
         parse_scenario(d, "s.toml")
