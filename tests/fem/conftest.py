@@ -15,12 +15,7 @@ import pyvista  # noqa: E402,F401  (before dolfinx: FENICSX-NOTES.md)
 
 gmsh = pytest.importorskip("gmsh")
 pytest.importorskip("dolfinx")
-
-
-def _start(name):
-    gmsh.initialize(["-nopopup"])
-    gmsh.option.setNumber("General.Terminal", 0)
-    gmsh.model.add(name)
+from .gmsh_cases import gmsh_file  # noqa: E402
 
 
 def _name_box_faces(vol, L, W, H, x0=0.0, prefix=""):
@@ -35,8 +30,7 @@ def _name_box_faces(vol, L, W, H, x0=0.0, prefix=""):
 
 def write_box(path, L=1.0, W=0.1, H=0.1, n=(10, 1, 1), h=None, volume="solid"):
     """Box [0,L]x[0,W]x[0,H]; structured n=(nx,ny,nz) divisions, or unstructured size h."""
-    _start("box")
-    try:
+    with gmsh_file("box", path, h=h):
         v = gmsh.model.occ.addBox(0, 0, 0, L, W, H)
         gmsh.model.occ.synchronize()
         gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, [v]), volume)
@@ -49,62 +43,39 @@ def write_box(path, L=1.0, W=0.1, H=0.1, n=(10, 1, 1), h=None, volume="solid"):
             for _, s in gmsh.model.getEntities(2):
                 gmsh.model.mesh.setTransfiniteSurface(s)
             gmsh.model.mesh.setTransfiniteVolume(v)
-        else:
-            gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
-        gmsh.model.mesh.generate(3)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
     return str(path)
 
 
 def write_two_boxes(path, gap=0.05, h=0.05):
     """Two disjoint unit-ish boxes in one mesh (a floating part); faces a_x0.. and b_x0.."""
-    _start("two")
-    try:
+    with gmsh_file("two", path, h=h):
         a = gmsh.model.occ.addBox(0, 0, 0, 0.3, 0.1, 0.1)
         b = gmsh.model.occ.addBox(0.3 + gap, 0, 0, 0.3, 0.1, 0.1)
         gmsh.model.occ.synchronize()
         gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, [a, b]), "solid")
         _name_box_faces(a, 0.3, 0.1, 0.1, prefix="a_")
         _name_box_faces(b, 0.3, 0.1, 0.1, x0=0.3 + gap, prefix="b_")
-        gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
-        gmsh.model.mesh.generate(3)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
     return str(path)
 
 
 def write_ring(path, R=1.0, t=0.05, b=0.1, h=0.1):
     """Thin ring: annulus R +- t/2 in the xy plane, axial width b; faces 'outer', 'inner'."""
-    _start("ring")
-    try:
+    with gmsh_file("ring", path, h=h):
         o = gmsh.model.occ.addCylinder(0, 0, 0, 0, 0, b, R + t / 2)
         i = gmsh.model.occ.addCylinder(0, 0, 0, 0, 0, b, R - t / 2)
         out, _ = gmsh.model.occ.cut([(3, o)], [(3, i)])
         gmsh.model.occ.synchronize()
         v = out[0][1]
         gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, [v]), "ring")
-        gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
-        gmsh.model.mesh.generate(3)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
     return str(path)
 
 
 def write_surface_only(path):
     """A mesh with only a 2-D physical group (no volume)."""
-    _start("surf")
-    try:
+    with gmsh_file("surf", path, dim=2):
         s = gmsh.model.occ.addRectangle(0, 0, 0, 1, 1)
         gmsh.model.occ.synchronize()
         gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, [s]), "plate")
-        gmsh.model.mesh.generate(2)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
     return str(path)
 
 
@@ -113,8 +84,7 @@ def write_shell_tube(path, R=0.1, L=1.0, n_around=24, n_along=20):
     in the circle of radius R (straight generators from z = 0 to L, n_along layers), surface
     'tube'; its end polygons 'root' (z = 0) and 'tip' (z = L) as curve groups, and the band
     0.4 L < z < 0.6 L as the surface group 'band' (also part of 'tube')."""
-    _start("tube")
-    try:
+    with gmsh_file("tube", path, dim=2):
         occ = gmsh.model.occ
         c = occ.addCircle(0, 0, 0, R)
         occ.synchronize()
@@ -129,10 +99,6 @@ def write_shell_tube(path, R=0.1, L=1.0, n_around=24, n_along=20):
         gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, [surfs[1]]), "band")
         gmsh.model.setPhysicalName(1, gmsh.model.addPhysicalGroup(1, [c]), "root")
         gmsh.model.setPhysicalName(1, gmsh.model.addPhysicalGroup(1, [curve[1]]), "tip")
-        gmsh.model.mesh.generate(2)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
     return str(path)
 
 
@@ -140,8 +106,7 @@ def write_glued_plate(path, a=0.2, L=1.0, b=0.2, d=0.1, h=0.05):
     """A solid block [0,a]x[0,b]x[-d,0] ('block', bottom face 'base') with a plate surface
     [0,L]x[0,b] at z = 0 ('plate') fragmented onto the block's top face (shared nodes) and
     overhanging it; the plate's free edge x = L is the curve group 'tip'."""
-    _start("glued")
-    try:
+    with gmsh_file("glued", path, h=h):
         occ = gmsh.model.occ
         blk = occ.addBox(0, 0, -d, a, b, d)
         plate = occ.addRectangle(0, 0, 0, L, b)
@@ -157,11 +122,6 @@ def write_glued_plate(path, a=0.2, L=1.0, b=0.2, d=0.1, h=0.05):
         tip = [c for _, c in gmsh.model.getEntities(1)
                if abs(gmsh.model.getBoundingBox(1, c)[0] - L) < 1e-6 and abs(gmsh.model.getBoundingBox(1, c)[3] - L) < 1e-6]
         gmsh.model.setPhysicalName(1, gmsh.model.addPhysicalGroup(1, tip), "tip")
-        gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
-        gmsh.model.mesh.generate(3)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
     return str(path)
 
 

@@ -36,21 +36,15 @@ from liftoff.core.errors import InputError
 
 pytestmark = pytest.mark.fem
 gmsh = pytest.importorskip("gmsh")
+from .gmsh_cases import gmsh_file  # noqa: E402
 
 R, H, RHO = 1.0, 1.5, 1000.0
-
-
-def _start(name):
-    gmsh.initialize(["-nopopup"])
-    gmsh.option.setNumber("General.Terminal", 0)
-    gmsh.model.add(name)
 
 
 def write_cylinder(path, h, wet_bottom=True):
     """Liquid cylinder r <= R, 0 <= z <= H: volume 'liquid', surfaces 'wet' (side and bottom),
     'free' (top), 'side', 'bottom'; a mesh node at the bottom centre."""
-    _start("cyl")
-    try:
+    with gmsh_file("cyl", path, h=h):
         occ = gmsh.model.occ
         v = occ.addCylinder(0, 0, 0, 0, 0, H, R)
         pt = occ.addPoint(0, 0, 0)
@@ -64,30 +58,19 @@ def write_cylinder(path, h, wet_bottom=True):
         for name, tags in faces.items():
             gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, tags), name)
         gmsh.model.mesh.embed(0, [pt], 2, faces["bottom"][0])
-        gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
-        gmsh.model.mesh.generate(3)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
     return str(path)
 
 
 def write_ring(path, h, r=1.0, height=0.2):
     """Quarter slab of liquid r <= R, 0 <= th <= pi/2, 0 <= z <= height (volume 'liquid');
     its curved face 'wall' is also the shell strip."""
-    _start("ring")
-    try:
+    with gmsh_file("ring", path, h=h):
         v = gmsh.model.occ.addCylinder(0, 0, 0, 0, 0, height, r, angle=np.pi / 2)
         gmsh.model.occ.synchronize()
         gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, [v]), "liquid")
         wall = [s for _, s in gmsh.model.getBoundary([(3, v)], oriented=False)
                 if gmsh.model.getType(2, s) == "Cylinder"]
         gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, wall), "wall")
-        gmsh.option.setNumber("Mesh.CharacteristicLengthMax", h)
-        gmsh.model.mesh.generate(3)
-        gmsh.write(str(path))
-    finally:
-        gmsh.finalize()
     return str(path)
 
 
