@@ -103,9 +103,10 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
     from .parallel import root_only
 
     with _run_cache(cache_dir, out, sc.n_generated, comm) as cache:
-        prep = prepare(sc, cache, progress, echo, error_estimate, max_memory)     # model stages: every rank
-        return root_only(comm, lambda: _cases_and_files(sc, prep, cache, opt, out, plots, want_pics, progress,
-                                                        echo, t_start, error_estimate))
+        models = prepare_models(sc, cache, progress, echo)      # model stages: every rank (SPMD FE stages)
+        return root_only(comm, lambda: _cases_and_files(        # the cases' problems and checks: rank 0
+            sc, prepare(sc, cache, progress, echo, error_estimate, max_memory, models), cache, opt, out, plots,
+            want_pics, progress, echo, t_start, error_estimate))
 
 
 def _cases_and_files(sc, prep: Prepared, cache: StageCache, opt: Options, out: Path, plots: bool,
@@ -159,18 +160,31 @@ class _Campaign:
     options: Options
 
 
+def prepare_models(sc, cache: StageCache, progress: bool, echo) -> tuple[dict, list]:
+    """Model stages (cached) of every distinct model of the named cases and of the first
+    generated case: ({model key: StackModel}, stage times). Under mpirun every rank runs them
+    (the FE stages are distributed); the rest of :func:`prepare` is rank 0's."""
+    stacks, stage_times = {}, []
+    for case in sc.cases:
+        _stack_for(case, stacks, cache, progress, echo, stage_times)
+    if sc.n_generated:
+        _stack_for(sc.generated_case(0), stacks, cache, progress, echo, stage_times)
+    return stacks, stage_times
+
+
 def prepare(sc, cache: StageCache, progress: bool, echo, error_estimate: bool = True,
-            max_memory: float | None = None) -> Prepared:
-    """Model stages (cached) for every distinct model, then every named case's problem, its
-    step (stability, time axis) and static initial state (section 2.6), then every
-    generated case parsed (its draws checked) and the first one built, so that bad input
-    stops the run before any output; the memory of the named cases' histories is estimated
-    (transient/stepping.py) and refused beyond ``max_memory`` bytes."""
+            max_memory: float | None = None, models: tuple[dict, list] | None = None) -> Prepared:
+    """Model stages (:func:`prepare_models`, or its result ``models``), then every named
+    case's problem, its step (stability, time axis) and static initial state (section 2.6),
+    then every generated case parsed (its draws checked) and the first one built, so that
+    bad input stops the run before any output; the memory of the named cases' histories is
+    estimated (transient/stepping.py) and refused beyond ``max_memory`` bytes."""
     from liftoff.transient import static_equilibrium
 
     from .loads import build_problem
 
-    stacks, problems, stage_times, memory = {}, {}, [], {}
+    stacks, stage_times = models if models is not None else prepare_models(sc, cache, progress, echo)
+    problems, memory = {}, {}
     for case in sc.cases:
         mkey = _stack_for(case, stacks, cache, progress, echo, stage_times)
         t0 = time.perf_counter()
