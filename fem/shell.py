@@ -118,11 +118,15 @@ def shell_space(mesh):
     return fem.FunctionSpace(mesh, shell_element(mesh.ufl_cell()))
 
 
+def _tangents(mesh):
+    """(t1, t2) = (x_,1, x_,2): the columns of the facet's Jacobian (its parametrisation)."""
+    J = ufl.Jacobian(mesh)
+    return ufl.as_vector([J[0, 0], J[1, 0], J[2, 0]]), ufl.as_vector([J[0, 1], J[1, 1], J[2, 1]])
+
+
 def local_frame(mesh):
     """(e1, e2, e3) of each flat facet as UFL vectors (see the module docstring)."""
-    J = ufl.Jacobian(mesh)
-    t1 = ufl.as_vector([J[0, 0], J[1, 0], J[2, 0]])
-    t2 = ufl.as_vector([J[0, 1], J[1, 1], J[2, 1]])
+    t1, t2 = _tangents(mesh)
     e3 = ufl.cross(t1, t2)
     e3 = e3 / ufl.sqrt(ufl.dot(e3, e3))
     e1 = t1 / ufl.sqrt(ufl.dot(t1, t1))
@@ -134,11 +138,16 @@ def _in_plane(frame):
     return ufl.as_matrix([[e1[i], e2[i]] for i in range(3)])     # 3 x 2
 
 
+def _surface_gradient(u, P):
+    """P^T grad(u) P: the in-plane (2 x 2, facet frame) gradient of the translations u."""
+    return ufl.dot(P.T, ufl.dot(ufl.grad(u), P))
+
+
 def strains(u, theta, frame):
     """(eps, kappa, gamma, varpi): membrane, bending, transverse shear, drilling."""
     e3 = frame[2]
     P = _in_plane(frame)
-    gu = ufl.dot(P.T, ufl.dot(ufl.grad(u), P))
+    gu = _surface_gradient(u, P)
     beta = ufl.cross(e3, theta)
     eps = ufl.sym(gu)
     kappa = ufl.sym(ufl.dot(P.T, ufl.dot(ufl.grad(beta), P)))
@@ -202,8 +211,7 @@ def thermal_load_form(W, f: ShellFields, cell_tags, strain_by_id: dict[int, floa
 def membrane_resultants(u, f: ShellFields, mesh):
     """Membrane stress resultants N = t C eps(u) (2 x 2, N/m, facet frame) of the
     translations ``u`` (the prestress of :func:`geometric_stiffness_form`)."""
-    P = _in_plane(local_frame(mesh))
-    return f.t * _plane_stress(f.E, f.nu, ufl.sym(ufl.dot(P.T, ufl.dot(ufl.grad(u), P))))
+    return f.t * _plane_stress(f.E, f.nu, ufl.sym(_surface_gradient(u, _in_plane(local_frame(mesh)))))
 
 
 def geometric_stiffness_form(W, N0, dx=None):
@@ -251,9 +259,7 @@ def volume_hessian_form(W, center, dx):
     closed vessel leaves rigid rotations free."""
     mesh = W.mesh
     n, X = _outward(mesh, center)
-    J = ufl.Jacobian(mesh)
-    t1 = ufl.as_vector([J[0, 0], J[1, 0], J[2, 0]])
-    t2 = ufl.as_vector([J[0, 1], J[1, 1], J[2, 1]])
+    t1, t2 = _tangents(mesh)
     area = ufl.cross(t1, t2)
     orient = ufl.sign(ufl.dot(area, n))          # +1 where (t1, t2) already runs outwards
     jac = ufl.sqrt(ufl.dot(area, area))          # dA = jac dxi
