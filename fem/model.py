@@ -418,7 +418,7 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
     n_keep = int(slot.max()) + 1 if slot.size and slot.max() >= 0 else 0
     ref_coords = np.array([np.asarray(p.ref_point, float).reshape(3) for p in patches]).reshape(-1, 3)
     n_dof = n_keep + 6 * len(patches)
-    _pressure_stiffened(parts, geometry)
+    pressurised = _pressure_stiffened(parts, geometry)
     K, M = _reduce(comm, parts, nodes, role, slot, ref_coords, n_keep, n_dof)
     _point_masses(M, geometry, pnames, n_keep)
     T = _field_map(nodes, role, slot, ref_coords, n_keep, n_dof)
@@ -426,7 +426,7 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
     dof_node, dof_comp = free // 6, free % 6
     dof_coords = np.vstack([nodes.xyz[dof_node], np.repeat(ref_coords, 6, axis=0)])
     dof_comp = np.concatenate([dof_comp, np.tile(np.arange(6), len(patches))]).astype(np.int64)
-    if not clamped and _pressurised(geometry, name):       # rigid modes exactly free (fem.prestress)
+    if pressurised and not clamped:       # rigid modes exactly free (fem.prestress)
         from .prestress import relative_to_reference
         K = relative_to_reference(K, dof_rb(dof_coords - ref_coords[0], dof_comp), n_keep + np.arange(6))
     dof_node = np.concatenate([dof_node, -np.ones(6 * len(patches), dtype=np.int64)])
@@ -441,24 +441,22 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
                    liquid_volume_rows=rows)
 
 
-def _pressurised(geometry, name: str) -> bool:
-    from .prestress import pressurised
-
-    if pressurised(geometry) and not geometry.patches and not geometry.clamped:
-        raise InputError(f"model {name!r}: ullage pressures on a free-free model need a reference point (patch)")
-    return bool(pressurised(geometry))
-
-
-def _pressure_stiffened(parts: list[Part], geometry) -> None:
-    """Add K_G + K_L of the liquids' ullage pressures (fem.prestress) to the shell part's K."""
+def _pressure_stiffened(parts: list[Part], geometry) -> bool:
+    """Add K_G + K_L of the liquids' ullage pressures (fem.prestress) to the shell part's K;
+    whether there were any. A free model needs a reference point (its K is then taken
+    relative to the first one's rigid motion)."""
     from .prestress import prestress_stiffness, pressurised
 
     if not pressurised(geometry):
-        return
+        return False
+    if not geometry.patches and not geometry.clamped:
+        raise InputError(f"model {geometry.name!r}: ullage pressures on a free-free model need a reference point "
+                         "(patch)")
     wall = next((p for p in parts if p.kind == "shell"), None)
     if wall is None:
         raise InputError(f"geometry {geometry.name!r}: ullage pressures need a shell wall (it has none)")
     wall.K = pb.add(wall.K, prestress_stiffness(wall, geometry))
+    return True
 
 
 def _liquid(comm, geometry, liquid_tm, parts, nodes, T, M, dof_coords, dof_comp, coupling_degree: int,

@@ -60,16 +60,15 @@ def _check_equilibrated(wall, b, name: str) -> None:
 
 
 def prestress_stiffness(wall, geometry):
-    """K_G + K_L (PETSc, on the shell part's space) of the geometry's ullage pressures, or
-    None. ``wall``: the model's shell part (fem.model.Part) with its assembled K and M."""
+    """K_G + K_L (PETSc, on the shell part's space) of the geometry's ullage pressures
+    (:func:`pressurised`: at least one). ``wall``: the model's shell part (fem.model.Part) with
+    its assembled K and M."""
     import ufl
     from dolfinx import fem
 
     from . import shell as sh
 
     loads = pressurised(geometry)
-    if not loads:
-        return None
     dx = {g: _cavity_measure(wall, liq, g) for g, liq in loads.items()}
     b = None
     for g, liq in loads.items():     # one form per cavity: UFL takes one subdomain_data per form
