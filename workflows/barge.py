@@ -26,11 +26,10 @@ from liftoff.transient.effects import center_of_gravity
 from liftoff.config.barge import BargeCase, BargeModel
 from liftoff.config.values import Where
 from liftoff.core.errors import InputError
+from liftoff.core.labels import COMPONENTS, TRANSLATIONS
 
 from .pipeline import cb_stage, component_stage, modes_stage
 
-XYZ = ("Tx", "Ty", "Tz")
-SIX = ("Tx", "Ty", "Tz", "Rx", "Ry", "Rz")
 
 
 @dataclass
@@ -148,7 +147,8 @@ def contacts(case: BargeCase, models: BargeModels) -> list[ContactPoint]:
     f = case.fender
     out = []
     for k, (bow, fen) in enumerate(zip(models.bow_points, models.fender_points)):
-        out.append(ContactPoint(f"fender_{k + 1}", [f"{bow}:{c}" for c in XYZ], [f"{fen}:{c}" for c in XYZ],
+        out.append(ContactPoint(f"fender_{k + 1}", [f"{bow}:{c}" for c in TRANSLATIONS],
+                                [f"{fen}:{c}" for c in TRANSLATIONS],
                                 [f.stiffness, f.lateral_stiffness, f.lateral_stiffness], axial=0, normal_sign=-1.0,
                                 gap=case.gap, release_time=-np.inf, friction=f.friction, damping=f.damping))
     return out
@@ -161,8 +161,9 @@ def recoveries(models: BargeModels) -> tuple[list[Recovery], dict]:
 
     out, interface = [], {}
     for pt in models.cargo_points:
-        D, A = interface_force_recovery(models.barge_asm, models.barge_modes, "cargo", [f"{pt}:{c}" for c in SIX])
-        out.append(Recovery(f"interface_{pt}", "a", SIX, disp=D, acc=A, units=("N",) * 3 + ("N m",) * 3,
+        D, A = interface_force_recovery(models.barge_asm, models.barge_modes, "cargo",
+                                        [f"{pt}:{c}" for c in COMPONENTS])
+        out.append(Recovery(f"interface_{pt}", "a", COMPONENTS, disp=D, acc=A, units=("N",) * 3 + ("N m",) * 3,
                             category="interface_force", description=f"force of the barge's cradle on the cargo at {pt}"))
         interface[f"interface_{pt}"] = pt
     na, nb = models.barge.n_modes, models.dock.n_modes

@@ -31,12 +31,10 @@ from liftoff.config.scenario import Case
 from liftoff.config.sections import Softening
 from liftoff.config.values import Where
 from liftoff.core.errors import InputError
-from liftoff.core.labels import named_points
+from liftoff.core.labels import COMPONENTS, TRANSLATIONS, named_points
 
 from .pipeline import StackModel, cryo_loads
 
-XYZ = ("Tx", "Ty", "Tz")
-SIX = ("Tx", "Ty", "Tz", "Rx", "Ry", "Rz")
 
 
 @dataclass
@@ -84,7 +82,7 @@ def applied_forces(case: Case, stack: StackModel) -> tuple[list[PointForce], lis
     for i, e in enumerate(case.engines):
         _check_point(stack.vehicle, e.mount, (case.at("engine") / i).named(e.name) / "mount")
         t, v = e.table()
-        for c, d in zip(XYZ, e.direction):
+        for c, d in zip(TRANSLATIONS, e.direction):
             if d != 0.0:
                 tables.append(TabulatedForce("a", f"{e.mount}:{c}", t, d * v))
     for i, f in enumerate(case.forces):
@@ -160,14 +158,14 @@ def recoveries(case: Case, stack: StackModel) -> tuple[list[Recovery], dict, dic
     for spec in case.recovery.attach:
         point, _, comp = spec.partition("@")
         comp = comp or _attach_component(stack, point, case.at("recovery.attach"))
-        labels = [f"{point}:{c}" for c in SIX]
+        labels = [f"{point}:{c}" for c in COMPONENTS]
         D, A = interface_force_recovery(stack.vehicle_asm, stack.vehicle_modes, comp, labels)
         name = f"attach_{point}"
-        out.append(Recovery(name, "a", SIX, disp=D, acc=A, units=("N",) * 3 + ("N m",) * 3,
+        out.append(Recovery(name, "a", COMPONENTS, disp=D, acc=A, units=("N",) * 3 + ("N m",) * 3,
                             category="interface_force",
                             description=f"force of the rest of the vehicle on {comp} at {point}"))
         attach[name] = (point, comp)
-    out.append(Recovery("cg_motion", "a", SIX, disp=cg_motion_matrix(body), units=("m",) * 3 + ("rad",) * 3,
+    out.append(Recovery("cg_motion", "a", COMPONENTS, disp=cg_motion_matrix(body), units=("m",) * 3 + ("rad",) * 3,
                         category="cg_motion", description="vehicle c.g. motion (eq. 23)"))
     out += component_recoveries(stack)
     outputs = []
@@ -176,10 +174,10 @@ def recoveries(case: Case, stack: StackModel) -> tuple[list[Recovery], dict, dic
         pt = getattr(case.recovery, key)
         if pt:
             _check_point(body, pt, w / key)
-            outputs += [f"{pt}:{c}" for c in XYZ]
+            outputs += [f"{pt}:{c}" for c in TRANSLATIONS]
     for i, pt in enumerate(case.recovery.stations):
         _check_point(body, pt, w / "stations" / i)
-        outputs += [f"{pt}:{c}" for c in XYZ if f"{pt}:{c}" not in outputs]
+        outputs += [f"{pt}:{c}" for c in TRANSLATIONS if f"{pt}:{c}" not in outputs]
     return out, attach, {"a": outputs, "b": []}
 
 

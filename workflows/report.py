@@ -497,11 +497,14 @@ def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[di
         for b in bulges:
             lines.append(f"    {b['tank']:<24} {b['hz']:7.2f} Hz (mode {b['mode']}), dV {b['dv_m3']:.3g} m^3, axial "
                          f"effective liquid mass {b['m_eff_kg'] / 1e3:.0f} t of {b['m_liquid_kg'] / 1e3:.0f} t")
-    lines.append("  wall time per stage:")
-    for name, secs in stage_times:
-        lines.append(f"    {name:<38}{secs:8.2f} s")
-    lines.append(f"    {'total':<38}{wall:8.2f} s")
+    lines += stage_time_lines(stage_times, wall)
     return "\n".join(lines)
+
+
+def stage_time_lines(stage_times: list, wall: float) -> list[str]:
+    """The summary's "wall time per stage" block: (stage, seconds) pairs and the total (s)."""
+    return ["  wall time per stage:", *(f"    {name:<38}{secs:8.2f} s" for name, secs in stage_times),
+            f"    {'total':<38}{wall:8.2f} s"]
 
 
 # ------------------------------------------------------------------ spectra, comparisons
