@@ -34,7 +34,7 @@ from liftoff.core.rigid import dof_rb
 
 from . import petsc_backend as pb
 from .mesh import TaggedMesh, read_mesh_parts
-from .spiders import CLAMPED, FREE, transformation_rows
+from .spiders import CLAMPED, FREE, eliminate_interpolations, interpolation_fit, transformation_rows
 
 
 @dataclass
@@ -134,7 +134,8 @@ class FEModel:
     def node_dofs(self, xyz) -> np.ndarray:
         """The three translation DOF indices (x, y, z) of the free mesh node nearest ``xyz``."""
         free = np.flatnonzero(self.dof_comp == 0)
-        free = free[self.dof_node[free] >= 0]
+        free = free[(self.dof_node[free] >= 0) & (free + 2 < self.dof_comp.size)]
+        free = free[(self.dof_comp[free + 2] == 2) & (self.dof_node[free + 2] == self.dof_node[free])]
         if free.size == 0:
             raise InputError(f"model {self.name!r} has no free mesh node")
         i = free[np.argmin(np.linalg.norm(self.dof_coords[free] - np.asarray(xyz, float), axis=1))]
@@ -259,6 +260,7 @@ class _Nodes:
     label: list                    # per part: node of each of the part's global DOFs
     in_part: np.ndarray            # (n_nodes, n_parts) bool: the node has DOFs of the part
     parent: np.ndarray = None      # (n_nodes, 2): translations = mean of these two nodes' (-1: own)
+    dependent: tuple = None        # interpolation patches: (DOF ids node*6+comp, their rows of T)
 
     @property
     def n(self) -> int:
@@ -341,10 +343,13 @@ def _group_nodes(comm: MPI.Comm, parts: list[Part], nodes: _Nodes, name: str, ro
     return np.unique(np.concatenate(comm.allgather(np.unique(np.concatenate(local)))))
 
 
-def _roles(comm: MPI.Comm, parts: list[Part], nodes: _Nodes, pnames: list[str], clamped: tuple) -> np.ndarray:
-    """FREE, CLAMPED or the patch number of every node; InputError on overlaps."""
+def _roles(comm: MPI.Comm, parts: list[Part], nodes: _Nodes, patches: list, clamped: tuple) -> np.ndarray:
+    """FREE, CLAMPED or the rigid patch number of every node; InputError on overlaps."""
     role = np.full(nodes.n, FREE, dtype=np.int64)
+    pnames = [pt.name for pt in patches]
     for p, name in enumerate(pnames):
+        if patches[p].nodes is not None:
+            continue
         on = _group_nodes(comm, parts, nodes, name, "patch")
         if on.size < 3:
             raise InputError(f"patch {name!r}: its surface has {on.size} nodes; a rigid spider needs >= 3")
@@ -365,10 +370,54 @@ def _roles(comm: MPI.Comm, parts: list[Part], nodes: _Nodes, pnames: list[str], 
     return role
 
 
+def _interpolation_nodes(comm, parts, nodes: _Nodes, role, patches: list) -> list:
+    """(patch number, nodes) of every interpolation patch: its group's nodes within reach
+    but tied midpoints (they follow their edge's end nodes); InputError if one of them is
+    clamped or on a rigid spider."""
+    out = []
+    for p, pt in enumerate(patches):
+        if pt.nodes is None:
+            continue
+        on = _group_nodes(comm, parts, nodes, pt.nodes, f"patch {pt.name!r}: nodes group")
+        on = on[(np.linalg.norm(nodes.xyz[on] - pt.ref_point, axis=1) <= pt.reach) & (nodes.parent[on, 0] < 0)]
+        bad = on[role[on] != FREE]
+        if bad.size:
+            raise InputError(f"patch {pt.name!r}: node at {np.round(nodes.xyz[bad[0]], 4).tolist()} m of group "
+                             f"{pt.nodes!r} is clamped or on a rigid spider; an interpolation needs free nodes")
+        out.append((p, on))
+    return out
+
+
+def _dependent_dofs(interp: list, nodes: _Nodes, patches: list) -> tuple:
+    """The interpolation patches' dependent DOFs (fem.spiders.eliminate_interpolations):
+    (their ids node*6+comp, the elimination (Dr, n ids, Dn)), or None without any."""
+    if not interp:
+        return None
+    fits = [interpolation_fit(nodes.xyz[on], patches[p].ref_point, f"patch {patches[p].name!r}") for p, on in interp]
+    ring = [(on[:, None] * 6 + np.arange(3)).ravel() for _, on in interp]
+    m, n, Dr, Dn = eliminate_interpolations(fits, ring, "interpolation patches "
+                                            + ", ".join(repr(patches[p].name) for p, _ in interp))
+    return m, (Dr, n, Dn, [p for p, _ in interp])
+
+
+def _dependent_rows(elim: tuple, slot: np.ndarray, n_keep: int, n_dof: int) -> sp.csr_matrix:
+    """Rows of T of the dependent DOFs: u_m = Dr u_ref + Dn u_n."""
+    Dr, n, Dn, pnum = elim
+    ref_cols = (n_keep + 6 * np.asarray(pnum)[:, None] + np.arange(6)).ravel()
+    n_cols = slot.ravel()[n]
+    assert np.all(n_cols >= 0)
+    A = np.zeros((Dr.shape[0], n_dof))
+    A[:, ref_cols] = Dr
+    A[:, n_cols] += Dn
+    return sp.csr_matrix(A)
+
+
 def _slots(nodes: _Nodes, role: np.ndarray) -> np.ndarray:
     """(n_nodes, 6) independent DOF of each (free node, component), -1 elsewhere."""
     carried = nodes.comps & (role == FREE)[:, None]
     carried[nodes.parent[:, 0] >= 0, :3] = False           # tied midpoint translations
+    if nodes.dependent is not None:
+        carried.ravel()[nodes.dependent[0]] = False         # interpolation patches' m-set
     slot = np.cumsum(carried.ravel()).reshape(-1, 6) - 1
     return np.where(carried, slot, -1)
 
@@ -413,11 +462,15 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
     nodes = _gather_nodes(comm, parts)
     part_cells = {p.kind: _part_cells(comm, p, nodes.label[k]) for k, p in enumerate(parts)}
     _tie_midpoints(nodes, parts, part_cells)
-    role = _roles(comm, parts, nodes, pnames, clamped)
+    role = _roles(comm, parts, nodes, patches, clamped)
+    dep = _dependent_dofs(_interpolation_nodes(comm, parts, nodes, role, patches), nodes, patches)
+    nodes.dependent = None if dep is None else (dep[0], None)
     slot = _slots(nodes, role)
     n_keep = int(slot.max()) + 1 if slot.size and slot.max() >= 0 else 0
     ref_coords = np.array([np.asarray(p.ref_point, float).reshape(3) for p in patches]).reshape(-1, 3)
     n_dof = n_keep + 6 * len(patches)
+    if dep is not None:
+        nodes.dependent = (dep[0], _dependent_rows(dep[1], slot, n_keep, n_dof))
     pressurised = _pressure_stiffened(parts, geometry)
     K, M = _reduce(comm, parts, nodes, role, slot, ref_coords, n_keep, n_dof)
     _point_masses(M, geometry, pnames, n_keep)
@@ -509,13 +562,28 @@ def _point_masses(M, geometry, pnames: list[str], ref_first: int) -> None:
         pb.add_block(M, ref_first + 6 * pnames.index(pm.patch) + np.arange(6), block)
 
 
-def _rows(nodes: _Nodes, role, slot, ref_coords, n_keep: int, n_dof: int, node, comp) -> sp.csr_matrix:
-    """Rows of T for the DOFs (node, comp): spiders and clamps (fem.spiders), and a tied
-    midpoint's translations as the mean of its two parents' rows."""
+def _own_rows(nodes: _Nodes, role, slot, ref_coords, n_keep: int, n_dof: int, node, comp) -> sp.csr_matrix:
+    """Rows of T for the DOFs (node, comp) by the node's own role: spiders and clamps
+    (fem.spiders), interpolation patches' dependent DOFs, else one independent DOF."""
     rows = transformation_rows(nodes.xyz[node], comp, role[node], slot[node, comp], ref_coords, n_keep, n_dof)
+    if nodes.dependent is not None:
+        ids, D = nodes.dependent
+        key = node * 6 + comp
+        j = np.minimum(np.searchsorted(ids, key), ids.size - 1)
+        hit = np.flatnonzero(ids[j] == key)
+        if hit.size:
+            pick = sp.csr_matrix((np.ones(hit.size), (hit, np.arange(hit.size))), shape=(node.size, hit.size))
+            rows = sp.csr_matrix(rows + pick @ D[j[hit]])
+    return rows
+
+
+def _rows(nodes: _Nodes, role, slot, ref_coords, n_keep: int, n_dof: int, node, comp) -> sp.csr_matrix:
+    """Rows of T for the DOFs (node, comp): :func:`_own_rows`, and a tied midpoint's
+    translations as the mean of its two parents' rows."""
+    rows = _own_rows(nodes, role, slot, ref_coords, n_keep, n_dof, node, comp)
     i = np.flatnonzero((nodes.parent[node, 0] >= 0) & (comp < 3) & (role[node] == FREE))
     if i.size:
-        half = [transformation_rows(nodes.xyz[a], comp[i], role[a], slot[a, comp[i]], ref_coords, n_keep, n_dof)
+        half = [_own_rows(nodes, role, slot, ref_coords, n_keep, n_dof, a, comp[i])
                 for a in (nodes.parent[node[i], 0], nodes.parent[node[i], 1])]
         pick = sp.csr_matrix((np.full(i.size, 0.5), (i, np.arange(i.size))), shape=(node.size, i.size))
         rows = sp.csr_matrix(rows + pick @ (half[0] + half[1]))

@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from liftoff.core.errors import InputError
 from liftoff.core.rigid import dof_rb
 
 FREE, CLAMPED = -1, -2
@@ -46,3 +47,46 @@ def transformation_rows(dof_coords: np.ndarray, dof_comp: np.ndarray, dof_role: 
         vals.append(rb[r, c])
     r, c, v = (np.concatenate(a) for a in (rows, cols, vals))
     return sp.csr_matrix((v, (r.astype(np.int64), c.astype(np.int64))), shape=(n, n_cols))
+
+
+def interpolation_fit(node_xyz: np.ndarray, ref: np.ndarray, what: str) -> np.ndarray:
+    """G (6 x 3n): the motion (Tx..Rz) of reference point ``ref`` as the least-squares rigid
+    fit of the translations (x, y, z interleaved) of n nodes, unit weights: Nastran's RBE3
+    (REFC = 123456, C_i = 123). With A (3n x 6) the rigid-body rows of the node translations
+    about ``ref`` (liftoff.core.rigid), G = (A^T A)^-1 A^T; a force F at ``ref`` goes to the
+    nodes as G^T F, statically equivalent, and a rigid motion of the nodes moves ``ref``
+    rigidly with them. InputError if the nodes do not fix a rigid motion (fewer than three,
+    or collinear)."""
+    xyz = np.asarray(node_xyz, float).reshape(-1, 3)
+    n = xyz.shape[0]
+    A = dof_rb(np.repeat(xyz - np.asarray(ref, float), 3, axis=0), np.tile(np.arange(3), n))
+    AtA = A.T @ A
+    w = np.linalg.eigvalsh(AtA)
+    if n < 3 or w[0] <= 1e-10 * w[-1]:
+        raise InputError(f"{what}: its {n} nodes do not fix a rigid motion (need >= 3, not collinear)")
+    return np.linalg.solve(AtA, A.T)
+
+
+def eliminate_interpolations(fits: list[np.ndarray], ring_dofs: list[np.ndarray], what: str):
+    """Choose the dependent DOFs of a set of interpolation constraints and write them in
+    terms of the independent ones (Nastran's m-set, solved jointly so that constraints
+    sharing nodes need no ordering).
+
+    Constraint k reads u_ref_k = fits[k] @ u[ring_dofs[k]] (ring_dofs[k]: candidate DOF
+    ids, 3 per node). Stacked, C u_ring = u_ref; 6K columns of C picked by QR with column
+    pivoting (well conditioned) become the dependent set m: u_m = C_m^-1 (u_ref - C_n u_n).
+    Returns (m DOF ids, n DOF ids, Dr = C_m^-1 (len(m) x 6K), Dn = -C_m^-1 C_n)."""
+    from scipy.linalg import qr
+
+    ids = np.unique(np.concatenate(ring_dofs))
+    C = np.zeros((6 * len(fits), ids.size))
+    for k, (G, d) in enumerate(zip(fits, ring_dofs)):
+        C[6 * k: 6 * k + 6, np.searchsorted(ids, d)] += G
+    _, R, piv = qr(C, mode="economic", pivoting=True)
+    k6 = 6 * len(fits)
+    if abs(R[k6 - 1, k6 - 1]) <= 1e-10 * abs(R[0, 0]):
+        raise InputError(f"{what}: the interpolation constraints are dependent (two reference "
+                         "points on the same nodes with the same fit?)")
+    m, n = np.sort(piv[:k6]), np.sort(piv[k6:])
+    Cm_inv = np.linalg.inv(C[:, m])
+    return ids[m], ids[n], Cm_inv, -Cm_inv @ C[:, n]

@@ -63,6 +63,46 @@ def shell_patch_tool(name: str, ref, axis_xy, r: float, z_lo_apex: float, z_hi_a
     return _occ.shell_wall_patch(name, axis_xy, math.atan2(d[1], d[0]), z, r, w, w)
 
 
+#: an attach ring spreads a point's loads over the wall nodes within RING_REACH x the wall
+#: radius of it: a half circumference (about +-97 degrees)
+RING_REACH = 1.5
+
+
+def ring_heights(refs: dict, axis_xy, cyl_ranges: list[tuple[float, float]]) -> dict[float, list[str]]:
+    """The off-axis reference points of ``refs`` grouped by height (m): one attach ring per
+    height. InputError for a point off the cylindrical wall's height ranges."""
+    out: dict[float, list[str]] = {}
+    for name, ref in refs.items():
+        ref = np.asarray(ref, float)
+        if np.hypot(*(ref[:2] - np.asarray(axis_xy, float))) < 1e-6:
+            continue
+        z = round(float(ref[2]), 6)
+        if not any(lo < z < hi for lo, hi in cyl_ranges):
+            raise InputError(f"patch {name}: height z = {z} m is not on the cylindrical wall "
+                             f"(ranges {[(round(a, 3), round(b, 3)) for a, b in cyl_ranges]})")
+        out.setdefault(z, []).append(name)
+    return out
+
+
+def ring_patches(wall_faces: list[int], prefix: str, heights: dict[float, list[str]], refs: dict,
+                 radius: float) -> list[Patch]:
+    """Interpolation patches (fem: RBE3) of the attach rings: the wall's edges at each height
+    (imprinted by ``_occ.plane_cut``) become the curve group ``<prefix>_ring_<k>``; each
+    point at that height interpolates its nodes within RING_REACH x ``radius``."""
+    import gmsh
+
+    edges = {abs(t) for _, t in gmsh.model.getBoundary([(2, f) for f in wall_faces], combined=False,
+                                                       oriented=False)}
+    out = []
+    for k, (z, names) in enumerate(sorted(heights.items())):
+        on = [e for e in sorted(edges) if abs(gmsh.model.getBoundingBox(1, e)[2] - z) < 1e-6 * radius
+              and abs(gmsh.model.getBoundingBox(1, e)[5] - z) < 1e-6 * radius]
+        group = f"{prefix}_ring_{k}"
+        _occ.add_physical(1, group, on)
+        out += [Patch(n, np.asarray(refs[n], float), nodes=group, reach=RING_REACH * radius) for n in names]
+    return out
+
+
 def shell_section(material: Material, area: float, dry_mass: float | None, thickness: float | None,
                   default_thickness: float) -> tuple[Material, float]:
     """(material, thickness) of a shell wall of mid-surface ``area`` (m^2): the given
@@ -109,9 +149,12 @@ def build_shell_tank(p: TankParams, out_dir: Path) -> Geometry:
                                           p.axis_xy)
         for lo, hi in zip(lay[:-1], lay[1:]):
             faces += _occ.cylinder_surface(rm, lo.z_cyl_top, hi.z_cyl_bottom, p.axis_xy)
+        cyl = [(lay[0].z_cyl_bottom, lay[-1].z_cyl_top)]
+        rings = ring_heights(p.patches, p.axis_xy, cyl) if p.attach == "ring" else {}
         tools = [shell_patch_tool(n, ref, p.axis_xy, rm, p.z_bottom + 0.5 * t, lay[-1].z_cyl_top + lay[-1].a_top - 0.5 * t,
-                                  [(lay[0].z_cyl_bottom, lay[-1].z_cyl_top)], w, lay[0].a_bottom - 0.5 * t,
-                                  lay[-1].a_top - 0.5 * t) for n, ref in p.patches.items()]
+                                  cyl, w, lay[0].a_bottom - 0.5 * t, lay[-1].a_top - 0.5 * t)
+                 for n, ref in p.patches.items() if not any(n in names for names in rings.values())]
+        tools += [_occ.plane_cut(z) for z in rings]
         tools += [_occ.plane_cut(cav.z_fill) for c, cav in zip(lay, cavities)
                   if c.fill_height < (c.z_inner_top - c.z_inner_bottom)]
         wall_faces = _occ.imprint_surfaces({wall: faces}, tools)[wall]
@@ -120,6 +163,7 @@ def build_shell_tank(p: TankParams, out_dir: Path) -> Geometry:
             _, new_faces, liquids = _occ.add_liquids({}, {wall: wall_faces}, liquids)
             wall_faces = new_faces[wall]
         patches = _occ.patch_groups(wall_faces, tools, p.patches, lambda _: min(p.mesh_size, 0.6 * w))
+        patches += ring_patches(wall_faces, p.name, rings, p.patches, rm)
         smeared, specs = compartment_groups(p, cavities, wall_faces, liquids, inner_cavities(p))
         _occ.add_physical(2, wall, wall_faces)
         areas = _occ.physical_measures(2)
@@ -137,7 +181,8 @@ def _patches_on(faces: list[int], tools, refs: dict, size_of) -> list[Patch]:
     """Physical surface groups of the tools' patches on the candidate faces (refined)."""
     found: dict[str, list[int]] = {}
     for tl in tools:
-        found.setdefault(tl.name, []).extend(_occ.faces_inside(faces, tl.bbox))
+        if tl.name is not None:
+            found.setdefault(tl.name, []).extend(_occ.faces_inside(faces, tl.bbox))
     out = []
     for name, pf in found.items():
         _occ.add_physical(2, name, pf)
@@ -152,6 +197,18 @@ def _apex_tool(name: str, axis, w: float, r: float, a: float, z_apex: float, top
         raise InputError(f"patch {name}: apex patch of half-width {w} m too wide for the dome")
     reach = 1.5 * a * (1 - math.sqrt(1 - (w / r) ** 2)) + 0.02 * r
     return _occ.cylinder_tool(name, axis, w, *((z_apex - reach, z_apex + 1.0) if top else (z_apex - 1.0, z_apex + reach)))
+
+
+def _wall_tools(attach: dict, rings: dict, axis, rm: float, w: float) -> list[_occ.Tool]:
+    """Imprint tools of attach points on a cylindrical mid-surface of radius rm: a plane cut
+    per ring height, a (2w x 2w) patch for each point not on a ring."""
+    on_ring = {n for names in rings.values() for n in names}
+    tools = [_occ.plane_cut(z) for z in rings]
+    for name, pt in attach.items():
+        if name not in on_ring:
+            d = np.asarray(pt[:2], float) - axis
+            tools.append(_occ.shell_wall_patch(name, axis, math.atan2(d[1], d[0]), pt[2], rm, w, w))
+    return tools
 
 
 def booster_skirt_section(p) -> list[tuple[float, float]]:
@@ -186,14 +243,15 @@ def build_shell_booster(p, out_dir: Path) -> Geometry:
         gimbal = f"{p.name}_gimbal"
         tools.append(_apex_tool(gimbal, axis, w, rm, am_b, p.case_bottom_z - am_b, top=False))
         refs[gimbal] = np.array([axis[0], axis[1], p.case_bottom_z - p.aft_dome_ratio * R])
-        for name, pt in lay.srb_attach_points(p.side).items():
-            d = pt[:2] - axis
-            tools.append(_occ.shell_wall_patch(name, axis, math.atan2(d[1], d[0]), pt[2], rm, w, w))
-            refs[name] = pt
+        attach = lay.srb_attach_points(p.side)
+        rings = ring_heights(attach, axis, [(p.case_bottom_z, p.cyl_top_z)]) if p.attach == "ring" else {}
+        tools += _wall_tools(attach, rings, axis, rm, w)
+        refs.update(attach)
         vols, faces = _occ.imprint_parts({skirt_g: skirt}, {case_g: case}, tools)
         cand = _occ.boundary_faces(vols[skirt_g]) + faces[case_g]
         patches = _patches_on(cand, tools, refs, lambda n: min(p.mesh_size, 0.6 * (
             p.holddown_patch_radius if "_hd_" in n else w)))
+        patches += ring_patches(faces[case_g], p.name, rings, attach, rm)
         _occ.add_physical(2, f"{p.name}_case_inner", faces[case_g])
         _occ.add_physical(2, case_g, faces[case_g])
         _occ.add_physical(3, skirt_g, [tg for _, tg in vols[skirt_g]])
@@ -238,12 +296,13 @@ def build_shell_orbiter(p, out_dir: Path) -> Geometry:
         refs = {"ssme_mount": np.array([axis[0], axis[1], z0 - p.ssme_cg_below_bulkhead]),
                 "payload_station": np.array([axis[0], axis[1], p.payload_z])}
         tools += [_occ.shell_wall_patch("payload_station", axis, phi, p.payload_z, rm, 0.5, 0.5) for phi in (0.0, math.pi)]
-        for name, pt in lay.orbiter_attach_points().items():
-            d = pt[:2] - axis
-            tools.append(_occ.shell_wall_patch(name, axis, math.atan2(d[1], d[0]), pt[2], rm, w, w))
-            refs[name] = pt
+        attach = lay.orbiter_attach_points()
+        rings = ring_heights(attach, axis, [(z0 + 0.5 * t, z0 + p.cyl_length)]) if p.attach == "ring" else {}
+        tools += _wall_tools(attach, rings, axis, rm, w)
+        refs.update(attach)
         vols, faces = _occ.imprint_parts({wing_g: wings}, {skin: faces}, tools)
         patches = _patches_on(faces[skin], tools, refs, lambda n: min(p.mesh_size, 0.6 * w))
+        patches += ring_patches(faces[skin], p.name, rings, attach, rm)
         _occ.add_physical(2, skin, faces[skin])
         _occ.add_physical(3, wing_g, [tg for _, tg in vols[wing_g]])
         volume = _occ.group_volume(vols[wing_g])

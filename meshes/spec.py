@@ -70,6 +70,18 @@ def check_walls(owner: str, walls) -> None:
         raise InputError(f"{owner}.walls must be one of {', '.join(map(repr, WALLS))} (got {walls!r})")
 
 
+#: how a shell wall carries its off-axis attach points: rigid patches or interpolation rings
+ATTACH = ("patch", "ring")
+
+
+def check_attach(owner: str, walls: str, attach) -> None:
+    """InputError unless ``attach`` is "patch" or "ring", the latter with shell walls."""
+    if attach not in ATTACH:
+        raise InputError(f"{owner}.attach must be one of {', '.join(map(repr, ATTACH))} (got {attach!r})")
+    if attach == "ring" and walls != "shell":
+        raise InputError(f"{owner}.attach = 'ring' needs walls = 'shell' (got {walls!r})")
+
+
 FORMAT = "liftoff-geometry"
 VERSION = 1
 _NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_.\-]*$")
@@ -118,16 +130,39 @@ def equivalent(base: Material, mass: float, volume: float, name: str | None = No
 
 @dataclass
 class Patch:
-    """Surface group ``name`` tied rigidly to one 6-DOF reference point ``ref_point`` (m)."""
+    """A 6-DOF reference point ``ref_point`` (m) tied to mesh nodes. ``nodes=None``: the
+    surface (or shell curve) group ``name`` hangs on it rigidly (rigid spider, RBE2).
+    ``nodes`` = a group name: the point follows the least-squares rigid fit of the
+    translations of that group's nodes within ``reach`` (m) of it, unit weights, and adds
+    no stiffness (interpolation, Nastran RBE3: a frame's attach fitting spreading its loads
+    over a sector of the wall; several points may share a group's nodes)."""
 
     name: str
     ref_point: np.ndarray
+    nodes: str | None = None
+    reach: float = math.inf
 
     def __post_init__(self) -> None:
         _check_name("patch", self.name)
         self.ref_point = np.asarray(self.ref_point, dtype=float).reshape(-1)
         if self.ref_point.shape != (3,) or not np.all(np.isfinite(self.ref_point)):
             raise InputError(f"patch {self.name!r}: ref_point must be 3 finite coordinates (m)")
+        if self.nodes is not None:
+            _check_name(f"patch {self.name!r}: nodes group", self.nodes)
+        self.reach = float(self.reach)
+        if not self.reach > 0:
+            raise InputError(f"patch {self.name!r}: reach must be > 0 m (got {self.reach!r})")
+
+    def to_dict(self) -> dict:
+        d = {"name": self.name, "ref_point": self.ref_point.tolist()}
+        if self.nodes is not None:
+            d.update(nodes=self.nodes, reach=None if math.isinf(self.reach) else self.reach)
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "Patch":
+        reach = d.get("reach")
+        return cls(d["name"], np.array(d["ref_point"]), d.get("nodes"), math.inf if reach is None else reach)
 
 
 @dataclass
@@ -321,7 +356,7 @@ class Geometry:
             "format": FORMAT, "version": VERSION, "units": "SI (m, kg, Pa, kg/m^3, kg m^2)",
             "name": self.name, "msh_path": str(msh),
             "volumes": {g: {"name": m.name, "E": m.E, "nu": m.nu, "rho": m.rho} for g, m in self.volumes.items()},
-            "patches": [{"name": p.name, "ref_point": p.ref_point.tolist()} for p in self.patches],
+            "patches": [p.to_dict() for p in self.patches],
             "point_masses": [{"name": p.name, "patch": p.patch, "mass": p.mass, "inertia": p.inertia.tolist()}
                              for p in self.point_masses],
             "smeared_masses": [{"surface": s.surface, "mass": s.mass} for s in self.smeared_masses],
@@ -358,7 +393,7 @@ class Geometry:
             return cls(
                 name=d["name"], msh_path=str(msh),
                 volumes={g: Material(**m) for g, m in d["volumes"].items()},
-                patches=[Patch(p["name"], np.array(p["ref_point"])) for p in d["patches"]],
+                patches=[Patch.from_dict(p) for p in d["patches"]],
                 point_masses=[PointMass(p["name"], p["patch"], p["mass"], np.array(p["inertia"]))
                               for p in d["point_masses"]],
                 smeared_masses=[SmearedMass(s["surface"], s["mass"]) for s in d["smeared_masses"]],

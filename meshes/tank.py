@@ -34,7 +34,7 @@ from liftoff.core.errors import InputError
 
 from . import _occ
 from ._occ import occ
-from .spec import Geometry, Liquid, Material, SmearedMass, check_walls, equivalent, require_positive
+from .spec import Geometry, Liquid, Material, SmearedMass, check_attach, check_walls, equivalent, require_positive
 
 #: liquid models of a tank (TankParams.liquid)
 LIQUIDS = ("smeared", "hydroelastic")
@@ -76,7 +76,9 @@ class TankParams:
     continued as a cylinder) of ``intertank_length`` between their cylinder ends.
     ``patches``: reference points; a point on the axis gives a disk patch on the nearest
     dome apex, any other point a (2w x 2w) patch on the outer cylindrical wall at the
-    point's azimuth and height. ``dry_mass`` (kg): if given, the wall density is set so that
+    point's azimuth and height; with shell walls and ``attach="ring"`` an off-axis point
+    instead interpolates (RBE3) the wall's nodes on the ring at its height over a half
+    circumference (meshes.shells.ring_patches). ``dry_mass`` (kg): if given, the wall density is set so that
     the structure weighs this much and E is scaled with it (E/rho of ``material`` kept)."""
 
     name: str = "tank"
@@ -97,6 +99,7 @@ class TankParams:
     shell_bending_ratio: float = 1.0      # shell walls: 12 I / t^3 (frames, stringers smeared; 1 = bare skin)
     liquid: str = "smeared"               # "smeared" (wetted-wall mass) or "hydroelastic" (liquid volumes, fem.liquid)
     slosh_modes: int = 0                  # hydroelastic: gravity slosh modes kept per compartment (0: p = 0 free surface)
+    attach: str = "patch"                 # shell walls: wall points as rigid "patch"es or "ring" interpolations (RBE3)
 
     def check(self) -> None:
         o = f"TankParams({self.name})"
@@ -107,6 +110,7 @@ class TankParams:
                 or self.slosh_modes != int(self.slosh_modes) or self.slosh_modes < 0:
             raise InputError(f"{o}.slosh_modes must be an integer >= 0 (got {self.slosh_modes!r})")
         self.slosh_modes = int(self.slosh_modes)
+        check_attach(o, self.walls, self.attach)
         if self.shell_thickness is not None:
             require_positive(o, shell_thickness=self.shell_thickness)
         require_positive(o, shell_bending_ratio=self.shell_bending_ratio)

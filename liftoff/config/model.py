@@ -52,7 +52,7 @@ _MODEL = {"source", "mesh_size", "degree", "zeta", "vehicle", "pad", "component"
 WALLS = ("solid", "shell")
 LIQUIDS = ("smeared", "hydroelastic")     # [model] liquid: the core stage's propellants (meshes.tank)
 CONVECTIVE = ("wall", "free")             # [model] convective: a hydroelastic liquid's sloshing part (fem.liquid)
-_CORE_PARAMS = {"shell_bending_ratio", "ullage_pressure"}
+_CORE_PARAMS = {"shell_bending_ratio", "ullage_pressure", "attach"}
 _VEHICLE = {"mesh_size", "params"}
 _COMP = {"mesh_size", "n_modes", "f_max", "params", "nastran"}
 _NASTRAN = {"file", "units", "grids", "asm", "pch", "op4", "bulk", "stiffness", "mass", "se", "recovery"}
@@ -248,7 +248,8 @@ def _fe_builders(where: Where, layout: StackLayout, sel: dict[str, dict], size: 
     ullage = _ullage(wc / "core" / "params", core)
     try:
         out["core"] = core_stage_params(layout, **_size(size["core"]), walls=walls, shell_bending_ratio=ratio,
-                                        liquid=liquid, ullage_pressure=ullage)
+                                        liquid=liquid, ullage_pressure=ullage,
+                                        **({"attach": core["attach"]} if "attach" in core else {}))
         out["core"].check()
     except InputError as exc:
         raise (wc / "core").wrap(exc) from None

@@ -94,3 +94,43 @@ def test_shell_booster_and_orbiter_groups_and_masses(shell_vehicle, tmp_path, ms
     axis = BoosterParams(side="right").layout.srb_axis("right")
     assert np.all(np.hypot(gimbal[:, 0] - axis[0], gimbal[:, 1] - axis[1]) <= 0.45 + 1e-6)
     assert math.isclose(gimbal[:, 2].min(), 2.6 - 0.7 * 1.855 + 0.075, rel_tol=1e-6)
+
+
+def test_shell_tank_ring_attach(tmp_path, msh_groups):
+    """attach = "ring": an off-axis point interpolates (fem: RBE3) the wall's nodes on the
+    ring imprinted at its height, over RING_REACH x the mid-surface radius; apex points stay
+    rigid disk patches; the wall and its mass are those of the patch variant."""
+    from liftoff.meshes.shells import RING_REACH
+
+    g = build_tank(_small(walls="shell", attach="ring"), tmp_path / "ring")
+    ref = build_tank(_small(walls="shell"), tmp_path / "patch")
+    side = g.patch("side")
+    assert side.nodes == "tank_ring_0" and side.reach == pytest.approx(RING_REACH * 0.95)
+    assert g.patch("tank_top").nodes is None and g.patch("tank_bottom").nodes is None
+    groups = msh_groups(g)
+    assert (2, "side") not in groups
+    ring = groups[(1, "tank_ring_0")]["nodes"]
+    assert ring.shape[0] >= 12
+    assert np.allclose(ring[:, 2], 1.5, rtol=0, atol=1e-9) and np.allclose(np.hypot(ring[:, 0], ring[:, 1]), 0.95)
+    assert g.nominal_mass() == pytest.approx(ref.nominal_mass(), rel=CAD_RTOL)
+    with pytest.raises(InputError, match="attach = 'ring' needs walls = 'shell'"):
+        build_tank(_small(attach="ring"), tmp_path)
+    with pytest.raises(InputError, match=r"attach must be one of 'patch', 'ring' \(got 'hoop'\)"):
+        build_tank(_small(walls="shell", attach="hoop"), tmp_path)
+
+
+def test_shell_booster_and_orbiter_ring_attach(tmp_path, msh_groups):
+    """The core attach points of a shell booster and orbiter as rings at their heights."""
+    out = tmp_path / "ring"
+    for g, attach in ((build_booster(BoosterParams(side="right", walls="shell", mesh_size=1.0, attach="ring"), out),
+                       BoosterParams().layout.srb_attach_points("right")),
+                      (build_orbiter(OrbiterParams(walls="shell", mesh_size=1.0, attach="ring"), out),
+                       OrbiterParams().layout.orbiter_attach_points())):
+        groups = msh_groups(g)
+        for name, pt in attach.items():
+            p = g.patch(name)
+            assert p.nodes is not None and (2, name) not in groups
+            z = groups[(1, p.nodes)]["nodes"][:, 2]
+            assert np.allclose(z, pt[2], rtol=0, atol=1e-9)
+    with pytest.raises(InputError, match="attach = 'ring' needs walls = 'shell'"):
+        build_orbiter(OrbiterParams(attach="ring"), out)
