@@ -84,22 +84,30 @@ def ring_heights(refs: dict, axis_xy, cyl_ranges: list[tuple[float, float]]) -> 
     return out
 
 
-def ring_patches(wall_faces: list[int], prefix: str, heights: dict[float, list[str]], refs: dict,
-                 radius: float) -> list[Patch]:
-    """Interpolation patches (fem: RBE3) of the attach rings: the wall's edges at each height
-    (imprinted by ``_occ.plane_cut``) become the curve group ``<prefix>_ring_<k>``; each
-    point at that height interpolates its nodes within RING_REACH x ``radius``."""
+def ring_patches(wall_faces: list[int], prefix: str, heights: dict[float, list[str]], refs: dict, axis_xy,
+                 radius: float, reach: dict | None = None) -> list[Patch]:
+    """Interpolation patches (fem: RBE3) of the attach rings: the wall's edges of radius
+    ``radius`` about the axis at each height (imprinted by ``_occ.plane_cut``, or a rim)
+    become the curve group ``<prefix>_ring_<k>``; each point at that height interpolates its
+    nodes within RING_REACH x ``radius`` of it (``reach[name]`` (m) where given)."""
     import gmsh
 
     edges = {abs(t) for _, t in gmsh.model.getBoundary([(2, f) for f in wall_faces], combined=False,
                                                        oriented=False)}
-    out = []
+
+    def on_ring(e: int, z: float) -> bool:
+        lo, hi = gmsh.model.getParametrizationBounds(1, e)
+        x = np.asarray(gmsh.model.getValue(1, e, [0.5 * (lo[0] + hi[0])]))
+        b = gmsh.model.getBoundingBox(1, e)
+        return (abs(b[2] - z) < 1e-6 * radius and abs(b[5] - z) < 1e-6 * radius
+                and abs(np.hypot(*(x[:2] - np.asarray(axis_xy, float))) - radius) < 1e-3 * radius)
+
+    out, reach = [], reach or {}
     for k, (z, names) in enumerate(sorted(heights.items())):
-        on = [e for e in sorted(edges) if abs(gmsh.model.getBoundingBox(1, e)[2] - z) < 1e-6 * radius
-              and abs(gmsh.model.getBoundingBox(1, e)[5] - z) < 1e-6 * radius]
         group = f"{prefix}_ring_{k}"
-        _occ.add_physical(1, group, on)
-        out += [Patch(n, np.asarray(refs[n], float), nodes=group, reach=RING_REACH * radius) for n in names]
+        _occ.add_physical(1, group, [e for e in sorted(edges) if on_ring(e, z)])
+        out += [Patch(n, np.asarray(refs[n], float), nodes=group, reach=reach.get(n, RING_REACH * radius))
+                for n in names]
     return out
 
 
@@ -163,7 +171,7 @@ def build_shell_tank(p: TankParams, out_dir: Path) -> Geometry:
             _, new_faces, liquids = _occ.add_liquids({}, {wall: wall_faces}, liquids)
             wall_faces = new_faces[wall]
         patches = _occ.patch_groups(wall_faces, tools, p.patches, lambda _: min(p.mesh_size, 0.6 * w))
-        patches += ring_patches(wall_faces, p.name, rings, p.patches, rm)
+        patches += ring_patches(wall_faces, p.name, rings, p.patches, p.axis_xy, rm)
         smeared, specs = compartment_groups(p, cavities, wall_faces, liquids, inner_cavities(p))
         _occ.add_physical(2, wall, wall_faces)
         areas = _occ.physical_measures(2)
@@ -251,7 +259,7 @@ def build_shell_booster(p, out_dir: Path) -> Geometry:
         cand = _occ.boundary_faces(vols[skirt_g]) + faces[case_g]
         patches = _patches_on(cand, tools, refs, lambda n: min(p.mesh_size, 0.6 * (
             p.holddown_patch_radius if "_hd_" in n else w)))
-        patches += ring_patches(faces[case_g], p.name, rings, attach, rm)
+        patches += ring_patches(faces[case_g], p.name, rings, attach, axis, rm)
         _occ.add_physical(2, f"{p.name}_case_inner", faces[case_g])
         _occ.add_physical(2, case_g, faces[case_g])
         _occ.add_physical(3, skirt_g, [tg for _, tg in vols[skirt_g]])
@@ -271,9 +279,12 @@ def build_shell_booster(p, out_dir: Path) -> Geometry:
 
 def build_shell_orbiter(p, out_dir: Path) -> Geometry:
     """build_orbiter for walls = "shell": fuselage skin, aft bulkhead and nose as the shell
-    surface ``orbiter_structure``, the wing slab the solid ``orbiter_wing`` (cut at the skin's
-    mid-surface, so its root face is a band of the skin: shared nodes); same patches and
-    lumped masses as the solid variant, the structure mass split in its volume shares."""
+    surface ``orbiter_structure``, the wing slab the solid ``orbiter_wing``, carried through
+    the fuselage (the wing carry-through structure: the skin crosses the slab, sharing its
+    nodes there; a wing held by a band of bare skin alone flaps at 0.76 Hz); same patches and
+    lumped masses as the solid variant. The wing's density is the solid variant's (structure
+    mass over its volume), so the outboard wing is the solid variant's; the skin weighs the
+    rest of the structure mass."""
     from .vehicle import AL2219, orbiter_part_volumes, orbiter_point_masses
 
     lay = p.layout
@@ -285,31 +296,38 @@ def build_shell_orbiter(p, out_dir: Path) -> Geometry:
     with _occ.gmsh_session(p.name):
         inside = _occ.revolve_to_z(_occ.half(_occ.capsule_profile(rm, 0.0, am, z0 + 0.5 * t, p.cyl_length - 0.5 * t)),
                                    axis)
-        box = _occ.occ.addBox(-0.5 * p.wing_span, axis[1] - 0.5 * p.wing_thickness, z0 + p.wing_bottom_offset,
-                              p.wing_span, p.wing_thickness, p.wing_root_chord)
-        wings, _ = _occ.occ.cut([(3, box)], inside, removeTool=False)
+        wings = [(3, _occ.occ.addBox(-0.5 * p.wing_span, axis[1] - 0.5 * p.wing_thickness, z0 + p.wing_bottom_offset,
+                                     p.wing_span, p.wing_thickness, p.wing_root_chord))]
         _occ.occ.synchronize()
         faces = _occ.boundary_faces(inside)
         _occ.occ.remove(inside)
         _occ.occ.synchronize()
-        tools = [_occ.cylinder_tool("ssme_mount", axis, 1.0, z0 - 1.0, z0 + 0.5 * t + 0.25)]
+        att = lay.orbiter_attach_points()
         refs = {"ssme_mount": np.array([axis[0], axis[1], z0 - p.ssme_cg_below_bulkhead]),
-                "payload_station": np.array([axis[0], axis[1], p.payload_z])}
-        tools += [_occ.shell_wall_patch("payload_station", axis, phi, p.payload_z, rm, 0.5, 0.5) for phi in (0.0, math.pi)]
-        attach = lay.orbiter_attach_points()
-        rings = ring_heights(attach, axis, [(z0 + 0.5 * t, z0 + p.cyl_length)]) if p.attach == "ring" else {}
-        tools += _wall_tools(attach, rings, axis, rm, w)
-        refs.update(attach)
+                "payload_station": np.array([axis[0], axis[1], p.payload_z]), **att}
+        rings, reach = {}, {}
+        if p.attach == "ring":      # the engines' thrust structure and the payload's trunnions as whole rings
+            rings = ring_heights(att, axis, [(z0 + 0.5 * t, z0 + p.cyl_length)])
+            rings.setdefault(round(p.payload_z, 6), []).append("payload_station")
+            tools = _wall_tools(att, rings, axis, rm, w)
+            rings[round(z0 + 0.5 * t, 6)] = ["ssme_mount"]          # the aft bulkhead's rim (no cut needed)
+            reach = {"ssme_mount": math.inf, "payload_station": math.inf}
+        else:
+            tools = [_occ.cylinder_tool("ssme_mount", axis, 1.0, z0 - 1.0, z0 + 0.5 * t + 0.25)]
+            tools += [_occ.shell_wall_patch("payload_station", axis, phi, p.payload_z, rm, 0.5, 0.5)
+                      for phi in (0.0, math.pi)]
+            tools += _wall_tools(att, rings, axis, rm, w)
         vols, faces = _occ.imprint_parts({wing_g: wings}, {skin: faces}, tools)
         patches = _patches_on(faces[skin], tools, refs, lambda n: min(p.mesh_size, 0.6 * w))
-        patches += ring_patches(faces[skin], p.name, rings, attach, rm)
+        patches += ring_patches(faces[skin], p.name, rings, refs, axis, rm, reach)
         _occ.add_physical(2, skin, faces[skin])
         _occ.add_physical(3, wing_g, [tg for _, tg in vols[wing_g]])
         volume = _occ.group_volume(vols[wing_g])
         areas = _occ.physical_measures(2)
         n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size, shell_curvature_elements(rm, p.mesh_size))
-    v_fus, v_wing = orbiter_part_volumes(p)
-    m_wing = p.structure_mass * v_wing / (v_fus + v_wing)
+    m_wing = p.structure_mass * volume / sum(orbiter_part_volumes(p))         # the solid variant's density
+    if m_wing >= p.structure_mass:
+        raise InputError(f"OrbiterParams: the wing slab ({volume:.1f} m^3) weighs the whole structure_mass")
     skin_mat, ts = shell_section(AL2219, areas[skin], p.structure_mass - m_wing, p.skin_shell_thickness, t)
     mats = {skin: skin_mat, wing_g: equivalent(AL2219, m_wing, volume, "Al2219-equivalent-wing")}
     geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), mats, patches, orbiter_point_masses(p), [], [],

@@ -74,12 +74,16 @@ def check_walls(owner: str, walls) -> None:
 ATTACH = ("patch", "ring")
 
 
-def check_attach(owner: str, walls: str, attach) -> None:
-    """InputError unless ``attach`` is "patch" or "ring", the latter with shell walls."""
+def check_attach(owner: str, walls: str, attach) -> str:
+    """``attach`` checked: "patch" or "ring" (the latter with shell walls only); None gives
+    "ring" with shell walls and "patch" with solid ones."""
+    if attach is None:
+        return "ring" if walls == "shell" else "patch"
     if attach not in ATTACH:
         raise InputError(f"{owner}.attach must be one of {', '.join(map(repr, ATTACH))} (got {attach!r})")
     if attach == "ring" and walls != "shell":
         raise InputError(f"{owner}.attach = 'ring' needs walls = 'shell' (got {walls!r})")
+    return attach
 
 
 FORMAT = "liftoff-geometry"

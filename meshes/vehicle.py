@@ -50,7 +50,7 @@ ULLAGE_PRESSURE = {"lh2": 32.0 * PSI, "lox": 20.0 * PSI}
 
 def core_stage_params(layout: StackLayout | None = None, mesh_size: float = 0.9, walls: str = "solid",
                       shell_bending_ratio: float = 1.0, liquid: str = "smeared",
-                      ullage_pressure: dict | None = None, attach: str = "patch") -> TankParams:
+                      ullage_pressure: dict | None = None, attach: str | None = None) -> TankParams:
     """External-tank-like core stage: LH2 tank (aft), intertank skirt, LOX tank (forward),
     Al 2219 wall thickened to 0.15 m (``walls="solid"``) or its mid-surface as an Al 2219
     shell of the thickness that weighs the dry mass, 6.8 mm (``walls="shell"``, bending
@@ -61,7 +61,8 @@ def core_stage_params(layout: StackLayout | None = None, mesh_size: float = 0.9,
     Pa} gauge, by default :data:`ULLAGE_PRESSURE` there and none otherwise. ``attach``: the
     booster and orbiter attach points as rigid 1 m x 1 m ``"patch"``es or, shell walls only,
     as ``"ring"`` interpolations over half the wall's circumference at their station (the
-    ring frames there: the LH2 tank's aft frame, the intertank's booster beam frame)."""
+    ring frames there: the LH2 tank's aft frame, the intertank's booster beam frame);
+    None: ``"ring"`` with shell walls, ``"patch"`` with solid ones."""
     lay = layout or StackLayout()
     lay.check()
     patches = {}
@@ -76,7 +77,8 @@ def core_stage_params(layout: StackLayout | None = None, mesh_size: float = 0.9,
                       Compartment("lox", 4.65, 0.72, 1.6, 0.90, 1141.0, ullage_pressure=pressure["lox"])),
         intertank_length=6.9, z_bottom=lay.core_bottom_z, axis_xy=(0.0, 0.0),
         material=replace(AL2219), dry_mass=26_500.0, patches=patches, patch_half_width=0.5,
-        mesh_size=mesh_size, walls=walls, shell_bending_ratio=shell_bending_ratio, liquid=liquid, attach=attach)
+        mesh_size=mesh_size, walls=walls, shell_bending_ratio=shell_bending_ratio, liquid=liquid,
+        attach=check_attach("core_stage_params", walls, attach))
     p.patches["stack_top"] = np.array([0.0, 0.0, lay.core_bottom_z + tank_height(p)])
     return p
 
@@ -110,7 +112,7 @@ class BoosterParams:
     walls: str = "solid"                # "solid" (thickened tetrahedra) or "shell" (case as a shell, meshes.shells)
     case_shell_thickness: float | None = None   # shell case: None = the D6AC thickness that weighs case_mass
     case_shell_bending_ratio: float = 1.0       # shell case: 12 I / t^3 (1 = bare skin)
-    attach: str = "patch"               # shell case: core attach points as rigid "patch"es or "ring" interpolations
+    attach: str | None = None           # shell case: core attach points as rigid "patch"es or "ring"s (None: ring)
 
     @property
     def name(self) -> str:
@@ -119,7 +121,7 @@ class BoosterParams:
     def check(self) -> None:
         o = f"BoosterParams({self.side})"
         check_walls(o, self.walls)
-        check_attach(o, self.walls, self.attach)
+        self.attach = check_attach(o, self.walls, self.attach)
         if self.case_shell_thickness is not None:
             require_positive(o, case_shell_thickness=self.case_shell_thickness)
         require_positive(o, case_shell_bending_ratio=self.case_shell_bending_ratio)
@@ -284,14 +286,14 @@ class OrbiterParams:
     walls: str = "solid"                # "solid" or "shell" (fuselage skin as a shell, meshes.shells)
     skin_shell_thickness: float | None = None   # shell skin: None = the Al 2219 thickness that weighs its mass share
     skin_shell_bending_ratio: float = 1.0       # shell skin: 12 I / t^3 (1 = bare skin)
-    attach: str = "patch"               # shell skin: core attach points as rigid "patch"es or "ring" interpolations
+    attach: str | None = None           # shell skin: attach points, engines, payload as rigid "patch"es or "ring"s (None: ring)
 
     name = "orbiter"
 
     def check(self) -> None:
         o = "OrbiterParams"
         check_walls(o, self.walls)
-        check_attach(o, self.walls, self.attach)
+        self.attach = check_attach(o, self.walls, self.attach)
         if self.skin_shell_thickness is not None:
             require_positive(o, skin_shell_thickness=self.skin_shell_thickness)
         require_positive(o, skin_shell_bending_ratio=self.skin_shell_bending_ratio)
@@ -396,9 +398,9 @@ def build_orbiter(p: OrbiterParams, out_dir) -> Geometry:
 
 # ---- the stack --------------------------------------------------------------------------------
 def build_core_stage(out_dir, layout: StackLayout | None = None, mesh_size: float = 0.9, walls: str = "solid",
-                     shell_bending_ratio: float = 1.0) -> Geometry:
+                     shell_bending_ratio: float = 1.0, attach: str | None = None) -> Geometry:
     """Core stage ``core`` built with the tank builder (see :func:`core_stage_params`)."""
-    return build_tank(core_stage_params(layout, mesh_size, walls, shell_bending_ratio), out_dir)
+    return build_tank(core_stage_params(layout, mesh_size, walls, shell_bending_ratio, attach=attach), out_dir)
 
 
 def default_stack(mesh_size: float | None = None, out_dir="out/meshes",

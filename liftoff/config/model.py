@@ -130,11 +130,11 @@ class ModelConfig:
 # ---------------------------------------------------------------- builder dataclasses
 def _field_value(where: Where, value: Any, default: Any) -> Any:
     """A TOML value for a dataclass field, typed after the field's default: true/false, a
-    string, an array (of numbers, or of points as long as the default's; a coordinate
+    string (also for a default of None), an array (of numbers, or of points as long as the default's; a coordinate
     ``*_xy`` as long as the default), else a number."""
     if isinstance(default, bool):
         return boolean(where, value)
-    if isinstance(default, str):
+    if isinstance(default, str) or (default is None and isinstance(value, str)):
         return string(where, value)
     if not isinstance(default, tuple):
         return number(where, value)

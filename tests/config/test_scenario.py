@@ -123,13 +123,15 @@ BAD = [
      "BoosterParams(left).case_thickness must be < srb_radius/2"),
     ("model.component.srb_left.params", {"side": "right"}, "model.component.srb_left.params: unknown key 'side'"),
     ("model.component.orbiter.params", {"wing_spam": 20.0}, "model.component.orbiter.params: unknown key 'wing_spam'"),
-    ("model.component.core.params", {"radius": 4.0}, "model.component.core.params: unknown key 'radius': the core stage takes only shell_bending_ratio, ullage_pressure"),
+    ("model.component.core.params", {"radius": 4.0}, "model.component.core.params: unknown key 'radius': the core stage takes only attach, shell_bending_ratio, ullage_pressure"),
     ("model.component.core.params", {"ullage_pressure": {"lh2": 1e5}},
      "model.component.core.params.ullage_pressure: missing required key 'lox'"),
     ("model.component.core.params", {"ullage_pressure": {"lh2": -1.0, "lox": 0.0}},
      "model.component.core.params.ullage_pressure.lh2: negative value -1"),
-    ("model.component.core.params", {"ullage_pressure": {"lh2": 1e5, "lox": 1e5}},
-     "model.component.core: TankParams(core).lh2.ullage_pressure: the pressure prestress needs walls = 'shell'"),
+    ("model.component.core.params", {"attach": "hoop"},
+     "model.component.core: core_stage_params.attach must be one of 'patch', 'ring' (got 'hoop')"),
+    ("model.component.srb_left.params", {"walls": "solid", "attach": "ring"},
+     "model.component.srb_left.params: BoosterParams(left).attach = 'ring' needs walls = 'shell' (got 'solid')"),
     ("model.stick", {"core_wall": 0.01}, "model.stick: [model.stick] is for source = \"stick\""),
 ]
 
@@ -248,9 +250,12 @@ def test_walls_as_shells_reach_every_vehicle_builder(base):
     to shells (meshes builders' ``walls``); the core takes its bending ratio from its params."""
     d = copy.deepcopy(base)
     d["model"]["walls"] = "shell"
+    for name in ("srb_left", "srb_right"):         # the default keeps the boosters solid
+        d["model"]["component"][name].pop("params", None)
     d["model"].setdefault("component", {}).setdefault("core", {})["params"] = {"shell_bending_ratio": 50.0}
     comps = parse_scenario(d, "s.toml").cases[0].model.components
     assert all(comps[n].builder.walls == "shell" for n in ("core", "srb_left", "srb_right", "orbiter"))
+    assert all(comps[n].builder.attach == "ring" for n in ("core", "srb_left", "srb_right", "orbiter"))
     assert comps["core"].builder.shell_bending_ratio == 50.0
     # shells with hydroelastic propellants carry the external tank's ullage pressures (fem.prestress)
     d["model"]["liquid"] = "hydroelastic"
@@ -259,6 +264,10 @@ def test_walls_as_shells_reach_every_vehicle_builder(base):
     d["model"]["component"]["core"]["params"]["ullage_pressure"] = {"lh2": 0.0, "lox": 1.0e5}
     core = parse_scenario(d, "s.toml").cases[0].model.components["core"].builder
     assert [c.ullage_pressure for c in core.compartments] == [0.0, 1.0e5]
+    d["model"]["walls"] = "solid"          # pressure needs shell walls
+    with pytest.raises(InputError, match=r"model\.component\.core: TankParams\(core\)\.lox\.ullage_pressure: "
+                                         "the pressure prestress needs walls = 'shell'"):
+        parse_scenario(d, "s.toml")
     d["model"]["walls"] = "plates"
     with pytest.raises(InputError, match=r"model\.walls: must be one of solid, shell"):
         parse_scenario(d, "s.toml")

@@ -1,5 +1,8 @@
 """The default core stage with shell walls against the thickened solid (issue 11's checks):
 the same total mass, and the first free-free beam-bending frequency within a few percent.
+Like for like: the shell carries the solid's rigid 1 m x 1 m attach patches here (the
+default's attach rings add no stiffness, so the patches' local stiffening goes: -6.5 % on
+this mesh; the pressurised default is benchmarks/bench_prestress.py's).
 
 The shell model is the wall's mid-surface as a bare Al 2219 skin of the thickness that
 weighs the dry mass (6.8 mm): membrane stiffness and mass are the thickened solid's, so beam
@@ -21,7 +24,7 @@ pytestmark = [pytest.mark.fem, pytest.mark.slow]     # ~20 s (two core models, a
 
 def test_core_stage_shell_walls_against_solid(tmp_path):
     solid = build_model(build_core_stage(tmp_path / "solid"))
-    shell = build_model(build_core_stage(tmp_path / "shell", mesh_size=1.8, walls="shell"))
+    shell = build_model(build_core_stage(tmp_path / "shell", mesh_size=1.8, walls="shell", attach="patch"))
     m_solid, m_shell = mass_properties(solid), mass_properties(shell)
     err = m_shell.mass / m_solid.mass - 1
     print(f"core mass: shell {m_shell.mass:.1f} kg, solid {m_solid.mass:.1f} kg ({err:+.4%}); "

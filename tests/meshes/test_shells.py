@@ -75,13 +75,13 @@ def test_shell_booster_and_orbiter_groups_and_masses(shell_vehicle, tmp_path, ms
     solid_o = build_orbiter(OrbiterParams(mesh_size=1.0), tmp_path)
     for shell, solid in ((booster, solid_b), (orbiter, solid_o)):
         assert {p.name for p in shell.patches} == {p.name for p in solid.patches}
-        for a, b in zip(shell.patches, solid.patches):
-            assert np.allclose(a.ref_point, b.ref_point)
+        for a in shell.patches:
+            assert np.allclose(a.ref_point, solid.patch(a.name).ref_point)
         assert shell.nominal_mass() == pytest.approx(solid.nominal_mass(), rel=CAD_RTOL)
         assert [(s.surface, s.mass) for s in shell.smeared_masses] == [(s.surface, s.mass) for s in solid.smeared_masses]
         assert [(q.name, q.mass) for q in shell.point_masses] == [(q.name, q.mass) for q in solid.point_masses]
         names = {n for _, n in msh_groups(shell)}
-        assert {p.name for p in shell.patches} <= names
+        assert {p.nodes or p.name for p in shell.patches} <= names       # rigid patch or ring group
     assert booster.shells == {"srb_right_case": pytest.approx(75_000.0 / (7850.0 * booster.surface_areas["srb_right_case"]))}
     assert set(booster.volumes) == {"srb_right_case", "srb_right_skirt"}
     assert (3, "srb_right_skirt") in msh_groups(booster) and (2, "srb_right_case_inner") in msh_groups(booster)
@@ -132,5 +132,29 @@ def test_shell_booster_and_orbiter_ring_attach(tmp_path, msh_groups):
             assert p.nodes is not None and (2, name) not in groups
             z = groups[(1, p.nodes)]["nodes"][:, 2]
             assert np.allclose(z, pt[2], rtol=0, atol=1e-9)
+        if g.name == "orbiter":       # engines on the aft bulkhead's rim, payload on a whole ring
+            p = OrbiterParams()
+            z0, t = p.layout.orbiter_bottom_z, p.wall_thickness
+            for name, z in (("ssme_mount", z0 + 0.5 * t), ("payload_station", p.payload_z)):
+                ring = groups[(1, g.patch(name).nodes)]["nodes"]
+                assert g.patch(name).reach == math.inf and np.allclose(ring[:, 2], z, rtol=0, atol=1e-9)
+                r = np.hypot(ring[:, 0], ring[:, 1] - p.layout.orbiter_axis_y)
+                assert ring.shape[0] >= 12 and np.allclose(r, p.layout.orbiter_radius - 0.5 * t)
     with pytest.raises(InputError, match="attach = 'ring' needs walls = 'shell'"):
         build_orbiter(OrbiterParams(attach="ring"), out)
+
+
+def test_shell_orbiter_wing_carried_through(shell_vehicle):
+    """The shell orbiter's wing slab runs through the fuselage (carry-through structure) with
+    the solid variant's density; the skin weighs the rest of the structure mass."""
+    from liftoff.meshes.vehicle import orbiter_part_volumes
+
+    _, orbiter = shell_vehicle
+    p = OrbiterParams()
+    box = p.wing_span * p.wing_thickness * p.wing_root_chord
+    assert orbiter.group_volumes["orbiter_wing"] == pytest.approx(box, rel=CAD_RTOL)
+    rho = p.structure_mass / sum(orbiter_part_volumes(p))
+    assert orbiter.volumes["orbiter_wing"].rho == pytest.approx(rho, rel=CAD_RTOL)
+    skin = orbiter.volumes["orbiter_structure"].rho * orbiter.shells["orbiter_structure"] \
+        * orbiter.surface_areas["orbiter_structure"]
+    assert skin + rho * box == pytest.approx(p.structure_mass, rel=CAD_RTOL)
