@@ -34,16 +34,18 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 T_IGN = 6.6
 
-#: Materials of the default: the builders' equivalents (meshes/: E_eff, nu, rho_eff;
-#: docs/meshes.md) and the default scenario's booster case (12.7 mm D6AC membrane).
-MATERIALS = {"core_wall": (3.412074e9, 0.33, 131.3047), "srb_case": (17.357e9, 0.29, 1024.447),
-             "srb_skirt": (8.905302e9, 0.33, 342.6973), "orbiter_structure": (10.93015e9, 0.33, 420.6181),
+#: Materials of the default: the core wall and orbiter skin are Al 2219 shells (6.8 mm and
+#: the skin's share of the structure mass), the boosters the builders' thickened-solid
+#: equivalents (meshes/: E_eff, nu, rho_eff; docs/meshes.md) with the default scenario's
+#: booster case (12.7 mm D6AC membrane).
+MATERIALS = {"core_wall": (73.8e9, 0.33, 2840.0), "srb_case": (17.357e9, 0.29, 1024.447),
+             "srb_skirt": (8.905302e9, 0.33, 342.6973), "orbiter_structure": (73.8e9, 0.33, 2840.0),
              "pad_deck": (7.894737e9, 0.30, 240.5370), "pad_pedestals": (19.5e9, 0.29, 765.375),
              "pad_posts": (200e9, 0.29, 7850.0)}
 #: the builder's booster case modulus: the whole 75 t case_mass as a 19.6 mm D6AC wall (before issue 15)
 E_CASE_BUILDER = 26.75306e9
 K_POST = (2.0e9, 2.0e9, 5.0e9)
-SSME_SCALE, SSME_DIR = 1.668e6, [0.0, -7.38, 24.21]
+SSME_SCALE, SSME_DIR = 1.668e6, [0.0, -7.38, 24.03]
 
 
 def scaled(group: str, factor: float) -> dict:
@@ -54,13 +56,16 @@ def scaled(group: str, factor: float) -> dict:
     return {"model": {"materials": {v: {"E": E * factor, "nu": nu, "rho": rho} for v in vols}}}
 
 
-#: shells with the thickened solids' wall bending (12 I/t^3 = (t_solid/t_shell)^2: like for like)
-#: and the default's case membrane (12.7 mm of D6AC on the 19.5 mm shell that weighs case_mass)
+#: the thickened-solid walls everywhere: the default before issue 11 made core and orbiter shells
+SOLID = {"model": {"walls": "solid"}}
+#: every wall a shell, framed to the thickened solids' wall bending (12 I/t^3 = (t_solid/t_shell)^2:
+#: like for like), the rigid attach patches of the solids, and the default's case membrane
+#: (12.7 mm of D6AC on the 19.5 mm shell that weighs case_mass)
 SHELL_B = {"model": {"walls": "shell", "component": {
-    "core": {"params": {"shell_bending_ratio": 490.0}},
-    "srb_left": {"params": {"case_shell_bending_ratio": 58.6}},
-    "srb_right": {"params": {"case_shell_bending_ratio": 58.6}},
-    "orbiter": {"params": {"skin_shell_bending_ratio": 46.5}}},
+    "core": {"params": {"shell_bending_ratio": 490.0, "attach": "patch"}},
+    "srb_left": {"params": {"walls": "shell", "case_shell_bending_ratio": 58.6, "attach": "patch"}},
+    "srb_right": {"params": {"walls": "shell", "case_shell_bending_ratio": 58.6, "attach": "patch"}},
+    "orbiter": {"params": {"skin_shell_bending_ratio": 46.5, "attach": "patch"}}},
     "materials": {f"srb_{s}_case": {"E": 205e9 * 0.0127 / 0.0195, "nu": 0.29, "rho": 7850.0} for s in ("left", "right")}}}
 
 
@@ -80,6 +85,7 @@ def engines(**kw) -> dict:
 #: name -> (what it changes, scenario override of the default)
 VARIANTS: dict[str, tuple[str, dict]] = {
     "default": ("the default scenario", {}),
+    "solid walls": ("walls = solid: thickened tetrahedra everywhere (the default before issue 11)", SOLID),
     "before": ("main before issue 15: SSME 1.80 MN canted 16.6 deg, case of the builder (19.6 mm)",
                merge_all(engines(scale=1.80e6, direction=[0.0, -7.36, 24.67]), scaled("srb_case", E_CASE_BUILDER / 17.357e9))),
     "posts x0.25": ("hold-down stiffness K_C / 4", {"post_defaults": {"stiffness": [k / 4 for k in K_POST]}}),
@@ -105,7 +111,8 @@ VARIANTS: dict[str, tuple[str, dict]] = {
         "time": [0.0, 0.65, 1.3, 1.95, 2.6, 3.25, 3.9, 4.55]}}}),
     "case E x0.49": ("case modulus x 0.49 (a 6.3 mm wall): the period that brings the tip back at 6.6 s",
                      scaled("srb_case", 0.49)),
-    "shell-b": ("walls = shell with the solids' wall bending, the same case membrane", SHELL_B),
+    "shell-b": ("walls = shell everywhere with the solids' wall bending and rigid attach patches, the same "
+                "case membrane", SHELL_B),
 }
 
 

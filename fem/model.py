@@ -403,21 +403,21 @@ def _dependent_dofs(interp: list, nodes: _Nodes, patches: list) -> tuple:
 def _dependent_rows(elim: tuple, slot: np.ndarray, n_keep: int, n_dof: int) -> sp.csr_matrix:
     """Rows of T of the dependent DOFs: u_m = Dr u_ref + Dn u_n."""
     Dr, n, Dn, pnum = elim
-    ref_cols = (n_keep + 6 * np.asarray(pnum)[:, None] + np.arange(6)).ravel()
     n_cols = slot.ravel()[n]
-    assert np.all(n_cols >= 0)
-    A = np.zeros((Dr.shape[0], n_dof))
-    A[:, ref_cols] = Dr
-    A[:, n_cols] += Dn
-    return sp.csr_matrix(A)
+    if np.any(n_cols < 0):
+        raise RuntimeError("interpolation patch: an independent ring DOF has no model DOF")
+    cols = np.concatenate([(n_keep + 6 * np.asarray(pnum)[:, None] + np.arange(6)).ravel(), n_cols])
+    A = sp.coo_matrix(np.hstack([Dr, Dn]))
+    return sp.csr_matrix((A.data, (A.row, cols[A.col])), shape=(Dr.shape[0], n_dof))
 
 
-def _slots(nodes: _Nodes, role: np.ndarray) -> np.ndarray:
-    """(n_nodes, 6) independent DOF of each (free node, component), -1 elsewhere."""
+def _slots(nodes: _Nodes, role: np.ndarray, dependent: np.ndarray | None = None) -> np.ndarray:
+    """(n_nodes, 6) independent DOF of each (free node, component), -1 elsewhere;
+    ``dependent``: DOF ids node*6+comp that interpolation patches eliminate."""
     carried = nodes.comps & (role == FREE)[:, None]
     carried[nodes.parent[:, 0] >= 0, :3] = False           # tied midpoint translations
-    if nodes.dependent is not None:
-        carried.ravel()[nodes.dependent[0]] = False         # interpolation patches' m-set
+    if dependent is not None:
+        carried.ravel()[dependent] = False
     slot = np.cumsum(carried.ravel()).reshape(-1, 6) - 1
     return np.where(carried, slot, -1)
 
@@ -464,8 +464,7 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
     _tie_midpoints(nodes, parts, part_cells)
     role = _roles(comm, parts, nodes, patches, clamped)
     dep = _dependent_dofs(_interpolation_nodes(comm, parts, nodes, role, patches), nodes, patches)
-    nodes.dependent = None if dep is None else (dep[0], None)
-    slot = _slots(nodes, role)
+    slot = _slots(nodes, role, None if dep is None else dep[0])
     n_keep = int(slot.max()) + 1 if slot.size and slot.max() >= 0 else 0
     ref_coords = np.array([np.asarray(p.ref_point, float).reshape(3) for p in patches]).reshape(-1, 3)
     n_dof = n_keep + 6 * len(patches)
