@@ -482,7 +482,7 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
         from .prestress import relative_to_reference
         K = relative_to_reference(K, dof_rb(dof_coords - ref_coords[0], dof_comp), n_keep + np.arange(6))
     dof_node = np.concatenate([dof_node, -np.ones(6 * len(patches), dtype=np.int64)])
-    cells, cell_type = _output_cells(part_cells)
+    cells, cell_type = _output_cells(part_cells, nodes.xyz)
     liquid, rows = None, {}
     if liquid_tm is not None:
         liquid, rows = _liquid(comm, geometry, liquid_tm, parts, nodes.xyz, T, M, dof_coords, dof_comp,
@@ -611,25 +611,30 @@ def _part_cells(comm: MPI.Comm, part: Part, label: np.ndarray) -> np.ndarray:
     return np.vstack(comm.allgather(cells)).reshape(-1, k)
 
 
-def _boundary_faces(tets: np.ndarray) -> np.ndarray:
-    """Exterior faces of tetra/tetra10 cells as triangle/triangle6 (VTK order)."""
+def _boundary_faces(tets: np.ndarray, xyz: np.ndarray) -> np.ndarray:
+    """Exterior faces of tetra/tetra10 cells as triangle/triangle6 (VTK order), numbered
+    anticlockwise seen from outside (the tet's fourth node behind the face), so that
+    renderers see one consistent outward surface."""
     faces = []
-    for a, b, c in ((0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3)):
+    for a, b, c, d in ((0, 1, 2, 3), (0, 1, 3, 2), (0, 2, 3, 1), (1, 2, 3, 0)):
         f = [a, b, c] + ([_TET10_EDGE[(a, b)], _TET10_EDGE[(b, c)], _TET10_EDGE[(a, c)]] if tets.shape[1] == 10 else [])
-        faces.append(tets[:, f])
+        g = [a, c, b] + ([_TET10_EDGE[(a, c)], _TET10_EDGE[(b, c)], _TET10_EDGE[(a, b)]] if tets.shape[1] == 10 else [])
+        p = xyz[tets[:, [a, b, c, d]]]
+        inward = np.einsum("ij,ij->i", np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), p[:, 3] - p[:, 0]) > 0
+        faces.append(np.where(inward[:, None], tets[:, g], tets[:, f]))
     faces = np.vstack(faces)
     _, inv, count = np.unique(np.sort(faces[:, :3], axis=1), axis=0, return_inverse=True, return_counts=True)
     return faces[count[inv.ravel()] == 1]
 
 
-def _output_cells(cells: dict) -> tuple[np.ndarray, str]:
+def _output_cells(cells: dict, xyz: np.ndarray) -> tuple[np.ndarray, str]:
     """(cells, meshio cell type) for pictures and VTU from {part kind: cells}: the solid's
-    tets, the shell's triangle6, or, for both, the solid's exterior faces with the shell
-    triangles (split into four 3-node triangles next to P1 solids)."""
+    tets, the shell's triangle6, or, for both, the solid's exterior faces (outward) with the
+    shell triangles (split into four 3-node triangles next to P1 solids)."""
     if len(cells) == 1:
         kind, c = next(iter(cells.items()))
         return c, {4: "tetra", 10: "tetra10", 6: "triangle6"}[c.shape[1]]
-    faces, shells = _boundary_faces(cells["solid"]), cells["shell"]
+    faces, shells = _boundary_faces(cells["solid"], xyz), cells["shell"]
     if faces.shape[1] == 6:
         return np.vstack([faces, shells]), "triangle6"
     split = np.vstack([shells[:, s] for s in ((0, 3, 5), (3, 1, 4), (5, 4, 2), (3, 4, 5))])
