@@ -163,8 +163,8 @@ def build_shell_tank(p: TankParams, out_dir: Path) -> Geometry:
                                   cyl, w, lay[0].a_bottom - 0.5 * t, lay[-1].a_top - 0.5 * t)
                  for n, ref in p.patches.items() if not any(n in names for names in rings.values())]
         tools += [_occ.plane_cut(z) for z in rings]
-        tools += [_occ.plane_cut(cav.z_fill) for c, cav in zip(lay, cavities)
-                  if c.fill_height < (c.z_inner_top - c.z_inner_bottom)]
+        tools += [_occ.plane_cut(cav.z_fill) for c, cav in zip(lay, cavities)       # (one cut per height)
+                  if c.fill_height < (c.z_inner_top - c.z_inner_bottom) and round(cav.z_fill, 6) not in rings]
         wall_faces = _occ.imprint_surfaces({wall: faces}, tools)[wall]
         liquids = liquid_solids(p, cavities)
         if liquids:
