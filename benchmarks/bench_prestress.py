@@ -8,7 +8,8 @@ build time (assembly, plus the prestress solve and K_G + K_L for shell-p), the
 Craig-Bampton time (fem.petsc_solver, the pipeline's boundary, ``--modes`` modes), the first
 fixed-interface frequencies, the first free-free elastic frequency of the CB model and its
 first beam-bending mode (beam content > 0.5, fem.modes.beam_content of the expanded shape)
-with the number of other elastic modes below it.
+with the number of other elastic modes below it, and what its first ten elastic modes are
+(beam, or the wall's circumferential wave number and region, benchmarks/bench_shells.py).
 Times: min and median over ``--repeat`` builds in this process (the machine is shared).
 
     .venv/bin/python benchmarks/bench_prestress.py [--mesh-size 0.9] [--repeat 2]
@@ -52,15 +53,21 @@ def run_variant(kind: str, h: float, out: Path, n_modes: int) -> dict:
     t0 = time.perf_counter()
     cb = craig_bampton(comp, points_labels(boundary_points(comp)), n_modes=n_modes, solver=petsc_solver())
     t_cb = time.perf_counter() - t0
+    from bench_shells import wave_number
+
     w2, Q = la.eigh(cb.K, cb.M)
     nm = cb.fixed_omega.size
-    beam = None
+    beam, kinds = None, []
     for j in range(6, w2.size):      # the first free-free mode that is beam bending (fem.modes.beam_content)
         x = cb.fixed_interface_modes @ Q[:nm, j] + cb.constraint_modes @ Q[nm:, j]
-        if beam_content(m, x) > 0.5:
-            beam = {"hz": float(np.sqrt(w2[j]) / (2 * np.pi)), "content": beam_content(m, x), "others_below": j - 6}
+        hz, content = float(np.sqrt(w2[j]) / (2 * np.pi)), beam_content(m, x)
+        if len(kinds) < 10:          # what the first elastic modes are: beam, or (n, where) of the wall
+            kinds.append({"hz": hz, "beam": content > 0.5, "wave": wave_number(m, x)})
+        if beam is None and content > 0.5:
+            beam = {"hz": hz, "content": content, "others_below": j - 6}
+        if beam is not None and len(kinds) == 10:
             break
-    return {"first_beam": beam, "kind": kind, "mesh_size": h, "n_dof": m.n_dof, "build_s": build, "cb_s": t_cb,
+    return {"first_beam": beam, "first_modes": kinds, "kind": kind, "mesh_size": h, "n_dof": m.n_dof, "build_s": build, "cb_s": t_cb,
             "pressure_pa": [c.ullage_pressure for c in p.compartments],
             "fixed_interface_hz": cb.fixed_freq_hz[:10].tolist(),
             "free_free_hz": (np.sign(w2[:12]) * np.sqrt(np.abs(w2[:12])) / (2 * np.pi)).tolist()}
@@ -98,6 +105,16 @@ def main(argv=None) -> None:
               f"{r['cb_s']['min']:.1f} / {r['cb_s']['median']:.1f} | "
               f"{', '.join(f'{f:.2f}' for f in r['fixed_interface_hz'][:4])} | {np.abs(ff[:6]).max():.1e} | "
               f"{ff[6]:.3f} | {_beam(r['first_beam'])} |")
+    print("\nFirst free-free elastic modes of the CB models (Hz; beam, or n = the radial displacement's "
+          "dominant circumferential wave number and where |u|^2 is largest):")
+    print("| " + " | ".join(r["kind"] for r in rows) + " |")
+    print("|" + "---|" * len(rows))
+    for i in range(10):
+        print("| " + " | ".join(_mode(r["first_modes"][i]) if i < len(r["first_modes"]) else "" for r in rows) + " |")
+
+
+def _mode(k) -> str:
+    return f"{k['hz']:.2f} " + ("beam" if k["beam"] else f"n={k['wave'][0]} {k['wave'][1]}")
 
 
 def _beam(b) -> str:
