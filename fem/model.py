@@ -388,15 +388,27 @@ def _interpolation_nodes(comm, parts, nodes: _Nodes, role, patches: list) -> lis
     return out
 
 
-def _dependent_dofs(interp: list, nodes: _Nodes, patches: list) -> tuple:
+def _dependent_dofs(comm: MPI.Comm, interp: list, nodes: _Nodes, patches: list) -> tuple:
     """The interpolation patches' dependent DOFs (fem.spiders.eliminate_interpolations):
-    (their ids node*6+comp, the elimination (Dr, n ids, Dn)), or None without any."""
+    (their ids node*6+comp, the elimination (Dr, n ids, Dn)), or None without any. Chosen on
+    rank 0 and broadcast: a pivoted QR on a symmetric ring ties columns, and every rank must
+    make the same choice; an InputError is raised on every rank."""
     if not interp:
         return None
-    fits = [interpolation_fit(nodes.xyz[on], patches[p].ref_point, f"patch {patches[p].name!r}") for p, on in interp]
-    ring = [(on[:, None] * 6 + np.arange(3)).ravel() for _, on in interp]
-    m, n, Dr, Dn = eliminate_interpolations(fits, ring, "interpolation patches "
-                                            + ", ".join(repr(patches[p].name) for p, _ in interp))
+    out = None
+    if comm.rank == 0:
+        try:
+            fits = [interpolation_fit(nodes.xyz[on], patches[p].ref_point, f"patch {patches[p].name!r}")
+                    for p, on in interp]
+            ring = [(on[:, None] * 6 + np.arange(3)).ravel() for _, on in interp]
+            out = eliminate_interpolations(fits, ring, "interpolation patches "
+                                           + ", ".join(repr(patches[p].name) for p, _ in interp))
+        except InputError as exc:
+            out = str(exc)
+    out = comm.bcast(out, root=0)
+    if isinstance(out, str):
+        raise InputError(out)
+    m, n, Dr, Dn = out
     return m, (Dr, n, Dn, [p for p, _ in interp])
 
 
@@ -463,7 +475,7 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
     part_cells = {p.kind: _part_cells(comm, p, nodes.label[k]) for k, p in enumerate(parts)}
     _tie_midpoints(nodes, parts, part_cells)
     role = _roles(comm, parts, nodes, patches, clamped)
-    dep = _dependent_dofs(_interpolation_nodes(comm, parts, nodes, role, patches), nodes, patches)
+    dep = _dependent_dofs(comm, _interpolation_nodes(comm, parts, nodes, role, patches), nodes, patches)
     slot = _slots(nodes, role, None if dep is None else dep[0])
     n_keep = int(slot.max()) + 1 if slot.size and slot.max() >= 0 else 0
     ref_coords = np.array([np.asarray(p.ref_point, float).reshape(3) for p in patches]).reshape(-1, 3)

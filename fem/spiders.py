@@ -79,11 +79,14 @@ def eliminate_interpolations(fits: list[np.ndarray], ring_dofs: list[np.ndarray]
     from scipy.linalg import qr
 
     ids = np.unique(np.concatenate(ring_dofs))
-    C = np.zeros((6 * len(fits), ids.size))
+    k6 = 6 * len(fits)
+    if ids.size < k6:
+        raise InputError(f"{what}: {ids.size // 3} nodes in all cannot carry {len(fits)} interpolations "
+                         f"(each needs 6 node DOFs of its own; {k6 // 3} nodes at least)")
+    C = np.zeros((k6, ids.size))
     for k, (G, d) in enumerate(zip(fits, ring_dofs)):
         C[6 * k: 6 * k + 6, np.searchsorted(ids, d)] += G
     _, R, piv = qr(C, mode="economic", pivoting=True)
-    k6 = 6 * len(fits)
     if abs(R[k6 - 1, k6 - 1]) <= 1e-10 * abs(R[0, 0]):
         raise InputError(f"{what}: the interpolation constraints are dependent (two reference "
                          "points on the same nodes with the same fit?)")

@@ -26,7 +26,7 @@ import numpy as np
 from liftoff.core.errors import InputError
 
 from . import _occ
-from .spec import Geometry, Material, Patch, SmearedMass, equivalent
+from .spec import Geometry, Material, Patch, SmearedMass, check_attach, equivalent
 from .tank import TankParams, tank_layout
 
 #: elements per 2 pi of curvature on shell walls (gmsh Mesh.MeshSizeFromCurvature), at most:
@@ -64,7 +64,8 @@ def shell_patch_tool(name: str, ref, axis_xy, r: float, z_lo_apex: float, z_hi_a
 
 
 #: an attach ring spreads a point's loads over the wall nodes within RING_REACH x the wall
-#: radius of it: a half circumference (about +-97 degrees)
+#: radius of it: about half the circumference (+-86 to +-94 degrees on the core stage, whose
+#: attach points sit between the walls, outside its wall)
 RING_REACH = 1.5
 
 
@@ -95,11 +96,13 @@ def ring_patches(wall_faces: list[int], prefix: str, heights: dict[float, list[s
     edges = {abs(t) for _, t in gmsh.model.getBoundary([(2, f) for f in wall_faces], combined=False,
                                                        oriented=False)}
 
+    tol = 1e-5 * max(1.0, radius)          # heights are keyed rounded to 1e-6 m
+
     def on_ring(e: int, z: float) -> bool:
         lo, hi = gmsh.model.getParametrizationBounds(1, e)
         x = np.asarray(gmsh.model.getValue(1, e, [0.5 * (lo[0] + hi[0])]))
         b = gmsh.model.getBoundingBox(1, e)
-        return (abs(b[2] - z) < 1e-6 * radius and abs(b[5] - z) < 1e-6 * radius
+        return (abs(b[2] - z) < tol and abs(b[5] - z) < tol
                 and abs(np.hypot(*(x[:2] - np.asarray(axis_xy, float))) - radius) < 1e-3 * radius)
 
     out, reach = [], reach or {}
@@ -158,7 +161,7 @@ def build_shell_tank(p: TankParams, out_dir: Path) -> Geometry:
         for lo, hi in zip(lay[:-1], lay[1:]):
             faces += _occ.cylinder_surface(rm, lo.z_cyl_top, hi.z_cyl_bottom, p.axis_xy)
         cyl = [(lay[0].z_cyl_bottom, lay[-1].z_cyl_top)]
-        rings = ring_heights(p.patches, p.axis_xy, cyl) if p.attach == "ring" else {}
+        rings = ring_heights(p.patches, p.axis_xy, cyl) if check_attach(p.name, p.walls, p.attach) == "ring" else {}
         tools = [shell_patch_tool(n, ref, p.axis_xy, rm, p.z_bottom + 0.5 * t, lay[-1].z_cyl_top + lay[-1].a_top - 0.5 * t,
                                   cyl, w, lay[0].a_bottom - 0.5 * t, lay[-1].a_top - 0.5 * t)
                  for n, ref in p.patches.items() if not any(n in names for names in rings.values())]
@@ -252,7 +255,8 @@ def build_shell_booster(p, out_dir: Path) -> Geometry:
         tools.append(_apex_tool(gimbal, axis, w, rm, am_b, p.case_bottom_z - am_b, top=False))
         refs[gimbal] = np.array([axis[0], axis[1], p.case_bottom_z - p.aft_dome_ratio * R])
         attach = lay.srb_attach_points(p.side)
-        rings = ring_heights(attach, axis, [(p.case_bottom_z, p.cyl_top_z)]) if p.attach == "ring" else {}
+        rings = ring_heights(attach, axis, [(p.case_bottom_z, p.cyl_top_z)]) \
+            if check_attach(p.name, p.walls, p.attach) == "ring" else {}
         tools += _wall_tools(attach, rings, axis, rm, w)
         refs.update(attach)
         vols, faces = _occ.imprint_parts({skirt_g: skirt}, {case_g: case}, tools)
@@ -306,7 +310,7 @@ def build_shell_orbiter(p, out_dir: Path) -> Geometry:
         refs = {"ssme_mount": np.array([axis[0], axis[1], z0 - p.ssme_cg_below_bulkhead]),
                 "payload_station": np.array([axis[0], axis[1], p.payload_z]), **att}
         rings, reach = {}, {}
-        if p.attach == "ring":      # the engines' thrust structure and the payload's trunnions as whole rings
+        if check_attach(p.name, p.walls, p.attach) == "ring":     # engines' thrust structure, payload trunnions
             rings = ring_heights(att, axis, [(z0 + 0.5 * t, z0 + p.cyl_length)])
             rings.setdefault(round(p.payload_z, 6), []).append("payload_station")
             tools = _wall_tools(att, rings, axis, rm, w)

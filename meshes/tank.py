@@ -110,7 +110,7 @@ class TankParams:
                 or self.slosh_modes != int(self.slosh_modes) or self.slosh_modes < 0:
             raise InputError(f"{o}.slosh_modes must be an integer >= 0 (got {self.slosh_modes!r})")
         self.slosh_modes = int(self.slosh_modes)
-        self.attach = check_attach(o, self.walls, self.attach)
+        check_attach(o, self.walls, self.attach)
         if self.shell_thickness is not None:
             require_positive(o, shell_thickness=self.shell_thickness)
         require_positive(o, shell_bending_ratio=self.shell_bending_ratio)

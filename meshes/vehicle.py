@@ -121,7 +121,7 @@ class BoosterParams:
     def check(self) -> None:
         o = f"BoosterParams({self.side})"
         check_walls(o, self.walls)
-        self.attach = check_attach(o, self.walls, self.attach)
+        check_attach(o, self.walls, self.attach)
         if self.case_shell_thickness is not None:
             require_positive(o, case_shell_thickness=self.case_shell_thickness)
         require_positive(o, case_shell_bending_ratio=self.case_shell_bending_ratio)
@@ -293,7 +293,7 @@ class OrbiterParams:
     def check(self) -> None:
         o = "OrbiterParams"
         check_walls(o, self.walls)
-        self.attach = check_attach(o, self.walls, self.attach)
+        check_attach(o, self.walls, self.attach)
         if self.skin_shell_thickness is not None:
             require_positive(o, skin_shell_thickness=self.skin_shell_thickness)
         require_positive(o, skin_shell_bending_ratio=self.skin_shell_bending_ratio)

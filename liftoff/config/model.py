@@ -128,13 +128,13 @@ class ModelConfig:
 
 
 # ---------------------------------------------------------------- builder dataclasses
-def _field_value(where: Where, value: Any, default: Any) -> Any:
+def _field_value(where: Where, value: Any, default: Any, annotation: str = "") -> Any:
     """A TOML value for a dataclass field, typed after the field's default: true/false, a
-    string (also for a default of None), an array (of numbers, or of points as long as the default's; a coordinate
+    string (also for a default of None where the field's annotation is ``str | None``), an array (of numbers, or of points as long as the default's; a coordinate
     ``*_xy`` as long as the default), else a number."""
     if isinstance(default, bool):
         return boolean(where, value)
-    if isinstance(default, str) or (default is None and isinstance(value, str)):
+    if isinstance(default, str) or (default is None and str(annotation).replace(" ", "") == "str|None"):
         return string(where, value)
     if not isinstance(default, tuple):
         return number(where, value)
@@ -156,16 +156,16 @@ def builder(where: Where, cls: type, spec: Any, fixed: dict | None = None, defau
     fixed = fixed or {}
     if not isinstance(spec, dict):
         raise where.error(f"expected a table of {cls.__name__} fields, got {type(spec).__name__}")
-    fields = {}
+    fields, types = {}, {}
     for f in dataclasses.fields(cls):
         default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
         if f.init and f.name not in fixed and not dataclasses.is_dataclass(default):
-            fields[f.name] = default
+            fields[f.name], types[f.name] = default, f.type
     unknown = sorted(set(spec) - set(fields))
     if unknown:
         raise where.error(f"unknown key {unknown[0]!r}: not a parameter of {cls.__name__} "
                           f"(parameters: {', '.join(fields)})")
-    kwargs = {**(defaults or {}), **{k: _field_value(where / k, v, fields[k]) for k, v in spec.items()}}
+    kwargs = {**(defaults or {}), **{k: _field_value(where / k, v, fields[k], types[k]) for k, v in spec.items()}}
     try:
         obj = cls(**fixed, **kwargs)
         obj.check()

@@ -2,7 +2,6 @@
 objects; bad inputs, builder parameters included, give one line naming the file and the key
 when the file is read (before anything is meshed)."""
 import copy
-import math
 import tomllib
 
 import numpy as np
@@ -130,6 +129,9 @@ BAD = [
      "model.component.core.params.ullage_pressure.lh2: negative value -1"),
     ("model.component.core.params", {"attach": "hoop"},
      "model.component.core: core_stage_params.attach must be one of 'patch', 'ring' (got 'hoop')"),
+    # a field that defaults to None takes a string only where it is a string field
+    ("model.component.srb_left.params", {"case_shell_thickness": "0.01"},
+     "model.component.srb_left.params.case_shell_thickness: expected a number"),
     ("model.component.srb_left.params", {"walls": "solid", "attach": "ring"},
      "model.component.srb_left.params: BoosterParams(left).attach = 'ring' needs walls = 'shell' (got 'solid')"),
     ("model.stick", {"core_wall": 0.01}, "model.stick: [model.stick] is for source = \"stick\""),
@@ -255,7 +257,10 @@ def test_walls_as_shells_reach_every_vehicle_builder(base):
     d["model"].setdefault("component", {}).setdefault("core", {})["params"] = {"shell_bending_ratio": 50.0}
     comps = parse_scenario(d, "s.toml").cases[0].model.components
     assert all(comps[n].builder.walls == "shell" for n in ("core", "srb_left", "srb_right", "orbiter"))
-    assert all(comps[n].builder.attach == "ring" for n in ("core", "srb_left", "srb_right", "orbiter"))
+    from liftoff.meshes.spec import check_attach
+
+    b = {n: comps[n].builder for n in ("core", "srb_left", "srb_right", "orbiter")}
+    assert all(check_attach(n, x.walls, x.attach) == "ring" for n, x in b.items())     # rings on shells
     assert comps["core"].builder.shell_bending_ratio == 50.0
     # shells with hydroelastic propellants carry the external tank's ullage pressures (fem.prestress)
     d["model"]["liquid"] = "hydroelastic"

@@ -140,3 +140,14 @@ def test_rings_through_a_shell_glued_on_a_solid(tmp_path):
     res = np.abs(K @ RB).max(axis=0) / (abs(K).max() * np.abs(RB).max(axis=0))
     print("K RB residual", res)
     assert res.max() < 1e-12
+
+
+def test_too_few_nodes_for_the_interpolations():
+    """Two points on the same three nodes need 12 dependent DOFs from 9: a one-line
+    InputError, not an index error in the elimination."""
+    from liftoff.fem.spiders import eliminate_interpolations, interpolation_fit
+
+    xyz = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    fits = [interpolation_fit(xyz, ref, "p") for ref in ((0.0, 0.0, 0.0), (0.3, 0.3, 0.0))]
+    with pytest.raises(InputError, match="3 nodes in all cannot carry 2 interpolations"):
+        eliminate_interpolations(fits, [np.arange(9), np.arange(9)], "patches 'a', 'b'")
