@@ -128,19 +128,17 @@ def scenario_case(over: dict):
 
 def coupled(problem) -> tuple[np.ndarray, np.ndarray]:
     """Modal stiffness of vehicle + pad + bolted posts less KSOF (unit modal masses), and
-    the row matrix D of the post DOFs (relative displacement = D q)."""
+    the row matrix D of the post DOFs (relative displacement = D q), from the transient's
+    own contact rows (transient.assembly.contact_rows)."""
+    from liftoff.transient.assembly import contact_rows
+
     a, b = problem.body_a, problem.body_b
-    na, nb = a.n_modes, b.n_modes
-    K = np.zeros((na + nb, na + nb))
-    K[:na, :na] = np.diag(a.omega ** 2)
-    K[na:, na:] = np.diag(b.omega ** 2)
-    rows, ks = [], []
-    for c in problem.contacts:
-        for la, lb, k in zip(c.labels_a, c.labels_b, c.stiffness):
-            rows.append(np.concatenate([a.rows([la])[0], -b.rows([lb])[0]]))
-            ks.append(k)
-    D, ks = np.array(rows), np.array(ks)
-    K += D.T @ (ks[:, None] * D)
+    na = a.n_modes
+    rows = contact_rows(a, b, problem.contacts)
+    if np.any(rows.compliance <= 0):
+        raise ValueError("twang_study: rigid posts have no stiffness to assemble (use penalty posts)")
+    D = np.hstack([rows.Phi_a, -rows.Phi_b])
+    K = np.diag(np.concatenate([a.omega ** 2, b.omega ** 2])) + D.T @ (D / rows.compliance[:, None])
     for fb in problem.forcing.feedback:   # the gravity softening (eq. 27), on before ignition
         if fb.active(0.0) and fb.rate_matrix is None:
             K[:na, :na] -= fb.matrix
