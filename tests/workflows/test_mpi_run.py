@@ -20,20 +20,22 @@ ROOT = HERE.parents[1]
 HAVE_FE = all(importlib.util.find_spec(m) is not None for m in ("dolfinx", "gmsh", "slepc4py"))
 pytestmark = [pytest.mark.slow, pytest.mark.fem,
               pytest.mark.skipif(not HAVE_FE or shutil.which("mpirun") is None, reason="needs dolfinx and mpirun")]
-MODEL = {"source": "fe", "zeta": 0.01,
-         "component": {"core": {"mesh_size": 1.2, "n_modes": 8, "f_max": 40.0},
-                       "srb_left": {"n_modes": 6, "f_max": 40.0}, "srb_right": {"n_modes": 6, "f_max": 40.0},
-                       "orbiter": {"n_modes": 6, "f_max": 40.0}},
-         "pad": {"mesh_size": 2.4, "n_modes": 8, "f_max": 60.0},
-         "system": {"f_max": 40.0, "pad_f_max": 60.0}}
+
+
+def _test_run():
+    """test_run.py as a module: its scenario writer and its coarse FE [model]."""
+    spec = importlib.util.spec_from_file_location("liftoff_test_run", HERE / "test_run.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+MODEL = _test_run().COARSE_FE
 
 
 def _scenario(tmp_path, model, **kw):
     """The scenario writer of test_run.py (the default scenario with another [model])."""
-    spec = importlib.util.spec_from_file_location("liftoff_test_run", HERE / "test_run.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod._scenario(tmp_path, model, **kw)
+    return _test_run()._scenario(tmp_path, model, **kw)
 
 
 def _liftoff(*args, mpirun=False, timeout=600):

@@ -49,6 +49,15 @@ def _toml(d: dict) -> str:
     return "\n".join(out) + "\n"
 
 
+#: the default stack on coarse FE meshes with few modes (also test_mpi_run.py's)
+COARSE_FE = {"source": "fe", "zeta": 0.01,
+             "component": {"core": {"mesh_size": 1.2, "n_modes": 8, "f_max": 40.0},
+                           "srb_left": {"n_modes": 6, "f_max": 40.0}, "srb_right": {"n_modes": 6, "f_max": 40.0},
+                           "orbiter": {"n_modes": 6, "f_max": 40.0}},
+             "pad": {"mesh_size": 2.4, "n_modes": 8, "f_max": 60.0},
+             "system": {"f_max": 40.0, "pad_f_max": 60.0}}
+
+
 def _scenario(tmp_path, model: dict, t_end=8.0, cases=None, name="s.toml", **over):
     d = tomllib.loads(default_text())
     d["model"] = model
@@ -198,13 +207,7 @@ def test_fe_scenario_end_to_end_coarse(tmp_path, capsys, monolithic):
     on the same (cached) FE models, the bolted phase (SSME build-up, 0-3 s) against the
     monolithic coupled model (vehicle + pad + K_C, scipy DOP853 rtol 1e-10): error below
     1e-5 of the peak post force at h0/2 and second order (ratio > 3 per halving)."""
-    model = {"source": "fe", "zeta": 0.01,
-             "component": {"core": {"mesh_size": 1.2, "n_modes": 8, "f_max": 40.0},
-                           "srb_left": {"n_modes": 6, "f_max": 40.0}, "srb_right": {"n_modes": 6, "f_max": 40.0},
-                           "orbiter": {"n_modes": 6, "f_max": 40.0}},
-             "pad": {"mesh_size": 2.4, "n_modes": 8, "f_max": 60.0},
-             "system": {"f_max": 40.0, "pad_f_max": 60.0}}
-    p = _scenario(tmp_path, model, cases=[{"name": "nominal"}])
+    p = _scenario(tmp_path, COARSE_FE, cases=[{"name": "nominal"}])
     assert main(["run", str(p), "--out", str(tmp_path / "fe"), "--cache", str(tmp_path / "cache"),
                  "--no-progress"]) == 0
     text = capsys.readouterr().out
