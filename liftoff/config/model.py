@@ -130,8 +130,9 @@ class ModelConfig:
 # ---------------------------------------------------------------- builder dataclasses
 def _field_value(where: Where, value: Any, default: Any, annotation: str = "") -> Any:
     """A TOML value for a dataclass field, typed after the field's default: true/false, a
-    string (also for a default of None where the field's annotation is ``str | None``), an array (of numbers, or of points as long as the default's; a coordinate
-    ``*_xy`` as long as the default), else a number."""
+    string (also for a default of None where the field's annotation is ``str | None``), an
+    array (of numbers, or of points as long as the default's; a coordinate ``*_xy`` as long
+    as the default), else a number."""
     if isinstance(default, bool):
         return boolean(where, value)
     if isinstance(default, str) or (default is None and str(annotation).replace(" ", "") == "str|None"):
@@ -246,10 +247,10 @@ def _fe_builders(where: Where, layout: StackLayout, sel: dict[str, dict], size: 
     ratio = number(wc / "core" / "params" / "shell_bending_ratio", core.get("shell_bending_ratio", 1.0),
                    positive=True)
     ullage = _ullage(wc / "core" / "params", core)
+    attach = string(wc / "core" / "params" / "attach", core["attach"]) if "attach" in core else None
     try:
         out["core"] = core_stage_params(layout, **_size(size["core"]), walls=walls, shell_bending_ratio=ratio,
-                                        liquid=liquid, ullage_pressure=ullage,
-                                        **({"attach": core["attach"]} if "attach" in core else {}))
+                                        liquid=liquid, ullage_pressure=ullage, attach=attach)
         out["core"].check()
     except InputError as exc:
         raise (wc / "core").wrap(exc) from None
