@@ -31,6 +31,11 @@ def _section():
     return side, 0.5 * N * R * R * np.sin(2 * np.pi / N), float(np.sum(T * side * (x0 * x0 + x0 * x1 + x1 * x1) / 3))
 
 
+def _rigid_rows(xyz, ref):
+    """(3n x 6) the nodes' translations (x, y, z interleaved) under a unit rigid motion of ref."""
+    return dof_rb(np.repeat(np.asarray(xyz) - np.asarray(ref, float), 3, axis=0), np.tile(np.arange(3), len(xyz)))
+
+
 def _tip_nodes(model):
     on = np.flatnonzero(np.isclose(model.nodes[:, 2], L))
     assert on.size == 2 * N                      # vertices and P2 edge midpoints
@@ -59,7 +64,7 @@ def test_tube_loaded_through_an_interpolation_patch(msh):
     assert bend == pytest.approx(1.0, abs=0.015)
     on = _tip_nodes(model)
     u = model.nodal_displacement(x)[on]
-    A = dof_rb(np.repeat(model.nodes[on] - [0.0, 0.0, L], 3, axis=0), np.tile(np.arange(3), on.size))
+    A = _rigid_rows(model.nodes[on], (0.0, 0.0, L))
     fit = np.linalg.lstsq(A, u.ravel(), rcond=None)[0]
     ref = x[model.dof_index("lid:Tx"):][:6]
     assert np.allclose(ref, fit, rtol=0, atol=1e-9 * np.abs(ref).max())
@@ -75,7 +80,7 @@ def test_interpolation_distributes_a_point_load_statically(msh):
     regular tip polygon a force alone gives each node the same share."""
     model = build_model(_tube(msh, [Patch("lid", (0.0, 0.0, L), nodes="tip")]))
     on = _tip_nodes(model)
-    A = dof_rb(np.repeat(model.nodes[on] - [0.0, 0.0, L], 3, axis=0), np.tile(np.arange(3), on.size))
+    A = _rigid_rows(model.nodes[on], (0.0, 0.0, L))
     Tt = model.field_map().T
     for F in (np.array([3.0, -2.0, 5.0, 0.4, 0.7, -0.2]), np.array([3.0, -2.0, 5.0, 0.0, 0.0, 0.0])):
         f_on = np.linalg.lstsq(A.T, F, rcond=None)[0]            # min-norm, A^T f = F
@@ -100,7 +105,7 @@ def test_points_sharing_an_edge_with_a_reach(msh):
         on = np.flatnonzero(np.isclose(model.nodes[:, 2], L)
                             & (np.linalg.norm(model.nodes - p.ref_point, axis=1) <= p.reach))
         assert N < on.size < 2 * N
-        A = dof_rb(np.repeat(model.nodes[on] - p.ref_point, 3, axis=0), np.tile(np.arange(3), on.size))
+        A = _rigid_rows(model.nodes[on], p.ref_point)
         fit = np.linalg.lstsq(A, u[on].ravel(), rcond=None)[0]
         ref = x[model.dof_index(f"{p.name}:Tx"):][:6]
         assert np.allclose(ref, fit, rtol=0, atol=1e-9 * np.abs(x).max())
