@@ -37,6 +37,11 @@ _EXPORTS = {
     "SystemModes": ".system",
     "system_modes": ".system",
     "system_rb": ".system",
+    "StaticFlexibility": ".truncation",
+    "TruncationCheck": ".truncation",
+    "keep_modes": ".truncation",
+    "residual_vectors": ".truncation",
+    "truncation_check": ".truncation",
 }
 __all__ = list(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

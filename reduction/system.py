@@ -5,7 +5,8 @@ rigid-body shape RB of the boundary DOFs (modal DOFs have zero RB rows, section 
 mass-orthonormalised; the elastic modes are the eigenvectors of the deflated pencil
 (K + a (M R)(M R)^T, M), a = -1 s^-2, which moves the rigid modes to -1 rad^2/s^2 and leaves
 every elastic eigenpair exact and M-orthogonal to them. Grounded (n_rigid=0): plain
-dense eigh; a zero-frequency mode is an error. All modes are kept unless f_max is given.
+dense eigh; a zero-frequency mode is an error. All modes are kept unless f_max is given
+(a plain cut: reduction/truncation.py's keep_modes cuts with residual vectors and checks).
 """
 from __future__ import annotations
 
@@ -27,12 +28,16 @@ MASSLESS_TOL = 1e-12  # mass eigenvalues below this x the largest span the massl
 
 @dataclass
 class SystemModes:
-    """Mass-normalised modes of an assembly: phi (n_sys_dof x n_modes), omega (rad/s)."""
+    """Mass-normalised modes of an assembly: phi (n_sys_dof x n_modes), omega (rad/s). The
+    last ``n_residual`` are residual vectors (reduction/truncation.py); ``n_space``: the
+    eigenmodes of the whole space when some were cut (None: all are here)."""
 
     assembly: Assembly
     omega: np.ndarray
     phi: np.ndarray
     n_rigid: int
+    n_residual: int = 0
+    n_space: int | None = None
 
     @property
     def freq_hz(self) -> np.ndarray:
@@ -143,7 +148,11 @@ def system_modes(assembly: Assembly, n_rigid: int = 6, f_max: float | None = Non
         omega = np.sqrt(lam)
     else:
         raise InputError(f"{who}: n_rigid must be 6 (free-free) or 0 (grounded), got {n_rigid}")
+    n_space = None
     if f_max is not None:
         keep = omega <= 2 * np.pi * f_max
-        omega, phi = omega[keep], phi[:, keep]
-    return SystemModes(assembly=assembly, omega=omega, phi=phi, n_rigid=n_rigid)
+        keep[:n_rigid] = True
+        if not keep.all():
+            n_space = omega.size
+            omega, phi = omega[keep], phi[:, keep]
+    return SystemModes(assembly=assembly, omega=omega, phi=phi, n_rigid=n_rigid, n_space=n_space)

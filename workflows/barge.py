@@ -19,7 +19,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
-from liftoff.reduction import Assembly, SystemModes, assemble
+from liftoff.reduction import Assembly, SystemModes, assemble, keep_modes
 from liftoff.transient import ContactPoint, Forcing, InitialState, ModalBody, Recovery, TransientProblem
 from liftoff.transient.effects import center_of_gravity
 
@@ -88,11 +88,13 @@ def build_models(model: BargeModel, cache, progress: bool = True) -> BargeModels
             cbs[name], keys[name] = cb_stage(mc, name, comps[name], k, cache)
     t1 = time.perf_counter()
     basm = assemble([cbs["barge"], cbs["cargo"]], "barge")
-    bmodes = modes_stage(basm, 6, model.f_max, [keys["barge"], keys["cargo"]], cache, "barge+cargo")
+    bmodes = keep_modes(modes_stage(basm, 6, [keys["barge"], keys["cargo"]], cache, "barge+cargo"), model.f_max,
+                        residual=model.residual_vectors)
     _, cg = center_of_gravity(bmodes.to_body(zeta=model.zeta, name="barge"))
     barge = bmodes.to_body(ref_point=cg, zeta=model.zeta, name="barge")
     dasm = assemble([cbs["dock"]], "dock")
-    dmodes = modes_stage(dasm, 0, model.dock_f_max, [keys["dock"]], cache, "dock")
+    dmodes = keep_modes(modes_stage(dasm, 0, [keys["dock"]], cache, "dock"), model.dock_f_max,
+                        residual=model.residual_vectors)
     dock = dmodes.to_body(zeta=model.zeta, name="dock")
     return BargeModels(comps, cbs, basm, bmodes, barge, dasm, dmodes, dock,
                        {"components+CB (s)": t1 - t0, "system modes (s)": time.perf_counter() - t1})
@@ -103,7 +105,8 @@ def flexibility(body: ModalBody, labels, elastic_only: bool) -> np.ndarray:
     """Static flexibility (m/N) at ``labels`` from the modes, Phi diag(1/omega^2) Phi^T over the
     elastic modes: the grounded dock's static flexibility, and for the free-free barge its
     flexibility relative to its rigid-body motion (inertia relief). Exact at CB boundary DOFs
-    when every system mode is kept; modes above f_max make it slightly low."""
+    when every system mode is kept or the cut ones are replaced by residual vectors
+    (reduction/truncation.py); a cut without them makes it low."""
     rows = body.rows(labels)
     el = body.omega > 0 if elastic_only else np.ones(body.n_modes, bool)
     return (rows[:, el] / body.omega[el] ** 2) @ rows[:, el].T

@@ -120,7 +120,9 @@ def summary(scenario, result, path: Path, wall: float, est=None) -> str:
              f"  bodies   a = {p.body_a.name} ({p.body_a.n_modes} modes), "
              f"b = {p.body_b.name} ({p.body_b.n_modes} modes)",
              f"  time     {result.time[0]:g} .. {result.time[-1]:g} s, {result.time.size - 1} steps of "
-             f"h = {result.h:.4g} s, method {p.method}, {wall:.2f} s wall"]
+             f"h = {result.h:.4g} s, method {p.method}, {wall:.2f} s wall",
+             "  modes    as the body files give them: no truncation check here (a body file carries modes, not the "
+             "stiffness they came from; `liftoff run` checks its bodies against their CB models)"]
     lines.append(f"  {'contact':<16}{'release (s)':>12}{'separation (s)':>16}{'recontacts':>12}"
                  f"{'peak compression (N)':>22}{'est. error':>12}{'peak tension (N)':>18}{'est. error':>12}")
     fine = est.check.contact_summary() if est is not None else None

@@ -25,7 +25,7 @@ def _scenario(stick: bool):
     if stick:
         m = data["model"]
         no_size = lambda t: {k: v for k, v in t.items() if k not in ("mesh_size", "params")}  # noqa: E731
-        data["model"] = {"source": "stick", "mesh_size": 4.0, "zeta": m["zeta"], "system": m["system"],
+        data["model"] = {"source": "stick", "mesh_size": 4.0, "zeta": m["zeta"], "system": m.get("system", {}),
                          "pad": no_size(m["pad"]), "component": {n: no_size(c) for n, c in m["component"].items()}}
     return parse_scenario(data, "default_scenario.toml").cases[0]
 
@@ -38,7 +38,7 @@ def main(argv=None) -> None:
     args.out.mkdir(parents=True, exist_ok=True)
     if not args.stick:
         import pyvista  # noqa: F401  (before dolfinx, FENICSX-NOTES.md)
-    from liftoff.reduction import assemble, craig_bampton, system_modes
+    from liftoff.reduction import assemble, craig_bampton, keep_modes, system_modes
     from liftoff.transient import Forcing, PointForce, TabulatedForce, TransientProblem, estimate_step, solve
     from liftoff.transient.effects import center_of_gravity, cg_static_report
     from liftoff.workflows.loads import applied_forces, attitude_feedback, contacts, control_table
@@ -73,17 +73,22 @@ def main(argv=None) -> None:
 
     # 4. Vehicle: overlay the components on shared points, free-free system modes (eq. 4);
     #    pad: grounded, reduced to its posts. Modal bodies with gravity participation (eq. 14).
+    #    Every system mode is kept (section 3.0) unless [model.system] cuts them; then residual
+    #    vectors keep the static flexibility at the boundary DOFs exact (reduction/truncation.py).
+    sysp = model.system
     vasm = assemble([cbs[n] for n in VEHICLE], "vehicle")
-    vmodes = system_modes(vasm, n_rigid=6, f_max=model.system.f_max)
+    vall = system_modes(vasm, n_rigid=6)
+    vmodes = keep_modes(vall, sysp.f_max, sysp.n_modes, sysp.residual_vectors)
     _, cg = center_of_gravity(vmodes.to_body(name="vehicle"))
     vehicle = vmodes.to_body(ref_point=cg, zeta=model.zeta, name="vehicle")
     pasm = assemble([cbs["pad"]], "pad")
-    pmodes = system_modes(pasm, n_rigid=0, f_max=model.system.pad_f_max)
+    pall = system_modes(pasm, n_rigid=0)
+    pmodes = keep_modes(pall, sysp.pad_f_max, sysp.pad_n_modes, sysp.residual_vectors)
     pad = pmodes.to_body(zeta=model.zeta, name="pad")
     print(f"vehicle: {vehicle.n_modes} modes, {vehicle.mass / 1e3:.0f} t, c.g. {np.round(cg, 2)} m; "
           f"pad: {pad.n_modes} modes")
     unit = {n: {vol: cbs[n].boundary_load(f) for vol, f in thermal[n].items()} for n in comps}
-    stack = StackModel(comps, cbs, vasm, vmodes, vehicle, pasm, pmodes, pad, unit)
+    stack = StackModel(comps, cbs, vasm, vmodes, vehicle, pasm, pmodes, pad, unit, vall, pall)
 
     # 5. Hold-down posts: penalty contacts, bolted until release, then compression-only on
     #    their axial direction (2.7). The step from the contact model (eq. 12).

@@ -48,6 +48,7 @@ class CaseProblem:
     softening: ModalFeedback | None
     attach: dict[str, tuple[str, str]] = field(default_factory=dict)  # recovery name -> (point, component)
     gravity_only: Forcing | None = None
+    truncation: tuple = ()   # (vehicle, pad) TruncationCheck at the posts and attach points (reduction/truncation.py)
 
 
 def _check_point(body, point: str, where: Where) -> None:
@@ -239,7 +240,10 @@ def build_problem(case: Case, stack: StackModel, progress: bool = True, keep_mod
                                tol=t.tol, max_iter=t.max_iter, initial="static", outputs=outputs,
                                recoveries=recs, keep_modal=keep_modal,
                                progress=progress and case.output.progress)
-    return CaseProblem(case, problem, cryo, ctab, soft, attach, gravity_only=Forcing(gravity=case.gravity))
+    checks = stack.truncation([lab for c in cps for lab in c.labels_a], [lab for c in cps for lab in c.labels_b],
+                              [f"{point}:{c}" for point, _ in attach.values() for c in COMPONENTS])
+    return CaseProblem(case, problem, cryo, ctab, soft, attach, gravity_only=Forcing(gravity=case.gravity),
+                       truncation=checks)
 
 
 def table1(stack: StackModel, cp: CaseProblem, case: Case):

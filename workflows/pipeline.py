@@ -23,12 +23,15 @@ from liftoff.reduction import (
     CBModel,
     Component,
     SystemModes,
+    TruncationCheck,
     assemble,
     craig_bampton,
+    keep_modes,
     load_cb,
     load_component,
     save_component,
     system_modes,
+    truncation_check,
 )
 from liftoff.transient.body import ModalBody
 from liftoff.transient.effects import center_of_gravity
@@ -57,7 +60,22 @@ class StackModel:
     pad_modes: SystemModes
     pad: ModalBody
     unit_thermal: dict[str, dict[str, np.ndarray]]  # component -> volume -> boundary load per unit strain
+    vehicle_all: SystemModes | None = None         # every system mode (None: the kept ones are all)
+    pad_all: SystemModes | None = None
     timings: dict = field(default_factory=dict)
+    _checks: dict = field(default_factory=dict, repr=False)
+
+    def truncation(self, contact_a, contact_b, attach) -> tuple[TruncationCheck, TruncationCheck]:
+        """The truncation checks (reduction/truncation.py) of the vehicle at its contact
+        labels ``contact_a`` and attach labels ``attach``, and of the pad at ``contact_b``;
+        computed once per set of labels."""
+        key = (tuple(contact_a), tuple(contact_b), tuple(attach))
+        if key not in self._checks:
+            self._checks[key] = (
+                truncation_check(self.vehicle_all or self.vehicle_modes, self.vehicle_modes,
+                                 list(contact_a) + list(attach), contact_a, "vehicle"),
+                truncation_check(self.pad_all or self.pad_modes, self.pad_modes, contact_b, contact_b, "pad"))
+        return self._checks[key]
 
 
 def boundary_points(component: Component) -> list[str]:
@@ -160,11 +178,13 @@ def nastran_stage(model: ModelConfig, name: str, cache: StageCache) -> tuple[CBM
     return cb, key
 
 
-def modes_stage(asm: Assembly, n_rigid: int, f_max, keys: list[str], cache: StageCache, label: str) -> SystemModes:
-    key = stage_key("system", {"n_rigid": n_rigid, "f_max": f_max}, ("liftoff.reduction", "liftoff.core"), tuple(keys))
+def modes_stage(asm: Assembly, n_rigid: int, keys: list[str], cache: StageCache, label: str) -> SystemModes:
+    """Every system mode of an assembly (cached); the cut, if any, is :func:`keep_modes`'."""
+    key = stage_key("system", {"n_rigid": n_rigid}, ("liftoff.reduction.system", "liftoff.reduction.assembly",
+                                                     "liftoff.core"), tuple(keys))
 
     def build():
-        return system_modes(asm, n_rigid=n_rigid, f_max=f_max)
+        return system_modes(asm, n_rigid=n_rigid)
 
     def save(sm, p):
         save_arrays({"omega": sm.omega, "phi": sm.phi, "n_rigid": np.array(sm.n_rigid)}, p)
@@ -201,35 +221,34 @@ def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, wh
             cbs[name], ckeys[name] = cb_stage(model, name, comps[name], k, cache)
     t1 = time.perf_counter()
     _check_materials(model, thermal, where or Where("scenario", "model"))
-    vasm, vmodes, vehicle, pasm, pmodes, pad, unit = _bodies(model, cbs, ckeys, thermal, cache)
+    vasm, vmodes, vehicle, pasm, pmodes, pad, unit, vall, pall = _bodies(model, cbs, ckeys, thermal, cache)
     t2 = time.perf_counter()
-    return StackModel(comps, cbs, vasm, vmodes, vehicle, pasm, pmodes, pad, unit,
+    return StackModel(comps, cbs, vasm, vmodes, vehicle, pasm, pmodes, pad, unit, vall, pall,
                       timings={"components+CB (s)": t1 - t0, "system modes (s)": t2 - t1})
 
 
 @threadpool_limits.wrap(limits=1, user_api="blas")   # the same arithmetic in any process (campaign workers)
 def _bodies(model: ModelConfig, cbs: dict, ckeys: dict, thermal: dict, cache: StageCache):
-    """Assemblies, system modes (cached) and the two modal bodies; the unit thermal loads
-    reduced to each component's boundary."""
+    """Assemblies, system modes (all of them cached; those kept with their residual vectors,
+    reduction/truncation.py) and the two modal bodies; the unit thermal loads reduced to
+    each component's boundary."""
     names = list(VEHICLE) + ["pad"]
     sysp = model.system
     vasm = assemble([cbs[n] for n in VEHICLE], "vehicle")
-    vmodes = modes_stage(vasm, 6, sysp.f_max, [ckeys[n] for n in VEHICLE], cache, "vehicle")
-    if sysp.n_modes and vmodes.n_modes > sysp.n_modes:
-        vmodes = SystemModes(vasm, vmodes.omega[: sysp.n_modes], vmodes.phi[:, : sysp.n_modes], 6)
+    vall = modes_stage(vasm, 6, [ckeys[n] for n in VEHICLE], cache, "vehicle")
+    vmodes = keep_modes(vall, sysp.f_max, sysp.n_modes, sysp.residual_vectors)
     body0 = vmodes.to_body(zeta=model.zeta, name="vehicle")
     _, cg = center_of_gravity(body0)
     vehicle = vmodes.to_body(ref_point=cg, zeta=model.zeta, name="vehicle")
     pasm = assemble([cbs["pad"]], "pad")
-    pmodes = modes_stage(pasm, 0, sysp.pad_f_max, [ckeys["pad"]], cache, "pad")
-    if sysp.pad_n_modes and pmodes.n_modes > sysp.pad_n_modes:
-        pmodes = SystemModes(pasm, pmodes.omega[: sysp.pad_n_modes], pmodes.phi[:, : sysp.pad_n_modes], 0)
+    pall = modes_stage(pasm, 0, [ckeys["pad"]], cache, "pad")
+    pmodes = keep_modes(pall, sysp.pad_f_max, sysp.pad_n_modes, sysp.residual_vectors)
     pad = pmodes.to_body(zeta=model.zeta, name="pad")
     unit = {}
     for name in names:
         cb = cbs[name]
         unit[name] = {vol: cb.boundary_load(f) for vol, f in thermal[name].items()}
-    return vasm, vmodes, vehicle, pasm, pmodes, pad, unit
+    return vasm, vmodes, vehicle, pasm, pmodes, pad, unit, vall, pall
 
 
 def _check_materials(model: ModelConfig, thermal: dict[str, dict], where: Where) -> None:

@@ -464,6 +464,7 @@ def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[di
     lines = [f"liftoff run: {scenario.title}",
              f"  vehicle  {stack.vehicle.n_modes} modes, mass {m / 1e3:.1f} t, c.g. {np.round(cg, 2).tolist()} m; "
              f"pad {stack.pad.n_modes} modes"]
+    lines += truncation_lines(cp for _, cp in results.values())
     for case, (res, cp) in results.items():
         lines.append(f"  case {case!r}: {res.time.size - 1} steps of h = {res.h:.3g} s "
                      f"({res.time[0]:g} .. {res.time[-1]:g} s)")
@@ -499,6 +500,18 @@ def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[di
                          f"effective liquid mass {b['m_eff_kg'] / 1e3:.0f} t of {b['m_liquid_kg'] / 1e3:.0f} t")
     lines += stage_time_lines(stage_times, wall)
     return "\n".join(lines)
+
+
+def truncation_lines(problems) -> list[str]:
+    """The summary's truncation block (reduction/truncation.py): each distinct check of the
+    cases' bodies once, then a warning for each that misses more than 1 %."""
+    checks = list(dict.fromkeys(c for cp in problems for c in cp.truncation))
+    if not checks:
+        return []
+    lines = ["  modes kept (truncation check against the whole CB space; warning above 1 %):"]
+    lines += [f"    {c.line()}" for c in checks]
+    lines += [f"  {c.warning()}" for c in checks if c.warning()]
+    return lines
 
 
 def stage_time_lines(stage_times: list, wall: float) -> list[str]:

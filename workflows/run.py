@@ -360,6 +360,7 @@ def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, sta
     stage_times.append((f"transient [{name}]" + (" + h/2" if half is not None else ""),
                         time.perf_counter() - t0 if secs is None else secs))
     t0 = time.perf_counter()
+    res.metadata["truncation"] = [c.as_dict() for c in cp.truncation]
     files = [Path(res.save(out / f"results_{name}.h5"))]
     if not generated:                   # a generated case's summary comes from its record
         agg.add(summarize(res, cp, name, -1, sc.post, check=half), generated=False)

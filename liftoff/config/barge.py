@@ -31,7 +31,7 @@ PARTS = ("barge", "cargo", "dock")
 _TOP = {"kind", "title", "description", "model", "impact", "fender", "force", "time", "output", "case"}
 _MODEL = {"degree", "zeta", "barge", "cargo", "dock", "system"}
 _PART = {"mesh_size", "n_modes", "f_max", "params"}
-_SYSTEM = {"f_max", "dock_f_max"}
+_SYSTEM = {"f_max", "dock_f_max", "residual_vectors"}
 _IMPACT = {"velocity", "gap"}
 _FENDER = {"stiffness", "lateral_stiffness", "friction", "damping"}
 _OUTPUT = {"plots", "snapshots", "frames", "progress"}
@@ -49,6 +49,7 @@ class BargeModel:
     components: dict           # part -> ComponentModel (builder: BargeParams | CargoParams | DockParams)
     f_max: float | None = None
     dock_f_max: float | None = None
+    residual_vectors: bool = True   # where modes are cut (reduction/truncation.py)
 
     def model_config(self) -> ModelConfig:
         """The lift-off ModelConfig view the model stages (workflows.pipeline) take."""
@@ -138,8 +139,9 @@ def barge_model(where: Where, spec: Any) -> BargeModel:
     comps["dock"] = _part(where / "dock", "dock", m.get("dock", {}), fit["dock"])
     _check_fit(where, comps)
     s = table(where / "system", m.get("system", {}), _SYSTEM)
-    f_max = {k: number(where / "system" / k, v, positive=True) for k, v in s.items()}
-    return BargeModel(degree, zeta, comps, f_max.get("f_max"), f_max.get("dock_f_max"))
+    f_max = {k: number(where / "system" / k, v, positive=True) for k, v in s.items() if k != "residual_vectors"}
+    rv = boolean(where / "system" / "residual_vectors", s.get("residual_vectors", True))
+    return BargeModel(degree, zeta, comps, f_max.get("f_max"), f_max.get("dock_f_max"), rv)
 
 
 def _fender(where: Where, spec: Any) -> Fender:

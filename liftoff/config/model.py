@@ -58,7 +58,7 @@ _COMP = {"mesh_size", "n_modes", "f_max", "params", "nastran"}
 _NASTRAN = {"file", "units", "grids", "asm", "pch", "op4", "bulk", "stiffness", "mass", "se", "recovery"}
 _NASTRAN_FILES = ("file", "asm", "pch", "op4", "bulk")
 _NASTRAN_RECOVERY = {"name", "disp", "vel", "acc", "rows", "quantity"}
-_SYSTEM = {"n_modes", "f_max", "pad_n_modes", "pad_f_max"}
+_SYSTEM = {"n_modes", "f_max", "pad_n_modes", "pad_f_max", "residual_vectors"}
 _MATERIAL = {"E", "nu", "rho"}
 
 
@@ -100,12 +100,15 @@ class ComponentModel:
 @dataclass(frozen=True)
 class SystemModel:
     """System modes kept: vehicle (free-free) ``n_modes``/``f_max`` (Hz), pad
-    ``pad_n_modes``/``pad_f_max``; None: all."""
+    ``pad_n_modes``/``pad_f_max``; None: all (the default, as the reference's section 3.0).
+    ``residual_vectors``: where modes are cut, append the residual vectors of every boundary
+    DOF and of gravity (reduction/truncation.py), so the static flexibility stays exact."""
 
     n_modes: int | None = None
     f_max: float | None = None
     pad_n_modes: int | None = None
     pad_f_max: float | None = None
+    residual_vectors: bool = True
 
 
 @dataclass(frozen=True)
@@ -369,7 +372,8 @@ def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig
                                        sel[name].get("nastran"))
                   for name in NAMES}
     s = table(where / "system", m.get("system", {}), _SYSTEM)
-    system = SystemModel(**{k: integer(where / "system" / k, v, 1) if "n_modes" in k else
+    system = SystemModel(**{k: boolean(where / "system" / k, v) if k == "residual_vectors" else
+                            integer(where / "system" / k, v, 1) if "n_modes" in k else
                             number(where / "system" / k, v, positive=True) for k, v in s.items()})
     max_elements = integer(where / "max_elements", m.get("max_elements", MAX_ELEMENTS[source]), 1)
     return ModelConfig(source, degree, zeta, layout, components,

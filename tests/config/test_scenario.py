@@ -30,7 +30,9 @@ def test_default_scenario_parses(base):
     assert comps["core"].mesh_size == 1.2 and comps["core"].builder.mesh_size == 1.2
     assert comps["pad"].builder.mesh_size == 2.4 and comps["pad"].f_max == 100.0 and comps["pad"].n_modes == 30
     assert comps["srb_left"].mesh_size is None and comps["srb_left"].builder.mesh_size == BoosterParams().mesh_size
-    assert nominal.model.system.f_max == 60.0 and nominal.model.system.n_modes is None
+    # every system mode (section 3.0, issue 22); residual vectors only matter where a user cuts
+    assert nominal.model.system.f_max is None and nominal.model.system.n_modes is None
+    assert nominal.model.system.pad_f_max is None and nominal.model.system.residual_vectors
     assert nominal.time.h is None and nominal.time.t_end == 9.6 and nominal.recovery.top == "stack_top"
     assert {e.name for e in nominal.engines} == {"ssme_1", "ssme_2", "ssme_3", "srb_left", "srb_right"}
     srb = next(e for e in nominal.engines if e.name == "srb_left")

@@ -19,7 +19,7 @@ MODEL = {"source": "fe", "zeta": 0.01, "liquid": "hydroelastic",
                        "srb_left": {"n_modes": 6, "f_max": 40.0}, "srb_right": {"n_modes": 6, "f_max": 40.0},
                        "orbiter": {"n_modes": 6, "f_max": 40.0}},
          "pad": {"mesh_size": 2.4, "n_modes": 8, "f_max": 60.0},
-         "system": {"f_max": 40.0, "pad_f_max": 60.0}}
+         "system": {"f_max": 40.0, "pad_f_max": 60.0, "residual_vectors": False}}
 
 
 def test_hydroelastic_run_outputs_and_head(tmp_path, capsys):

@@ -49,13 +49,14 @@ def _toml(d: dict) -> str:
     return "\n".join(out) + "\n"
 
 
-#: the default stack on coarse FE meshes with few modes (also test_mpi_run.py's)
+#: the default stack on coarse FE meshes with few modes (also test_mpi_run.py's); its system modes cut
+#: without residual vectors on purpose (a small modal model, a large step: test_truncation* cover them)
 COARSE_FE = {"source": "fe", "zeta": 0.01,
              "component": {"core": {"mesh_size": 1.2, "n_modes": 8, "f_max": 40.0},
                            "srb_left": {"n_modes": 6, "f_max": 40.0}, "srb_right": {"n_modes": 6, "f_max": 40.0},
                            "orbiter": {"n_modes": 6, "f_max": 40.0}},
              "pad": {"mesh_size": 2.4, "n_modes": 8, "f_max": 60.0},
-             "system": {"f_max": 40.0, "pad_f_max": 60.0}}
+             "system": {"f_max": 40.0, "pad_f_max": 60.0, "residual_vectors": False}}
 
 
 def _scenario(tmp_path, model: dict, t_end=8.0, cases=None, name="s.toml", **over):
@@ -71,8 +72,10 @@ def _scenario(tmp_path, model: dict, t_end=8.0, cases=None, name="s.toml", **ove
     return p
 
 
-STICK = {"source": "stick", "mesh_size": 6.0, "zeta": 0.01, "system": {"f_max": 60.0, "pad_f_max": 100.0},
-         "pad": {"f_max": 100.0}}
+# (system modes cut without residual vectors on purpose: a small modal model with a large step;
+# the modes kept and their convergence are tests/workflows/test_truncation_run.py's)
+STICK = {"source": "stick", "mesh_size": 6.0, "zeta": 0.01,
+         "system": {"f_max": 60.0, "pad_f_max": 100.0, "residual_vectors": False}, "pad": {"f_max": 100.0}}
 
 
 def _check_outputs(out, cases, all_cases=None):
