@@ -1,0 +1,158 @@
+"""Is the default run converged in the modes it keeps? The default scenario against a
+reference with every component mode below 3x each component's f_max (no n_modes caps) and
+every system mode, and the system-mode cuts a user may choose, with and without residual
+vectors (issue 22; reduction/truncation.py).
+
+    python benchmarks/convergence_study.py [--cache DIR] [--only NAME ...] [--json PATH]
+
+Each variant is the embedded default scenario with a few [model] keys changed; both named
+cases run (nominal, no-control) and the envelope over them is compared, row by row, with
+the reference's: the deviation of a row is the larger change of its max and of its min,
+relative to the row's largest magnitude in the reference (a peak near zero is judged
+against the row's scale, not against itself). The step is each run's own automatic one;
+its error is the run's Richardson estimate (shown by ``make run``), not studied here.
+
+Writes ``docs/figures/convergence.json`` (default ``--json``), which
+``benchmarks/default_figures.py`` renders into README.md and docs/workflow.md; the test
+tests/workflows/test_default_figures.py checks that its default row is what the current
+code gives. Model stages use the stage cache (default out/.liftoff-cache).
+"""
+from __future__ import annotations
+
+import argparse
+import copy
+import json
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from default_figures import run_default_like, twang_figures  # noqa: E402
+
+REFERENCE = "reference"
+F_MAX_FACTOR = 3.0
+#: fixed-interface modes a component may have below its f_max here (the library refuses more
+#: than reduction.craig_bampton.BAND_MODE_LIMIT: the default core has 1490 below 180 Hz)
+STUDY_BAND_LIMIT = 4000
+
+
+def components_below(factor: float):
+    """Every component mode below ``factor`` x the component's f_max, no n_modes caps,
+    every system mode."""
+    def edit(data: dict) -> dict:
+        m = data["model"]
+        for sel in list(m.get("component", {}).values()) + [m.get("pad", {})]:
+            sel.pop("n_modes", None)
+            sel["f_max"] = factor * sel.get("f_max", 60.0)
+        m.pop("system", None)
+        return data
+    return edit
+
+
+def system_cut(f_max: float, residual: bool):
+    def edit(data: dict) -> dict:
+        data["model"]["system"] = {"f_max": f_max, "pad_f_max": f_max, "residual_vectors": residual}
+        return data
+    return edit
+
+
+#: name -> (what it is, edit of the default scenario's TOML data)
+VARIANTS = {
+    "default": ("the default: every system mode, component modes as the scenario gives them", lambda d: d),
+    REFERENCE: (f"every component mode below {F_MAX_FACTOR:g} x its f_max (no n_modes caps), every system mode",
+                components_below(F_MAX_FACTOR)),
+    "components to f_max": ("every component mode below its f_max (no n_modes caps), every system mode",
+                            components_below(1.0)),
+    "system 60 Hz": ("system modes below 60 Hz (pad 60 Hz), no residual vectors: the default before issue 22 "
+                     "(its pad kept 100 Hz)", system_cut(60.0, False)),
+    "system 30 Hz + RV": ("system modes below 30 Hz and residual vectors", system_cut(30.0, True)),
+    "system 30 Hz": ("system modes below 30 Hz, no residual vectors", system_cut(30.0, False)),
+}
+
+
+def deviations(rows: list[dict], ref: list[dict]) -> list[dict]:
+    """Per envelope row: its deviation from the reference's row (module docstring)."""
+    by = {r["item"]: r for r in ref}
+    out = []
+    for r in rows:
+        o = by[r["item"]]
+        scale = max(abs(o["max"]), abs(o["min"]))
+        dev = max(abs(r["max"] - o["max"]), abs(r["min"] - o["min"])) / scale if scale > 0 else 0.0
+        out.append({"item": r["item"], "category": r["category"], "unit": r["unit"], "deviation": dev})
+    return out
+
+
+def summarize(devs: list[dict]) -> dict:
+    """Largest deviation over all rows, over posts and attaches, and the worst rows."""
+    def worst(sel):
+        d = [x for x in devs if sel(x)]
+        return max(d, key=lambda x: x["deviation"]) if d else None
+    out = {"n_rows": len(devs)}
+    for key, sel in (("all", lambda x: True), ("posts", lambda x: x["category"] == "contact_force"),
+                     ("attach", lambda x: x["category"] == "interface_force")):
+        w = worst(sel)
+        out[key] = {"deviation": w["deviation"], "item": w["item"]} if w else None
+    out["over_1pct"] = sum(x["deviation"] > 0.01 for x in devs)
+    return out
+
+
+def run_variant(name: str, cache: Path, tmp: Path) -> dict:
+    """One variant's run: what it is, its envelope rows (item, category, unit, max, min), mode
+    counts, steps, twang and wall time."""
+    t0 = time.perf_counter()
+    what, edit = VARIANTS[name]
+    out = run_default_like(lambda d: edit(copy.deepcopy(d)), tmp / name.replace(" ", "_"), cache,
+                           error_estimate=False)
+    stack = next(iter(out.stacks.values()))
+    rows = [{k: r[k] for k in ("item", "category", "unit", "max", "min")} for r in out.envelope]
+    return {"variant": name, "what": what, "rows": rows, "vehicle_modes": stack.vehicle.n_modes,
+            "pad_modes": stack.pad.n_modes, "component_modes": {n: cb.n_modes for n, cb in stack.cbs.items()},
+            "steps": next(iter(out.results.values()))[0].time.size - 1, "twang": twang_figures(out),
+            "wall_s": time.perf_counter() - t0}
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--cache", type=Path, default=ROOT / "out" / ".liftoff-cache")
+    ap.add_argument("--only", nargs="*", default=None, help="variants to run (default: all)")
+    ap.add_argument("--reuse", action="store_true",
+                    help="take the variants not named by --only from the existing --json file instead of running them")
+    ap.add_argument("--json", type=Path, default=ROOT / "docs" / "figures" / "convergence.json")
+    ap.add_argument("--reference", default=REFERENCE, help="the variant the others are compared with")
+    args = ap.parse_args(argv)
+    import pyvista  # noqa: F401  (before dolfinx, FENICSX-NOTES.md)
+    import importlib
+
+    importlib.import_module("liftoff.reduction.craig_bampton").BAND_MODE_LIMIT = STUDY_BAND_LIMIT
+
+    old = {r["variant"]: r for r in json.loads(args.json.read_text())["variants"]} \
+        if args.reuse and args.json.is_file() else {}
+    todo = list(args.only or VARIANTS)
+    runs = {n: old[n] for n in VARIANTS if n in old and n not in todo}
+    with tempfile.TemporaryDirectory() as tmp:
+        for name in todo:
+            runs[name] = r = run_variant(name, args.cache, Path(tmp))
+            print(f"{name:20s} vehicle {r['vehicle_modes']:4d} modes, pad {r['pad_modes']:3d}, {r['steps']} steps, "
+                  f"{r['wall_s']:.0f} s", flush=True)
+    if args.reference not in runs:
+        raise SystemExit(f"no run of the reference {args.reference!r} (run it, or --reuse a file that has it)")
+    ref = runs[args.reference]["rows"]
+    table = []
+    for name in [n for n in VARIANTS if n in runs]:
+        r = runs[name]
+        s = summarize(deviations(r["rows"], ref))
+        table.append({**r, **s})
+        tw = r["twang"]
+        print(f"{name:20s} twang {tw['peak_m']:.3f} m at {tw['t_peak_s']:.2f} s, at ignition {tw['at_ignition_m']:.3f} m; "
+              f"largest deviation {s['all']['deviation']:.2%} ({s['all']['item']}), posts "
+              f"{s['posts']['deviation']:.2%}, attach {s['attach']['deviation']:.2%}, rows over 1 %: {s['over_1pct']}")
+    args.json.parent.mkdir(parents=True, exist_ok=True)
+    args.json.write_text(json.dumps({"reference": args.reference, "f_max_factor": F_MAX_FACTOR, "variants": table},
+                                    indent=1) + "\n")
+    print(f"wrote {args.json}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,273 @@
+"""The default run's figures, generated: README.md and docs/ quote them from here, never typed.
+
+    python benchmarks/default_figures.py [--cache DIR] [--check]
+
+Runs the embedded default scenario (both named cases, no pictures) and writes its figures
+to ``docs/figures/default_run.json`` (SI units, full precision), then renders that file and
+``docs/figures/convergence.json`` (benchmarks/convergence_study.py) into the blocks between
+``<!-- generated:NAME -->`` and ``<!-- /generated:NAME -->`` in README.md and
+docs/workflow.md. ``--check`` writes nothing and exits 1 when the checked-in figures differ
+from the current code's (tests/workflows/test_default_figures.py does the same).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+FIGURES = ROOT / "docs" / "figures"
+DEFAULT_JSON = FIGURES / "default_run.json"
+CONVERGENCE_JSON = FIGURES / "convergence.json"
+DOCS = (ROOT / "README.md", ROOT / "docs" / "workflow.md")
+#: figures agree when within this relative difference (or DIGITS of the largest of a group):
+#: the same code on another machine differs by round-off amplified through the contact
+#: events (separations and recontacts), far below the 3-4 digits the documents print
+RTOL = 2e-3
+BLOCK = re.compile(r"(<!-- generated:(?P<name>[\w-]+) -->\n)(?P<body>.*?)(<!-- /generated:(?P=name) -->)", re.S)
+
+
+# ------------------------------------------------------------------ runs
+def run_default_like(edit, out: Path, cache: Path | None, error_estimate: bool = True):
+    """``liftoff run`` of the default scenario's TOML data changed by ``edit`` (a function of
+    the parsed dictionary), both named cases, no plots or pictures: its RunOutput."""
+    from liftoff.config import default_text, parse_scenario, parse_toml
+    from liftoff.workflows.run import run
+
+    data = edit(parse_toml(default_text(), "default_scenario.toml"))
+    sc = parse_scenario(data, "default_scenario.toml")
+    return run(sc, out=out, cache_dir=cache if cache is not None else False, progress=False, plots=False,
+               snapshots=False, echo=lambda *a, **k: None, error_estimate=error_estimate)
+
+
+def twang_figures(out, case: str = "nominal") -> dict:
+    """The twang of ``case``: pad-frame peak (m) and its time (s), the value at booster
+    ignition (m) and its share of the peak, the peak relative to the c.g. (m)."""
+    from liftoff.workflows.report import twang
+
+    res, cp = out.results[case]
+    tw = twang(res, cp)
+    i, k = tw.i_peak, tw.i_peak_cg
+    peak = float(np.hypot(*tw.pad[i]))
+    ign = float(np.hypot(*tw.at_ign))
+    return {"peak_m": peak, "t_peak_s": float(tw.time[i]), "at_ignition_m": ign, "at_ignition_ratio": ign / peak,
+            "t_ignition_s": float(tw.t_ign), "rel_cg_peak_m": float(np.hypot(*tw.rel_cg[k]))}
+
+
+def envelope_table(rows: list[dict]) -> dict:
+    """{item: [max, min]} of the envelope (N, N m, m, Pa, ...)."""
+    return {r["item"]: [r["max"], r["min"]] for r in rows}
+
+
+def _peak(row: dict) -> tuple[float, float, str, float]:
+    """(value, time, case, estimated error) of a row's larger extreme."""
+    if abs(row["max"]) >= abs(row["min"]):
+        return row["max"], row["t_max"], row["case_max"], row.get("max_err", float("nan"))
+    return row["min"], row["t_min"], row["case_min"], row.get("min_err", float("nan"))
+
+
+def default_figures(cache: Path | None) -> dict:
+    """Every figure of the default run that the documents quote (SI units)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out = run_default_like(lambda d: d, Path(tmp) / "run", cache)
+    stack = next(iter(out.stacks.values()))
+    v, p = stack.vehicle, stack.pad
+    res, cp = out.results["nominal"]
+    m, cg = _mass_cg(v)
+    rows = out.envelope
+    posts = [r for r in rows if r["category"] == "contact_force" and r["item"].endswith("Tz")]
+    pressure = [r for r in rows if r["item"].startswith("tank pressure core_lox")]
+    largest = sorted((r for r in rows if r["category"] in ("contact_force", "interface_force") and r["unit"] == "N"),
+                     key=lambda r: -abs(_peak(r)[0]))[:5]
+    heads = {}
+    from liftoff.workflows.report import liquid_heads
+
+    for name, head in liquid_heads(cp).items():
+        heads[name] = [float(x) for x in head]
+    preload = {}
+    for name, (point, comp) in cp.attach.items():
+        preload[point] = float(res.recovered[name][0, 2])
+    checks = [c.as_dict() for c in cp.truncation]
+    return {
+        "vehicle": {"modes": v.n_modes, "first_elastic_hz": float(v.omega[6] / (2 * np.pi)),
+                    "highest_hz": float(v.omega.max() / (2 * np.pi)), "mass_t": m / 1e3, "cg_m": cg},
+        "pad": {"modes": p.n_modes, "first_hz": float(p.omega[0] / (2 * np.pi)),
+                "highest_hz": float(p.omega.max() / (2 * np.pi))},
+        "components": {n: {"cb_modes": cb.n_modes, "boundary_dofs": len(cb.boundary_labels),
+                           "fe_dofs": stack.components[n].n_dof if n in stack.components else None}
+                       for n, cb in stack.cbs.items()},
+        "truncation": checks,
+        "steps": int(res.time.size - 1), "h_s": float(res.h),
+        "error_estimate": {c: out.results[c][0].metadata.get("error_estimate", {}).get("worst_relative")
+                           for c in out.results},
+        "twang": {c: twang_figures(out, c) for c in out.results},
+        "posts": {c: out.results[c][0].contact_summary() for c in out.results},
+        "preload_t0_tz_n": preload,
+        "peak_post_compression_n": max(r["max"] for r in posts),
+        "largest_loads": [{"item": r["item"], "value": _peak(r)[0], "t_s": _peak(r)[1], "case": _peak(r)[2],
+                           "err_est": _peak(r)[3]} for r in largest],
+        "lox_bottom_pressure_pa": [min(r["min"] for r in pressure), max(r["max"] for r in pressure)]
+        if pressure else None,
+        "liquid_heads_pa": heads,
+    }
+
+
+def _mass_cg(body) -> tuple[float, list]:
+    from liftoff.transient.effects import center_of_gravity
+
+    m, cg = center_of_gravity(body)
+    return float(m), [float(x) for x in cg]
+
+
+# ------------------------------------------------------------------ rendering
+def _mn(x: float) -> str:
+    return f"{x / 1e6:.2f}"
+
+
+def render_blocks(fig: dict, conv: dict | None) -> dict[str, str]:
+    """{block name: markdown} from the figures (and the convergence study, if any)."""
+    tw, twn = fig["twang"]["nominal"], fig["twang"]
+    v, p = fig["vehicle"], fig["pad"]
+    lox = fig["lox_bottom_pressure_pa"]
+    head = max((max(h) for k, h in fig["liquid_heads_pa"].items() if "lox" in k), default=None)
+    pre = fig["preload_t0_tz_n"]
+    lines = [
+        "| figure of the default run (`make run`, nominal case unless noted) | value |",
+        "|---|---|",
+        f"| vehicle system modes kept (all) | {v['modes']} (first elastic {v['first_elastic_hz']:.2f} Hz, highest "
+        f"{v['highest_hz']:.0f} Hz) |",
+        f"| pad system modes kept (all) | {p['modes']} (first {p['first_hz']:.2f} Hz, highest {p['highest_hz']:.0f} Hz) |",
+        f"| vehicle mass, c.g. | {v['mass_t']:.1f} t at z = {v['cg_m'][2]:.2f} m |",
+        f"| step | {fig['steps']} steps of h = {fig['h_s'] * 1e6:.1f} us (0.25 / the highest mode) |",
+    ]
+    for c in fig["truncation"]:
+        mass = "/".join("-" if x is None else f"{100 * x:.1f}" for x in c["effective_mass_kept_xyz"])
+        lines.append(f"| truncation check, {c['body']} | static flexibility at {c['n_checked']} contact/attach DOFs "
+                     f"short by {c['flexibility_shortfall']:.1g}; effective mass kept {mass} % |")
+    err = max(x for x in fig["error_estimate"].values() if x is not None)
+    lines += [
+        f"| largest estimated step error of a peak post force (Richardson) | {err:.1g} of the largest post force |",
+        f"| tank-tip twang (pad frame, from t0) | {tw['peak_m']:.3f} m at {tw['t_peak_s']:.2f} s; relative to the "
+        f"c.g. {tw['rel_cg_peak_m']:.3f} m |",
+        f"| twang at booster ignition ({tw['t_ignition_s']:.1f} s) | {tw['at_ignition_m']:.3f} m = "
+        f"{100 * tw['at_ignition_ratio']:.0f} % of the peak |",
+        f"| static preload at t0 (Tz): aft SRB attach (left) / orbiter forward attach | "
+        f"{_mn(pre['att_srb_left_aft'])} / {_mn(pre['att_orb_fwd'])} MN |",
+        f"| peak post compression (envelope) | {_mn(fig['peak_post_compression_n'])} MN |",
+    ]
+    for r in fig["largest_loads"]:
+        lines.append(f"| {r['item']} (envelope) | {_mn(r['value'])} MN at {r['t_s']:.3f} s ({r['case']}) |")
+    if lox:
+        lines.append(f"| LOX tank-bottom pressure (dynamic + head), range | {lox[0] / 1e3:.0f} to {lox[1] / 1e3:.0f} kPa"
+                     + (f" (head {head / 1e3:.0f} kPa)" if head is not None else "") + " |")
+    blocks = {"default-run": "\n".join(lines) + "\n"}
+    posts = ["| post | separation (s) nominal / no-control | recontacts | peak compression (MN) | peak tension (MN) |",
+             "|---|---|---|---|---|"]
+    nom, noc = fig["posts"]["nominal"], fig["posts"].get("no-control", fig["posts"]["nominal"])
+    for a, b in zip(nom, noc):
+        sep = " / ".join("-" if x["separation_time"] is None else f"{x['separation_time']:.4f}" for x in (a, b))
+        posts.append(f"| {a['name']} | {sep} | {a['recontacts']} / {b['recontacts']} | "
+                     f"{_mn(a['peak_compression'])} / {_mn(b['peak_compression'])} | "
+                     f"{_mn(a['peak_tension'])} / {_mn(b['peak_tension'])} |")
+    blocks["default-posts"] = "\n".join(posts) + "\n"
+    if conv:
+        blocks["convergence"] = render_convergence(conv)
+    return blocks
+
+
+def render_convergence(conv: dict) -> str:
+    lines = [f"| variant | vehicle / pad modes | steps | twang peak (m) at (s) | at ignition (m) | largest change of "
+             f"a peak from the {conv['reference']} (row) | posts | attaches | rows over 1 % |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for r in conv["variants"]:
+        tw = r["twang"]
+        lines.append(f"| {r['variant']}: {r['what']} | {r['vehicle_modes']} / {r['pad_modes']} | {r['steps']} | "
+                     f"{tw['peak_m']:.3f} at {tw['t_peak_s']:.2f} | {tw['at_ignition_m']:.3f} | "
+                     f"{100 * r['all']['deviation']:.2f} % ({r['all']['item']}) | "
+                     f"{100 * r['posts']['deviation']:.2f} % | {100 * r['attach']['deviation']:.2f} % | "
+                     f"{r['over_1pct']} of {r['n_rows']} |")
+    return "\n".join(lines) + "\n"
+
+
+def apply_blocks(text: str, blocks: dict[str, str]) -> str:
+    """``text`` with every generated block whose name is in ``blocks`` replaced."""
+    return BLOCK.sub(lambda m: m.group(1) + blocks[m.group("name")] + m.group(4)
+                     if m.group("name") in blocks else m.group(0), text)
+
+
+def block_names(text: str) -> list[str]:
+    return [m.group("name") for m in BLOCK.finditer(text)]
+
+
+# ------------------------------------------------------------------ comparing
+def differences(a, b, path: str = "") -> list[str]:
+    """Where two figure trees differ: numbers beyond RTOL (relative to the larger of the two
+    or, inside a list, to the list's largest magnitude), anything else not equal."""
+    out = []
+    if isinstance(a, dict) and isinstance(b, dict):
+        for k in sorted(set(a) | set(b)):
+            if k not in a or k not in b:
+                out.append(f"{path}/{k}: only in one")
+            else:
+                out += differences(a[k], b[k], f"{path}/{k}")
+    elif isinstance(a, list) and isinstance(b, list):
+        if len(a) != len(b):
+            return [f"{path}: {len(a)} vs {len(b)} entries"]
+        nums = [abs(x) for x in a + b if isinstance(x, (int, float)) and not isinstance(x, bool) and x == x]
+        scale = max(nums, default=0.0)
+        for i, (x, y) in enumerate(zip(a, b)):
+            out += differences(x, y, f"{path}[{i}]") if not _is_num(x) else _num_diff(x, y, f"{path}[{i}]", scale)
+    elif _is_num(a) and _is_num(b):
+        out += _num_diff(a, b, path, 0.0)
+    elif a != b:
+        out.append(f"{path}: {a!r} vs {b!r}")
+    return out
+
+
+def _is_num(x) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool)
+
+
+def _num_diff(x, y, path: str, scale: float) -> list[str]:
+    if not (_is_num(x) and _is_num(y)):
+        return [] if x == y else [f"{path}: {x!r} vs {y!r}"]
+    if x != x and y != y:
+        return []
+    tol = RTOL * max(abs(x), abs(y), scale)
+    return [] if abs(x - y) <= tol else [f"{path}: {x!r} vs {y!r}"]
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--cache", type=Path, default=ROOT / "out" / ".liftoff-cache")
+    ap.add_argument("--check", action="store_true", help="compare with the checked-in figures; write nothing")
+    ap.add_argument("--render-only", action="store_true", help="only render the checked-in JSON into the documents")
+    args = ap.parse_args(argv)
+    import pyvista  # noqa: F401  (before dolfinx, FENICSX-NOTES.md)
+
+    if args.render_only:
+        fig = json.loads(DEFAULT_JSON.read_text())
+    else:
+        fig = json.loads(json.dumps(default_figures(args.cache)))     # as the JSON file holds it
+    if args.check:
+        diff = differences(fig, json.loads(DEFAULT_JSON.read_text()))
+        print("\n".join(diff) if diff else "the checked-in figures are the current code's")
+        return 1 if diff else 0
+    conv = json.loads(CONVERGENCE_JSON.read_text()) if CONVERGENCE_JSON.is_file() else None
+    FIGURES.mkdir(parents=True, exist_ok=True)
+    DEFAULT_JSON.write_text(json.dumps(fig, indent=1) + "\n")
+    blocks = render_blocks(fig, conv)
+    for doc in DOCS:
+        doc.write_text(apply_blocks(doc.read_text(), blocks))
+    print(f"wrote {DEFAULT_JSON.relative_to(ROOT)} and the generated blocks of "
+          f"{', '.join(str(d.relative_to(ROOT)) for d in DOCS)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
