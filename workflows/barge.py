@@ -19,7 +19,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
-from liftoff.reduction import Assembly, SystemModes, assemble, keep_modes
+from liftoff.reduction import Assembly, SystemModes, assemble, keep_modes, truncation_check
 from liftoff.transient import ContactPoint, Forcing, InitialState, ModalBody, Recovery, TransientProblem
 from liftoff.transient.effects import center_of_gravity
 
@@ -45,6 +45,7 @@ class BargeModels:
     dock_modes: SystemModes
     dock: ModalBody             # grounded
     timings: dict = field(default_factory=dict)
+    truncation: tuple = ()      # (barge, dock) TruncationCheck at the fenders and cargo interfaces
 
     @property
     def bow_points(self) -> list[str]:
@@ -88,16 +89,22 @@ def build_models(model: BargeModel, cache, progress: bool = True) -> BargeModels
             cbs[name], keys[name] = cb_stage(mc, name, comps[name], k, cache)
     t1 = time.perf_counter()
     basm = assemble([cbs["barge"], cbs["cargo"]], "barge")
-    bmodes = keep_modes(modes_stage(basm, 6, [keys["barge"], keys["cargo"]], cache, "barge+cargo"), model.f_max,
-                        residual=model.residual_vectors)
+    ball = modes_stage(basm, 6, [keys["barge"], keys["cargo"]], cache, "barge+cargo")
+    bmodes = keep_modes(ball, model.f_max, residual=model.residual_vectors)
     _, cg = center_of_gravity(bmodes.to_body(zeta=model.zeta, name="barge"))
     barge = bmodes.to_body(ref_point=cg, zeta=model.zeta, name="barge")
     dasm = assemble([cbs["dock"]], "dock")
-    dmodes = keep_modes(modes_stage(dasm, 0, [keys["dock"]], cache, "dock"), model.dock_f_max,
-                        residual=model.residual_vectors)
+    dall = modes_stage(dasm, 0, [keys["dock"]], cache, "dock")
+    dmodes = keep_modes(dall, model.dock_f_max, residual=model.residual_vectors)
     dock = dmodes.to_body(zeta=model.zeta, name="dock")
-    return BargeModels(comps, cbs, basm, bmodes, barge, dasm, dmodes, dock,
-                       {"components+CB (s)": t1 - t0, "system modes (s)": time.perf_counter() - t1})
+    out = BargeModels(comps, cbs, basm, bmodes, barge, dasm, dmodes, dock,
+                      {"components+CB (s)": t1 - t0, "system modes (s)": time.perf_counter() - t1})
+    bow = [f"{p}:{c}" for p in out.bow_points for c in TRANSLATIONS]
+    fenders = [f"{p}:{c}" for p in out.fender_points for c in TRANSLATIONS]
+    cargo = [f"{p}:{c}" for p in out.cargo_points for c in COMPONENTS]
+    out.truncation = (truncation_check(ball, bmodes, bow + cargo, bow, "barge"),
+                      truncation_check(dall, dmodes, fenders, fenders, "dock"))
+    return out
 
 
 # ------------------------------------------------------------------ the series-spring estimate

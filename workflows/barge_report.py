@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .report import Item, maxmin, stage_time_lines
+from .report import Item, maxmin, stage_time_lines, truncation_lines
 
 PLATE_WAVE = float(np.sqrt(210e9 / (7850.0 * (1 - 0.3 ** 2))))   # m/s, membrane waves in the steel plates
 
@@ -269,5 +269,6 @@ def summary(scenario, models, rows: list[dict], stage_times: list, impedance: fl
         lines.append(f"  {r['case']:<12}{r['k_dock']:>14.4g}{r['k_dock'] / r['k_barge']:>9.3g}{r['F_fe'] / 1e6:>11.4g}"
                      f"{r['F_series'] / 1e6:>10.4g}{r['ratio']:>10.4f}{r['cargo_peak'] / 1e3:>15.4g}"
                      f"{r['deck_acc_peak']:>16.4g}  {gov}")
+    lines += truncation_lines(models.truncation)
     lines += stage_time_lines(stage_times, wall)
     return "\n".join(lines)

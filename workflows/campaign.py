@@ -107,7 +107,8 @@ def summarize(result, cp, name: str, index: int, post, wall: float = 0.0, check=
 
     from . import report
 
-    its = report.items(result, cp.attach, report.liquid_heads(cp))
+    band = post.acceleration_band_hz
+    its = report.items(result, cp.attach, report.liquid_heads(cp), band)
     t = result.time
     V = np.column_stack([it.values for it in its])
     imax, imin = np.argmax(V, axis=0), np.argmin(V, axis=0)
@@ -119,7 +120,8 @@ def summarize(result, cp, name: str, index: int, post, wall: float = 0.0, check=
         sel = [j for j, it in enumerate(its) if it.category in post.srs.categories]
         srs_items = tuple(its[j].name for j in sel)
         freq = srs_frequencies(post.srs.f_min, post.srs.f_max, post.srs.n_freq)
-        srs_arr = np.stack([srs(V[:, sel], result.h, freq, q) for q in post.srs.q]) if sel else None
+        raw = np.column_stack([its[j].history for j in sel]) if sel else None
+        srs_arr = np.stack([srs(raw, result.h, freq, q) for q in post.srs.q]) if sel else None
     cs = result.contact_summary()
     return CaseSummary(
         name, index, tuple(it.name for it in its), tuple(it.unit for it in its), tuple(it.category for it in its),
@@ -127,7 +129,7 @@ def summarize(result, cp, name: str, index: int, post, wall: float = 0.0, check=
         tuple(c["name"] for c in cs), np.array([np.nan if c["separation_time"] is None else c["separation_time"]
                                                  for c in cs]),
         np.array([c["recontacts"] for c in cs], dtype=np.int64), np.array([c["peak_compression"] for c in cs]),
-        int(t.size - 1), float(result.h), float(wall), *_errors(its, report.items(check, cp.attach, report.liquid_heads(cp)), error_estimate)
+        int(t.size - 1), float(result.h), float(wall), *_errors(its, report.items(check, cp.attach, report.liquid_heads(cp), band), error_estimate)
         if check is not None else (None, None))
 
 
@@ -188,7 +190,9 @@ def run_case(task: CaseTask):
     if task.columns:
         from . import report
 
-        its = {it.name: it.values for it in report.items(res, cp.attach, report.liquid_heads(cp))}
+        sc = _MEMO["scenario"]
+        its = {it.name: it.values for it in report.items(res, cp.attach, report.liquid_heads(cp),
+                                                         sc.post.acceleration_band_hz)}
         return task.index, res.time, {c: its[c] for c in task.columns}
     sc = _MEMO["scenario"]
     return summarize(res, cp, case.name, task.index, sc.post, wall)

@@ -28,13 +28,24 @@ class Item:
     unit: str
     values: np.ndarray
     category: str = ""
+    raw: np.ndarray | None = None      # the unfiltered history where ``values`` is band-limited
+
+    @property
+    def history(self) -> np.ndarray:
+        """The unfiltered history (spectra are taken of it)."""
+        return self.values if self.raw is None else self.raw
 
 
-def items(result, attach: dict, heads: dict | None = None) -> list[Item]:
+def items(result, attach: dict, heads: dict | None = None, band_hz: float = 0.0) -> list[Item]:
     """Every reported history: post forces, recovered items (attach forces, c.g. motion; not
     the modal coordinates), output points, and with ``heads`` (:func:`liquid_heads`) the
     total tank pressures and ullage volumes. Names, units and kinds come from the result's
-    contact directions and recovery items; ``attach``: recovery name -> (point, component)."""
+    contact directions and recovery items; ``attach``: recovery name -> (point, component).
+    ``band_hz`` > 0: the output-point accelerations low-pass filtered to that band
+    (workflows/spectra.lowpass; ``[postprocess] acceleration_band_hz``), the unfiltered
+    history kept as ``raw``."""
+    from .spectra import lowpass
+
     out = []
     for j, d in enumerate(result.contact_directions):
         out.append(Item(f"post {d.contact} {d.component}", d.unit, result.contact_force[:, j], "contact_force"))
@@ -51,7 +62,9 @@ def items(result, attach: dict, heads: dict | None = None) -> list[Item]:
     dunits, aunits = result.output_units("a", "disp"), result.output_units("a", "acc")
     for j, lab in enumerate(result.output_labels["a"]):
         out.append(Item(f"disp {lab}", dunits[j], result.displacement["a"][:, j], "displacement"))
-        out.append(Item(f"acc {lab}", aunits[j], result.acceleration["a"][:, j], "acceleration"))
+        acc = result.acceleration["a"][:, j]
+        out.append(Item(f"acc {lab}", aunits[j], lowpass(acc, result.h, band_hz), "acceleration",
+                        raw=acc if band_hz > 0 else None))
     if heads is not None:
         out += tank_items(result, heads)
     return out
@@ -180,7 +193,8 @@ FIELDS = ("item", "unit", "max", "max_err_est", "t_max", "case_max", "min", "min
 _KEYS = {"max_err_est": "max_err", "min_err_est": "min_err"}
 CSV_HEADER = ("# liftoff max/min table; SI units (column 'unit'); times in s; max_err_est, min_err_est: estimated "
               "error of the value (true - reported, Richardson from a second run at h/2; an estimate, not a bound; "
-              "empty when not estimated)\n")
+              "empty when not estimated); 'acc' rows: output-point accelerations low-pass filtered to the scenario's "
+              "[postprocess] acceleration_band_hz (summary.txt states it; 0: unfiltered)\n")
 
 
 def _cell(value) -> str:
@@ -464,7 +478,10 @@ def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[di
     lines = [f"liftoff run: {scenario.title}",
              f"  vehicle  {stack.vehicle.n_modes} modes, mass {m / 1e3:.1f} t, c.g. {np.round(cg, 2).tolist()} m; "
              f"pad {stack.pad.n_modes} modes"]
-    lines += truncation_lines(cp for _, cp in results.values())
+    lines += truncation_lines(c for _, cp in results.values() for c in cp.truncation)
+    band = scenario.post.acceleration_band_hz
+    lines.append(f"  accelerations in the max/min tables: {f'low-pass filtered to {band:g} Hz' if band > 0 else 'unfiltered'}"
+                 " ([postprocess] acceleration_band_hz; SRS and PSD unfiltered)")
     for case, (res, cp) in results.items():
         lines.append(f"  case {case!r}: {res.time.size - 1} steps of h = {res.h:.3g} s "
                      f"({res.time[0]:g} .. {res.time[-1]:g} s)")
@@ -502,10 +519,10 @@ def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[di
     return "\n".join(lines)
 
 
-def truncation_lines(problems) -> list[str]:
+def truncation_lines(checks) -> list[str]:
     """The summary's truncation block (reduction/truncation.py): each distinct check of the
-    cases' bodies once, then a warning for each that misses more than 1 %."""
-    checks = list(dict.fromkeys(c for cp in problems for c in cp.truncation))
+    bodies once, then a warning for each that misses more than 1 %."""
+    checks = list(dict.fromkeys(checks))
     if not checks:
         return []
     lines = ["  modes kept (truncation check against the whole CB space; warning above 1 %):"]
@@ -534,7 +551,7 @@ def spectra(result, cp, post, out: Path, case: str) -> list[Path]:
     h, data, paths = result.h, {}, []
     if post.psd is not None:
         sel = [it for it in its if it.category in post.psd.categories]
-        V = np.column_stack([it.values for it in sel])
+        V = np.column_stack([it.history for it in sel])
         f, P = psd(V, h, post.psd.segment)
         fa, A = fft_amplitude(V, h)
         data["psd"] = {"items": np.array([it.name for it in sel], dtype=str), "freq": Dataset(f, "Hz"),
@@ -549,7 +566,7 @@ def spectra(result, cp, post, out: Path, case: str) -> list[Path]:
     if post.srs is not None:
         sel = [it for it in its if it.category in post.srs.categories]
         freq = srs_frequencies(post.srs.f_min, post.srs.f_max, post.srs.n_freq)
-        V = np.column_stack([it.values for it in sel])
+        V = np.column_stack([it.history for it in sel])
         data["srs"] = {"items": np.array([it.name for it in sel], dtype=str), "freq": Dataset(freq, "Hz"),
                        "q": Dataset(np.array(post.srs.q), "1"),
                        "value": Dataset(np.stack([srs(V, h, freq, q) for q in post.srs.q]),

@@ -365,9 +365,10 @@ def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, sta
     if not generated:                   # a generated case's summary comes from its record
         agg.add(summarize(res, cp, name, -1, sc.post, check=half), generated=False)
     heads = report.liquid_heads(cp)
-    rows = report.maxmin(res.time, report.items(res, cp.attach, heads), name)
+    band = sc.post.acceleration_band_hz
+    rows = report.maxmin(res.time, report.items(res, cp.attach, heads, band), name)
     if half is not None:
-        report.with_errors(rows, report.maxmin(half.time, report.items(half, cp.attach, heads), name))
+        report.with_errors(rows, report.maxmin(half.time, report.items(half, cp.attach, heads, band), name))
     files.append(report.write_csv(rows, out / f"maxmin_{name}.csv"))
     if plots:
         files += report.plots(res, cp, out, name)

@@ -39,7 +39,8 @@ def _one_by_one(out):
     for case in list(sc.cases) + [sc.generated_case(i) for i in range(sc.n_generated)]:
         cp = build_problem(case, stack, progress=False)
         res = solve(cp.problem)
-        per_case[case.name] = report.maxmin(res.time, report.items(res, cp.attach), case.name)
+        per_case[case.name] = report.maxmin(res.time, report.items(res, cp.attach, band_hz=sc.post.acceleration_band_hz),
+                                            case.name)
     return per_case
 
 

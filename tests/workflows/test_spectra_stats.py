@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from liftoff.workflows.spectra import fft_amplitude, psd, srs
+from liftoff.workflows.spectra import fft_amplitude, lowpass, psd, srs
 from liftoff.workflows.stats import Largest, Running, k_factor, order_rank
 
 
@@ -116,3 +116,24 @@ def test_streaming_equals_batch():
     srt = -np.sort(-x, axis=0)
     np.testing.assert_array_equal(top.values.T, srt[:5])
     np.testing.assert_array_equal(top.rth()[1], np.argsort(-x, axis=0, kind="stable")[4])
+
+
+def test_lowpass_keeps_the_band_and_its_peak_times():
+    """The acceleration band of the max/min tables (workflows/spectra.lowpass): a Butterworth
+    filter of order n run forward and backward has |H|^2 = 1 / (1 + (f/f_c)^(2n)); a sine
+    at 10 Hz under a 50 Hz band keeps its amplitude to that (1 - 1e-11 for n = 4) and its
+    peak times (zero phase), one at 400 Hz is cut to (50/400)^8 = 6e-8 of it; away from
+    the ends (the start-up of the filter over a few periods of f_c)."""
+    h = 1e-4
+    t = np.arange(0.0, 2.0, h)
+    low, high = np.sin(2 * np.pi * 10 * t), np.sin(2 * np.pi * 400 * t)
+    y = lowpass(np.column_stack([low, high, low + high]), h, 50.0)
+    mid = (t > 0.3) & (t < 1.7)
+    gain = lambda f: 1 / (1 + (f / 50.0) ** 8)  # noqa: E731
+    assert np.abs(y[mid, 0] - gain(10) * low[mid]).max() < 1e-3
+    assert np.abs(y[mid, 1]).max() < 10 * gain(400) + 1e-3
+    assert np.abs(y[mid, 2] - y[mid, 0]).max() < 1e-3
+    one = (t > 1.0) & (t < 1.1)                                         # one period of the 10 Hz sine
+    assert abs(t[one][np.argmax(y[one, 2])] - t[one][np.argmax(low[one])]) < 2 * h   # zero phase: the same peak time
+    assert lowpass(low, h, 0.0) is not None and np.array_equal(lowpass(low, h, 0.0), low)   # 0: unfiltered
+    assert np.array_equal(lowpass(low, h, 6000.0), low)                 # above 0.45 of the sample rate: as is
