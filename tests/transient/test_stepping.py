@@ -125,3 +125,22 @@ def test_memory_estimate_matches_the_arrays_of_a_run():
     est = memory_estimate(p, n_t - 1)
     # byte counts: integers below 2^53, exact in floats but for the 0.125 and 0.5 fractions' sums
     assert math.isclose(est["histories"] + est["modal histories (keep_modal)"], actual, rel_tol=1e-12)
+
+
+def test_keep_modal_q_is_one_column_a_mode_and_the_error_check_keeps_none():
+    """keep_modal = "q" holds the modal displacements alone: a third of True's modal bytes,
+    the q arrays of the result exactly; the h/2 run of an error estimate keeps no modal
+    histories (it is read for its peaks only), so a run with its estimate holds one set."""
+    from dataclasses import replace
+
+    from liftoff.transient import solve_estimated
+
+    p = _block(t_end=0.05, h=1e-4, outputs={"a": ["block:Tz"]}, keep_modal="q")
+    r = solve(p)
+    est = memory_estimate(p, r.time.size - 1)["modal histories (keep_modal)"]
+    assert est == sum(a.nbytes for a in r.modal.values() if a is not None)
+    assert math.isclose(memory_estimate(replace(p, keep_modal=True), r.time.size - 1)["modal histories (keep_modal)"],
+                        3 * est, rel_tol=1e-12)
+    e = solve_estimated(p)
+    assert e.result.modal and not e.check.modal
+    np.testing.assert_array_equal(e.result.contact_force, r.contact_force)
