@@ -51,24 +51,54 @@ def components_below(factor: float):
     return edit
 
 
-def system_cut(f_max: float, residual: bool):
+def system_cut(f_max: float, residual: bool, pad_f_max: float | None = None):
     def edit(data: dict) -> dict:
-        data["model"]["system"] = {"f_max": f_max, "pad_f_max": f_max, "residual_vectors": residual}
+        data["model"]["system"] = {"f_max": f_max, "pad_f_max": pad_f_max or f_max, "residual_vectors": residual}
         return data
     return edit
 
 
+#: the fixed-interface modes the default capped before issue 22
+CAPS = {"core": 30, "srb_left": 20, "srb_right": 20, "orbiter": 20}
+PAD_CAP = 30
+
+
+def capped(data: dict) -> dict:
+    m = data["model"]
+    for name, n in CAPS.items():
+        m["component"][name]["n_modes"] = n
+    m["pad"]["n_modes"] = PAD_CAP
+    return data
+
+
+#: mesh sizes (m) of the refined variant: about 0.7 x the default's (core 1.2, boosters 0.6 and
+#: orbiter 0.7 from their builders, pad 2.4)
+REFINED = {"core": 0.85, "srb_left": 0.45, "srb_right": 0.45, "orbiter": 0.5, "pad": 1.7}
+
+
+def refined(data: dict) -> dict:
+    m = data["model"]
+    for name, h in REFINED.items():
+        (m["pad"] if name == "pad" else m["component"][name])["mesh_size"] = h
+    return data
+
+
 #: name -> (what it is, edit of the default scenario's TOML data)
 VARIANTS = {
-    "default": ("the default: every system mode, component modes as the scenario gives them", lambda d: d),
-    REFERENCE: (f"every component mode below {F_MAX_FACTOR:g} x its f_max (no n_modes caps), every system mode",
+    "default": ("every fixed-interface mode below each component's f_max (60 Hz; pad 100 Hz), every system mode",
+                lambda d: d),
+    REFERENCE: (f"every fixed-interface mode below {F_MAX_FACTOR:g} x each component's f_max, every system mode",
                 components_below(F_MAX_FACTOR)),
-    "components to f_max": ("every component mode below its f_max (no n_modes caps), every system mode",
-                            components_below(1.0)),
-    "system 60 Hz": ("system modes below 60 Hz (pad 60 Hz), no residual vectors: the default before issue 22 "
-                     "(its pad kept 100 Hz)", system_cut(60.0, False)),
-    "system 30 Hz + RV": ("system modes below 30 Hz and residual vectors", system_cut(30.0, True)),
-    "system 30 Hz": ("system modes below 30 Hz, no residual vectors", system_cut(30.0, False)),
+    "components to 2 f_max": ("every fixed-interface mode below 2 x each component's f_max, every system mode",
+                              components_below(2.0)),
+    "mesh x0.7": ("the default on meshes about 0.7 x as fine (core 0.85 m, boosters 0.45 m, orbiter 0.5 m, pad "
+                  "1.7 m)", refined),
+    "component caps": ("the default with the fixed-interface modes capped as before issue 22 (core 30, boosters and "
+                       "orbiter 20, pad 30)", capped),
+    "before issue 22": ("those caps and the system modes below 60 Hz (pad 100 Hz), no residual vectors: the default "
+                        "before issue 22", lambda d: system_cut(60.0, False, 100.0)(capped(d))),
+    "system 30 Hz + RV": ("the default with the system modes below 30 Hz and residual vectors", system_cut(30.0, True)),
+    "system 30 Hz": ("the default with the system modes below 30 Hz, no residual vectors", system_cut(30.0, False)),
 }
 
 
@@ -116,7 +146,8 @@ def run_variant(name: str, cache: Path, tmp: Path) -> dict:
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--cache", type=Path, default=ROOT / "out" / ".liftoff-cache")
-    ap.add_argument("--only", nargs="*", default=None, help="variants to run (default: all)")
+    ap.add_argument("--only", nargs="*", default=None,
+                    help="variants to run (default: all; none with --reuse: only recompute the tables)")
     ap.add_argument("--reuse", action="store_true",
                     help="take the variants not named by --only from the existing --json file instead of running them")
     ap.add_argument("--json", type=Path, default=ROOT / "docs" / "figures" / "convergence.json")
@@ -129,8 +160,8 @@ def main(argv=None) -> None:
 
     old = {r["variant"]: r for r in json.loads(args.json.read_text())["variants"]} \
         if args.reuse and args.json.is_file() else {}
-    todo = list(args.only or VARIANTS)
-    runs = {n: old[n] for n in VARIANTS if n in old and n not in todo}
+    todo = list(VARIANTS if args.only is None else args.only)
+    runs = {n: {**old[n], "what": VARIANTS[n][0]} for n in VARIANTS if n in old and n not in todo}
     with tempfile.TemporaryDirectory() as tmp:
         for name in todo:
             runs[name] = r = run_variant(name, args.cache, Path(tmp))
@@ -143,7 +174,9 @@ def main(argv=None) -> None:
     for name in [n for n in VARIANTS if n in runs]:
         r = runs[name]
         s = summarize(deviations(r["rows"], ref))
-        table.append({**r, **s})
+        if "default" in runs and name not in ("default", args.reference):
+            s["vs_default"] = summarize(deviations(r["rows"], runs["default"]["rows"]))
+        table.append({**{k: v for k, v in r.items() if k != "vs_default"}, **s})
         tw = r["twang"]
         print(f"{name:20s} twang {tw['peak_m']:.3f} m at {tw['t_peak_s']:.2f} s, at ignition {tw['at_ignition_m']:.3f} m; "
               f"largest deviation {s['all']['deviation']:.2%} ({s['all']['item']}), posts "

@@ -24,6 +24,7 @@ ROOT = Path(__file__).resolve().parent.parent
 FIGURES = ROOT / "docs" / "figures"
 DEFAULT_JSON = FIGURES / "default_run.json"
 CONVERGENCE_JSON = FIGURES / "convergence.json"
+TWANG_JSON = FIGURES / "twang_study.json"
 DOCS = (ROOT / "README.md", ROOT / "docs" / "workflow.md")
 #: figures agree when within this relative difference (or DIGITS of the largest of a group):
 #: the same code on another machine differs by round-off amplified through the contact
@@ -85,7 +86,7 @@ def default_figures(cache: Path | None) -> dict:
     largest = sorted((r for r in rows if r["category"] in ("contact_force", "interface_force") and r["unit"] == "N"),
                      key=lambda r: -abs(_peak(r)[0]))[:5]
     heads = {}
-    from liftoff.workflows.report import liquid_heads
+    from liftoff.workflows.report import bulge_modes, liquid_heads
 
     for name, head in liquid_heads(cp).items():
         heads[name] = [float(x) for x in head]
@@ -114,6 +115,10 @@ def default_figures(cache: Path | None) -> dict:
         "lox_bottom_pressure_pa": [min(r["min"] for r in pressure), max(r["max"] for r in pressure)]
         if pressure else None,
         "liquid_heads_pa": heads,
+        # (the volume change's sign is the eigenvector's, which any eigensolver may flip)
+        "bulge_modes": [{k: (abs(float(v)) if k == "dv_m3" else float(v) if isinstance(v, (float, np.floating))
+                             else v) for k, v in b.items()} for b in bulge_modes(stack.cbs)],
+        "table1": {"rows": list(out.table1.rows), "cg_motion_m": [[float(x) for x in r[:3]] for r in out.table1.motion]},
     }
 
 
@@ -129,8 +134,8 @@ def _mn(x: float) -> str:
     return f"{x / 1e6:.2f}"
 
 
-def render_blocks(fig: dict, conv: dict | None) -> dict[str, str]:
-    """{block name: markdown} from the figures (and the convergence study, if any)."""
+def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None) -> dict[str, str]:
+    """{block name: markdown} from the figures (and the convergence and twang studies, if any)."""
     tw, twn = fig["twang"]["nominal"], fig["twang"]
     v, p = fig["vehicle"], fig["pad"]
     lox = fig["lox_bottom_pressure_pa"]
@@ -165,6 +170,10 @@ def render_blocks(fig: dict, conv: dict | None) -> dict[str, str]:
     if lox:
         lines.append(f"| LOX tank-bottom pressure (dynamic + head), range | {lox[0] / 1e3:.0f} to {lox[1] / 1e3:.0f} kPa"
                      + (f" (head {head / 1e3:.0f} kPa)" if head is not None else "") + " |")
+    for b in fig["bulge_modes"]:
+        lines.append(f"| first bulge mode, {b['tank']} (fixed-interface) | {b['hz']:.2f} Hz, ullage {b['dv_m3']:.3g} m^3 "
+                     f"per unit modal coordinate, axial effective liquid mass {b['m_eff_kg'] / 1e3:.0f} t of "
+                     f"{b['m_liquid_kg'] / 1e3:.0f} t |")
     blocks = {"default-run": "\n".join(lines) + "\n"}
     posts = ["| post | separation (s) nominal / no-control | recontacts | peak compression (MN) | peak tension (MN) |",
              "|---|---|---|---|---|"]
@@ -175,22 +184,44 @@ def render_blocks(fig: dict, conv: dict | None) -> dict[str, str]:
                      f"{_mn(a['peak_compression'])} / {_mn(b['peak_compression'])} | "
                      f"{_mn(a['peak_tension'])} / {_mn(b['peak_tension'])} |")
     blocks["default-posts"] = "\n".join(posts) + "\n"
+    t1 = ["| Table 1: c.g. motion on the pad under static loads | X (mm) | Y (mm) | Z (mm) | X, Y, Z (in) |",
+          "|---|---|---|---|---|"]
+    for row, m in zip(fig["table1"]["rows"], fig["table1"]["cg_motion_m"]):
+        t1.append(f"| {row} | " + " | ".join(f"{1e3 * x:.1f}" for x in m) + " | "
+                  + ", ".join(f"{x / 0.0254:.2f}" for x in m) + " |")
+    blocks["table1"] = "\n".join(t1) + "\n"
     if conv:
         blocks["convergence"] = render_convergence(conv)
+    if twang_rows:
+        blocks["twang-study"] = render_twang(twang_rows)
     return blocks
 
 
+def render_twang(study: dict) -> str:
+    lines = ["| variant (change from the default) | T1 (s) | static (m) | c = static / T1^2 (m/s^2) | peak (m) | "
+             "t_peak (s) | at 6.6 s (m) | at 6.6 s / peak |", "|---|---|---|---|---|---|---|---|"]
+    for r in study["variants"]:
+        bold = "**" if r["variant"] == "default" else ""
+        lines.append(f"| {bold}{r['what']}{bold} | {r['T1']:.2f} | {abs(r['static']):.3f} | "
+                     f"{abs(r['static']) / r['T1'] ** 2:.4f} | {abs(r['peak']):.3f} | "
+                     f"{r['t_peak']:.2f} | {abs(r['at_ign']):.3f} | {r['ratio']:.2f} |")
+    return "\n".join(lines) + "\n"
+
+
 def render_convergence(conv: dict) -> str:
-    lines = [f"| variant | vehicle / pad modes | steps | twang peak (m) at (s) | at ignition (m) | largest change of "
-             f"a peak from the {conv['reference']} (row) | posts | attaches | rows over 1 % |",
-             "|---|---|---|---|---|---|---|---|---|"]
+    """The convergence study: each variant's twang and the largest change of an envelope
+    peak from the reference (and, for the cuts, from the default)."""
+    pct = lambda d: f"{100 * d['deviation']:.2f} %"  # noqa: E731
+    lines = [f"| variant | vehicle / pad modes | steps | twang peak (m) at (s); at ignition (m) | largest change of a "
+             f"peak from the {conv['reference']}: any row; posts; attaches | rows over 1 % | from the default: "
+             "posts; attaches |", "|---|---|---|---|---|---|---|"]
     for r in conv["variants"]:
-        tw = r["twang"]
+        tw, vd = r["twang"], r.get("vs_default")
         lines.append(f"| {r['variant']}: {r['what']} | {r['vehicle_modes']} / {r['pad_modes']} | {r['steps']} | "
-                     f"{tw['peak_m']:.3f} at {tw['t_peak_s']:.2f} | {tw['at_ignition_m']:.3f} | "
-                     f"{100 * r['all']['deviation']:.2f} % ({r['all']['item']}) | "
-                     f"{100 * r['posts']['deviation']:.2f} % | {100 * r['attach']['deviation']:.2f} % | "
-                     f"{r['over_1pct']} of {r['n_rows']} |")
+                     f"{tw['peak_m']:.3f} at {tw['t_peak_s']:.2f}; {tw['at_ignition_m']:.3f} | "
+                     f"{pct(r['all'])} ({r['all']['item']}); {pct(r['posts'])}; {pct(r['attach'])} | "
+                     f"{r['over_1pct']} of {r['n_rows']} | "
+                     + (f"{pct(vd['posts'])}; {pct(vd['attach'])} ({vd['attach']['item']})" if vd else "-") + " |")
     return "\n".join(lines) + "\n"
 
 
@@ -202,6 +233,11 @@ def apply_blocks(text: str, blocks: dict[str, str]) -> str:
 
 def block_names(text: str) -> list[str]:
     return [m.group("name") for m in BLOCK.finditer(text)]
+
+
+def studies() -> tuple[dict | None, dict | None]:
+    """The checked-in convergence and twang studies (None where not run)."""
+    return tuple(json.loads(p.read_text()) if p.is_file() else None for p in (CONVERGENCE_JSON, TWANG_JSON))
 
 
 # ------------------------------------------------------------------ comparing
@@ -258,10 +294,9 @@ def main(argv=None) -> int:
         diff = differences(fig, json.loads(DEFAULT_JSON.read_text()))
         print("\n".join(diff) if diff else "the checked-in figures are the current code's")
         return 1 if diff else 0
-    conv = json.loads(CONVERGENCE_JSON.read_text()) if CONVERGENCE_JSON.is_file() else None
     FIGURES.mkdir(parents=True, exist_ok=True)
     DEFAULT_JSON.write_text(json.dumps(fig, indent=1) + "\n")
-    blocks = render_blocks(fig, conv)
+    blocks = render_blocks(fig, *studies())
     for doc in DOCS:
         doc.write_text(apply_blocks(doc.read_text(), blocks))
     print(f"wrote {DEFAULT_JSON.relative_to(ROOT)} and the generated blocks of "

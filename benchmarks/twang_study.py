@@ -18,7 +18,8 @@ on its pad with the posts bolted (SI units):
 * ``at_ign`` (m): the tank-tip twang at booster ignition and its ratio to ``peak``.
 
 Model stages use the stage cache (default out/.liftoff-cache, shared with `make run`), so
-only the components a variant changes are rebuilt. Figures are reported in
+only the components a variant changes are rebuilt. The rows go to
+docs/figures/twang_study.json, which benchmarks/default_figures.py renders into
 docs/workflow.md, "What sets the twang".
 """
 from __future__ import annotations
@@ -189,7 +190,8 @@ def main(argv=None) -> None:
     ap.add_argument("--cache", type=Path, default=ROOT / "out" / ".liftoff-cache")
     ap.add_argument("--only", nargs="*", default=None)
     ap.add_argument("--list", action="store_true")
-    ap.add_argument("--json", type=Path, default=None, help="append the rows to this JSON-lines file")
+    ap.add_argument("--json", type=Path, default=ROOT / "docs" / "figures" / "twang_study.json",
+                    help="write the rows here (benchmarks/default_figures.py renders them into docs/workflow.md)")
     args = ap.parse_args(argv)
     if args.list:
         for k, (what, over) in VARIANTS.items():
@@ -200,6 +202,7 @@ def main(argv=None) -> None:
     from liftoff.workflows.cache import StageCache
 
     cache = StageCache(args.cache)
+    rows = []
     print(f"{'variant':24s}{'T1 (s)':>8}{'static (m)':>12}{'peak (m)':>10}{'t_peak':>8}{'at 6.6 s':>10}{'ratio':>7}"
           f"{'wall (s)':>9}")
     for name in args.only or VARIANTS:
@@ -209,9 +212,10 @@ def main(argv=None) -> None:
         r.update(variant=name, what=what, wall=time.perf_counter() - t0)
         print(f"{name:24s}{r['T1']:8.2f}{r['static']:12.3f}{r['peak']:10.3f}{r['t_peak']:8.2f}{r['at_ign']:10.3f}"
               f"{r['ratio']:7.2f}{r['wall']:9.1f}", flush=True)
-        if args.json:
-            with open(args.json, "a") as fh:
-                fh.write(json.dumps(r) + "\n")
+        rows.append(r)
+    args.json.parent.mkdir(parents=True, exist_ok=True)
+    args.json.write_text(json.dumps({"variants": rows}, indent=1) + "\n")
+    print(f"wrote {args.json}")
 
 
 if __name__ == "__main__":

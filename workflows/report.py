@@ -482,6 +482,8 @@ def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[di
     band = scenario.post.acceleration_band_hz
     lines.append(f"  accelerations in the max/min tables: {f'low-pass filtered to {band:g} Hz' if band > 0 else 'unfiltered'}"
                  " ([postprocess] acceleration_band_hz; SRS and PSD unfiltered)")
+    lines.append("  mesh: not checked by a run (refine the [model] mesh sizes and compare the envelopes; the default's "
+                 "study: docs/workflow.md, Convergence)")
     for case, (res, cp) in results.items():
         lines.append(f"  case {case!r}: {res.time.size - 1} steps of h = {res.h:.3g} s "
                      f"({res.time[0]:g} .. {res.time[-1]:g} s)")

@@ -1,0 +1,68 @@
+"""The default run's figures in README.md and docs/ are generated (benchmarks/default_figures.py),
+never typed: the documents' generated blocks are the rendering of the checked-in figures, and
+those figures are what the current code gives (the whole default run, FE, both cases). The
+convergence study (benchmarks/convergence_study.py) must have been run on the same default:
+its default row gives the same twang and peak loads as the default run's figures."""
+import importlib.util
+import json
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+HAVE_FE = all(importlib.util.find_spec(m) is not None for m in ("dolfinx", "gmsh"))
+
+
+def _figures_module():
+    spec = importlib.util.spec_from_file_location("default_figures", ROOT / "benchmarks" / "default_figures.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.fixture(scope="module")
+def figures():
+    return _figures_module()
+
+
+def test_documents_show_the_checked_in_figures(figures):
+    fig = json.loads(figures.DEFAULT_JSON.read_text())
+    blocks = figures.render_blocks(fig, *figures.studies())
+    found = set()
+    for doc in figures.DOCS:
+        text = doc.read_text()
+        names = figures.block_names(text)
+        assert set(names) <= set(blocks), f"{doc.name}: unknown generated blocks {set(names) - set(blocks)}"
+        found |= set(names)
+        assert figures.apply_blocks(text, blocks) == text, (
+            f"{doc.name}: a generated block differs from the checked-in figures; run "
+            "`python benchmarks/default_figures.py --render-only` (or without it, to rerun the default)")
+    assert found == set(blocks), f"blocks not shown in any document: {set(blocks) - found}"
+
+
+def test_convergence_study_is_of_the_current_default(figures):
+    """The study's default row against the default run's figures (same model, same step:
+    the same numbers up to the figures' own tolerance)."""
+    fig = json.loads(figures.DEFAULT_JSON.read_text())
+    conv = json.loads(figures.CONVERGENCE_JSON.read_text())
+    row = next(r for r in conv["variants"] if r["variant"] == "default")
+    assert row["vehicle_modes"] == fig["vehicle"]["modes"] and row["pad_modes"] == fig["pad"]["modes"]
+    assert row["steps"] == fig["steps"]
+    tw = fig["twang"]["nominal"]
+    assert not figures.differences({k: row["twang"][k] for k in tw}, tw)
+    env = {r["item"]: r for r in row["rows"]}
+    for load in fig["largest_loads"]:
+        r = env[load["item"]]
+        value = r["max"] if abs(r["max"]) >= abs(r["min"]) else r["min"]
+        assert not figures.differences([value], [load["value"]]), load["item"]
+    # the reference is the study's, with more modes than the default
+    ref = next(r for r in conv["variants"] if r["variant"] == conv["reference"])
+    assert ref["vehicle_modes"] > row["vehicle_modes"]
+
+
+@pytest.mark.skipif(not HAVE_FE, reason="needs dolfinx and gmsh")
+def test_checked_in_figures_are_the_current_codes(figures, tmp_path):
+    fresh = json.loads(json.dumps(figures.default_figures(tmp_path / "cache")))
+    diff = figures.differences(fresh, json.loads(figures.DEFAULT_JSON.read_text()))
+    assert not diff, ("the default run's figures changed; run `python benchmarks/default_figures.py` (and "
+                      "benchmarks/convergence_study.py when the model changed):\n" + "\n".join(diff[:20]))
