@@ -53,8 +53,10 @@ def build_component(comp: ComponentModel, model: ModelConfig, workdir: Path):
         with element_limit(model.max_elements, f"component {comp.name!r}"):
             return geometry(comp, Path(workdir))
 
+    from .pipeline import component_materials
+
     geo = on_root(world(), mesh)   # gmsh on rank 0; its .msh is read there
-    for vol, mat in model.materials.items():
+    for vol, mat in component_materials(model, comp.name).items():   # those in the stage's cache key
         if vol in geo.volumes:
             geo.volumes[vol] = mat
     from liftoff.fem.parallel import fe_comm

@@ -84,11 +84,23 @@ def boundary_points(component: Component) -> list[str]:
 
 
 # ------------------------------------------------------------------ components
+def component_materials(model: ModelConfig, name: str) -> dict:
+    """The [model.materials] entries that may apply to component ``name``: the builders name
+    their volume groups after their component (``srb_left_case``, ``pad_deck``, ...), so a
+    volume named after another component is not this one's; a volume named after none may be
+    any component's and counts for all."""
+    others = [n for n in model.components if n != name and not name.startswith(n + "_")]
+    return {vol: m for vol, m in model.materials.items()
+            if vol.startswith(name + "_") or not any(vol.startswith(n + "_") for n in others)}
+
+
 def _component_key(model: ModelConfig, comp: ComponentModel) -> dict:
-    """Everything a component stage depends on (its cache key's parameters)."""
+    """Everything a component stage depends on (its cache key's parameters); of the materials,
+    those that may apply to it (:func:`component_materials`), so that changing one component's
+    material rebuilds that component only."""
     return {"source": model.source, "name": comp.name, "mesh_size": comp.mesh_size, "degree": model.degree,
             "builder": {type(comp.builder).__name__: asdict(comp.builder)},
-            "materials": {vol: asdict(m) for vol, m in model.materials.items()},
+            "materials": {vol: asdict(m) for vol, m in component_materials(model, comp.name).items()},
             **({"convective": model.convective} if getattr(comp.builder, "liquid", "") == "hydroelastic" else {})}
 
 

@@ -76,3 +76,31 @@ def test_keys_change_with_code_and_library_versions():
     assert v["numpy"] == np.__version__ and "gmsh" in v and "fenics-dolfinx" in v
     assert stage_key("s", {"a": 1}, ("liftoff.core",)) != stage_key("s", {"a": 1}, ("liftoff.reduction",))
     assert stage_key("s", {"a": 1}, ("liftoff.core",)) != stage_key("s", {"a": 2}, ("liftoff.core",))
+
+
+def test_a_components_key_holds_only_the_materials_that_may_apply_to_it():
+    """[model.materials] of one component's volume (builders name volumes after their
+    component) changes that component's stage key only; a volume named after no component
+    counts for every one (it may be any's)."""
+    import tomllib
+
+    from liftoff.config import default_text, parse_scenario
+    from liftoff.workflows.cache import stage_key
+    from liftoff.workflows.pipeline import _component_key, component_materials
+
+    def model(materials):
+        d = tomllib.loads(default_text())
+        d["model"]["materials"] = materials
+        return parse_scenario(d, "t.toml").cases[0].model
+
+    deck = {"E": 1e9, "nu": 0.3, "rho": 100.0}
+    base, changed, odd = model({}), model({"pad_deck": deck}), model({"wing_slab": deck})
+    keys = lambda m: {n: stage_key("component", _component_key(m, c), ()) for n, c in m.components.items()}  # noqa: E731
+    kb, kc, ko = keys(base), keys(changed), keys(odd)
+    assert [n for n in kb if kb[n] != kc[n]] == ["pad"]
+    assert all(kb[n] != ko[n] for n in kb)
+    assert set(component_materials(changed, "pad")) == {"pad_deck"} and not component_materials(changed, "core")
+    # srb_left's volumes are not srb_right's, though both names start with "srb_"
+    both = model({"srb_left_case": deck})
+    assert set(component_materials(both, "srb_left")) == {"srb_left_case"}
+    assert not component_materials(both, "srb_right")
