@@ -94,7 +94,8 @@ class GrowthGuard:
             return
         allowed = max(SAFETY * self.distortion * eb, np.finfo(float).tiny)
         if forces.size and self.pen.any():
-            fmax = np.sqrt(2.0 * allowed / self.comp[self.pen])
+            with np.errstate(over="ignore"):         # a bound beyond any float: no force exceeds it
+                fmax = np.sqrt(2.0 * allowed / self.comp[self.pen])
             over = np.abs(forces[:, self.pen]) > fmax[None, :]
             if over.any():
                 i, j = np.argwhere(over)[0]

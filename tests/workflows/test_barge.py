@@ -91,6 +91,9 @@ def test_outputs_written(sweep):
     assert (out / "impact_sweep.png").is_file() and (out / "summary.txt").is_file()
     text = (out / "summary.txt").read_text()
     assert "k_b =" in text and "soft" in text
+    # every system mode kept: the truncation check (reduction/truncation.py) finds nothing missing
+    assert "modes kept (truncation check" in text and "barge: all " in text and "dock: all " in text
+    assert "warning:" not in text
 
 
 def test_soft_dock_is_dock_governed(sweep):
