@@ -71,9 +71,9 @@ def capped(data: dict) -> dict:
     return data
 
 
-#: mesh sizes (m) of the refined variant: about 0.7 x the default's (core 1.2, boosters 0.6 and
-#: orbiter 0.7 from their builders, pad 2.4)
-REFINED = {"core": 0.85, "srb_left": 0.45, "srb_right": 0.45, "orbiter": 0.5, "pad": 1.7}
+#: mesh sizes (m) of the refined variant: 0.7 x the default's (core 0.85 and orbiter 0.5 from the
+#: scenario, boosters 0.6 from their builder, pad 2.4)
+REFINED = {"core": 0.6, "srb_left": 0.42, "srb_right": 0.42, "orbiter": 0.35, "pad": 1.7}
 
 
 def refined(data: dict) -> dict:
@@ -83,22 +83,32 @@ def refined(data: dict) -> dict:
     return data
 
 
+def before_issue_22(data: dict) -> dict:
+    """The default before issue 22: P1 solids, the core at 1.2 m and the orbiter at its
+    builder's 0.7 m, the caps, the system modes below 60 Hz (pad 100 Hz), no residual vectors."""
+    m = data["model"]
+    m["degree"] = 1
+    m["component"]["core"]["mesh_size"] = 1.2
+    m["component"]["orbiter"].pop("mesh_size", None)
+    return system_cut(60.0, False, 100.0)(capped(data))
+
+
 #: name -> (what it is, edit of the default scenario's TOML data)
 VARIANTS = {
     "default": ("every fixed-interface mode below each component's f_max (60 Hz; pad 100 Hz), every system mode",
                 lambda d: d),
     REFERENCE: (f"every fixed-interface mode below {F_MAX_FACTOR:g} x each component's f_max, every system mode",
                 components_below(F_MAX_FACTOR)),
-    "components to 2 f_max": ("every fixed-interface mode below 2 x each component's f_max, every system mode",
-                              components_below(2.0)),
-    "mesh x0.7": ("the default on meshes about 0.7 x as fine (core 0.85 m, boosters 0.45 m, orbiter 0.5 m, pad "
-                  "1.7 m)", refined),
+    "mesh x0.7": ("the default on meshes 0.7 x as fine (core 0.6 m, boosters 0.42 m, orbiter 0.35 m, pad 1.7 m)",
+                  refined),
     "component caps": ("the default with the fixed-interface modes capped as before issue 22 (core 30, boosters and "
                        "orbiter 20, pad 30)", capped),
-    "before issue 22": ("those caps and the system modes below 60 Hz (pad 100 Hz), no residual vectors: the default "
-                        "before issue 22", lambda d: system_cut(60.0, False, 100.0)(capped(d))),
+    "before issue 22": ("P1 solids, core 1.2 m, orbiter 0.7 m, those caps, the system modes below 60 Hz (pad "
+                        "100 Hz), no residual vectors: the default before issue 22", before_issue_22),
     "system 30 Hz + RV": ("the default with the system modes below 30 Hz and residual vectors", system_cut(30.0, True)),
     "system 30 Hz": ("the default with the system modes below 30 Hz, no residual vectors", system_cut(30.0, False)),
+    "components to 2 f_max": ("every fixed-interface mode below 2 x each component's f_max, every system mode",
+                              components_below(2.0)),
 }
 
 

@@ -25,6 +25,7 @@ FIGURES = ROOT / "docs" / "figures"
 DEFAULT_JSON = FIGURES / "default_run.json"
 CONVERGENCE_JSON = FIGURES / "convergence.json"
 TWANG_JSON = FIGURES / "twang_study.json"
+MESH_JSON = FIGURES / "mesh_study.json"
 DOCS = (ROOT / "README.md", ROOT / "docs" / "workflow.md")
 #: figures agree when within this relative difference (of the larger of the two or, inside a
 #: list, of the list's largest magnitude): the same code on another machine differs by
@@ -133,8 +134,9 @@ def _mn(x: float) -> str:
     return f"{x / 1e6:.2f}"
 
 
-def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None) -> dict[str, str]:
-    """{block name: markdown} from the figures (and the convergence and twang studies, if any)."""
+def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
+                  mesh: dict | None = None) -> dict[str, str]:
+    """{block name: markdown} from the figures (and the convergence, twang and mesh studies, if any)."""
     tw, twn = fig["twang"]["nominal"], fig["twang"]
     v, p = fig["vehicle"], fig["pad"]
     lox = fig["lox_bottom_pressure_pa"]
@@ -147,6 +149,8 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None) 
         f"{v['highest_hz']:.0f} Hz) |",
         f"| pad system modes kept (all) | {p['modes']} (first {p['first_hz']:.2f} Hz, highest {p['highest_hz']:.0f} Hz) |",
         f"| vehicle mass, c.g. | {v['mass_t']:.1f} t at z = {v['cg_m'][2]:.2f} m |",
+        "| FE DOFs; fixed-interface modes kept | " + "; ".join(
+            f"{n} {c['fe_dofs']} DOFs, {c['cb_modes']} modes" for n, c in fig["components"].items()) + " |",
         f"| step | {fig['steps']} steps of h = {fig['h_s'] * 1e6:.1f} us (0.25 / the highest mode) |",
     ]
     for c in fig["truncation"]:
@@ -193,7 +197,25 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None) 
         blocks["convergence"] = render_convergence(conv)
     if twang_rows:
         blocks["twang-study"] = render_twang(twang_rows)
+    if mesh:
+        blocks["mesh-study"] = render_mesh(mesh)
     return blocks
+
+
+def render_mesh(study: dict) -> str:
+    """The static mesh study: each level's DOFs, post axial loads at t0 and its largest
+    changes from the finest level."""
+    posts = list(study["levels"][0]["posts_tz_n"])
+    lines = [f"| level (solids' degree, mesh x the sizes before issue 22) | DOFs | post Tz at t0 (MN): {', '.join(posts)} | "
+             f"change from {study['finest']}: posts; attach forces; attach moments |", "|---|---|---|---|"]
+    for r in study["levels"]:
+        ch = r.get("change_from_finest")
+        pct = (lambda d: f"{100 * d['change']:.1f} % ({d['item']})")  # noqa: E731
+        lines.append(f"| {r['level']} | {sum(r['dofs'].values())} | "
+                     + ", ".join(f"{r['posts_tz_n'][p] / 1e6:.2f}" for p in posts) + " | "
+                     + (f"{pct(ch['posts'])}; {pct(ch['attach_forces'])}; {pct(ch['attach_moments'])}" if ch else "-")
+                     + " |")
+    return "\n".join(lines) + "\n"
 
 
 def render_twang(study: dict) -> str:
@@ -234,9 +256,9 @@ def block_names(text: str) -> list[str]:
     return [m.group("name") for m in BLOCK.finditer(text)]
 
 
-def studies() -> tuple[dict | None, dict | None]:
-    """The checked-in convergence and twang studies (None where not run)."""
-    return tuple(json.loads(p.read_text()) if p.is_file() else None for p in (CONVERGENCE_JSON, TWANG_JSON))
+def studies() -> tuple[dict | None, dict | None, dict | None]:
+    """The checked-in convergence, twang and mesh studies (None where not run)."""
+    return tuple(json.loads(p.read_text()) if p.is_file() else None for p in (CONVERGENCE_JSON, TWANG_JSON, MESH_JSON))
 
 
 # ------------------------------------------------------------------ comparing

@@ -27,7 +27,8 @@ def test_default_scenario_parses(base):
     comps = nominal.model.components
     assert isinstance(comps["srb_left"].builder, BoosterParams) and comps["srb_left"].builder.side == "left"
     assert isinstance(comps["orbiter"].builder, OrbiterParams) and isinstance(comps["pad"].builder, PadParams)
-    assert comps["core"].mesh_size == 1.2 and comps["core"].builder.mesh_size == 1.2
+    assert comps["core"].mesh_size == 0.85 and comps["core"].builder.mesh_size == 0.85
+    assert comps["orbiter"].mesh_size == 0.5 and nominal.model.degree == 2      # mesh-converged (issue 22)
     assert comps["pad"].builder.mesh_size == 2.4 and comps["pad"].f_max == 100.0 and comps["pad"].n_modes is None
     # every fixed-interface mode below f_max (issue 22: caps moved attach loads by up to 85 %)
     assert all(c.n_modes is None and c.f_max == 60.0 for n, c in comps.items() if n != "pad")

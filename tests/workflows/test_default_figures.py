@@ -60,6 +60,21 @@ def test_convergence_study_is_of_the_current_default(figures):
     assert ref["vehicle_modes"] > row["vehicle_modes"]
 
 
+def test_mesh_study_has_the_current_default_as_a_level(figures):
+    """The mesh study's default level is the default run's model: the same FE DOFs, and the
+    same static preloads at t0. A Craig-Bampton model's statics are exact whatever its
+    fixed-interface modes (the constraint modes carry them), so the study's one-mode model
+    and the default's all-mode model differ only by the round-off of two static solves of
+    a system with cond ~1e8: 1e-6 relative is that with margin, and a mesh, degree or
+    material change moves them by more than 1e-3 (the study's own table)."""
+    fig = json.loads(figures.DEFAULT_JSON.read_text())
+    study = json.loads(figures.MESH_JSON.read_text())
+    level = next(r for r in study["levels"] if "(the default)" in r["level"])
+    assert level["dofs"] == {n: c["fe_dofs"] for n, c in fig["components"].items()}
+    for point, tz in fig["preload_t0_tz_n"].items():
+        assert level["attach"][point][2] == pytest.approx(tz, rel=1e-6), point
+
+
 @pytest.mark.skipif(not HAVE_FE, reason="needs dolfinx and gmsh")
 def test_checked_in_figures_are_the_current_codes(figures, tmp_path):
     fresh = json.loads(json.dumps(figures.default_figures(tmp_path / "cache")))
