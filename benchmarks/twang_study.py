@@ -1,7 +1,7 @@
 """What sets the twang of the default stack: sensitivity of the tank-tip twang and of the
 on-pad rocking period to the stack, skirt, post, pad and engine parameters (issue 15).
 
-    python benchmarks/twang_study.py [--cache DIR] [--only NAME ...] [--list]
+    python benchmarks/twang_study.py [--cache DIR] [--only NAME ...] [--list] [--resume]
 
 Each variant is the embedded default scenario (its first case) with a few keys changed
 (deep-merged as a ``[[case]]`` override would be). For each it reports, from the FE stack
@@ -185,11 +185,32 @@ def analyse(case, cache, top: str = "stack_top") -> dict:
             "mass_t": float(pr.body_a.mass / 1e3)}
 
 
+def variant_key(over: dict) -> str:
+    """What a row was computed from: the default scenario's text and the variant's override
+    (a row whose key differs was computed on another model and is never reused)."""
+    import hashlib
+
+    from liftoff.config import default_text
+
+    return hashlib.sha256((default_text() + json.dumps(over, sort_keys=True)).encode()).hexdigest()[:16]
+
+
+def write_rows(path: Path, rows: list[dict]) -> None:
+    """Write the rows atomically (a killed study leaves the previous file or the new one)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".json.tmp")
+    tmp.write_text(json.dumps({"variants": rows}, indent=1) + "\n")
+    tmp.replace(path)
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--cache", type=Path, default=ROOT / "out" / ".liftoff-cache")
     ap.add_argument("--only", nargs="*", default=None)
     ap.add_argument("--list", action="store_true")
+    ap.add_argument("--resume", action="store_true",
+                    help="keep the rows of --json computed on the same default and override (their key), "
+                         "compute the others")
     ap.add_argument("--json", type=Path, default=ROOT / "docs" / "figures" / "twang_study.json",
                     help="write the rows here (benchmarks/default_figures.py renders them into docs/workflow.md)")
     args = ap.parse_args(argv)
@@ -197,6 +218,13 @@ def main(argv=None) -> None:
         for k, (what, over) in VARIANTS.items():
             print(f"{k:24s} {what}: {json.dumps(over)}")
         return
+    names = args.only or list(VARIANTS)
+    unknown = [n for n in names if n not in VARIANTS]
+    if unknown:
+        raise SystemExit(f"twang_study: unknown variant(s) {unknown} (--list shows them)")
+    old = {}
+    if args.resume and args.json.exists():
+        old = {r["variant"]: r for r in json.loads(args.json.read_text())["variants"]}
     import pyvista  # noqa: F401  (before dolfinx, FENICSX-NOTES.md)
 
     from liftoff.workflows.cache import StageCache
@@ -205,16 +233,20 @@ def main(argv=None) -> None:
     rows = []
     print(f"{'variant':24s}{'T1 (s)':>8}{'static (m)':>12}{'peak (m)':>10}{'t_peak':>8}{'at 6.6 s':>10}{'ratio':>7}"
           f"{'wall (s)':>9}")
-    for name in args.only or VARIANTS:
+    for name in names:
         what, over = VARIANTS[name]
-        t0 = time.perf_counter()
-        r = analyse(scenario_case(over), cache)
-        r.update(variant=name, what=what, wall=time.perf_counter() - t0)
+        key = variant_key(over)
+        if name in old and old[name].get("key") == key:
+            r = old[name]
+        else:
+            t0 = time.perf_counter()
+            r = analyse(scenario_case(over), cache)
+            r.update(variant=name, what=what, key=key, wall=time.perf_counter() - t0)
         print(f"{name:24s}{r['T1']:8.2f}{r['static']:12.3f}{r['peak']:10.3f}{r['t_peak']:8.2f}{r['at_ign']:10.3f}"
               f"{r['ratio']:7.2f}{r['wall']:9.1f}", flush=True)
         rows.append(r)
-    args.json.parent.mkdir(parents=True, exist_ok=True)
-    args.json.write_text(json.dumps({"variants": rows}, indent=1) + "\n")
+        # each row as it comes (and the old rows not yet reached), so a killed study resumes
+        write_rows(args.json, rows + [old[n] for n in names[len(rows):] if n in old])
     print(f"wrote {args.json}")
 
 
