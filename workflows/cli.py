@@ -9,6 +9,8 @@ the line asks to report it), 130/143 interrupted by SIGINT/SIGTERM.
 
     liftoff transient SCENARIO.toml --out DIR [--method direct|fixed-point] [--no-progress]
                       [--no-error-estimate] [--max-memory GB]
+    liftoff run [SCENARIO.toml] --out DIR ...      (workflows/run.py)
+    liftoff init DIR [--example shuttle|barge] [--full]   (workflows/init.py)
 
 Under ``mpirun -n N`` (or ``liftoff run --ranks N``) every rank prints its own error line
 and exits at once (workflows/parallel.py: errors are raised on every rank).
@@ -146,9 +148,10 @@ def summary(scenario, result, path: Path, wall: float, est=None) -> str:
 
 
 # ------------------------------------------------------------------ entry point
+from liftoff.workflows.init import add_parser as _add_init  # noqa: E402  `liftoff init` (workflows/init.py)
 from liftoff.workflows.run import add_parser as _add_run  # noqa: E402  `liftoff run` (workflows/run.py)
 
-COMMANDS: list[Callable[[argparse._SubParsersAction], None]] = [_add_transient, _add_run]
+COMMANDS: list[Callable[[argparse._SubParsersAction], None]] = [_add_transient, _add_run, _add_init]
 
 
 class _Parser(argparse.ArgumentParser):

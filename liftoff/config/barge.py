@@ -19,7 +19,8 @@ import numpy as np
 from liftoff.meshes.barge import BargeParams, CargoParams, DockParams, default_positions
 from liftoff.meshes.layout import StackLayout
 
-from .files import parse_toml, read_toml
+from .extends import read_scenario, resolve
+from .files import parse_toml
 from .model import ComponentModel, ModelConfig, SystemModel, builder
 from .scenario import merge
 from .sections import FORCE_KEYS, Force, TimeSpan, force, time_span
@@ -176,6 +177,7 @@ def _case(w: Where, d: dict, name: str, base: Path) -> BargeCase:
 def parse_barge(data: dict, source: str = "scenario", base: Path | str = ".") -> BargeScenario:
     """Validate a barge scenario mapping: one BargeCase per [[case]] (or 'base')."""
     w, base = Where(source), Path(base)
+    data = resolve(data, source, base)              # extends = "barge" or a path (liftoff.config.extends)
     table(w, data, _TOP)
     if data.get("kind", KIND) != KIND:
         raise (w / "kind").error(f"expected {KIND!r} for a barge scenario, got {data.get('kind')!r}")
@@ -204,13 +206,13 @@ def load_barge(path: str | Path | None = None) -> BargeScenario:
         source = f"<example {EXAMPLE_NAME}>"
         return parse_barge(parse_toml(example_text(), source), source)
     path = Path(path)
-    return parse_barge(read_toml(path), path.name, path.resolve().parent)
+    return parse_barge(read_scenario(path), path.name, path.resolve().parent)
 
 
 def scenario_kind(path: str | Path | None) -> str:
     """``kind`` of a ``liftoff run`` scenario file: "liftoff" (the default) or "barge"."""
     if path is None:
         return "liftoff"
-    kind = read_toml(path).get("kind", "liftoff")
+    kind = read_scenario(path).get("kind", "liftoff")
     return kind if isinstance(kind, str) else "liftoff"
 

@@ -25,7 +25,8 @@ from liftoff.core.labels import TRANSLATIONS, point_labels
 from liftoff.transient.model import ContactPoint
 
 from .dispersion import Dispersion, case_name, dispersion
-from .files import parse_toml, read_toml
+from .extends import merge, read_scenario, resolve
+from .files import parse_toml
 from .model import ModelConfig, model_config
 from .postprocess import PostProcess, postprocess
 from .sections import (
@@ -305,28 +306,12 @@ def _check_profiles_used(w: Where, profiles: Any, used: set) -> None:
                                                 f"{', '.join(sorted(str(u) for u in used if u)) or 'none'})")
 
 
-def merge(base: dict, over: dict) -> dict:
-    """Deep merge ``over`` into a copy of ``base`` (tables by key, named tables by name)."""
-    out = copy.deepcopy(base)
-    for k, v in over.items():
-        if isinstance(v, dict) and isinstance(out.get(k), dict):
-            out[k] = merge(out[k], v)
-        elif (isinstance(v, list) and isinstance(out.get(k), list) and v and out[k]
-              and all(isinstance(x, dict) and "name" in x for x in v + out[k])):
-            merged = {x["name"]: copy.deepcopy(x) for x in out[k]}
-            for x in v:
-                merged[x["name"]] = merge(merged.get(x["name"], {}), x)
-            out[k] = list(merged.values())
-        else:
-            out[k] = copy.deepcopy(v)
-    return out
-
-
 # --------------------------------------------------------------------- entry points
 def parse_scenario(data: dict, source: str = "scenario", base: Path | str = ".", n_cases: int | None = None) -> Scenario:
     """Validate a scenario mapping (as read from TOML): one Case per [[case]] (or 'base');
     CSV paths relative to ``base``; ``n_cases`` overrides ``[dispersion] n_cases``."""
     w, base = Where(source), Path(base)
+    data = resolve(data, source, base)              # extends = "shuttle" or a path (liftoff.config.extends)
     table(w, data, _TOP)
     if data.get("kind", "liftoff") != "liftoff":   # "barge": liftoff.config.barge
         raise (w / "kind").error(f"expected 'liftoff' for a lift-off scenario, got {data.get('kind')!r}")
@@ -376,4 +361,4 @@ def load_scenario(path: str | Path | None = None, n_cases: int | None = None) ->
         source = f"<default {DEFAULT_NAME}>"
         return parse_scenario(parse_toml(default_text(), source), source, n_cases=n_cases)
     path = Path(path)
-    return parse_scenario(read_toml(path), path.name, path.resolve().parent, n_cases)
+    return parse_scenario(read_scenario(path), path.name, path.resolve().parent, n_cases)

@@ -1,0 +1,109 @@
+"""Scenarios that start from another: ``extends = "shuttle"`` (an embedded example) or
+``extends = "path/to/base.toml"``, with the file's own keys merged into the base's key by
+key (:func:`merge`).
+
+The base is resolved first (it may itself extend another; a cycle is an error), then:
+
+* tables merge by key and arrays of named tables (``[[case]]``, ``[[engine]]``,
+  ``[[post]]``, ...) by ``name``; any other value replaces the base's;
+* ``[model]`` is a description of one model source: a file that sets ``[model] source``
+  to another source than its base's (``"stick"`` on the ``"fe"`` Shuttle) does not inherit
+  the base's ``[model]`` table at all, so that FE meshes, materials and builder parameters
+  of the base never reach (or are refused by) the stick model;
+* ``kind`` (``"liftoff"`` or ``"barge"``) is the base's: a file may repeat it, not change it;
+* file paths (CSV tables, Nastran files) resolve against the folder of the file that is run,
+  whichever file names them.
+
+Unknown keys still fail with one line, naming the file that is run and the key.
+"""
+from __future__ import annotations
+
+import copy
+from importlib import resources
+from pathlib import Path
+
+from liftoff.core.errors import InputError
+
+from .files import parse_toml, read_toml
+from .values import Where, string
+
+#: example name -> embedded scenario (package data of liftoff.config)
+EXAMPLES = {"shuttle": "default_scenario.toml", "barge": "barge_scenario.toml"}
+#: how deep ``extends`` may chain (a longer chain is a mistake, not a design)
+MAX_DEPTH = 8
+
+
+def merge(base: dict, over: dict) -> dict:
+    """Deep merge ``over`` into a copy of ``base`` (tables by key, named tables by name)."""
+    out = copy.deepcopy(base)
+    for k, v in over.items():
+        if isinstance(v, dict) and isinstance(out.get(k), dict):
+            out[k] = merge(out[k], v)
+        elif (isinstance(v, list) and isinstance(out.get(k), list) and v and out[k]
+              and all(isinstance(x, dict) and "name" in x for x in v + out[k])):
+            merged = {x["name"]: copy.deepcopy(x) for x in out[k]}
+            for x in v:
+                merged[x["name"]] = merge(merged.get(x["name"], {}), x)
+            out[k] = list(merged.values())
+        else:
+            out[k] = copy.deepcopy(v)
+    return out
+
+
+def example_text(name: str) -> str:
+    """The text of an embedded example scenario (:data:`EXAMPLES`)."""
+    return resources.files("liftoff.config").joinpath(EXAMPLES[name]).read_text(encoding="utf-8")
+
+
+def _model_source(data: dict) -> str:
+    model = data.get("model")
+    src = model.get("source", "fe") if isinstance(model, dict) else "fe"
+    return src if isinstance(src, str) else "fe"
+
+
+def resolve(data: dict, source: str, folder: Path | None, _chain: tuple[str, ...] = ()) -> dict:
+    """The scenario mapping ``data`` (read from ``source``, a file in ``folder``; None for
+    embedded text) with its ``extends`` resolved; without ``extends``, ``data`` itself."""
+    if "extends" not in data:
+        return data
+    w = Where(source, "extends")
+    name = string(w, data["extends"])
+    if len(_chain) >= MAX_DEPTH:
+        raise w.error(f"more than {MAX_DEPTH} scenarios extend one another ({' -> '.join(_chain)})")
+    if name in EXAMPLES:
+        ident, base_source, base_folder = f"example:{name}", f"<example {name}>", None
+        base = parse_toml(example_text(name), base_source)
+    else:
+        if folder is None:
+            raise w.error(f"unknown example {name!r} (examples: {', '.join(EXAMPLES)})")
+        path = (folder / name)
+        if not path.is_file():
+            hint = f"; examples: {', '.join(EXAMPLES)}" if "/" not in name and not name.endswith(".toml") else ""
+            raise w.error(f"no example and no file {name!r} (looked in {folder}{hint})")
+        ident, base_source, base_folder = str(path.resolve()), path.name, path.resolve().parent
+        base = read_toml(path)
+    if ident in _chain:
+        raise w.error(f"scenarios extend one another in a cycle: {' -> '.join(_chain + (ident,))}")
+    base = resolve(base, base_source, base_folder, _chain + (ident,))
+    own = {k: v for k, v in data.items() if k != "extends"}
+    kind = base.get("kind", "liftoff")
+    if "kind" in own and own["kind"] != kind:
+        raise Where(source, "kind").error(f"{own['kind']!r} differs from the kind of the scenario it extends "
+                                          f"({name!r}: {kind!r})")
+    if isinstance(own.get("model"), dict) and "source" in own["model"] \
+            and own["model"]["source"] != _model_source(base):
+        base = {k: v for k, v in base.items() if k != "model"}     # another model source: its own [model]
+    return merge(base, own)
+
+
+def read_scenario(path: str | Path) -> dict:
+    """A scenario file's mapping with its ``extends`` resolved."""
+    path = Path(path)
+    return resolve(read_toml(path), path.name, path.resolve().parent, (str(path.resolve()),))
+
+
+def check_example(name: str) -> str:
+    """``name`` if it is an embedded example, else a one-line InputError."""
+    if name not in EXAMPLES:
+        raise InputError(f"unknown example {name!r} (examples: {', '.join(EXAMPLES)})")
+    return name
