@@ -8,9 +8,10 @@ that DIR holds the old set or the new set, never a mix). A failed, interrupted o
 run leaves DIR as it was; its staging folder is removed on the way out, or by the next
 run when the process was killed (the folder carries its pid).
 
-DIR may be new, empty, or a previous output of liftoff (it holds a MANIFEST.json written by
-liftoff, or only files with liftoff's output names); anything else is refused, so a run
-never replaces a folder of the user's own files.
+DIR may be new, empty, or a previous output of liftoff, proven by its own manifest: a
+liftoff MANIFEST.json that lists exactly the folder's files with their SHA-256. Anything
+else is refused before the run, so a run never replaces a folder of the user's own files
+(nor one where a user added a file to a previous output).
 """
 from __future__ import annotations
 
@@ -21,7 +22,6 @@ import shutil
 import tempfile
 import time
 from contextlib import contextmanager
-from fnmatch import fnmatch
 from pathlib import Path
 from typing import Iterator
 
@@ -30,25 +30,34 @@ from liftoff.core.records import TEMP_TAG, file_sha256, fsync_dir, sweep_stale, 
 
 MANIFEST = "MANIFEST.json"
 FORMAT = "liftoff-run-manifest"
-OUTPUT_NAMES = ("MANIFEST.json", "results*.h5", "maxmin_*.csv", "table1.*", "summary.txt", "*.png", "*.csv",
-                "*.h5", "*.vtu", "*.pvd", "*.gif", "*.mp4", "*.json")
 
 
 def check_target(out: Path) -> None:
-    """InputError (one line) unless ``out`` is new, empty or a previous liftoff output folder."""
+    """InputError (one line) unless ``out`` is new, empty or a folder that liftoff wrote:
+    its MANIFEST.json is liftoff's (format), and it lists exactly the files the folder holds,
+    each with its size and SHA-256 (:func:`verify`). Output-like names prove nothing (a
+    user's data.csv or photo.png), nor does a MANIFEST.json of another origin."""
     if not str(out) or str(out) in (".", "/"):
         raise InputError(f"--out {str(out)!r}: give a folder of its own for the results")
     if out.exists() and not out.is_dir():
         raise InputError(f"--out {str(out)!r}: exists and is not a folder")
-    if not out.is_dir():
+    if not out.is_dir() or not any(out.iterdir()):
         return
-    entries = [e for e in out.iterdir()]
-    if not entries or (out / MANIFEST).is_file():
-        return
-    foreign = [e.name for e in entries if e.is_dir() or not any(fnmatch(e.name, pat) for pat in OUTPUT_NAMES)]
-    if foreign:
-        raise InputError(f"--out {str(out)!r}: holds {foreign[0]!r}, which liftoff did not write; give a new "
-                         "or empty folder (a run replaces its output folder as a whole)")
+    refuse = (f"--out {str(out)!r}: {{}}; a run replaces its output folder as a whole, so it takes only a "
+              "new or empty folder or one that liftoff wrote: give another folder")
+    try:
+        man = json.loads((out / MANIFEST).read_text())
+    except FileNotFoundError:
+        first = sorted(e.name for e in out.iterdir())[0]
+        raise InputError(refuse.format(f"holds {first!r} and no {MANIFEST}, so liftoff did not write it")) from None
+    except (OSError, ValueError) as exc:
+        raise InputError(refuse.format(f"its {MANIFEST} cannot be read ({' '.join(str(exc).split())})")) from None
+    if not isinstance(man, dict) or man.get("format") != FORMAT:
+        raise InputError(refuse.format(f"its {MANIFEST} is not a liftoff run manifest"))
+    problems = [p for p in verify(out) if not p.startswith("missing ")]   # a file the user removed is no loss
+    if problems:
+        raise InputError(refuse.format(f"it does not match its {MANIFEST} ({problems[0]}), so it holds files "
+                                       "liftoff did not write"))
 
 
 def _manifest(stage: Path, command: str) -> dict:
@@ -116,15 +125,21 @@ def verify(out) -> list[str]:
         man = json.loads((out / MANIFEST).read_text())
     except (OSError, ValueError) as exc:
         return [f"no readable {MANIFEST}: {exc}"]
+    files = man.get("files") if isinstance(man, dict) else None
+    if not isinstance(files, list) or not all(isinstance(f, dict) and isinstance(f.get("name"), str)
+                                              and isinstance(f.get("sha256"), str) for f in files):
+        return [f"{MANIFEST} lists no files in liftoff's format"]
     problems, listed = [], set()
-    for f in man.get("files", []):
+    for f in files:
         p = out / f["name"]
         listed.add(f["name"])
         if not p.is_file():
             problems.append(f"missing {f['name']}")
         elif file_sha256(p) != f["sha256"]:
             problems.append(f"changed {f['name']}")
-    extra = [str(p.relative_to(out)) for p in out.rglob("*") if p.is_file()
-             and str(p.relative_to(out)) not in listed | {MANIFEST}]
+    listed_dirs = {str(parent) for name in listed for parent in Path(name).parents}
+    extra = [str(p.relative_to(out)) for p in sorted(out.rglob("*"))
+             if (p.is_file() or p.is_symlink()) and str(p.relative_to(out)) not in listed | {MANIFEST}
+             or p.is_dir() and not p.is_symlink() and str(p.relative_to(out)) not in listed_dirs]
     problems += [f"extra {e}" for e in extra]
     return problems

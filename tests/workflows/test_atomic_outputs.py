@@ -58,10 +58,48 @@ def test_staged_output_publishes_all_or_nothing(tmp_path):
 
 
 def test_foreign_folders_are_refused(tmp_path):
+    """Only a folder that liftoff wrote, proven by its own manifest, is replaced (issue 27):
+    output-like names (a user's data.csv, photo.png), a hand-made MANIFEST.json, or a file
+    added to a previous output are refused, and nothing in the folder is touched."""
     (tmp_path / "mine").mkdir()
     (tmp_path / "mine" / "thesis.tex").write_text("x")
-    with pytest.raises(InputError, match="'thesis.tex', which liftoff did not write"):
+    with pytest.raises(InputError, match="holds 'thesis.tex' and no MANIFEST.json, so liftoff did not write it"):
         check_target(tmp_path / "mine")
+    look_alike = tmp_path / "ud"
+    look_alike.mkdir()
+    for name in ("mydata.csv", "photo.png", "experiment_data.h5", "settings.json"):
+        (look_alike / name).write_text("user data")
+    with pytest.raises(InputError, match="holds 'experiment_data.h5' and no MANIFEST.json"):
+        check_target(look_alike)
+    (look_alike / MANIFEST).write_text('{"files": []}')
+    with pytest.raises(InputError, match="not a liftoff run manifest"):
+        check_target(look_alike)
+    (look_alike / MANIFEST).write_text('{"format": "liftoff-run-manifest", "files": []}')
+    with pytest.raises(InputError, match=r"does not match its MANIFEST.json \(extra experiment_data.h5\)"):
+        check_target(look_alike)
+    (look_alike / MANIFEST).write_text("not json")
+    with pytest.raises(InputError, match="MANIFEST.json cannot be read"):
+        check_target(look_alike)
+    assert sorted(p.name for p in look_alike.iterdir()) == sorted(
+        ["mydata.csv", "photo.png", "experiment_data.h5", "settings.json", MANIFEST])
+    # a real output with a file (or an empty folder) added by the user, or a file changed
+    out = tmp_path / "run"
+    with staged_output(out, "test") as stage:
+        (stage / "results.h5").write_bytes(b"r")
+    check_target(out)                                      # liftoff's own: replaceable
+    (out / "notes.txt").write_text("mine")
+    with pytest.raises(InputError, match="extra notes.txt"):
+        check_target(out)
+    (out / "notes.txt").unlink()
+    (out / "photos").mkdir()
+    with pytest.raises(InputError, match="extra photos"):
+        check_target(out)
+    (out / "photos").rmdir()
+    (out / "results.h5").write_bytes(b"edited")
+    with pytest.raises(InputError, match="changed results.h5"):
+        check_target(out)
+    (out / "results.h5").unlink()                          # a file the user removed is no loss
+    check_target(out)
     for bad in ("", "."):
         with pytest.raises(InputError, match="give a folder of its own"):
             check_target(__import__("pathlib").Path(bad))
