@@ -491,6 +491,9 @@ def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[di
         if est:
             lines.append(f"    peak post forces: estimated error (Richardson, second run at h/2) at most "
                          f"{est['worst_relative']:.2g} of the largest post force")
+        else:
+            lines.append("    step: not checked (no second run at h/2: --no-error-estimate); the peaks carry no error "
+                         "estimate")
         tw = twang(res, cp)
         if tw is not None:
             lines.append(f"    {tw.line()}")
@@ -505,7 +508,9 @@ def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[di
                     and r["unit"] == "N"),
                    key=lambda r: -max(abs(r["max"]), abs(r["min"])))[:5]
     if peaks:
-        lines.append("  largest loads (envelope over cases; est. error: Richardson from a run at h/2, an estimate):")
+        estimated = any(r.get(k) is not None and r.get(k) == r.get(k) for r in peaks for k in ("max_err", "min_err"))
+        lines.append("  largest loads (envelope over cases" + ("; est. error: Richardson from a run at h/2, an estimate):"
+                                                            if estimated else "; no step-error estimate):"))
         for r in peaks:
             big, t, c, e = (r["max"], r["t_max"], r["case_max"], r.get("max_err")) if abs(r["max"]) >= abs(r["min"]) \
                 else (r["min"], r["t_min"], r["case_min"], r.get("min_err"))

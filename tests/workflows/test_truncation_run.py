@@ -106,5 +106,7 @@ def test_run_reports_the_truncation_check(tmp_path, capsys):
                  "--no-error-estimate"]) == 0
     text = (tmp_path / "all" / "summary.txt").read_text()
     assert "vehicle: all " in text and "warning:" not in text
+    # --no-error-estimate: the summary says the step is not checked, and claims no estimate (issue 27)
+    assert "step: not checked" in text and "Richardson" not in text and "no step-error estimate" in text
     meta = load_result(tmp_path / "all" / "results_nominal.h5").metadata["truncation"]
     assert all(m["ok"] and m["f_cut_hz"] is None and m["flexibility_shortfall"] < 1e-6 for m in meta)
