@@ -33,8 +33,11 @@ from liftoff.core.labels import COMPONENTS, split_label
 from liftoff.core.rigid import dof_rb
 
 from . import petsc_backend as pb
+from .jit_log import quiet_compiler_log
 from .mesh import TaggedMesh, read_mesh_parts
 from .spiders import CLAMPED, FREE, eliminate_interpolations, interpolation_fit, transformation_rows
+
+quiet_compiler_log()    # no gcc command lines on the terminal when forms compile
 
 
 @dataclass

@@ -27,6 +27,12 @@ os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
 import pyvista  # noqa: E402
 
 pyvista.OFF_SCREEN = True
+try:  # headless machines: VTK warns "bad X server connection" (in colour) and renders off-screen all the same
+    from vtkmodules.vtkCommonCore import vtkLogger
+
+    vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_ERROR)
+except ImportError:  # pragma: no cover  (an older VTK without vtkLogger)
+    pass
 
 from liftoff.core.errors import InputError  # noqa: E402
 from liftoff.core.records import atomic_path  # noqa: E402

@@ -158,7 +158,9 @@ class _Parser(argparse.ArgumentParser):
     """Usage errors in one line (``liftoff: error: ...``), exit status 2."""
 
     def error(self, message: str):
-        self.exit(EXIT_INPUT, f"liftoff: error: {self.prog}: {_one_line(Exception(message))}\n")
+        where = "" if self.prog == "liftoff" else f"{self.prog}: "      # no "liftoff: error: liftoff: ..."
+        self.exit(EXIT_INPUT, f"liftoff: error: {where}{_one_line(Exception(message))} "
+                              f"(usage: {self.prog} --help)\n")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -290,3 +290,16 @@ def test_fixed_point_divergence_is_an_error(case_dir: Path):
                         "--method", "fixed-point"], case_dir)
     _assert_clean_failure(proc.returncode, proc.stderr, "", case_dir / "out", status=3)   # no convergence
     assert "converge" in proc.stderr.lower(), proc.stderr
+
+
+def test_no_command_is_one_line_with_usage(capsys):
+    """`liftoff` alone: one line naming what is missing and where the usage is, exit 2 (no
+    "liftoff: error: liftoff: ...")."""
+    from liftoff.workflows.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main([])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and err.count("\n") == 1
+    assert err.startswith("liftoff: error: the following arguments are required: COMMAND")
+    assert "(usage: liftoff --help)" in err and "liftoff: error: liftoff:" not in err
