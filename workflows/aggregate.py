@@ -197,12 +197,18 @@ def read_maxmin(path: Path) -> dict[str, dict]:
         path = path / "maxmin_envelope.csv"
     if not path.is_file():
         raise InputError(f"--compare {str(path)!r}: no such max/min table")
-    lines = [ln for ln in path.read_text().splitlines() if ln and not ln.startswith("#")]
     try:
+        lines = [ln for ln in path.read_text(encoding="utf-8").splitlines() if ln and not ln.startswith("#")]
         rows = {r["item"]: {"max": float(r["max"]), "min": float(r["min"]), "unit": r.get("unit", "")}
                 for r in csv.DictReader(lines)}
+    except UnicodeDecodeError:
+        raise InputError(f"--compare {str(path)!r}: not a text file (a liftoff max/min CSV is)") from None
+    except OSError as exc:
+        raise InputError(f"--compare {str(path)!r}: cannot be read ({exc.strerror or exc})") from None
     except (KeyError, ValueError, TypeError) as exc:
         raise InputError(f"--compare {str(path)!r}: not a liftoff max/min table ({exc})") from None
+    if not rows:
+        raise InputError(f"--compare {str(path)!r}: holds no max/min rows")
     return rows
 
 

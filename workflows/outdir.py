@@ -32,6 +32,27 @@ MANIFEST = "MANIFEST.json"
 FORMAT = "liftoff-run-manifest"
 
 
+NAME_MAX = 255              # bytes of one file name (Linux, most file systems)
+STAGING_EXTRA = 48          # the staging folder's name: "." + name + TEMP_TAG + pid + "-old-" + random
+
+
+def _check_writable(out: Path) -> None:
+    """The folder that will hold ``out`` can take the staging folder: a probe folder made
+    and removed in the nearest existing ancestor (creating ``out``'s parents waits for the
+    run's end); a run cannot write there otherwise (read-only, /proc, not a folder)."""
+    anc = out.absolute().parent
+    while not anc.exists() and anc != anc.parent:
+        anc = anc.parent
+    if not anc.is_dir():
+        raise InputError(f"--out {str(out)!r}: {str(anc)!r} is not a folder")
+    try:
+        probe = tempfile.mkdtemp(prefix=f".liftoff-probe{TEMP_TAG}{os.getpid()}-", dir=anc)
+    except OSError as exc:
+        raise InputError(f"--out {str(out)!r}: cannot write in {str(anc)!r} "
+                         f"({exc.strerror or exc}); give a writable folder") from None
+    os.rmdir(probe)
+
+
 def check_target(out: Path) -> None:
     """InputError (one line) unless ``out`` is new, empty or a folder that liftoff wrote:
     its MANIFEST.json is liftoff's (format), and it lists exactly the files the folder holds,
@@ -39,8 +60,15 @@ def check_target(out: Path) -> None:
     user's data.csv or photo.png), nor does a MANIFEST.json of another origin."""
     if not str(out) or str(out) in (".", "/"):
         raise InputError(f"--out {str(out)!r}: give a folder of its own for the results")
+    if out.is_symlink() and not out.exists():
+        raise InputError(f"--out {str(out)!r}: a symbolic link to nothing ({os.readlink(out)!r}); give a folder")
     if out.exists() and not out.is_dir():
         raise InputError(f"--out {str(out)!r}: exists and is not a folder")
+    if len(os.fsencode(out.absolute().name)) > NAME_MAX - STAGING_EXTRA:
+        raise InputError(f"--out {str(out)!r}: a folder name longer than {NAME_MAX - STAGING_EXTRA} bytes (liftoff "
+                         f"stages the run beside it under a name {STAGING_EXTRA} bytes longer; the file system takes "
+                         f"{NAME_MAX}); give a shorter name")
+    _check_writable(out)
     if not out.is_dir() or not any(out.iterdir()):
         return
     refuse = (f"--out {str(out)!r}: {{}}; a run replaces its output folder as a whole, so it takes only a "

@@ -97,6 +97,10 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
     else:
         sc = load_scenario(scenario, n_cases=n_cases)
     on_root(comm, lambda: check_target(out), share=False)
+    if opt.compare is not None:           # read before the first expensive stage (and again at the end)
+        from .aggregate import read_maxmin
+
+        on_root(comm, lambda: read_maxmin(Path(opt.compare)), share=False)
     want_pics = snapshots and any(c.output.snapshots for c in sc.cases)
     if want_pics or _fields_wanted(sc, opt):  # pyvista (fem.snapshot) before dolfinx (FENICSX-NOTES.md)
         import liftoff.fem.snapshot  # noqa: F401

@@ -9,6 +9,7 @@ import subprocess
 import sys
 import time
 import tomllib
+from pathlib import Path
 
 import pytest
 
@@ -147,3 +148,43 @@ def test_usage_errors_and_version_in_one_line(capsys):
     with pytest.raises(SystemExit) as e:
         main(["--version"])
     assert e.value.code == 0 and capsys.readouterr().out.strip() == f"liftoff {__version__}"
+
+
+def test_unusable_out_paths_fail_before_the_run(tmp_path):
+    """A dangling symlink, a folder that cannot be written and a name too long for the
+    staging folder beside it are refused by check_target, before any stage (issue 27:
+    they failed after the run, naming the hidden staging path)."""
+    (tmp_path / "dang").symlink_to(tmp_path / "nowhere" / "x")
+    with pytest.raises(InputError, match="a symbolic link to nothing"):
+        check_target(tmp_path / "dang")
+    with pytest.raises(InputError, match=r"cannot write in '/proc'"):
+        check_target(Path("/proc/liftoff-test/out"))
+    with pytest.raises(InputError, match="a folder name longer than"):
+        check_target(tmp_path / ("a" * 240))
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(InputError, match="is not a folder"):
+        check_target(tmp_path / "file" / "out")
+    check_target(tmp_path / "new" / "deeper" / "out")           # parents are made at the end
+    assert not (tmp_path / "new").exists() and not [p for p in tmp_path.iterdir() if "probe" in p.name]
+
+
+def test_compare_table_is_read_before_the_first_stage(tmp_path, monkeypatch):
+    """--compare at a missing, empty or binary file fails at once (issue 27: after the whole
+    run, or an empty compare.csv)."""
+    from liftoff.workflows import run as run_mod
+    from liftoff.workflows.aggregate import read_maxmin
+
+    def no_stage(*a, **k):
+        raise AssertionError("a model stage ran before --compare was checked")
+
+    monkeypatch.setattr(run_mod, "prepare_models", no_stage)
+    (tmp_path / "empty.csv").write_text("")
+    (tmp_path / "binary.csv").write_bytes(bytes(range(256)) * 4)
+    for name, match in (("typo.csv", "no such max/min table"), ("empty.csv", "holds no max/min rows"),
+                        ("binary.csv", "not a text file")):
+        with pytest.raises(InputError, match=match):
+            run_mod.run(None, tmp_path / "out", cache_dir=False, progress=False, echo=lambda *a: None,
+                        options=run_mod.Options(compare=tmp_path / name))
+        with pytest.raises(InputError, match=match):
+            read_maxmin(tmp_path / name)
+    assert not (tmp_path / "out").exists()
