@@ -5,7 +5,7 @@ carrying a tank on its transporter cradle, set moving by a wave, hits a pile-sup
 dock; cases sweep the dock's stiffness. The format is documented key by key in
 docs/barge.md; the embedded example is liftoff/config/barge_scenario.toml. Units SI (m, kg,
 s, N). Errors are one line ``file: key.path: what``. ``[[case]]`` tables are merged over
-the base as in lift-off scenarios (:func:`liftoff.config.scenario.merge`).
+the base as in lift-off scenarios (:func:`liftoff.config.extends.merge`).
 """
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ from liftoff.meshes.layout import StackLayout
 from .extends import read_scenario, resolve
 from .files import parse_toml
 from .model import ComponentModel, ModelConfig, SystemModel, builder
-from .scenario import merge
+from .scenario import RESERVED_CASE_NAMES, merge
 from .sections import FORCE_KEYS, Force, TimeSpan, force, time_span
 from .values import Where, array_of_tables, boolean, integer, number, string, table, unique_name
 
@@ -191,6 +191,9 @@ def parse_barge(data: dict, source: str = "scenario", base: Path | str = ".") ->
         wc = w / "case" / i
         c = table(wc, c, _CASE, required=("name",))
         name = unique_name(wc / "name", c["name"], names, "case")
+        if name in RESERVED_CASE_NAMES:
+            raise (wc / "name").error(f"{name!r} names the run's envelope outputs (maxmin_envelope.csv): give the "
+                                      "case another name")
         cases.append(_case(wc, merge(common, {k: v for k, v in c.items() if k != "name"}), name, base))
     return BargeScenario(source, title, description, cases)
 

@@ -33,6 +33,12 @@ def parse_toml(raw: bytes | str, source: str) -> dict:
         return tomllib.loads(raw)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"{source}: TOML syntax error: {' '.join(str(exc).split())}") from None
+    except RecursionError:
+        raise InputError(f"{source}: TOML nested too deep for a scenario (arrays or tables inside one another "
+                         "hundreds of levels deep)") from None
+    except ValueError as exc:          # an integer of thousands of digits (Python's int-to-str limit)
+        why = "an integer with thousands of digits" if "digits" in str(exc) else " ".join(str(exc).split())[:200]
+        raise InputError(f"{source}: TOML value not usable: {why}") from None
 
 
 def file_path(where: Where, value, base: Path) -> Path:

@@ -51,6 +51,8 @@ from .sections import (
 from .values import Where, array_of_tables, boolean, number, string, strings, table, unique_name, vector
 
 DEFAULT_NAME = "default_scenario.toml"
+#: case names that output file names use for the envelope over cases
+RESERVED_CASE_NAMES = frozenset({"envelope"})
 
 _TOP = {"title", "description", "model", "profiles", "post_defaults", "post", "engine",
         "gravity", "cryo", "control", "softening", "force", "time", "recovery", "output", "case", "kind",
@@ -325,6 +327,9 @@ def parse_scenario(data: dict, source: str = "scenario", base: Path | str = ".",
         wc = w / "case" / i
         c = table(wc, c, _CASE, required=("name",))
         name = unique_name(wc / "name", c["name"], names, "case")
+        if name in RESERVED_CASE_NAMES:
+            raise (wc / "name").error(f"{name!r} names the run's envelope outputs (maxmin_envelope.csv): give the "
+                                      "case another name")
         over = {k: v for k, v in c.items() if k != "name"}
         merged = merge(common, over)
         cases.append(_case(wc, merged, name, base))

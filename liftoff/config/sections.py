@@ -22,6 +22,12 @@ from .files import file_path, read_csv_table
 from .values import Where, boolean, choice, integer, label, labels, number, string, strings, table, vector
 
 TIME_KEYS = {"t0", "t_end", "h", "method", "tol", "max_iter", "accuracy"}
+MAX_STEPS = 1e9             # steps a run may take ([time] h): 1e9 steps of one output are 8 GB of history
+#: a cryo temperature change below this (K) would be below absolute zero from any launch site's ambient
+MIN_DELTA_T = -320.0
+#: the largest free thermal strain |alpha delta_T| (metals from ambient to LH2: ~0.4 %); beyond it the
+#: linear thermoelastic preload of section 4.3 means nothing
+MAX_THERMAL_STRAIN = 0.02
 FORCE_KEYS = {"label", "value", "time", "csv", "scale"}
 GRAVITY_KEYS = {"accel"}
 LAW_KEYS = {"stiffness", "rigid", "axial", "normal_sign", "gap", "release_time", "normal", "friction", "damping",
@@ -67,6 +73,9 @@ def time_span(where: Where, spec: Any, *, method: str | None = None) -> TimeSpan
         h = number(where / "h", h, positive=True)
         if h > t_end - t0:
             raise (where / "h").error(f"step {h:g} s is longer than the run ({t_end - t0:g} s)")
+        if (t_end - t0) / h > MAX_STEPS:
+            raise (where / "h").error(f"step {h:g} s makes more than {MAX_STEPS:.0e} steps of the {t_end - t0:g} s run "
+                                      "(no memory holds their histories): give a larger step or \"auto\"")
     meth = method if method is not None else choice(where / "method", t.get("method", "direct"), METHODS)
     accuracy = None
     if "accuracy" in t:
@@ -340,8 +349,15 @@ def cryo(where: Where, spec: Any) -> Cryo:
     enabled = boolean(where / "enabled", c.get("enabled", False))
     if enabled:
         table(where, c, CRYO_KEYS, required=("component", "volumes", "delta_T", "alpha"))
+    delta_T = number(where / "delta_T", c["delta_T"]) if "delta_T" in c else 0.0
+    alpha = number(where / "alpha", c["alpha"], positive=True) if "alpha" in c else 0.0
+    if delta_T < MIN_DELTA_T:
+        raise (where / "delta_T").error(f"{delta_T:g} K would cool below absolute zero (at most {-MIN_DELTA_T:g} K "
+                                        "below ambient)")
+    if abs(alpha * delta_T) > MAX_THERMAL_STRAIN:
+        raise where.error(f"free thermal strain alpha delta_T = {alpha * delta_T:g} beyond {MAX_THERMAL_STRAIN:g} "
+                          "(metals from ambient to LH2: ~0.004): check alpha (1/K) and delta_T (K)")
     return Cryo(enabled,
                 string(where / "component", c["component"]) if "component" in c else "",
                 strings(where / "volumes", c["volumes"], nonempty=True) if "volumes" in c else (),
-                number(where / "delta_T", c["delta_T"]) if "delta_T" in c else 0.0,
-                number(where / "alpha", c["alpha"], positive=True) if "alpha" in c else 0.0)
+                delta_T, alpha)
