@@ -205,18 +205,88 @@ def save_body(body: ModalBody, path: str | os.PathLike) -> Path:
     return write_record(path, FORMAT, VERSION, data, units=UNITS, attrs={"name": body.name})
 
 
+#: a body file's rigid-body modes are checked to this fraction of their own size (an FE
+#: eigensolution's rigid modes are rigid to ~1e-8; a wrong file, e.g. a transposed phi, is O(1) off)
+CONSISTENCY_TOL = 1e-3
+#: modes below this (rad/s, 0.016 Hz) are taken as rigid-body modes by the file check
+RIGID_OMEGA = 0.1
+
+
+def consistency_problems(body: ModalBody) -> list[str]:
+    """What a body file's arrays say about one another that cannot be true (empty: none
+    found). ``rigid_body_mass`` = RB^T M RB is symmetric positive semidefinite (all zero:
+    not given; rigid-body outputs are then undefined). On the rigid-body components it gives
+    (nonzero diagonal, ``sel``), where ``participation`` (Phi^T M RB) is given, the modes
+    satisfy what mass-normalised modes of a free body must: the rigid ones (omega <
+    RIGID_OMEGA) are rigid motions, Phi_r = RB M_rb^-1 P_r^T at every labelled DOF of a point
+    with coordinates, with unit modal mass, P_r M_rb^-1 P_r^T = I; the elastic ones are
+    orthogonal to rigid motion, P_e = 0. A transposed square phi, a negated rigid-body mass
+    or mode shapes of another body break these."""
+    M = body.rigid_body_mass
+    scale = float(np.abs(M).max(initial=0.0))
+    if scale == 0:
+        return []
+    if np.abs(M - M.T).max() > 1e-9 * scale:
+        return ["rigid_body_mass is not symmetric"]
+    if np.linalg.eigvalsh(0.5 * (M + M.T)).min() < -1e-9 * scale:
+        return ["rigid_body_mass is not positive semidefinite (a negative mass or inertia)"]
+    rigid = body.omega < RIGID_OMEGA
+    P = body.participation
+    sel = np.flatnonzero(np.diag(M) > 0)
+    if not rigid.any() or not np.abs(P).max(initial=0.0) > 0 or not sel.size:
+        return []
+    Msel = M[np.ix_(sel, sel)]
+    if not np.linalg.cond(Msel) < 1e12:
+        return []
+    Minv = np.linalg.inv(Msel)
+    Pr, Pe = P[rigid][:, sel], P[~rigid][:, sel]
+    out = []
+    G = Pr @ Minv @ Pr.T
+    off = float(np.abs(G - np.eye(G.shape[0])).max())
+    if off > CONSISTENCY_TOL:
+        out.append(f"the rigid-body modes' participation and rigid_body_mass do not give unit modal masses "
+                   f"(P_r M_rb^-1 P_r^T off I by {off:.2g})")
+    size = float(np.sqrt(np.diag(Msel).max()))
+    if Pe.size and np.abs(Pe).max() > CONSISTENCY_TOL * size:
+        j = int(np.argmax(np.abs(Pe).max(axis=1)))
+        out.append(f"elastic mode {int(np.flatnonzero(~rigid)[j])} has a rigid-body participation "
+                   f"{np.abs(Pe[j]).max():.3g}: elastic modes of a free body are orthogonal to rigid motion")
+    rows = [i for i, lab in enumerate(body.dof_labels) if split_label(lab)[0] in set(body.points)]
+    if rows and not out:
+        from liftoff.core.rigid import rb_rows
+
+        RB = rb_rows([body.dof_labels[i] for i in rows], body.points, body.point_coords, body.ref_point)
+        expect = RB[:, sel] @ Minv @ Pr.T
+        got = body.phi[rows][:, rigid]
+        err = np.abs(got - expect).max() / max(float(np.abs(expect).max()), 1e-300)
+        if err > CONSISTENCY_TOL:
+            out.append(f"phi's rigid-body modes are not rigid motions of the labelled points (off by {err:.2g} of "
+                       "their size): are phi's rows the DOF labels and its columns the modes (not transposed)?")
+    return out
+
+
 def load_body(path: str | os.PathLike) -> ModalBody:
-    """Read a body written by :func:`save_body` (or by a user's tool in the same format)."""
+    """Read a body written by :func:`save_body` (or by a user's tool in the same format).
+    The file's ``units`` must be SI (the format's); :func:`consistency_problems` must find
+    nothing."""
     path = Path(path)
     rec = read_record(path, FORMAT, (VERSION,), what="body file")
+    units = rec.attrs.get("units")
+    if units is not None and not str(units).strip().upper().startswith("SI"):
+        raise InputError(f"body file {str(path)!r}: units {str(units)!r}, but a body file holds SI (m, kg, s, rad): "
+                         "convert it (the Nastran import converts: liftoff.reduction.nastran, units = ...)")
     data = {k: v for k, v in rec.data.items() if k in _ARRAYS or k in ("dof_labels", "points")}
     missing = [k for k in ("omega", "zeta", "dof_labels", "phi", "participation") if k not in data]
     if missing:
         raise InputError(f"body file {str(path)!r}: missing dataset {missing[0]!r}")
     try:
-        return ModalBody(name=str(rec.attrs.get("name", path.stem)),
+        body = ModalBody(name=str(rec.attrs.get("name", path.stem)),
                          dof_labels=tuple(str(s) for s in np.atleast_1d(data.pop("dof_labels"))),
                          points=tuple(str(s) for s in np.atleast_1d(data.pop("points", ()))), **data)
+        problems = consistency_problems(body)
+        if problems:
+            raise InputError(problems[0])
+        return body
     except InputError as exc:
         raise InputError(f"body file {str(path)!r}: {exc}") from None
     except (ValueError, TypeError) as exc:
