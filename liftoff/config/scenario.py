@@ -217,8 +217,15 @@ def _profiles(w: Where, p: Any, base: Path) -> dict[str, tuple[np.ndarray, np.nd
 def _posts(w: Where, posts: Any, wd: Where, defaults: Any) -> list[Post]:
     d = table(wd, defaults, LAW_KEYS)
     out, names = [], set()
-    for i, p in enumerate(array_of_tables(w, posts, "post", nonempty=True)):
+    entries = array_of_tables(w, posts, "post", nonempty=True)
+    for i, p in enumerate(entries):
         wp = w / i
+        lacking = [k for k in ("vehicle", "pad") if isinstance(p, dict) and "name" in p and k not in p]
+        if lacking:      # a case override's misspelt post name arrives here as a new, incomplete post
+            known = [str(e.get("name")) for e in entries if isinstance(e, dict) and "vehicle" in e and "pad" in e]
+            raise wp.named(str(p["name"])).error(
+                f"no '{lacking[0]}': {p['name']!r} is not one of the posts ({', '.join(known)}), so it is a new "
+                "post, which needs vehicle and pad")
         p = table(wp, p, _POST, required=("name", "vehicle", "pad"))
         q = {**d, **p}
         if p.get("rigid") is True and "stiffness" not in p:

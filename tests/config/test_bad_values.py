@@ -43,3 +43,12 @@ def test_the_defaults_cryo_is_within_the_bounds():
     """The default's cryo preload (LH2/LOX tank shrinkage) passes the new bounds."""
     c = parse_scenario(DEFAULT, "d").cases[0].cryo
     assert c.enabled and -320.0 <= c.delta_T < 0 and abs(c.alpha * c.delta_T) < 0.02
+
+
+def test_case_override_of_an_unknown_post_names_the_posts():
+    """A case override's misspelt post name is a new, incomplete post: the message says so and
+    lists the posts (issue 27: it said "missing required key 'vehicle'")."""
+    over = {"case": [{"name": "x", "post": [{"name": "nope", "release_time": 1.0}]}]}
+    with pytest.raises(InputError, match=r"case\[2\]\.post\[8\] 'nope': no 'vehicle': 'nope' is not one of the posts "
+                                         r"\(left_1, .*right_4\), so it is a new post"):
+        parse_scenario(merge(DEFAULT, over), "s")
