@@ -15,6 +15,7 @@ not carry the model.
 from __future__ import annotations
 
 import multiprocessing
+import re
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from contextlib import contextmanager
 from typing import Iterator
@@ -62,6 +63,48 @@ def make_executor(workers: int = 2, dask: str | None = None, mpi: bool = False) 
         yield ex, f"process pool of {workers}"
 
 
+#: a Dask scheduler address: protocol://host:port (the dashboard's http:// address is not one)
+_DASK_ADDRESS = re.compile(r"^(tcp|tls|ucx|ws|wss)://[A-Za-z0-9_.\-\[\]:]+:\d{1,5}$")
+#: seconds to reach a scheduler before the run gives up with one line
+DASK_CONNECT_S = 20
+
+
+def check_dask_address(address: str | None) -> None:
+    """One-line InputError unless ``address`` is None, "local" or a scheduler address."""
+    if address is None or address == "local":
+        return
+    if address.startswith(("http://", "https://")):
+        raise InputError(f"--dask {address}: that is a web (dashboard) address; a Dask scheduler's is "
+                         "tcp://host:8786")
+    if not _DASK_ADDRESS.match(address):
+        raise InputError(f"--dask {address!r}: not a Dask scheduler address (tcp://host:port, or 'local')")
+
+
+def _connect(Client, address: str):
+    """A Client of the scheduler at ``address``, or a one-line InputError within about
+    DASK_CONNECT_S seconds. Client's own timeout covers the TCP connection, not the
+    handshake: a server of another protocol that accepts and never answers (a web server)
+    would hold it for ever, so the connection is made in a daemon thread that is given up."""
+    import threading
+
+    box: dict = {}
+
+    def work():
+        try:
+            box["client"] = Client(address, timeout=f"{DASK_CONNECT_S}s")
+        except Exception as exc:      # OSError, TimeoutError, a peer that speaks another protocol ...
+            box["error"] = exc
+
+    t = threading.Thread(target=work, name="liftoff-dask-connect", daemon=True)
+    t.start()
+    t.join(DASK_CONNECT_S + 5)
+    if "client" in box:
+        return box["client"]
+    why = "no answer" if "error" not in box else \
+        f"{type(box['error']).__name__}: {' '.join(str(box['error']).split())[:160]}"
+    raise InputError(f"--dask {address}: cannot reach a Dask scheduler there within {DASK_CONNECT_S} s ({why})")
+
+
 @contextmanager
 def _dask_executor(address: str, workers: int):
     try:
@@ -76,10 +119,8 @@ def _dask_executor(address: str, workers: int):
         what = f"Dask LocalCluster of {max(workers, 1)} worker processes"
     else:
         cluster = None
-        try:
-            client = Client(address, timeout="20s")
-        except OSError as exc:
-            raise InputError(f"--dask {address}: cannot reach the scheduler ({exc})") from None
+        check_dask_address(address)
+        client = _connect(Client, address)
         what = f"Dask scheduler {address} ({len(client.scheduler_info().get('workers', {}))} workers)"
     try:
         ex = client.get_executor(pure=False)
