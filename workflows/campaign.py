@@ -225,15 +225,41 @@ def save_summary(s: CaseSummary, path: Path, key: str) -> Path:
                         attrs={"name": s.name, "metadata": json.dumps({"key": key})}, suffixes=(".npz",))
 
 
+_RECORD_ARRAYS = ("mx", "t_mx", "mn", "t_mn", "separation", "recontacts", "compression", "items", "units",
+                  "categories", "posts", "srs_items", "scalars")
+
+
 def load_summary(path: Path) -> CaseSummary:
     rec = read_record(path, RECORD_FORMAT, (RECORD_VERSION,), what="campaign record")
     d = rec.data
+    missing = [k for k in _RECORD_ARRAYS if k not in d]
+    if missing or np.shape(d["scalars"]) != (4,) or "name" not in rec.attrs:
+        raise InputError(f"campaign record {str(path)!r}: not a complete record "
+                         f"({'missing ' + repr(missing[0]) if missing else 'scalars or name malformed'})")
     tup = lambda a: tuple(str(x) for x in np.atleast_1d(a))  # noqa: E731
     index, n_steps, h, wall = d["scalars"]
     return CaseSummary(str(rec.attrs["name"]), int(index), tup(d["items"]), tup(d["units"]), tup(d["categories"]),
                        d["mx"], d["t_mx"], d["mn"], d["t_mn"], tup(d["srs_items"]) if d["srs_items"].size else (),
                        d.get("srs"), tup(d["posts"]), d["separation"], d["recontacts"], d["compression"],
                        int(n_steps), float(h), float(wall))
+
+
+def record_problem(path: Path, name: str, index: int, key: str) -> str | None:
+    """Why the record at ``path`` cannot stand for generated case ``name`` (``index``,
+    ``key``), None if it can: unreadable or incomplete, another case's (a record copied
+    over this one), another key, or values that are not finite (a damaged run)."""
+    try:
+        s = load_summary(path)
+        meta = json.loads(read_record(path, RECORD_FORMAT, (RECORD_VERSION,)).attrs.get("metadata", "{}"))
+    except (InputError, ValueError, TypeError, KeyError) as exc:
+        return " ".join(str(exc).split())[:200]
+    if s.name != name or s.index != index:
+        return f"it is the record of case {s.name!r} (index {s.index}), not of {name!r}"
+    if not isinstance(meta, dict) or meta.get("key") != key:
+        return "its key is not this case's"
+    if not all(np.all(np.isfinite(np.asarray(a, dtype=float))) for a in (s.mx, s.mn, s.t_mx, s.t_mn)):
+        return "it holds NaN or infinite peaks"
+    return None
 
 
 # ------------------------------------------------------------------ the loop
@@ -277,9 +303,15 @@ def run_campaign(sc, ref: ScenarioRef, cache_root: Path, model_key: str, executo
     for i in range(sc.n_generated):
         from liftoff.config.dispersion import case_name
 
-        p = record_path(folder, case_name(i), case_key(sc, i, model_key))
+        key = case_key(sc, i, model_key)
+        p = record_path(folder, case_name(i), key)
         records[i] = p
         if not p.is_file():
+            todo.append(i)
+            continue
+        why = record_problem(p, case_name(i), i, key)
+        if why is not None:          # damaged or foreign: the case runs again and its record is replaced
+            echo(f"  campaign: record {p.name} is not usable ({why}); case {case_name(i)} runs again")
             todo.append(i)
     reused = sc.n_generated - len(todo)
     echo(f"  campaign: {sc.n_generated} generated cases, {reused} done before (records in {folder}), "

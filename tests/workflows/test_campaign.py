@@ -123,6 +123,37 @@ def test_restart_skips_done_cases(campaign4):
     assert (other.campaign.ran, other.campaign.reused) == (4, 0)
 
 
+def test_damaged_or_foreign_records_run_again(tmp_path, campaign4):
+    """A record copied over another case's, one with NaN peaks and one without its scalars
+    are not reused: their cases run again and the envelope is the first run's (issue 27:
+    the copy was used under the wrong case, NaN reached design_loads.csv, and a record
+    without scalars exited 1)."""
+    import shutil
+
+    from liftoff.workflows.campaign import load_summary, save_summary
+
+    tmp, p, first = campaign4
+    camp = tmp_path / "c.campaign"
+    shutil.copytree(tmp / "out.campaign", camp)
+    recs = [camp / "cases" / first.campaign.records[i].name for i in range(4)]    # this scenario's records
+    assert all(r.is_file() for r in recs)
+    shutil.copyfile(recs[0], recs[1])                                   # d0000's record under d0001's name
+    s = load_summary(recs[2])
+    s.mx[0] = np.nan
+    save_summary(s, recs[2], recs[2].stem.rsplit("-", 1)[1])            # a NaN peak
+    with np.load(recs[3]) as z:
+        data = {k: z[k] for k in z.files if k != "scalars"}
+    np.savez(recs[3], **data)                                           # no scalars
+    notes = []
+    again = run(p, tmp_path / "again", cache_dir=tmp / "cache", n_cases=4,
+                options=Options(executor=InlineExecutor(), campaign=camp),
+                **{**QUIET, "echo": lambda *a, **k: notes.append(" ".join(map(str, a)))})
+    assert (again.campaign.ran, again.campaign.reused) == (3, 1)
+    assert _same(again.envelope, first.envelope)
+    said = "\n".join(notes)
+    assert "it is the record of case 'd0000'" in said and "NaN" in said and "missing 'scalars'" in said
+
+
 def test_fields_and_compare(tmp_path, campaign4):
     """ParaView series (.pvd + .vtu frames with total and elastic displacement) and the
     GIF of the governing case; a comparison against the campaign's envelope."""
