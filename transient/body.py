@@ -265,12 +265,27 @@ def consistency_problems(body: ModalBody) -> list[str]:
     return out
 
 
+def _declared(path: Path, shapes: dict) -> None:
+    """The body file's declared shapes (before its arrays are read): the datasets a body
+    needs are there, and phi is (dof_labels x modes)."""
+    missing = [k for k in ("omega", "dof_labels", "phi") if k not in shapes]
+    if missing:
+        raise InputError(f"body file {str(path)!r}: missing dataset {missing[0]!r}")
+    labels, omega, phi = shapes["dof_labels"][0], shapes["omega"][0], shapes["phi"][0]
+    if len(labels) != 1 or len(omega) != 1 or len(phi) != 2:
+        return                      # ModalBody's own checks word these
+    n_dof, n = labels[0], omega[0]
+    if phi != (n_dof, n):
+        raise InputError(f"body file {str(path)!r}: phi has shape {shapes['phi'][0]}, expected ({n_dof}, {n}) "
+                         "(DOF labels x modes)")
+
+
 def load_body(path: str | os.PathLike) -> ModalBody:
     """Read a body written by :func:`save_body` (or by a user's tool in the same format).
     The file's ``units`` must be SI (the format's); :func:`consistency_problems` must find
     nothing."""
     path = Path(path)
-    rec = read_record(path, FORMAT, (VERSION,), what="body file")
+    rec = read_record(path, FORMAT, (VERSION,), what="body file", check=lambda shapes: _declared(path, shapes))
     units = rec.attrs.get("units")
     if units is not None and not str(units).strip().upper().startswith("SI"):
         raise InputError(f"body file {str(path)!r}: units {str(units)!r}, but a body file holds SI (m, kg, s, rad): "

@@ -20,13 +20,13 @@ Rules (documented in docs/transient.md, "Step size"):
 from __future__ import annotations
 
 import math
-import os
 import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
 from liftoff.core.errors import InputError, ResourceError
+from liftoff.core.memory import available_memory  # noqa: F401  (also imported from here)
 
 from .assembly import contact_rows
 from .body import ModalBody
@@ -272,21 +272,6 @@ def _stable_below(rows, omega, zeta, h_try: float, h_bad: float) -> float:
 
 
 # ----------------------------------------------------------------- run size
-def available_memory() -> float:
-    """Bytes of memory available now (Linux MemAvailable; else the physical memory)."""
-    try:
-        with open("/proc/meminfo", encoding="ascii") as fh:
-            for line in fh:
-                if line.startswith("MemAvailable:"):
-                    return float(line.split()[1]) * 1024.0
-    except OSError:
-        pass
-    try:
-        return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
-    except (ValueError, OSError, AttributeError):
-        return math.inf
-
-
 def memory_estimate(problem: TransientProblem, n_steps: int, runs: int = 1) -> dict[str, float]:
     """Bytes the transient needs, by item: time histories (n_t x columns, 8 bytes each;
     ``runs`` of them held at once, e.g. 3 for a run with its h/2 error-estimate run), the

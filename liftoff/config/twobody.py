@@ -273,6 +273,9 @@ def _recovery_file(where: Where, path: Path, key: str, n: int) -> dict:
            "units": str(data["units"]) if "units" in data else "SI"}
     for kind in ("disp", "vel", "acc"):
         if kind in data:
+            if np.iscomplexobj(data[kind]) or data[kind].dtype.kind not in "biuf":
+                raise where.error(f"{path.name}: {kind} is {data[kind].dtype} (a recovery matrix of a modal model "
+                                  "is real numbers)")
             m = np.asarray(data[kind], dtype=float)
             if m.shape != (len(out["labels"]), n):
                 raise where.error(f"{path.name}: {kind} has shape {m.shape}, expected ({len(out['labels'])}, {n}) "

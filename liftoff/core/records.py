@@ -187,16 +187,21 @@ def write_record(path: str | os.PathLike, kind: str, version: int, data: Mapping
     return path
 
 
-def read_record(path: str | os.PathLike, kind: str, versions=(1,), what: str | None = None) -> Record:
+def read_record(path: str | os.PathLike, kind: str, versions=(1,), what: str | None = None,
+                check=None) -> Record:
     """Read a file written by :func:`write_record` (or by another tool in the same layout).
     One-line InputError naming the file when it is missing, unreadable, of another format
-    or of an unsupported version. Never unpickles."""
+    or of an unsupported version. Never unpickles. Before any array is read, the shapes the
+    file declares are checked: ``check(shapes)`` ({name: (shape, bytes per item)}) may
+    raise the reader's own error, and arrays beyond RECORD_MEMORY_FRACTION of the memory
+    available are a ResourceError."""
     path = Path(path)
     what = what or f"{kind} file"
     if not path.is_file():
         raise InputError(f"{what} not found: {str(path)!r}")
     if path.suffix not in SUFFIXES:
         raise InputError(f"{what} {str(path)!r}: unknown extension, use .h5 or .npz")
+    _check_declared_size(path, what, check)
     try:
         if path.suffix == ".npz":
             with np.load(path, allow_pickle=False) as z:
@@ -222,6 +227,62 @@ def read_record(path: str | os.PathLike, kind: str, versions=(1,), what: str | N
 
 
 _HEADER_KEYS = ("format", "version", "units", "name", "metadata", "source_units")
+#: a record's arrays may take at most this share of the memory available when it is read
+RECORD_MEMORY_FRACTION = 0.5
+
+
+def declared_shapes(path: Path) -> dict[str, tuple[tuple[int, ...], int]]:
+    """(shape, bytes per item) of each array of an .npz or HDF5 file, from the file's own
+    headers, without reading the data: a few-kB file may declare gigabytes (a compressed
+    array of zeros, an HDF5 dataset never written)."""
+    out: dict[str, tuple[tuple[int, ...], int]] = {}
+    if path.suffix == ".npz":
+        import zipfile
+
+        with zipfile.ZipFile(path) as zf:
+            for info in zf.infolist():
+                if not info.filename.endswith(".npy"):
+                    continue
+                with zf.open(info) as fh:
+                    version = np.lib.format.read_magic(fh)
+                    read = {(1, 0): np.lib.format.read_array_header_1_0,
+                            (2, 0): np.lib.format.read_array_header_2_0}.get(version)
+                    if read is None:
+                        continue
+                    shape, _, dtype = read(fh)
+                out[info.filename[:-4]] = (tuple(int(n) for n in shape), int(dtype.itemsize))
+    else:
+        import h5py
+
+        def visit(name, obj):
+            if isinstance(obj, h5py.Dataset) and obj.shape is not None:
+                out[name] = (tuple(int(n) for n in obj.shape), int(obj.dtype.itemsize))
+
+        with h5py.File(path, "r") as f:
+            f.visititems(visit)
+    return out
+
+
+def _check_declared_size(path: Path, what: str, check=None) -> None:
+    """ResourceError (one line) when the file's arrays would not fit in memory, and
+    ``check(shapes)``'s error (the reader's own shape rules), before any array is read; a
+    file whose headers cannot be read is left to the reader's own error."""
+    from .errors import ResourceError
+    from .memory import available_memory
+
+    try:
+        shapes = declared_shapes(path)
+    except Exception:  # not a zip / HDF5 file: read_record says so
+        return
+    if check is not None:
+        check(shapes)
+    sizes = {k: float(np.prod(shape, dtype=float)) * item for k, (shape, item) in shapes.items()}
+    total, limit = sum(sizes.values()), RECORD_MEMORY_FRACTION * available_memory()
+    if total > limit:
+        big = max(sizes, key=sizes.get)
+        raise ResourceError(f"{what} {str(path)!r}: its arrays declare {total / 1e9:.3g} GB ({big!r} alone "
+                            f"{sizes[big] / 1e9:.3g} GB), more than {limit / 1e9:.3g} GB of the memory available; "
+                            "not read")
 
 
 def _flatten(data: Mapping, prefix: str = "") -> dict:

@@ -62,6 +62,15 @@ def _files(write: dict[str, str]):
 NAN = float("nan")
 
 # (id, mutation of the scenario dict, extra files to write, substring the message must contain)
+
+def _npz_bytes(**arrays) -> bytes:
+    import io
+
+    buf = io.BytesIO()
+    np.savez(buf, **arrays)
+    return buf.getvalue()
+
+
 CASES = [
     ("unknown-top-key", _set("contacts", [1]), None, "unknown key 'contacts'"),
     ("unknown-contact-key", _set("contact[0].stifness", 1.0), None, "contact[0]: unknown key 'stifness'"),
@@ -136,6 +145,9 @@ CASES = [
      None, "modal_force[0].body: must be 'a' or 'b'"),
     ("recovery-missing", _set("recovery", [{"name": "r", "body": "a", "file": "none.npz"}]), None,
      "recovery[0].file: recovery file not found"),
+    ("recovery-complex", _set("recovery", [{"name": "r", "body": "a", "file": "r.npz"}]),
+     {"r.npz": _npz_bytes(labels=np.array(["x"]), disp=np.ones((1, 3)) * (1 + 2j))},
+     "recovery[0].file: r.npz: disp is complex128 (a recovery matrix of a modal model is real numbers)"),
     ("ground-labels_b", _set("bodies.b", "ground"), None, "body b is ground: omit labels_b"),
     ("keep-modal-type", _set("output.keep_modal", "yes"), None, "output.keep_modal: expected true or false"),
     ("h-not-auto", _set("time.h", "automatic"), None, "time.h: expected a step in s or \"auto\""),

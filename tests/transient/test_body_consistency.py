@@ -66,3 +66,33 @@ def test_the_pipelines_own_bodies_are_consistent():
     for body in (stack.vehicle, stack.pad):
         assert consistency_problems(body) == [], body.name
     assert int(np.sum(stack.vehicle.omega < 0.1)) == 6
+
+
+def test_declared_sizes_are_checked_before_reading(tmp_path):
+    """A few-kB file that declares gigabytes is refused from its headers, before anything
+    is allocated (issue 27: 11.8 GB before the shape error): an .npz whose compressed phi
+    claims 29 GB, an HDF5 dataset never written, a phi of the wrong declared shape."""
+    import resource
+    import zipfile
+
+    import h5py
+
+    from liftoff.core.errors import ResourceError
+
+    npz = tmp_path / "big.npz"
+    with zipfile.ZipFile(npz, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+        for name, shape in (("omega", (60000,)), ("dof_labels", (60000,)), ("phi", (60000, 60000))):
+            with zf.open(f"{name}.npy", "w", force_zip64=True) as fh:
+                np.lib.format.write_array_header_1_0(fh, {"descr": "<f8", "fortran_order": False, "shape": shape})
+    h5 = tmp_path / "big.h5"
+    with h5py.File(h5, "w") as f:
+        f.create_dataset("phi", shape=(25_000_000, 27), dtype="f8")    # 5.4 GB declared, never written
+        f.create_dataset("omega", data=np.arange(27.0))
+        f.create_dataset("dof_labels", data=np.array(["a:Tx"] * 3, dtype="S"))
+        f.attrs["format"] = "liftoff-modal-body"
+    rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    with pytest.raises(ResourceError, match=r"big\.npz': its arrays declare .* GB \('phi' alone"):
+        load_body(npz)
+    with pytest.raises(InputError, match=r"phi has shape \(25000000, 27\), expected \(3, 27\)"):
+        load_body(h5)
+    assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - rss0 < 500_000     # kB: nothing big was read
