@@ -201,12 +201,24 @@ def _steps(span: float, h_max: float) -> int:
     return max(int(n), 1)
 
 
-def _check_resolution(t0: float, t_end: float, h: float) -> None:
-    ulp = float(np.spacing(max(abs(t0), abs(t_end))))
-    if not ulp <= TIME_RESOLUTION * h:
-        raise InputError(f"time step h = {h:.4g} s is below the resolution of the time axis: floats near "
-                         f"t = {max(abs(t0), abs(t_end)):.6g} s are {ulp:.3g} s apart (more than {TIME_RESOLUTION:g} h); "
-                         "start the run near t0 = 0 (shift the times of the scenario)")
+def _check_resolution(t0: float, t_end: float, h: float, f_h: float | None = None, f_s: float | None = None) -> None:
+    """InputError when floats near the run's times are coarser than TIME_RESOLUTION h. Said
+    as what can be changed: a run far from t = 0 (shift it), or a step that bodies with
+    frequencies far beyond any structure's set (check the stiffnesses and modes, SI units)."""
+    t_big = max(abs(t0), abs(t_end))
+    ulp = float(np.spacing(t_big))
+    if ulp <= TIME_RESOLUTION * h:
+        return
+    span = t_end - t0
+    head = (f"time step h = {h:.4g} s is below the resolution of the time axis: floats near t = {t_big:.6g} s are "
+            f"{ulp:.3g} s apart (more than {TIME_RESOLUTION:g} h); ")
+    if abs(t0) > span:             # a run far from t = 0: shifting it helps
+        raise InputError(head + "start the run near t0 = 0 (shift the times of the scenario)")
+    fast = max(f for f in (f_h, f_s, 0.0) if f is not None and math.isfinite(f))
+    which = (f"the contact stiffnesses set f_h = {f_h:.4g} Hz" if f_h and fast == f_h else
+             f"the bodies' highest mode is {fast:.4g} Hz") if fast > 0 else "the step given is that small"
+    raise InputError(head + f"{which}, far beyond a structure's: check the stiffnesses and mode frequencies "
+                     "(SI units: N/m, rad/s) or give a shorter run")
 
 
 def choose_step(problem: TransientProblem, rows=None) -> StepChoice:
@@ -232,12 +244,12 @@ def choose_step(problem: TransientProblem, rows=None) -> StepChoice:
                 break
             n *= 2
             margin = coupling_margin(rows, omega, zeta, span / n)
-        _check_resolution(t0, t_end, span / n)
+        _check_resolution(t0, t_end, span / n, f_h, f_s)
         return StepChoice(span / n, f_h, h_default, n, t0, t_end, f_s, None, margin)
     h_req = float(problem.h)
     n = _steps(span, h_req)
     h = span / n
-    _check_resolution(t0, t_end, h)
+    _check_resolution(t0, t_end, h, f_h, f_s)
     margin = coupling_margin(rows, omega, zeta, h)
     if not margin > -1.0:
         h_ok = _stable_below(rows, omega, zeta, min(h_default, h), h)

@@ -263,8 +263,10 @@ def test_body_file_arrays_exactly_as_documented(case_dir: Path, capsys, edit, ex
     (_set("force[1].value", 1e308), "force[1] 'top:Tx'.value: magnitude 1e+308", 2),
     (_set("time.t_end", 1e308), "time.t_end: magnitude 1e+308", 2),
     (_set("time.h", 0.002), "time: time step h = 0.002 s exceeds the stability limit of the penalty contact coupling", 2),
-    (_both(_set("time.t0", 1e15), _set("time.t_end", 1e15 + 1.0)), "below the resolution of the time axis", 2),
-], ids=["gravity-1e308", "force-1e308", "t_end-1e308", "h-unstable", "t0-1e15"])
+    (_both(_set("time.t0", 1e15), _set("time.t_end", 1e15 + 1.0)), "start the run near t0 = 0", 2),
+    (_both(_set("contact[0].stiffness", [1e99, 1e99]), _set("time.h", "auto")), "the contact stiffnesses set f_h = ", 2),
+    (_both(_set("time.t_end", 1e99), _set("time.h", "auto")), "give a shorter run", 2),
+], ids=["gravity-1e308", "force-1e308", "t_end-1e308", "h-unstable", "t0-1e15", "stiffness-1e99", "t_end-1e99"])
 def test_overflowing_or_unstable_input(case_dir: Path, capsys, mutate, expect, status):
     """Magnitudes that would overflow inside, a step beyond the stability limit (it used to
     run and save 1e22 N contact forces) and a time axis that cannot resolve the step are
