@@ -34,6 +34,9 @@ LAW_KEYS = {"stiffness", "rigid", "axial", "normal_sign", "gap", "release_time",
             "latch_force"}
 SOFTENING_KEYS = {"enabled", "until", "labels"}
 CONTROL_KEYS = {"enabled", "gimbals", "start", "ramp", "law", "bandwidth_hz", "damping", "hold_start"}
+#: the highest attitude-hold bandwidth (Hz) taken: a rigid-body attitude loop far above the
+#: structure's first modes is not a control design (and its held feedback outruns any step)
+MAX_BANDWIDTH_HZ = 20.0
 CONTROL_LAWS = ("moment", "attitude-hold")
 CRYO_KEYS = {"enabled", "component", "volumes", "delta_T", "alpha"}
 STANDARD_GRAVITY = (0.0, 0.0, -9.80665)
@@ -323,6 +326,10 @@ def control(where: Where, spec: Any) -> Control:
     if law not in CONTROL_LAWS:
         raise (where / "law").error(f"must be one of {', '.join(CONTROL_LAWS)}, got {law!r}")
     bandwidth = number(where / "bandwidth_hz", c.get("bandwidth_hz", 0.5), positive=True)
+    if bandwidth > MAX_BANDWIDTH_HZ:
+        raise (where / "bandwidth_hz").error(
+            f"{bandwidth:g} Hz: an attitude-hold loop acts on the rigid-body attitude and must stay well below the "
+            f"vehicle's first elastic modes (a few Hz; launch vehicles: 0.1-2 Hz); at most {MAX_BANDWIDTH_HZ:g} Hz")
     damping = number(where / "damping", c.get("damping", 0.7), nonneg=True)
     if damping >= 5:
         raise (where / "damping").error(f"a damping ratio of {damping:g} is not a control design (use 0.5-1)")

@@ -52,3 +52,9 @@ def test_case_override_of_an_unknown_post_names_the_posts():
     with pytest.raises(InputError, match=r"case\[2\]\.post\[8\] 'nope': no 'vehicle': 'nope' is not one of the posts "
                                          r"\(left_1, .*right_4\), so it is a new post"):
         parse_scenario(merge(DEFAULT, over), "s")
+
+
+def test_attitude_hold_bandwidth_beyond_a_control_design():
+    """bandwidth_hz = 1e4 (issue 27: "diverged ... reduce h") is refused at the key."""
+    with pytest.raises(InputError, match=r"control\.bandwidth_hz: 10000 Hz: an attitude-hold loop .* at most 20 Hz"):
+        parse_scenario(merge(DEFAULT, {"control": {"law": "attitude-hold", "bandwidth_hz": 1e4}}), "s")
