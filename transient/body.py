@@ -222,6 +222,11 @@ def consistency_problems(body: ModalBody) -> list[str]:
     with coordinates, with unit modal mass, P_r M_rb^-1 P_r^T = I; the elastic ones are
     orthogonal to rigid motion, P_e = 0. A transposed square phi, a negated rigid-body mass
     or mode shapes of another body break these."""
+    if body.phi.size and not np.any(body.phi):
+        return ["phi is all zero: the body's DOFs do not move in any mode"]
+    if int(np.sum(body.omega < RIGID_OMEGA)) > 6:
+        return [f"{int(np.sum(body.omega < RIGID_OMEGA))} modes below {RIGID_OMEGA:g} rad/s: a body has at most six "
+                "rigid-body modes (omega in rad/s, not zero for elastic modes)"]
     M = body.rigid_body_mass
     scale = float(np.abs(M).max(initial=0.0))
     if scale == 0:

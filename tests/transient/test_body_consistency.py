@@ -96,3 +96,13 @@ def test_declared_sizes_are_checked_before_reading(tmp_path):
     with pytest.raises(InputError, match=r"phi has shape \(25000000, 27\), expected \(3, 27\)"):
         load_body(h5)
     assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - rss0 < 500_000     # kB: nothing big was read
+
+
+@pytest.mark.parametrize("edit, match", [
+    (lambda b: replace(b, phi=np.zeros_like(b.phi)), "phi is all zero"),
+    (lambda b: replace(b, omega=np.zeros_like(b.omega)), "27 modes below 0.1 rad/s: a body has at most six"),
+])
+def test_zero_phi_or_omega_named_with_the_file(tmp_path, edit, match):
+    """Issue 27: these gave "static equilibrium singular" without naming the body file."""
+    with pytest.raises(InputError, match=rf"body file .*z\.npz': {match}"):
+        load_body(save_body(edit(_vehicle()), tmp_path / "z.npz"))
