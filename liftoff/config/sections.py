@@ -22,6 +22,8 @@ from .files import file_path, read_csv_table
 from .values import Where, boolean, choice, integer, label, labels, number, string, strings, table, vector
 
 TIME_KEYS = {"t0", "t_end", "h", "method", "tol", "max_iter", "accuracy"}
+#: the smallest [time] accuracy taken: 100 x the round-off of a peak after 1e6 steps (1e6 x 1.1e-16, ~1e-10 at most)
+MIN_ACCURACY = 1e-8
 MAX_STEPS = 1e9             # steps a run may take ([time] h): 1e9 steps of one output are 8 GB of history
 #: a cryo temperature change below this (K) would be below absolute zero from any launch site's ambient
 MIN_DELTA_T = -320.0
@@ -85,6 +87,10 @@ def time_span(where: Where, spec: Any, *, method: str | None = None) -> TimeSpan
         accuracy = number(where / "accuracy", t["accuracy"], positive=True)
         if not accuracy < 1:
             raise (where / "accuracy").error(f"a fraction of the peak force below 1 (e.g. 0.01 for 1 %), got {accuracy:g}")
+        if accuracy < MIN_ACCURACY:
+            raise (where / "accuracy").error(
+                f"{accuracy:g} is below what the arithmetic resolves: a peak force after 1e5-1e6 steps carries "
+                f"round-off of ~1e-11 of itself, so halving the step cannot reach it; at least {MIN_ACCURACY:g}")
     return TimeSpan(t_end, t0, h, meth, number(where / "tol", t.get("tol", 1.0), positive=True),
                     integer(where / "max_iter", t.get("max_iter", 100), 1), accuracy)
 

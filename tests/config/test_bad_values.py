@@ -58,3 +58,10 @@ def test_attitude_hold_bandwidth_beyond_a_control_design():
     """bandwidth_hz = 1e4 (issue 27: "diverged ... reduce h") is refused at the key."""
     with pytest.raises(InputError, match=r"control\.bandwidth_hz: 10000 Hz: an attitude-hold loop .* at most 20 Hz"):
         parse_scenario(merge(DEFAULT, {"control": {"law": "attitude-hold", "bandwidth_hz": 1e4}}), "s")
+
+
+def test_accuracy_below_round_off():
+    """accuracy = 1e-15 (issue 27: 8.5 GB of halved runs before exit 4) is refused at the key."""
+    with pytest.raises(InputError, match=r"time\.accuracy: 1e-15 is below what the arithmetic resolves"):
+        parse_scenario(merge(DEFAULT, {"time": {"accuracy": 1e-15}}), "s")
+    parse_scenario(merge(DEFAULT, {"time": {"accuracy": 1e-3}}), "s")

@@ -29,9 +29,9 @@ def test_accuracy_setting_halves_the_step(tmp_path):
                 snapshots=False, echo=lambda *a: None)
     res, _ = loose.results["nominal"]
     assert res.metadata.get("accuracy") is None and res.metadata.get("halvings") == 0
-    tight = run(_scenario(1e-9), tmp_path / "b", cache_dir=tmp_path / "c", progress=False, plots=False,
+    tight = run(_scenario(1e-8), tmp_path / "b", cache_dir=tmp_path / "c", progress=False, plots=False,
                 snapshots=False, echo=lambda *a: None)
     res_t, _ = tight.results["nominal"]
-    assert res_t.metadata["accuracy"] == 1e-9
+    assert res_t.metadata["accuracy"] == 1e-8
     assert res_t.metadata["halvings"] >= 1                  # the setting acted: the step was halved
     assert len(res_t.time) > len(res.time)
