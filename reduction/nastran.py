@@ -268,6 +268,12 @@ def _grid_frames(uset, gids, where: str) -> dict:
 # ---------------------------------------------------------------------------- conversion
 def _point_names(gids, grid_names, who: str) -> dict:
     grid_names = dict(grid_names or {})
+    known = {str(g) for g in gids}
+    absent = [g for g in grid_names if str(g) not in known]
+    if absent:
+        raise InputError(f"{who}: grid_names: grid {absent[0]} is not a boundary grid of the file (boundary grids: "
+                         f"{', '.join(sorted(known, key=lambda x: (len(x), x))[:20])}"
+                         f"{' ...' if len(known) > 20 else ''})")
     names = {}
     for g in gids:
         nm = str(grid_names.get(g, grid_names.get(str(g), f"g{g}")))

@@ -233,6 +233,7 @@ def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, wh
             cbs[name], ckeys[name] = cb_stage(model, name, comps[name], k, cache)
     t1 = time.perf_counter()
     _check_materials(model, thermal, where or Where("scenario", "model"))
+    _check_nastran_points(model, cbs, where or Where("scenario", "model"))
     vasm, vmodes, vehicle, pasm, pmodes, pad, unit, vall, pall = _bodies(model, cbs, ckeys, thermal, cache)
     t2 = time.perf_counter()
     return StackModel(comps, cbs, vasm, vmodes, vehicle, pasm, pmodes, pad, unit, vall, pall,
@@ -261,6 +262,27 @@ def _bodies(model: ModelConfig, cbs: dict, ckeys: dict, thermal: dict, cache: St
         cb = cbs[name]
         unit[name] = {vol: cb.boundary_load(f) for vol, f in thermal[name].items()}
     return vasm, vmodes, vehicle, pasm, pmodes, pad, unit, vall, pall
+
+
+def _check_nastran_points(model: ModelConfig, cbs: dict, where: Where) -> None:
+    """A Nastran vehicle component carries every joint the stack's layout gives it (the
+    booster and orbiter attach points; the core all of them), named by ``grids``: one
+    missing (an unmapped grid, a misspelt name) would leave the component disconnected
+    there, silently."""
+    lay = model.layout
+    joints = {"srb_left": set(lay.srb_attach_points("left")), "srb_right": set(lay.srb_attach_points("right")),
+              "orbiter": set(lay.orbiter_attach_points())}
+    joints["core"] = set().union(*joints.values())
+    for name in VEHICLE:
+        src = model.components[name].nastran
+        if src is None:
+            continue
+        missing = sorted(joints.get(name, set()) - set(cbs[name].boundary_points))
+        if missing:
+            named = ", ".join(f"{g} = {p!r}" for g, p in (src.grid_names or {}).items()) or "none"
+            raise (where / "component" / name / "nastran" / "grids").error(
+                f"no grid is named {missing[0]!r}, a joint of {name} with the stack: map its grid ID to it "
+                f"(joints of {name}: {', '.join(sorted(joints[name]))}; named: {named})")
 
 
 def _check_materials(model: ModelConfig, thermal: dict[str, dict], where: Where) -> None:

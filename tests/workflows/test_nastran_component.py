@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from liftoff.config import Where, default_text, parse_scenario
+from liftoff.core.errors import InputError
 from liftoff.workflows.cache import StageCache
 from liftoff.workflows.loads import build_problem
 from liftoff.workflows.pipeline import build_stack
@@ -59,3 +60,27 @@ def test_bad_nastran_component_is_one_line(tmp_path):
         with pytest.raises(Exception, match=expect) as e:
             _case({**STICK, "component": {"orbiter": {"nastran": nastran}}}, tmp_path)
         assert "\n" not in str(e.value) and "model.component.orbiter.nastran" in str(e.value)
+
+
+def test_grid_maps_that_would_disconnect_are_refused(tmp_path):
+    """Issue 27: a grid map naming a misspelt attach point left the orbiter's forward
+    attach silently disconnected; grid IDs absent from the file were ignored."""
+    from liftoff.reduction.nastran import write_dmig
+
+    cache = StageCache(tmp_path / "cache")
+    stack = build_stack(_case(STICK, tmp_path).model, cache, progress=False, where=Where("s.toml", "model"))
+    ids = {p: 101 + k for k, p in enumerate(stack.cbs["orbiter"].boundary_points)}
+    write_dmig(stack.cbs["orbiter"], tmp_path / "orbiter.pch", units="in-lbf-s", grid_ids=ids)
+    grids = {str(g): p for p, g in ids.items()}
+
+    def build(grids):
+        model = {**STICK, "component": {"orbiter": {"f_max": 60.0, "nastran": {
+            "file": "orbiter.pch", "units": "in-lbf-s", "grids": grids}}}}
+        return build_stack(_case(model, tmp_path).model, cache, progress=False, where=Where("s.toml", "model"))
+
+    typo = {g: ("att_orb_fwdd" if p == "att_orb_fwd" else p) for g, p in grids.items()}
+    with pytest.raises(InputError, match=r"s\.toml: model\.component\.orbiter\.nastran\.grids: no grid is named "
+                                         r"'att_orb_fwd', a joint of orbiter with the stack"):
+        build(typo)
+    with pytest.raises(InputError, match=r"grid_names: grid 999 is not a boundary grid of the file"):
+        build({**grids, "999": "somewhere"})
