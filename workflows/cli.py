@@ -29,6 +29,18 @@ from .outdir import check_target, staged_output
 
 EXIT_OK, EXIT_INTERNAL, EXIT_INPUT, EXIT_CONVERGENCE, EXIT_RESOURCES = 0, 1, 2, 3, 4
 EXIT_SIGINT, EXIT_SIGTERM = 130, 143
+#: packages a command may need that an install can lack -> how to get them (exit 2, one line)
+_VIZ = "pip install 'liftoff-loads[viz]', or run with --no-snapshots (and without --fields)"
+_FE = "the FE stack comes from Debian packages (`make setup`); without it use [model] source = \"stick\""
+OPTIONAL_PACKAGES = {
+    "h5py": "pip install h5py (on Debian, the system venv of `make setup` uses python3-h5py: pip's wheel "
+            "clashes with the HDF5 that dolfinx loads)",
+    "pyvista": _VIZ, "vtk": _VIZ, "imageio": _VIZ, "vtkmodules": _VIZ,
+    "distributed": "pip install 'liftoff-loads[dask]' (for --dask)", "dask": "pip install 'liftoff-loads[dask]'",
+    "pyyeti": "pip install 'liftoff-loads[nastran]' and pip install --no-deps pyyeti==1.4.7 (the Nastran reader)",
+    "pandas": "pip install 'liftoff-loads[nastran]'", "mpi4py": "Debian's python3-mpi4py (for --mpi and --ranks)",
+    "dolfinx": _FE, "gmsh": _FE, "petsc4py": _FE, "slepc4py": _FE, "ufl": _FE, "basix": _FE, "ffcx": _FE,
+}
 RESULTS_NAME = "results.h5"
 
 
@@ -216,6 +228,13 @@ def main(argv: list[str] | None = None) -> int:
     except _Terminated:
         print("liftoff: terminated (SIGTERM), no results written", file=sys.stderr)
         return EXIT_SIGTERM
+    except ModuleNotFoundError as exc:
+        how = OPTIONAL_PACKAGES.get((exc.name or "").split(".")[0])
+        if how is None:
+            return _fail(EXIT_INTERNAL, f"internal error (ModuleNotFoundError: {exc}); please report it with the "
+                                        "command and input that caused it")
+        return _fail(EXIT_INPUT, f"this needs the Python package {exc.name.split('.')[0]!r}, which is not installed: "
+                                 f"{how}")
     except Exception as exc:  # a bug: still one line, and a way to report it
         if _SIGNALLED:        # SIGTERM inside a C extension's import surfaces as "ImportError: initialization failed"
             print("liftoff: terminated (SIGTERM), no results written", file=sys.stderr)

@@ -317,3 +317,23 @@ def test_no_command_is_one_line_with_usage(capsys):
     assert exc.value.code == 2 and err.count("\n") == 1
     assert err.startswith("liftoff: error: the following arguments are required: COMMAND")
     assert "(usage: liftoff --help)" in err and "liftoff: error: liftoff:" not in err
+
+
+def test_a_missing_optional_package_is_one_line_with_how_to_get_it(monkeypatch, capsys, tmp_path):
+    """Issue 27: a missing optional package (pyvista, h5py ...) was an internal error."""
+    from liftoff.workflows import cli
+
+    def boom(args):
+        raise ModuleNotFoundError("No module named 'pyvista'", name="pyvista")
+
+    parser = cli.build_parser()
+    monkeypatch.setattr(cli, "build_parser", lambda: parser)
+    monkeypatch.setattr(parser, "parse_args", lambda argv: type("A", (), {"func": staticmethod(boom)})())
+    assert cli.main(["run", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "needs the Python package 'pyvista'" in err and "--no-snapshots" in err
+
+    def other(args):
+        raise ModuleNotFoundError("No module named 'nonesuch'", name="nonesuch")
+    monkeypatch.setattr(parser, "parse_args", lambda argv: type("A", (), {"func": staticmethod(other)})())
+    assert cli.main(["run", "--out", str(tmp_path / "o")]) == 1            # not an optional package: a bug
