@@ -1,16 +1,20 @@
 """Cold and warm wall time of `liftoff run` (the embedded default scenario), per stage.
 
-    python benchmarks/bench_workflow.py [--scenario FILE | --example barge] [--keep DIR]
+    python benchmarks/bench_workflow.py [--scenario FILE | --example barge] [--keep DIR] [--json FILE]
 
 Cold: a fresh, empty stage cache (meshing, FE assembly, Craig-Bampton, system modes all
 computed). Warm: the same command again on that cache (a second run that changes only
 loads or cases costs this much). Each run is a separate `liftoff run` process, so the
 totals include interpreter start-up, imports and numba compilation. Per-stage times come
-from the run's own summary.txt. Figures are reported in docs/workflow.md.
+from the run's own summary.txt. With ``--json`` (docs/figures/bench_workflow.json for the
+default) the figures are written for benchmarks/default_figures.py, which renders them into
+README.md and docs/workflow.md (machine-dependent: the test checks the documents show the
+file, not that another machine gives the same times).
 """
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import platform
 import re
@@ -36,6 +40,18 @@ def stage_times(summary: Path) -> dict[str, float]:
     return out
 
 
+def model_line(summary: str) -> dict:
+    """Modes and steps of the run (its summary.txt): what the times were measured on."""
+    out = {}
+    m = re.search(r"vehicle\s+(\d+) modes.*?pad (\d+) modes", summary)
+    if m:
+        out.update(vehicle_modes=int(m.group(1)), pad_modes=int(m.group(2)))
+    m = re.search(r"case '[^']+': (\d+) steps of h = ([0-9.e-]+) s", summary)
+    if m:
+        out.update(steps=int(m.group(1)), h_s=float(m.group(2)))
+    return out
+
+
 def run_once(scenario, out: Path, cache: Path, example: str | None = None) -> tuple[float, dict]:
     cmd = [str(LIFTOFF), "run", *([str(scenario)] if scenario else []), *(["--example", example] if example else []),
            "--out", str(out), "--cache", str(cache), "--no-progress"]
@@ -52,12 +68,16 @@ def main() -> None:
     ap.add_argument("--scenario", type=Path, default=None, help="scenario file (default: embedded)")
     ap.add_argument("--example", choices=("barge",), default=None, help="an embedded example (liftoff run --example)")
     ap.add_argument("--keep", type=Path, default=None, help="keep outputs and cache in this directory")
+    ap.add_argument("--json", type=Path, default=None,
+                    help="also write the figures here (docs/figures/bench_workflow.json: the default's, rendered into "
+                         "README.md and docs/workflow.md by benchmarks/default_figures.py)")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory(prefix="liftoff-bench-") as tmp:
         base = args.keep or Path(tmp)
         cache = base / "cache"
         cold_wall, cold = run_once(args.scenario, base / "cold", cache, args.example)
         warm_wall, warm = run_once(args.scenario, base / "warm", cache, args.example)
+        summary = (base / "warm" / "summary.txt").read_text()
     what = args.scenario or (f"--example {args.example}" if args.example else "(embedded default)")
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"liftoff run {what}: {platform.processor() or platform.machine()}, "
@@ -68,6 +88,14 @@ def main() -> None:
         print(f"{name:<40}{cold[name]:>10.2f}{w:>10.2f}")
     print(f"{'process wall time (incl. start-up)':<40}{cold_wall:>10.2f}{warm_wall:>10.2f}")
     print(f"warm / cold = {warm_wall / cold_wall:.2f}")
+    if args.json:
+        rec = {"what": str(what), "date": time.strftime("%Y-%m-%d"), "cpus": os.cpu_count(),
+               "machine": platform.processor() or platform.machine(), "python": platform.python_version(),
+               "load_average_end": load, "cold_s": cold, "warm_s": warm, "cold_wall_s": cold_wall,
+               "warm_wall_s": warm_wall, "model": model_line(summary)}
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps(rec, indent=1) + "\n")
+        print(f"wrote {args.json}")
 
 
 if __name__ == "__main__":

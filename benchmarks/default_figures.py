@@ -26,6 +26,7 @@ DEFAULT_JSON = FIGURES / "default_run.json"
 CONVERGENCE_JSON = FIGURES / "convergence.json"
 TWANG_JSON = FIGURES / "twang_study.json"
 MESH_JSON = FIGURES / "mesh_study.json"
+BENCH_JSON = FIGURES / "bench_workflow.json"       # benchmarks/bench_workflow.py --json (machine-dependent)
 DOCS = (ROOT / "README.md", ROOT / "docs" / "workflow.md")
 #: figures agree when within this relative difference (of the larger of the two or, inside a
 #: list, of the list's largest magnitude): the same code on another machine differs by
@@ -135,8 +136,9 @@ def _mn(x: float) -> str:
 
 
 def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
-                  mesh: dict | None = None) -> dict[str, str]:
-    """{block name: markdown} from the figures (and the convergence, twang and mesh studies, if any)."""
+                  mesh: dict | None = None, bench: dict | None = None) -> dict[str, str]:
+    """{block name: markdown} from the figures (and the convergence, twang and mesh studies
+    and the workflow benchmark, if any)."""
     tw, twn = fig["twang"]["nominal"], fig["twang"]
     v, p = fig["vehicle"], fig["pad"]
     lox = fig["lox_bottom_pressure_pa"]
@@ -199,7 +201,26 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
         blocks["twang-study"] = render_twang(twang_rows)
     if mesh:
         blocks["mesh-study"] = render_mesh(mesh)
+    if bench:
+        blocks.update(render_bench(bench))
     return blocks
+
+
+def render_bench(b: dict) -> dict[str, str]:
+    """The workflow benchmark (benchmarks/bench_workflow.py --json): a one-line summary and
+    the per-stage table (the run's own stage times, cold cache and warm)."""
+    m = b.get("model", {})
+    on = (f"{m['steps']} steps, {m['vehicle_modes']} vehicle + {m['pad_modes']} pad modes"
+          if {"steps", "vehicle_modes", "pad_modes"} <= set(m) else "")
+    line = (f"On this {b['cpus']}-core machine ({b['date']}, `benchmarks/bench_workflow.py`, load average "
+            f"{b['load_average_end']:.1f} at the end): {b['cold_wall_s']:.0f} s cold (empty stage cache: meshing, FE, "
+            f"Craig-Bampton, system modes), {b['warm_wall_s']:.0f} s warm (cache hit){'; ' + on if on else ''}.\n")
+    rows = ["| stage | cold (s) | warm (s) |", "|---|---|---|"]
+    for name, cold in b["cold_s"].items():
+        warm = b["warm_s"].get(name, b["warm_s"].get(name.replace("(built)", "(hit)")))
+        rows.append(f"| {name} | {cold:.1f} | {'-' if warm is None else f'{warm:.1f}'} |")
+    rows.append(f"| **process wall time** (incl. start-up) | **{b['cold_wall_s']:.1f}** | **{b['warm_wall_s']:.1f}** |")
+    return {"bench-summary": line, "bench-workflow": "\n".join(rows) + "\n"}
 
 
 def render_mesh(study: dict) -> str:
@@ -256,9 +277,11 @@ def block_names(text: str) -> list[str]:
     return [m.group("name") for m in BLOCK.finditer(text)]
 
 
-def studies() -> tuple[dict | None, dict | None, dict | None]:
-    """The checked-in convergence, twang and mesh studies (None where not run)."""
-    return tuple(json.loads(p.read_text()) if p.is_file() else None for p in (CONVERGENCE_JSON, TWANG_JSON, MESH_JSON))
+def studies() -> tuple[dict | None, dict | None, dict | None, dict | None]:
+    """The checked-in convergence, twang and mesh studies and the workflow benchmark (None
+    where not run)."""
+    return tuple(json.loads(p.read_text()) if p.is_file() else None
+                 for p in (CONVERGENCE_JSON, TWANG_JSON, MESH_JSON, BENCH_JSON))
 
 
 # ------------------------------------------------------------------ comparing

@@ -81,3 +81,14 @@ def test_checked_in_figures_are_the_current_codes(figures, tmp_path):
     diff = figures.differences(fresh, json.loads(figures.DEFAULT_JSON.read_text()))
     assert not diff, ("the default run's figures changed; run `python benchmarks/default_figures.py` (and "
                       "benchmarks/convergence_study.py when the model changed):\n" + "\n".join(diff[:20]))
+
+
+def test_bench_blocks_show_the_benchmark_file(figures):
+    """The workflow benchmark's figures (benchmarks/bench_workflow.py --json) are rendered,
+    not typed: the summary line and every stage of the file appear in the blocks."""
+    bench = {"date": "2026-01-01", "cpus": 2, "load_average_end": 1.0, "cold_wall_s": 123.4, "warm_wall_s": 45.6,
+             "cold_s": {"fe core (built)": 3.2, "total": 120.0}, "warm_s": {"fe core (hit)": 0.1, "total": 44.0},
+             "model": {"steps": 1000, "vehicle_modes": 10, "pad_modes": 5}}
+    b = figures.render_bench(bench)
+    assert "123 s cold" in b["bench-summary"] and "46 s warm" in b["bench-summary"] and "1000 steps" in b["bench-summary"]
+    assert "| fe core (built) | 3.2 | 0.1 |" in b["bench-workflow"] and "**123.4**" in b["bench-workflow"]
