@@ -8,7 +8,7 @@ SUDO    := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 OUT     ?= out/run
 STAMP   := $(VENV)/.installed
 
-.PHONY: setup test run bench clean
+.PHONY: setup test run bench clean check-install
 
 setup: $(STAMP)
 
@@ -24,7 +24,12 @@ $(STAMP): pyproject.toml constraints.txt
 	@test -x $(PY) || $(SYSPY) -m venv --system-site-packages $(VENV)
 	@echo "liftoff setup: pip install into $(VENV) (numpy pinned to Debian's build)"
 	@$(PY) -m pip uninstall -q -y liftoff 2>/dev/null || true   # the distribution's name before 0.2
-	@$(PY) -m pip install -q --disable-pip-version-check -c constraints.txt -e '.[viz,test,nastran,dask]'
+	@# pyproject's dependencies and extras, less h5py and pyyeti (Debian's h5py; pyyeti would pull pip's)
+	@$(PY) -c "import tomllib; p = tomllib.load(open('pyproject.toml', 'rb'))['project']; \
+	  reqs = p['dependencies'] + [r for e in ('viz', 'test', 'nastran', 'dask') for r in p['optional-dependencies'][e]]; \
+	  print('\n'.join(r for r in reqs if not r.startswith(('h5py', 'pyyeti'))))" > $(VENV)/requirements.txt
+	@$(PY) -m pip install -q --disable-pip-version-check -c constraints.txt -r $(VENV)/requirements.txt
+	@$(PY) -m pip install -q --disable-pip-version-check --no-deps -e .
 	@$(PY) -m pip install -q --disable-pip-version-check -c constraints.txt --no-deps pyyeti
 	@$(PY) -c "import numpy, dolfinx, numba, h5py, pyvista, distributed, imageio; assert numpy.__version__.startswith('1.24'), numpy.__version__"
 	@touch $(STAMP)
@@ -34,6 +39,19 @@ test: $(STAMP)
 
 run: $(STAMP)
 	$(VENV)/bin/liftoff run --out $(OUT)
+
+# A plain `pip install .` (and '.[nastran]') in a venv without Debian's FE stack: `liftoff
+# transient` on the vehicle_on_pad example and the Nastran import of the test model, from
+# a folder outside the repository (.ci/run runs it after the tests).
+PLAIN := /tmp/liftoff-plain-install
+check-install:
+	rm -rf $(PLAIN) && $(SYSPY) -m venv $(PLAIN)/venv
+	$(PLAIN)/venv/bin/pip install -q --disable-pip-version-check '.[nastran]'
+	cp -r examples/vehicle_on_pad $(PLAIN)/case && cp tests/data/nastran/inboard.* $(PLAIN)/
+	cd $(PLAIN)/case && ../venv/bin/liftoff transient scenario.toml --out out --no-progress > transient.txt
+	cd $(PLAIN) && venv/bin/python -c "from liftoff.reduction.nastran import from_extseout; \
+	  cb = from_extseout('inboard.op4', name='inboard', units='mm-kg-s'); print('nastran import:', cb.n_modes, 'modes')"
+	@echo "check-install: a plain pip install runs liftoff transient and the Nastran import"
 
 bench: $(STAMP)
 	for b in benchmarks/bench_*.py; do $(PY) $$b || exit 1; done
