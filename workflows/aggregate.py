@@ -123,7 +123,7 @@ def _csv(rows: list[dict], fields, head: str, path: Path) -> Path:
     return write_text(path, head + buf.getvalue())
 
 
-def write_statistics(agg: Aggregate, out: Path) -> list[Path]:
+def write_statistics(agg: Aggregate, out: Path, freq=None, q=None) -> list[Path]:
     """statistics.csv and statistics.h5 over the generated cases."""
     st = agg.statistics()
     rows = [{"item": it, "unit": u, "category": cat, **{k: (v[j] if isinstance(v, list) else float(v[j]))
@@ -140,8 +140,23 @@ def write_statistics(agg: Aggregate, out: Path) -> list[Path]:
         data[key] = Dataset(np.array(v, dtype=str) if isinstance(v, list) else v, "per item (see units)",
                             dims=("items",))
     if agg.srs_env is not None and agg.srs_run.n:
-        data["srs"] = {"items": np.array(agg.srs_items, dtype=str), "envelope": agg.srs_env,
-                       "mean": agg.srs_run.mean, "std": agg.srs_run.std, "normal": agg.srs_run.bound(agg.k)}
+        # its own dimensions (Q x frequency x SRS item), each a labelled scale with units, so that
+        # xarray opens the group beside the root's 'items' (issue 24: the group reused 'items')
+        units = [agg.units[agg.items.index(it)] for it in agg.srs_items]
+        unit = units[0] if len(set(units)) == 1 else "per item (srs_units)"
+        dims = ("q", "freq_Hz", "srs_items")
+        nq, nf, _ = np.shape(agg.srs_env)
+        qv = np.asarray(q if q is not None else np.arange(nq), float)
+        fv = np.asarray(freq if freq is not None else np.arange(nf), float)
+        data["srs"] = {"srs_items": np.array(agg.srs_items, dtype=str),          # the scales themselves
+                       "srs_units": Dataset(np.array(units, dtype=str), "", dims=("srs_items",)),
+                       "q": Dataset(qv, "1 (quality factor Q)" if q is not None else "index"),
+                       "freq_Hz": Dataset(fv, "Hz" if freq is not None else "index"),
+                       **{k: Dataset(v, unit, dims=dims, description=d) for k, v, d in (
+                           ("envelope", agg.srs_env, "SRS envelope over every case (absolute acceleration)"),
+                           ("mean", agg.srs_run.mean, "mean over the dispersed cases"),
+                           ("std", agg.srs_run.std, "standard deviation over the dispersed cases"),
+                           ("normal", agg.srs_run.bound(agg.k), "normal P/C bound, mean + k std"))}}
     paths.append(write_record(out / "statistics.h5", "liftoff-statistics", 1, data, units="SI per item",
                               attrs={"n_cases": agg.n, "p": agg.p, "c": agg.c, "k": agg.k, "r": agg.r}))
     return paths

@@ -426,13 +426,14 @@ def _loads_tables(sc, agg, out: Path, echo, camp) -> list:
     echo("Max/min envelope over cases (posts: force on vehicle, Tz > 0 compression; full table in "
          "maxmin_envelope.csv):")
     echo(report.format_table(env, select=report.is_force, limit=40))
-    if agg.n >= 2:
-        files += aggregate.write_statistics(agg, out)
-    if sc.post.srs is not None:
-        from .spectra import srs_frequencies
+    from .spectra import srs_frequencies
 
-        s = sc.post.srs
-        f = aggregate.write_srs(agg, srs_frequencies(s.f_min, s.f_max, s.n_freq), s.q, out)
+    s = sc.post.srs
+    freq = srs_frequencies(s.f_min, s.f_max, s.n_freq) if s is not None else None
+    if agg.n >= 2:
+        files += aggregate.write_statistics(agg, out, freq, s.q if s is not None else None)
+    if s is not None:
+        f = aggregate.write_srs(agg, freq, s.q, out)
         files += [f] if f else []
     f = aggregate.write_design(agg, sc.post.uncertainty, out)
     files += [f] if f else []

@@ -92,6 +92,15 @@ def test_campaign_outputs(campaign4):
                 assert ds[j] == r[side] and ds.attrs["case"] == r[f"case_{side}"]
                 n += 1
         assert n > 0
+    # statistics.h5's srs group: its own dimensions, each a scale with units (issue 24: it reused
+    # the root's 'items' and had no frequency or Q, so xarray could not open it)
+    with h5py.File(d / "statistics.h5", "r") as f:
+        g = f["srs"]
+        env = g["envelope"]
+        assert env.shape == (g["q"].shape[0], g["freq_Hz"].shape[0], g["srs_items"].shape[0])
+        assert [env.dims[k][0].name for k in range(3)] == ["/srs/q", "/srs/freq_Hz", "/srs/srs_items"]
+        assert g["freq_Hz"].attrs["units"] == "Hz" and g["freq_Hz"][0] > 0 and list(g["q"][()]) == [10.0, 25.0]
+        assert env.attrs["units"] and g["srs_items"].shape[0] < f["items"].shape[0]
 
 
 def test_tasks_carry_no_model(campaign4):
