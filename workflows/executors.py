@@ -23,6 +23,24 @@ from typing import Iterator
 from liftoff.core.errors import InputError
 
 
+def die_with_parent() -> None:
+    """Pool worker initializer (Linux): the kernel sends this worker SIGTERM when the process
+    that started it dies, however it dies (SIGKILL included), so no worker outlives a killed
+    campaign (issue 27). Elsewhere a no-op; a worker whose parent is already gone exits."""
+    import ctypes
+    import os
+    import signal
+
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        PR_SET_PDEATHSIG = 1
+        libc.prctl(PR_SET_PDEATHSIG, signal.SIGTERM, 0, 0, 0)
+    except (OSError, AttributeError):
+        return
+    if os.getppid() == 1:                 # the parent died before the call: nobody to work for
+        os._exit(1)
+
+
 class InlineExecutor(Executor):
     """Runs each task at once in the calling process (a sequential reference)."""
 
@@ -59,7 +77,8 @@ def make_executor(workers: int = 2, dask: str | None = None, mpi: bool = False) 
     if workers == 0:
         yield InlineExecutor(), "in process"
         return
-    with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as ex:
+    with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+                             initializer=die_with_parent) as ex:
         yield ex, f"process pool of {workers}"
 
 

@@ -70,3 +70,34 @@ def test_sigterm_and_sigkill_during_a_transient(tmp_path: Path):
                            capture_output=True, text=True, timeout=300)
     assert again.returncode == 0, again.stderr
     assert not _leftovers(tmp_path) and verify(out) == [] and (out / MANIFEST).read_text() != before
+
+
+def test_sigkill_of_a_campaign_leaves_no_worker(tmp_path: Path):
+    """SIGKILL of `liftoff run --cases N --workers 2` (issue 27: the pool workers went on
+    running): the workers get SIGTERM from the kernel when their parent dies
+    (executors.die_with_parent) and are gone within seconds."""
+    import pytest
+
+    psutil = pytest.importorskip("psutil")
+    s = tmp_path / "c.toml"
+    s.write_text('extends = "shuttle"\n[model]\nsource = "stick"\nmesh_size = 6.0\n[time]\nt_end = 2.0\n'
+                 '[output]\nplots = false\nsnapshots = false\n')
+    proc = subprocess.Popen(_cmd("run", str(s), "--out", str(tmp_path / "out"), "--cases", "400", "--workers", "2",
+                                 "--no-progress", "--no-error-estimate", "--cache", str(tmp_path / "cache")),
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        parent = psutil.Process(proc.pid)
+        workers = []
+        deadline = time.time() + 240
+        while time.time() < deadline and len(workers) < 2:
+            workers = [c for c in parent.children(recursive=True) if "spawn" in " ".join(c.cmdline())]
+            time.sleep(0.5)
+        assert len(workers) >= 2, "the campaign's pool workers never started"
+        time.sleep(2.0)                                  # the workers are inside cases now
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(timeout=30)
+        gone, alive = psutil.wait_procs(workers, timeout=20)
+        assert not alive, f"workers outlived the killed campaign: {[p.pid for p in alive]}"
+    finally:
+        if proc.poll() is None:
+            proc.kill()
