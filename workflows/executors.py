@@ -63,6 +63,7 @@ def make_executor(workers: int = 2, dask: str | None = None, mpi: bool = False) 
     if dask and mpi:
         raise InputError("--dask and --mpi: give one of them")
     if mpi:
+        check_mpi(mpi)
         try:
             from mpi4py.futures import MPIPoolExecutor
         except ImportError as exc:
@@ -86,6 +87,16 @@ def make_executor(workers: int = 2, dask: str | None = None, mpi: bool = False) 
 _DASK_ADDRESS = re.compile(r"^(tcp|tls|ucx|ws|wss)://[A-Za-z0-9_.\-\[\]:]+:\d{1,5}$")
 #: seconds to reach a scheduler before the run gives up with one line
 DASK_CONNECT_S = 20
+
+
+def check_mpi(mpi: bool) -> None:
+    """--mpi outside mpiexec is refused: spawning the pool's ranks there waits for slots that
+    never come (issue 27: a hang after Open MPI's "not enough slots")."""
+    from .parallel import launched_size
+
+    if mpi and launched_size() < 2:
+        raise InputError("--mpi: start the run under mpiexec with the pool's ranks: mpiexec -n K python -m "
+                         "mpi4py.futures -m liftoff.workflows.cli run ... --mpi (K >= 2)")
 
 
 def check_dask_address(address: str | None) -> None:

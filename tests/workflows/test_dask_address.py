@@ -55,3 +55,12 @@ def test_silent_server_is_given_up(monkeypatch):
         stop.set()
         srv.close()
     assert time.perf_counter() - t0 < 1 + 5 + 2
+
+
+def test_mpi_outside_mpiexec_is_refused(monkeypatch):
+    """--mpi without mpiexec hung after Open MPI's "not enough slots" (issue 27)."""
+    for var in ("OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE", "MPI_LOCALNRANKS"):
+        monkeypatch.delenv(var, raising=False)
+    with pytest.raises(InputError, match="--mpi: start the run under mpiexec"):
+        executors.check_mpi(True)
+    executors.check_mpi(False)
