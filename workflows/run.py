@@ -564,6 +564,10 @@ def _child_args(args: argparse.Namespace) -> list[str]:
                                          ("--no-progress", args.no_progress)) if on]
 
 
+#: the most --ranks per CPU (oversubscribed FE stages only wait on one another beyond a few)
+MAX_RANKS_PER_CPU = 4
+
+
 def launch(ranks: int, argv: list[str]) -> int:
     """``mpirun --quiet -n ranks python -m liftoff.workflows.cli ARGV``; returns its exit
     status. Every rank reports an error (it may be its own); the copies of an error line
@@ -578,14 +582,30 @@ def launch(ranks: int, argv: list[str]) -> int:
     mpirun = shutil.which("mpirun")
     if mpirun is None:
         raise InputError("--ranks: mpirun not found (Debian package openmpi-bin, installed with python3-dolfinx-real)")
-    cmd = [mpirun, "--quiet", "-n", str(ranks)] + (["--oversubscribe"] if ranks > (os.cpu_count() or 1) else [])
+    cpus = os.cpu_count() or 1
+    if ranks > MAX_RANKS_PER_CPU * cpus:
+        raise InputError(f"--ranks {ranks}: more than {MAX_RANKS_PER_CPU} ranks per CPU ({cpus} CPUs here); the FE "
+                         "stages would only wait on one another")
+    cmd = [mpirun, "--quiet", "-n", str(ranks)] + (["--oversubscribe"] if ranks > cpus else [])
     env = dict(os.environ)
     if hasattr(os, "geteuid") and os.geteuid() == 0:   # containers: Open MPI refuses root otherwise
         env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+    from .executors import die_with_parent
+
+    # mpirun (and through it every rank) is stopped when this process ends, however it ends:
+    # SIGTERM here, or a kill of this process (issue 27: ranks survived and replaced the output)
     proc = subprocess.Popen(cmd + [sys.executable, "-m", "liftoff.workflows.cli", *argv], stderr=subprocess.PIPE,
-                            env=env)
-    _forward_stderr(proc.stderr.fileno(), sys.stderr)
-    return proc.wait()
+                            env=env, preexec_fn=die_with_parent)
+    try:
+        _forward_stderr(proc.stderr.fileno(), sys.stderr)
+        return proc.wait()
+    finally:
+        if proc.poll() is None:
+            proc.terminate()
+            try:
+                proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                proc.kill()
 
 
 def _forward_stderr(fd: int, dest) -> None:

@@ -101,3 +101,43 @@ def test_sigkill_of_a_campaign_leaves_no_worker(tmp_path: Path):
     finally:
         if proc.poll() is None:
             proc.kill()
+
+
+def test_sigterm_of_a_ranks_run_stops_its_ranks(tmp_path: Path):
+    """SIGTERM to `liftoff run --ranks 2` (issue 27: it printed "no results written", exited
+    143, and 40 s later the surviving ranks replaced the output): mpirun and its ranks stop
+    with it, and no output appears afterwards."""
+    import shutil
+
+    import pytest
+
+    psutil = pytest.importorskip("psutil")
+    if shutil.which("mpirun") is None:
+        pytest.skip("no mpirun")
+    s = tmp_path / "r.toml"
+    s.write_text('extends = "shuttle"\n[model]\nsource = "stick"\nmesh_size = 6.0\n[time]\nt_end = 9.6\n'
+                 '[output]\nplots = false\nsnapshots = false\n')
+    out = tmp_path / "out"
+    proc = subprocess.Popen(_cmd("run", str(s), "--out", str(out), "--ranks", "2", "--no-progress",
+                                 "--cache", str(tmp_path / "cache")),
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    try:
+        parent = psutil.Process(proc.pid)
+        ranks = []
+        deadline = time.time() + 120
+        while time.time() < deadline and len(ranks) < 2:
+            ranks = [c for c in parent.children(recursive=True)
+                     if "liftoff.workflows.cli" in " ".join(c.cmdline()) and c.pid != proc.pid]
+            time.sleep(0.2)
+        assert len(ranks) >= 2, "the ranks never started"
+        family = parent.children(recursive=True)
+        time.sleep(1.0)
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(timeout=60) == 143
+        gone, alive = psutil.wait_procs(family, timeout=30)
+        assert not alive, f"processes outlived the terminated run: {[p.pid for p in alive]}"
+        time.sleep(3.0)
+        assert not out.exists()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
