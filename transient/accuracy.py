@@ -102,11 +102,14 @@ def _solve_estimated(problem: TransientProblem) -> Estimated:
 
     rows = contact_rows(problem.body_a, problem.body_b, problem.contacts)
     step = choose_step(problem, rows)
+    # memory, in histories of the coarse run: the coarse run and the h/2 run (twice its time
+    # points) are held together, 3 coarse = 1.5 fine; checked before the coarse run starts, so
+    # a pair that cannot fit is refused at once, not after the coarse run (issue 27)
     coarse = _solve(problem, step, runs=3)
     # the h/2 run is a check: it keeps modal histories only where it may become the result
     check = problem if problem.accuracy is not None else replace(problem, keep_modal=False)
     for k in range(MAX_HALVINGS + 1):
-        fine = _solve(check, step.halved(), runs=3)
+        fine = _solve(check, step.halved(), runs=1.5)
         est = _estimate(coarse, fine)
         if problem.accuracy is None or est.relative <= problem.accuracy:
             coarse.metadata["accuracy"] = problem.accuracy

@@ -68,3 +68,23 @@ def test_peak_errors_of_a_second_order_sequence():
     emax, emin = peak_errors(y + c * h ** 2, y + c * (h / 2) ** 2)
     # the differences are 3e-5 of values ~1: round-off 1e-16 / 3e-5 ~ 1e-11 relative
     assert emax == pytest.approx(-c * h ** 2, rel=1e-9) and emin == pytest.approx(-c * h ** 2, rel=1e-9)
+
+
+def test_memory_of_the_run_and_its_h2_check_is_counted_once_before_both():
+    """The coarse run and its h/2 check are held together: 3 coarse-run histories (1 + 2).
+    A limit below that refuses at once; above it both run (issue 27: the h/2 run was counted
+    as 3 of its own, 6 coarse, and refused after the coarse run had taken its time and memory)."""
+    from dataclasses import replace
+
+    from liftoff.core.errors import ResourceError
+    from liftoff.transient import solve_estimated
+    from liftoff.transient.stepping import choose_step, memory_estimate
+
+    pr = _drop(t_end=0.25)
+    n = choose_step(pr).n_steps
+    unit = memory_estimate(pr, n, 1)["histories"]
+    rest = sum(v for k, v in memory_estimate(pr, n, 1).items() if k != "histories")
+    est = solve_estimated(replace(pr, memory_limit=4.0 * unit + rest))          # 3 units needed: runs
+    assert est.check.time.size == 2 * n + 1
+    with pytest.raises(ResourceError, match="the transient needs about"):
+        solve_estimated(replace(pr, memory_limit=2.5 * unit + rest))
