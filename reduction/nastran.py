@@ -583,6 +583,8 @@ def from_extseout(op4, *, name: str, units, asm=None, pch=None, grid_names: Mapp
     have = _call(str(op4), "OP4 directory (truncated or not OP4?)", _op4_names, op4)
     kname = (stiffness or next((n for n in ("kaa", "kxx") if n in have), "kaa")).lower()
     mname = (mass or next((n for n in ("maa", "mxx") if n in have), "maa")).lower()
+    if kname == mname:
+        raise InputError(f"{op4}: stiffness and mass both name the matrix {kname!r}")
     mats = _read_op4(op4, [kname, mname])
     uset, _ = _call(str(asm), "GRID/CORD cards", bulk.bulk2uset, str(asm))
     gids = list(dict.fromkeys(iddof[iddof[:, 1] > 0, 0].tolist()))

@@ -512,3 +512,13 @@ def test_boundary_grid_with_one_component():
     assert np.allclose(cb.K[:10, :10], raw["kaa"][np.ix_(order, order)][:10, :10], rtol=1e-14)    # omega^2
     # a translation-translation mass entry scales by the mass factor only
     assert cb.M[-1, -1] == pytest.approx(raw["maa"][18, 18] * f.mass, rel=1e-14)   # one product: 1 eps
+
+
+def test_matrix_names_that_cannot_be_right():
+    """Issue 27: a mass name absent from the file, or the stiffness's own, is one line."""
+    from liftoff.core.errors import InputError
+
+    with pytest.raises(InputError, match="matrix 'kaax' not found"):
+        extseout("inboard", mass="KAAX")
+    with pytest.raises(InputError, match="stiffness and mass both name the matrix 'kxx'"):
+        extseout("inboard", mass="kxx")
