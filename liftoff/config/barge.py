@@ -22,9 +22,9 @@ from liftoff.meshes.layout import StackLayout
 from .extends import read_scenario, resolve
 from .files import parse_toml
 from .model import ComponentModel, ModelConfig, SystemModel, builder
-from .scenario import RESERVED_CASE_NAMES, merge
+from .scenario import checked_case_name, merge
 from .sections import FORCE_KEYS, Force, TimeSpan, force, time_span
-from .values import Where, array_of_tables, boolean, integer, number, string, table, unique_name
+from .values import Where, array_of_tables, boolean, integer, number, string, table
 
 EXAMPLE_NAME = "barge_scenario.toml"
 KIND = "barge"
@@ -190,10 +190,7 @@ def parse_barge(data: dict, source: str = "scenario", base: Path | str = ".") ->
     for i, c in enumerate(cases_raw):
         wc = w / "case" / i
         c = table(wc, c, _CASE, required=("name",))
-        name = unique_name(wc / "name", c["name"], names, "case")
-        if name in RESERVED_CASE_NAMES:
-            raise (wc / "name").error(f"{name!r} names the run's envelope outputs (maxmin_envelope.csv): give the "
-                                      "case another name")
+        name = checked_case_name(wc / "name", c["name"], names)
         cases.append(_case(wc, merge(common, {k: v for k, v in c.items() if k != "name"}), name, base))
     return BargeScenario(source, title, description, cases)
 

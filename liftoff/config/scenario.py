@@ -315,6 +315,16 @@ def _check_profiles_used(w: Where, profiles: Any, used: set) -> None:
                                                 f"{', '.join(sorted(str(u) for u in used if u)) or 'none'})")
 
 
+def checked_case_name(where: Where, value: Any, seen: set[str]) -> str:
+    """A ``[[case]]`` name (lift-off and barge scenarios): plain and unique
+    (:func:`~.values.unique_name`), and not a name the run's envelope outputs use."""
+    name = unique_name(where, value, seen, "case")
+    if name in RESERVED_CASE_NAMES:
+        raise where.error(f"{name!r} names the run's envelope outputs (maxmin_envelope.csv): give the case another "
+                          "name")
+    return name
+
+
 # --------------------------------------------------------------------- entry points
 def parse_scenario(data: dict, source: str = "scenario", base: Path | str = ".", n_cases: int | None = None) -> Scenario:
     """Validate a scenario mapping (as read from TOML): one Case per [[case]] (or 'base');
@@ -333,10 +343,7 @@ def parse_scenario(data: dict, source: str = "scenario", base: Path | str = ".",
     for i, c in enumerate(cases_raw):
         wc = w / "case" / i
         c = table(wc, c, _CASE, required=("name",))
-        name = unique_name(wc / "name", c["name"], names, "case")
-        if name in RESERVED_CASE_NAMES:
-            raise (wc / "name").error(f"{name!r} names the run's envelope outputs (maxmin_envelope.csv): give the "
-                                      "case another name")
+        name = checked_case_name(wc / "name", c["name"], names)
         over = {k: v for k, v in c.items() if k != "name"}
         merged = merge(common, over)
         cases.append(_case(wc, merged, name, base))
