@@ -230,7 +230,11 @@ _RECORD_ARRAYS = ("mx", "t_mx", "mn", "t_mn", "separation", "recontacts", "compr
 
 
 def load_summary(path: Path) -> CaseSummary:
-    rec = read_record(path, RECORD_FORMAT, (RECORD_VERSION,), what="campaign record")
+    return _summary_of(read_record(path, RECORD_FORMAT, (RECORD_VERSION,), what="campaign record"), path)
+
+
+def _summary_of(rec, path: Path) -> CaseSummary:
+    """The CaseSummary of a campaign record read from ``path`` (InputError if incomplete)."""
     d = rec.data
     missing = [k for k in _RECORD_ARRAYS if k not in d]
     if missing or np.shape(d["scalars"]) != (4,) or "name" not in rec.attrs:
@@ -249,8 +253,9 @@ def record_problem(path: Path, name: str, index: int, key: str) -> str | None:
     ``key``), None if it can: unreadable or incomplete, another case's (a record copied
     over this one), another key, or values that are not finite (a damaged run)."""
     try:
-        s = load_summary(path)
-        meta = json.loads(read_record(path, RECORD_FORMAT, (RECORD_VERSION,)).attrs.get("metadata", "{}"))
+        rec = read_record(path, RECORD_FORMAT, (RECORD_VERSION,), what="campaign record")
+        s = _summary_of(rec, path)
+        meta = json.loads(rec.attrs.get("metadata", "{}"))
     except (InputError, ValueError, TypeError, KeyError) as exc:
         return " ".join(str(exc).split())[:200]
     if s.name != name or s.index != index:
