@@ -26,7 +26,7 @@ import scipy.sparse.linalg as spla
 
 from liftoff.core.errors import InputError, ResourceError
 from liftoff.core.labels import split_label
-from liftoff.core.memory import available_memory
+from liftoff.core.memory import MEMORY_FRACTION, available_memory
 from liftoff.core.records import read_record, write_record
 
 from .component import Component
@@ -283,11 +283,11 @@ def craig_bampton(component: Component, boundary_labels, n_modes: int | None = N
         raise InputError(f"{who}: every DOF is a boundary DOF; nothing to reduce")
     if n_modes is not None:             # the dense modes (n x n_modes) and their products, before any solve
         # (n_modes beyond the interior DOFs means all of them)
-        need, have = 3.0 * 8.0 * n * (min(n_modes, i.size) + b.size), available_memory()
-        if need > 0.8 * have:
-            raise ResourceError(f"{who}: {min(n_modes, i.size)} fixed-interface modes of {n} DOFs need about {need / 1e9:.3g} GB "
-                                f"of dense mode shapes, more than the {0.8 * have / 1e9:.3g} GB available: keep fewer "
-                                "(n_modes, f_max) or mesh coarser")
+        need, limit = 3.0 * 8.0 * n * (min(n_modes, i.size) + b.size), MEMORY_FRACTION * available_memory()
+        if need > limit:
+            raise ResourceError(f"{who}: {min(n_modes, i.size)} fixed-interface modes of {n} DOFs need about "
+                                f"{need / 1e9:.3g} GB of dense mode shapes, more than the {limit / 1e9:.3g} GB "
+                                "available: keep fewer (n_modes, f_max) or mesh coarser")
     solver = scipy_solver() if solver is None else solver
     liquid = component.liquid              # hydroelastic liquid (reduction.liquid.LiquidMass) or None
     lam, phi, psi, timings = solver(component.K, component.M, i, b, n_modes=n_modes, f_max=f_max,

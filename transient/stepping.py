@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from liftoff.core.errors import InputError, ResourceError
-from liftoff.core.memory import available_memory  # noqa: F401  (also imported from here)
+from liftoff.core.memory import MEMORY_FRACTION, available_memory  # noqa: F401  (also imported from here)
 
 from .assembly import contact_rows
 from .body import ModalBody
@@ -35,7 +35,6 @@ from .model import TransientProblem
 
 STABILITY = math.sqrt(3) / math.pi  # rigid bodies: 2 pi f_h h < 2 sqrt(3) (0.551/f_h), the linear-acceleration limit
 TIME_RESOLUTION = 1e-6              # the float spacing of the time axis must stay below this fraction of h
-MEMORY_FRACTION = 0.8               # default memory limit: this fraction of the memory available at the start
 DIVIDES = 1e-6                      # a step that overshoots t_end by less than this fraction of h divides the span
 
 

@@ -4,6 +4,9 @@ from __future__ import annotations
 import math
 import os
 
+#: default memory limit of a run's big allocations: this fraction of the memory available
+MEMORY_FRACTION = 0.8
+
 
 def available_memory() -> float:
     """Bytes of memory available now (Linux MemAvailable; else the physical memory)."""
