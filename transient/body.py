@@ -222,11 +222,12 @@ def consistency_problems(body: ModalBody) -> list[str]:
     with coordinates, with unit modal mass, P_r M_rb^-1 P_r^T = I; the elastic ones are
     orthogonal to rigid motion, P_e = 0. A transposed square phi, a negated rigid-body mass
     or mode shapes of another body break these."""
+    rigid = body.omega < RIGID_OMEGA
     if body.phi.size and not np.any(body.phi):
         return ["phi is all zero: the body's DOFs do not move in any mode"]
-    if int(np.sum(body.omega < RIGID_OMEGA)) > 6:
-        return [f"{int(np.sum(body.omega < RIGID_OMEGA))} modes below {RIGID_OMEGA:g} rad/s: a body has at most six "
-                "rigid-body modes (omega in rad/s, not zero for elastic modes)"]
+    if int(rigid.sum()) > 6:
+        return [f"{int(rigid.sum())} modes below {RIGID_OMEGA:g} rad/s: a body has at most six rigid-body modes "
+                "(omega in rad/s, not zero for elastic modes)"]
     M = body.rigid_body_mass
     scale = float(np.abs(M).max(initial=0.0))
     if scale == 0:
@@ -235,7 +236,6 @@ def consistency_problems(body: ModalBody) -> list[str]:
         return ["rigid_body_mass is not symmetric"]
     if np.linalg.eigvalsh(0.5 * (M + M.T)).min() < -1e-9 * scale:
         return ["rigid_body_mass is not positive semidefinite (a negative mass or inertia)"]
-    rigid = body.omega < RIGID_OMEGA
     P = body.participation
     sel = np.flatnonzero(np.diag(M) > 0)
     if not rigid.any() or not np.abs(P).max(initial=0.0) > 0 or not sel.size:
