@@ -74,9 +74,9 @@ def resolve(data: dict, source: str, folder: Path | None, _chain: tuple[str, ...
         ident, base_source, base_folder = f"example:{name}", f"<example {name}>", None
         base = parse_toml(example_text(name), base_source)
     else:
-        if folder is None:
-            raise w.error(f"unknown example {name!r} (examples: {', '.join(EXAMPLES)})")
-        path = (folder / name)
+        if folder is None:                                   # embedded text: examples only
+            check_example(name, w)
+        path = folder / name
         if not path.is_file():
             hint = f"; examples: {', '.join(EXAMPLES)}" if "/" not in name and not name.endswith(".toml") else ""
             raise w.error(f"no example and no file {name!r} (looked in {folder}{hint})")
@@ -102,8 +102,9 @@ def read_scenario(path: str | Path) -> dict:
     return resolve(read_toml(path), path.name, path.resolve().parent, (str(path.resolve()),))
 
 
-def check_example(name: str) -> str:
-    """``name`` if it is an embedded example, else a one-line InputError."""
+def check_example(name: str, where: Where | None = None) -> str:
+    """``name`` if it is an embedded example, else a one-line InputError (at ``where``)."""
     if name not in EXAMPLES:
-        raise InputError(f"unknown example {name!r} (examples: {', '.join(EXAMPLES)})")
+        msg = f"unknown example {name!r} (examples: {', '.join(EXAMPLES)})"
+        raise where.error(msg) if where is not None else InputError(msg)
     return name
