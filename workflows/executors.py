@@ -24,9 +24,10 @@ from liftoff.core.errors import InputError
 
 
 def die_with_parent() -> None:
-    """Pool worker initializer (Linux): the kernel sends this worker SIGTERM when the process
-    that started it dies, however it dies (SIGKILL included), so no worker outlives a killed
-    campaign (issue 27). Elsewhere a no-op; a worker whose parent is already gone exits."""
+    """Pool worker initializer, and ``preexec_fn`` of the mpirun that ``--ranks`` starts
+    (workflows/run.launch) (Linux): the kernel sends this process SIGTERM when the process
+    that started it dies, however it dies (SIGKILL included), so nothing outlives a killed
+    run (issue 27). Elsewhere a no-op; a process whose parent is already gone exits."""
     import ctypes
     import os
     import signal
