@@ -77,6 +77,7 @@ class RecoveryItem:
     labels: tuple[str, ...]     # per column
     units: tuple[str, ...]      # per column
     description: str = ""
+    from_acceleration: bool = False     # recovered from the modal accelerations alone (an ATM: y = A qddot)
 
 
 @dataclass
@@ -166,7 +167,7 @@ class TransientResult:
             rec[name + COLUMNS] = Dataset(np.array(it.labels, dtype=object), "1")
             rec[name] = Dataset(arr, units_text(it.units, "SI"), dims=("/time", name + COLUMNS),
                                 column_units=list(it.units), category=it.category, body=it.body,
-                                description=it.description)
+                                description=it.description, from_acceleration=int(it.from_acceleration))
         data["recovered"] = rec
         return write_record(path, FORMAT, VERSION, data, units="SI (m, kg, s, N, rad)",
                             attrs={"metadata": json.dumps(self.metadata)}, suffixes=(".h5", ".hdf5"))
@@ -261,7 +262,7 @@ def load_result(path: str | os.PathLike) -> TransientResult:
         recovered[name] = arr
         items[name] = RecoveryItem(name, str(a["body"]), str(a["category"]), strings(d["recovered"][name + COLUMNS]),
                                    strings(np.atleast_1d(a["column_units"])) if arr.shape[1] else (),
-                                   str(a.get("description", "")))
+                                   str(a.get("description", "")), bool(a.get("from_acceleration", 0)))
     return TransientResult(
         time=d["time"], contact_names=strings(c["names"]), contact_directions=dirs, contact_force=c["force"],
         contact_state=c["state"], separation_time=c["separation_time"], recontact_count=c["recontact_count"],

@@ -581,7 +581,8 @@ def _result(problem: TransientProblem, rows, step: StepChoice, plans, hist: Hist
             "wall_time_s": _time.perf_counter() - started, "active_set_patterns": n_patterns}
     if np.isfinite(rows.latch).any():
         meta["capture_time"] = capture_times(hist.state, time, rows)
-    items = {r.name: RecoveryItem(r.name, r.body, r.category, r.labels, r.units, r.description) for r in problem.recoveries}
+    items = {r.name: RecoveryItem(r.name, r.body, r.category, r.labels, r.units, r.description,
+                                  r.disp is None and r.vel is None) for r in problem.recoveries}
     return TransientResult(
         time=time, contact_names=rows.names, contact_directions=rows.directions, contact_force=hist.Fc,
         contact_state=hist.state, separation_time=sep, recontact_count=rec, release_time=rows.release.copy(),

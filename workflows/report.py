@@ -41,9 +41,11 @@ def items(result, attach: dict, heads: dict | None = None, band_hz: float = 0.0)
     the modal coordinates), output points, and with ``heads`` (:func:`liquid_heads`) the
     total tank pressures and ullage volumes. Names, units and kinds come from the result's
     contact directions and recovery items; ``attach``: recovery name -> (point, component).
-    ``band_hz`` > 0: the output-point accelerations low-pass filtered to that band
+    ``band_hz`` > 0: the acceleration-type histories low-pass filtered to that band
     (workflows/spectra.lowpass; ``[postprocess] acceleration_band_hz``), the unfiltered
-    history kept as ``raw``."""
+    history kept as ``raw``: the output-point accelerations and every recovery made from
+    the modal accelerations alone (``RecoveryItem.from_acceleration``: liquid pressures,
+    liquid inertia forces, a Nastran ATM), whose peaks are set by the highest modes."""
     from .spectra import lowpass
 
     out = []
@@ -57,8 +59,10 @@ def items(result, attach: dict, heads: dict | None = None, band_hz: float = 0.0)
         if it.category == "interface_force" and it.name in attach:
             point, comp = attach[it.name]
             head = f"attach {point} on {comp}"
+        band = band_hz if it.from_acceleration else 0.0
+        filtered = lowpass(arr, result.h, band)
         for j, (lab, unit) in enumerate(zip(it.labels, it.units)):
-            out.append(Item(f"{head} {lab}", unit, arr[:, j], it.category))
+            out.append(Item(f"{head} {lab}", unit, filtered[:, j], it.category, raw=arr[:, j] if band > 0 else None))
     dunits, aunits = result.output_units("a", "disp"), result.output_units("a", "acc")
     for j, lab in enumerate(result.output_labels["a"]):
         out.append(Item(f"disp {lab}", dunits[j], result.displacement["a"][:, j], "displacement"))
@@ -66,7 +70,7 @@ def items(result, attach: dict, heads: dict | None = None, band_hz: float = 0.0)
         out.append(Item(f"acc {lab}", aunits[j], lowpass(acc, result.h, band_hz), "acceleration",
                         raw=acc if band_hz > 0 else None))
     if heads is not None:
-        out += tank_items(result, heads)
+        out += tank_items(result, heads, band_hz)
     return out
 
 
@@ -89,13 +93,19 @@ def liquid_heads(cp) -> dict[str, np.ndarray]:
     return out
 
 
-def tank_items(result, heads: dict) -> list[Item]:
-    """Total tank pressure (dynamic + head) and ullage volume change histories."""
+def tank_items(result, heads: dict, band_hz: float = 0.0) -> list[Item]:
+    """Total tank pressure (dynamic + head) and ullage volume change histories; ``band_hz``
+    > 0: the dynamic pressure (from the accelerations) in that band, as in :func:`items`."""
+    from .spectra import lowpass
+
     out = []
     for it in result.recovery_items.values():
         if it.name in heads:
-            arr = result.recovered[it.name] + heads[it.name]
-            out += [Item(f"tank pressure {lab}", "Pa", arr[:, j], "tank_pressure") for j, lab in enumerate(it.labels)]
+            raw = result.recovered[it.name] + heads[it.name]
+            band = band_hz if it.from_acceleration else 0.0
+            arr = lowpass(result.recovered[it.name], result.h, band) + heads[it.name]
+            out += [Item(f"tank pressure {lab}", "Pa", arr[:, j], "tank_pressure", raw=raw[:, j] if band > 0 else None)
+                    for j, lab in enumerate(it.labels)]
         elif it.name.endswith(ULLAGE):
             arr = result.recovered[it.name]
             out += [Item(f"ullage volume change {lab}", "m^3", arr[:, j], "ullage_volume")
@@ -193,8 +203,9 @@ FIELDS = ("item", "unit", "max", "max_err_est", "t_max", "case_max", "min", "min
 _KEYS = {"max_err_est": "max_err", "min_err_est": "min_err"}
 CSV_HEADER = ("# liftoff max/min table; SI units (column 'unit'); times in s; max_err_est, min_err_est: estimated "
               "error of the value (true - reported, Richardson from a second run at h/2; an estimate, not a bound; "
-              "empty when not estimated); 'acc' rows: output-point accelerations low-pass filtered to the scenario's "
-              "[postprocess] acceleration_band_hz (summary.txt states it; 0: unfiltered)\n")
+              "empty when not estimated); 'acc' rows (output-point accelerations) and rows recovered from the "
+              "accelerations alone (liquid and tank pressures, liquid inertia forces): low-pass filtered to the "
+              "scenario's [postprocess] acceleration_band_hz (summary.txt states it; 0: unfiltered)\n")
 
 
 def _cell(value) -> str:
@@ -480,7 +491,8 @@ def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[di
              f"pad {stack.pad.n_modes} modes"]
     lines += truncation_lines(c for _, cp in results.values() for c in cp.truncation)
     band = scenario.post.acceleration_band_hz
-    lines.append(f"  accelerations in the max/min tables: {f'low-pass filtered to {band:g} Hz' if band > 0 else 'unfiltered'}"
+    lines.append(f"  accelerations and liquid pressures in the max/min tables: "
+                 f"{f'low-pass filtered to {band:g} Hz' if band > 0 else 'unfiltered'}"
                  " ([postprocess] acceleration_band_hz; SRS and PSD unfiltered)")
     lines.append("  mesh: not checked by a run (refine the [model] mesh sizes and compare the envelopes; the default's "
                  "study: docs/workflow.md, Convergence)")

@@ -4,8 +4,8 @@ hold-downs list the axial direction first, with recoveries of several
 categories. Reference: the problem definition the run was given."""
 import numpy as np
 
-from liftoff.transient import ContactPoint, Forcing, Recovery, TransientProblem, solve
-from liftoff.transient.examples import toy_pad, toy_vehicle
+from liftoff.transient import ContactPoint, Forcing, PointForce, Recovery, TransientProblem, solve
+from liftoff.transient.examples import holddown_contacts, toy_pad, toy_vehicle
 from liftoff.workflows import report
 
 
@@ -34,3 +34,33 @@ def test_items_follow_the_result_metadata():
     assert np.array_equal(its[len(posts) + 1].values, r.recovered["attach_x"][:, 1])
     rows = report.maxmin(r.time, its, "c")
     assert [row["category"] for row in rows] == [n[2] for n in names]
+
+
+def test_acceleration_recoveries_take_the_band(tmp_path):
+    """A recovery made from the modal accelerations alone (an ATM: liquid pressures, liquid
+    inertia forces) is set, like an output acceleration, by the highest modes; with a band it
+    is reported low-pass filtered (workflows/spectra.lowpass, its own unit test), the raw
+    history kept; a recovery with a displacement part is not filtered. The flag survives the
+    results file. Reference: lowpass applied to the same history, and the unfiltered history."""
+    from liftoff.transient.result import load_result
+    from liftoff.workflows.spectra import lowpass
+
+    v, p = toy_vehicle(3), toy_pad(3)
+    cps = holddown_contacts(3, release_time=0.01)    # the lateral load is let go at release
+    rows = v.rows(["top:Tx"])
+    recs = [Recovery("atm", "a", ["a"], acc=rows, units="m/s^2"),
+            Recovery("ltm", "a", ["f"], disp=rows, acc=rows, units="N", category="interface_force")]
+    prob = TransientProblem(v, p, cps, Forcing([PointForce("a", "top:Tx", 3e5)], gravity=(0, 0, -9.81)), t_end=0.05,
+                            outputs={"a": ["top:Tz"]}, recoveries=recs, progress=False)
+    r = solve(prob)
+    assert r.recovery_items["atm"].from_acceleration and not r.recovery_items["ltm"].from_acceleration
+    r = load_result(r.save(tmp_path / "r.h5"))
+    assert r.recovery_items["atm"].from_acceleration and not r.recovery_items["ltm"].from_acceleration
+    band = 50.0
+    its = {it.name: it for it in report.items(r, {}, band_hz=band)}
+    atm, ltm = its["atm a"], its["ltm f"]
+    assert np.array_equal(atm.values, lowpass(r.recovered["atm"], r.h, band)[:, 0])
+    assert np.array_equal(atm.history, r.recovered["atm"][:, 0])
+    assert not np.allclose(atm.values, atm.history)      # the release excites modes above the band
+    assert ltm.raw is None and np.array_equal(ltm.values, r.recovered["ltm"][:, 0])
+    assert np.array_equal(its["acc top:Tz"].values, lowpass(r.acceleration["a"], r.h, band)[:, 0])
