@@ -214,6 +214,10 @@ def prepare(sc, cache: StageCache, progress: bool, echo, error_estimate: bool = 
         t0 = time.perf_counter()
         first = sc.generated_case(0)
         gen_model = _stack_for(first, stacks, cache, progress, echo, stage_times)
+        if sc.dispersion.database is not None:      # every file's columns are DOFs of the vehicle
+            from liftoff.config.values import Where
+
+            sc.dispersion.database.check(Where(sc.path, "dispersion.database"), stacks[gen_model].vehicle.dof_index)
         for i in range(1, sc.n_generated):
             if stage_key("model", asdict(sc.generated_case(i).model)) != gen_model:
                 raise InputError(f"{sc.path}: case d{i:04d}: its [model] differs from the first generated case's")
