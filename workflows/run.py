@@ -97,9 +97,11 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
     else:
         sc = load_scenario(scenario, n_cases=n_cases)
     on_root(comm, lambda: check_target(out), share=False)
-    from .executors import check_dask_address, check_mpi
+    from .executors import check_dask_address, check_mpi, probe_dask_scheduler
 
     check_dask_address(opt.dask)
+    if sc.n_generated and opt.dask not in (None, "local"):   # a scheduler there, before the model stages
+        on_root(comm, lambda: probe_dask_scheduler(opt.dask), share=False)
     if n_cases:
         check_mpi(opt.mpi)
     if opt.compare is not None:           # read before the first expensive stage (and again at the end)
