@@ -23,6 +23,7 @@ import copy
 import csv
 import io
 import math
+import operator
 import re
 import zlib
 from dataclasses import dataclass
@@ -46,6 +47,25 @@ NOT_DISPERSED = ("model", "title", "description", "case", "dispersion", "postpro
 # values the scenario layer defaults when a table omits them (what "add"/"scale" start from)
 DEFAULTS = {"engine": {"start": 0.0, "scale": 1.0, "direction": [0.0, 0.0, 1.0]}, "force": {"scale": 1.0}}
 _SEGMENT = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)((?:\[[^\[\]]+\])*)$")
+
+
+#: the most generated cases of one run ([dispersion] n_cases and --cases): every case is
+#: checked before the first runs (a few ms each), and the run keeps a record path and name
+#: per case until its envelope is written (workflows/campaign.py)
+MAX_CASES = 10 ** 7
+
+
+def check_case_count(source: str, n_cases: Any) -> int:
+    """``n_cases`` of the command line (--cases) as an int in [0, MAX_CASES], or a one-line
+    InputError, before any case is generated."""
+    try:
+        n = None if isinstance(n_cases, bool) else operator.index(n_cases)
+    except TypeError:
+        n = None
+    if n is None or not 0 <= n <= MAX_CASES:
+        raise InputError(f"{source}: --cases {n_cases}: out of range [0, {MAX_CASES}] (the most generated cases of "
+                         "one run; split a larger campaign into runs)")
+    return n
 
 
 def case_name(index: int) -> str:
@@ -403,6 +423,6 @@ def dispersion(where: Where, spec: Any, base: Path, n_cases: int | None = None) 
     names: set[str] = set()
     out = tuple(variable(wv / name, unique_name(wv / name, name, names, "variable"), v) for name, v in variables.items())
     db = database(where / "database", d["database"], base) if "database" in d else None
-    n = integer(where / "n_cases", d.get("n_cases", len(db.files) if db else 0), 0, 10 ** 7)
+    n = integer(where / "n_cases", d.get("n_cases", len(db.files) if db else 0), 0, MAX_CASES)
     source = string(where / "from", d["from"]) if "from" in d else None
-    return Dispersion(seed, n if n_cases is None else n_cases, source, out, db)
+    return Dispersion(seed, n if n_cases is None else check_case_count(where.source, n_cases), source, out, db)

@@ -184,3 +184,21 @@ def test_database_labels_checked_against_the_model(tmp_path):
         sc.dispersion.database.check(Where("s.toml", "dispersion.database"), known)
     assert str(exc.value) == ("s.toml: dispersion.database: db/b.csv line 1, column 3 'nope:Ty': unknown DOF label "
                               "'nope:Ty' on body 'vehicle'")
+
+
+@pytest.mark.parametrize("n", [10 ** 9, -3])
+def test_case_counts_beyond_the_cap_are_refused_before_any_case_is_generated(monkeypatch, n):
+    """Issue 27: `--cases 1000000000` generated and parsed every case before running any (the
+    file's n_cases had a cap of 1e7, the command line's none). The count is refused at once:
+    no case is generated (Dispersion.generate would fail the test)."""
+    from liftoff.config.dispersion import Dispersion
+
+    def no_generation(*a, **k):
+        raise AssertionError("a case was generated")
+
+    monkeypatch.setattr(Dispersion, "generate", no_generation)
+    with pytest.raises(InputError, match=rf"^s\.toml: --cases {n}: out of range \[0, 10000000\]"):
+        parse_scenario(_data(), "s.toml", n_cases=n)
+    sc = parse_scenario(_data(), "s.toml")
+    with pytest.raises(InputError, match=rf"^s\.toml: --cases {n}: out of range"):
+        sc.with_generated(n)
