@@ -5,3 +5,28 @@ One import namespace over the repository's top-level folders (pyproject.toml map
 imported on demand, so the numpy-only layers never pull in gmsh, dolfinx or PETSc.
 """
 __version__ = "0.2.0"
+
+
+def _source_tree() -> None:
+    """Run from a source checkout (its root on sys.path: the current folder, PYTHONPATH),
+    ``import liftoff`` finds this folder, which holds only core/ and config/ (issue 27: it
+    shadowed the installed package and ``liftoff.fem`` failed). There the checkout's root
+    joins ``__path__``, so ``liftoff.fem`` is ../fem as pyproject.toml's package-dir maps it.
+    A checkout is told by its pyproject.toml (project liftoff-loads) and every folder its
+    [tool.setuptools.package-dir] names; an installed package changes nothing."""
+    import os
+    import tomllib
+
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    try:
+        with open(os.path.join(root, "pyproject.toml"), "rb") as fh:
+            project = tomllib.load(fh)
+    except (OSError, tomllib.TOMLDecodeError):
+        return
+    dirs = project.get("tool", {}).get("setuptools", {}).get("package-dir", {})
+    if (project.get("project", {}).get("name") == "liftoff-loads" and dirs
+            and all(os.path.isdir(os.path.join(root, d)) for d in dirs.values()) and root not in __path__):
+        __path__.append(root)
+
+
+_source_tree()

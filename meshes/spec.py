@@ -61,6 +61,13 @@ def require_positive(owner: str, **values: float) -> None:
             raise InputError(f"{owner}.{name} must be a finite number > 0 (got {v!r})")
 
 
+def require_range(owner: str, name: str, value: float, lo: float, hi: float, unit: str, why: str) -> None:
+    """InputError naming ``owner.name`` unless ``lo <= value <= hi`` (in ``unit``); ``why``
+    says what the range is (the physical span of such a quantity)."""
+    if not lo <= value <= hi:
+        raise InputError(f"{owner}.{name} = {value:g} {unit} is outside [{lo:g}, {hi:g}] {unit}, {why}")
+
+
 WALLS = ("solid", "shell")
 
 

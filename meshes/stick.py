@@ -17,7 +17,30 @@ from liftoff.core.errors import InputError
 
 from .layout import StackLayout
 from .pad import PadParams
-from .spec import require_positive
+from .spec import require_positive, require_range
+
+# Physical ranges of the parameters (SI), by the field's kind (from its name); a value
+# outside is a slip (units, exponent) that would make the beams' K and M numerically
+# singular far from the key (issue 27: srb_mass = 1e-30 "floats (or has a mechanism)").
+# Walls: 0.1 mm up to a tenth of the tube's radius (the thin-walled I = pi R^3 t, A = 2 pi R t).
+RANGES = {  # kind: (low, high, unit, what)
+    "mass": (1.0, 1.0e7, "kg", "the span of a stick-model mass (a kilogram to 10,000 t; the heaviest launch "
+                               "vehicles weigh 3,000-5,000 t)"),
+    "length": (0.01, 1000.0, "m", "the span of a stick-model length or height (a centimetre to a kilometre)"),
+    "modulus": (1.0e9, 1.2e12, "Pa", "the span of a structural Young's modulus (plastics to diamond)"),
+    "area": (1.0e-4, 100.0, "m^2", "the span of a beam's section area (1 cm^2 to 100 m^2)"),
+    "inertia": (1.0e-6, 1.0e4, "m^4", "the span of a beam's section moment of inertia (a small steel beam to a "
+                                     "girder tens of metres deep)"),
+}
+_KIND = (("_E", "modulus"), ("_A", "area"), ("_I", "inertia"))
+
+
+def _kind(name: str) -> str:
+    """The kind of the StickParams field ``name``: a mass (``*_mass*``), a modulus, area or
+    inertia (``*_E``, ``*_A``, ``*_I``), else a length (walls are checked against their tube)."""
+    if "_mass" in name:
+        return "mass"
+    return next((kind for end, kind in _KIND if name.endswith(end)), "length")
 
 
 @dataclass
@@ -63,6 +86,13 @@ class StickParams:
         require_positive(o, **{k: getattr(self, k) for k in self.__dataclass_fields__ if k != "pad"})
         self.pad.check()
         lay = self.layout
+        walls = {"core_wall": lay.core_radius, "srb_wall": lay.srb_radius}
+        for k in self.__dataclass_fields__:
+            if k in walls:
+                require_range(o, k, getattr(self, k), 1.0e-4, walls[k] / 10, "m",
+                              f"a thin wall: 0.1 mm to a tenth of the tube's radius ({walls[k]:g} m)")
+            elif k != "pad":
+                require_range(o, k, getattr(self, k), *RANGES[_kind(k)])
         if not lay.core_bottom_z < self.lox_bottom_z < self.core_top_z:
             raise InputError(f"{o}.lox_bottom_z = {self.lox_bottom_z} m is not between the core's bottom "
                              f"({lay.core_bottom_z} m) and top ({self.core_top_z} m)")

@@ -79,7 +79,8 @@ def add_common(p: argparse.ArgumentParser) -> None:
                    help="skip the second run at h/2 that estimates the error of every peak (Richardson); "
                         "[time] accuracy needs it and keeps it")
     p.add_argument("--max-memory", type=_positive, default=None, metavar="GB",
-                   help="memory the transient may use, in GB (default: 80 %% of the memory available)")
+                   help="memory the transient (and the record of a run's generated cases) may use, in GB "
+                        "(default: 80 %% of the memory available)")
 
 
 def _positive(text: str) -> float:

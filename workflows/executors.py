@@ -88,6 +88,9 @@ def make_executor(workers: int = 2, dask: str | None = None, mpi: bool = False) 
 _DASK_ADDRESS = re.compile(r"^(tcp|tls|ucx|ws|wss)://[A-Za-z0-9_.\-\[\]:]+:\d{1,5}$")
 #: seconds to reach a scheduler before the run gives up with one line
 DASK_CONNECT_S = 20
+#: bytes a scheduler's handshake may announce (it sends a few hundred; distributed would
+#: allocate whatever a server's first 8 bytes say)
+DASK_HANDSHAKE_MAX = 1 << 20
 
 
 def check_mpi(mpi: bool) -> None:
@@ -111,13 +114,62 @@ def check_dask_address(address: str | None) -> None:
         raise InputError(f"--dask {address!r}: not a Dask scheduler address (tcp://host:port, or 'local')")
 
 
+def probe_dask_scheduler(address: str, timeout: float | None = None) -> None:
+    """One-line InputError unless the ``tcp://`` ``address`` answers as a Dask scheduler does,
+    within ``timeout`` s (default DASK_CONNECT_S): on accepting a connection a scheduler
+    writes its handshake (distributed.comm: an 8-byte frame length, then that many bytes,
+    a few hundred). Another server is named here, before distributed reads its answer as a
+    frame length (issue 27: a proxy's "HTTP/1.1 ..." gave "Unable to allocate 3.07 EiB"); a
+    web server, which waits for a request, sends nothing. Other protocols (tls://, ...)
+    are left to the Client."""
+    import socket
+    import struct
+    import time
+    from urllib.parse import urlsplit
+
+    if not address.startswith("tcp://"):
+        return
+    timeout = DASK_CONNECT_S if timeout is None else timeout
+    url = urlsplit(address)
+    try:
+        conn = socket.create_connection((url.hostname, url.port), timeout=timeout)
+    except OSError as exc:
+        raise InputError(f"--dask {address}: cannot connect ({type(exc).__name__}: {exc})") from None
+    got, need, deadline = b"", 8, time.monotonic() + timeout
+    nope = f"--dask {address}: not a Dask scheduler:"
+    with conn:
+        while len(got) < need:
+            conn.settimeout(max(deadline - time.monotonic(), 1e-3))
+            try:
+                chunk = conn.recv(min(need - len(got), 1 << 16))
+            except TimeoutError:
+                if got:
+                    raise InputError(f"{nope} it sent {len(got)} bytes, not a whole handshake, within {timeout:g} "
+                                     "s") from None
+                raise InputError(f"{nope} it sent nothing within {timeout:g} s (a Dask scheduler greets first; a web "
+                                 "server waits for a request)") from None
+            except OSError as exc:
+                raise InputError(f"{nope} the connection failed ({type(exc).__name__}: {exc})") from None
+            if not chunk:
+                raise InputError(f"{nope} it closed the connection after {len(got)} bytes, before a Dask handshake")
+            got += chunk
+            if need == 8 and len(got) >= 8:
+                (n,) = struct.unpack("Q", got[:8])        # distributed's frame length (native order)
+                if not 0 < n <= DASK_HANDSHAKE_MAX:
+                    raise InputError(f"{nope} its first bytes {got[:8]!r} are no Dask handshake (it announces "
+                                     f"{n} bytes; a scheduler's is under {DASK_HANDSHAKE_MAX} bytes)")
+                need = 8 + n
+
+
 def _connect(Client, address: str):
     """A Client of the scheduler at ``address``, or a one-line InputError within about
-    DASK_CONNECT_S seconds. Client's own timeout covers the TCP connection, not the
-    handshake: a server of another protocol that accepts and never answers (a web server)
-    would hold it for ever, so the connection is made in a daemon thread that is given up."""
+    DASK_CONNECT_S seconds: the address first probed (:func:`probe_dask_scheduler`), then
+    Client's own timeout covers the TCP connection, not the handshake: a server of another
+    protocol that accepts and never answers (a web server) would hold it for ever, so the
+    connection is made in a daemon thread that is given up."""
     import threading
 
+    probe_dask_scheduler(address)
     box: dict = {}
 
     def work():

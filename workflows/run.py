@@ -78,7 +78,8 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
     written into a staging folder that replaces ``out`` as a whole at the end
     (workflows/outdir.py), so a failed run leaves ``out`` as it was. ``error_estimate``:
     every named case runs again at h/2 (transient/accuracy.py) so that each max/min carries
-    an estimated error; ``max_memory`` (bytes) overrides the memory limit of the histories.
+    an estimated error; ``max_memory`` (bytes) overrides the memory limit of the histories (and
+    of what the run keeps per generated case, checked before any case is generated).
 
     Under ``mpirun -n N`` every rank calls this: the model stages are built by all ranks
     together (workflows/parallel.py), the cases and every file by rank 0, which returns the
@@ -97,9 +98,14 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
     else:
         sc = load_scenario(scenario, n_cases=n_cases)
     on_root(comm, lambda: check_target(out), share=False)
-    from .executors import check_dask_address, check_mpi
+    from .campaign import check_case_memory
+    from .executors import check_dask_address, check_mpi, probe_dask_scheduler
+
+    check_case_memory(sc.path, sc.n_generated, max_memory)      # before any case is generated
 
     check_dask_address(opt.dask)
+    if sc.n_generated and opt.dask not in (None, "local"):   # a scheduler there, before the model stages
+        on_root(comm, lambda: probe_dask_scheduler(opt.dask), share=False)
     if n_cases:
         check_mpi(opt.mpi)
     if opt.compare is not None:           # read before the first expensive stage (and again at the end)
@@ -214,7 +220,15 @@ def prepare(sc, cache: StageCache, progress: bool, echo, error_estimate: bool = 
         t0 = time.perf_counter()
         first = sc.generated_case(0)
         gen_model = _stack_for(first, stacks, cache, progress, echo, stage_times)
-        for i in range(1, sc.n_generated):
+        if sc.dispersion.database is not None:      # every file's columns are DOFs of the vehicle
+            from liftoff.config.values import Where
+
+            sc.dispersion.database.check(Where(sc.path, "dispersion.database"), stacks[gen_model].vehicle.dof_index)
+        from tqdm import tqdm
+
+        # every case parsed (its draws checked) before the first runs: a few ms a case, shown
+        for i in tqdm(range(1, sc.n_generated), desc="checking generated cases", unit="case", leave=False,
+                      disable=not progress or sc.n_generated < 1000):
             if stage_key("model", asdict(sc.generated_case(i).model)) != gen_model:
                 raise InputError(f"{sc.path}: case d{i:04d}: its [model] differs from the first generated case's")
         cp = build_problem(first, stacks[gen_model], progress=False)

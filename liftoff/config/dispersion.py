@@ -23,14 +23,18 @@ import copy
 import csv
 import io
 import math
+import operator
 import re
 import zlib
 from dataclasses import dataclass
 from fnmatch import fnmatchcase
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable, NamedTuple
 
 import numpy as np
+
+from liftoff.core.errors import InputError
+from liftoff.core.labels import split_label
 
 from .values import Where, boolean, choice, integer, number, string, strings, table
 
@@ -43,6 +47,25 @@ NOT_DISPERSED = ("model", "title", "description", "case", "dispersion", "postpro
 # values the scenario layer defaults when a table omits them (what "add"/"scale" start from)
 DEFAULTS = {"engine": {"start": 0.0, "scale": 1.0, "direction": [0.0, 0.0, 1.0]}, "force": {"scale": 1.0}}
 _SEGMENT = re.compile(r"^([A-Za-z_][A-Za-z0-9_]*)((?:\[[^\[\]]+\])*)$")
+
+
+#: the most generated cases of one run ([dispersion] n_cases and --cases): every case is
+#: checked before the first runs (a few ms each), and the run keeps a record path and name
+#: per case until its envelope is written (workflows/campaign.py)
+MAX_CASES = 10 ** 7
+
+
+def check_case_count(source: str, n_cases: Any) -> int:
+    """``n_cases`` of the command line (--cases) as an int in [0, MAX_CASES], or a one-line
+    InputError, before any case is generated."""
+    try:
+        n = None if isinstance(n_cases, bool) else operator.index(n_cases)
+    except TypeError:
+        n = None
+    if n is None or not 0 <= n <= MAX_CASES:
+        raise InputError(f"{source}: --cases {n_cases}: out of range [0, {MAX_CASES}] (the most generated cases of "
+                         "one run; split a larger campaign into runs)")
+    return n
 
 
 def case_name(index: int) -> str:
@@ -212,20 +235,51 @@ def variable(where: Where, name: str, spec: Any) -> Variable:
 
 
 # --------------------------------------------------------------------- database
+class Forcing(NamedTuple):
+    """One database file: ``labels`` (k DOF labels), ``time`` (n_t,) s, ``values`` (n_t, k)
+    N or N m, and ``columns``: where each label stands in the file (``line 1, column 2``
+    of a CSV, ``labels[0]`` of an HDF5 file), for messages."""
+
+    labels: list[str]
+    time: np.ndarray
+    values: np.ndarray
+    columns: list[str]
+
+
 @dataclass(frozen=True)
 class Database:
     """``[dispersion.database] files``: one forcing file per case, CSV (header ``time``,
     then one DOF label per column; values in N or N m) or HDF5 (datasets ``time`` (s),
     ``force`` (n_t, k) in N / N m, ``labels`` (k,)); each column becomes a tabulated force
-    on the vehicle."""
+    on the vehicle. ``base``: the scenario's folder (messages name a file relative to it)."""
 
     files: tuple[Path, ...]
+    base: Path = Path(".")
+
+    def shown(self, path: Path) -> str:
+        """``path`` as the scenario's folder sees it (``db/gust_0.csv``)."""
+        try:
+            return str(path.relative_to(self.base))
+        except ValueError:
+            return str(path)
 
     def forces(self, where: Where, index: int) -> tuple[str, list[dict]]:
         path = self.files[index % len(self.files)]
-        labels, time, values = read_forcing(where, path)
-        return path.name, [{"label": lab, "time": time.tolist(), "value": values[:, j].tolist()}
-                           for j, lab in enumerate(labels)]
+        f = read_forcing(where, path, self.shown(path))
+        return path.name, [{"label": lab, "time": f.time.tolist(), "value": f.values[:, j].tolist()}
+                           for j, lab in enumerate(f.labels)]
+
+    def check(self, where: Where, known: Callable[[str], Any]) -> None:
+        """Every file read once, and each column's DOF given to ``known`` (say the vehicle's
+        ``dof_index``, raising InputError for a DOF it lacks): before any case runs, a bad
+        file is named with its line and column, not as the generated force it would become."""
+        for path in dict.fromkeys(self.files):
+            f = read_forcing(where, path, self.shown(path))
+            for lab, col in zip(f.labels, f.columns):
+                try:
+                    known(lab)
+                except InputError as exc:
+                    raise where.error(f"{self.shown(path)} {col} {lab!r}: {' '.join(str(exc).split())}") from None
 
 
 def database(where: Where, spec: Any, base: Path) -> Database:
@@ -238,14 +292,41 @@ def database(where: Where, spec: Any, base: Path) -> Database:
         if not hits:
             raise (where / "files" / i).error(f"no file matches {pat!r} (relative to {str(base)!r})")
         files += hits
-    return Database(tuple(files))
+    return Database(tuple(files), base)
 
 
-def read_forcing(where: Where, path: Path) -> tuple[list[str], np.ndarray, np.ndarray]:
-    """(labels, time (n_t,), values (n_t, k)) of one database forcing file."""
-    from .values import label
+def _csv_forcing(where: Where, shown: str, path: Path) -> Forcing:
+    """A CSV forcing file: header ``time,<label>,...``, then rows of numbers ('#' comments)."""
+    text = path.read_bytes().decode("utf-8-sig", errors="replace")
+    reader = csv.reader(io.StringIO(text))
+    rows = [(reader.line_num, r) for r in reader if r and not r[0].lstrip().startswith("#")]
+    if len(rows) < 3:
+        raise where.error(f"{shown}: expected a header (time, DOF labels) and at least 2 rows")
+    head_line, head = rows[0]
+    labels = [c.strip() for c in head[1:]]
+    data = np.empty((len(rows) - 1, len(head)))
+    for i, (line, r) in enumerate(rows[1:]):
+        if len(r) != len(head):
+            raise where.error(f"{shown} line {line}: {len(r)} columns, expected {len(head)} (time and one per label)")
+        for c, cell in enumerate(r):
+            try:
+                data[i, c] = x = float(cell)
+            except ValueError:
+                x = None
+            if x is None or not math.isfinite(x):
+                what = "not a number" if x is None else "NaN or inf"
+                raise where.error(f"{shown} line {line}, column {c + 1} {head[c].strip()!r}: {what}: {cell.strip()!r}")
+    for (line, _), dt in zip(rows[2:], np.diff(data[:, 0])):
+        if not dt > 0:
+            raise where.error(f"{shown} line {line}: time is not strictly increasing")
+    return Forcing(labels, data[:, 0], data[:, 1:], [f"line {head_line}, column {j + 2}" for j in range(len(labels))])
 
-    w = where / path.name
+
+def read_forcing(where: Where, path: Path, shown: str | None = None) -> Forcing:
+    """One database forcing file, checked; every error names ``shown`` (the file as the
+    scenario's folder sees it; default its name) and the line and column (CSV) or the
+    dataset (HDF5)."""
+    shown = shown or path.name
     if path.suffix.lower() in (".h5", ".hdf5"):
         import h5py
 
@@ -254,28 +335,29 @@ def read_forcing(where: Where, path: Path) -> tuple[list[str], np.ndarray, np.nd
                 labels = [s.decode() if isinstance(s, bytes) else str(s) for s in f["labels"][()]]
                 time, values = np.asarray(f["time"][()], float), np.asarray(f["force"][()], float)
         except (OSError, KeyError) as exc:
-            raise w.error(f"not a forcing file with datasets time, force, labels ({' '.join(str(exc).split())})") from None
+            raise where.error(f"{shown}: not a forcing file with datasets time, force, labels "
+                              f"({' '.join(str(exc).split())})") from None
+        out = Forcing(labels, time, values, [f"labels[{j}]" for j in range(len(labels))])
+        if values.ndim != 2 or values.shape != (time.size, len(labels)) or time.size < 2:
+            raise where.error(f"{shown}: force has shape {values.shape}, expected ({time.size}, {len(labels)}) "
+                              "with >= 2 times")
+        if not (np.all(np.isfinite(time)) and np.all(np.isfinite(values))):
+            raise where.error(f"{shown}: NaN or inf in the forcing")
+        if np.any(np.diff(time) <= 0):
+            raise where.error(f"{shown}: time is not strictly increasing")
     else:
-        text = path.read_bytes().decode("utf-8-sig", errors="replace")
-        rows = [r for r in csv.reader(io.StringIO(text)) if r and not r[0].lstrip().startswith("#")]
-        if len(rows) < 3:
-            raise w.error("expected a header (time, DOF labels) and at least 2 rows")
-        labels = [c.strip() for c in rows[0][1:]]
+        out = _csv_forcing(where, shown, path)
+    first: dict[str, str] = {}
+    for lab, col in zip(out.labels, out.columns):
         try:
-            data = np.array([[float(c) for c in r] for r in rows[1:]], dtype=float)
-        except ValueError as exc:
-            raise w.error(f"not a number ({exc})") from None
-        if data.ndim != 2 or data.shape[1] != len(labels) + 1:
-            raise w.error(f"every row needs {len(labels) + 1} columns (time and one per label)")
-        time, values = data[:, 0], data[:, 1:]
-    labels = [label(w / "labels" / j, lab) for j, lab in enumerate(labels)]
-    if values.ndim != 2 or values.shape != (time.size, len(labels)) or time.size < 2:
-        raise w.error(f"force has shape {values.shape}, expected ({time.size}, {len(labels)}) with >= 2 times")
-    if not (np.all(np.isfinite(time)) and np.all(np.isfinite(values))):
-        raise w.error("NaN or inf in the forcing")
-    if np.any(np.diff(time) <= 0):
-        raise w.error("time is not strictly increasing")
-    return labels, time, values
+            split_label(lab)
+        except InputError as exc:
+            raise where.error(f"{shown} {col} {lab!r}: {exc}") from None
+        if lab in first:
+            raise where.error(f"{shown} {col} {lab!r}: the same DOF as {first[lab].split(', ')[-1]} (one column "
+                              "per DOF)")
+        first[lab] = col
+    return out
 
 
 # --------------------------------------------------------------------- the section
@@ -341,6 +423,6 @@ def dispersion(where: Where, spec: Any, base: Path, n_cases: int | None = None) 
     names: set[str] = set()
     out = tuple(variable(wv / name, unique_name(wv / name, name, names, "variable"), v) for name, v in variables.items())
     db = database(where / "database", d["database"], base) if "database" in d else None
-    n = integer(where / "n_cases", d.get("n_cases", len(db.files) if db else 0), 0, 10 ** 7)
+    n = integer(where / "n_cases", d.get("n_cases", len(db.files) if db else 0), 0, MAX_CASES)
     source = string(where / "from", d["from"]) if "from" in d else None
-    return Dispersion(seed, n if n_cases is None else n_cases, source, out, db)
+    return Dispersion(seed, n if n_cases is None else check_case_count(where.source, n_cases), source, out, db)

@@ -24,7 +24,7 @@ from liftoff.core.errors import InputError
 from liftoff.core.labels import TRANSLATIONS, point_labels
 from liftoff.transient.model import ContactPoint
 
-from .dispersion import Dispersion, case_name, dispersion
+from .dispersion import Dispersion, case_name, check_case_count, dispersion
 from .extends import merge, read_scenario, resolve
 from .files import parse_toml
 from .model import ModelConfig, model_config
@@ -201,7 +201,7 @@ class Scenario:
             if n_cases:
                 raise InputError(f"{self.path}: --cases {n_cases}: the scenario has no [dispersion] section")
             return self
-        sc = replace(self, dispersion=replace(self.dispersion, n_cases=int(n_cases)))
+        sc = replace(self, dispersion=replace(self.dispersion, n_cases=check_case_count(self.path, n_cases)))
         if n_cases:
             sc.dispersion.check(sc._source_raw(), Where(self.path, "dispersion"))
         return sc

@@ -65,3 +65,35 @@ def test_accuracy_below_round_off():
     with pytest.raises(InputError, match=r"time\.accuracy: 1e-15 is below what the arithmetic resolves"):
         parse_scenario(merge(DEFAULT, {"time": {"accuracy": 1e-15}}), "s")
     parse_scenario(merge(DEFAULT, {"time": {"accuracy": 1e-3}}), "s")
+
+
+STICK = {**DEFAULT, "model": {"source": "stick"}}      # the stick model of the default stack
+
+
+@pytest.mark.parametrize("key, value, match", [
+    ("srb_mass", 1e-30, r"StickParams\.srb_mass = 1e-30 kg is outside \[1, 1e\+07\] kg"),
+    ("core_mass_lox", 1e30, r"StickParams\.core_mass_lox = 1e\+30 kg is outside \[1, 1e\+07\] kg"),
+    ("payload_mass", 1e-30, r"StickParams\.payload_mass = 1e-30 kg is outside"),
+    ("core_wall", 1e3, r"StickParams\.core_wall = 1000 m is outside \[0\.0001, 0\.42\d*\] m"),
+    ("srb_wall", 1e-30, r"StickParams\.srb_wall = 1e-30 m is outside"),
+    ("ssme_cg_below_bulkhead", 1e-30, r"StickParams\.ssme_cg_below_bulkhead = 1e-30 m is outside \[0\.01, 1000\] m"),
+    ("orbiter_length", 1e6, r"StickParams\.orbiter_length = 1e\+06 m is outside \[0\.01, 1000\] m"),
+    ("srb_E", 1e-30, r"StickParams\.srb_E = 1e-30 Pa is outside \[1e\+09, 1\.2e\+12\] Pa"),
+    ("orbiter_I", 1e30, r"StickParams\.orbiter_I = 1e\+30 m\^4 is outside \[1e-06, 10000\] m\^4"),
+    ("post_A", 1e-30, r"StickParams\.post_A = 1e-30 m\^2 is outside \[0\.0001, 100\] m\^2"),
+])
+def test_stick_parameters_beyond_physical_ranges(key, value, match):
+    """Issue 27: ``srb_mass = 1e-30`` said "component 'srb_left' floats (or has a mechanism)",
+    other absurd masses, walls and lengths ran or failed far away (a ZeroDivisionError for a
+    zero-length SSME link). Each is refused at the key, with the range it must lie in."""
+    with pytest.raises(InputError, match=r"^s: model\.stick: " + match) as exc:
+        parse_scenario(merge(STICK, {"model": {"stick": {key: value}}}), "s")
+    assert "\n" not in str(exc.value)
+
+
+def test_the_stick_defaults_are_within_the_ranges():
+    """Every default StickParams value (the Shuttle-like stack) passes the ranges."""
+    from liftoff.meshes import StickParams
+
+    StickParams().check()
+    assert parse_scenario(STICK, "d").cases[0].model.components["srb_left"].builder.srb_mass == 590.0e3

@@ -10,6 +10,7 @@ import pytest
 
 from liftoff.config import default_text, parse_scenario
 from liftoff.config.dispersion import Variable
+from liftoff.config.values import Where
 from liftoff.core.errors import InputError
 
 
@@ -147,3 +148,57 @@ def test_cases_need_a_dispersion_and_names_stay_apart():
     d["dispersion"]["from"] = "no-control"
     sc = parse_scenario(copy.deepcopy(d), "s.toml", n_cases=1)
     assert sc.generated_case(0).control.enabled is False         # dispersed from the named case
+
+
+@pytest.mark.parametrize("text, msg", [
+    ("time,stack_top:Tx,stack_top:Ty\n0,0,0\n# a comment\n1,1e4,x\n", "g.csv line 4, column 3 'stack_top:Ty': not a number: 'x'"),
+    ("time,stack_top:Tx\n0,0\n1,1e4,5\n", "g.csv line 3: 3 columns, expected 2 (time and one per label)"),
+    ("time,stack_top:Tx,stack_top:Tq\n0,0,0\n1,1,1\n", "g.csv line 1, column 3 'stack_top:Tq': malformed DOF label"),
+    ("time,stack_top:Tx,stack_top:Tx\n0,0,0\n1,1,1\n",
+     "g.csv line 1, column 3 'stack_top:Tx': the same DOF as column 2 (one column per DOF)"),
+])
+def test_database_csv_errors_name_file_line_and_column(tmp_path, text, msg):
+    """Issue 27: a bad database column was blamed on a `force[6]` that is not in the file; every
+    error of a database CSV names the file, its line and the column (with its label)."""
+    (tmp_path / "db").mkdir()
+    (tmp_path / "db" / "g.csv").write_text(text)
+    with pytest.raises(InputError) as exc:
+        parse_scenario(_data(database={"files": ["db/g.csv"]}), "s.toml", tmp_path, n_cases=1).generated_case(0)
+    assert str(exc.value).startswith(f"s.toml: dispersion.database: db/{msg}"), str(exc.value)
+    assert "\n" not in str(exc.value)
+
+
+def test_database_labels_checked_against_the_model(tmp_path):
+    """Database.check reads every file once and asks the model about each column's DOF: an
+    unknown DOF is named by file, line 1 and column, not by the generated force it becomes."""
+    (tmp_path / "db").mkdir()
+    (tmp_path / "db" / "a.csv").write_text("time,stack_top:Tx\n0,0\n1,1\n")
+    (tmp_path / "db" / "b.csv").write_text("time,stack_top:Tx,nope:Ty\n0,0,0\n1,1,1\n")
+    sc = parse_scenario(_data(database={"files": ["db/*.csv"]}), "s.toml", tmp_path)
+
+    def known(label: str) -> None:
+        if not label.startswith("stack_top:"):
+            raise InputError(f"unknown DOF label {label!r} on body 'vehicle'")
+
+    with pytest.raises(InputError) as exc:
+        sc.dispersion.database.check(Where("s.toml", "dispersion.database"), known)
+    assert str(exc.value) == ("s.toml: dispersion.database: db/b.csv line 1, column 3 'nope:Ty': unknown DOF label "
+                              "'nope:Ty' on body 'vehicle'")
+
+
+@pytest.mark.parametrize("n", [10 ** 9, -3])
+def test_case_counts_beyond_the_cap_are_refused_before_any_case_is_generated(monkeypatch, n):
+    """Issue 27: `--cases 1000000000` generated and parsed every case before running any (the
+    file's n_cases had a cap of 1e7, the command line's none). The count is refused at once:
+    no case is generated (Dispersion.generate would fail the test)."""
+    from liftoff.config.dispersion import Dispersion
+
+    def no_generation(*a, **k):
+        raise AssertionError("a case was generated")
+
+    monkeypatch.setattr(Dispersion, "generate", no_generation)
+    with pytest.raises(InputError, match=rf"^s\.toml: --cases {n}: out of range \[0, 10000000\]"):
+        parse_scenario(_data(), "s.toml", n_cases=n)
+    sc = parse_scenario(_data(), "s.toml")
+    with pytest.raises(InputError, match=rf"^s\.toml: --cases {n}: out of range"):
+        sc.with_generated(n)

@@ -282,3 +282,47 @@ def test_run_refuses_before_any_output(tmp_path, capsys, over, code, expect):
     err = [ln for ln in capsys.readouterr().err.strip().splitlines() if not ln.startswith("liftoff: warning: ")]
     assert len(err) == 1 and expect in err[0], err
     assert not out.exists() or not any(out.iterdir())
+
+
+def test_a_database_column_on_no_dof_names_its_file(tmp_path, capsys):
+    """Issue 27: a database file's column naming a DOF the vehicle lacks was blamed on a
+    generated ``force[6]`` that is in no file, and the second file's only when case d0001 ran.
+    Every file is checked against the model before any case runs: one line naming the file,
+    the line and the column, exit 2, nothing written."""
+    (tmp_path / "db").mkdir()
+    (tmp_path / "db" / "g0.csv").write_text("time,stack_top:Tx\n0,0\n1,1e4\n")
+    (tmp_path / "db" / "g1.csv").write_text("time,stack_top:Ty,nope:Tx\n0,0,0\n1,1e4,1e4\n")
+    d = tomllib.loads(default_text())
+    d["model"], d["time"]["t_end"] = STICK, 7.0
+    d["dispersion"] = {"seed": 1, "database": {"files": ["db/g*.csv"]}}
+    p = tmp_path / "s.toml"
+    p.write_text(_toml(d))
+    out = tmp_path / "o"
+    assert main(["run", str(p), "--cases", "2", "--out", str(out), "--cache", str(tmp_path / "c"), "--no-progress",
+                 "--no-snapshots"]) == 2
+    err = [ln for ln in capsys.readouterr().err.strip().splitlines() if not ln.startswith("liftoff: warning: ")]
+    assert err == ["liftoff: error: s.toml: dispersion.database: db/g1.csv line 1, column 3 'nope:Tx': unknown DOF "
+                   "label 'nope:Tx' on body 'vehicle'"], err
+    assert not out.exists() or not any(out.iterdir())
+
+
+def test_a_case_count_beyond_memory_is_refused_before_any_stage(tmp_path, monkeypatch, capsys):
+    """Issue 27: `--cases 1000000` generated and parsed every case before running any. The
+    count times what the run keeps per case (campaign.CASE_BYTES) is compared with the memory
+    limit before any model stage or case generation (both would fail the test here): one
+    line, exit 4."""
+    from liftoff.config.dispersion import Dispersion
+    from liftoff.workflows import campaign, run
+
+    def never(*a, **k):
+        raise AssertionError("reached")
+
+    monkeypatch.setattr(Dispersion, "generate", never)
+    monkeypatch.setattr(run, "prepare_models", never)
+    monkeypatch.setattr("liftoff.core.memory.available_memory", lambda: 1e6 * campaign.CASE_BYTES)
+    p = tmp_path / "s.toml"
+    p.write_text('extends = "shuttle"\n[model]\nsource = "stick"\n')
+    assert main(["run", str(p), "--cases", "1000000", "--out", str(tmp_path / "o"), "--no-progress"]) == 4
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("liftoff: error: s.toml: 1000000 generated cases: the run keeps about "
+                                               "1 kB per case (1 GB) but the limit is 0.8 GB"), err
