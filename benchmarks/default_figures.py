@@ -255,15 +255,29 @@ def render_convergence(conv: dict) -> str:
     peak from the reference (and, for the cuts, from the default)."""
     pct = lambda d: f"{100 * d['deviation']:.2f} %"  # noqa: E731
     lines = [f"| variant | vehicle / pad modes | steps | twang peak (m) at (s); at ignition (m) | largest change of a "
-             f"peak from the {conv['reference']}: any row; posts; attaches | rows over 1 % | from the default: "
-             "posts; attaches |", "|---|---|---|---|---|---|---|"]
+             f"peak from the {conv['reference']}: any row; posts; attaches | rows over 1 % (of the row; of the "
+             "point's vector) | from the default: posts; attaches |", "|---|---|---|---|---|---|---|"]
     for r in conv["variants"]:
         tw, vd = r["twang"], r.get("vs_default")
         lines.append(f"| {r['variant']}: {r['what']} | {r['vehicle_modes']} / {r['pad_modes']} | {r['steps']} | "
                      f"{tw['peak_m']:.3f} at {tw['t_peak_s']:.2f}; {tw['at_ignition_m']:.3f} | "
                      f"{pct(r['all'])} ({r['all']['item']}); {pct(r['posts'])}; {pct(r['attach'])} | "
-                     f"{r['over_1pct']} of {r['n_rows']} | "
+                     f"{r['over_1pct']}; {r.get('over_1pct_of_point', '-')} of {r['n_rows']} | "
                      + (f"{pct(vd['posts'])}; {pct(vd['attach'])} ({vd['attach']['item']})" if vd else "-") + " |")
+    default = next((r for r in conv["variants"] if r["variant"] == "default"), None)
+    if default and default.get("rows_over_1pct"):
+        lines.append("")
+        lines.append("The default's rows over 1 % of the reference (change against the row's own peak; against "
+                     "the largest peak of the point's vector): " + "; ".join(
+                         f"{x['item']} {100 * x['deviation']:.2f} %, {100 * x['point_deviation']:.2f} %"
+                         for x in default["rows_over_1pct"]) + ".")
+    if default and default.get("system_modes"):
+        sm = default["system_modes"]
+        lines.append("")
+        lines.append("The default's vehicle system modes against the reference's (mode k against mode k), largest "
+                     "frequency error below: " + "; ".join(
+                         f"{b:g} Hz ({n} modes) {100 * e:.2f} %" for b, n, e in
+                         zip(sm["bands_hz"], sm["modes_below"], sm["largest_error"])) + ".")
     return "\n".join(lines) + "\n"
 
 

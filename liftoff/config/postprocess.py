@@ -9,11 +9,13 @@
   items of ``categories``, for the cases whose histories are kept;
 * ``[postprocess.fields]``: ParaView output of the governing case: ``frames`` deformed
   shapes of stack and pad as a .pvd series of .vtu files and an animated GIF (``gif``);
-* ``acceleration_band_hz``: the band (Hz) the output-point accelerations of the max/min
-  tables, envelopes and statistics are low-pass filtered to (0: unfiltered). An acceleration
-  peak of the whole model is set by its highest modes, which a Craig-Bampton model does not
-  converge (issue 22: 10x between component cuts); within the components' band it is.
-  SRS and PSD use the unfiltered histories.
+* ``acceleration_band_hz``: the band (Hz) the acceleration-type histories of the max/min
+  tables, envelopes and statistics are low-pass filtered to (0: unfiltered): the output-point
+  accelerations and every recovery made from the accelerations alone (liquid and tank
+  pressures, liquid inertia forces, a Nastran ATM). Their peaks are set by the highest modes,
+  which a Craig-Bampton model does not converge (issue 22: 10x between component cuts);
+  within the band where its system modes are converged they are. SRS and PSD use the
+  unfiltered histories.
 """
 from __future__ import annotations
 
