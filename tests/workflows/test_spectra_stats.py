@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from liftoff.workflows.spectra import fft_amplitude, lowpass, psd, srs
+from liftoff.workflows.spectra import LOWPASS_ORDER, fft_amplitude, lowpass, psd, srs
 from liftoff.workflows.stats import Largest, Running, k_factor, order_rank
 
 
@@ -121,15 +121,17 @@ def test_streaming_equals_batch():
 def test_lowpass_keeps_the_band_and_its_peak_times():
     """The acceleration band of the max/min tables (workflows/spectra.lowpass): a Butterworth
     filter of order n run forward and backward has |H|^2 = 1 / (1 + (f/f_c)^(2n)); a sine
-    at 10 Hz under a 50 Hz band keeps its amplitude to that (1 - 1e-11 for n = 4) and its
-    peak times (zero phase), one at 400 Hz is cut to (50/400)^8 = 6e-8 of it; away from
-    the ends (the start-up of the filter over a few periods of f_c)."""
+    at 10 Hz under a 50 Hz band keeps its amplitude to that (1 - 7e-12 for n = 8) and its
+    peak times (zero phase), one at 400 Hz is cut to (50/400)^16 = 3e-15 of it, one at 1.5
+    f_c to 1 / (1 + 1.5^16) = 0.15 % (the band's margin below the components' f_max); away
+    from the ends (the start-up of the filter over a few periods of f_c)."""
     h = 1e-4
     t = np.arange(0.0, 2.0, h)
     low, high = np.sin(2 * np.pi * 10 * t), np.sin(2 * np.pi * 400 * t)
     y = lowpass(np.column_stack([low, high, low + high]), h, 50.0)
     mid = (t > 0.3) & (t < 1.7)
-    gain = lambda f: 1 / (1 + (f / 50.0) ** 8)  # noqa: E731
+    gain = lambda f: 1 / (1 + (f / 50.0) ** (2 * LOWPASS_ORDER))  # noqa: E731
+    assert gain(75.0) < 2e-3
     assert np.abs(y[mid, 0] - gain(10) * low[mid]).max() < 1e-3
     assert np.abs(y[mid, 1]).max() < 10 * gain(400) + 1e-3
     assert np.abs(y[mid, 2] - y[mid, 0]).max() < 1e-3
