@@ -484,16 +484,44 @@ def snapshots(stack, result, cp, out: Path, case: str) -> list[Path]:
 
 
 # ------------------------------------------------------------------ summary
+#: the share of a mode at the lowest component cut that the acceleration band may pass
+BAND_LEAK_WARNING = 0.01
+
+
+def band_lines(band: float, cbs: dict) -> list[str]:
+    """The acceleration band of the max/min tables and what its filter passes at the lowest
+    frequency a component's reduction cuts at (its highest kept fixed-interface mode): the
+    modes above it are left out, so whatever the band passes there is not converged; a
+    warning above BAND_LEAK_WARNING."""
+    from .spectra import lowpass_gain
+
+    head = "  accelerations and liquid pressures in the max/min tables: "
+    tail = " ([postprocess] acceleration_band_hz; SRS and PSD unfiltered)"
+    cuts = {name: float(np.max(cb.fixed_freq_hz)) for name, cb in cbs.items()
+            if getattr(cb, "n_modes", 0) and np.size(getattr(cb, "fixed_freq_hz", ()))}
+    if not band > 0:
+        return [head + "unfiltered" + tail]
+    if not cuts:
+        return [head + f"low-pass filtered to {band:g} Hz" + tail]
+    name = min(cuts, key=cuts.get)
+    leak = lowpass_gain(cuts[name], band)
+    lines = [head + f"low-pass filtered to {band:g} Hz, which passes {100 * leak:.2g} % at {cuts[name]:.1f} Hz, the "
+             f"lowest component cut ({name!r})" + tail]
+    if leak > BAND_LEAK_WARNING:
+        lines.append(f"  WARNING: the acceleration band passes {100 * leak:.2g} % at {cuts[name]:.1f} Hz, where "
+                     f"component {name!r} is cut: modes the reduction left out would enter those peaks; lower "
+                     f"[postprocess] acceleration_band_hz (to {cuts[name] / 1.5:.0f} Hz or less) or raise the "
+                     "component's f_max")
+    return lines
+
+
 def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[dict], wall: float) -> str:
     m, cg = center_of_gravity(stack.vehicle)
     lines = [f"liftoff run: {scenario.title}",
              f"  vehicle  {stack.vehicle.n_modes} modes, mass {m / 1e3:.1f} t, c.g. {np.round(cg, 2).tolist()} m; "
              f"pad {stack.pad.n_modes} modes"]
     lines += truncation_lines(c for _, cp in results.values() for c in cp.truncation)
-    band = scenario.post.acceleration_band_hz
-    lines.append(f"  accelerations and liquid pressures in the max/min tables: "
-                 f"{f'low-pass filtered to {band:g} Hz' if band > 0 else 'unfiltered'}"
-                 " ([postprocess] acceleration_band_hz; SRS and PSD unfiltered)")
+    lines += band_lines(scenario.post.acceleration_band_hz, getattr(stack, "cbs", {}))
     lines.append("  mesh: not checked by a run (refine the [model] mesh sizes and compare the envelopes; the default's "
                  "study: docs/workflow.md, Convergence)")
     for case, (res, cp) in results.items():

@@ -117,6 +117,12 @@ def fft_amplitude(values: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]
 LOWPASS_ORDER = 8
 
 
+def lowpass_gain(f_hz: float, band_hz: float) -> float:
+    """The amplitude :func:`lowpass` passes at ``f_hz`` for a band ``band_hz``: |H|^2 of the
+    Butterworth filter (it runs twice), 1 / (1 + (f / f_c)^(2 LOWPASS_ORDER))."""
+    return 1.0 / (1.0 + (f_hz / band_hz) ** (2 * LOWPASS_ORDER)) if band_hz > 0 else 1.0
+
+
 def lowpass(values: np.ndarray, h: float, f_hz: float) -> np.ndarray:
     """``values`` (time along axis 0, step h s) low-pass filtered to ``f_hz``: a Butterworth
     filter of order LOWPASS_ORDER run forward and backward (scipy.signal.sosfiltfilt: zero

@@ -64,3 +64,23 @@ def test_acceleration_recoveries_take_the_band(tmp_path):
     assert not np.allclose(atm.values, atm.history)      # the release excites modes above the band
     assert ltm.raw is None and np.array_equal(ltm.values, r.recovered["ltm"][:, 0])
     assert np.array_equal(its["acc top:Tz"].values, lowpass(r.acceleration["a"], r.h, band)[:, 0])
+
+
+def test_band_check_warns_when_the_band_reaches_a_component_cut():
+    """summary.txt states what the acceleration band passes at the lowest component cut (the
+    highest kept fixed-interface mode); above 1 % it warns. Reference: |H|^2 of the order-n
+    Butterworth run twice, 1 / (1 + (f/f_c)^(2n)), at the cut."""
+    from types import SimpleNamespace
+
+    from liftoff.workflows.spectra import LOWPASS_ORDER
+
+    cbs = {"core": SimpleNamespace(n_modes=2, fixed_freq_hz=np.array([10.0, 59.0])),
+           "srb": SimpleNamespace(n_modes=1, fixed_freq_hz=np.array([80.0])),
+           "rigid": SimpleNamespace(n_modes=0, fixed_freq_hz=np.zeros(0))}
+    ok = report.band_lines(40.0, cbs)
+    leak = 1 / (1 + (59.0 / 40.0) ** (2 * LOWPASS_ORDER))
+    assert len(ok) == 1 and f"passes {100 * leak:.2g} % at 59.0 Hz" in ok[0] and "'core'" in ok[0]
+    wide = report.band_lines(55.0, cbs)
+    assert len(wide) == 2 and "WARNING" in wide[1] and "'core'" in wide[1]
+    assert "unfiltered" in report.band_lines(0.0, cbs)[0]
+    assert "passes" not in report.band_lines(40.0, {})[0]      # a model without CB components
