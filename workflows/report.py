@@ -490,15 +490,16 @@ BAND_LEAK_WARNING = 0.01
 
 def band_lines(band: float, cbs: dict) -> list[str]:
     """The acceleration band of the max/min tables and what its filter passes at the lowest
-    frequency a component's reduction cuts at (its highest kept fixed-interface mode): the
-    modes above it are left out, so whatever the band passes there is not converged; a
+    frequency a component's reduction cuts at (its highest kept fixed-interface mode; a
+    component that keeps all its interior modes cuts nothing): the modes above it are left out, so whatever the band passes there is not converged; a
     warning above BAND_LEAK_WARNING."""
     from .spectra import lowpass_gain
 
     head = "  accelerations and liquid pressures in the max/min tables: "
     tail = " ([postprocess] acceleration_band_hz; SRS and PSD unfiltered)"
     cuts = {name: float(np.max(cb.fixed_freq_hz)) for name, cb in cbs.items()
-            if getattr(cb, "n_modes", 0) and np.size(getattr(cb, "fixed_freq_hz", ()))}
+            if getattr(cb, "n_modes", 0) and np.size(getattr(cb, "fixed_freq_hz", ()))
+            and cb.n_modes < getattr(cb, "n_dof", np.inf) - len(getattr(cb, "boundary_labels", ()))}  # a cut
     if not band > 0:
         return [head + "unfiltered" + tail]
     if not cuts:

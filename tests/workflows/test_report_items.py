@@ -76,7 +76,9 @@ def test_band_check_warns_when_the_band_reaches_a_component_cut():
 
     cbs = {"core": SimpleNamespace(n_modes=2, fixed_freq_hz=np.array([10.0, 59.0])),
            "srb": SimpleNamespace(n_modes=1, fixed_freq_hz=np.array([80.0])),
-           "rigid": SimpleNamespace(n_modes=0, fixed_freq_hz=np.zeros(0))}
+           "rigid": SimpleNamespace(n_modes=0, fixed_freq_hz=np.zeros(0)),
+           "whole": SimpleNamespace(n_modes=3, fixed_freq_hz=np.array([1.0, 2.0, 5.0]), n_dof=9,   # all 3 interior
+                                    boundary_labels=("a:Tx", "a:Ty", "a:Tz", "b:Tx", "b:Ty", "b:Tz"))}  # modes: no cut
     ok = report.band_lines(40.0, cbs)
     leak = 1 / (1 + (59.0 / 40.0) ** (2 * LOWPASS_ORDER))
     assert len(ok) == 1 and f"passes {100 * leak:.2g} % at 59.0 Hz" in ok[0] and "'core'" in ok[0]
