@@ -488,10 +488,11 @@ def snapshots(stack, result, cp, out: Path, case: str) -> list[Path]:
 BAND_LEAK_WARNING = 0.01
 
 
-def band_lines(band: float, cbs: dict) -> list[str]:
+def band_lines(band: float, cbs: dict, f_max: dict | None = None) -> list[str]:
     """The acceleration band of the max/min tables and what its filter passes at the lowest
     frequency a component's reduction cuts at (its highest kept fixed-interface mode; a
-    component that keeps all its interior modes cuts nothing): the modes above it are left out, so whatever the band passes there is not converged; a
+    component that keeps all its interior modes cuts nothing; one selected by band alone,
+    ``f_max[name]`` Hz, cuts there or above): the modes above it are left out, so whatever the band passes there is not converged; a
     warning above BAND_LEAK_WARNING."""
     from .spectra import lowpass_gain
 
@@ -500,6 +501,9 @@ def band_lines(band: float, cbs: dict) -> list[str]:
     cuts = {name: float(np.max(cb.fixed_freq_hz)) for name, cb in cbs.items()
             if getattr(cb, "n_modes", 0) and np.size(getattr(cb, "fixed_freq_hz", ()))
             and cb.n_modes < getattr(cb, "n_dof", np.inf) - len(getattr(cb, "boundary_labels", ()))}  # a cut
+    for name, f in (f_max or {}).items():
+        if name in cuts and f is not None:
+            cuts[name] = max(cuts[name], float(f))
     if not band > 0:
         return [head + "unfiltered" + tail]
     if not cuts:
@@ -522,7 +526,10 @@ def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[di
              f"  vehicle  {stack.vehicle.n_modes} modes, mass {m / 1e3:.1f} t, c.g. {np.round(cg, 2).tolist()} m; "
              f"pad {stack.pad.n_modes} modes"]
     lines += truncation_lines(c for _, cp in results.values() for c in cp.truncation)
-    lines += band_lines(scenario.post.acceleration_band_hz, getattr(stack, "cbs", {}))
+    cases = getattr(scenario, "cases", ())       # the stack shown is the first case's model
+    comps = getattr(cases[0].model, "components", {}) if cases else {}
+    band_fmax = {n: c.f_max for n, c in comps.items() if getattr(c, "n_modes", None) is None}
+    lines += band_lines(scenario.post.acceleration_band_hz, getattr(stack, "cbs", {}), band_fmax)
     lines.append("  mesh: not checked by a run (refine the [model] mesh sizes and compare the envelopes; the default's "
                  "study: docs/workflow.md, Convergence)")
     for case, (res, cp) in results.items():

@@ -85,4 +85,6 @@ def test_band_check_warns_when_the_band_reaches_a_component_cut():
     wide = report.band_lines(55.0, cbs)
     assert len(wide) == 2 and "WARNING" in wide[1] and "'core'" in wide[1]
     assert "unfiltered" in report.band_lines(0.0, cbs)[0]
+    by_band = report.band_lines(40.0, cbs, {"core": 60.0})   # selected by band: cut at f_max, not at 59 Hz
+    assert f"at 60.0 Hz" in by_band[0] and "'core'" in by_band[0]
     assert "passes" not in report.band_lines(40.0, {})[0]      # a model without CB components
