@@ -102,11 +102,10 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
     from .executors import check_dask_address, check_mpi, probe_dask_scheduler
 
     check_case_memory(sc.path, sc.n_generated, max_memory)      # before any case is generated
-
     check_dask_address(opt.dask)
-    if sc.n_generated and opt.dask not in (None, "local"):   # a scheduler there, before the model stages
-        on_root(comm, lambda: probe_dask_scheduler(opt.dask), share=False)
-    if n_cases:
+    if sc.n_generated:              # the case pool (_executor) is made only then: checked before the model stages
+        if opt.dask not in (None, "local"):
+            on_root(comm, lambda: probe_dask_scheduler(opt.dask), share=False)
         check_mpi(opt.mpi)
     if opt.compare is not None:           # read before the first expensive stage (and again at the end)
         from .aggregate import read_maxmin
