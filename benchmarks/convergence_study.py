@@ -28,6 +28,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from liftoff.core.labels import COMPONENTS
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "benchmarks"))
@@ -114,9 +115,6 @@ VARIANTS = {
 }
 
 
-COMPONENTS = ("Tx", "Ty", "Tz", "Rx", "Ry", "Rz")
-
-
 def point_of(row: dict) -> str:
     """The vector a row is one component of: its name less the component (``attach X on
     core Ty`` -> ``attach X on core``, ``acc stack_top:Tz`` -> ``acc stack_top``) and its
@@ -160,7 +158,8 @@ def mode_errors(omega: list[float], omega_ref: list[float], bands=(10, 20, 30, 4
     fr = np.sort(np.asarray(omega_ref)) / (2 * np.pi)
     n = min(f.size, fr.size)
     elastic = fr[:n] > 0.05             # rigid modes (~0 Hz) carry no relative error
-    err = np.where(elastic, f[:n] / np.where(elastic, fr[:n], 1.0) - 1.0, 0.0)
+    err = np.zeros(n)
+    err[elastic] = f[:n][elastic] / fr[:n][elastic] - 1.0
     return {"bands_hz": list(bands),
             "largest_error": [float(np.abs(err[f[:n] < b]).max(initial=0.0)) for b in bands],
             "modes_below": [int((f < b).sum()) for b in bands]}

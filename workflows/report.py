@@ -101,10 +101,11 @@ def tank_items(result, heads: dict, band_hz: float = 0.0) -> list[Item]:
     out = []
     for it in result.recovery_items.values():
         if it.name in heads:
-            raw = result.recovered[it.name] + heads[it.name]
+            dynamic, head = result.recovered[it.name], heads[it.name]
             band = band_hz if it.from_acceleration else 0.0
-            arr = lowpass(result.recovered[it.name], result.h, band) + heads[it.name]
-            out += [Item(f"tank pressure {lab}", "Pa", arr[:, j], "tank_pressure", raw=raw[:, j] if band > 0 else None)
+            arr = lowpass(dynamic, result.h, band) + head
+            raw = dynamic + head if band > 0 else None
+            out += [Item(f"tank pressure {lab}", "Pa", arr[:, j], "tank_pressure", raw=None if raw is None else raw[:, j])
                     for j, lab in enumerate(it.labels)]
         elif it.name.endswith(ULLAGE):
             arr = result.recovered[it.name]
@@ -490,20 +491,18 @@ BAND_LEAK_WARNING = 0.01
 
 def band_lines(band: float, cbs: dict, f_max: dict | None = None) -> list[str]:
     """The acceleration band of the max/min tables and what its filter passes at the lowest
-    frequency a component's reduction cuts at (its highest kept fixed-interface mode; a
-    component that keeps all its interior modes cuts nothing; one selected by band alone,
-    ``f_max[name]`` Hz, cuts there or above): the modes above it are left out, so whatever the band passes there is not converged; a
-    warning above BAND_LEAK_WARNING."""
+    frequency a component's reduction cuts at: its highest kept fixed-interface mode, or its
+    ``f_max[name]`` Hz when it was selected by band alone; a component that keeps all its
+    interior modes cuts nothing. The modes above a cut are left out, so whatever the band
+    passes there is not converged; a warning above BAND_LEAK_WARNING. ``cbs``: the vehicle's
+    CB models (n_modes, fixed_freq_hz, n_dof, boundary_labels)."""
     from .spectra import lowpass_gain
 
     head = "  accelerations and liquid pressures in the max/min tables: "
     tail = " ([postprocess] acceleration_band_hz; SRS and PSD unfiltered)"
-    cuts = {name: float(np.max(cb.fixed_freq_hz)) for name, cb in cbs.items()
-            if getattr(cb, "n_modes", 0) and np.size(getattr(cb, "fixed_freq_hz", ()))
-            and cb.n_modes < getattr(cb, "n_dof", np.inf) - len(getattr(cb, "boundary_labels", ()))}  # a cut
-    for name, f in (f_max or {}).items():
-        if name in cuts and f is not None:
-            cuts[name] = max(cuts[name], float(f))
+    f_max = f_max or {}
+    cuts = {name: max(float(cb.fixed_freq_hz.max()), f_max.get(name) or 0.0) for name, cb in cbs.items()
+            if 0 < cb.n_modes < cb.n_dof - len(cb.boundary_labels)}
     if not band > 0:
         return [head + "unfiltered" + tail]
     if not cuts:
@@ -526,10 +525,9 @@ def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[di
              f"  vehicle  {stack.vehicle.n_modes} modes, mass {m / 1e3:.1f} t, c.g. {np.round(cg, 2).tolist()} m; "
              f"pad {stack.pad.n_modes} modes"]
     lines += truncation_lines(c for _, cp in results.values() for c in cp.truncation)
-    cases = getattr(scenario, "cases", ())       # the stack shown is the first case's model
-    comps = getattr(cases[0].model, "components", {}) if cases else {}
-    band_fmax = {n: c.f_max for n, c in comps.items() if getattr(c, "n_modes", None) is None}
-    lines += band_lines(scenario.post.acceleration_band_hz, getattr(stack, "cbs", {}), band_fmax)
+    comps = scenario.cases[0].model.components        # the stack shown is the first case's model
+    lines += band_lines(scenario.post.acceleration_band_hz, stack.cbs,
+                        {n: c.f_max for n, c in comps.items() if c.n_modes is None})
     lines.append("  mesh: not checked by a run (refine the [model] mesh sizes and compare the envelopes; the default's "
                  "study: docs/workflow.md, Convergence)")
     for case, (res, cp) in results.items():

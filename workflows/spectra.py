@@ -127,8 +127,8 @@ def lowpass(values: np.ndarray, h: float, f_hz: float) -> np.ndarray:
     """``values`` (time along axis 0, step h s) low-pass filtered to ``f_hz``: a Butterworth
     filter of order LOWPASS_ORDER run forward and backward (scipy.signal.sosfiltfilt: zero
     phase, so peaks keep their times; -6 dB at f_hz, 2 x LOWPASS_ORDER x 6 dB per octave
-    beyond). Unchanged
-    when f_hz <= 0, when f_hz is above 0.45 of the sample rate, or for fewer than 16 samples."""
+    beyond: :func:`lowpass_gain`). Unchanged when f_hz <= 0, when f_hz is above 0.45 of the
+    sample rate, or for fewer than 16 samples."""
     from scipy.signal import butter, sosfiltfilt
 
     values = np.asarray(values, dtype=float)
