@@ -41,12 +41,14 @@ F_MAX_FACTOR = 3.0
 STUDY_BAND_LIMIT = 4000
 
 
-def components_below(factor: float):
+def components_below(factor: float, only: tuple[str, ...] | None = None):
     """Every component mode below ``factor`` x the component's f_max, no n_modes caps,
-    every system mode."""
+    every system mode; ``only``: those components (names, "pad"), the others as given."""
     def edit(data: dict) -> dict:
         m = data["model"]
-        for sel in list(m.get("component", {}).values()) + [m.get("pad", {})]:
+        for name, sel in list(m.get("component", {}).items()) + [("pad", m.get("pad", {}))]:
+            if only is not None and name not in only:
+                continue
             sel.pop("n_modes", None)
             sel["f_max"] = factor * sel.get("f_max", 60.0)
         m.pop("system", None)
@@ -96,6 +98,14 @@ def before_issue_22(data: dict) -> dict:
     return system_cut(60.0, False, 100.0)(capped(data))
 
 
+#: (label, what, components) of the variants that take one component (the boosters together)
+#: to the reference's modes: which component's truncation moves which row
+ONE_AT_A_TIME = (("core", "the core's modes", ("core",)),
+                 ("boosters", "the boosters' modes", ("srb_left", "srb_right")),
+                 ("orbiter", "the orbiter's modes", ("orbiter",)),
+                 ("pad", "the pad's modes", ("pad",)))
+
+
 #: name -> (what it is, edit of the default scenario's TOML data)
 VARIANTS = {
     "default": ("every fixed-interface mode below each component's f_max (60 Hz; pad 100 Hz), every system mode",
@@ -112,6 +122,9 @@ VARIANTS = {
     "system 30 Hz": ("the default with the system modes below 30 Hz, no residual vectors", system_cut(30.0, False)),
     "components to 2 f_max": ("every fixed-interface mode below 2 x each component's f_max, every system mode",
                               components_below(2.0)),
+    **{f"{label} to {F_MAX_FACTOR:g} f_max": (
+        f"the default with {what} at the reference's {F_MAX_FACTOR:g} x f_max, the other components at their f_max",
+        components_below(F_MAX_FACTOR, names)) for label, what, names in ONE_AT_A_TIME},
 }
 
 
@@ -226,9 +239,13 @@ def main(argv=None) -> None:
         raise SystemExit(f"no run of the reference {args.reference!r} (run it, or --reuse a file that has it)")
     ref = runs[args.reference]["rows"]
     table = []
+    watch = ([x["item"] for x in summarize(deviations(runs["default"]["rows"], ref))["rows_over_1pct"]]
+             if "default" in runs else [])
     for name in [n for n in VARIANTS if n in runs]:
         r = runs[name]
-        s = summarize(deviations(r["rows"], ref))
+        devs = deviations(r["rows"], ref)
+        s = summarize(devs)
+        s["default_rows"] = {x["item"]: x["deviation"] for x in devs if x["item"] in watch}
         if "default" in runs and name not in ("default", args.reference):
             s["vs_default"] = summarize(deviations(r["rows"], runs["default"]["rows"]))
         if "omega" in r and name != args.reference and "omega" in runs[args.reference]:

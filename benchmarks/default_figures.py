@@ -271,6 +271,19 @@ def render_convergence(conv: dict) -> str:
                      "the largest peak of the point's vector): " + "; ".join(
                          f"{x['item']} {100 * x['deviation']:.2f} %, {100 * x['point_deviation']:.2f} %"
                          for x in default["rows_over_1pct"]) + ".")
+    mixed = [r for r in conv["variants"] if r.get("default_rows") and r["variant"] not in ("default", conv["reference"])
+             and (r["variant"].endswith("f_max") or r["variant"].startswith("mesh"))]
+    if default and default.get("rows_over_1pct") and mixed:
+        lines.append("")
+        lines.append("Those rows in the variants that take more modes (one component at a time, the boosters "
+                     "together) or a finer mesh, change from the reference against the row's own peak:")
+        lines.append("")
+        lines.append("| row | default | " + " | ".join(r["variant"] for r in mixed) + " |")
+        lines.append("|---|---|" + "---|" * len(mixed))
+        for x in default["rows_over_1pct"]:
+            lines.append(f"| {x['item']} | {100 * x['deviation']:.2f} % | " + " | ".join(
+                f"{100 * r['default_rows'][x['item']]:.2f} %" if x["item"] in r["default_rows"] else "-"
+                for r in mixed) + " |")
     if default and default.get("system_modes"):
         sm = default["system_modes"]
         lines.append("")
