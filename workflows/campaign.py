@@ -121,7 +121,7 @@ def summarize(result, cp, name: str, index: int, post, wall: float = 0.0, check=
     cols = np.arange(V.shape[1])
     srs_items, srs_arr = (), None
     if post.srs is not None:
-        from .spectra import srs, srs_frequencies
+        from liftoff.analysis.spectra import srs, srs_frequencies
 
         sel = [j for j, it in enumerate(its) if it.category in post.srs.categories]
         srs_items = tuple(its[j].name for j in sel)

@@ -42,11 +42,11 @@ def items(result, attach: dict, heads: dict | None = None, band_hz: float = 0.0)
     total tank pressures and ullage volumes. Names, units and kinds come from the result's
     contact directions and recovery items; ``attach``: recovery name -> (point, component).
     ``band_hz`` > 0: the acceleration-type histories low-pass filtered to that band
-    (workflows/spectra.lowpass; ``[postprocess] acceleration_band_hz``), the unfiltered
+    (analysis/spectra.lowpass; ``[postprocess] acceleration_band_hz``), the unfiltered
     history kept as ``raw``: the output-point accelerations and every recovery made from
     the modal accelerations alone (``RecoveryItem.from_acceleration``: liquid pressures,
     liquid inertia forces, a Nastran ATM), whose peaks are set by the highest modes."""
-    from .spectra import lowpass
+    from liftoff.analysis.spectra import lowpass
 
     out = []
     for j, d in enumerate(result.contact_directions):
@@ -96,7 +96,7 @@ def liquid_heads(cp) -> dict[str, np.ndarray]:
 def tank_items(result, heads: dict, band_hz: float = 0.0) -> list[Item]:
     """Total tank pressure (dynamic + head) and ullage volume change histories; ``band_hz``
     > 0: the dynamic pressure (from the accelerations) in that band, as in :func:`items`."""
-    from .spectra import lowpass
+    from liftoff.analysis.spectra import lowpass
 
     out = []
     for it in result.recovery_items.values():
@@ -496,7 +496,7 @@ def band_lines(band: float, cbs: dict, f_max: dict | None = None) -> list[str]:
     interior modes cuts nothing. The modes above a cut are left out, so whatever the band
     passes there is not converged; a warning above BAND_LEAK_WARNING. ``cbs``: the vehicle's
     CB models (n_modes, fixed_freq_hz, n_dof, boundary_labels)."""
-    from .spectra import lowpass_gain
+    from liftoff.analysis.spectra import lowpass_gain
 
     head = "  accelerations and liquid pressures in the max/min tables: "
     tail = " ([postprocess] acceleration_band_hz; SRS and PSD unfiltered)"
@@ -596,7 +596,7 @@ def spectra(result, cp, post, out: Path, case: str) -> list[Path]:
     psd_<case>.csv, per [postprocess.psd] / [postprocess.srs]; nothing when neither is set."""
     from liftoff.core.records import Dataset, write_record
 
-    from .spectra import fft_amplitude, psd, srs, srs_frequencies
+    from liftoff.analysis.spectra import fft_amplitude, psd, srs, srs_frequencies
 
     if post.psd is None and post.srs is None:
         return []

@@ -108,7 +108,7 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
             on_root(comm, lambda: probe_dask_scheduler(opt.dask), share=False)
         check_mpi(opt.mpi)
     if opt.compare is not None:           # read before the first expensive stage (and again at the end)
-        from .aggregate import read_maxmin
+        from liftoff.analysis.aggregate import read_maxmin
 
         on_root(comm, lambda: read_maxmin(Path(opt.compare)), share=False)
     want_pics = snapshots and any(c.output.snapshots for c in sc.cases)
@@ -310,7 +310,7 @@ def write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, e
     snapshots and spectra; the generated cases' records; the envelope over all cases,
     statistics, SRS, design loads; the governing generated case's histories and pictures;
     ParaView output; the comparison and the summary. Everything goes to ``out``."""
-    from .aggregate import Aggregate
+    from liftoff.analysis.aggregate import Aggregate
 
     stage_times = list(prep.stage_times)
     results, files, tab1 = {}, [], None
@@ -434,14 +434,14 @@ def _generated_outputs(sc, prep: Prepared, camp: _Campaign, agg, out: Path, stag
 
 def _loads_tables(sc, agg, out: Path, echo, camp) -> list:
     """maxmin_envelope.csv, statistics, SRS, design loads and the comparison table."""
-    from . import aggregate
+    from liftoff.analysis import aggregate
 
     env = agg.envelope_rows()
     files = [report.write_csv(env, out / "maxmin_envelope.csv")]
     echo("Max/min envelope over cases (posts: force on vehicle, Tz > 0 compression; full table in "
          "maxmin_envelope.csv):")
     echo(report.format_table(env, select=report.is_force, limit=40))
-    from .spectra import srs_frequencies
+    from liftoff.analysis.spectra import srs_frequencies
 
     s = sc.post.srs
     freq = srs_frequencies(s.f_min, s.f_max, s.n_freq) if s is not None else None

@@ -172,7 +172,7 @@ def test_compare_table_is_read_before_the_first_stage(tmp_path, monkeypatch):
     """--compare at a missing, empty or binary file fails at once (issue 27: after the whole
     run, or an empty compare.csv)."""
     from liftoff.workflows import run as run_mod
-    from liftoff.workflows.aggregate import read_maxmin
+    from liftoff.analysis.aggregate import read_maxmin
 
     def no_stage(*a, **k):
         raise AssertionError("a model stage ran before --compare was checked")

@@ -54,7 +54,7 @@ def test_campaign_envelope_equals_cases_run_one_by_one(campaign4):
         assert {k: a[k] for k in keys} == {k: b[k] for k in keys}, (a, b)   # values, times and cases, exactly
     assert {r["case_max"] for r in ref} & {"d0000", "d0001", "d0002", "d0003"}    # dispersions matter
     # statistics over the 4 generated cases = the batch formulas on the per-case maxima
-    from liftoff.workflows.stats import k_factor
+    from liftoff.analysis.stats import k_factor
 
     st = out.aggregate.statistics()
     mx = np.array([[r["max"] for r in per_case[f"d000{i}"]] for i in range(4)])

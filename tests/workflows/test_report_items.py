@@ -39,11 +39,11 @@ def test_items_follow_the_result_metadata():
 def test_acceleration_recoveries_take_the_band(tmp_path):
     """A recovery made from the modal accelerations alone (an ATM: liquid pressures, liquid
     inertia forces) is set, like an output acceleration, by the highest modes; with a band it
-    is reported low-pass filtered (workflows/spectra.lowpass, its own unit test), the raw
+    is reported low-pass filtered (analysis/spectra.lowpass, its own unit test), the raw
     history kept; a recovery with a displacement part is not filtered. The flag survives the
     results file. Reference: lowpass applied to the same history, and the unfiltered history."""
     from liftoff.transient.result import load_result
-    from liftoff.workflows.spectra import lowpass
+    from liftoff.analysis.spectra import lowpass
 
     v, p = toy_vehicle(3), toy_pad(3)
     cps = holddown_contacts(3, release_time=0.01)    # the lateral load is let go at release
@@ -72,7 +72,7 @@ def test_band_check_warns_when_the_band_reaches_a_component_cut():
     Butterworth run twice, 1 / (1 + (f/f_c)^(2n)), at the cut."""
     from types import SimpleNamespace
 
-    from liftoff.workflows.spectra import LOWPASS_ORDER
+    from liftoff.analysis.spectra import LOWPASS_ORDER
 
     six = ("a:Tx", "a:Ty", "a:Tz", "b:Tx", "b:Ty", "b:Tz")
     cbs = {"core": SimpleNamespace(n_modes=2, fixed_freq_hz=np.array([10.0, 59.0]), n_dof=100, boundary_labels=six),

@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from liftoff.workflows.spectra import LOWPASS_ORDER, fft_amplitude, lowpass, psd, srs
-from liftoff.workflows.stats import Largest, Running, k_factor, order_rank
+from liftoff.analysis.spectra import LOWPASS_ORDER, fft_amplitude, lowpass, psd, srs
+from liftoff.analysis.stats import Largest, Running, k_factor, order_rank
 
 
 def test_srs_equals_pyyeti_on_the_same_input():
@@ -119,7 +119,7 @@ def test_streaming_equals_batch():
 
 
 def test_lowpass_keeps_the_band_and_its_peak_times():
-    """The acceleration band of the max/min tables (workflows/spectra.lowpass): a Butterworth
+    """The acceleration band of the max/min tables (analysis/spectra.lowpass): a Butterworth
     filter of order n run forward and backward has |H|^2 = 1 / (1 + (f/f_c)^(2n)); a sine
     at 10 Hz under a 50 Hz band keeps its amplitude to that (1 - 7e-12 for n = 8) and its
     peak times (zero phase), one at 400 Hz is cut to (50/400)^16 = 3e-15 of it, one at 1.5
