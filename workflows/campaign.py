@@ -39,7 +39,7 @@ from liftoff.core.records import read_record, write_record
 CASE_BYTES = 1000
 RECORD_FORMAT = "liftoff-campaign-case"
 RECORD_VERSION = 1
-CODE = ("liftoff.transient", "liftoff.workflows", "liftoff.config", "liftoff.core")
+CODE = ("liftoff.transient", "liftoff.analysis", "liftoff.workflows", "liftoff.config", "liftoff.core")
 
 
 @dataclass(frozen=True)

@@ -74,6 +74,35 @@ def items(result, attach: dict, heads: dict | None = None, band_hz: float = 0.0)
     return out
 
 
+def interface_histories(result, attach: dict) -> list:
+    """The attach points' load histories as analysis.interface_loads.InterfaceHistory, named as
+    the max/min rows name them (``attach <point> on <component>``); ``attach``: recovery name
+    -> (point, component)."""
+    from liftoff.analysis.interface_loads import InterfaceHistory
+
+    out = []
+    for it in result.recovery_items.values():
+        if it.category == "interface_force" and it.name in attach:
+            point, comp = attach[it.name]
+            out.append(InterfaceHistory(f"attach {point} on {comp}", tuple(it.labels), tuple(it.units),
+                                        result.recovered[it.name]))
+    return out
+
+
+def write_interface_loads(results: dict, out: Path, name: str, note: str = "") -> list[Path]:
+    """``interface_loads_<name>.csv``: the time-consistent interface loads (analysis/
+    interface_loads.py) of one case (``results`` {case: (result, case problem)} with one
+    entry) or, over several, their envelope; nothing when the model has no attach points.
+    The file's second comment line names the cases it covers (and ``note``)."""
+    from liftoff.analysis import interface_loads as il
+
+    per_case = [il.time_consistent(res.time, interface_histories(res, cp.attach), case)
+                for case, (res, cp) in results.items()]
+    rows = il.envelope(per_case) if len(per_case) > 1 else (per_case[0] if per_case else [])
+    cover = f"cases: {', '.join(results)}" + (f"; {note}" if note else "")
+    return [il.write_csv(rows, out / f"interface_loads_{name}.csv", cover)] if rows else []
+
+
 # ------------------------------------------------------------------ hydroelastic tanks
 LIQUID_PRESSURE, ULLAGE = "_liquid_pressure", "_ullage_volume"     # component recovery names end so
 

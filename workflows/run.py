@@ -335,6 +335,9 @@ def write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, e
         files += _generated_outputs(sc, prep, camp, agg, out, stage_times, results, plots, want_pics)
         stage_times.append(("campaign tables and histories", time.perf_counter() - t0))
     files += _loads_tables(sc, agg, out, echo, camp)
+    files += report.write_interface_loads(
+        results, out, "envelope", "the generated cases other than the governing one are not in this table (their "
+        "histories are not kept; see envelope_histories.h5)" if camp_run is not None else "")
     files += _fields(sc, prep, results, agg, out, camp, stage_times)
     env = agg.envelope_rows()
     first = next(iter(prep.stacks.values()))
@@ -392,6 +395,7 @@ def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, sta
     if half is not None:
         report.with_errors(rows, report.maxmin(half.time, report.items(half, cp.attach, heads, band), name))
     files.append(report.write_csv(rows, out / f"maxmin_{name}.csv"))
+    files += report.write_interface_loads({name: (res, cp)}, out, name)
     if plots:
         files += report.plots(res, cp, out, name)
     if pics:

@@ -92,6 +92,7 @@ def _check_outputs(out, cases, all_cases=None):
                                    if not line.startswith("#")))
         assert {r["case_max"] for r in rows} == {c}
         assert any(r["item"] == "post left_1 Tz" for r in rows)
+        _check_interface_loads(out, c, res, rows)
     env = list(csv.DictReader(line for line in (out / "maxmin_envelope.csv").read_text().splitlines()
                               if not line.startswith("#")))
     assert {r["case_max"] for r in env} <= set(all_cases or cases)
@@ -99,6 +100,24 @@ def _check_outputs(out, cases, all_cases=None):
     assert "gravity + softening + cryo" in t1
     assert "wall time per stage" in (out / "summary.txt").read_text()
     _check_twang(out, cases)
+
+
+def _check_interface_loads(out, case, res, maxmin_rows):
+    """interface_loads_<case>.csv (analysis/interface_loads.py) against the results file: each
+    row is the attach history at its time (to the CSV's 7 digits), and its peak component is
+    the max/min table's extreme of that row (the same history, the same step)."""
+    from liftoff.analysis.interface_loads import read_csv
+
+    rows = read_csv(out / f"interface_loads_{case}.csv")
+    mm = {r["item"]: r for r in maxmin_rows}
+    assert len(rows) == 12 * 7                     # 7 attach points x 6 components x (max, min)
+    for r in rows:
+        hist = res.recovered["attach_" + r["interface"].split()[1]]     # 'attach <point> on <component>'
+
+        i = int(np.argmin(np.abs(res.time - r["time"])))
+        np.testing.assert_allclose(r["values"], hist[i], rtol=5e-7, atol=1e-9 * np.abs(hist).max())
+        table = mm[f"{r['interface']} {r['labels'][r['component']]}"]
+        assert float(table[r["extreme"]]) == pytest.approx(r["values"][r["component"]], rel=1e-6)
 
 
 TWANG = re.compile(r"twang at stack_top \(pad frame, from t0\): peak ([0-9.]+) m at t = ([0-9.]+) s .*"
