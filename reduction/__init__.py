@@ -34,6 +34,8 @@ _EXPORTS = {
     "field_recovery": ".recovery",
     "interface_force_recovery": ".recovery",
     "label_transform": ".assembly",
+    "ModalMassTable": ".modal_mass",
+    "modal_mass_table": ".modal_mass",
     "SystemModes": ".system",
     "system_modes": ".system",
     "system_rb": ".system",

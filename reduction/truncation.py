@@ -39,6 +39,7 @@ from liftoff.core.labels import TRANSLATIONS
 from liftoff.core.rigid import rb_rows
 
 from .assembly import label_transform
+from .modal_mass import held_effective_mass
 from .system import MASSLESS_TOL, SystemModes, system_rb
 
 #: a residual direction whose share of a loaded DOF's static flexibility is below this is
@@ -149,25 +150,6 @@ def keep_modes(full: SystemModes, f_max: float | None = None, n_modes: int | Non
 
 
 # ------------------------------------------------------------------ the check
-def held_effective_mass(omega: np.ndarray, rows: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """Effective mass (kg, one per column of ``u``) of a modal model (unit modal masses,
-    stiffness diag(omega^2)) held at the DOFs whose mode-shape rows are ``rows`` and excited
-    by their motion ``u``: |N^T q_s|^2, q_s the least-strain-energy shape with rows q_s = u,
-    N an orthonormal basis of the motions that leave those DOFs fixed. Summed over the held
-    model's modes this is the mass that follows the held DOFs' motion dynamically; the rest
-    sits on them (the interface mass, (rows rows^T)^-1 for a free body)."""
-    n = omega.size
-    U, s, Vt = np.linalg.svd(rows, full_matrices=True)
-    r = int(np.sum(s > 1e-12 * max(float(s.max(initial=0.0)), 1e-300)))
-    N, Vr = Vt[r:].T, Vt[:r].T
-    q_p = Vr @ ((U[:, :r].T @ u) / s[:r, None])               # rows q_p = u (least squares)
-    lam = omega ** 2
-    A = N.T @ (lam[:, None] * N)
-    z = sla.lstsq(0.5 * (A + A.T), -N.T @ (lam[:, None] * q_p))[0] if N.shape[1] else np.zeros((0, u.shape[1]))
-    y = N.T @ (q_p + N @ z) if n else np.zeros((0, u.shape[1]))
-    return np.einsum("ij,ij->j", y, y)
-
-
 def effective_mass(modes: SystemModes, contact_labels) -> np.ndarray:
     """Effective mass (kg; x, y, z) that the modes carry: of a free-free body held at its
     contact DOFs (:func:`held_effective_mass`; nan without contacts), of a grounded one

@@ -103,6 +103,40 @@ def write_interface_loads(results: dict, out: Path, name: str, note: str = "") -
     return [il.write_csv(rows, out / f"interface_loads_{name}.csv", cover)] if rows else []
 
 
+def write_modal_tables(stack, cp, out: Path) -> list[Path]:
+    """The modal deliverables of the stack (reduction/modal_mass.py): ``modes_vehicle.csv``
+    (the vehicle's free-free system modes the transient uses: rigid, elastic, residual
+    vectors), ``modal_mass_vehicle_held.csv`` (the vehicle held at its contact DOFs: modes
+    and effective mass under the posts' rigid translation) and ``modal_mass_pad.csv`` (the
+    grounded pad's modes and their effective mass)."""
+    from liftoff.reduction.modal_mass import modal_mass_table
+
+    vm = stack.vehicle_modes
+    kind = ["rigid"] * vm.n_rigid + ["elastic"] * (vm.n_modes - vm.n_rigid - vm.n_residual) + \
+        ["residual vector"] * vm.n_residual
+    lines = ["# liftoff vehicle system modes (free-free; the modes the transient keeps): frequency in Hz; kind: "
+             "rigid, elastic or residual vector (its Rayleigh frequency)", "mode,f_hz,kind"]
+    lines += [f"{k + 1},{f:.6e},{kd}" for k, (f, kd) in enumerate(zip(vm.freq_hz, kind))]
+    files = [write_text(out / "modes_vehicle.csv", "\n".join(lines) + "\n")]
+    contact_a = [lab for c in cp.problem.contacts for lab in c.labels_a]
+    for table, name in ((modal_mass_table(vm, contact_a, "vehicle"), "modal_mass_vehicle_held.csv"),
+                        (modal_mass_table(stack.pad_modes, [], "pad"), "modal_mass_pad.csv")):
+        head = (f"# liftoff modal effective mass, {table.body} {table.condition} (reduction/modal_mass.py): per mode "
+                "the frequency (Hz) and the effective mass (kg) under a rigid translation x, y, z of the supports, "
+                "its percent and cumulative percent of the total; total mass (kg) x/y/z "
+                + "/".join(f"{m:.6e}" for m in table.total_mass) + ", on the supports (no mode carries it) "
+                + "/".join(f"{m:.6e}" for m in table.on_supports) + "\n")
+        buf = io.StringIO()
+        rows = table.rows()
+        if rows:
+            w = csv.DictWriter(buf, fieldnames=list(rows[0]))
+            w.writeheader()
+            for r in rows:
+                w.writerow({k: (f"{v:.6e}" if isinstance(v, float) else v) for k, v in r.items()})
+        files.append(write_text(out / name, head + buf.getvalue()))
+    return files
+
+
 # ------------------------------------------------------------------ hydroelastic tanks
 LIQUID_PRESSURE, ULLAGE = "_liquid_pressure", "_ullage_volume"     # component recovery names end so
 

@@ -356,8 +356,9 @@ def _table1(stack, cp, case, out: Path, echo, stage_times: list):
     tab1 = table1(stack, cp, case)
     files = [write_text(out / "table1.txt", tab1.table() + "\n"),
              write_text(out / "table1.csv", "# c.g. motion under static loads; m and rad\n" + tab1.csv())]
+    files += report.write_modal_tables(stack, cp, out)
     echo(tab1.table())
-    stage_times.append(("Table 1", time.perf_counter() - t0))
+    stage_times.append(("Table 1, modal tables", time.perf_counter() - t0))
     return tab1, files
 
 

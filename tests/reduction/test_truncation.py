@@ -11,7 +11,8 @@ from liftoff.core.rigid import rb_rows
 from liftoff.reduction import (assemble, craig_bampton, keep_modes, label_transform, residual_vectors,
                                system_modes, truncation_check)
 from liftoff.reduction.models import chain_component, six_labels
-from liftoff.reduction.truncation import StaticFlexibility, held_effective_mass, load_vectors
+from liftoff.reduction.modal_mass import held_effective_mass, held_modes, modal_mass_table
+from liftoff.reduction.truncation import StaticFlexibility, load_vectors
 
 from ..roundoff import solve_rtol
 from .test_assembly import N_SEG, SECTION, bent_frame_nodes, pad_component
@@ -153,6 +154,52 @@ def test_held_effective_mass_equals_the_physical_held_model(frame):
     cut = keep_modes(full_modes, f_max=20.0, residual=False)
     part = held_effective_mass(cut.omega, label_transform(asm, contact) @ cut.phi, u)
     assert np.all(part <= modal * (1 + 1e-9)) and np.any(part < 0.99 * modal)
+
+
+def test_modal_mass_table_equals_the_physical_held_and_grounded_models(frame):
+    """Per mode: the held model built in modal coordinates (reduction/modal_mass.py) has the
+    physical held assembly's frequencies and effective masses (its eigenproblem with the held
+    rows and columns removed); they sum to the total mass less what sits on the held DOFs.
+    The bent frame held at one end (a grounded body): the table is (phi^T M r)^2 and its sum
+    over the whole space is r^T M r less the held point's own mass."""
+    asm, full_modes, _ = frame
+    contact = [f"{p}:{c}" for p in BOUNDARY for c in ("Tx", "Ty", "Tz")]
+    rb = full_modes.rb_shape()[:, :3]
+    held = np.array([asm.boundary_dof(lab) for lab in contact])
+    free = np.setdiff1d(np.arange(asm.n_dof), held)
+    lam, psi = sla.eigh(asm.K[np.ix_(free, free)], asm.M[np.ix_(free, free)])
+    Lp = psi.T @ (asm.M @ rb)[free]
+    table = modal_mass_table(full_modes, contact, "frame")
+    assert table.condition == "held at its contact DOFs" and table.freq_hz.size == lam.size
+    # eigenvalues of the same matrix pencil in two bases: round-off of the CB basis (cond ~1e8 at most here)
+    np.testing.assert_allclose(table.freq_hz, np.sqrt(lam) / (2 * np.pi), rtol=1e-7)
+    # per mode (distinct frequencies on this frame): the same participations, squared
+    gaps = np.diff(lam) / lam[1:]
+    assert gaps.min() > 1e-6
+    scale = np.diag(rb.T @ asm.M @ rb)
+    np.testing.assert_allclose(table.effective_mass, Lp ** 2, rtol=1e-6, atol=1e-9 * scale.max())
+    np.testing.assert_allclose(table.total_mass, scale, rtol=1e-9)
+    np.testing.assert_allclose(table.effective_mass.sum(axis=0) + table.on_supports, table.total_mass, rtol=1e-12)
+    rows = table.rows()
+    assert rows[-1]["cum_pct_x"] == pytest.approx(100 * table.effective_mass[:, 0].sum() / scale[0])
+    # held_effective_mass (the truncation check's figure) is the table's sum
+    u = rb_rows(contact, asm.points, asm.point_coords, np.zeros(3))[:, :3]
+    np.testing.assert_allclose(held_modes(full_modes.omega, label_transform(asm, contact) @ full_modes.phi, u)[1]
+                               .sum(axis=0), table.effective_mass.sum(axis=0), rtol=1e-10)
+
+
+def test_modal_mass_table_of_a_grounded_body():
+    """A grounded frame (tests/reduction/test_assembly.pad_component, clamped DOFs removed):
+    effective masses are (phi^T M r)^2 of the CB system's modes and, over the whole space,
+    sum to the mass that moves (r^T M r of the free DOFs: Phi Phi^T = M^-1)."""
+    pad, posts = pad_component()
+    modes = system_modes(assemble([craig_bampton(pad, posts, n_modes=pad.n_dof)], "pad"), n_rigid=0)
+    table = modal_mass_table(modes, [], "grounded")
+    assert table.condition == "grounded"
+    rb = np.asarray(table.total_mass)
+    np.testing.assert_allclose(table.effective_mass.sum(axis=0) + table.on_supports, rb, rtol=1e-12)
+    # every mode of the whole space: the moving mass is all carried (the ground DOFs are not in the CB space)
+    np.testing.assert_allclose(table.on_supports, 0.0, atol=1e-8 * rb.max())
 
 
 def test_residual_vectors_skip_what_the_kept_modes_carry(frame):

@@ -98,8 +98,35 @@ def _check_outputs(out, cases, all_cases=None):
     assert {r["case_max"] for r in env} <= set(all_cases or cases)
     t1 = (out / "table1.txt").read_text()
     assert "gravity + softening + cryo" in t1
+    _check_modal_tables(out)
     assert "wall time per stage" in (out / "summary.txt").read_text()
     _check_twang(out, cases)
+
+
+def _check_modal_tables(out):
+    """modes_vehicle.csv and the effective mass tables (reduction/modal_mass.py): the vehicle
+    held at its posts and the pad carry, with what sits on their supports, the rigid-body
+    mass; the vehicle's is the same in x, y and z and equal to the summary's mass (cg_mass of the
+    assembly: an independent computation, to its printed 0.1 t)."""
+    modes = list(csv.DictReader(ln for ln in (out / "modes_vehicle.csv").read_text().splitlines()
+                                if not ln.startswith("#")))
+    assert [r["kind"] for r in modes[:6]] == ["rigid"] * 6 and modes[6]["kind"] == "elastic"
+    summary_mass = float(re.search(r"vehicle +\d+ modes, mass ([0-9.]+) t", (out / "summary.txt").read_text())[1])
+    for name in ("modal_mass_vehicle_held.csv", "modal_mass_pad.csv"):
+        text = (out / name).read_text()
+        head = text.splitlines()[0]
+        total = np.array([float(x) for x in re.search(r"total mass \(kg\) x/y/z ([^,]+),", head)[1].split("/")])
+        held = np.array([float(x) for x in re.search(r"on the supports \(no mode carries it\) (\S+)", head)[1]
+                         .split("/")])
+        rows = list(csv.DictReader(ln for ln in text.splitlines() if not ln.startswith("#")))
+        m = np.array([[float(r[f"m_eff_{a}"]) for a in "xyz"] for r in rows])
+        # the table's sum and what the supports hold make the total (the CSV's 7 digits)
+        np.testing.assert_allclose(m.sum(axis=0) + held, total, rtol=1e-6)
+        assert np.all(m >= 0) and float(rows[-1]["cum_pct_z"]) <= 100 + 1e-6
+        if "vehicle" in name:          # the vehicle's translation mass is isotropic (the pad's: a stick
+            np.testing.assert_allclose(total, total[0], rtol=1e-9)   # pad's scalar masses need not be)
+            assert total[0] / 1e3 == pytest.approx(summary_mass, abs=0.051)
+            assert m[:, 2].sum() > 0.5 * total[2]       # most of the stack moves on its posts axially
 
 
 def _check_interface_loads(out, case, res, maxmin_rows):
