@@ -20,6 +20,7 @@ _EXPORTS = {
     "load_cb": ".craig_bampton",
     "save_cb": ".craig_bampton",
     "acceleration_recovery": ".recovery",
+    "cg_acceleration_recovery": ".recovery",
     "component_recovery": ".recovery",
     "CBRecovery": ".craig_bampton",
     "NastranRecovery": ".nastran",

@@ -2,6 +2,8 @@
 
 - displacement / acceleration at labelled DOFs (boundary DOFs of the assembly, or
   labelled interior DOFs of a component through its CB transformation);
+- net c.g. acceleration of a component: the resultant of its inertia forces over its
+  rigid-body mass, per direction (what its net c.g. load factor is made from);
 - interface forces: the force the rest of the vehicle applies to a component at its
   boundary DOFs, F_b = [C_M^T M_B] [qdd_cb; xdd_b] + K_B x_b (eq. 13, lower rows), which
   is what the component carries there. It excludes loads applied to the component
@@ -15,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from liftoff.core.errors import InputError
+from liftoff.core.rigid import rb_rows
 
 from .assembly import Assembly, label_transform
 from .component import Component
@@ -45,6 +48,27 @@ def interface_force_recovery(assembly: Assembly, sysm: SystemModes, component_na
         rows.append(cb.n_modes + cb.boundary_labels.index(lab))
     T = sysm.phi[assembly.cb_index(cb.name)]           # [q_cb; x_b] = T q
     return cb.K[rows] @ T, cb.M[rows] @ T
+
+
+def cg_acceleration_recovery(assembly: Assembly, sysm: SystemModes, component_name: str) -> tuple[np.ndarray, np.ndarray]:
+    """(A (3 x n_modes), mass (3,) kg): the net acceleration of ``component_name``'s c.g. (m/s^2,
+    x y z) = A qddot, the resultant of the component's inertia forces R^T M_CB qddot_cb (eq.
+    13: M_CB in its CB coordinates [q_cb; x_b], R the rigid translation there: the boundary
+    DOFs translating rigidly, q_cb = 0, which the constraint modes carry exactly) over its
+    rigid-body mass in that direction, diag(R^T M_CB R). On a rigid component it is the c.g.
+    acceleration; by Newton it is the net force on the component (interfaces, applied loads,
+    gravity) over its mass. With a hydroelastic liquid the mass per direction is what moves
+    with the tank in that direction (the liquid's impulsive part laterally, all of it axially)."""
+    cb = assembly.component(component_name)
+    rb = rb_rows(cb.boundary_labels, cb.points, cb.point_coords, np.zeros(3))[:, :3]
+    R = np.zeros((cb.n_modes + len(cb.boundary_labels), 3))
+    R[cb.n_modes:] = rb
+    mass = np.einsum("ij,ij->j", R, cb.M @ R)
+    if not np.all(mass > 0):
+        raise InputError(f"component {cb.name!r}: rigid-body mass {mass.tolist()} kg (x, y, z) is not positive; "
+                         "no c.g. acceleration")
+    T = sysm.phi[assembly.cb_index(cb.name)]           # [q_cb; x_b] = T q
+    return (R.T @ (cb.M @ T)) / mass[:, None], mass
 
 
 def field_recovery(assembly: Assembly, sysm: SystemModes, component_name: str,

@@ -34,6 +34,7 @@ from liftoff.core.errors import InputError
 from liftoff.core.labels import COMPONENTS, TRANSLATIONS, named_points
 
 from .pipeline import StackModel, cryo_loads
+from .report import CG_ACCELERATION
 
 
 
@@ -152,7 +153,7 @@ def recoveries(case: Case, stack: StackModel) -> tuple[list[Recovery], dict, dic
     """Interface forces at attach points, c.g. motion (eq. 23), top/payload/stations motion.
     (The modal coordinates the full-field pictures need are kept by the transient's
     ``keep_modal = "q"`` storage, O(n) per step, not by identity-matrix recoveries.)"""
-    from liftoff.reduction import interface_force_recovery
+    from liftoff.reduction import cg_acceleration_recovery, interface_force_recovery
 
     body = stack.vehicle
     out, attach = [], {}
@@ -168,6 +169,11 @@ def recoveries(case: Case, stack: StackModel) -> tuple[list[Recovery], dict, dic
         attach[name] = (point, comp)
     out.append(Recovery("cg_motion", "a", COMPONENTS, disp=cg_motion_matrix(body), units=("m",) * 3 + ("rad",) * 3,
                         category="cg_motion", description="vehicle c.g. motion (eq. 23)"))
+    for comp in [cb.name for cb in stack.vehicle_asm.components]:
+        A, mass = cg_acceleration_recovery(stack.vehicle_asm, stack.vehicle_modes, comp)
+        out.append(Recovery(f"cg_accel_{comp}", "a", TRANSLATIONS, acc=A, units="m/s^2", category=CG_ACCELERATION,
+                            description=f"net acceleration of {comp}'s c.g. (rigid-body mass x/y/z "
+                                        f"{'/'.join(f'{m:.6g}' for m in mass)} kg)"))
     out += component_recoveries(stack)
     outputs = []
     w = case.at("recovery")

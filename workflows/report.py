@@ -52,6 +52,9 @@ def items(result, attach: dict, heads: dict | None = None, band_hz: float = 0.0)
     for j, d in enumerate(result.contact_directions):
         out.append(Item(f"post {d.contact} {d.component}", d.unit, result.contact_force[:, j], "contact_force"))
     for it in result.recovery_items.values():
+        if it.category == CG_ACCELERATION:
+            out += load_factor_items(result, it, band_hz)
+            continue
         if it.category == "modal":
             continue
         arr = result.recovered[it.name]
@@ -72,6 +75,29 @@ def items(result, attach: dict, heads: dict | None = None, band_hz: float = 0.0)
     if heads is not None:
         out += tank_items(result, heads, band_hz)
     return out
+
+
+G0 = 9.80665          # m/s^2, standard gravity: load factors are in units of it
+#: recovery category of a vehicle component's net c.g. acceleration (reduction.cg_acceleration_recovery,
+#: workflows/loads.recoveries): the reports turn it into the net c.g. load factor (:func:`load_factor_items`)
+CG_ACCELERATION = "cg_acceleration"
+
+
+def load_factor_items(result, it, band_hz: float = 0.0) -> list[Item]:
+    """A component's net c.g. load factor (g) from its c.g. acceleration item (category
+    ``cg_acceleration``, m/s^2; reduction.cg_acceleration_recovery): n = (a - g) / g0 with g the
+    run's gravity field (result metadata), the specific force of the component's c.g.: the net
+    non-gravity force on it over its weight, +1 g upward (z) at rest on the pad. An
+    acceleration-type history: band-limited like the other accelerations (``band_hz``)."""
+    from liftoff.analysis.spectra import lowpass
+
+    comp = it.name.removeprefix("cg_accel_")
+    gvec = np.asarray(result.metadata.get("gravity", (0.0, 0.0, 0.0)), dtype=float)
+    a = result.recovered[it.name]
+    n = (a - gvec[None, :]) / G0
+    filtered = lowpass(n, result.h, band_hz)
+    return [Item(f"load factor {comp} N{lab[-1].lower()}", "g", filtered[:, j], "cg_load_factor",
+                 raw=n[:, j] if band_hz > 0 else None) for j, lab in enumerate(it.labels)]
 
 
 def interface_histories(result, attach: dict) -> list:
@@ -461,8 +487,8 @@ def plots(result, cp, out: Path, case: str) -> list[Path]:
     if pay:
         fig, axs = plt.subplots(1, 1, figsize=(10, 4))
         for lab in point_labels(pay, TRANSLATIONS):
-            axs.plot(t, result.acceleration["a"][:, labels.index(lab)], lw=0.8, label=lab)
-        axs.set_ylabel(f"{pay} acceleration (m/s^2)")
+            axs.plot(t, result.acceleration["a"][:, labels.index(lab)] / G0, lw=0.8, label=lab)
+        axs.set_ylabel(f"{pay} acceleration (g = {G0} m/s^2)")
         finish(fig, [axs], "payload_acc", "Payload-station acceleration")
     tank_plots(result, cp, out, case, finish)
     return paths

@@ -93,6 +93,15 @@ def _check_outputs(out, cases, all_cases=None):
         assert {r["case_max"] for r in rows} == {c}
         assert any(r["item"] == "post left_1 Tz" for r in rows)
         _check_interface_loads(out, c, res, rows)
+        # net c.g. load factors: at t0 the stack rests statically on its pad (exact static
+        # start, section 2.6): no acceleration, so every component's load factor is +1 g in z
+        names = [n for n in res.recovered if n.startswith("cg_accel_")]
+        assert sorted(names) == ["cg_accel_core", "cg_accel_orbiter", "cg_accel_srb_left", "cg_accel_srb_right"]
+        for n in names:
+            assert np.abs(res.recovered[n][0]).max() < 1e-6 * 9.80665
+        lf = {r["item"]: r for r in rows if r["item"].startswith("load factor ")}
+        assert len(lf) == 12 and {r["unit"] for r in lf.values()} == {"g"}
+        assert float(lf["load factor core Nz"]["max"]) > 1.0 > float(lf["load factor core Nz"]["min"]) > 0.0
     env = list(csv.DictReader(line for line in (out / "maxmin_envelope.csv").read_text().splitlines()
                               if not line.startswith("#")))
     assert {r["case_max"] for r in env} <= set(all_cases or cases)
