@@ -163,6 +163,24 @@ def write_modal_tables(stack, cp, out: Path) -> list[Path]:
     return files
 
 
+#: (sheet, CSV file) of the run's tables the workbook holds, in order (those present)
+WORKBOOK_TABLES = (("time-consistent loads", "interface_loads_envelope.csv"), ("design loads", "design_loads.csv"),
+                   ("comparison", "compare.csv"), ("statistics", "statistics.csv"), ("SRS", "srs.csv"),
+                   ("table 1", "table1.csv"), ("system modes", "modes_vehicle.csv"),
+                   ("modal mass vehicle held", "modal_mass_vehicle_held.csv"), ("modal mass pad", "modal_mass_pad.csv"))
+
+
+def write_workbook(out: Path, title: str) -> list[Path]:
+    """``loads.xlsx`` (analysis/workbook.py): the max/min envelope by category and the run's
+    other tables, made from the CSV files in ``out`` (the same numbers, cell for cell)."""
+    from liftoff.analysis import workbook
+
+    if not (out / "maxmin_envelope.csv").is_file():
+        return []
+    tables = [(name, out / f) for name, f in WORKBOOK_TABLES if (out / f).is_file()]
+    return [workbook.write_workbook(workbook.from_csv(tables, out / "maxmin_envelope.csv", title), out / "loads.xlsx")]
+
+
 # ------------------------------------------------------------------ hydroelastic tanks
 LIQUID_PRESSURE, ULLAGE = "_liquid_pressure", "_ullage_volume"     # component recovery names end so
 

@@ -338,6 +338,7 @@ def write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, e
     files += report.write_interface_loads(
         results, out, "envelope", "the generated cases other than the governing one are not in this table (their "
         "histories are not kept; see envelope_histories.h5)" if camp_run is not None else "")
+    files += report.write_workbook(out, sc.title)
     files += _fields(sc, prep, results, agg, out, camp, stage_times)
     env = agg.envelope_rows()
     first = next(iter(prep.stacks.values()))

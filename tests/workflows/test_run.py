@@ -108,8 +108,27 @@ def _check_outputs(out, cases, all_cases=None):
     t1 = (out / "table1.txt").read_text()
     assert "gravity + softening + cryo" in t1
     _check_modal_tables(out)
+    _check_workbook(out, env)
     assert "wall time per stage" in (out / "summary.txt").read_text()
     _check_twang(out, cases)
+
+
+def _check_workbook(out, env):
+    """loads.xlsx (analysis/workbook.py) read back with openpyxl: every max/min envelope row is
+    on its category's sheet with the CSV's numbers; the run's other tables have their sheets."""
+    openpyxl = pytest.importorskip("openpyxl")
+    book = openpyxl.load_workbook(out / "loads.xlsx", read_only=True)
+    assert {"contents", "max-min posts", "max-min attach", "max-min load factors", "time-consistent loads",
+            "table 1", "system modes", "modal mass vehicle held", "modal mass pad"} <= set(book.sheetnames)
+    found = {}
+    for name in book.sheetnames:
+        if name.startswith("max-min"):
+            for row in book[name].iter_rows(values_only=True):
+                if row and row[1] in ("N", "N m", "g", "m", "m/s^2", "rad", "Pa", "m^3") and isinstance(row[2], (int, float)):   # openpyxl gives whole numbers as int
+                    found[row[0]] = row
+    assert len(found) == len(env)
+    for r in env:
+        assert found[r["item"]][2] == float(r["max"]) and found[r["item"]][6] == float(r["min"])
 
 
 def _check_modal_tables(out):

@@ -1,0 +1,118 @@
+"""An Excel workbook of a run's tables (issue 24; pyyeti's ``rpttab`` style): one sheet per
+table, the max/min envelope split by category, each sheet headed by the table's own comment
+lines (what it is, SI units), then the table with frozen header and filters.
+
+The workbook is made **from the CSV tables the run wrote** (:func:`from_csv`), so it holds
+the same numbers as the CSV files, cell for cell (numbers as numbers, to the CSVs' digits);
+xlsxwriter writes it, to a temporary name renamed into place (all or nothing).
+"""
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from liftoff.core.errors import InputError
+from liftoff.core.records import atomic_path
+
+#: the max/min rows' categories by item name (prefix -> sheet), in sheet order
+MAXMIN_SHEETS = (("post ", "max-min posts"), ("attach ", "max-min attach"), ("load factor ", "max-min load factors"),
+                 ("acc ", "max-min accelerations"), ("disp ", "max-min displacements"))
+OTHER_SHEET = "max-min other"
+SHEET_NAME_MAX = 31          # Excel's limit
+
+
+@dataclass
+class Sheet:
+    """One table: ``notes`` (lines above it), ``columns`` and ``rows`` (cells: str or float)."""
+
+    name: str
+    columns: list[str]
+    rows: list[list] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        if not 0 < len(self.name) <= SHEET_NAME_MAX or any(ch in self.name for ch in "[]:*?/\\"):
+            raise InputError(f"sheet name {self.name!r}: 1 to {SHEET_NAME_MAX} characters, none of []:*?/\\")
+
+
+def _cell(text: str):
+    """A CSV cell as Excel takes it: a number where it reads as one, else the text."""
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
+def read_csv_table(path: Path) -> tuple[list[str], list[str], list[list]]:
+    """(comment lines without '# ', columns, rows) of one of liftoff's CSV tables."""
+    notes, lines = [], []
+    for ln in Path(path).read_text().splitlines():
+        (notes.append(ln[1:].strip()) if ln.startswith("#") else lines.append(ln))
+    reader = csv.reader(lines)
+    try:
+        columns = next(reader)
+    except StopIteration:
+        raise InputError(f"{Path(path).name}: no table in the file") from None
+    return notes, columns, [[_cell(c) for c in rec] for rec in reader]
+
+
+def maxmin_sheets(path: Path) -> list[Sheet]:
+    """The max/min table split by category (:data:`MAXMIN_SHEETS`), empty sheets left out."""
+    notes, columns, rows = read_csv_table(path)
+    sheets = {name: Sheet(name, columns, [], notes) for _, name in MAXMIN_SHEETS + (("", OTHER_SHEET),)}
+    for r in rows:
+        item = str(r[0])
+        name = next((n for prefix, n in MAXMIN_SHEETS if item.startswith(prefix)), OTHER_SHEET)
+        sheets[name].rows.append(r)
+    return [s for s in sheets.values() if s.rows]
+
+
+def from_csv(tables: list[tuple[str, Path]], maxmin: Path | None = None, title: str = "") -> list[Sheet]:
+    """The sheets of a run: a 'contents' sheet, the max/min envelope by category (``maxmin``),
+    then one sheet per (name, CSV path) in ``tables``."""
+    sheets = maxmin_sheets(maxmin) if maxmin is not None else []
+    for name, path in tables:
+        notes, columns, rows = read_csv_table(path)
+        sheets.append(Sheet(name, columns, rows, notes))
+    contents = Sheet("contents", ["sheet", "rows", "what"], [[s.name, float(len(s.rows)), s.notes[0] if s.notes else ""]
+                                                            for s in sheets],
+                     [title or "liftoff run", "SI units throughout (each sheet says which)"])
+    return [contents] + sheets
+
+
+def write_workbook(sheets: list[Sheet], path: Path) -> Path:
+    """Write ``sheets`` to an .xlsx file, atomically."""
+    import xlsxwriter
+
+    names = [s.name for s in sheets]
+    if len(set(names)) != len(names):
+        raise InputError(f"{Path(path).name}: two sheets with one name in {names}")
+    with atomic_path(path) as tmp:
+        book = xlsxwriter.Workbook(str(tmp), {"nan_inf_to_errors": True})
+        bold = book.add_format({"bold": True})
+        note = book.add_format({"italic": True, "font_color": "#555555"})
+        num = book.add_format({"num_format": "0.000000E+00"})
+        for s in sheets:
+            ws = book.add_worksheet(s.name)
+            for i, line in enumerate(s.notes):
+                ws.write_string(i, 0, line, note)
+            top = len(s.notes) + (1 if s.notes else 0)
+            ws.write_row(top, 0, s.columns, bold)
+            for i, row in enumerate(s.rows):
+                for j, v in enumerate(row):
+                    if isinstance(v, float):
+                        ws.write_number(top + 1 + i, j, v, num)
+                    elif v == "":
+                        continue                           # an empty CSV cell stays empty
+                    else:
+                        ws.write_string(top + 1 + i, j, str(v))
+            ws.freeze_panes(top + 1, 1)
+            if s.rows:
+                ws.autofilter(top, 0, top + len(s.rows), len(s.columns) - 1)
+            widths = [max([len(str(c))] + [len(str(r[j])) if j < len(r) and not isinstance(r[j], float) else 13
+                                          for r in s.rows[:200]]) for j, c in enumerate(s.columns)]
+            for j, w in enumerate(widths):
+                ws.set_column(j, j, min(max(w + 2, 10), 60))
+        book.close()
+    return Path(path)

@@ -1,0 +1,65 @@
+"""The Excel workbook (analysis/workbook.py) holds the CSV tables it was made from, cell for
+cell; read back with openpyxl (an independent reader of the format)."""
+import numpy as np
+import pytest
+
+from liftoff.analysis import workbook
+from liftoff.core.errors import InputError
+
+openpyxl = pytest.importorskip("openpyxl")
+
+MAXMIN = """# liftoff max/min table; SI units (column 'unit')
+item,unit,max,max_err_est,t_max,case_max,min,min_err_est,t_min,case_min
+post left_1 Tz,N,1.250000e+06,,6.600000e+00,nominal,-3.000000e+05,,6.700000e+00,no-control
+attach att_a on core Tx,N,2.000000e+03,1.0e-01,7.000000e+00,nominal,-1.000000e+03,,7.100000e+00,nominal
+load factor core Nz,g,1.997548e+00,,7.05e+00,nominal,6.214628e-01,,6.79e+00,nominal
+acc stack_top:Tx,m/s^2,4.897000e-01,,7.304000e+00,nominal,-5.172000e-01,,6.929000e+00,nominal
+cg_motion Tx,m,1.764000e-03,,9.600000e+00,nominal,-7.409000e-04,,9.596000e+00,no-control
+"""
+TABLE = """# liftoff time-consistent interface loads
+# cases: nominal, no-control
+interface,peak,case,t (s),Tx (N),Ty (N)
+attach a on core,Tx max,nominal,6.700000e+00,1.000000e+03,-2.500000e+02
+"""
+
+
+def _values(ws):
+    return [[c.value for c in row] for row in ws.iter_rows()]
+
+
+def test_workbook_holds_the_csv_tables_cell_for_cell(tmp_path):
+    (tmp_path / "maxmin_envelope.csv").write_text(MAXMIN)
+    (tmp_path / "tcl.csv").write_text(TABLE)
+    sheets = workbook.from_csv([("time-consistent loads", tmp_path / "tcl.csv")], tmp_path / "maxmin_envelope.csv",
+                               "test run")
+    path = workbook.write_workbook(sheets, tmp_path / "loads.xlsx")
+    book = openpyxl.load_workbook(path, read_only=True)
+    assert book.sheetnames == ["contents", "max-min posts", "max-min attach", "max-min load factors",
+                               "max-min accelerations", "max-min other", "time-consistent loads"]
+    # each category sheet: its notes, the header, then the CSV's rows of that category
+    rows = _values(book["max-min load factors"])
+    assert rows[0][0].startswith("liftoff max/min table") and rows[2][:3] == ["item", "unit", "max"]
+    assert rows[3][0] == "load factor core Nz" and rows[3][2] == 1.997548 and rows[3][5] == "nominal"
+    assert rows[3][3] is None                  # an empty estimate stays empty
+    rows = _values(book["max-min attach"])
+    assert rows[3][3] == 0.1
+    rows = _values(book["time-consistent loads"])
+    assert rows[1][0] == "cases: nominal, no-control"
+    assert rows[3][:3] == ["interface", "peak", "case"] and rows[4][4:6] == [1000.0, -250.0]
+    contents = _values(book["contents"])
+    assert contents[0][0] == "test run"
+    assert contents[3][:2] == ["sheet", "rows"]
+    assert [r[:2] for r in contents[4:]] == [["max-min posts", 1], ["max-min attach", 1], ["max-min load factors", 1],
+                                           ["max-min accelerations", 1], ["max-min other", 1],
+                                           ["time-consistent loads", 1]]
+
+
+def test_bad_sheets_are_refused(tmp_path):
+    with pytest.raises(InputError, match="sheet name"):
+        workbook.Sheet("a/b", ["x"])
+    with pytest.raises(InputError, match="two sheets"):
+        workbook.write_workbook([workbook.Sheet("s", ["x"]), workbook.Sheet("s", ["y"])], tmp_path / "w.xlsx")
+    assert not (tmp_path / "w.xlsx").exists()
+    (tmp_path / "empty.csv").write_text("# only a note\n")
+    with pytest.raises(InputError, match="no table"):
+        workbook.read_csv_table(tmp_path / "empty.csv")
