@@ -423,8 +423,14 @@ def twang(result, cp) -> Twang | None:
 
 
 # ------------------------------------------------------------------ plots
+RELEASE_WINDOW = (-0.05, 0.45)   # s about the first release: the zoom panel of the plots
+
+
 def plots(result, cp, out: Path, case: str) -> list[Path]:
-    """PNG time histories: post forces, attach forces, c.g./top motion, payload acceleration."""
+    """PNG time histories: post forces, attach forces and moments, c.g./top motion, payload
+    acceleration. Each history plot has the whole run on the left and the release window
+    (:data:`RELEASE_WINDOW` about the first release) on the right; engine starts (grey,
+    dotted, named) and the release (red, dashed) are marked; legends sit outside the data."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -433,45 +439,81 @@ def plots(result, cp, out: Path, case: str) -> list[Path]:
     t = result.time
     rel = [p.release_time for p in cp.case.posts if np.isfinite(p.release_time)]
     t_rel = min(rel) if rel else None
+    starts: dict[float, list[str]] = {}
+    for e in cp.case.engines:
+        if t[0] <= e.start <= t[-1]:
+            starts.setdefault(round(float(e.start), 6), []).append(e.name)
     paths = []
 
+    def panels(nrows: int, height: float):
+        """(fig, axes (nrows, 2)): the whole run | the release window, each row sharing y."""
+        ncol = 2 if t_rel is not None else 1
+        fig, axs = plt.subplots(nrows, ncol, figsize=(14 if ncol == 2 else 11, height), squeeze=False,
+                                sharex="col", sharey="row", gridspec_kw={"width_ratios": [2, 1][:ncol]})
+        return fig, axs
+
+    def draw(axs, row: int, x, y, **kw):
+        for k, ax in enumerate(axs[row]):
+            ax.plot(x, y, **{**kw, "label": kw.get("label") if k == 0 else None})
+
     def finish(fig, ax_list, name, title):
-        for ax in ax_list:
-            if t_rel is not None:
-                ax.axvline(t_rel, color="red", ls="--", lw=1, label="release" if ax is ax_list[0] else None)
-            ax.grid(True, alpha=0.3)
-        ax_list[-1].set_xlabel("time (s)")
-        ax_list[0].legend(fontsize=7, ncol=4, loc="best")
+        ax_arr = np.atleast_2d(np.asarray(ax_list, dtype=object))
+        if ax_arr.shape[0] == 1 and ax_arr.shape[1] > 1 and not isinstance(ax_list[0], np.ndarray):
+            ax_arr = ax_arr.T                      # a plain list of axes: one column
+        for r, row in enumerate(ax_arr):
+            for k, ax in enumerate(row):
+                for ts, names in starts.items():
+                    ax.axvline(ts, color="0.45", ls=":", lw=0.9)
+                    if r == 0:
+                        ax.annotate(", ".join(names), (ts, 1.0), xycoords=("data", "axes fraction"), rotation=90,
+                                    fontsize=6, va="top", ha="right", color="0.3")
+                if t_rel is not None:
+                    ax.axvline(t_rel, color="red", ls="--", lw=1, label="release" if (r == 0 and k == 0) else None)
+                ax.grid(True, alpha=0.3)
+                if k == 1:
+                    ax.set_xlim(t_rel + RELEASE_WINDOW[0], t_rel + RELEASE_WINDOW[1])
+                    if r == 0:
+                        ax.set_title(f"release window ({t_rel + RELEASE_WINDOW[0]:g} to "
+                                     f"{t_rel + RELEASE_WINDOW[1]:g} s)", fontsize=8)
+        for ax in ax_arr[-1]:
+            ax.set_xlabel("time (s)")
+        handles, labs = ax_arr[0][0].get_legend_handles_labels()
         fig.suptitle(f"{title} — case {case}")
-        fig.tight_layout()
+        fig.tight_layout(rect=(0, 0, 1, 0.97))
+        if handles:                                 # outside the data, right of the panels
+            fig.subplots_adjust(right=0.84)
+            fig.legend(handles, labs, fontsize=7, loc="center left", bbox_to_anchor=(0.855, 0.5), frameon=False)
         p = out / f"{name}_{case}.png"
         fig.savefig(p, dpi=110)
         plt.close(fig)
         paths.append(p)
 
     # post forces: axial (normal, + compression) and the magnitude of the lateral translations
-    fig, axs = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
+    fig, axs = panels(2, 7)
     dirs, F = result.contact_directions, result.contact_force
     for c, name in enumerate(result.contact_names):
         ax = result.axial_column(c)
         lat = [j for j in result.directions_of(c) if not dirs[j].axial and dirs[j].component in TRANSLATIONS]
-        axs[0].plot(t, dirs[ax].normal_sign * F[:, ax] / 1e6, lw=0.8, label=name)
-        axs[1].plot(t, np.sqrt(np.sum(F[:, lat] ** 2, axis=1)) / 1e6, lw=0.8)
-    axs[0].set_ylabel("axial force on vehicle (MN)\n(+ compression)")
-    axs[1].set_ylabel("lateral force magnitude (MN)")
-    finish(fig, list(axs), "post_forces", "Hold-down post forces")
+        draw(axs, 0, t, dirs[ax].normal_sign * F[:, ax] / 1e6, lw=0.8, label=name)
+        draw(axs, 1, t, np.sqrt(np.sum(F[:, lat] ** 2, axis=1)) / 1e6, lw=0.8)
+    axs[0][0].set_ylabel("axial force on vehicle (MN)\n(+ compression)")
+    axs[1][0].set_ylabel("lateral force magnitude (MN)")
+    finish(fig, axs, "post_forces", "Hold-down post forces")
 
     att = [it for it in result.items("interface_force") if it.name in cp.attach]
-    if att:
-        cols = _translations(att[0])
-        fig, axs = plt.subplots(len(cols), 1, figsize=(10, 8), sharex=True)
+    for kind, title, unit_scale in (("T", "Attach forces (on the named component)", "MN"),
+                                    ("R", "Attach moments (on the named component)", "MN m")):
+        cols = [k for k, lab in enumerate(att[0].labels) if lab.startswith(kind)] if att else []
+        if not cols:
+            continue
+        fig, axs = panels(len(cols), 2.6 * len(cols) + 1)
         for it in att:
             point, comp = cp.attach[it.name]
-            for ax, j in zip(axs, _translations(it)):
-                ax.plot(t, result.recovered[it.name][:, j] / 1e6, lw=0.8, label=f"{point} ({comp})")
-        for ax, j in zip(axs, cols):
-            ax.set_ylabel(f"{att[0].labels[j]} (M{att[0].units[j]})")
-        finish(fig, list(axs), "attach_forces", "Attach forces (on the named component)")
+            for r, j in enumerate(cols):
+                draw(axs, r, t, result.recovered[it.name][:, j] / 1e6, lw=0.8, label=f"{point} ({comp})")
+        for r, j in enumerate(cols):
+            axs[r][0].set_ylabel(f"{att[0].labels[j]} ({unit_scale})")
+        finish(fig, axs, "attach_forces" if kind == "T" else "attach_moments", title)
 
     fig, axs = plt.subplots(3, 1, figsize=(10, 9), sharex=True)
     cg_item = result.items("cg_motion")[0]
@@ -498,16 +540,16 @@ def plots(result, cp, out: Path, case: str) -> list[Path]:
     axs[0].set_ylabel("c.g. motion (m)")
     axs[1].set_ylabel("tank-tip lateral (m)")
     axs[2].set_ylabel("attitude, rigid-body\nrotation (deg)")
-    axs[1].legend(fontsize=7)
+    axs[1].legend(fontsize=7, loc="upper left")
     finish(fig, list(axs), "motion", "C.g. motion, tank-tip twang, attitude")
 
     pay = cp.case.recovery.payload
     if pay:
-        fig, axs = plt.subplots(1, 1, figsize=(10, 4))
+        fig, axs = panels(1, 4.5)
         for lab in point_labels(pay, TRANSLATIONS):
-            axs.plot(t, result.acceleration["a"][:, labels.index(lab)] / G0, lw=0.8, label=lab)
-        axs.set_ylabel(f"{pay} acceleration (g = {G0} m/s^2)")
-        finish(fig, [axs], "payload_acc", "Payload-station acceleration")
+            draw(axs, 0, t, result.acceleration["a"][:, labels.index(lab)] / G0, lw=0.8, label=lab)
+        axs[0][0].set_ylabel(f"{pay} acceleration\n(g = {G0} m/s^2, unfiltered)")
+        finish(fig, axs, "payload_acc", "Payload-station acceleration")
     tank_plots(result, cp, out, case, finish)
     return paths
 
