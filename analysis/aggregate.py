@@ -135,7 +135,8 @@ def write_statistics(agg: Aggregate, out: Path, freq=None, q=None) -> list[Path]
             f"({'none: too few cases' if agg.r == 0 else 'distribution-free'})\n")
     paths = [_csv(rows, STAT_FIELDS, head, out / "statistics.csv")]
     data = {"items": np.array(agg.items, dtype=str),
-            "units": np.array(agg.units, dtype=str), "categories": np.array(agg.categories, dtype=str)}
+            "units": Dataset(np.array(agg.units, dtype=str), "1", dims=("items",)),
+            "categories": Dataset(np.array(agg.categories, dtype=str), "1", dims=("items",))}
     for key, v in st.items():
         data[key] = Dataset(np.array(v, dtype=str) if isinstance(v, list) else v, "per item (see units)",
                             dims=("items",))
@@ -149,7 +150,7 @@ def write_statistics(agg: Aggregate, out: Path, freq=None, q=None) -> list[Path]
         qv = np.asarray(q if q is not None else np.arange(nq), float)
         fv = np.asarray(freq if freq is not None else np.arange(nf), float)
         data["srs"] = {"srs_items": np.array(agg.srs_items, dtype=str),          # the scales themselves
-                       "srs_units": Dataset(np.array(units, dtype=str), "", dims=("srs_items",)),
+                       "srs_units": Dataset(np.array(units, dtype=str), "1", dims=("srs_items",)),
                        "q": Dataset(qv, "1 (quality factor Q)" if q is not None else "index"),
                        "freq_Hz": Dataset(fv, "Hz" if freq is not None else "index"),
                        **{k: Dataset(v, unit, dims=dims, description=d) for k, v, d in (

@@ -445,25 +445,35 @@ def case_name_of(i: int) -> str:
 def write_envelope_histories(env: list[dict], setters: dict, ref: ScenarioRef, cache_root: str, model_key: str,
                              executor, path: Path) -> Path:
     """envelope_histories.h5: for each envelope value a generated case sets, that case's
-    history of the item (the cases re-run on ``executor``, only those columns sent back)."""
+    history of the item (the cases re-run on ``executor``, only those columns sent back).
+    Layout (netCDF/xarray, every axis a dimension scale): root ``items`` (the envelope rows)
+    with ``units``; per setting case a group ``cases/<case>`` with ``time`` (s), ``row`` (the
+    values it sets: index into ``items``), ``side`` (max or min), ``item``, ``unit``,
+    ``t_extreme`` (s) on ``row``, and ``value`` (time x row, each column in its row's unit)."""
     from liftoff.core.records import Dataset
 
     data: dict = {"items": np.array([r["item"] for r in env], dtype=str),
-                  "units": np.array([r["unit"] for r in env], dtype=str), "time": {}, "max": {}, "min": {}}
+                  "units": Dataset(np.array([r["unit"] for r in env], dtype=str), "1", dims=("items",)),
+                  "cases": {}}
 
     def store(res) -> None:
         index, t, cols = res
         name = case_name_of(index)
-        data["time"][name] = Dataset(t, "s")
-        for j, side in setters[index]:
-            r = env[j]
-            data[side][f"{j:04d}"] = Dataset(cols[r["item"]], r["unit"], item=r["item"], case=name,
-                                             t_extreme=r[f"t_{side}"], time=f"/time/{name}")
+        rows = [(j, side) for j, side in setters[index]]
+        data["cases"][name] = {
+            "time": Dataset(t, "s"),
+            "row": Dataset(np.array([j for j, _ in rows], dtype=np.int64), "1"),
+            "side": Dataset(np.array([side for _, side in rows], dtype=str), "1", dims=("row",)),
+            "item": Dataset(np.array([env[j]["item"] for j, _ in rows], dtype=str), "1", dims=("row",)),
+            "unit": Dataset(np.array([env[j]["unit"] for j, _ in rows], dtype=str), "1", dims=("row",)),
+            "t_extreme": Dataset(np.array([env[j][f"t_{side}"] for j, side in rows]), "s", dims=("row",)),
+            "value": Dataset(np.column_stack([cols[env[j]["item"]] for j, _ in rows]), "SI: the row's unit",
+                             dims=("time", "row"))}
 
     tasks = (CaseTask(ref, i, cache_root, model_key, tuple(env[j]["item"] for j, _ in setters[i]))
              for i in sorted(setters))
     run_tasks(executor, tasks, store, 4 * max(1, getattr(executor, "_max_workers", 2) or 2))
-    return write_record(path, "liftoff-envelope-histories", 1, data, units="SI per item (attribute units); s",
-                        attrs={"layout": "max/<row>, min/<row>: history of item <row> (items[row]) in the case that "
-                                         "sets its envelope value, on time/<case>; rows set by named cases are in "
-                                         "their results_<case>.h5"})
+    return write_record(path, "liftoff-envelope-histories", 2, data, units="SI per row (unit); s",
+                        attrs={"layout": "cases/<case>/value (time x row): the history of envelope row "
+                                         "items[row] in the case that sets its max or min (side), on that case's "
+                                         "time; rows set by named cases are in their results_<case>.h5"})

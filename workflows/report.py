@@ -758,7 +758,7 @@ def spectra(result, cp, post, out: Path, case: str) -> list[Path]:
         fa, A = fft_amplitude(V, h)
         data["psd"] = {"items": np.array([it.name for it in sel], dtype=str), "freq": Dataset(f, "Hz"),
                        "value": Dataset(P, "units^2/Hz of each item", dims=("freq", "items")),
-                       "item_units": np.array([it.unit for it in sel], dtype=str)}
+                       "item_units": Dataset(np.array([it.unit for it in sel], dtype=str), "1", dims=("items",))}
         data["fft"] = {"items": np.array([it.name for it in sel], dtype=str), "freq": Dataset(fa, "Hz"),
                        "amplitude": Dataset(A, "units of each item", dims=("freq", "items"))}
         head = f"# liftoff PSD (Welch, {post.psd.segment:g} s segments, Hann) of case {case}; units^2/Hz of each item\n"

@@ -84,12 +84,14 @@ def test_campaign_outputs(campaign4):
     env = {r["item"]: r for r in out.envelope}
     with h5py.File(d / "envelope_histories.h5", "r") as f:
         n = 0
-        for side in ("max", "min"):
-            for key, ds in f[side].items():
-                r = env[ds.attrs["item"]]
-                t = f["time"][ds.attrs["case"]][()]
+        for case, g in f["cases"].items():
+            t = g["time"][()]
+            for k, row in enumerate(g["row"][()]):
+                side = g["side"][k].decode() if isinstance(g["side"][k], bytes) else str(g["side"][k])
+                r = env[f["items"][row].decode() if isinstance(f["items"][row], bytes) else str(f["items"][row])]
                 j = int(np.argmin(np.abs(t - r[f"t_{side}"])))
-                assert ds[j] == r[side] and ds.attrs["case"] == r[f"case_{side}"]
+                assert g["value"][j, k] == r[side] and case == r[f"case_{side}"]
+                assert g["t_extreme"][k] == r[f"t_{side}"]
                 n += 1
         assert n > 0
     # statistics.h5's srs group: its own dimensions, each a scale with units (issue 24: it reused
@@ -244,3 +246,38 @@ def test_mpi_futures_gives_the_same_envelope(tmp_path, campaign4):
         assert float(r["max"]) == pytest.approx(f["max"], rel=1e-6, abs=1e-6 * abs(f["max"]) + 1e-12)
 
 
+
+
+def test_every_hdf5_file_of_a_campaign_opens_in_xarray(campaign4):
+    """Every HDF5 file a campaign run writes (results, spectra, statistics, envelope histories)
+    opens in xarray through h5netcdf, every group, with real dimensions (dimension scales, no
+    phony dims) and a units attribute on every numeric variable (issue 24)."""
+    xr = pytest.importorskip("xarray")
+    pytest.importorskip("h5netcdf")
+    import h5py
+
+    tmp, _, _ = campaign4
+    files = sorted((tmp / "out").glob("*.h5"))
+    assert {f.name for f in files} >= {"statistics.h5", "envelope_histories.h5", "results_nominal.h5",
+                                       "spectra_nominal.h5"}
+    bad = []
+    for f in files:
+        groups = [None]
+        with h5py.File(f, "r") as h:
+            h.visit(lambda n: groups.append(n) if isinstance(h[n], h5py.Group) else None)
+        for g in groups:
+            try:
+                with xr.open_dataset(f, engine="h5netcdf", group=g) as ds:
+                    bad += [f"{f.name}:{g} dim {d}" for d in ds.dims if str(d).startswith("phony")]
+                    # every numeric variable states its units (label arrays of text need none)
+                    bad += [f"{f.name}:{g}/{v} has no units" for v in ds.variables
+                            if ds[v].dtype.kind in "fiuc" and "units" not in ds[v].attrs]
+            except Exception as e:                      # noqa: BLE001 - report every file and group
+                bad.append(f"{f.name}:{g} {type(e).__name__}: {e}")
+        if hasattr(xr, "open_datatree"):               # the whole file as one tree (xarray >= 2024.10)
+            try:
+                with xr.open_datatree(f, engine="h5netcdf") as tree:
+                    assert len(list(tree.subtree)) == len(groups)
+            except Exception as e:                      # noqa: BLE001
+                bad.append(f"{f.name} as a tree: {type(e).__name__}: {e}")
+    assert not bad, "\n".join(bad)
