@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 from liftoff.transient.effects import center_of_gravity
 
+from liftoff.core.errors import InputError
 from liftoff.core.labels import TRANSLATIONS, point_labels
 from liftoff.core.records import write_text
 
@@ -129,6 +130,77 @@ def write_interface_loads(results: dict, out: Path, name: str, note: str = "") -
     return [il.write_csv(rows, out / f"interface_loads_{name}.csv", cover)] if rows else []
 
 
+MODE_SHAPES = "liftoff-mode-shapes"
+
+
+def write_mode_shapes(stack, path: Path) -> Path:
+    """``modes_vehicle.h5``: the vehicle's system modes (Hz) and their shapes at the
+    translations of its named points (the assembly's boundary DOFs: posts, attach points,
+    engine mounts, output stations), m per unit modal coordinate (unit modal mass): what a
+    later run pairs its modes with by MAC (``--compare``, analysis/modes_compare.py)."""
+    from liftoff.core.records import Dataset, write_record
+    from liftoff.reduction import label_transform
+
+    asm, vm = stack.vehicle_asm, stack.vehicle_modes
+    labels = [lab for lab in asm.boundary_labels if lab.rpartition(":")[2] in TRANSLATIONS]
+    shapes = label_transform(asm, labels) @ vm.phi
+    data = {"mode": Dataset(np.arange(1, vm.n_modes + 1), "1"), "dof": np.array(labels, dtype=str),
+            "freq": Dataset(vm.freq_hz, "Hz", dims=("mode",)),
+            "shape": Dataset(shapes, "m per unit modal coordinate (unit modal mass)", dims=("dof", "mode"))}
+    return write_record(path, MODE_SHAPES, 1, data, units="SI", attrs={"n_rigid": int(vm.n_rigid)})
+
+
+def read_mode_shapes(path: Path) -> tuple[np.ndarray, list[str], np.ndarray]:
+    """(freq Hz, DOF labels, shapes) of a ``modes_vehicle.h5``."""
+    from liftoff.core.records import read_record
+
+    rec = read_record(path, MODE_SHAPES, (1,))
+    d = rec.data
+    return np.asarray(d["freq"], float), [str(x) for x in d["dof"]], np.asarray(d["shape"], float)
+
+
+def compare_modes(new: Path, old: Path, out: Path) -> tuple[Path, list]:
+    """compare_modes.csv: each elastic vehicle mode of this run (``new``, a modes_vehicle.h5)
+    paired by MAC with one of an earlier run's (``old``) at the DOFs both have
+    (analysis/modes_compare.py), with the frequency change."""
+    from liftoff.analysis.modes_compare import MAC_PAIRED, pair_modes
+
+    f_new, dof_new, s_new = read_mode_shapes(new)
+    f_old, dof_old, s_old = read_mode_shapes(old)
+    common = [d for d in dof_new if d in set(dof_old)]
+    if not common:
+        raise InputError(f"{old}: no DOF in common with this run's modes; cannot pair them")
+    i_new = [dof_new.index(d) for d in common]
+    i_old = [dof_old.index(d) for d in common]
+    pairs = pair_modes(f_new, s_new[i_new], f_old, s_old[i_old])
+    head = (f"# liftoff modes of this run paired by MAC with an earlier run's ({old}), at the {len(common)} "
+            f"translation DOFs both have; mode numbers 1-based; MAC below {MAC_PAIRED}: unmatched (empty old "
+            "mode); change = (f - f_old) / f_old x 100 %\n")
+    lines = ["mode,f_hz,old_mode,f_old_hz,mac,change_pct"]
+    for p in pairs:
+        lines.append(f"{p.new + 1},{p.f_new:.6e}," + (f"{p.old + 1},{p.f_old:.6e}" if p.old is not None else ",")
+                     + f",{p.mac:.6f}," + ("" if p.old is None else f"{p.change_pct:.6e}"))
+    return write_text(out / "compare_modes.csv", head + "\n".join(lines) + "\n"), pairs
+
+
+def earlier_modes(compare) -> Path:
+    """The modes_vehicle.h5 beside a ``--compare`` table (or in a ``--compare`` folder)."""
+    p = Path(compare)
+    return (p if p.is_dir() else p.parent) / "modes_vehicle.h5"
+
+
+def format_mode_changes(pairs: list, limit: int = 10) -> str:
+    """The vehicle modes that moved most against the earlier run, and the unmatched ones."""
+    matched = [p for p in pairs if p.old is not None]
+    lost = [p for p in pairs if p.old is None]
+    lines = [f"Vehicle modes against the earlier run (compare_modes.csv): {len(matched)} of {len(pairs)} elastic modes "
+             f"paired by MAC, {len(lost)} unmatched; largest frequency changes:"]
+    for p in sorted(matched, key=lambda p: -abs(p.change_pct))[:limit]:
+        lines.append(f"  mode {p.new + 1:5d} {p.f_new:9.3f} Hz <- old {p.old + 1:5d} {p.f_old:9.3f} Hz "
+                     f"{p.change_pct:+8.3f} %  MAC {p.mac:.3f}")
+    return "\n".join(lines)
+
+
 def write_modal_tables(stack, cp, out: Path) -> list[Path]:
     """The modal deliverables of the stack (reduction/modal_mass.py): ``modes_vehicle.csv``
     (the vehicle's free-free system modes the transient uses: rigid, elastic, residual
@@ -144,6 +216,7 @@ def write_modal_tables(stack, cp, out: Path) -> list[Path]:
              "rigid, elastic or residual vector (its Rayleigh frequency)", "mode,f_hz,kind"]
     lines += [f"{k + 1},{f:.6e},{kd}" for k, (f, kd) in enumerate(zip(vm.freq_hz, kind))]
     files = [write_text(out / "modes_vehicle.csv", "\n".join(lines) + "\n")]
+    files.append(write_mode_shapes(stack, out / "modes_vehicle.h5"))
     contact_a = [lab for c in cp.problem.contacts for lab in c.labels_a]
     for table, name in ((modal_mass_table(vm, contact_a, "vehicle"), "modal_mass_vehicle_held.csv"),
                         (modal_mass_table(stack.pad_modes, [], "pad"), "modal_mass_pad.csv")):

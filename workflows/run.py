@@ -111,6 +111,9 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
         from liftoff.analysis.aggregate import read_maxmin
 
         on_root(comm, lambda: read_maxmin(Path(opt.compare)), share=False)
+        old_modes = report.earlier_modes(opt.compare)
+        if old_modes.is_file():           # the earlier run's modes, paired with this run's at the end
+            on_root(comm, lambda: report.read_mode_shapes(old_modes), share=False)
     want_pics = snapshots and any(c.output.snapshots for c in sc.cases)
     if want_pics or _fields_wanted(sc, opt):  # pyvista (fem.snapshot) before dolfinx (FENICSX-NOTES.md)
         import liftoff.fem.snapshot  # noqa: F401
@@ -463,6 +466,11 @@ def _loads_tables(sc, agg, out: Path, echo, camp) -> list:
         path, rows = aggregate.write_compare(env, aggregate.read_maxmin(Path(compare)), out)
         files.append(path)
         echo(report.format_changes(rows, limit=12))
+        old_modes = report.earlier_modes(compare)
+        if old_modes.is_file() and (out / "modes_vehicle.h5").is_file():
+            path, pairs = report.compare_modes(out / "modes_vehicle.h5", old_modes, out)
+            files.append(path)
+            echo(report.format_mode_changes(pairs))
     return files
 
 

@@ -185,6 +185,12 @@ def test_fields_and_compare(tmp_path, campaign4):
     assert (tmp_path / "f" / f"animation_{gov}.gif").stat().st_size > 10_000
     rows = (tmp_path / "f" / "compare.csv").read_text().splitlines()
     assert rows[1].startswith("item,unit,max,max_old,max_change_pct")
+    # the same model both times: every elastic vehicle mode pairs with itself, MAC 1, no change
+    modes = (tmp_path / "f" / "compare_modes.csv").read_text().splitlines()
+    assert modes[1] == "mode,f_hz,old_mode,f_old_hz,mac,change_pct"
+    for line in modes[2:]:
+        mode, f, old, f_old, mac, change = line.split(",")
+        assert old == mode and float(mac) > 1 - 1e-9 and abs(float(change)) < 1e-9
     # the named cases against the envelope of named + generated cases: never above it
     env = {r["item"]: r for r in first.envelope}
     for r in out.envelope:
