@@ -499,43 +499,40 @@ def twang(result, cp) -> Twang | None:
 RELEASE_WINDOW = (-0.05, 0.45)   # s about the first release: the zoom panel of the plots
 
 
-def plots(result, cp, out: Path, case: str) -> list[Path]:
-    """PNG time histories: post forces, attach forces and moments, c.g./top motion, payload
-    acceleration. Each history plot has the whole run on the left and the release window
-    (:data:`RELEASE_WINDOW` about the first release) on the right; engine starts (grey,
-    dotted, named) and the release (red, dashed) are marked; legends sit outside the data."""
-    import matplotlib
+class _Figures:
+    """The history plots' common frame: the whole run | the release window (:data:`RELEASE_WINDOW`
+    about the first release), engine starts (grey, dotted, named) and the release (red,
+    dashed) marked, the legend right of the panels; ``paths`` collects the PNGs written."""
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    def __init__(self, plt, result, cp, out: Path, case: str):
+        self.plt, self.out, self.case, self.paths = plt, out, case, []
+        t = result.time
+        rel = [p.release_time for p in cp.case.posts if np.isfinite(p.release_time)]
+        self.t_rel = min(rel) if rel else None
+        self.starts: dict[float, list[str]] = {}
+        for e in cp.case.engines:
+            if t[0] <= e.start <= t[-1]:
+                self.starts.setdefault(round(float(e.start), 6), []).append(e.name)
 
-    t = result.time
-    rel = [p.release_time for p in cp.case.posts if np.isfinite(p.release_time)]
-    t_rel = min(rel) if rel else None
-    starts: dict[float, list[str]] = {}
-    for e in cp.case.engines:
-        if t[0] <= e.start <= t[-1]:
-            starts.setdefault(round(float(e.start), 6), []).append(e.name)
-    paths = []
-
-    def panels(nrows: int, height: float):
+    def panels(self, nrows: int, height: float):
         """(fig, axes (nrows, 2)): the whole run | the release window, each row sharing y."""
-        ncol = 2 if t_rel is not None else 1
-        fig, axs = plt.subplots(nrows, ncol, figsize=(14 if ncol == 2 else 11, height), squeeze=False,
-                                sharex="col", sharey="row", gridspec_kw={"width_ratios": [2, 1][:ncol]})
-        return fig, axs
+        ncol = 2 if self.t_rel is not None else 1
+        return self.plt.subplots(nrows, ncol, figsize=(14 if ncol == 2 else 11, height), squeeze=False,
+                                 sharex="col", sharey="row", gridspec_kw={"width_ratios": [2, 1][:ncol]})
 
+    @staticmethod
     def draw(axs, row: int, x, y, **kw):
         for k, ax in enumerate(axs[row]):
             ax.plot(x, y, **{**kw, "label": kw.get("label") if k == 0 else None})
 
-    def finish(fig, ax_list, name, title):
+    def finish(self, fig, ax_list, name, title):
         ax_arr = np.atleast_2d(np.asarray(ax_list, dtype=object))
         if ax_arr.shape[0] == 1 and ax_arr.shape[1] > 1 and not isinstance(ax_list[0], np.ndarray):
             ax_arr = ax_arr.T                      # a plain list of axes: one column
+        t_rel, lo, hi = self.t_rel, *RELEASE_WINDOW
         for r, row in enumerate(ax_arr):
             for k, ax in enumerate(row):
-                for ts, names in starts.items():
+                for ts, names in self.starts.items():
                     ax.axvline(ts, color="0.45", ls=":", lw=0.9)
                     if r == 0:
                         ax.annotate(", ".join(names), (ts, 1.0), xycoords=("data", "axes fraction"), rotation=90,
@@ -544,22 +541,35 @@ def plots(result, cp, out: Path, case: str) -> list[Path]:
                     ax.axvline(t_rel, color="red", ls="--", lw=1, label="release" if (r == 0 and k == 0) else None)
                 ax.grid(True, alpha=0.3)
                 if k == 1:
-                    ax.set_xlim(t_rel + RELEASE_WINDOW[0], t_rel + RELEASE_WINDOW[1])
+                    ax.set_xlim(t_rel + lo, t_rel + hi)
                     if r == 0:
-                        ax.set_title(f"release window ({t_rel + RELEASE_WINDOW[0]:g} to "
-                                     f"{t_rel + RELEASE_WINDOW[1]:g} s)", fontsize=8)
+                        ax.set_title(f"release window ({t_rel + lo:g} to {t_rel + hi:g} s)", fontsize=8)
         for ax in ax_arr[-1]:
             ax.set_xlabel("time (s)")
         handles, labs = ax_arr[0][0].get_legend_handles_labels()
-        fig.suptitle(f"{title} — case {case}")
+        fig.suptitle(f"{title} — case {self.case}")
         fig.tight_layout(rect=(0, 0, 1, 0.97))
         if handles:                                 # outside the data, right of the panels
             fig.subplots_adjust(right=0.84)
             fig.legend(handles, labs, fontsize=7, loc="center left", bbox_to_anchor=(0.855, 0.5), frameon=False)
-        p = out / f"{name}_{case}.png"
+        p = self.out / f"{name}_{self.case}.png"
         fig.savefig(p, dpi=110)
-        plt.close(fig)
-        paths.append(p)
+        self.plt.close(fig)
+        self.paths.append(p)
+
+
+def plots(result, cp, out: Path, case: str) -> list[Path]:
+    """PNG time histories: post forces, attach forces and moments, c.g./top motion, payload
+    acceleration, tank pressures (:class:`_Figures`: the whole run beside the release window,
+    engine starts and release marked, legends outside the data)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = result.time
+    kit = _Figures(plt, result, cp, out, case)
+    panels, draw, finish, paths = kit.panels, kit.draw, kit.finish, kit.paths
 
     # post forces: axial (normal, + compression) and the magnitude of the lateral translations
     fig, axs = panels(2, 7)
