@@ -897,7 +897,9 @@ def _solve_laws(contact, state, cache, rigid, u, ed, free, opening, max_iter, fn
                     else:
                         u2[j] -= panchor[j]
         for j in range(nc):
-            eq = active[j] and not slip[j] and not (yld[j] and free[j])
+            eq = active[j] and not slip[j]
+            if soft and yld[j] and free[j]:
+                eq = False
             rows2[j] = eq
             cols2[j] = eq and not opening[j]
             if any_rigid:
