@@ -5,8 +5,9 @@ rows Phi_ca, Phi_cb (zero row for ground), the compliance 1/K_C (0 for a rigid b
 and the offset c (normal_sign * gap on the axial row), so that while coupled the force
 on A is f = -K_C (c + x_a - x_b) (eq. 3). A contact with a ``normal`` couples the rows of
 its frame (normal, tangents), each a combination of the labelled rows. The contact laws
-beyond the reference's (friction, dashpots, latches; transient/contact_laws.py) add
-per-row damping time constants tau = c/K_C, friction coefficients and latch forces.
+beyond the reference's (friction, dashpots, latches, soft release; transient/contact_laws.py)
+add per-row damping time constants tau = c/K_C, friction coefficients, latch forces and
+the release force-travel tables (concatenated, ``rptr`` the offsets per contact).
 """
 from __future__ import annotations
 
@@ -39,7 +40,15 @@ class ContactRows:
     tau: np.ndarray = None    # (n_c,) s, dashpot / K_C (0: no damping)
     mu: np.ndarray = None     # (n_c,) friction coefficient of the row's contact on its tangent rows, else 0
     latch: np.ndarray = None  # (n_contacts,) N, latch force (inf: no latch)
-    laws: bool = False        # any friction, damping or latch: the kernel's extended path
+    laws: bool = False        # any friction, damping, latch or soft release: the kernel's extended path
+    rtravel: np.ndarray = None  # (k,) m, release_force travel of every soft contact, concatenated
+    rforce: np.ndarray = None   # (k,) N, the matching forces
+    rptr: np.ndarray = None     # (n_contacts + 1,) int64, contact c's table is [rptr[c], rptr[c + 1])
+
+    def release_force_at(self, c: int, s: float) -> float:
+        """F(s) of contact c's release table (N; linear, held at the end values); 0 without one."""
+        k0, k1 = self.rptr[c], self.rptr[c + 1]
+        return float(np.interp(s, self.rtravel[k0:k1], self.rforce[k0:k1])) if k1 > k0 else 0.0
 
     @property
     def n(self) -> int:
@@ -89,6 +98,9 @@ def contact_rows(body_a: ModalBody, body_b: ModalBody, contacts) -> ContactRows:
             mu.append(c.friction if d != c.axial else 0.0)
     n = len(dirs)
     latch = np.array([np.inf if c.latch_force is None else c.latch_force for c in contacts])
+    tables = [(np.zeros(0), np.zeros(0)) if getattr(c, "release_force", None) is None else c.release_force
+              for c in contacts]
+    rptr = np.concatenate([[0], np.cumsum([t[0].size for t in tables])]).astype(np.int64)
     return ContactRows(directions=tuple(dirs), names=tuple(c.name for c in contacts),
                        Phi_a=np.array(Pa).reshape(n, na), Phi_b=np.array(Pb).reshape(n, nb),
                        compliance=np.array(comp), offset=np.array(off), contact=np.array(cidx, dtype=np.int64),
@@ -97,7 +109,9 @@ def contact_rows(body_a: ModalBody, body_b: ModalBody, contacts) -> ContactRows:
                        axial_column=np.array(axcol, dtype=np.int64),
                        normal_sign=np.array([c.normal_sign for c in contacts]),
                        tau=np.array(tau), mu=np.array(mu), latch=latch,
-                       laws=any(c.has_laws for c in contacts))
+                       laws=any(c.has_laws for c in contacts),
+                       rtravel=np.concatenate([np.zeros(0)] + [t[0] for t in tables]).astype(float),
+                       rforce=np.concatenate([np.zeros(0)] + [t[1] for t in tables]).astype(float), rptr=rptr)
 
 
 @dataclass

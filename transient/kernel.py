@@ -19,7 +19,7 @@ is affine in the contact force, e = e_free + W f (W the step flexibility), and
   the step); it is open from the next step on (or at once if g itself is tensile).
 * ``fixed-point``: the reference's iteration f <- -K_C (c + e_free + W f) with its
   convergence test |f_j - f_i| < tol (eq. 11).
-* contact laws beyond the reference's (friction, dashpots, latches: ``Contact.laws``; the
+* contact laws beyond the reference's (friction, dashpots, latches, soft release: ``Contact.laws``; the
   method in transient/contact_laws.py): ``_laws_candidates``, ``_solve_laws`` and
   ``_laws_after_step`` at the end of this file, called from the same loop in place of the
   candidate rows and ``_solve_direct``; problems without them never enter that branch.
@@ -89,6 +89,9 @@ class Contact(NamedTuple):
     axrow: np.ndarray       # (nc,) the normal row of each row's contact point
     axcol: np.ndarray       # (ncon,) the normal row of each contact point
     latch: np.ndarray       # (ncon,) N, latch force (inf: none)
+    rtravel: np.ndarray     # (k,) m, soft-release travel tables of all contacts, concatenated (0: none)
+    rforce: np.ndarray      # (k,) N, their forces F(s)
+    rptr: np.ndarray        # (ncon + 1,) int64, contact c's table is [rptr[c], rptr[c + 1]) (empty: no soft release)
 
 
 class OutputRows(NamedTuple):
@@ -116,6 +119,14 @@ class State(NamedTuple):
     latched: np.ndarray  # (ncon,) bool, captured by a latch
     slip: np.ndarray    # (nc,) bool, friction row slipping
     sdir: np.ndarray    # (nc,) slip direction (unit per contact point)
+    pin: np.ndarray     # (nc,) bool, soft release: the pin carries the normal row (elastic or yielding)
+    yld: np.ndarray     # (nc,) bool, soft release: the pin yields (known force F(s))
+    panchor: np.ndarray  # (nc,) soft release: the pin's anchor (drawn travel) in row units (u' = u - panchor)
+    fsoft: np.ndarray   # (nc,) N, soft release: F(s) at the step start
+    drawn: np.ndarray   # (ncon,) bool, soft release: pins drawn out
+    sep: np.ndarray     # (ncon,) m, separation of the normal row at the last step end
+    tyield: np.ndarray  # (ncon,) s, first yield (NaN: never)
+    tdrawn: np.ndarray  # (ncon,) s, drawn out (NaN: never)
 
 
 class Cache(NamedTuple):
@@ -363,7 +374,7 @@ def march(i0, i1, steps, modal, contact, rows_out, state, cache, hist):
         anyf, anyg = _contact_load(Phi_c, rigid, any_rigid, fn, g, f, Pf, Pg, Pc)
         _post_step(coef, qf, vf, P1, Pf, Pg, anyf, anyg, zw2, w2, q, v, acc)
         if laws:
-            _laws_after_step(contact, state, fn, bolted, opening)
+            _laws_after_step(contact, state, fn, bolted, opening, tb)
         # ---------------- outputs at t1
         r = i + 1
         _record_contact(r, it, fn, bolted, active, opening, dcontact, axial, Fc, states, iters)
@@ -575,6 +586,7 @@ def _outputs(L, kind, targ, q, v, acc, Y, r):
 # march, because numba's on-disk cache of march is keyed on this file only: a callee in another
 # file could change without march being recompiled.
 FRICTION_HYSTERESIS = 1e-9   # relative band on |f_T| / (mu N) between stick and slip
+SOFT_HYSTERESIS = 1e-9       # relative band on the pin tension / F(s) between elastic and yielding
 SLIP_TURN_TOL = 1e-8         # slip direction converged when no component moves by more than this
 
 
@@ -606,6 +618,26 @@ def _laws_candidates(tb, e, ed, contact, state, rigid, bolted, cand, free, u):
         u[j] = coff[j] + e[j] - anchor[j] + tau[j] * ed[j] if cand[j] else 0.0
         if any_rigid:
             u[nc + j] = ed[j] if (cand[j] and rigid[j]) else 0.0
+    rtravel, rforce, rptr, axcol = contact.rtravel, contact.rforce, contact.rptr, contact.axcol
+    if rtravel.size > 0:  # soft release: F(s) with the separation at the step start (explicit)
+        for c in range(release.size):
+            k0, k1 = rptr[c], rptr[c + 1]
+            if k1 > k0:
+                a = axcol[c]
+                state.fsoft[a] = 0.0 if (bolted[c] or state.drawn[c]) else \
+                    _table_force(rtravel, rforce, k0, k1, state.sep[c])
+
+
+@njit(cache=True)
+def _table_force(rtravel, rforce, k0, k1, s):
+    """F(s) of the table [k0, k1): linear between its points, held at the end values outside."""
+    if s <= rtravel[k0]:
+        return rforce[k0]
+    for k in range(k0, k1 - 1):
+        if s < rtravel[k + 1]:
+            w = (s - rtravel[k]) / (rtravel[k + 1] - rtravel[k])
+            return rforce[k] + w * (rforce[k + 1] - rforce[k])
+    return rforce[k1 - 1]
 
 
 @njit(cache=True)
@@ -693,14 +725,15 @@ def _follow_normals(free, active, opening, mu, axrow):
 
 
 @njit(cache=True)
-def _normal_flips(W, Wv, tau, nsign, u, ed, free, rigid, active, opening, mu, fn, g, single):
+def _normal_flips(W, Wv, tau, nsign, u, ed, free, rigid, active, opening, mu, pin, fn, g, single):
     """The active-set rules of kernel._solve_direct for normal and rigid rows, with the dashpot's
-    position conditions; returns whether a row changed (one only when ``single``)."""
+    position conditions; returns whether a row changed (one only when ``single``). Rows carried
+    by a soft-release pin follow _soft_checks instead."""
     nc = fn.size
     any_rigid = W.shape[0] > nc
     changed = False
     for j in range(nc):
-        if not free[j] or mu[j] > 0.0:
+        if not free[j] or mu[j] > 0.0 or pin[j]:
             continue
         if active[j] and rigid[j]:
             if not opening[j] and nsign[j] * fn[j] < 0.0:  # closed -> opening
@@ -792,6 +825,46 @@ def _friction_checks(W, C2, nsign, u, free, axial, active, mu, axrow, slip, sdir
 
 
 @njit(cache=True)
+def _soft_checks(W, C2, nsign, u, free, active, pin, yld, panchor, fsoft, drawn, axcol, rptr, fn, g, single):
+    """Soft-release states of the normal rows of points not drawn out (transient/contact_laws.py):
+    elastic pin -> yielding when its tension exceeds F(s), -> slack when it is compressed after
+    having been drawn (panchor on the open side); yielding -> elastic when the elastic trial
+    (end position less the anchor, with the solved forces) gives a tension below F(s); slack
+    and open -> elastic pin when the position passes the anchor. Returns whether a row changed."""
+    nc = fn.size
+    any_rigid = W.shape[0] > nc
+    changed = False
+    for c in range(drawn.size):
+        if rptr[c + 1] == rptr[c] or drawn[c]:
+            continue
+        j = axcol[c]
+        if not free[j]:
+            continue
+        if pin[j] and not yld[j]:
+            tension = -nsign[j] * fn[j]
+            if tension > fsoft[j] * (1.0 + SOFT_HYSTERESIS):
+                yld[j] = True
+                changed = True
+            elif tension < 0.0 and nsign[j] * panchor[j] > 0.0:
+                pin[j] = False
+                active[j] = False
+                changed = True
+        elif pin[j]:
+            trial = nsign[j] * (_row_residual(W, u, fn, g, j, any_rigid) - panchor[j]) / C2[j]
+            if trial < fsoft[j] * (1.0 - SOFT_HYSTERESIS):
+                yld[j] = False
+                changed = True
+        elif not active[j]:
+            if nsign[j] * (_row_residual(W, u, fn, g, j, any_rigid) - panchor[j]) > 0.0:
+                pin[j] = True
+                active[j] = True
+                changed = True
+        if changed and single:
+            return True
+    return changed
+
+
+@njit(cache=True)
 def _solve_laws(contact, state, cache, rigid, u, ed, free, opening, max_iter, fn, g, rows2, cols2):
     """Active-set solve with friction, dashpots and rigid rows (kernel._solve_direct's rules plus
     the stick/slip states); returns (status, iterations, info1, info2). ``contact``, ``state``,
@@ -799,18 +872,34 @@ def _solve_laws(contact, state, cache, rigid, u, ed, free, opening, max_iter, fn
     W, C2, Wv, tau, nsign, axial, mu, axrow = contact.W, contact.C2, contact.Wv, contact.tau, contact.sign, \
         contact.axial, contact.mu, contact.axrow
     active, slip, sdir = state.active, state.slip, state.sdir
+    pin, yld, panchor, fsoft = state.pin, state.yld, state.panchor, state.fsoft
+    soft = contact.rtravel.size > 0
     keys, invs, used = cache
     nc = fn.size
     n2 = W.shape[0]
     any_rigid = n2 > nc
+    u2 = np.empty(n2) if soft else u
     it = 0
     turns = 0
     single = False
     while True:
         it += 1
         _follow_normals(free, active, opening, mu, axrow)
+        if soft:  # the pins' anchors and the yielding rows' known forces, u' = u + W[:, P] f_P
+            for r in range(n2):
+                u2[r] = u[r]
+            for j in range(nc):
+                if pin[j] and free[j]:
+                    if yld[j]:
+                        fy = -nsign[j] * fsoft[j]
+                        for r in range(n2):
+                            u2[r] += W[r, j] * fy
+                    else:
+                        u2[j] -= panchor[j]
         for j in range(nc):
             eq = active[j] and not slip[j]
+            if soft and yld[j] and free[j]:
+                eq = False
             rows2[j] = eq
             cols2[j] = eq and not opening[j]
             if any_rigid:
@@ -820,7 +909,7 @@ def _solve_laws(contact, state, cache, rigid, u, ed, free, opening, max_iter, fn
         if not ok:
             return SINGULAR, it, 0.0, 0.0
         used[1] = slot
-        x2 = np.dot(invs[slot], u)
+        x2 = np.dot(invs[slot], u2)
         if _slip_update(W, invs[slot], x2, nsign, active, slip, sdir, mu, axrow) != OK:
             return FRICTION_SINGULAR, it, 0.0, 0.0
         for j in range(nc):
@@ -829,13 +918,20 @@ def _solve_laws(contact, state, cache, rigid, u, ed, free, opening, max_iter, fn
         for j in range(nc):  # slip rows: mu N d with the solved normal force
             if slip[j] and active[j]:
                 fn[j] = mu[j] * nsign[axrow[j]] * fn[axrow[j]] * sdir[j]
+        if soft:
+            for j in range(nc):  # yielding pins: the known tension F(s)
+                if yld[j] and free[j]:
+                    fn[j] = -nsign[j] * fsoft[j]
         # friction first, on the pattern that was solved (a point closing in stick with a large
         # trial tangent force must slip before its normal is judged), then the normal rows
         changed, turned = _friction_checks(W, C2, nsign, u, free, axial, active, mu, axrow, slip, sdir, fn, g,
                                            single)
         if not (changed and single):
-            changed = _normal_flips(W, Wv, tau, nsign, u, ed, free, rigid, active, opening, mu, fn, g,
+            changed = _normal_flips(W, Wv, tau, nsign, u, ed, free, rigid, active, opening, mu, pin, fn, g,
                                     single) or changed
+        if soft and not (changed and single):
+            changed = _soft_checks(W, C2, nsign, u, free, active, pin, yld, panchor, fsoft, state.drawn,
+                                   contact.axcol, contact.rptr, fn, g, single) or changed
         if not changed and not turned:
             return OK, it, 0.0, 0.0
         if turned and not changed:
@@ -849,12 +945,14 @@ def _solve_laws(contact, state, cache, rigid, u, ed, free, opening, max_iter, fn
 
 
 @njit(cache=True)
-def _laws_after_step(contact, state, fn, bolted, opening):
-    """Anchors and latches at the step end: a slipping tangent row's anchor moves so that the
-    stick relation holds with the slip force; an open point's tangent anchors follow the
-    relative position (a new contact starts unstressed); a point closed with compression
+def _laws_after_step(contact, state, fn, bolted, opening, tb):
+    """Anchors and latches at the step end (time tb): a slipping tangent row's anchor moves so
+    that the stick relation holds with the slip force; an open point's tangent anchors follow
+    the relative position (a new contact starts unstressed); a point closed with compression
     >= latch force is latched (bolted from the next step), its frictionless laterals
-    anchored at the current relative position."""
+    anchored at the current relative position. Soft release: a yielding pin's anchor moves
+    so that K_C times its stretch is the yield force; a point whose separation reached the
+    table's end is drawn out (an ordinary released point from the next step on)."""
     Phi_c, Cdiag, tau, mu, axial, nsign = contact.Phi, contact.compliance, contact.tau, contact.mu, contact.axial, \
         contact.sign
     dcontact, axcol, latch = contact.contact, contact.axcol, contact.latch
@@ -870,6 +968,28 @@ def _laws_after_step(contact, state, fn, bolted, opening):
             else:
                 anchor[j] = e[j]
                 slip[j] = False
+    rtravel, rptr = contact.rtravel, contact.rptr
+    if rtravel.size > 0:
+        coff = contact.offset
+        pin, yld, panchor, drawn = state.pin, state.yld, state.panchor, state.drawn
+        for c in range(latch.size):
+            if rptr[c + 1] == rptr[c]:
+                continue
+            a = axcol[c]
+            s = nsign[a] * (coff[a] + e[a])
+            state.sep[c] = s
+            if bolted[c] or drawn[c]:
+                continue
+            if yld[a]:
+                panchor[a] = coff[a] + e[a] + Cdiag[a] * fn[a]
+                if np.isnan(state.tyield[c]):
+                    state.tyield[c] = tb
+            if s >= rtravel[rptr[c + 1] - 1]:
+                drawn[c] = True
+                state.tdrawn[c] = tb
+                pin[a] = False
+                yld[a] = False
+                active[a] = s < 0.0
     for c in range(latch.size):
         if latched[c] or bolted[c] or not latch[c] < np.inf:
             continue

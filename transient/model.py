@@ -74,6 +74,35 @@ class ContactPoint:
     * ``latch_force``: a capture latch: once the released point is closed with a normal
       compression >= latch_force (N; 0: on first contact), it is bolted from the end of
       that step on, laterals anchored where they were (docking capture).
+    * ``release_force = (travel, force)``: a soft (controlled) release, e.g. tapered pins
+      drawn through dies (m, N; travel strictly increasing from 0, forces >= 0, at least
+      two points, F(s) linear between them). Let s = gap + normal_sign n . (x_a - x_b) be
+      the separation of the normal row (s > 0 open). After release and until the point is
+      *drawn out* (its separation has once reached travel[-1] at a step end) the normal
+      row carries, besides compression, a **tension** up to F(s):
+
+      - elastic: the spring K_C as when closed, anchored at the pin's drawn travel p
+        (p = 0 until it first yields): tension K_C (s - p) while that is <= F(s);
+      - yielding: when the tension demand exceeds F(s) the row carries the known tensile
+        force F(s) (force on A towards B, f = -normal_sign F), with s taken at the start
+        of the step (explicit: F varies over centimetres, dF/ds << K_C, so the lag is
+        stable and O(h)); p follows so that K_C (s - p) = F(s) (the pin is drawn:
+        plastic, the work F ds is dissipated, as for slipping friction);
+      - yielding -> elastic when the elastic trial (the row's end position with the
+        solved forces) gives a tension below F(s) or a compression (a mass that stops
+        in the dies stays there, held by the pin);
+      - a pin pushed back after it has yielded (p > 0) goes slack: the row then follows
+        the ordinary released rules (the post in compression at s < 0) and the pin takes
+        tension again once s >= p;
+      - drawn out (s >= travel[-1] at a step end): for good, an ordinary released point
+        (compression-only, recontact allowed).
+
+      The point's state is CLOSED while its pin carries it (yielding included), so its
+      separation_time is the time it is drawn out; the result's metadata["soft_release"]
+      gives each point's first yield and drawn-out times.
+
+      Not with rigid=True, friction, a latch or damping on the normal (refused).
+      Bolted before release_time as any post.
     """
 
     name: str
@@ -89,6 +118,7 @@ class ContactPoint:
     friction: float = 0.0
     damping: float | Sequence[float] = 0.0
     latch_force: float | None = None
+    release_force: tuple[Sequence[float], Sequence[float]] | None = None
 
     def __post_init__(self) -> None:
         who = f"contact {self.name!r}"
@@ -124,7 +154,7 @@ class ContactPoint:
         self._laws(who, n)
 
     def _laws(self, who: str, n: int) -> None:
-        """Check and normalise normal, friction, damping and latch_force."""
+        """Check and normalise normal, friction, damping, latch_force and release_force."""
         translations = all(split_label(lab)[1] < 3 for lab in self.labels_a)
         if self.normal is not None:
             nv = np.asarray(self.normal, dtype=float).reshape(-1)
@@ -154,6 +184,41 @@ class ContactPoint:
             if not (math.isfinite(lf) and lf >= 0):
                 raise InputError(f"{who}: latch_force must be >= 0 N, got {self.latch_force!r}")
             self.latch_force = lf
+        if self.release_force is not None:
+            self.release_force = self._release_table(who)
+
+    def _release_table(self, who: str) -> tuple[np.ndarray, np.ndarray]:
+        """(travel m, force N) of ``release_force``, checked (one-line InputError naming the key)."""
+        key = f"{who}: release_force"
+        rf = self.release_force
+        if isinstance(rf, dict):
+            rf = (rf.get("travel"), rf.get("force"))
+        try:
+            travel, force = rf
+            s = np.asarray(travel, dtype=float).reshape(-1)
+            F = np.asarray(force, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            raise InputError(f"{key} must be (travel, force): two lists of numbers (m, N)") from None
+        if s.size != F.size:
+            raise InputError(f"{key}: {s.size} travel values but {F.size} forces")
+        if s.size < 2:
+            raise InputError(f"{key}: needs at least 2 points (travel, force), got {s.size}")
+        if not (np.all(np.isfinite(s)) and np.all(np.isfinite(F))):
+            raise InputError(f"{key} contains NaN or inf")
+        if np.abs(np.concatenate([s, F])).max() > MAX_MAGNITUDE:
+            raise InputError(f"{key} has a value beyond {MAX_MAGNITUDE:g} (SI units)")
+        if s[0] != 0.0:
+            raise InputError(f"{key}: travel must start at 0 m, got {s[0]!r}")
+        if np.any(np.diff(s) <= 0):
+            raise InputError(f"{key}: travel must be strictly increasing (m)")
+        if np.any(F < 0):
+            raise InputError(f"{key}: forces must be >= 0 N (the tension the pins carry), got {F.min()!r}")
+        if self.rigid:
+            raise InputError(f"{key} needs a penalty contact (not rigid): the pins' tension is carried by K_C")
+        if self.friction > 0 or self.latch_force is not None or self.damping[self.axial] > 0:
+            raise InputError(f"{key} cannot be combined with friction, a latch or damping on the normal "
+                             "(not supported)")
+        return s, F
 
     @property
     def n_dirs(self) -> int:
@@ -161,8 +226,9 @@ class ContactPoint:
 
     @property
     def has_laws(self) -> bool:
-        """True when the point uses friction, damping or a latch (the kernel's extended path)."""
-        return self.friction > 0 or bool(np.any(self.damping > 0)) or self.latch_force is not None
+        """True when the point uses friction, damping, a latch or a soft release (the kernel's extended path)."""
+        return self.friction > 0 or bool(np.any(self.damping > 0)) or self.latch_force is not None \
+            or self.release_force is not None
 
     def frame(self) -> np.ndarray:
         """(n_dirs, n_dirs) rows: the coupled directions over the labels (identity without a normal)."""
@@ -447,8 +513,8 @@ class TransientProblem:
                 raise InputError(f"contact {c.name!r}: rigid contacts need method 'direct' "
                                  "(the fixed-point iteration needs a finite K_C)")
             if self.method == "fixed-point" and c.has_laws:
-                raise InputError(f"contact {c.name!r}: friction, damping and latches need method 'direct' "
-                                 "(the fixed-point iteration is the reference's contact law only)")
+                raise InputError(f"contact {c.name!r}: friction, damping, latches and soft release need method "
+                                 "'direct' (the fixed-point iteration is the reference's contact law only)")
         f = self.forcing
         for p in f.constant + f.tables:
             self.body(p.body).dof_index(p.label)

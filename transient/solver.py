@@ -12,7 +12,7 @@ from liftoff.core.errors import ConvergenceError, InputError
 from .assembly import contact_rows, feedback_at, feedback_factors, modal_load
 from .body import ModalBody
 from .coefficients import StepCoefficients, step_coefficients
-from .contact_laws import initial_slip
+from .contact_laws import initial_slip, initial_soft
 from .guard import GrowthGuard
 from .kernel import (
     BOLTED,
@@ -77,6 +77,10 @@ def static_solution(body_a: ModalBody, body_b: ModalBody, contacts, forcing: For
     for _ in range(rows.n + 1):
         state, f = _static_solve(na, rows, (lam, U, V), P0, t, act)
         tension = act & released & (rows.sign * f < 0)
+        if rows.rtravel.size:  # a released soft point holds a tension up to F(s) (contact_laws.py)
+            from .contact_laws import soft_static_hold
+
+            tension &= ~soft_static_hold(rows, f)
         if not tension.any():
             return state, f
         act = act & ~tension
@@ -187,7 +191,7 @@ def initial_contact_force(body_a, body_b, rows, forcing, state: InitialState, t0
     f = np.zeros(rows.n)
     f[active & pen] = -u[active & pen] / rows.compliance[active & pen]
     if rows.laws:  # dashpots: f = -K_C (u + tau u'), a closed normal not in tension; sliding friction points
-        from .contact_laws import initial_friction
+        from .contact_laws import initial_friction, soft_initial_force
 
         ud = rows.Phi_a @ state.v_a - rows.Phi_b @ state.v_b
         ap = active & pen
@@ -196,6 +200,7 @@ def initial_contact_force(body_a, body_b, rows, forcing, state: InitialState, t0
         active &= ~tension
         f[tension] = 0.0
         initial_friction(rows, f, active, ud, bolted[rows.axial_column])
+        soft_initial_force(rows, f, active, u, bolted[rows.axial_column])
     rig = active & ~pen
     if rig.any():
         # rigid rows: zero relative acceleration at t0 given the penalty forces
@@ -351,7 +356,8 @@ def _contact_inputs(rows, coefs) -> tuple[Contact, np.ndarray]:
     axrow = rows.axial_column[rows.contact]
     return Contact(Phi_c, rows.compliance, rows.offset, rows.contact, rows.axial, rows.sign, rows.release,
                    np.ascontiguousarray(W2), C2, bool(rows.laws), rows.tau.copy(), np.ascontiguousarray(Wv),
-                   rows.mu.copy(), axrow, rows.axial_column.copy(), rows.latch.copy()), W
+                   rows.mu.copy(), axrow, rows.axial_column.copy(), rows.latch.copy(), rows.rtravel.copy(),
+                   rows.rforce.copy(), rows.rptr.copy()), W
 
 
 def _modal_inputs(problem: TransientProblem, coefs, loads) -> Modal:
@@ -418,10 +424,13 @@ def _start(problem: TransientProblem, rows, contact: Contact, init: InitialState
             hist.Va[0], hist.Aa[0], hist.Vb[0], hist.Ab[0] = v_a, a_a0, v_b, a_b0
     pen0 = np.where(rows.compliance > 0, f0, 0.0)  # rigid rows start each step from their own g
     q0 = np.concatenate([q_a, q_b])
-    anchor, slip, sdir = initial_slip(rows, f0, contact.Phi @ q0, active0, bolted0)   # contact_laws.py
+    e0 = contact.Phi @ q0
+    anchor, slip, sdir = initial_slip(rows, f0, e0, active0, bolted0)   # contact_laws.py
+    soft = initial_soft(rows, f0, e0, bolted0)
     return State(q0, np.concatenate([v_a, v_b]), f0.copy(), active0.copy(),
                  contact.Phi.T @ pen0, np.concatenate([loads[0].at(t0), loads[1].at(t0)]),
-                 np.zeros(1, dtype=np.int64), anchor, np.zeros(len(rows.names), dtype=np.bool_), slip, sdir)
+                 np.zeros(1, dtype=np.int64), anchor, np.zeros(len(rows.names), dtype=np.bool_), slip, sdir,
+                 *soft)
 
 
 def _new_cache(n2: int, cap: int = 64) -> Cache:
@@ -474,7 +483,7 @@ def _solve(problem: TransientProblem, step: StepChoice | None = None, runs: int 
     guard = GrowthGuard(rows, modal, state, step.h, step.margin)
     guard.start(step.t0, step.t_end)
     _drive(problem, step, inputs, state, cache, hist, lambda: _spectral_radius(W, rows, state.active), guard)
-    return _result(problem, rows, step, plans, hist, int(cache.used[0]), started)
+    return _result(problem, rows, step, plans, hist, int(cache.used[0]), started, state)
 
 
 def _drive(problem: TransientProblem, step: StepChoice, inputs, state: State, cache: Cache, hist: History,
@@ -563,8 +572,12 @@ def capture_times(state: np.ndarray, time: np.ndarray, rows) -> dict:
     return out
 
 
+def _time_or_none(t: float):
+    return None if np.isnan(t) else float(t)
+
+
 def _result(problem: TransientProblem, rows, step: StepChoice, plans, hist: History, n_patterns: int,
-            started: float) -> TransientResult:
+            started: float, state: State) -> TransientResult:
     """The TransientResult of a finished run: histories split per body, events, metadata."""
     time = step.time
     sep, rec = contact_events(hist.state, time)
@@ -582,6 +595,10 @@ def _result(problem: TransientProblem, rows, step: StepChoice, plans, hist: Hist
             "gravity": [float(g) for g in problem.forcing.gravity]}     # m/s^2, the uniform field applied (eq. 14)
     if np.isfinite(rows.latch).any():
         meta["capture_time"] = capture_times(hist.state, time, rows)
+    if rows.rtravel.size:
+        soft = np.flatnonzero(np.diff(rows.rptr) > 0)
+        meta["soft_release"] = {rows.names[c]: {"first_yield": _time_or_none(state.tyield[c]),
+                                                "drawn_out": _time_or_none(state.tdrawn[c])} for c in soft}
     items = {r.name: RecoveryItem(r.name, r.body, r.category, r.labels, r.units, r.description,
                                   r.disp is None and r.vel is None) for r in problem.recoveries}
     return TransientResult(

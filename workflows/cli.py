@@ -156,6 +156,12 @@ def summary(scenario, result, path: Path, wall: float, est=None) -> str:
     if captured:
         lines.append("  latches  " + ", ".join(f"{k} {'captured at ' + format(t, '.6g') + ' s' if t is not None else 'open'}"
                                              for k, t in captured.items()))
+    soft = result.metadata.get("soft_release") or {}
+    if soft:
+        def _t(t):
+            return "never" if t is None else format(t, ".6g") + " s"
+        lines.append("  soft release  " + ", ".join(f"{k} yields {_t(v['first_yield'])}, drawn out {_t(v['drawn_out'])}"
+                                                   for k, v in soft.items()))
     lines.append(f"  results  {path}")
     return "\n".join(lines)
 

@@ -33,7 +33,8 @@ MAX_THERMAL_STRAIN = 0.02
 FORCE_KEYS = {"label", "value", "time", "csv", "scale"}
 GRAVITY_KEYS = {"accel"}
 LAW_KEYS = {"stiffness", "rigid", "axial", "normal_sign", "gap", "release_time", "normal", "friction", "damping",
-            "latch_force"}
+            "latch_force", "release_force"}
+RELEASE_FORCE_KEYS = {"travel", "force"}
 SOFTENING_KEYS = {"enabled", "until", "labels"}
 CONTROL_KEYS = {"enabled", "gimbals", "start", "ramp", "law", "bandwidth_hz", "damping", "hold_start"}
 #: the highest attitude-hold bandwidth (Hz) taken: a rigid-body attitude loop far above the
@@ -183,7 +184,9 @@ class ContactLaw:
     """How a post or contact point couples its directions (eq. 2-3, section 2.7): penalty
     ``stiffness`` K_C per direction (N/m, N m/rad) or a ``rigid`` bolt; the normal
     direction ``axial`` (index) with ``normal_sign``; ``gap`` (m); bolted while
-    t < ``release_time`` (s), then compression-only on the normal."""
+    t < ``release_time`` (s), then compression-only on the normal; with ``release_force``
+    (travel m, force N) a soft release: the normal also carries a tension up to F(travel)
+    until the travel passes the table's end (ContactPoint.release_force)."""
 
     stiffness: np.ndarray
     rigid: bool = False
@@ -195,13 +198,14 @@ class ContactLaw:
     friction: float = 0.0              # Coulomb coefficient on the tangent directions
     damping: np.ndarray | float = 0.0  # N s/m (N m s/rad) per direction, a dashpot in parallel with K_C
     latch_force: float | None = None   # N, capture latch (None: none)
+    release_force: tuple | None = None  # ((travel m...), (force N...)): soft release (None: instantaneous)
 
     def contact(self, name: str, labels_a: Sequence[str], labels_b: Sequence[str | None]) -> ContactPoint:
         """The transient model's contact point with this law."""
         return ContactPoint(name, list(labels_a), list(labels_b), self.stiffness, axial=self.axial,
                             normal_sign=self.normal_sign, gap=self.gap, release_time=self.release_time,
                             rigid=self.rigid, normal=self.normal, friction=self.friction, damping=self.damping,
-                            latch_force=self.latch_force)
+                            latch_force=self.latch_force, release_force=self.release_force)
 
 
 def axial_index(where: Where, value: Any, directions: Sequence[str]) -> int:
@@ -256,7 +260,8 @@ def _orientation(where: Where, spec: dict, directions: Sequence[str], default_ax
 
 
 def _laws(where: Where, spec: dict, n: int, rigid: bool) -> dict:
-    """friction, damping, latch_force and the normal vector of a contact law (ContactPoint checks the rest)."""
+    """friction, damping, latch_force, release_force and the normal vector of a contact law (ContactPoint
+    checks the rest)."""
     out = {}
     if "normal" in spec:
         out["normal"] = tuple(float(x) for x in vector(where / "normal", spec["normal"], length=n))
@@ -273,7 +278,25 @@ def _laws(where: Where, spec: dict, n: int, rigid: bool) -> dict:
             raise (where / "damping").error("a rigid contact takes no damping (the dashpot is in parallel with K_C)")
     if "latch_force" in spec:
         out["latch_force"] = number(where / "latch_force", spec["latch_force"], nonneg=True)
+    if "release_force" in spec:
+        out["release_force"] = _release_force(where / "release_force", spec["release_force"], rigid)
     return out
+
+
+def _release_force(where: Where, spec: Any, rigid: bool) -> tuple:
+    """``release_force = { travel = [...], force = [...] }`` (m, N): the soft release's table."""
+    r = table(where, spec, RELEASE_FORCE_KEYS, required=("travel", "force"))
+    travel = vector(where / "travel", r["travel"], nonneg=True)
+    force = vector(where / "force", r["force"], nonneg=True, length=travel.size)
+    if travel.size < 2:
+        raise (where / "travel").error(f"needs at least 2 points, got {travel.size}")
+    if travel[0] != 0.0:
+        raise (where / "travel").error(f"must start at 0 m, got {travel[0]:g}")
+    if np.any(np.diff(travel) <= 0):
+        raise (where / "travel").error("must be strictly increasing (m)")
+    if rigid:
+        raise where.error("a soft release needs a penalty contact (stiffness, not rigid)")
+    return tuple(float(x) for x in travel), tuple(float(x) for x in force)
 
 
 # ---------------------------------------------------------------- effects (section 4)
