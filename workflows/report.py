@@ -236,8 +236,72 @@ def write_modal_tables(stack, cp, out: Path) -> list[Path]:
     return files
 
 
+def write_correlated(results: dict, out: Path, plots: bool = True, note: str = "") -> list[Path]:
+    """``correlated_loads.csv`` (and ``correlated_loads.png``): per attach point the correlated
+    envelopes of axial force with bending moment and of shear with torque over the cases in
+    ``results`` (analysis/correlated.py: the convex hull of the pair's samples over time and
+    cases, each vertex a sample with its time and case); nothing without attach points."""
+    from liftoff.analysis import correlated as cl
+
+    per_case = {case: (res.time, interface_histories(res, cp.attach)) for case, (res, cp) in results.items()}
+    hulls = cl.envelope(cl.correlated(t, itfs, case) for case, (t, itfs) in per_case.items())
+    if not hulls:
+        return []
+    buf = io.StringIO()
+    rows = cl.rows(hulls)
+    w = csv.DictWriter(buf, fieldnames=list(rows[0]))
+    w.writeheader()
+    for r in rows:
+        w.writerow({k: (f"{v:.6e}" if isinstance(v, float) else v) for k, v in r.items()})
+    head = ("# liftoff correlated loads: per attach point (force on the named component) the convex hull of "
+            "(Tz, Mb = |(Rx, Ry)|) and of (V = |(Tx, Ty)|, Rz) over time and the cases " + ", ".join(results)
+            + (f" ({note})" if note else "") + "; vertices counter-clockwise, each a sample (time s, case); "
+            "units in x_unit, y_unit\n")
+    files = [write_text(out / "correlated_loads.csv", head + buf.getvalue())]
+    if plots:
+        files.append(_plot_correlated(hulls, per_case, out))
+    return files
+
+
+def _plot_correlated(hulls, per_case: dict, out: Path) -> Path:
+    """correlated_loads.png: a row per attach point, a column per pair; every case's
+    trajectory (thin) and the hull (black)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from liftoff.analysis import correlated as cl
+
+    names = list(dict.fromkeys(h.interface for h in hulls))
+    pairs = [p for p, _, _ in cl.PAIRS]
+    fig, axs = plt.subplots(len(names), len(pairs), figsize=(10, 2.6 * len(names) + 1), squeeze=False)
+    for h in hulls:
+        ax = axs[names.index(h.interface)][pairs.index(h.pair)]
+        for case, (_, itfs) in per_case.items():
+            itf = next(i for i in itfs if i.name == h.interface)
+            ax.plot(cl.pair_values(itf.labels, itf.values, h.x_name) / 1e6,
+                    cl.pair_values(itf.labels, itf.values, h.y_name) / 1e6, lw=0.5, alpha=0.7, label=case)
+        ax.fill(h.x / 1e6, h.y / 1e6, fill=False, ec="k", lw=1.2)
+        ax.set_xlabel(f"{h.x_name} (M{h.x_unit})", fontsize=8)
+        ax.set_ylabel(f"{h.y_name} (M{h.y_unit})", fontsize=8)
+        ax.set_title(h.interface, fontsize=8)
+        ax.grid(True, alpha=0.3)
+    handles, labs = axs[0][0].get_legend_handles_labels()
+    fig.suptitle("Correlated loads: axial force with bending moment, shear with torque (hull over time and cases)")
+    fig.tight_layout(rect=(0, 0, 1, 0.98))
+    if handles:
+        fig.subplots_adjust(right=0.84)
+        fig.legend(handles, labs, fontsize=7, loc="center left", bbox_to_anchor=(0.855, 0.5), frameon=False)
+    path = out / "correlated_loads.png"
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
 #: (sheet, CSV file) of the run's tables the workbook holds, in order (those present)
-WORKBOOK_TABLES = (("time-consistent loads", "interface_loads_envelope.csv"), ("design loads", "design_loads.csv"),
+WORKBOOK_TABLES = (("time-consistent loads", "interface_loads_envelope.csv"), ("correlated loads", "correlated_loads.csv"),
+                   ("design loads", "design_loads.csv"),
                    ("comparison", "compare.csv"), ("statistics", "statistics.csv"), ("SRS", "srs.csv"),
                    ("table 1", "table1.csv"), ("system modes", "modes_vehicle.csv"),
                    ("modal mass vehicle held", "modal_mass_vehicle_held.csv"), ("modal mass pad", "modal_mass_pad.csv"))

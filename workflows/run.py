@@ -338,9 +338,10 @@ def write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, e
         files += _generated_outputs(sc, prep, camp, agg, out, stage_times, results, plots, want_pics)
         stage_times.append(("campaign tables and histories", time.perf_counter() - t0))
     files += _loads_tables(sc, agg, out, echo, camp)
-    files += report.write_interface_loads(
-        results, out, "envelope", "the generated cases other than the governing one are not in this table (their "
-        "histories are not kept; see envelope_histories.h5)" if camp_run is not None else "")
+    partial = ("the generated cases other than the governing one are not in this table (their histories are not "
+               "kept; see envelope_histories.h5)") if camp_run is not None else ""
+    files += report.write_interface_loads(results, out, "envelope", partial)
+    files += report.write_correlated(results, out, plots, partial)
     files += report.write_workbook(out, sc.title)
     files += _fields(sc, prep, results, agg, out, camp, stage_times)
     env = agg.envelope_rows()

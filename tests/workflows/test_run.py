@@ -113,6 +113,25 @@ def _check_outputs(out, cases, all_cases=None):
     _check_twang(out, cases)
 
 
+def _check_correlated(out):
+    """correlated_loads.csv (analysis/correlated.py) against the envelope table: the hull of
+    (Tz, Mb) over all cases reaches the envelope's Tz max and min of each attach point (the
+    hull's extremes are the samples' extremes), and no vertex lies beyond them."""
+    env = {r["item"]: r for r in csv.DictReader(ln for ln in (out / "maxmin_envelope.csv").read_text().splitlines()
+                                                 if not ln.startswith("#"))}
+    rows = list(csv.DictReader(ln for ln in (out / "correlated_loads.csv").read_text().splitlines()
+                               if not ln.startswith("#")))
+    by: dict = {}
+    for r in rows:
+        if r["pair"] == "axial-bending":
+            by.setdefault(r["interface"], []).append(float(r["x"]))
+    assert len(by) == 7
+    for itf, xs in by.items():
+        e = env[f"{itf} Tz"]
+        assert max(xs) == pytest.approx(float(e["max"]), rel=1e-6) and min(xs) == pytest.approx(float(e["min"]), rel=1e-6)
+    assert (out / "correlated_loads.png").stat().st_size > 10_000
+
+
 def _check_workbook(out, env):
     """loads.xlsx (analysis/workbook.py) read back with openpyxl: every max/min envelope row is
     on its category's sheet with the CSV's numbers; the run's other tables have their sheets."""
@@ -220,6 +239,7 @@ def test_stick_scenario_end_to_end_and_cache(tmp_path, capsys):
     text = capsys.readouterr().out
     assert "separation (s)" in text and "Vehicle c.g. motion under static loads" in text
     _check_outputs(tmp_path / "a", ["nominal", "late-release-wind"], ["nominal", "late-release-wind", "stud-hang"])
+    _check_correlated(tmp_path / "a")
     # the wind leans the stack in +x (the symmetric nominal case has no x motion at all)
     wind, nom = (load_result(tmp_path / "a" / f"results_{c}.h5") for c in ("late-release-wind", "nominal"))
     assert wind.recovered["cg_motion"][-1, 0] > 1e-3 > abs(nom.recovered["cg_motion"][-1, 0]) * 1e3

@@ -1,0 +1,129 @@
+"""Correlated loads: the pairs of an interface's load components that size a joint, plotted
+against each other over time and cases, and their convex hull (issue 24).
+
+Enveloping each component alone takes every maximum at its own time, and designs the joint
+to a combination that never occurs. The pairs here are the ones a joint is checked for:
+
+* **axial force with bending moment**: Tz against Mb = sqrt(Rx^2 + Ry^2);
+* **shear with torque**: V = sqrt(Tx^2 + Ty^2) against Rz;
+
+(forces N, moments N m, on the named component; the interface's own axes). Over a run the
+correlated envelope of a pair is the convex hull of its (x(t), y(t)) samples; over cases,
+the hull of the cases' hulls (the hull of a union is the hull of the union of the hulls).
+Each hull vertex is a sample of one case at one time, so it is a load the structure saw;
+a straight hull edge between two vertices is the (conservative) convex combination.
+
+numpy/scipy only.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Iterable
+
+import numpy as np
+
+from liftoff.core.errors import InputError
+
+#: (name, x, y): the pairs, by the interface's component labels (Tx Ty Tz Rx Ry Rz)
+PAIRS = (("axial-bending", "Tz", "Mb"), ("shear-torque", "V", "Rz"))
+
+
+def pair_values(labels, values: np.ndarray, name: str) -> np.ndarray:
+    """The component ``name`` of an interface's histories: one of its labels, or Mb =
+    |(Rx, Ry)|, V = |(Tx, Ty)|."""
+    labels = list(labels)
+    derived = {"Mb": ("Rx", "Ry"), "V": ("Tx", "Ty")}
+    try:
+        if name in derived:
+            a, b = (labels.index(c) for c in derived[name])
+            return np.hypot(values[:, a], values[:, b])
+        return values[:, labels.index(name)]
+    except ValueError:
+        raise InputError(f"correlated loads: the interface has no {derived.get(name, name)} among "
+                         f"its components {labels}") from None
+
+
+def hull_indices(points: np.ndarray) -> np.ndarray:
+    """Indices of the convex hull's vertices of 2-D ``points``, counter-clockwise; collinear or
+    coincident points (a degenerate hull) give the two extreme points of the segment."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    pts = np.asarray(points, float)
+    if pts.ndim != 2 or pts.shape[1] != 2 or pts.shape[0] == 0:
+        raise InputError(f"correlated loads: {np.shape(points)} is not a set of 2-D points")
+    finite = np.isfinite(pts).all(axis=1)
+    if not finite.all():
+        raise InputError("correlated loads: a history holds NaN or inf")
+    span = np.ptp(pts, axis=0)
+    scale = np.where(span > 0, span, 1.0)
+    try:
+        return ConvexHull(pts / scale).vertices           # counter-clockwise in 2-D
+    except (QhullError, ValueError):
+        d = pts - pts.mean(axis=0)
+        u = np.linalg.svd(d, full_matrices=False)[2][0] if np.any(d) else np.array([1.0, 0.0])
+        s = d @ u
+        return np.unique([int(np.argmin(s)), int(np.argmax(s))])
+
+
+@dataclass
+class CorrelatedHull:
+    """The correlated envelope of one pair of one interface: hull vertices (x, y) with the
+    time (s) and case of each, counter-clockwise."""
+
+    interface: str
+    pair: str
+    x_name: str
+    y_name: str
+    x_unit: str
+    y_unit: str
+    x: np.ndarray
+    y: np.ndarray
+    time: np.ndarray
+    case: list[str]
+
+
+def correlated(time: np.ndarray, interfaces: Iterable, case: str) -> list[CorrelatedHull]:
+    """The hull of every pair (:data:`PAIRS`) of every interface (analysis.interface_loads
+    InterfaceHistory) over one run."""
+    time = np.asarray(time, float)
+    out = []
+    for itf in interfaces:
+        units = dict(zip(itf.labels, itf.units))
+        for pair, xn, yn in PAIRS:
+            x, y = pair_values(itf.labels, itf.values, xn), pair_values(itf.labels, itf.values, yn)
+            k = hull_indices(np.column_stack([x, y]))
+            ux = units.get(xn, units.get("Tx" if xn == "V" else "Rx", ""))
+            uy = units.get(yn, units.get("Rx" if yn == "Mb" else "Tx", ""))
+            out.append(CorrelatedHull(itf.name, pair, xn, yn, ux, uy, x[k], y[k], time[k], [case] * k.size))
+    return out
+
+
+def envelope(per_case: Iterable[list[CorrelatedHull]]) -> list[CorrelatedHull]:
+    """Over cases: per (interface, pair) the hull of the cases' hull vertices."""
+    groups: dict[tuple[str, str], list[CorrelatedHull]] = {}
+    for hulls in per_case:
+        for h in hulls:
+            groups.setdefault((h.interface, h.pair), []).append(h)
+    out = []
+    for hs in groups.values():
+        x = np.concatenate([h.x for h in hs])
+        y = np.concatenate([h.y for h in hs])
+        t = np.concatenate([h.time for h in hs])
+        c = [name for h in hs for name in h.case]
+        k = hull_indices(np.column_stack([x, y]))
+        h0 = hs[0]
+        out.append(CorrelatedHull(h0.interface, h0.pair, h0.x_name, h0.y_name, h0.x_unit, h0.y_unit, x[k], y[k],
+                                  t[k], [c[i] for i in k]))
+    return out
+
+
+def rows(hulls: list[CorrelatedHull]) -> list[dict]:
+    """One dict per hull vertex (interface, pair, vertex, x and y with their names and units,
+    time, case): the table correlated_loads.csv holds."""
+    out = []
+    for h in hulls:
+        for v in range(h.x.size):
+            out.append({"interface": h.interface, "pair": h.pair, "vertex": v + 1, "x_name": h.x_name,
+                        "x": float(h.x[v]), "x_unit": h.x_unit, "y_name": h.y_name, "y": float(h.y[v]),
+                        "y_unit": h.y_unit, "time": float(h.time[v]), "case": h.case[v]})
+    return out
