@@ -31,6 +31,8 @@ _EXPORTS = {
     "from_nas2cam": ".nastran",
     "import_nastran": ".nastran",
     "write_dmig": ".nastran",
+    "write_op4": ".nastran",
+    "read_op4": ".nastran",
     "displacement_recovery": ".recovery",
     "field_recovery": ".recovery",
     "interface_force_recovery": ".recovery",

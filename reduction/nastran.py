@@ -670,6 +670,40 @@ def import_nastran(path, *, name: str, units, grid_names: Mapping | None = None,
 
 
 # ------------------------------------------------------------------------------ writer
+OP4_NAME = re.compile(r"^[A-Z][A-Z0-9_]{0,7}$")      # Nastran's matrix names: 8 characters, a letter first
+
+
+def write_op4(path, matrices: Mapping[str, np.ndarray]) -> Path:
+    """Write named real matrices to a binary, double-precision OUTPUT4 file (pyyeti.nastran.op4,
+    the format Nastran's DMAP OUTPUT4 and pyyeti read), atomically. Names: upper case, at most
+    8 characters, a letter first; order kept."""
+    from liftoff.core.records import atomic_path
+
+    _, _, _, _, op4 = _nastran()
+    names, mats = [], []
+    for name, m in matrices.items():
+        if not OP4_NAME.match(name):
+            raise InputError(f"{path}: OP4 matrix name {name!r}: upper case, at most 8 characters, a letter first")
+        a = np.atleast_2d(np.asarray(m, dtype=float))
+        if a.ndim != 2 or not np.all(np.isfinite(a)):
+            raise InputError(f"{path}: OP4 matrix {name!r}: a finite 2-D real matrix is needed, got shape {a.shape}")
+        names.append(name)
+        mats.append(a)
+    with atomic_path(path, suffix=".op4") as tmp:
+        op4.write(str(tmp), names, mats, binary=True, digits=16, sparse="dense")
+    return Path(path)
+
+
+def read_op4(path, names=None) -> dict[str, np.ndarray]:
+    """Named matrices of an OP4 file (lower-case names, dense float arrays); ``names``: those
+    only (a one-line InputError for a missing one), default all."""
+    p = _need_file(path, "OP4 file")
+    if names is None:
+        _, _, _, _, op4 = _nastran()
+        names = _call(str(p), "OP4 directory", op4.dir, str(p), verbose=False)[0]
+    return _read_op4(p, names)
+
+
 def write_dmig(cb: CBModel, path, *, units="SI", grid_ids: Mapping | None = None, spoint1: int | None = None,
                stiffness: str = "KAAX", mass: str = "MAAX"):
     """Write ``cb`` as a Nastran punch file: GRID cards of its boundary points (basic

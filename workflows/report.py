@@ -201,6 +201,40 @@ def format_mode_changes(pairs: list, limit: int = 10) -> str:
     return "\n".join(lines)
 
 
+def write_recovery_op4(stack, cp, out: Path) -> list[Path]:
+    """``recovery_vehicle.op4`` and its index ``recovery_vehicle_op4.csv``: the vehicle's
+    recovery matrices in its system modal coordinates (y = D q + V qdot + A qddot: DTM, the
+    velocity matrix, ATM; interface forces are LTMs in D and A), with the modal model they act
+    on (FREQ, Hz; ZETA; unit modal masses) for another team's tools (Nastran OUTPUT4, binary,
+    double; pyyeti.nastran.op4 reads it). Needs pyyeti (the ``nastran`` extra): without it
+    nothing is written and the summary says so."""
+    from liftoff.reduction import write_op4
+
+    body = stack.vehicle
+    mats = {"FREQ": stack.vehicle_modes.freq_hz[:, None], "ZETA": np.asarray(body.zeta, float)[:, None]}
+    index = ["# liftoff recovery matrices of the vehicle in recovery_vehicle.op4 (binary OUTPUT4, double); "
+             "y = D q + V qdot + A qddot over the vehicle's system modes (unit modal mass; FREQ Hz, ZETA); "
+             "row_labels, row_units: one per row, ';'-separated; SI", "matrix,item,kind,rows,category,row_labels,row_units"]
+    k = 0
+    for r in cp.problem.recoveries:
+        if r.body != "a":
+            continue
+        k += 1
+        for kind, m in (("D", r.disp), ("V", r.vel), ("A", r.acc)):
+            if m is None:
+                continue
+            name = f"R{k:04d}{kind}"
+            mats[name] = m
+            index.append(f"{name},{r.name},{ {'D': 'disp', 'V': 'vel', 'A': 'acc'}[kind]},{m.shape[0]},{r.category},"
+                         f"{';'.join(r.labels)},{';'.join(r.units)}")
+    try:
+        files = [write_op4(out / "recovery_vehicle.op4", mats)]
+    except ImportError:
+        files = []
+        index.insert(1, "# recovery_vehicle.op4 NOT written: pyyeti is not installed (pip install 'liftoff-loads[nastran]')")
+    return files + [write_text(out / "recovery_vehicle_op4.csv", "\n".join(index) + "\n")]
+
+
 def write_modal_tables(stack, cp, out: Path) -> list[Path]:
     """The modal deliverables of the stack (reduction/modal_mass.py): ``modes_vehicle.csv``
     (the vehicle's free-free system modes the transient uses: rigid, elastic, residual

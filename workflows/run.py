@@ -362,6 +362,7 @@ def _table1(stack, cp, case, out: Path, echo, stage_times: list):
     files = [write_text(out / "table1.txt", tab1.table() + "\n"),
              write_text(out / "table1.csv", "# c.g. motion under static loads; m and rad\n" + tab1.csv())]
     files += report.write_modal_tables(stack, cp, out)
+    files += report.write_recovery_op4(stack, cp, out)
     echo(tab1.table())
     stage_times.append(("Table 1, modal tables", time.perf_counter() - t0))
     return tab1, files

@@ -522,3 +522,25 @@ def test_matrix_names_that_cannot_be_right():
         extseout("inboard", mass="KAAX")
     with pytest.raises(InputError, match="stiffness and mass both name the matrix 'kxx'"):
         extseout("inboard", mass="kxx")
+
+
+def test_op4_round_trip(tmp_path):
+    """write_op4 then pyyeti's reader and read_op4: the matrices back bit for bit (binary,
+    double precision); bad names and non-finite matrices refused in one line."""
+    pytest.importorskip("pyyeti")
+    from pyyeti.nastran import op4
+
+    from liftoff.reduction import read_op4, write_op4
+
+    rng = np.random.default_rng(7)
+    mats = {"FREQ": rng.uniform(0, 50, (9, 1)), "R0001A": rng.standard_normal((6, 9)), "KAA": np.eye(3)}
+    path = write_op4(tmp_path / "x.op4", mats)
+    theirs = op4.read(str(path))
+    ours = read_op4(path)
+    for name, m in mats.items():
+        assert np.array_equal(np.asarray(theirs[name.lower()]), m) and np.array_equal(ours[name.lower()], m)
+    with pytest.raises(InputError, match="upper case"):
+        write_op4(tmp_path / "y.op4", {"toolongname": np.eye(2)})
+    with pytest.raises(InputError, match="finite"):
+        write_op4(tmp_path / "y.op4", {"BAD": np.array([[np.nan]])})
+    assert not (tmp_path / "y.op4").exists()
