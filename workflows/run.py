@@ -18,7 +18,7 @@ from pathlib import Path
 from liftoff.core.errors import InputError
 from liftoff.core.records import write_text
 
-from . import report
+from . import outputs, report
 from .cache import StageCache, default_cache_dir, stage_key
 from .outdir import check_target, staged_output
 
@@ -340,9 +340,7 @@ def write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, e
     files += _loads_tables(sc, agg, out, echo, camp)
     partial = ("the generated cases other than the governing one are not in this table (their histories are not "
                "kept; see envelope_histories.h5)") if camp_run is not None else ""
-    files += report.write_interface_loads(results, out, "envelope", partial)
-    files += report.write_correlated(results, out, plots, partial)
-    files += report.write_workbook(out, sc.title)
+    files += outputs.write("run", outputs.RunContext(results, out, plots, sc.title, partial))
     files += _fields(sc, prep, results, agg, out, camp, stage_times)
     env = agg.envelope_rows()
     first = next(iter(prep.stacks.values()))
@@ -361,8 +359,7 @@ def _table1(stack, cp, case, out: Path, echo, stage_times: list):
     tab1 = table1(stack, cp, case)
     files = [write_text(out / "table1.txt", tab1.table() + "\n"),
              write_text(out / "table1.csv", "# c.g. motion under static loads; m and rad\n" + tab1.csv())]
-    files += report.write_modal_tables(stack, cp, out)
-    files += report.write_recovery_op4(stack, cp, out)
+    files += outputs.write("model", stack, cp, out)
     echo(tab1.table())
     stage_times.append(("Table 1, modal tables", time.perf_counter() - t0))
     return tab1, files
@@ -402,7 +399,7 @@ def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, sta
     if half is not None:
         report.with_errors(rows, report.maxmin(half.time, report.items(half, cp.attach, heads, band), name))
     files.append(report.write_csv(rows, out / f"maxmin_{name}.csv"))
-    files += report.write_interface_loads({name: (res, cp)}, out, name)
+    files += outputs.write("case", res, cp, out, name)
     if plots:
         files += report.plots(res, cp, out, name)
     if pics:

@@ -443,3 +443,33 @@ def _check_op4(out, res):
     q = res.modal["q_a"]
     y = res.recovered["cg_motion"]
     np.testing.assert_allclose(q @ D.T, y, rtol=0, atol=1e-12 * np.abs(y).max())
+
+
+def test_a_registered_output_is_written_with_the_run(tmp_path):
+    """workflows/outputs.py: one registration adds a deliverable (DR_Def style); it is written
+    per case into the published folder, and listed in its manifest."""
+    from liftoff.workflows import outputs
+    from liftoff.workflows.run import run
+
+    seen = []
+
+    @outputs.register_output("test_post_sum", "case", "sum of the posts' axial forces")
+    def post_sum(res, cp, out, case):
+        ax = [res.axial_column(c) for c in range(len(res.contact_names))]
+        path = out / f"post_sum_{case}.csv"
+        path.write_text("t,sum_N\n" + "".join(f"{t:.6e},{v:.6e}\n" for t, v in
+                                               zip(res.time[::500], res.contact_force[::500][:, ax].sum(axis=1))))
+        seen.append(case)
+        return [path]
+
+    try:
+        p = _scenario(tmp_path, STICK, cases=[{"name": "nominal"}], t_end=7.0)
+        run(p, tmp_path / "o", cache_dir=tmp_path / "cache", progress=False, plots=False, snapshots=False,
+            echo=lambda *a, **k: None, error_estimate=False)
+    finally:
+        outputs.OUTPUTS.pop("test_post_sum", None)
+    assert seen == ["nominal"]
+    assert (tmp_path / "o" / "post_sum_nominal.csv").read_text().startswith("t,sum_N\n")
+    assert "post_sum_nominal.csv" in (tmp_path / "o" / "MANIFEST.json").read_text()
+    with pytest.raises(Exception, match="stage must be one of"):
+        outputs.register_output("x", "later")

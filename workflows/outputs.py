@@ -1,0 +1,98 @@
+"""The run's deliverables, registered by name (pyyeti's ``cla.DR_Def`` registers recovery
+categories the same way): a new output is one function and one registration, not an edit
+of the run.
+
+Three stages, each output a function of that stage's objects returning the paths it wrote
+(into the run's staging folder, which is published atomically with everything else):
+
+* ``"model"``: once per run, ``fn(stack, cp, out)`` (the stack model and the first named
+  case's problem): modal tables, mode shapes, recovery matrices;
+* ``"case"``: per case with full outputs, ``fn(result, cp, out, case)``;
+* ``"run"``: after every case, ``fn(ctx)`` with a :class:`RunContext` (the cases' results,
+  the folder, whether plots are wanted, the scenario's title, what the tables cover).
+
+Outputs run in registration order within a stage; liftoff's workbook is the last of its own
+"run" outputs, so it reads their tables (an output registered later runs after it and is not
+in the workbook). From Python, before ``liftoff.workflows.run.run``::
+
+    from liftoff.workflows.outputs import register_output
+
+    @register_output("peak_post_sum", "case", "sum of the posts' axial forces")
+    def peak_post_sum(result, cp, out, case):
+        ...
+        return [path]
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from liftoff.core.errors import InputError
+
+STAGES = ("model", "case", "run")
+
+
+@dataclass(frozen=True)
+class Output:
+    name: str
+    stage: str
+    fn: Callable
+    description: str = ""
+
+
+@dataclass
+class RunContext:
+    """What a ``"run"``-stage output gets: ``results`` {case: (TransientResult, CaseProblem)}
+    of the named cases and the governing generated case, the staging folder ``out``,
+    ``plots`` (pictures wanted), the scenario ``title`` and ``partial`` (non-empty when the
+    cases' histories do not cover a campaign's generated cases: a note for the tables)."""
+
+    results: dict
+    out: Path
+    plots: bool
+    title: str
+    partial: str = ""
+
+
+OUTPUTS: dict[str, Output] = {}
+
+
+def register_output(name: str, stage: str, description: str = ""):
+    """Decorator: register ``fn`` as output ``name`` of ``stage`` (replacing one of that name)."""
+    if stage not in STAGES:
+        raise InputError(f"output {name!r}: stage must be one of {', '.join(STAGES)}, got {stage!r}")
+
+    def deco(fn):
+        OUTPUTS.pop(name, None)
+        OUTPUTS[name] = Output(name, stage, fn, description)
+        return fn
+    return deco
+
+
+def write(stage: str, *args) -> list[Path]:
+    """Every registered output of ``stage`` (in registration order); the paths they wrote."""
+    files: list[Path] = []
+    for o in list(OUTPUTS.values()):
+        if o.stage == stage:
+            files += list(o.fn(*args) or [])
+    return files
+
+
+# ------------------------------------------------------------------ liftoff's own deliverables
+def _register_builtin() -> None:
+    from . import report
+
+    register_output("modal_tables", "model", "modes_vehicle.csv/.h5, modal_mass_vehicle_held.csv, "
+                    "modal_mass_pad.csv")(report.write_modal_tables)
+    register_output("recovery_op4", "model", "recovery_vehicle.op4 and its index")(report.write_recovery_op4)
+    register_output("interface_loads", "case", "interface_loads_<case>.csv")(
+        lambda res, cp, out, case: report.write_interface_loads({case: (res, cp)}, out, case))
+    register_output("interface_loads_envelope", "run", "interface_loads_envelope.csv")(
+        lambda ctx: report.write_interface_loads(ctx.results, ctx.out, "envelope", ctx.partial))
+    register_output("correlated_loads", "run", "correlated_loads.csv/.png")(
+        lambda ctx: report.write_correlated(ctx.results, ctx.out, ctx.plots, ctx.partial))
+    register_output("workbook", "run", "loads.xlsx")(lambda ctx: report.write_workbook(ctx.out, ctx.title))
+
+
+_register_builtin()
