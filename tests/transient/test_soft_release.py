@@ -34,20 +34,13 @@ from liftoff.transient import (ContactPoint, Forcing, InitialState, ModalBody, P
 from liftoff.transient.examples import holddown_contacts, toy_pad, toy_vehicle
 from liftoff.workflows.cli import main
 
+from .test_contact_laws import mass1d
+
 G = 9.81
 M, KC = 1000.0, 1e10                       # kg, N/m
 F1, F2, S1, S_END = 3000.0, 5000.0, 0.02, 0.05
 TRAVEL = (0.0, S1, S1 + 1e-7, S_END)       # F1 up to S1, F2 beyond (a 0.1 um ramp between)
 FORCE = (F1, F1, F2, F2)
-
-
-def mass1d(name: str, m: float) -> ModalBody:
-    """A rigid mass moving along x (one rigid mode)."""
-    part = np.zeros((1, 6))
-    part[0, 0] = math.sqrt(m)
-    return ModalBody(name, omega=[0.0], zeta=[0.0], dof_labels=[f"{name}:Tx"], phi=[[1 / math.sqrt(m)]],
-                     participation=part, points=(name,), point_coords=[[0.0, 0.0, 0.0]],
-                     rigid_body_mass=np.diag([m, 0, 0, 0, 0, 0]))
 
 
 def lift(net: float, h: float = 1e-4, t_end: float = 0.5, cut: float | None = None, table=(TRAVEL, FORCE)):
