@@ -29,7 +29,7 @@ import pytest
 
 from liftoff.config import default_text, parse_scenario
 from liftoff.core.errors import InputError
-from liftoff.transient import (ContactPoint, Forcing, InitialState, ModalBody, PointForce, TabulatedForce,
+from liftoff.transient import (ContactPoint, Forcing, InitialState, PointForce, TabulatedForce,
                                TransientProblem, ground, solve)
 from liftoff.transient.examples import holddown_contacts, toy_pad, toy_vehicle
 from liftoff.workflows.cli import main
