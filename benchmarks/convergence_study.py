@@ -128,14 +128,18 @@ VARIANTS = {
 }
 
 
+LOAD_FACTORS = ("Nx", "Ny", "Nz")      # a component's net c.g. load factor rows (workflows/report.load_factor_items)
+
+
 def point_of(row: dict) -> str:
     """The vector a row is one component of: its name less the component (``attach X on
     core Ty`` -> ``attach X on core``, ``acc stack_top:Tz`` -> ``acc stack_top``) and its
-    unit (forces apart from moments); a scalar row (a pressure) is its own."""
+    unit (forces apart from moments; a component's load factors Nx Ny Nz form one vector); a
+    scalar row (a pressure) is its own."""
     item = row["item"]
     for sep in (" ", ":"):
         head, _, last = item.rpartition(sep)
-        if head and last in COMPONENTS:
+        if head and (last in COMPONENTS or last in LOAD_FACTORS):
             return f"{head} [{row['unit']}]"
     return f"{item} [{row['unit']}]"
 
