@@ -174,7 +174,7 @@ def _check_modal_tables(out):
         if "vehicle" in name:          # the vehicle's translation mass is isotropic (the pad's: a stick
             np.testing.assert_allclose(total, total[0], rtol=1e-9)   # pad's scalar masses need not be)
             assert total[0] / 1e3 == pytest.approx(summary_mass, abs=0.051)
-            assert m[:, 2].sum() > 0.5 * total[2]       # most of the stack moves on its posts axially
+            assert 0 < m[:, 2].sum() < total[2]         # part moves on the posts, the rest sits on them
 
 
 def _check_interface_loads(out, case, res, maxmin_rows):
