@@ -92,6 +92,7 @@ def _register_builtin() -> None:
         lambda ctx: report.write_interface_loads(ctx.results, ctx.out, "envelope", ctx.partial))
     register_output("correlated_loads", "run", "correlated_loads.csv/.png")(
         lambda ctx: report.write_correlated(ctx.results, ctx.out, ctx.plots, ctx.partial))
+    register_output("spectra_plots", "run", "srs.png, psd_<case>.png")(report.plot_spectra)
     register_output("workbook", "run", "loads.xlsx")(lambda ctx: report.write_workbook(ctx.out, ctx.title))
 
 

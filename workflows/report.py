@@ -333,6 +333,68 @@ def _plot_correlated(hulls, per_case: dict, out: Path) -> Path:
     return path
 
 
+def plot_spectra(ctx) -> list[Path]:
+    """``srs.png`` (the SRS envelope over the cases of every selected item, one panel per
+    item, a line per Q, log-log; from srs.csv) and ``psd_<case>.png`` (each case's PSD of the
+    selected items, log-log; from psd_<case>.csv): the spectra the tables hold, drawn."""
+    if not ctx.plots:
+        return []
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from liftoff.analysis.workbook import read_csv_table
+
+    files = []
+    if (ctx.out / "srs.csv").is_file():
+        _, cols, rows = read_csv_table(ctx.out / "srs.csv")
+        ci = {c: k for k, c in enumerate(cols)}
+        items = list(dict.fromkeys(r[ci["item"]] for r in rows))
+        n = len(items)
+        fig, axs = plt.subplots((n + 1) // 2, 2, figsize=(11, 2.8 * ((n + 1) // 2) + 1), squeeze=False)
+        for ax, item in zip(axs.flat, items):
+            sel = [r for r in rows if r[ci["item"]] == item]
+            for q in dict.fromkeys(r[ci["Q"]] for r in sel):
+                rq = [r for r in sel if r[ci["Q"]] == q]
+                ax.loglog([r[ci["freq_Hz"]] for r in rq], [r[ci["envelope"]] for r in rq], lw=1, label=f"Q = {q:g}")
+            ax.set_title(item, fontsize=8)
+            ax.set_xlabel("frequency (Hz)", fontsize=8)
+            ax.set_ylabel(f"SRS ({sel[0][ci['unit']]})", fontsize=8)
+            ax.grid(True, which="both", alpha=0.3)
+            ax.legend(fontsize=7)
+        for ax in list(axs.flat)[n:]:
+            ax.set_visible(False)
+        fig.suptitle("Shock response spectra, absolute acceleration, envelope over the cases")
+        fig.tight_layout(rect=(0, 0, 1, 0.97))
+        path = ctx.out / "srs.png"
+        fig.savefig(path, dpi=100)
+        plt.close(fig)
+        files.append(path)
+    for case in ctx.results:
+        src = ctx.out / f"psd_{case}.csv"
+        if not src.is_file():
+            continue
+        _, cols, rows = read_csv_table(src)
+        data = np.array(rows, dtype=float)
+        fig, ax = plt.subplots(figsize=(10, 5))
+        for k, col in enumerate(cols[1:], start=1):
+            y = np.where(data[:, k] > 0, data[:, k], np.nan)
+            ax.loglog(data[1:, 0], y[1:], lw=0.8, label=col)
+        ax.set_xlabel("frequency (Hz)")
+        ax.set_ylabel("PSD (unit^2/Hz of each item)")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.set_title(f"Power spectral density (Welch) — case {case}")
+        fig.tight_layout()
+        fig.subplots_adjust(right=0.7)
+        ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
+        path = ctx.out / f"psd_{case}.png"
+        fig.savefig(path, dpi=100)
+        plt.close(fig)
+        files.append(path)
+    return files
+
+
 #: (sheet, CSV file) of the run's tables the workbook holds, in order (those present)
 WORKBOOK_TABLES = (("time-consistent loads", "interface_loads_envelope.csv"), ("correlated loads", "correlated_loads.csv"),
                    ("design loads", "design_loads.csv"),

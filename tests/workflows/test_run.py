@@ -241,6 +241,8 @@ def test_stick_scenario_end_to_end_and_cache(tmp_path, capsys):
     assert "separation (s)" in text and "Vehicle c.g. motion under static loads" in text
     _check_outputs(tmp_path / "a", ["nominal", "late-release-wind"], ["nominal", "late-release-wind", "stud-hang"])
     _check_correlated(tmp_path / "a")
+    for png in ("srs.png", "psd_nominal.png", "attach_moments_nominal.png"):    # the spectra and moments, drawn
+        assert (tmp_path / "a" / png).stat().st_size > 10_000
     # the wind leans the stack in +x (the symmetric nominal case has no x motion at all)
     wind, nom = (load_result(tmp_path / "a" / f"results_{c}.h5") for c in ("late-release-wind", "nominal"))
     assert wind.recovered["cg_motion"][-1, 0] > 1e-3 > abs(nom.recovered["cg_motion"][-1, 0]) * 1e3
