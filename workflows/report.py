@@ -708,7 +708,13 @@ class _Figures:
             ax.set_xlabel("time (s)")
         handles, labs = ax_arr[0][0].get_legend_handles_labels()
         fig.suptitle(f"{title} — case {self.case}")
-        fig.tight_layout(rect=(0, 0, 1, 0.97))
+        import warnings
+
+        with warnings.catch_warnings(record=True) as caught:    # matplotlib's "tight layout not applied"
+            warnings.simplefilter("always")
+            fig.tight_layout(rect=(0, 0, 1, 0.97))
+        if any("tight" in str(w.message).lower() for w in caught):   # a fixed layout instead
+            fig.subplots_adjust(left=0.09, bottom=0.08, top=0.9, hspace=0.4, wspace=0.2)
         if handles:                                 # outside the data, right of the panels
             fig.subplots_adjust(right=0.84)
             fig.legend(handles, labs, fontsize=7, loc="center left", bbox_to_anchor=(0.855, 0.5), frameon=False)
