@@ -20,7 +20,7 @@ from liftoff.core.errors import InputError
 from . import _occ
 from ._occ import occ
 from .layout import SIDES, StackLayout
-from .spec import Geometry, Material, Patch, require_positive
+from .spec import Geometry, Material, Patch, require_positive, require_range
 
 STEEL = Material("steel", 200e9, 0.29, 7850.0)
 
@@ -61,6 +61,10 @@ class PadParams:
                          pedestal_height=self.pedestal_height,
                          pedestal_wall_thickness=self.pedestal_wall_thickness, mesh_size=self.mesh_size,
                          post_mesh_size=self.post_mesh_size)
+        # a platform's mass: beyond this span the pad's stiffness and mass matrices lose the
+        # digits the static start needs (1e30 kg gave "static equilibrium singular")
+        require_range(o, "mlp_mass", self.mlp_mass, 1.0e3, 1.0e9, "kg",
+                      "the deck and posts of a launch platform (the Shuttle's MLP: 3.7e6 kg)")
         self.layout.check()
         if not self.pedestal_xy:
             raise InputError(f"{o}.pedestal_xy is empty: the pad would float")

@@ -475,3 +475,17 @@ def test_a_registered_output_is_written_with_the_run(tmp_path):
     assert "post_sum_nominal.csv" in (tmp_path / "o" / "MANIFEST.json").read_text()
     with pytest.raises(Exception, match="stage must be one of"):
         outputs.register_output("x", "later")
+
+
+@pytest.mark.parametrize("mass", [1e30, 1.0])
+def test_a_platform_mass_out_of_range_is_named(tmp_path, capsys, mass):
+    """[model.pad.params] mlp_mass far outside a launch platform's span: one line naming the key
+    and the range before any stage (1e30 kg used to end in 'static equilibrium singular')."""
+    d = tomllib.loads(default_text())
+    d["model"] = dict(STICK, pad={"params": {"mlp_mass": mass}})
+    p = tmp_path / "bad.toml"
+    p.write_text(_toml(d))
+    assert main(["run", str(p), "--out", str(tmp_path / "o"), "--no-cache", "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "mlp_mass" in err and "outside [1000, 1e+09] kg" in err, err
+    assert not (tmp_path / "o").exists() or not list((tmp_path / "o").iterdir())
