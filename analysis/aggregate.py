@@ -114,7 +114,8 @@ STAT_FIELDS = ("item", "unit", "category", "mean_max", "std_max", "normal_max", 
                "mean_min", "std_min", "normal_min", "order_min", "order_case_min")
 
 
-def _csv(rows: list[dict], fields, head: str, path: Path) -> Path:
+def write_rows_csv(rows: list[dict], fields, head: str, path: Path) -> Path:
+    """Dict rows as a CSV table under the comment ``head`` (floats as %.6e), atomically."""
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=list(fields), extrasaction="ignore")
     w.writeheader()
@@ -133,7 +134,7 @@ def write_statistics(agg: Aggregate, out: Path, freq=None, q=None) -> list[Path]
             f"P{agg.p * 100:g}/{agg.c * 100:g}: normal bound mean +- k std with k = {agg.k:.6g} (one-sided "
             f"tolerance factor), order statistic = the {agg.r}-th largest maximum / smallest minimum "
             f"({'none: too few cases' if agg.r == 0 else 'distribution-free'})\n")
-    paths = [_csv(rows, STAT_FIELDS, head, out / "statistics.csv")]
+    paths = [write_rows_csv(rows, STAT_FIELDS, head, out / "statistics.csv")]
     data = {"items": np.array(agg.items, dtype=str),
             "units": Dataset(np.array(agg.units, dtype=str), "1", dims=("items",)),
             "categories": Dataset(np.array(agg.categories, dtype=str), "1", dims=("items",))}
@@ -183,7 +184,7 @@ def write_srs(agg: Aggregate, freq: np.ndarray, q: tuple, out: Path) -> Path | N
     fields = ["item", "unit", "Q", "freq_Hz", "envelope", "case"] + (["mean", "std", "normal_P9990"] if stats else [])
     head = ("# liftoff shock response spectra (absolute acceleration, peak) of the items' histories; units of the "
             f"item; envelope over all cases{'; statistics over the dispersed cases' if stats else ''}\n")
-    return _csv(rows, fields, head, out / "srs.csv")
+    return write_rows_csv(rows, fields, head, out / "srs.csv")
 
 
 def write_design(agg: Aggregate, factors: dict, out: Path) -> Path | None:
@@ -202,7 +203,7 @@ def write_design(agg: Aggregate, factors: dict, out: Path) -> Path | None:
                      "max": float(mx), "min": float(mn), "factor": float(f), "design_max": float(f * mx),
                      "design_min": float(f * mn)})
     head = "# liftoff design loads: basis x uncertainty factor of the item's category; SI units (column 'unit')\n"
-    return _csv(rows, ("item", "unit", "category", "basis", "max", "min", "factor", "design_max", "design_min"),
+    return write_rows_csv(rows, ("item", "unit", "category", "basis", "max", "min", "factor", "design_max", "design_min"),
                 head, out / "design_loads.csv")
 
 
@@ -245,4 +246,4 @@ def write_compare(rows_new: list[dict], old: dict, out: Path) -> tuple[Path, lis
                      "min_change_pct": pct_change(r["min"], o["min"]), "category": r.get("category", "")})
     fields = ("item", "unit", "max", "max_old", "max_change_pct", "min", "min_old", "min_change_pct")
     head = "# liftoff comparison with an earlier run's max/min; change = (new - old) / |old| x 100 %\n"
-    return _csv(rows, fields, head, out / "compare.csv"), rows
+    return write_rows_csv(rows, fields, head, out / "compare.csv"), rows

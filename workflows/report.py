@@ -241,6 +241,7 @@ def write_modal_tables(stack, cp, out: Path) -> list[Path]:
     vectors), ``modal_mass_vehicle_held.csv`` (the vehicle held at its contact DOFs: modes
     and effective mass under the posts' rigid translation) and ``modal_mass_pad.csv`` (the
     grounded pad's modes and their effective mass)."""
+    from liftoff.analysis.aggregate import write_rows_csv
     from liftoff.reduction.modal_mass import modal_mass_table
 
     vm = stack.vehicle_modes
@@ -259,14 +260,8 @@ def write_modal_tables(stack, cp, out: Path) -> list[Path]:
                 "its percent and cumulative percent of the total; total mass (kg) x/y/z "
                 + "/".join(f"{m:.6e}" for m in table.total_mass) + ", on the supports (no mode carries it) "
                 + "/".join(f"{m:.6e}" for m in table.on_supports) + "\n")
-        buf = io.StringIO()
         rows = table.rows()
-        if rows:
-            w = csv.DictWriter(buf, fieldnames=list(rows[0]))
-            w.writeheader()
-            for r in rows:
-                w.writerow({k: (f"{v:.6e}" if isinstance(v, float) else v) for k, v in r.items()})
-        files.append(write_text(out / name, head + buf.getvalue()))
+        files.append(write_rows_csv(rows, list(rows[0]), head, out / name) if rows else write_text(out / name, head))
     return files
 
 
@@ -276,22 +271,18 @@ def write_correlated(results: dict, out: Path, plots: bool = True, note: str = "
     ``results`` (analysis/correlated.py: the convex hull of the pair's samples over time and
     cases, each vertex a sample with its time and case); nothing without attach points."""
     from liftoff.analysis import correlated as cl
+    from liftoff.analysis.aggregate import write_rows_csv
 
     per_case = {case: (res.time, interface_histories(res, cp.attach)) for case, (res, cp) in results.items()}
     hulls = cl.envelope(cl.correlated(t, itfs, case) for case, (t, itfs) in per_case.items())
     if not hulls:
         return []
-    buf = io.StringIO()
     rows = cl.rows(hulls)
-    w = csv.DictWriter(buf, fieldnames=list(rows[0]))
-    w.writeheader()
-    for r in rows:
-        w.writerow({k: (f"{v:.6e}" if isinstance(v, float) else v) for k, v in r.items()})
     head = ("# liftoff correlated loads: per attach point (force on the named component) the convex hull of "
             "(Tz, Mb = |(Rx, Ry)|) and of (V = |(Tx, Ty)|, Rz) over time and the cases " + ", ".join(results)
             + (f" ({note})" if note else "") + "; vertices counter-clockwise, each a sample (time s, case); "
             "units in x_unit, y_unit\n")
-    files = [write_text(out / "correlated_loads.csv", head + buf.getvalue())]
+    files = [write_rows_csv(rows, list(rows[0]), head, out / "correlated_loads.csv")]
     if plots:
         files.append(_plot_correlated(hulls, per_case, out))
     return files
@@ -300,13 +291,9 @@ def write_correlated(results: dict, out: Path, plots: bool = True, note: str = "
 def _plot_correlated(hulls, per_case: dict, out: Path) -> Path:
     """correlated_loads.png: a row per attach point, a column per pair; every case's
     trajectory (thin) and the hull (black)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from liftoff.analysis import correlated as cl
 
+    plt = _pyplot()
     names = list(dict.fromkeys(h.interface for h in hulls))
     pairs = [p for p, _, _ in cl.PAIRS]
     fig, axs = plt.subplots(len(names), len(pairs), figsize=(10, 2.6 * len(names) + 1), squeeze=False)
@@ -321,16 +308,8 @@ def _plot_correlated(hulls, per_case: dict, out: Path) -> Path:
         ax.set_ylabel(f"{h.y_name} (M{h.y_unit})", fontsize=8)
         ax.set_title(h.interface, fontsize=8)
         ax.grid(True, alpha=0.3)
-    handles, labs = axs[0][0].get_legend_handles_labels()
     fig.suptitle("Correlated loads: axial force with bending moment, shear with torque (hull over time and cases)")
-    fig.tight_layout(rect=(0, 0, 1, 0.98))
-    if handles:
-        fig.subplots_adjust(right=0.84)
-        fig.legend(handles, labs, fontsize=7, loc="center left", bbox_to_anchor=(0.855, 0.5), frameon=False)
-    path = out / "correlated_loads.png"
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return path
+    return _save_figure(plt, fig, out / "correlated_loads.png", axs[0][0], top=0.98, dpi=100)
 
 
 def plot_spectra(ctx) -> list[Path]:
@@ -339,12 +318,9 @@ def plot_spectra(ctx) -> list[Path]:
     selected items, log-log; from psd_<case>.csv): the spectra the tables hold, drawn."""
     if not ctx.plots:
         return []
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from liftoff.analysis.workbook import read_csv_table
+
+    plt = _pyplot()
 
     files = []
     if (ctx.out / "srs.csv").is_file():
@@ -366,11 +342,7 @@ def plot_spectra(ctx) -> list[Path]:
         for ax in list(axs.flat)[n:]:
             ax.set_visible(False)
         fig.suptitle("Shock response spectra, absolute acceleration, envelope over the cases")
-        fig.tight_layout(rect=(0, 0, 1, 0.97))
-        path = ctx.out / "srs.png"
-        fig.savefig(path, dpi=100)
-        plt.close(fig)
-        files.append(path)
+        files.append(_save_figure(plt, fig, ctx.out / "srs.png", dpi=100))
     for case in ctx.results:
         src = ctx.out / f"psd_{case}.csv"
         if not src.is_file():
@@ -384,14 +356,8 @@ def plot_spectra(ctx) -> list[Path]:
         ax.set_xlabel("frequency (Hz)")
         ax.set_ylabel("PSD (unit^2/Hz of each item)")
         ax.grid(True, which="both", alpha=0.3)
-        ax.set_title(f"Power spectral density (Welch) — case {case}")
-        fig.tight_layout()
-        fig.subplots_adjust(right=0.7)
-        ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
-        path = ctx.out / f"psd_{case}.png"
-        fig.savefig(path, dpi=100)
-        plt.close(fig)
-        files.append(path)
+        fig.suptitle(f"Power spectral density (Welch) — case {case}")
+        files.append(_save_figure(plt, fig, ctx.out / f"psd_{case}.png", ax, dpi=100, right=0.7))   # long labels
     return files
 
 
@@ -659,6 +625,37 @@ def twang(result, cp) -> Twang | None:
 RELEASE_WINDOW = (-0.05, 0.45)   # s about the first release: the zoom panel of the plots
 
 
+def _pyplot():
+    """matplotlib.pyplot on the Agg backend (files only, no display)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _save_figure(plt, fig, path: Path, legend_from=None, top: float = 0.97, dpi: int = 110,
+                 right: float = 0.84) -> Path:
+    """Lay out, save and close a figure: tight layout below the title (a fixed layout where
+    matplotlib cannot fit one, instead of its warning on stderr) and, with ``legend_from`` (an
+    axes), that axes' legend right of the panels (which end at ``right``), outside the data."""
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:    # matplotlib's "tight layout not applied"
+        warnings.simplefilter("always")
+        fig.tight_layout(rect=(0, 0, 1, top))
+    if any("tight" in str(w.message).lower() for w in caught):
+        fig.subplots_adjust(left=0.09, bottom=0.08, top=0.9, hspace=0.4, wspace=0.2)
+    handles, labs = legend_from.get_legend_handles_labels() if legend_from is not None else ([], [])
+    if handles:
+        fig.subplots_adjust(right=right)
+        fig.legend(handles, labs, fontsize=7, loc="center left", bbox_to_anchor=(right + 0.015, 0.5), frameon=False)
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+    return path
+
+
 class _Figures:
     """The history plots' common frame: the whole run | the release window (:data:`RELEASE_WINDOW`
     about the first release), engine starts (grey, dotted, named) and the release (red,
@@ -706,33 +703,15 @@ class _Figures:
                         ax.set_title(f"release window ({t_rel + lo:g} to {t_rel + hi:g} s)", fontsize=8)
         for ax in ax_arr[-1]:
             ax.set_xlabel("time (s)")
-        handles, labs = ax_arr[0][0].get_legend_handles_labels()
         fig.suptitle(f"{title} — case {self.case}")
-        import warnings
-
-        with warnings.catch_warnings(record=True) as caught:    # matplotlib's "tight layout not applied"
-            warnings.simplefilter("always")
-            fig.tight_layout(rect=(0, 0, 1, 0.97))
-        if any("tight" in str(w.message).lower() for w in caught):   # a fixed layout instead
-            fig.subplots_adjust(left=0.09, bottom=0.08, top=0.9, hspace=0.4, wspace=0.2)
-        if handles:                                 # outside the data, right of the panels
-            fig.subplots_adjust(right=0.84)
-            fig.legend(handles, labs, fontsize=7, loc="center left", bbox_to_anchor=(0.855, 0.5), frameon=False)
-        p = self.out / f"{name}_{self.case}.png"
-        fig.savefig(p, dpi=110)
-        self.plt.close(fig)
-        self.paths.append(p)
+        self.paths.append(_save_figure(self.plt, fig, self.out / f"{name}_{self.case}.png", ax_arr[0][0]))
 
 
 def plots(result, cp, out: Path, case: str) -> list[Path]:
     """PNG time histories: post forces, attach forces and moments, c.g./top motion, payload
     acceleration, tank pressures (:class:`_Figures`: the whole run beside the release window,
     engine starts and release marked, legends outside the data)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = _pyplot()
     t = result.time
     kit = _Figures(plt, result, cp, out, case)
     panels, draw, finish, paths = kit.panels, kit.draw, kit.finish, kit.paths
