@@ -45,11 +45,6 @@ class ContactRows:
     rforce: np.ndarray = None   # (k,) N, the matching forces
     rptr: np.ndarray = None     # (n_contacts + 1,) int64, contact c's table is [rptr[c], rptr[c + 1])
 
-    def release_force_at(self, c: int, s: float) -> float:
-        """F(s) of contact c's release table (N; linear, held at the end values); 0 without one."""
-        k0, k1 = self.rptr[c], self.rptr[c + 1]
-        return float(np.interp(s, self.rtravel[k0:k1], self.rforce[k0:k1])) if k1 > k0 else 0.0
-
     @property
     def n(self) -> int:
         return self.compliance.size
@@ -98,7 +93,7 @@ def contact_rows(body_a: ModalBody, body_b: ModalBody, contacts) -> ContactRows:
             mu.append(c.friction if d != c.axial else 0.0)
     n = len(dirs)
     latch = np.array([np.inf if c.latch_force is None else c.latch_force for c in contacts])
-    tables = [(np.zeros(0), np.zeros(0)) if getattr(c, "release_force", None) is None else c.release_force
+    tables = [(np.zeros(0), np.zeros(0)) if c.release_force is None else c.release_force
               for c in contacts]
     rptr = np.concatenate([[0], np.cumsum([t[0].size for t in tables])]).astype(np.int64)
     return ContactRows(directions=tuple(dirs), names=tuple(c.name for c in contacts),
