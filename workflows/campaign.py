@@ -459,7 +459,7 @@ def write_envelope_histories(env: list[dict], setters: dict, ref: ScenarioRef, c
     def store(res) -> None:
         index, t, cols = res
         name = case_name_of(index)
-        rows = [(j, side) for j, side in setters[index]]
+        rows = setters[index]
         data["cases"][name] = {
             "time": Dataset(t, "s"),
             "row": Dataset(np.array([j for j, _ in rows], dtype=np.int64), "1"),

@@ -169,7 +169,7 @@ def recoveries(case: Case, stack: StackModel) -> tuple[list[Recovery], dict, dic
         attach[name] = (point, comp)
     out.append(Recovery("cg_motion", "a", COMPONENTS, disp=cg_motion_matrix(body), units=("m",) * 3 + ("rad",) * 3,
                         category="cg_motion", description="vehicle c.g. motion (eq. 23)"))
-    for comp in [cb.name for cb in stack.vehicle_asm.components]:
+    for comp in (cb.name for cb in stack.vehicle_asm.components):
         A, mass = cg_acceleration_recovery(stack.vehicle_asm, stack.vehicle_modes, comp)
         out.append(Recovery(f"cg_accel_{comp}", "a", TRANSLATIONS, acc=A, units="m/s^2", category=CG_ACCELERATION,
                             description=f"net acceleration of {comp}'s c.g. (rigid-body mass x/y/z "
