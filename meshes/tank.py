@@ -58,7 +58,7 @@ class Compartment:
     liquid_density: float = 1141.0  # LOX at its boiling point, kg/m^3
     ullage_pressure: float = 0.0    # gauge pressure of the ullage gas, Pa (shell walls, hydroelastic: prestress)
 
-    def check(self, owner: str) -> None:
+    def check(self, owner: str = "Compartment") -> None:
         require_positive(f"{owner}.{self.name}", cyl_length=self.cyl_length, dome_bottom=self.dome_bottom,
                          dome_top=self.dome_top, liquid_density=self.liquid_density)
         u = self.ullage_pressure

@@ -19,18 +19,15 @@ from liftoff.core.errors import InputError
 
 
 def geometry(comp: ComponentModel, workdir: Path):
-    """The meshed Geometry of one component, built from its parameter dataclass."""
-    from liftoff.meshes import BoosterParams, OrbiterParams, PadParams, build_booster, build_orbiter, build_pad
-    from liftoff.meshes.barge import BargeParams, CargoParams, DockParams, build_barge, build_cargo, build_dock
-    from liftoff.meshes.tank import TankParams, build_tank
+    """The meshed Geometry of one component, built by its registered type's gmsh builder
+    (liftoff.config.component_types) from its parameter dataclass."""
+    from liftoff.config import component_types
 
-    builders = ((TankParams, build_tank), (BoosterParams, build_booster), (OrbiterParams, build_orbiter),
-                (PadParams, build_pad), (BargeParams, build_barge), (CargoParams, build_cargo),
-                (DockParams, build_dock))
-    for cls, build in builders:
-        if isinstance(comp.builder, cls):
-            return build(comp.builder, workdir)
-    raise InputError(f"component {comp.name!r}: no FE builder for {type(comp.builder).__name__}")
+    try:
+        t = component_types.types()[comp.type]
+    except KeyError:
+        raise InputError(f"component {comp.name!r}: no FE builder for type {comp.type!r}") from None
+    return t.builder()(comp.builder, workdir)
 
 
 def build_component(comp: ComponentModel, model: ModelConfig, workdir: Path):

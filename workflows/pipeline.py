@@ -3,9 +3,9 @@ system modes -> the two modal bodies (vehicle, pad) of the transient (sections 3
 
 Each stage is cached under a hash of its inputs (workflows/cache.py), so a run that
 changes only loads or cases loads the reduced models instead of meshing and solving.
-The vehicle is the free-free assembly of the components ``core``, ``srb_left``,
-``srb_right``, ``orbiter`` overlaid on their shared points; the pad is a grounded
-component reduced to its hold-down posts. Every named point of a component (spider
+The vehicle is the free-free assembly of the scenario's components (``[model.component]``,
+in the order given) overlaid on their joints (``[[model.joint]]``: shared points); the pad
+is a grounded component reduced to its hold-down posts. Every named point of a component (spider
 reference point, stick node with a name) is a Craig-Bampton boundary point (section
 3.0: interfaces, contact points and large-load points stay discrete).
 """
@@ -37,7 +37,7 @@ from liftoff.transient.body import ModalBody
 from liftoff.transient.effects import center_of_gravity
 from threadpoolctl import threadpool_limits
 
-from liftoff.config.model import VEHICLE, ComponentModel, ModelConfig
+from liftoff.config.model import PAD, ComponentModel, ModelConfig
 from liftoff.config.sections import Cryo
 from liftoff.config.values import Where
 from liftoff.core.labels import named_points, points_labels
@@ -218,7 +218,7 @@ def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, wh
 
     t0 = time.perf_counter()
     comps, cbs, ckeys, thermal = {}, {}, {}, {}
-    names = list(VEHICLE) + ["pad"]
+    names = list(model.vehicle) + [PAD]
     on_root(cache.comm, lambda: sweep_stale(tempfile.gettempdir()), share=False)   # geometry folders of killed runs
     with tempfile.TemporaryDirectory(prefix=f"liftoff-geom{TEMP_TAG}{os.getpid()}-") as work:
         bar = tqdm(names, desc="model stages", unit="component", disable=not progress or cache.comm.rank != 0,
@@ -233,7 +233,7 @@ def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, wh
             cbs[name], ckeys[name] = cb_stage(model, name, comps[name], k, cache)
     t1 = time.perf_counter()
     _check_materials(model, thermal, where or Where("scenario", "model"))
-    _check_nastran_points(model, cbs, where or Where("scenario", "model"))
+    _check_joints(model, cbs, where or Where("scenario", "model"))
     vasm, vmodes, vehicle, pasm, pmodes, pad, unit, vall, pall = _bodies(model, cbs, ckeys, thermal, cache)
     t2 = time.perf_counter()
     return StackModel(comps, cbs, vasm, vmodes, vehicle, pasm, pmodes, pad, unit, vall, pall,
@@ -245,16 +245,16 @@ def _bodies(model: ModelConfig, cbs: dict, ckeys: dict, thermal: dict, cache: St
     """Assemblies, system modes (all of them cached; those kept with their residual vectors,
     reduction/truncation.py) and the two modal bodies; the unit thermal loads reduced to
     each component's boundary."""
-    names = list(VEHICLE) + ["pad"]
+    names = list(model.vehicle) + [PAD]
     sysp = model.system
-    vasm = assemble([cbs[n] for n in VEHICLE], "vehicle")
-    vall = modes_stage(vasm, 6, [ckeys[n] for n in VEHICLE], cache, "vehicle")
+    vasm = assemble([cbs[n] for n in model.vehicle], "vehicle")
+    vall = modes_stage(vasm, 6, [ckeys[n] for n in model.vehicle], cache, "vehicle")
     vmodes = keep_modes(vall, sysp.f_max, sysp.n_modes, sysp.residual_vectors)
     body0 = vmodes.to_body(zeta=model.zeta, name="vehicle")
     _, cg = center_of_gravity(body0)
     vehicle = vmodes.to_body(ref_point=cg, zeta=model.zeta, name="vehicle")
-    pasm = assemble([cbs["pad"]], "pad")
-    pall = modes_stage(pasm, 0, [ckeys["pad"]], cache, "pad")
+    pasm = assemble([cbs[PAD]], "pad")
+    pall = modes_stage(pasm, 0, [ckeys[PAD]], cache, "pad")
     pmodes = keep_modes(pall, sysp.pad_f_max, sysp.pad_n_modes, sysp.residual_vectors)
     pad = pmodes.to_body(zeta=model.zeta, name="pad")
     unit = {}
@@ -264,25 +264,34 @@ def _bodies(model: ModelConfig, cbs: dict, ckeys: dict, thermal: dict, cache: St
     return vasm, vmodes, vehicle, pasm, pmodes, pad, unit, vall, pall
 
 
-def _check_nastran_points(model: ModelConfig, cbs: dict, where: Where) -> None:
-    """A Nastran vehicle component carries every joint the stack's layout gives it (the
-    booster and orbiter attach points; the core all of them), named by ``grids``: one
-    missing (an unmapped grid, a misspelt name) would leave the component disconnected
-    there, silently."""
-    lay = model.layout
-    joints = {"srb_left": set(lay.srb_attach_points("left")), "srb_right": set(lay.srb_attach_points("right")),
-              "orbiter": set(lay.orbiter_attach_points())}
-    joints["core"] = set().union(*joints.values())
-    for name in VEHICLE:
-        src = model.components[name].nastran
-        if src is None:
-            continue
-        missing = sorted(joints.get(name, set()) - set(cbs[name].boundary_points))
-        if missing:
-            named = ", ".join(f"{g} = {p!r}" for g, p in (src.grid_names or {}).items()) or "none"
-            raise (where / "component" / name / "nastran" / "grids").error(
-                f"no grid is named {missing[0]!r}, a joint of {name} with the stack: map its grid ID to it "
-                f"(joints of {name}: {', '.join(sorted(joints[name]))}; named: {named})")
+def _check_joints(model: ModelConfig, cbs: dict, where: Where) -> None:
+    """Every joint's point is on each of its components (a Nastran component names it by
+    ``grids``), and every point that two vehicle components share is a joint of both: a
+    missing one (an unmapped grid, a misspelt group) would leave a component disconnected
+    there, an undeclared one would weld two components where nobody said so."""
+    points = {n: set(cbs[n].boundary_points) for n in model.vehicle}
+    for j in model.joints:
+        for c in j.components:
+            if j.name in points[c]:
+                continue
+            src = model.components[c].nastran
+            if src is not None:
+                named = ", ".join(f"{g} = {p!r}" for g, p in (src.grid_names or {}).items()) or "none"
+                raise (where / "component" / c / "nastran" / "grids").error(
+                    f"no grid is named {j.name!r}, a joint of {c} with the stack: map its grid ID to it "
+                    f"(joints of {c}: {', '.join(sorted(k.name for k in model.joints if c in k.components))}; "
+                    f"named: {named})")
+            raise (where / "joint").error(f"joint {j.name!r}: component {c!r} has no point {j.name!r} "
+                                          f"(its points: {', '.join(sorted(points[c])) or 'none'})")
+    joined = {(j.name, c) for j in model.joints for c in j.components}
+    names = list(model.vehicle)
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            for p in sorted(points[a] & points[b]):
+                if (p, a) not in joined or (p, b) not in joined:
+                    raise (where / "joint").error(
+                        f"components {a!r} and {b!r} both have a point {p!r}, which is no joint of both: declare "
+                        f"it ([[model.joint]] name = {p!r}, components = [{a!r}, {b!r}]) or rename one of them")
 
 
 def _check_materials(model: ModelConfig, thermal: dict[str, dict], where: Where) -> None:
@@ -303,8 +312,9 @@ def cryo_loads(stack: StackModel, cryo: Cryo, where: Where | None = None) -> dic
     if not cryo.enabled:
         return {}
     name = cryo.component
-    if name not in stack.cbs or name == "pad":
-        raise (where / "component").error(f"{name!r} is not a vehicle component ({', '.join(VEHICLE)})")
+    vehicle = [n for n in stack.cbs if n != PAD]
+    if name not in vehicle:
+        raise (where / "component").error(f"{name!r} is not a vehicle component ({', '.join(vehicle)})")
     avail = stack.unit_thermal[name]
     parts = []
     for vol in cryo.volumes:

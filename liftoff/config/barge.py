@@ -21,7 +21,8 @@ from liftoff.meshes.layout import StackLayout
 
 from .extends import read_scenario, resolve
 from .files import parse_toml
-from .model import ComponentModel, ModelConfig, SystemModel, builder
+from .model import ComponentModel, ModelConfig, SystemModel
+from .params import builder
 from .scenario import checked_case_name, merge
 from .sections import FORCE_KEYS, Force, TimeSpan, force, time_span
 from .values import Where, array_of_tables, boolean, integer, number, string, table
@@ -38,6 +39,7 @@ _FENDER = {"stiffness", "lateral_stiffness", "friction", "damping"}
 _OUTPUT = {"plots", "snapshots", "frames", "progress"}
 _CASE = _TOP - {"case", "kind"} | {"name"}
 _CLASSES = {"barge": BargeParams, "cargo": CargoParams, "dock": DockParams}
+_TYPES = {"barge": "barge_hull", "cargo": "barge_cargo", "dock": "dock"}    # liftoff.config.component_types
 
 
 @dataclass(frozen=True)
@@ -110,7 +112,7 @@ def _part(where: Where, name: str, spec: Any, defaults: dict) -> ComponentModel:
     obj = builder(where / "params", _CLASSES[name], params, defaults=extra)
     n_modes = integer(where / "n_modes", c["n_modes"], 0) if "n_modes" in c else None
     f_max = number(where / "f_max", c["f_max"], positive=True) if "f_max" in c else None
-    return ComponentModel(name, obj, size, n_modes, f_max if (f_max or n_modes) else 150.0)
+    return ComponentModel(name, obj, size, n_modes, f_max if (f_max or n_modes) else 150.0, type=_TYPES[name])
 
 
 def _check_fit(where: Where, comps: dict) -> None:

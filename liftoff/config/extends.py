@@ -10,6 +10,9 @@ The base is resolved first (it may itself extend another; a cycle is an error), 
   to another source than its base's (``"stick"`` on the ``"fe"`` Shuttle) does not inherit
   the base's ``[model]`` table at all, so that FE meshes, materials and builder parameters
   of the base never reach (or are refused by) the stick model;
+* a component (``[model.component.<name>]`` or ``[model.pad]``) whose ``type`` the file
+  changes (a ``nastran`` table makes it ``"nastran"``) does not inherit the base's table
+  for it either: the base's builder parameters belong to the base's type;
 * ``kind`` (``"liftoff"`` or ``"barge"``) is the base's: a file may repeat it, not change it;
 * file paths (CSV tables, Nastran files) resolve against the folder of the file that is run,
   whichever file names them.
@@ -93,7 +96,28 @@ def resolve(data: dict, source: str, folder: Path | None, _chain: tuple[str, ...
     if isinstance(own.get("model"), dict) and "source" in own["model"] \
             and own["model"]["source"] != _model_source(base):
         base = {k: v for k, v in base.items() if k != "model"}     # another model source: its own [model]
-    return merge(base, own)
+    return merge(_drop_retyped(base, own), own)
+
+
+def _type_of(table) -> str | None:
+    if not isinstance(table, dict):
+        return None
+    return "nastran" if "nastran" in table and "type" not in table else table.get("type")
+
+
+def _drop_retyped(base: dict, own: dict) -> dict:
+    """``base`` without the component tables whose type ``own`` changes."""
+    bm, om = base.get("model"), own.get("model")
+    if not isinstance(bm, dict) or not isinstance(om, dict):
+        return base
+    bm = dict(bm)
+    if isinstance(om.get("pad"), dict) and _type_of(om["pad"]) not in (None, _type_of(bm.get("pad"))):
+        bm.pop("pad", None)
+    bc, oc = bm.get("component"), om.get("component")
+    if isinstance(bc, dict) and isinstance(oc, dict):
+        bm["component"] = {n: t for n, t in bc.items()
+                           if not (isinstance(oc.get(n), dict) and _type_of(oc[n]) not in (None, _type_of(t)))}
+    return {**base, "model": bm}
 
 
 def read_scenario(path: str | Path) -> dict:

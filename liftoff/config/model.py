@@ -1,21 +1,24 @@
-"""``[model]`` of a lift-off scenario: which component models to build and how, checked
-when the file is read (before anything is meshed).
+"""``[model]`` of a lift-off scenario: the vehicle and the pad as components of registered
+types, the joints between them, and how to reduce them; checked when the file is read
+(before anything is meshed).
 
-Builder parameters become the builders' own dataclasses here, with their types, names and
-``check()`` (all importable without gmsh):
-
-* ``[model.vehicle.params]``: :class:`meshes.layout.StackLayout`, the positions shared by
-  every component and the pad, for both sources;
-* source ``"fe"``: ``[model.component.<srb_left|srb_right>.params]``
-  :class:`meshes.vehicle.BoosterParams`, ``[model.component.orbiter.params]``
-  :class:`meshes.vehicle.OrbiterParams` (the core stage takes none: its
-  :class:`meshes.tank.TankParams` follow from the layout), ``[model.pad.params]``
-  :class:`meshes.pad.PadParams`; ``[model.materials.<volume>]``
-  :class:`meshes.spec.Material` (its own check, the one copy of the material rules;
-  volume names are checked against the geometry once it is built);
-* source ``"stick"``: ``[model.pad.params]`` :class:`meshes.pad.PadParams` (deck, posts,
-  pedestals, mass) and ``[model.stick]`` :class:`meshes.stick.StickParams` (beam section
-  properties and masses; positions come from the layout and the pad).
+* ``[model.component.<name>]``, any number, any names: the vehicle, assembled free-free in
+  the order given. Each has a ``type`` (liftoff.config.component_types: ``shuttle_core``,
+  ``shuttle_booster``, ``shuttle_orbiter``, ``tank_stage``, ``geometry`` (the user's own
+  file), ... or ``nastran`` with a ``nastran`` table), its ``params`` (the type's builder
+  dataclass, checked by the type), ``mesh_size`` (m), and the fixed-interface modes kept
+  (``n_modes``/``f_max``).
+* ``[model.pad]``: the grounded body the hold-down posts stand on, the same way
+  (``launch_table``, ``geometry`` or ``nastran``).
+* ``[[model.joint]]``: a named point shared by two or more vehicle components (the
+  components overlay it, as the attach points of the Shuttle stack); every point that two
+  components share must be a joint, and the joints must connect the vehicle.
+* ``[model.vehicle.params]``: :class:`meshes.layout.StackLayout`, the positions the Shuttle
+  types (and the stick source) share;
+* source ``"stick"``: the Shuttle's four components and pad as beams from one
+  ``[model.stick]`` :class:`meshes.stick.StickParams` (no types);
+* ``[model.materials.<volume>]``: :class:`meshes.spec.Material` replacing a volume group's
+  material (volume names are checked against the geometry once it is built).
 
 Units SI: m, Hz, Pa, kg/m^3.
 """
@@ -31,13 +34,14 @@ from liftoff.meshes.layout import StackLayout
 from liftoff.meshes.pad import PadParams
 from liftoff.meshes.spec import Material
 from liftoff.meshes.stick import StickParams
-from liftoff.meshes.vehicle import BoosterParams, OrbiterParams, core_stage_params
 
-from .values import Where, array_of_tables, boolean, integer, number, string, table, unique_name, vector
+from . import component_types
+from .params import builder
+from .values import Where, array_of_tables, boolean, integer, number, string, strings, table, unique_name
 
 SOURCES = ("fe", "stick")
-VEHICLE = ("core", "srb_left", "srb_right", "orbiter")
-NAMES = VEHICLE + ("pad",)
+STICK_VEHICLE = ("core", "srb_left", "srb_right", "orbiter")   # the stick source's components (workflows/stick.py)
+PAD = "pad"                 # the pad's component name ([model.pad])
 DEFAULT_F_MAX = 60.0        # Hz, fixed-interface modes kept when neither n_modes nor f_max is given
 STICK_ELEMENT = 4.0         # m, default beam element length of the stick source
 # the most elements one component may have, estimated before it is built ([model] max_elements):
@@ -48,13 +52,13 @@ STICK_ELEMENT = 4.0         # m, default beam element length of the stick source
 MAX_ELEMENTS = {"fe": 1_000_000, "stick": 2_000}
 
 _MODEL = {"source", "mesh_size", "degree", "zeta", "vehicle", "pad", "component", "materials", "system", "stick",
-          "walls", "max_elements", "liquid", "convective"}
+          "walls", "max_elements", "liquid", "convective", "joint"}
 WALLS = ("solid", "shell")
 LIQUIDS = ("smeared", "hydroelastic")     # [model] liquid: the core stage's propellants (meshes.tank)
 CONVECTIVE = ("wall", "free")             # [model] convective: a hydroelastic liquid's sloshing part (fem.liquid)
-_CORE_PARAMS = {"shell_bending_ratio", "ullage_pressure", "attach"}
 _VEHICLE = {"mesh_size", "params"}
-_COMP = {"mesh_size", "n_modes", "f_max", "params", "nastran"}
+_COMP = {"type", "mesh_size", "n_modes", "f_max", "params", "nastran"}
+_JOINT = {"name", "components"}
 _NASTRAN = {"file", "units", "grids", "asm", "pch", "op4", "bulk", "stiffness", "mass", "se", "recovery"}
 _NASTRAN_FILES = ("file", "asm", "pch", "op4", "bulk")
 _NASTRAN_RECOVERY = {"name", "disp", "vel", "acc", "rows", "quantity"}
@@ -85,16 +89,27 @@ class NastranSource:
 
 @dataclass(frozen=True)
 class ComponentModel:
-    """One component's model: its builder's parameters, mesh size (m; stick: beam element
-    length; None: the builder's default) and the fixed-interface modes kept by
-    Craig-Bampton (the first ``n_modes``, at most ``f_max`` Hz; None: no limit)."""
+    """One component's model: its ``type`` (liftoff.config.component_types; "nastran";
+    "stick"), its builder's parameters (the type's dataclass; None for a Nastran model),
+    mesh size (m; stick: beam element length; None: the builder's default) and the
+    fixed-interface modes kept by Craig-Bampton (the first ``n_modes``, at most ``f_max``
+    Hz; None: no limit)."""
 
     name: str
-    builder: Any               # TankParams | BoosterParams | OrbiterParams | PadParams (fe); StickParams (stick)
+    builder: Any               # the type's parameter dataclass (fe); StickParams (stick); None (nastran)
     mesh_size: float | None = None
     n_modes: int | None = None
     f_max: float | None = None
     nastran: NastranSource | None = None
+    type: str = ""
+
+
+@dataclass(frozen=True)
+class Joint:
+    """A point (label prefix ``name``) that the vehicle ``components`` share and overlay."""
+
+    name: str
+    components: tuple[str, ...]
 
 
 @dataclass(frozen=True)
@@ -114,8 +129,9 @@ class SystemModel:
 @dataclass(frozen=True)
 class ModelConfig:
     """``[model]``: source ``fe`` (gmsh + dolfinx solids) or ``stick`` (beams), element
-    ``degree``, modal damping ratio ``zeta`` of every elastic mode, the five components
-    (core, srb_left, srb_right, orbiter, pad), material replacements and system modes;
+    ``degree``, modal damping ratio ``zeta`` of every elastic mode, the components (the
+    ``vehicle``'s, in assembly order, and the pad, :data:`PAD`), the ``joints`` between vehicle
+    components, material replacements and system modes;
     ``max_elements``: the most elements a component may have (estimated before it is built;
     default MAX_ELEMENTS of the source)."""
 
@@ -128,54 +144,8 @@ class ModelConfig:
     system: SystemModel
     max_elements: int = MAX_ELEMENTS["fe"]
     convective: str = "wall"      # hydroelastic liquids: their sloshing part on the wetted wall, or "free"
-
-
-# ---------------------------------------------------------------- builder dataclasses
-def _field_value(where: Where, value: Any, default: Any, annotation: str = "") -> Any:
-    """A TOML value for a dataclass field, typed after the field's default: true/false, a
-    string (also for a default of None where the field's annotation is ``str | None``), an
-    array (of numbers, or of points as long as the default's; a coordinate ``*_xy`` as long
-    as the default), else a number."""
-    if isinstance(default, bool):
-        return boolean(where, value)
-    if isinstance(default, str) or (default is None and str(annotation).replace(" ", "") == "str|None"):
-        return string(where, value)
-    if not isinstance(default, tuple):
-        return number(where, value)
-    if not isinstance(value, list) or not value:
-        raise where.error("expected a non-empty array")
-    if default and isinstance(default[0], tuple):
-        return tuple(tuple(float(x) for x in vector(where / i, v, length=len(default[0])))
-                     for i, v in enumerate(value))
-    out = tuple(float(x) for x in vector(where, value))
-    if where.key.endswith("_xy") and len(out) != len(default):
-        raise where.error(f"has {len(out)} entries, expected {len(default)} (x, y in m)")
-    return out
-
-
-def builder(where: Where, cls: type, spec: Any, fixed: dict | None = None, defaults: dict | None = None):
-    """``cls(**fixed, **spec)`` checked: keys are fields of ``cls`` (not those in ``fixed``,
-    not nested dataclasses), values typed after the field defaults, then ``cls.check()``.
-    ``defaults`` fill fields the table does not give."""
-    fixed = fixed or {}
-    if not isinstance(spec, dict):
-        raise where.error(f"expected a table of {cls.__name__} fields, got {type(spec).__name__}")
-    fields, types = {}, {}
-    for f in dataclasses.fields(cls):
-        default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
-        if f.init and f.name not in fixed and not dataclasses.is_dataclass(default):
-            fields[f.name], types[f.name] = default, f.type
-    unknown = sorted(set(spec) - set(fields))
-    if unknown:
-        raise where.error(f"unknown key {unknown[0]!r}: not a parameter of {cls.__name__} "
-                          f"(parameters: {', '.join(fields)})")
-    kwargs = {**(defaults or {}), **{k: _field_value(where / k, v, fields[k], types[k]) for k, v in spec.items()}}
-    try:
-        obj = cls(**fixed, **kwargs)
-        obj.check()
-    except InputError as exc:
-        raise where.wrap(exc) from None
-    return obj
+    vehicle: tuple[str, ...] = ()      # the vehicle's components, in assembly order
+    joints: tuple[Joint, ...] = ()
 
 
 # ---------------------------------------------------------------- [model]
@@ -215,14 +185,22 @@ def _nastran(where: Where, spec: Any, base: Path) -> NastranSource:
 
 
 def _sizes(where: Where, spec: dict, keys: set[str], base: Path = Path(".")) -> dict:
-    """mesh_size (m), n_modes, f_max (Hz) of a [model.component.*] / [model.pad] / [model.vehicle]
-    table, and a Nastran source if it has one."""
+    """type, mesh_size (m), n_modes, f_max (Hz) of a [model.component.*] / [model.pad] /
+    [model.vehicle] table, and a Nastran source if it has one."""
     c = table(where, spec, keys)
     out = {"params": c.get("params", {})}
+    if "type" in c:
+        out["type"] = string(where / "type", c["type"])
     if "nastran" in c:
+        if out.setdefault("type", component_types.NASTRAN) != component_types.NASTRAN:
+            raise (where / "nastran").error(f"a Nastran model is type = {component_types.NASTRAN!r}, not "
+                                            f"{out['type']!r} (set type = {component_types.NASTRAN!r})")
         out["nastran"] = _nastran(where / "nastran", c["nastran"], base)
         if out["params"] or "mesh_size" in c:
             raise (where / "nastran").error("a Nastran component takes no builder params or mesh_size")
+    elif out.get("type") == component_types.NASTRAN:
+        raise (where / "nastran").error("missing: a type = 'nastran' component needs its [nastran] table (file, units, "
+                                        "grids)")
     if "mesh_size" in c:
         out["mesh_size"] = number(where / "mesh_size", c["mesh_size"], positive=True)
     if "n_modes" in c:
@@ -234,61 +212,101 @@ def _sizes(where: Where, spec: dict, keys: set[str], base: Path = Path(".")) -> 
     return out
 
 
-def _fe_builders(where: Where, layout: StackLayout, sel: dict[str, dict], size: dict[str, float | None],
-                 walls: str, liquid: str = "smeared") -> dict:
-    """Builder dataclasses of the FE components (gmsh geometry of meshes/); ``walls`` the
-    vehicle walls' model ([model] walls: thickened solids or shells), overridable per
-    booster/orbiter in their params."""
+def _fe_builders(where: Where, ctx: dict, sel: dict[str, dict], size: dict[str, float | None],
+                 vehicle: tuple[str, ...]) -> dict:
+    """The builder dataclass of every FE component, read by its registered type
+    (liftoff.config.component_types); None for a Nastran one."""
     out = {}
-    wc = where / "component"
-    core = dict(sel["core"]["params"])
-    extra = sorted(set(core) - _CORE_PARAMS)
-    if extra:
-        raise (wc / "core" / "params").error(
-            f"unknown key {extra[0]!r}: the core stage takes only {', '.join(sorted(_CORE_PARAMS))} (shell walls); "
-            "its tank follows from [model.vehicle.params] (StackLayout)")
-    ratio = number(wc / "core" / "params" / "shell_bending_ratio", core.get("shell_bending_ratio", 1.0),
-                   positive=True)
-    ullage = _ullage(wc / "core" / "params", core)
-    attach = string(wc / "core" / "params" / "attach", core["attach"]) if "attach" in core else None
-    try:
-        out["core"] = core_stage_params(layout, **_size(size["core"]), walls=walls, shell_bending_ratio=ratio,
-                                        liquid=liquid, ullage_pressure=ullage, attach=attach)
-        out["core"].check()
-    except InputError as exc:
-        raise (wc / "core").wrap(exc) from None
-    for name in ("srb_left", "srb_right"):
-        out[name] = builder(wc / name / "params", BoosterParams, sel[name]["params"],
-                            {"side": name[4:], "layout": layout}, {**_size(size[name]), "walls": walls})
-    out["orbiter"] = builder(wc / "orbiter" / "params", OrbiterParams, sel["orbiter"]["params"], {"layout": layout},
-                             {**_size(size["orbiter"]), "walls": walls})
-    out["pad"] = builder(where / "pad" / "params", PadParams, sel["pad"]["params"], {"layout": layout},
-                         _size(size["pad"]))
+    for name in vehicle + (PAD,):
+        w = where / "component" / name if name != PAD else where / PAD
+        kind = sel[name].get("type")
+        if kind is None:
+            raise (w / "type").error("missing: the component's type (" + ", ".join(
+                sorted(component_types.types())) + f", or {component_types.NASTRAN!r} with a [nastran] table)")
+        if kind == component_types.NASTRAN:
+            out[name] = None
+            continue
+        try:
+            t = component_types.get(kind, "pad" if name == PAD else "vehicle")
+        except InputError as exc:
+            raise (w / "type").wrap(exc) from None
+        out[name] = t.read(component_types.Context(name, size[name], **ctx), w / "params", sel[name]["params"])
     return out
-
-
-def _ullage(where: Where, core: dict) -> dict | None:
-    """[model.component.core.params] ullage_pressure = {lh2 = Pa, lox = Pa} (gauge), or None."""
-    if "ullage_pressure" not in core:
-        return None
-    w = where / "ullage_pressure"
-    t = table(w, core["ullage_pressure"], {"lh2", "lox"}, ("lh2", "lox"))
-    return {k: number(w / k, v, nonneg=True) for k, v in t.items()}
-
-
-def _size(size: float | None) -> dict:
-    return {} if size is None else {"mesh_size": size}
 
 
 def _stick_builders(where: Where, layout: StackLayout, sel: dict[str, dict], spec: Any) -> dict:
     """One StickParams (beams) for all five components; the pad's geometry from PadParams."""
-    for name in VEHICLE:
+    for name in STICK_VEHICLE + (PAD,):
+        if sel[name].get("type", component_types.NASTRAN) != component_types.NASTRAN:
+            w = where / "component" / name if name != PAD else where / PAD
+            raise (w / "type").error("the stick source builds the Shuttle's components as beams: it takes no type")
+    for name in STICK_VEHICLE:
         if sel[name]["params"]:
             raise (where / "component" / name / "params").error(
                 "the stick source takes no per-component parameters: write StickParams fields in [model.stick]")
-    pad = builder(where / "pad" / "params", PadParams, sel["pad"]["params"], {"layout": layout})
+    pad = builder(where / PAD / "params", PadParams, sel[PAD]["params"], {"layout": layout})
     stick = builder(where / "stick", StickParams, spec, {"pad": pad})
-    return {name: stick for name in NAMES}
+    return {name: stick for name in STICK_VEHICLE + (PAD,)}
+
+
+def shuttle_joints(layout: StackLayout) -> tuple[Joint, ...]:
+    """The Shuttle stack's joints on ``layout``: each booster's and the orbiter's attach
+    points with the core (those of the stick source; the default scenario lists the same)."""
+    out = [Joint(p, ("core", f"srb_{side}")) for side in ("left", "right") for p in layout.srb_attach_points(side)]
+    return tuple(out + [Joint(p, ("core", "orbiter")) for p in layout.orbiter_attach_points()])
+
+
+def _vehicle_names(where: Where, comps: dict, source: str) -> tuple[str, ...]:
+    """The vehicle's component names, in the order given (the stick source: the Shuttle's)."""
+    wc = where / "component"
+    if source == "stick":
+        extra = sorted(set(comps) - set(STICK_VEHICLE))
+        if extra:
+            raise (wc / extra[0]).error(f"the stick source builds the Shuttle's components only "
+                                        f"({', '.join(STICK_VEHICLE)})")
+        return STICK_VEHICLE
+    if not comps:
+        raise wc.error("no components: list the vehicle's as [model.component.<name>] with a type")
+    seen: set[str] = set()
+    for name in comps:
+        unique_name(wc / name, name, seen, "component")
+        if name == PAD:
+            raise (wc / name).error("'pad' is the pad's name: describe it in [model.pad]")
+        seen.add(name)
+    return tuple(comps)
+
+
+def _joints(where: Where, spec: Any, vehicle: tuple[str, ...]) -> tuple[Joint, ...]:
+    """[[model.joint]]: names unique, components of the vehicle, and together connecting it
+    (a component joined to no other would float free: singular system modes)."""
+    out, seen = [], set()
+    for i, j in enumerate(array_of_tables(where, spec, "model.joint")):
+        w = where / i
+        j = table(w, j, _JOINT, ("name", "components"))
+        name = unique_name(w / "name", j["name"], seen, "joint")
+        seen.add(name)
+        comps = strings(w / "components", j["components"], nonempty=True)
+        for c in comps:
+            if c not in vehicle:
+                raise (w / "components").error(f"{c!r} is not a vehicle component ({', '.join(vehicle)})")
+        if len(set(comps)) < 2:
+            raise (w / "components").error("a joint joins two or more different components")
+        out.append(Joint(name, tuple(comps)))
+    if len(vehicle) > 1:
+        reached, todo = {vehicle[0]}, [vehicle[0]]
+        while todo:
+            c = todo.pop()
+            for j in out:
+                if c in j.components:
+                    for o in j.components:
+                        if o not in reached:
+                            reached.add(o)
+                            todo.append(o)
+        lone = [c for c in vehicle if c not in reached]
+        if lone:
+            raise where.error(f"component {lone[0]!r} is joined to none of {vehicle[0]!r}'s: give a "
+                              f"[[model.joint]] with components = [..., {lone[0]!r}] (the vehicle must hang together)")
+    return tuple(out)
 
 
 # keys of the stick model's [model.vehicle.params] (workflows.stick.StackParams) before the
@@ -346,11 +364,12 @@ def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig
     elif "stick" in m:
         raise (where / "stick").error("[model.stick] is for source = \"stick\"")
     vehicle = _sizes(where / "vehicle", m.get("vehicle", {}), _VEHICLE)
-    comps = table(where / "component", m.get("component", {}), set(VEHICLE))
-    sel = {name: _sizes(where / "component" / name, comps.get(name, {}), _COMP, base) for name in VEHICLE}
-    sel["pad"] = _sizes(where / "pad", m.get("pad", {}), _COMP, base)
-    sizes = {name: sel[name].get("mesh_size", vehicle.get("mesh_size") if name != "pad" else None) or size
-             for name in NAMES}
+    comps = table(where / "component", m.get("component", {}), set(m.get("component", {})))
+    names = _vehicle_names(where, comps, source)
+    sel = {name: _sizes(where / "component" / name, comps.get(name, {}), _COMP, base) for name in names}
+    sel[PAD] = _sizes(where / PAD, m.get(PAD, {}), _COMP, base)
+    sizes = {name: sel[name].get("mesh_size", vehicle.get("mesh_size") if name != PAD else None) or size
+             for name in names + (PAD,)}
     layout = _layout(where / "vehicle" / "params", vehicle["params"], source)
     walls = string(where / "walls", m.get("walls", "solid"))
     if walls not in WALLS:
@@ -365,12 +384,21 @@ def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig
     convective = string(where / "convective", m.get("convective", "wall"))
     if convective not in CONVECTIVE:
         raise (where / "convective").error(f"must be one of {', '.join(CONVECTIVE)}, got {convective!r}")
-    builders = _fe_builders(where, layout, sel, sizes, walls, liquid) if source == "fe" else \
-        _stick_builders(where, layout, sel, m.get("stick", {}))
+    if source == "fe":
+        ctx = {"layout": layout, "walls": walls, "liquid": liquid, "base": base}
+        builders = _fe_builders(where, ctx, sel, sizes, names)
+    else:
+        builders = _stick_builders(where, layout, sel, m.get("stick", {}))
     components = {name: ComponentModel(name, builders[name], sizes[name], sel[name].get("n_modes"),
                                        sel[name].get("f_max", None if "n_modes" in sel[name] else DEFAULT_F_MAX),
-                                       sel[name].get("nastran"))
-                  for name in NAMES}
+                                       sel[name].get("nastran"), sel[name].get("type", "stick"))
+                  for name in names + (PAD,)}
+    if source == "stick":
+        if "joint" in m:
+            raise (where / "joint").error("the stick source joins the Shuttle's components itself: no [[model.joint]]")
+        joints = shuttle_joints(layout)
+    else:
+        joints = _joints(where / "joint", m.get("joint", []), names)
     s = table(where / "system", m.get("system", {}), _SYSTEM)
     system = SystemModel(**{k: boolean(where / "system" / k, v) if k == "residual_vectors" else
                             integer(where / "system" / k, v, 1) if "n_modes" in k else
@@ -378,4 +406,4 @@ def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig
     max_elements = integer(where / "max_elements", m.get("max_elements", MAX_ELEMENTS[source]), 1)
     return ModelConfig(source, degree, zeta, layout, components,
                        _materials(where / "materials", m.get("materials", {}), source), system, max_elements,
-                       convective)
+                       convective, names, joints)

@@ -82,7 +82,15 @@ BAD = [
      "'core_wall': Poisson's ratio nu = 0.6 must be in (-1, 0.5)"),
     ("model.materials", {"core_wall": {"E": "7e10", "nu": 0.3, "rho": 2800.0}}, "model.materials.core_wall.E: "
      "expected a number"),
-    ("model.component", {"booster": {}}, "model.component: unknown key 'booster'"),
+    ("model.component", {"booster": {}}, "model.component.booster.type: missing: the component's type"),
+    ("model.component.srb_left.type", "booster", "model.component.srb_left.type: unknown component type 'booster'"),
+    ("model.component.srb_left.type", "launch_table", "model.component.srb_left.type: type 'launch_table' is not for "
+     "the vehicle"),
+    ("model.component.pad", {}, "model.component.pad: 'pad' is the pad's name"),
+    ("model.joint", [{"name": "att_orb_fwd", "components": ["core", "wing"]}],
+     "model.joint[0].components: 'wing' is not a vehicle component"),
+    ("model.joint", [{"name": "att_orb_fwd", "components": ["core", "orbiter"]}],
+     "model.joint: component 'srb_left' is joined to none of 'core''s"),
     ("post_defaults.stiffness", [1e9, -1e9, 1e9], "post[0] 'left_1'.stiffness[1]: negative value"),
     ("post_defaults.stiffness", [1e9, 1e9], "post[0] 'left_1'.stiffness: has 2 entries, expected 3"),
     ("post_defaults.stiffnes", 1e9, "post_defaults: unknown key 'stiffnes'"),
@@ -124,9 +132,10 @@ BAD = [
     ("model.vehicle.params", {"srb_axis_x": 5.0}, "model.vehicle.params: StackLayout.srb_axis_x: boosters overlap"),
     ("model.vehicle.params", {"n_modes": 5}, "model.vehicle.params: unknown key 'n_modes'"),
     ("model.vehicle.n_modes", 5, "model.vehicle: unknown key 'n_modes'"),
-    ("model.component.srb_left.params", {"case_thickness": 2.0}, "model.component.srb_left.params: "
+    ("model.component.srb_left.params", {"side": "left", "case_thickness": 2.0}, "model.component.srb_left.params: "
      "BoosterParams(left).case_thickness must be < srb_radius/2"),
-    ("model.component.srb_left.params", {"side": "right"}, "model.component.srb_left.params: unknown key 'side'"),
+    ("model.component.srb_left.params", {"side": "up"}, "model.component.srb_left.params: booster side must be one of"),
+    ("model.component.srb_left.params", {"walls": "solid"}, "model.component.srb_left.params.side: missing"),
     ("model.component.orbiter.params", {"wing_spam": 20.0}, "model.component.orbiter.params: unknown key 'wing_spam'"),
     ("model.component.core.params", {"radius": 4.0}, "model.component.core.params: unknown key 'radius': the core stage takes only attach, shell_bending_ratio, ullage_pressure"),
     ("model.component.core.params", {"ullage_pressure": {"lh2": 1e5}},
@@ -134,11 +143,11 @@ BAD = [
     ("model.component.core.params", {"ullage_pressure": {"lh2": -1.0, "lox": 0.0}},
      "model.component.core.params.ullage_pressure.lh2: negative value -1"),
     ("model.component.core.params", {"attach": "hoop"},
-     "model.component.core: core_stage_params.attach must be one of 'patch', 'ring' (got 'hoop')"),
+     "model.component.core.params: core_stage_params.attach must be one of 'patch', 'ring' (got 'hoop')"),
     # a field that defaults to None takes a string only where it is a string field
-    ("model.component.srb_left.params", {"case_shell_thickness": "0.01"},
+    ("model.component.srb_left.params", {"side": "left", "case_shell_thickness": "0.01"},
      "model.component.srb_left.params.case_shell_thickness: expected a number"),
-    ("model.component.srb_left.params", {"walls": "solid", "attach": "ring"},
+    ("model.component.srb_left.params", {"side": "left", "walls": "solid", "attach": "ring"},
      "model.component.srb_left.params: BoosterParams(left).attach = 'ring' needs walls = 'shell' (got 'solid')"),
     ("model.stick", {"core_wall": 0.01}, "model.stick: [model.stick] is for source = \"stick\""),
 ]
@@ -259,7 +268,7 @@ def test_walls_as_shells_reach_every_vehicle_builder(base):
     d = copy.deepcopy(base)
     d["model"]["walls"] = "shell"
     for name in ("srb_left", "srb_right"):         # the default keeps the boosters solid
-        d["model"]["component"][name].pop("params", None)
+        d["model"]["component"][name]["params"].pop("walls")
     d["model"].setdefault("component", {}).setdefault("core", {})["params"] = {"shell_bending_ratio": 50.0}
     comps = parse_scenario(d, "s.toml").cases[0].model.components
     assert all(comps[n].builder.walls == "shell" for n in ("core", "srb_left", "srb_right", "orbiter"))
@@ -276,7 +285,7 @@ def test_walls_as_shells_reach_every_vehicle_builder(base):
     core = parse_scenario(d, "s.toml").cases[0].model.components["core"].builder
     assert [c.ullage_pressure for c in core.compartments] == [0.0, 1.0e5]
     d["model"]["walls"] = "solid"          # pressure needs shell walls
-    with pytest.raises(InputError, match=r"model\.component\.core: TankParams\(core\)\.lox\.ullage_pressure: "
+    with pytest.raises(InputError, match=r"model\.component\.core\.params: TankParams\(core\)\.lox\.ullage_pressure: "
                                          "the pressure prestress needs walls = 'shell'"):
         parse_scenario(d, "s.toml")
     d["model"]["walls"] = "plates"

@@ -1,0 +1,54 @@
+"""``type = "tank_stage"``: a propellant tank stage of any number of compartments
+(meshes.tank.TankParams: cylinder with end domes, compartments joined by intertank skirts,
+walls solid or shell, liquids smeared or hydroelastic), with its named points as
+``patches = {name = [x, y, z]}`` (m): a point on the axis is a disk patch on the nearest
+dome apex (an engine mount, a payload adapter), any other a patch on the cylindrical wall
+(an attach fitting, a hold-down point). Compartments bottom to top as
+``[[model.component.<name>.params.compartments]]`` (meshes.tank.Compartment fields), the wall
+material as ``material = {E, nu, rho}`` (default Al 2219). walls and liquid default to
+[model]'s; the volume groups are named after the component (``<name>_wall``, ...)."""
+from __future__ import annotations
+
+from liftoff.core.errors import InputError
+
+from ..params import builder
+from ..values import Where, array_of_tables, number, table, vector
+from . import ComponentType, Context
+
+_MATERIAL = ("E", "nu", "rho")
+
+
+def read(ctx: Context, where: Where, params: dict):
+    from liftoff.meshes.spec import Material
+    from liftoff.meshes.tank import AL2219, Compartment, TankParams
+
+    if not isinstance(params, dict):
+        raise where.error("expected a table of TankParams fields")
+    own = {"compartments", "patches", "material"}
+    comps = []
+    for i, c in enumerate(array_of_tables(where / "compartments", params.get("compartments", []), "compartment",
+                                          nonempty=True)):
+        if "name" not in c:
+            raise (where / "compartments" / i / "name").error("missing: the compartment's name (lox, lh2, rp1, ...)")
+        comps.append(builder(where / "compartments" / i, Compartment, c))
+    names = [c.name for c in comps]
+    if len(set(names)) != len(names):
+        raise (where / "compartments").error(f"compartment names repeat: {names}")
+    patches = {}
+    for name, xyz in table(where / "patches", params.get("patches", {}), set(params.get("patches", {}))).items():
+        patches[name] = tuple(float(x) for x in vector(where / "patches" / name, xyz, length=3))
+    material = AL2219
+    if "material" in params:
+        m = table(where / "material", params["material"], set(_MATERIAL), _MATERIAL)
+        try:
+            material = Material(f"{ctx.name}-wall", *(number(where / "material" / k, m[k]) for k in _MATERIAL))
+        except InputError as exc:
+            raise (where / "material").wrap(exc) from None
+    rest = {k: v for k, v in params.items() if k not in own}
+    size = {} if ctx.mesh_size is None else {"mesh_size": ctx.mesh_size}
+    fixed = {"name": ctx.name, "compartments": tuple(comps), "patches": patches, "material": material}
+    return builder(where, TankParams, rest, fixed, {**size, "walls": ctx.walls, "liquid": ctx.liquid})
+
+
+TYPE = ComponentType("tank_stage", read, "liftoff.meshes.tank:build_tank", "vehicle",
+                     "a tank stage of any compartments, walls and liquids (meshes.tank.TankParams)")

@@ -1,0 +1,63 @@
+"""A builder's parameter dataclass from a TOML table, typed and checked (numpy only).
+
+The builders of meshes/ take plain dataclasses (scikit-fem style) with documented
+defaults and a ``check()``; :func:`builder` fills one from a scenario table: keys are the
+dataclass's fields, values typed after the field defaults, errors one line naming the key.
+"""
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+from liftoff.core.errors import InputError
+
+from .values import Where, boolean, number, string, vector
+
+
+def _field_value(where: Where, value: Any, default: Any, annotation: str = "") -> Any:
+    """A TOML value for a dataclass field, typed after the field's default: true/false, a
+    string (also for a default of None where the field's annotation is ``str | None``), an
+    array (of numbers, or of points as long as the default's; a coordinate ``*_xy`` as long
+    as the default), else a number."""
+    if isinstance(default, bool):
+        return boolean(where, value)
+    if isinstance(default, str) or (default is None and str(annotation).replace(" ", "") == "str|None"):
+        return string(where, value)
+    if not isinstance(default, tuple):
+        return number(where, value)
+    if not isinstance(value, list) or not value:
+        raise where.error("expected a non-empty array")
+    if default and isinstance(default[0], tuple):
+        return tuple(tuple(float(x) for x in vector(where / i, v, length=len(default[0])))
+                     for i, v in enumerate(value))
+    out = tuple(float(x) for x in vector(where, value))
+    if where.key.endswith("_xy") and len(out) != len(default):
+        raise where.error(f"has {len(out)} entries, expected {len(default)} (x, y in m)")
+    return out
+
+
+def builder(where: Where, cls: type, spec: Any, fixed: dict | None = None, defaults: dict | None = None):
+    """``cls(**fixed, **spec)`` checked: keys are fields of ``cls`` (not those in ``fixed``,
+    not nested dataclasses), values typed after the field defaults, then ``cls.check()``.
+    ``defaults`` fill fields the table does not give."""
+    fixed = fixed or {}
+    if not isinstance(spec, dict):
+        raise where.error(f"expected a table of {cls.__name__} fields, got {type(spec).__name__}")
+    fields, types = {}, {}
+    for f in dataclasses.fields(cls):
+        default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
+        if f.init and f.name not in fixed and not dataclasses.is_dataclass(default):
+            fields[f.name], types[f.name] = default, f.type
+    unknown = sorted(set(spec) - set(fields))
+    if unknown:
+        raise where.error(f"unknown key {unknown[0]!r}: not a parameter of {cls.__name__} "
+                          f"(parameters: {', '.join(fields)})")
+    kwargs = {**(defaults or {}), **{k: _field_value(where / k, v, fields[k], types[k]) for k, v in spec.items()}}
+    try:
+        obj = cls(**fixed, **kwargs)
+        obj.check()
+    except InputError as exc:
+        raise where.wrap(exc) from None
+    return obj
+
+
