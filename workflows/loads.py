@@ -141,12 +141,17 @@ def softening(case: Case, stack: StackModel, soft: Softening | None = None) -> M
         raise case.at("softening").wrap(exc) from None
 
 
-def _attach_component(stack: StackModel, point: str, where: Where) -> str:
+def _attach_component(stack: StackModel, joints, point: str, where: Where) -> str:
+    """The component whose interface force an attach recovery gives (``point@component``
+    names it): at a joint, the last of the joint's components (the Shuttle's joints list the
+    core first: the force on the booster or the orbiter), else the one component there."""
     owners = [n for n, cb in stack.cbs.items() if n != "pad" and f"{point}:Tx" in cb.boundary_labels]
     if not owners:
         raise where.error(f"point {point!r} is not a boundary point of any vehicle component")
-    non_core = [n for n in owners if n != "core"]
-    return (non_core or owners)[0]
+    for j in joints:
+        if j.name == point and j.components[-1] in owners:
+            return j.components[-1]
+    return owners[0]
 
 
 def recoveries(case: Case, stack: StackModel) -> tuple[list[Recovery], dict, dict]:
@@ -159,7 +164,7 @@ def recoveries(case: Case, stack: StackModel) -> tuple[list[Recovery], dict, dic
     out, attach = [], {}
     for spec in case.recovery.attach:
         point, _, comp = spec.partition("@")
-        comp = comp or _attach_component(stack, point, case.at("recovery.attach"))
+        comp = comp or _attach_component(stack, case.model.joints, point, case.at("recovery.attach"))
         labels = [f"{point}:{c}" for c in COMPONENTS]
         D, A = interface_force_recovery(stack.vehicle_asm, stack.vehicle_modes, comp, labels)
         name = f"attach_{point}"
