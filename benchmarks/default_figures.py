@@ -27,6 +27,7 @@ CONVERGENCE_JSON = FIGURES / "convergence.json"
 TWANG_JSON = FIGURES / "twang_study.json"
 MESH_JSON = FIGURES / "mesh_study.json"
 BENCH_JSON = FIGURES / "bench_workflow.json"       # benchmarks/bench_workflow.py --json (machine-dependent)
+SINGLE_STICK_JSON = FIGURES / "single_stick.json"  # benchmarks/single_stick_figures.py (the example)
 DOCS = (ROOT / "README.md", ROOT / "docs" / "workflow.md")
 #: figures agree when within this relative difference (of the larger of the two or, inside a
 #: list, of the list's largest magnitude): the same code on another machine differs by
@@ -136,9 +137,10 @@ def _mn(x: float) -> str:
 
 
 def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
-                  mesh: dict | None = None, bench: dict | None = None) -> dict[str, str]:
-    """{block name: markdown} from the figures (and the convergence, twang and mesh studies
-    and the workflow benchmark, if any)."""
+                  mesh: dict | None = None, bench: dict | None = None,
+                  single_stick: dict | None = None) -> dict[str, str]:
+    """{block name: markdown} from the figures (and the convergence, twang and mesh studies,
+    the workflow benchmark and the single-stick example's figures, if any)."""
     tw, twn = fig["twang"]["nominal"], fig["twang"]
     v, p = fig["vehicle"], fig["pad"]
     lox = fig["lox_bottom_pressure_pa"]
@@ -203,6 +205,11 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
         blocks["mesh-study"] = render_mesh(mesh)
     if bench:
         blocks.update(render_bench(bench))
+    if single_stick:
+        import runpy
+
+        blocks["single-stick"] = runpy.run_path(str(ROOT / "benchmarks" / "single_stick_figures.py"),
+                                                run_name="single_stick_figures")["render"](single_stick)
     return blocks
 
 
@@ -304,11 +311,11 @@ def block_names(text: str) -> list[str]:
     return [m.group("name") for m in BLOCK.finditer(text)]
 
 
-def studies() -> tuple[dict | None, dict | None, dict | None, dict | None]:
-    """The checked-in convergence, twang and mesh studies and the workflow benchmark (None
-    where not run)."""
+def studies() -> tuple[dict | None, ...]:
+    """The checked-in convergence, twang and mesh studies, the workflow benchmark and the
+    single-stick example's figures (None where not run)."""
     return tuple(json.loads(p.read_text()) if p.is_file() else None
-                 for p in (CONVERGENCE_JSON, TWANG_JSON, MESH_JSON, BENCH_JSON))
+                 for p in (CONVERGENCE_JSON, TWANG_JSON, MESH_JSON, BENCH_JSON, SINGLE_STICK_JSON))
 
 
 # ------------------------------------------------------------------ comparing

@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# Run every committed example through the command line; results go to out/examples/<name>/results.h5.
-# Usage: examples/run_all.sh [--regenerate]   (--regenerate first rebuilds the body files)
+# Run every committed example through the command line, into out/examples/<name>/: the two-body
+# transients (a make_bodies.py beside them) with `liftoff transient`, the launchers described as
+# components (a make_files.py beside them) with `liftoff run`.
+# Usage: examples/run_all.sh [--regenerate]   (--regenerate first rebuilds the body and geometry files)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PY=.venv/bin/python
@@ -8,7 +10,12 @@ LIFTOFF=.venv/bin/liftoff
 for dir in examples/*/; do
   name=$(basename "$dir")
   [ -f "$dir/scenario.toml" ] || continue
-  if [ "${1:-}" = "--regenerate" ]; then "$PY" "$dir/make_bodies.py"; fi
   echo "== $name"
-  "$LIFTOFF" transient "$dir/scenario.toml" --out "out/examples/$name"
+  if [ -f "$dir/make_files.py" ]; then
+    if [ "${1:-}" = "--regenerate" ]; then "$PY" "$dir/make_files.py"; fi
+    "$LIFTOFF" run "$dir/scenario.toml" --out "out/examples/$name"
+  else
+    if [ "${1:-}" = "--regenerate" ]; then "$PY" "$dir/make_bodies.py"; fi
+    "$LIFTOFF" transient "$dir/scenario.toml" --out "out/examples/$name"
+  fi
 done

@@ -28,6 +28,7 @@ STATIONS = {"interstage_low": 40.2, "interstage_up": 44.1, "fairing_low": 51.8, 
             "holddown": 3.6, "payload_if": 53.43, "payload_top": 57.43}
 PAYLOAD_MASS = 4850.0               # kg
 FAIRING_RADIUS = 2.6                # m (5.2 m fairing)
+PAYLOAD_TUBE = (0.6, 0.01)          # m: outer radius and wall of the payload's steel tube
 
 
 def joint_points(prefix: str, z: float, r: float = R) -> dict[str, list[float]]:
@@ -78,7 +79,7 @@ def payload_cb():
 
     z0, z1 = STATIONS["payload_if"], STATIONS["payload_top"]
     nodes = np.column_stack([np.zeros(9), np.zeros(9), np.linspace(z0, z1, 9)])
-    r_o, t = 0.6, 0.01                                    # m: tube radius and wall
+    r_o, t = PAYLOAD_TUBE
     A = math.pi * (r_o ** 2 - (r_o - t) ** 2)
     I = math.pi / 4 * (r_o ** 4 - (r_o - t) ** 4)
     rho = PAYLOAD_MASS / (A * (z1 - z0))                  # the payload's mass carried by its structure
