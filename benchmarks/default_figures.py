@@ -27,7 +27,7 @@ CONVERGENCE_JSON = FIGURES / "convergence.json"
 TWANG_JSON = FIGURES / "twang_study.json"
 MESH_JSON = FIGURES / "mesh_study.json"
 BENCH_JSON = FIGURES / "bench_workflow.json"       # benchmarks/bench_workflow.py --json (machine-dependent)
-SINGLE_STICK_JSON = FIGURES / "single_stick.json"  # benchmarks/single_stick_figures.py (the example)
+EXAMPLE_JSONS = {n: FIGURES / f"{n}.json" for n in ("single_stick", "saturn_v")}   # benchmarks/example_figures.py
 DOCS = (ROOT / "README.md", ROOT / "docs" / "workflow.md")
 #: figures agree when within this relative difference (of the larger of the two or, inside a
 #: list, of the list's largest magnitude): the same code on another machine differs by
@@ -138,9 +138,9 @@ def _mn(x: float) -> str:
 
 def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
                   mesh: dict | None = None, bench: dict | None = None,
-                  single_stick: dict | None = None) -> dict[str, str]:
+                  examples: dict | None = None) -> dict[str, str]:
     """{block name: markdown} from the figures (and the convergence, twang and mesh studies,
-    the workflow benchmark and the single-stick example's figures, if any)."""
+    the workflow benchmark and the launcher examples' figures {name: figures}, if any)."""
     tw, twn = fig["twang"]["nominal"], fig["twang"]
     v, p = fig["vehicle"], fig["pad"]
     lox = fig["lox_bottom_pressure_pa"]
@@ -205,11 +205,12 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
         blocks["mesh-study"] = render_mesh(mesh)
     if bench:
         blocks.update(render_bench(bench))
-    if single_stick:
+    if examples:
         import runpy
 
-        blocks["single-stick"] = runpy.run_path(str(ROOT / "benchmarks" / "single_stick_figures.py"),
-                                                run_name="single_stick_figures")["render"](single_stick)
+        mod = runpy.run_path(str(ROOT / "benchmarks" / "example_figures.py"), run_name="example_figures")
+        for name, ex in examples.items():
+            blocks[mod["EXAMPLES"][name].block] = mod["render"](name, ex)
     return blocks
 
 
@@ -314,8 +315,9 @@ def block_names(text: str) -> list[str]:
 def studies() -> tuple[dict | None, ...]:
     """The checked-in convergence, twang and mesh studies, the workflow benchmark and the
     single-stick example's figures (None where not run)."""
-    return tuple(json.loads(p.read_text()) if p.is_file() else None
-                 for p in (CONVERGENCE_JSON, TWANG_JSON, MESH_JSON, BENCH_JSON, SINGLE_STICK_JSON))
+    out = tuple(json.loads(p.read_text()) if p.is_file() else None
+                for p in (CONVERGENCE_JSON, TWANG_JSON, MESH_JSON, BENCH_JSON))
+    return out + ({n: json.loads(p.read_text()) for n, p in EXAMPLE_JSONS.items() if p.is_file()},)
 
 
 # ------------------------------------------------------------------ comparing

@@ -23,8 +23,8 @@ from typing import Any, Callable
 from liftoff.core.errors import InputError
 
 #: the types shipped with liftoff: module names of this package, each with a ``TYPE``
-BUILTIN = ("shuttle_core", "shuttle_booster", "shuttle_orbiter", "launch_table", "tank_stage", "geometry",
-           "barge_hull", "barge_cargo", "dock")
+BUILTIN = ("shuttle_core", "shuttle_booster", "shuttle_orbiter", "launch_table", "tank_stage", "barrel", "platform",
+           "geometry", "barge_hull", "barge_cargo", "dock")
 #: the type of a component imported from a Nastran Craig-Bampton model (no builder)
 NASTRAN = "nastran"
 ENTRY_POINTS = "liftoff.component_types"

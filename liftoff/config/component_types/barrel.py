@@ -1,0 +1,47 @@
+"""``type = "barrel"``: a thin-walled interstage, skirt, fairing or payload adapter,
+cylindrical or conical, as a shell joined at named points on its end rings
+(meshes.barrel.BarrelParams). Params: ``radius_bottom``, ``radius_top``, ``z_bottom``,
+``z_top``, ``thickness`` (m), ``material = {E, nu, rho}`` [Al 7075], ``mass`` (kg: the
+stiffened barrel's, its density set from it), ``joints_bottom``/``joints_top = {point =
+azimuth deg}``, ``bottom_point``/``top_point = {point = z}`` (a whole ring tied to one axis
+point), ``point_masses = {point = [kg, Ixx, Iyy, Izz]}``, ``arc_deg``, ``axis_xy``."""
+from __future__ import annotations
+
+from liftoff.core.errors import InputError
+
+from ..params import builder
+from ..values import Where, number, table, vector
+from . import ComponentType, Context
+
+_MAT = ("E", "nu", "rho")
+
+
+def _names(where: Where, spec) -> dict:
+    """A table of any names (points), checked to be a table."""
+    return table(where, spec, set(spec) if isinstance(spec, dict) else set())
+
+
+def read(ctx: Context, where: Where, params: dict):
+    from liftoff.meshes.barrel import BarrelParams
+    from liftoff.meshes.spec import Material
+
+    if not isinstance(params, dict):
+        raise where.error("expected a table of BarrelParams fields")
+    own = {"joints_bottom", "joints_top", "bottom_point", "top_point", "point_masses", "material"}
+    fixed = {"name": ctx.name}
+    for key in ("joints_bottom", "joints_top", "bottom_point", "top_point"):
+        fixed[key] = {n: number(where / key / n, v) for n, v in _names(where / key, params.get(key, {})).items()}
+    fixed["point_masses"] = {n: [float(x) for x in vector(where / "point_masses" / n, v, length=4)]
+                             for n, v in _names(where / "point_masses", params.get("point_masses", {})).items()}
+    if "material" in params:
+        m = table(where / "material", params["material"], set(_MAT), _MAT)
+        try:
+            fixed["material"] = Material(f"{ctx.name}-wall", *(number(where / "material" / k, m[k]) for k in _MAT))
+        except InputError as exc:
+            raise (where / "material").wrap(exc) from None
+    size = {} if ctx.mesh_size is None else {"mesh_size": ctx.mesh_size}
+    return builder(where, BarrelParams, {k: v for k, v in params.items() if k not in own}, fixed, size)
+
+
+TYPE = ComponentType("barrel", read, "liftoff.meshes.barrel:build_barrel", "vehicle",
+                     "an interstage, skirt, fairing or payload adapter as a shell barrel (meshes.barrel)")

@@ -1,0 +1,145 @@
+"""The launcher examples (examples/single_stick, examples/saturn_v), each a vehicle
+described as components of registered types on a pad, end to end.
+
+single_stick: two tank stages, the user's .geo interstage and fairing, a Nastran
+Craig-Bampton payload, on the user's .geo launch table; its files are what make_files.py
+writes. saturn_v: three tank stages, two barrel interstages and the spacecraft adapter, on
+a parametric platform; five engines started 1-2-2, controlled release.
+
+Both runs give the payload interface loads; the figures docs/workflow.md shows
+(benchmarks/example_figures.py -> docs/figures/<name>.json) are what they give. The
+first free-free bending frequency is checked against a second method, a Timoshenko beam
+(stick) model of the same stack built from closed forms (benchmarks/example_figures.py):
+the tank stages' wall sections and propellant (meshes.tank's closed forms), the barrels'
+sections and the payload's tube, all joints rigid (plane sections).
+
+Tolerance of the bending check (single_stick): the stick is stiffer by construction (its
+joints keep plane sections; the FE joins the stages at four patches and tied arcs, whose
+walls ovalise). On the first stage alone the FE (P1, 0.9 m) is 1.6 % below the stick
+(3.386 vs 3.441 Hz); on the stack 2.3 % (1.916 vs 1.962 Hz). The FE is asserted within
+[0.95, 1.0] of the stick: twice the measured gap, never above it. The Saturn V's FE is
+23 % below its stick (1.264 vs 1.639 Hz; P2 1.238 Hz) and its first stage alone 14 %
+(7.36 vs 8.59 Hz): that gap is not explained yet (docs/workflow.md), so its bending is
+not asserted against the stick, only recorded.
+"""
+from __future__ import annotations
+
+import csv
+import importlib.util
+import json
+import re
+import runpy
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+EXAMPLES = ROOT / "examples"
+EXAMPLE = EXAMPLES / "single_stick"
+
+
+def test_example_files_are_what_make_files_writes(tmp_path):
+    pytest.importorskip("pyyeti.nastran")
+    runpy.run_path(str(EXAMPLE / "make_files.py"), run_name="make_files")["main"](tmp_path)
+    for name in ("interstage.geo", "fairing.geo", "pad.geo"):
+        assert (EXAMPLE / name).read_text() == (tmp_path / name).read_text(), name
+    from liftoff.reduction.nastran import import_nastran
+
+    grids = {1: "payload_if", 2: "payload_top"}
+    a, b = (import_nastran(p / "payload.pch", name="payload", units="in-lbf-s", grid_names=grids)
+            for p in (EXAMPLE, tmp_path))
+    # the same beam and eigensolve, written to 10 significant digits: agree to 1e-9
+    np.testing.assert_allclose(a.fixed_freq_hz, b.fixed_freq_hz, rtol=1e-9)
+    np.testing.assert_allclose(a.M_B, b.M_B, rtol=0, atol=1e-9 * np.abs(b.M_B).max())
+    np.testing.assert_allclose(a.K_B, b.K_B, rtol=0, atol=1e-9 * np.abs(b.K_B).max())
+
+
+def _run(name: str, tmp_path_factory):
+    pytest.importorskip("dolfinx")
+    pytest.importorskip("pyyeti.nastran")
+    out = tmp_path_factory.mktemp(name) / "out"
+    cache = tmp_path_factory.getbasetemp() / "examples_cache"
+    p = subprocess.run([sys.executable, "-m", "liftoff.workflows.cli", "run", str(EXAMPLES / name / "scenario.toml"),
+                        "--out", str(out), "--cache", str(cache), "--no-snapshots", "--no-progress"],
+                       capture_output=True, text=True, timeout=1800)
+    assert p.returncode == 0, p.stderr[-3000:]
+    return out, p
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    return _run("single_stick", tmp_path_factory)
+
+
+@pytest.fixture(scope="module")
+def saturn(tmp_path_factory):
+    return _run("saturn_v", tmp_path_factory)
+
+
+def _figures_module():
+    spec = importlib.util.spec_from_file_location("example_figures", ROOT / "benchmarks" / "example_figures.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod            # its dataclasses look their module up
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_first_bending_against_a_timoshenko_stick(run):
+    out, _ = run
+    figures = _figures_module()
+    fig = figures.figures_of_run("single_stick", out)
+    f = figures.stick_of_example("single_stick").frequencies()
+    assert f[0] < 1e-2 and f[1] < 1e-2           # the two rigid-body modes of the plane
+    # the closed forms' mass against the meshed one: faceting of the domes, ~0.2 %
+    assert abs(fig["vehicle_mass_kg"] / fig["stick_mass_kg"] - 1) < 5e-3
+    assert 0.95 <= fig["first_bending_fe_hz"] / fig["first_bending_stick_hz"] <= 1.0, fig
+    # the figures docs/workflow.md shows (docs/figures/single_stick.json) are this run's
+    df = importlib.util.spec_from_file_location("default_figures", ROOT / "benchmarks" / "default_figures.py")
+    dmod = importlib.util.module_from_spec(df)
+    df.loader.exec_module(dmod)
+    checked_in = json.loads(figures.EXAMPLES["single_stick"].json.read_text())
+    diff = dmod.differences(json.loads(json.dumps(fig)), checked_in)
+    assert not diff, f"run `python benchmarks/example_figures.py single_stick`: {diff}"
+
+
+def test_example_runs_end_to_end_with_payload_interface_loads(run):
+    out, p = run
+    lines = [line for line in (out / "interface_loads_nominal.csv").open() if not line.startswith("#")]
+    interfaces = {r["interface"] for r in csv.DictReader(lines)}
+    assert "attach payload_if on payload" in interfaces, interfaces
+    peaks = {}
+    for case in ("nominal", "controlled-release"):
+        rows = {r[0]: r for r in csv.reader(line for line in (out / f"maxmin_{case}.csv").open()
+                                            if not line.startswith("#"))}
+        peaks[case] = float(rows["load factor payload Nz"][2])
+        assert float(rows["attach payload_if on payload Tz"][2]) > 0
+    # every case lifts off (the clamps separate), and the controlled release halves the
+    # payload's axial load factor of the instantaneous one (4.46 vs 2.19 g when written)
+    summary = (out / "summary.txt").read_text()
+    separations = [float(x) for x in re.findall(r"clamp_1\s+2\.500\s+([0-9.]+)", summary)]
+    assert len(separations) == 2 and all(2.5 <= t < 4.5 for t in separations), separations
+    assert peaks["controlled-release"] < 0.75 * peaks["nominal"], peaks
+
+
+def test_saturn_v_runs_with_a_controlled_release(saturn):
+    """Five engines started 1-2-2 and four hold-down arms: every case lifts off; the
+    controlled release holds the arms until the pins are drawn out (15.2 cm of travel)
+    and lowers the spacecraft's axial load factor; its figures are the checked-in ones."""
+    out, _ = saturn
+    summary = (out / "summary.txt").read_text()
+    sep = {case: [float(x) for x in re.findall(r"arm_1\s+3\.500\s+([0-9.]+)", block)]
+           for case, block in zip(("controlled-release", "instantaneous"), summary.split("  case '")[1:3])}
+    assert sep["instantaneous"][0] < 3.51 < sep["controlled-release"][0] < 6.0, sep
+    figures = _figures_module()
+    fig = figures.figures_of_run("saturn_v", out)
+    c = fig["cases"]
+    assert c["controlled-release"]["payload_nz_max_g"] < c["instantaneous"]["payload_nz_max_g"]
+    assert abs(fig["vehicle_mass_kg"] / fig["stick_mass_kg"] - 1) < 5e-3
+    df = importlib.util.spec_from_file_location("default_figures", ROOT / "benchmarks" / "default_figures.py")
+    dmod = importlib.util.module_from_spec(df)
+    df.loader.exec_module(dmod)
+    diff = dmod.differences(json.loads(json.dumps(fig)), json.loads(figures.EXAMPLES["saturn_v"].json.read_text()))
+    assert not diff, f"run `python benchmarks/example_figures.py saturn_v`: {diff}"
