@@ -1,0 +1,99 @@
+"""The parametric barrel (meshes/barrel.py) and platform (meshes/platform.py) against closed
+forms: the frustum's lateral area pi (r1 + r2) sqrt(h^2 + (r2 - r1)^2) and the mass it is
+given, the joint points on their rings, the platform's posts where asked and its mass."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from liftoff.core.errors import InputError
+
+pytest.importorskip("gmsh")
+
+
+def _mesh_area(path: str, group: str) -> float:
+    import gmsh
+
+    gmsh.initialize([], False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(path)
+        tag = next(t for d, t in gmsh.model.getPhysicalGroups(2) if gmsh.model.getPhysicalName(2, t) == group)
+        area = 0.0
+        for ent in gmsh.model.getEntitiesForPhysicalGroup(2, tag):
+            for et, nodes in zip(*gmsh.model.mesh.getElements(2, ent)[::2]):
+                for tri in np.asarray(nodes).reshape(-1, 3):
+                    p = np.array([gmsh.model.mesh.getNode(int(n))[0] for n in tri])
+                    area += 0.5 * np.linalg.norm(np.cross(p[1] - p[0], p[2] - p[0]))
+        return area
+    finally:
+        gmsh.finalize()
+
+
+def test_conical_barrel_area_mass_and_joints(tmp_path):
+    from liftoff.meshes.barrel import BarrelParams, build_barrel
+
+    p = BarrelParams("is2", 5.03, 3.3, 59.4, 65.285, 0.02, mass=3600.0, mesh_size=0.5,
+                     joints_bottom={f"lo_{k}": 45.0 + 90 * k for k in range(4)},
+                     joints_top={f"up_{k}": 45.0 + 90 * k for k in range(4)})
+    geo = build_barrel(p, tmp_path)
+    area = math.pi * (5.03 + 3.3) * math.hypot(65.285 - 59.4, 5.03 - 3.3)
+    assert p.wall_area() == pytest.approx(area, rel=1e-12)
+    # the meshed (faceted) area: 0.5 m triangles on radii of 3.3-5.0 m, chord sag ~ h^2 / (8 r) ~ 0.5 %
+    assert _mesh_area(geo.msh_path, "is2_wall") == pytest.approx(area, rel=1e-2)
+    assert geo.nominal_mass() == pytest.approx(3600.0, rel=1e-12)      # density set from the mass
+    ref = {q.name: q.ref_point for q in geo.patches}
+    assert np.allclose(ref["lo_0"], [5.03 * math.cos(math.pi / 4), 5.03 * math.sin(math.pi / 4), 59.4])
+    assert np.allclose(ref["up_2"], [-3.3 * math.cos(math.pi / 4), -3.3 * math.sin(math.pi / 4), 65.285])
+
+
+def test_barrel_axis_point_carries_its_mass(tmp_path):
+    from liftoff.meshes.barrel import BarrelParams, build_barrel
+
+    p = BarrelParams("sc", 3.3, 1.95, 75.5, 87.3, 0.02, mass=3800.0, mesh_size=0.8,
+                     joints_bottom={f"sc_{k}": 45.0 + 90 * k for k in range(4)}, top_point={"cg": 90.0},
+                     point_masses={"cg": [45000.0, 4.18e5, 4.18e5, 8.6e4]})
+    geo = build_barrel(p, tmp_path)
+    assert geo.nominal_mass() == pytest.approx(3800.0 + 45000.0, rel=1e-12)
+    assert np.allclose(geo.patch("cg").ref_point, [0.0, 0.0, 90.0])
+
+
+@pytest.mark.parametrize("change, expect", [
+    ({"z_top": 0.0}, "z_top 0.0 m must be above z_bottom"),
+    ({"joints_bottom": {"a": 0.0, "b": 20.0}}, r"joint arcs of \+-15\.0 deg overlap"),
+    ({"point_masses": {"x": [1.0, 0, 0, 0]}}, "'x' is not one of its points"),
+])
+def test_barrel_bad_parameters_are_one_line(change, expect):
+    from liftoff.meshes.barrel import BarrelParams
+
+    with pytest.raises(InputError, match=expect):
+        BarrelParams(**{"joints_bottom": {"a": 0.0}, **change}).check()
+
+
+def test_platform_posts_mass_and_clamps(tmp_path):
+    from liftoff.meshes.pad import STEEL
+    from liftoff.meshes.platform import PlatformParams, build_platform
+
+    posts = {f"arm_{k}": (3.5, 3.5 * (-1) ** k, 6.3) for k in range(2)}
+    p = PlatformParams("ml", deck_size=(30.0, 30.0), deck_thickness=6.0, deck_top_z=0.0, posts=posts,
+                       holes=((0.0, 0.0, 2.0),), pedestals=((-10.0, -10.0), (10.0, 10.0), (-10.0, 10.0)),
+                       mass=2.0e6, mesh_size=3.0)
+    geo = build_platform(p, tmp_path)
+    for n, xyz in posts.items():
+        assert np.allclose(geo.patch(n).ref_point, xyz)
+    # deck and posts weigh `mass` (the deck's density set from it), over the CAD volumes
+    vols = geo.group_volumes
+    deck_posts = geo.volumes["ml_deck"].rho * vols["ml_deck"] + STEEL.rho * vols["ml_posts"]
+    assert deck_posts == pytest.approx(2.0e6, rel=1e-9)
+    assert vols["ml_posts"] == pytest.approx(2 * 1.0 * 1.0 * 6.3, rel=1e-9)
+    assert vols["ml_deck"] == pytest.approx(30 * 30 * 6.0 - math.pi * 2.0 ** 2 * 6.0, rel=1e-6)
+    assert len(geo.clamped) == 3
+
+
+def test_platform_post_off_the_deck_is_one_line():
+    from liftoff.meshes.platform import PlatformParams
+
+    with pytest.raises(InputError, match=r"PlatformParams\(pad\)\.posts\.far: the post at \(50.0, 0.0\) is off the deck"):
+        PlatformParams(posts={"far": (50.0, 0.0, 3.0)}).check()
