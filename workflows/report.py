@@ -596,7 +596,8 @@ class Twang:
         return np.array([np.interp(self.t_ign, self.time, self.pad[:, j]) for j in range(2)])
 
     def line(self) -> str:
-        """One summary line: pad-frame peak and value at ignition, relative-to-c.g. peak."""
+        """One summary line: pad-frame peak and value at the first hold-down release (the
+        Shuttle's booster ignition), relative-to-c.g. peak."""
         i, k = self.i_peak, self.i_peak_cg
         peak = float(np.hypot(*self.pad[i]))
         out = (f"twang at {self.point} (pad frame, from t0): peak {peak:.3f} m at t = {self.time[i]:.2f} s "
@@ -604,7 +605,7 @@ class Twang:
         ign = self.at_ign
         if ign is not None:
             v = float(np.hypot(*ign))
-            out += (f"; at booster ignition (t = {self.t_ign:.2f} s) {v:.3f} m"
+            out += (f"; at hold-down release (t = {self.t_ign:.2f} s) {v:.3f} m"
                     + (f" = {100 * v / peak:.0f} % of the peak" if peak > 0 else ""))
         return out + f"; relative to the c.g.: peak {float(np.hypot(*self.rel_cg[k])):.3f} m at t = {self.time[k]:.2f} s"
 

@@ -196,7 +196,7 @@ def _check_interface_loads(out, case, res, maxmin_rows):
 
 
 TWANG = re.compile(r"twang at stack_top \(pad frame, from t0\): peak ([0-9.]+) m at t = ([0-9.]+) s .*"
-                   r"at booster ignition \(t = ([0-9.]+) s\) ([0-9.]+) m.*relative to the c\.g\.: peak ([0-9.]+) m")
+                   r"at hold-down release \(t = ([0-9.]+) s\) ([0-9.]+) m.*relative to the c\.g\.: peak ([0-9.]+) m")
 
 
 def _check_twang(out, cases):
