@@ -15,10 +15,13 @@ from liftoff.config import default_text
 HAVE_FE = all(importlib.util.find_spec(m) is not None for m in ("dolfinx", "gmsh", "slepc4py"))
 pytestmark = [pytest.mark.fem, pytest.mark.slow, pytest.mark.skipif(not HAVE_FE, reason="needs dolfinx")]
 MODEL = {"source": "fe", "zeta": 0.01, "liquid": "hydroelastic",
-         "component": {"core": {"mesh_size": 1.2, "n_modes": 10, "f_max": 40.0},
-                       "srb_left": {"n_modes": 6, "f_max": 40.0}, "srb_right": {"n_modes": 6, "f_max": 40.0},
-                       "orbiter": {"n_modes": 6, "f_max": 40.0}},
-         "pad": {"mesh_size": 2.4, "n_modes": 8, "f_max": 60.0},
+         "component": {"core": {"type": "shuttle_core", "mesh_size": 1.2, "n_modes": 10, "f_max": 40.0},
+                       "srb_left": {"type": "shuttle_booster", "params": {"side": "left"}, "n_modes": 6, "f_max": 40.0},
+                       "srb_right": {"type": "shuttle_booster", "params": {"side": "right"}, "n_modes": 6,
+                                     "f_max": 40.0},
+                       "orbiter": {"type": "shuttle_orbiter", "n_modes": 6, "f_max": 40.0}},
+         "pad": {"type": "launch_table", "mesh_size": 2.4, "n_modes": 8, "f_max": 60.0},
+         "joint": tomllib.loads(default_text())["model"]["joint"],      # the Shuttle's seven
          "system": {"f_max": 40.0, "pad_f_max": 60.0, "residual_vectors": False}}
 
 

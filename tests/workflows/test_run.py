@@ -52,10 +52,14 @@ def _toml(d: dict) -> str:
 #: the default stack on coarse FE meshes with few modes (also test_mpi_run.py's); its system modes cut
 #: without residual vectors on purpose (a small modal model, a large step: test_truncation* cover them)
 COARSE_FE = {"source": "fe", "zeta": 0.01,
-             "component": {"core": {"mesh_size": 1.2, "n_modes": 8, "f_max": 40.0},
-                           "srb_left": {"n_modes": 6, "f_max": 40.0}, "srb_right": {"n_modes": 6, "f_max": 40.0},
-                           "orbiter": {"n_modes": 6, "f_max": 40.0}},
-             "pad": {"mesh_size": 2.4, "n_modes": 8, "f_max": 60.0},
+             "component": {"core": {"type": "shuttle_core", "mesh_size": 1.2, "n_modes": 8, "f_max": 40.0},
+                           "srb_left": {"type": "shuttle_booster", "params": {"side": "left"}, "n_modes": 6,
+                                        "f_max": 40.0},
+                           "srb_right": {"type": "shuttle_booster", "params": {"side": "right"}, "n_modes": 6,
+                                         "f_max": 40.0},
+                           "orbiter": {"type": "shuttle_orbiter", "n_modes": 6, "f_max": 40.0}},
+             "pad": {"type": "launch_table", "mesh_size": 2.4, "n_modes": 8, "f_max": 60.0},
+             "joint": tomllib.loads(default_text())["model"]["joint"],         # the Shuttle's seven
              "system": {"f_max": 40.0, "pad_f_max": 60.0, "residual_vectors": False}}
 
 
