@@ -110,6 +110,20 @@ def pad_closed_form_volumes(p: PadParams) -> dict[str, float]:
     return {"pad_deck": float(deck), "pad_posts": float(posts), "pad_pedestals": float(peds)}
 
 
+def deck_material(name: str, mass: float, volume: float, flange_thickness: float, thickness: float) -> Material:
+    """A platform deck as a solid box: density mass / volume, and the modulus that gives the
+    bending stiffness of two steel flanges of ``flange_thickness`` at its top and bottom,
+    E_eq = 6 E_steel t_f / H (module docstring)."""
+    return Material(name, 6 * STEEL.E * flange_thickness / thickness, 0.3, mass / volume)
+
+
+def pedestal_material(size: float, wall: float) -> Material:
+    """A hollow square steel column of side ``size`` and ``wall`` smeared into a solid box:
+    E and rho times the steel's share of the box's area."""
+    fill = 1 - (1 - 2 * wall / size) ** 2
+    return Material("steel-column-equivalent", STEEL.E * fill, STEEL.nu, STEEL.rho * fill)
+
+
 def build_pad(p: PadParams, out_dir) -> Geometry:
     """Pad: volumes ``pad_deck``, ``pad_posts``, ``pad_pedestals``; post-top patches
     ``pad_post_<side>_<k>`` (reference points = booster hold-down points); clamped
@@ -158,11 +172,9 @@ def build_pad(p: PadParams, out_dir) -> Geometry:
     post_mass = STEEL.rho * vols["pad_posts"]
     if p.mlp_mass <= post_mass:
         raise InputError(f"PadParams.mlp_mass {p.mlp_mass} kg is less than the posts' mass {post_mass:.0f} kg")
-    rho = (p.mlp_mass - post_mass) / vols["pad_deck"]
-    E_eq = 6 * STEEL.E * p.deck_flange_thickness / H
-    fill = 1 - (1 - 2 * p.pedestal_wall_thickness / ps) ** 2  # steel area / box area
-    mats = {"pad_deck": Material("MLP-deck-equivalent", E_eq, 0.3, rho), "pad_posts": STEEL,
-            "pad_pedestals": Material("steel-column-equivalent", STEEL.E * fill, STEEL.nu, STEEL.rho * fill)}
+    mats = {"pad_deck": deck_material("MLP-deck-equivalent", p.mlp_mass - post_mass, vols["pad_deck"],
+                                      p.deck_flange_thickness, H),
+            "pad_posts": STEEL, "pad_pedestals": pedestal_material(ps, p.pedestal_wall_thickness)}
     geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), mats, patches, [], [], clamped, vols, n_nodes, areas)
     geo.save(out_dir / f"{p.name}.json")
     return geo

@@ -20,8 +20,8 @@ from liftoff.core.errors import InputError
 
 from . import _occ
 from ._occ import occ
-from .pad import STEEL
-from .spec import Geometry, Material, Patch, require_positive, require_range
+from .pad import STEEL, deck_material, pedestal_material
+from .spec import Geometry, Patch, require_positive, require_range
 
 
 @dataclass
@@ -130,11 +130,9 @@ def build_platform(p: PlatformParams, out_dir) -> Geometry:
     post_mass = STEEL.rho * vols[f"{n}_posts"]
     if p.mass <= post_mass:
         raise InputError(f"PlatformParams({n}).mass {p.mass} kg is less than the posts' mass {post_mass:.0f} kg")
-    fill = 1 - (1 - 2 * p.pedestal_wall_thickness / ps) ** 2      # steel area / box area
-    mats = {f"{n}_deck": Material(f"{n}-deck-equivalent", 6 * STEEL.E * p.flange_thickness / H, 0.3,
-                                  (p.mass - post_mass) / vols[f"{n}_deck"]),
-            f"{n}_posts": STEEL,
-            f"{n}_pedestals": Material("steel-column-equivalent", STEEL.E * fill, STEEL.nu, STEEL.rho * fill)}
+    mats = {f"{n}_deck": deck_material(f"{n}-deck-equivalent", p.mass - post_mass, vols[f"{n}_deck"],
+                                       p.flange_thickness, H),
+            f"{n}_posts": STEEL, f"{n}_pedestals": pedestal_material(ps, p.pedestal_wall_thickness)}
     geo = Geometry(n, str(out_dir / f"{n}.msh"), mats, patches, [], [], clamped, vols, n_nodes, areas)
     geo.save(out_dir / f"{n}.json")
     return geo
