@@ -43,6 +43,24 @@ _GUIDE = {
 # [[case]]
 # name = "my-case"              # a case besides the example's "nominal" and "no-control"
 ''',
+    "saturn_v": '''
+# Everything not set here is the "saturn_v" example's (liftoff init --example saturn_v --full DIR
+# writes it in full): three tank stages, two barrel interstages, the spacecraft adapter and a
+# platform, every part a parametric type (docs/workflow.md, "The vehicle and the pad").
+#
+# [model.component.s_ic]
+# mesh_size = 1.2               # m
+#
+# [post_defaults]
+# release_time = 3.5            # s: the hold-down arms let go
+#
+# [[engine]]
+# name = "f1_centre"            # the centre F-1: only the keys given change
+# start = 0.1                   # s
+#
+# [[case]]
+# name = "my-case"              # a case besides "controlled-release" and "instantaneous"
+''',
     "barge": '''
 # Everything not set here is the "barge" example's (liftoff init --example barge --full DIR
 # writes it in full). Tables merge key by key, and the entries of the arrays of tables

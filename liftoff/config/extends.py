@@ -31,7 +31,7 @@ from .files import parse_toml, read_toml
 from .values import Where, string
 
 #: example name -> embedded scenario (package data of liftoff.config)
-EXAMPLES = {"shuttle": "default_scenario.toml", "barge": "barge_scenario.toml"}
+EXAMPLES = {"shuttle": "default_scenario.toml", "barge": "barge_scenario.toml", "saturn_v": "saturn_v_scenario.toml"}
 #: how deep ``extends`` may chain (a longer chain is a mistake, not a design)
 MAX_DEPTH = 8
 
