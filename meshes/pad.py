@@ -75,12 +75,7 @@ class PadParams:
                     raise InputError(f"{o}: hold-down post under {name} is off the deck")
                 if np.hypot(*(pt[:2] - self.layout.srb_axis(side))) - self.post_size / np.sqrt(2) <= self.srb_hole_radius:
                     raise InputError(f"{o}.srb_hole_radius: the exhaust hole undercuts the post under {name}")
-        for k, (x, y) in enumerate(self.pedestal_xy):
-            if not (lo[0] < x - self.pedestal_size / 2 and x + self.pedestal_size / 2 < hi[0]
-                    and lo[1] < y - self.pedestal_size / 2 and y + self.pedestal_size / 2 < hi[1]):
-                raise InputError(f"{o}.pedestal_xy[{k}] = ({x}, {y}) is not under the deck")
-        if self.pedestal_wall_thickness >= 0.5 * self.pedestal_size:
-            raise InputError(f"{o}.pedestal_wall_thickness must be < pedestal_size/2")
+        check_pedestals(o, "pedestal_xy", self.pedestal_xy, self.pedestal_size, self.pedestal_wall_thickness, lo, hi)
         if self.deck_flange_thickness >= 0.5 * self.deck_thickness:
             raise InputError(f"{o}.deck_flange_thickness must be < deck_thickness/2")
 
@@ -108,6 +103,16 @@ def pad_closed_form_volumes(p: PadParams) -> dict[str, float]:
     posts = len(p.post_points()) * p.post_size ** 2 * p.post_height
     peds = len(p.pedestal_xy) * p.pedestal_size ** 2 * p.pedestal_height
     return {"pad_deck": float(deck), "pad_posts": float(posts), "pad_pedestals": float(peds)}
+
+
+def check_pedestals(owner: str, key: str, pedestals, size: float, wall: float, lo, hi) -> None:
+    """InputError naming ``owner.key[k]`` unless every square pedestal of side ``size`` at
+    (x, y) lies under the deck (bounds ``lo``, ``hi``), or its hollow ``wall`` is too thick."""
+    for k, (x, y) in enumerate(pedestals):
+        if not (lo[0] < x - size / 2 and x + size / 2 < hi[0] and lo[1] < y - size / 2 and y + size / 2 < hi[1]):
+            raise InputError(f"{owner}.{key}[{k}] = ({x}, {y}) is not under the deck")
+    if wall >= 0.5 * size:
+        raise InputError(f"{owner}.pedestal_wall_thickness must be < pedestal_size/2")
 
 
 def deck_material(name: str, mass: float, volume: float, flange_thickness: float, thickness: float) -> Material:

@@ -20,7 +20,7 @@ from liftoff.core.errors import InputError
 
 from . import _occ
 from ._occ import occ
-from .pad import STEEL, deck_material, pedestal_material
+from .pad import STEEL, check_pedestals, deck_material, pedestal_material
 from .spec import Geometry, Patch, require_positive, require_range
 
 
@@ -75,12 +75,7 @@ class PlatformParams:
             for k, (hx, hy, r) in enumerate(self.holes):
                 if math.hypot(x - hx, y - hy) - h * math.sqrt(2) <= r:
                     raise InputError(f"{o}.holes[{k}]: the exhaust hole undercuts the post {n!r}")
-        for k, (x, y) in enumerate(self.pedestals):
-            h = self.pedestal_size / 2
-            if not (lo[0] < x - h and x + h < hi[0] and lo[1] < y - h and y + h < hi[1]):
-                raise InputError(f"{o}.pedestals[{k}] = ({x}, {y}) is not under the deck")
-        if self.pedestal_wall_thickness >= 0.5 * self.pedestal_size:
-            raise InputError(f"{o}.pedestal_wall_thickness must be < pedestal_size/2")
+        check_pedestals(o, "pedestals", self.pedestals, self.pedestal_size, self.pedestal_wall_thickness, lo, hi)
         if self.flange_thickness >= 0.5 * self.deck_thickness:
             raise InputError(f"{o}.flange_thickness must be < deck_thickness/2")
 
