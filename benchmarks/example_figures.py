@@ -107,7 +107,8 @@ class _Stick:
         self.mass[i] = self.mass.get(i, 0.0) + mass
         self.inertia[i] = self.inertia.get(i, 0.0) + inertia
 
-    def frequencies(self) -> np.ndarray:
+    def frequencies(self, n_freq: int = 8) -> np.ndarray:
+        """The lowest ``n_freq`` frequencies (Hz) of the planar stick, rigid-body modes first."""
         import scipy.linalg as sla
 
         n = len(self.nodes)
@@ -118,7 +119,8 @@ class _Stick:
         for i in range(n):
             M[2 * i, 2 * i] = self.mass.get(i, 0.0)
             M[2 * i + 1, 2 * i + 1] = max(self.inertia.get(i, 0.0), 1e-12 * max(self.mass.values()))
-        return np.sqrt(np.abs(sla.eigh(K, M, eigvals_only=True))) / (2 * math.pi)
+        lam = sla.eigh(K, M, eigvals_only=True, subset_by_index=[0, min(n_freq, 2 * n) - 1])
+        return np.sqrt(np.abs(lam)) / (2 * math.pi)
 
 
 def _grid(z0, z1, must, dz):

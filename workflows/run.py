@@ -523,6 +523,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="stage cache directory (default $LIFTOFF_CACHE or DIR/../.liftoff-cache)")
     p.add_argument("--no-cache", action="store_true", help="do not read or write the stage cache")
     p.add_argument("--no-snapshots", action="store_true", help="skip the pyvista pictures")
+    p.add_argument("--no-plots", action="store_true", help="skip the matplotlib plots (as [output] plots = false)")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
     p.add_argument("--example", choices=("barge",), default=None,
                    help="run an embedded example instead of the default lift-off scenario: 'barge' (a barge hitting "
@@ -581,7 +582,7 @@ def _cli(args: argparse.Namespace) -> int:
     if args.cases is not None and args.cases < 0:
         raise InputError(f"--cases {args.cases}: must be 0 or more")
     run(args.scenario, args.out, n_cases=args.cases, options=opt, error_estimate=not args.no_error_estimate,
-        max_memory=None if args.max_memory is None else args.max_memory * 1e9, **kw)
+        max_memory=None if args.max_memory is None else args.max_memory * 1e9, plots=not args.no_plots, **kw)
     return 0
 
 
@@ -589,7 +590,7 @@ def _child_args(args: argparse.Namespace) -> list[str]:
     argv = ["run"] + ([str(args.scenario)] if args.scenario is not None else []) + ["--out", str(args.out)]
     argv += ["--cache", str(args.cache)] if args.cache is not None else []
     return argv + [flag for flag, on in (("--no-cache", args.no_cache), ("--no-snapshots", args.no_snapshots),
-                                         ("--no-progress", args.no_progress)) if on]
+                                         ("--no-plots", args.no_plots), ("--no-progress", args.no_progress)) if on]
 
 
 #: the most --ranks per CPU (oversubscribed FE stages only wait on one another beyond a few)

@@ -63,7 +63,8 @@ def _run(name: str, tmp_path_factory):
     out = tmp_path_factory.mktemp(name) / "out"
     cache = tmp_path_factory.getbasetemp() / "examples_cache"
     p = subprocess.run([sys.executable, "-m", "liftoff.workflows.cli", "run", str(EXAMPLES / name / "scenario.toml"),
-                        "--out", str(out), "--cache", str(cache), "--no-snapshots", "--no-progress"],
+                        "--out", str(out), "--cache", str(cache), "--no-snapshots", "--no-progress",
+                        "--no-error-estimate", "--no-plots"],
                        capture_output=True, text=True, timeout=1800)
     assert p.returncode == 0, p.stderr[-3000:]
     return out, p
