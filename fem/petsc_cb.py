@@ -34,7 +34,7 @@ import scipy.sparse as sp
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from liftoff.core.errors import ConvergenceError, InputError
+from liftoff.core.errors import ConvergenceError, InputError, ResourceError
 
 from . import petsc_backend as pb
 
@@ -236,12 +236,34 @@ def _solver(Kii: PETSc.Mat, Mii: PETSc.Mat, nev: int, tol: float, max_it: int, w
             eps.destroy()
 
 
+#: MUMPS INFOG(1) codes of a singular matrix (-6 structurally, -10 numerically); the others a
+#: failure of MUMPS itself (workspace, memory, integer overflow: -8, -9, -13, -19, ...)
+MUMPS_SINGULAR = (-6, -10)
+
+
+def _mumps_infog(eps) -> tuple[int, int] | None:
+    """(INFOG(1), INFOG(2)) of the factor of a failed EPSSetUp, None if there is none."""
+    try:
+        F = eps.getST().getKSP().getPC().getFactorMatrix()
+        return int(F.getMumpsInfog(1)), int(F.getMumpsInfog(2))
+    except Exception:            # no factor object (the failure came before it)
+        return None
+
+
 def _set_up(eps, who: str) -> None:
-    """Factor K_ii (EPSSetUp); a null or negative pivot means K_ii is singular."""
+    """Factor K_ii (EPSSetUp); a null or negative pivot means K_ii is singular. A failure of
+    MUMPS that is not a singular matrix (INFOG(1) outside MUMPS_SINGULAR) is said as such, with
+    its codes, not as a floating component."""
     try:
         eps.setUp()
     except PETSc.Error as exc:
-        raise _factor_error("factorisation of K_ii failed", who, f"PETSc error {exc.ierr}") from None
+        info = _mumps_infog(eps)
+        if info is not None and info[0] < 0 and info[0] not in MUMPS_SINGULAR:
+            raise ResourceError(f"{who}: MUMPS failed to factor K_ii (PETSc error {exc.ierr}, INFOG(1) = {info[0]}, "
+                                f"INFOG(2) = {info[1]}: its workspace or memory, not a singular matrix); run again, "
+                                "with fewer ranks or more memory") from None
+        detail = f"PETSc error {exc.ierr}" + ("" if info is None else f", INFOG(1) = {info[0]}")
+        raise _factor_error("factorisation of K_ii failed", who, detail) from None
     F = eps.getST().getKSP().getPC().getFactorMatrix()
     if F.getMumpsInfog(1) < 0:
         raise _factor_error("MUMPS failed to factor K_ii", who, f"INFOG(1) = {F.getMumpsInfog(1)}")
