@@ -145,7 +145,6 @@ def build_barrel(p: BarrelParams, out_dir) -> Geometry:
                     out.append(c)
             return out
 
-        patches = []
         for joints, axis, r, z in ((p.joints_bottom, p.bottom_point, p.radius_bottom, p.z_bottom),
                                    (p.joints_top, p.top_point, p.radius_top, p.z_top)):
             for n, a in joints.items():

@@ -162,7 +162,6 @@ def _check_roles(p: GeometryFileParams, groups: dict[str, tuple[int, int]]) -> N
 def _mesh_measures(gmsh, groups: dict[str, tuple[int, int]]) -> tuple[dict, dict, dict]:
     """(volume of each volume group, area of each surface group, centroid of each surface
     or curve group), from the mesh's linear elements (m^3, m^2, m)."""
-    x = {}
     tags, coords, _ = gmsh.model.mesh.getNodes()
     xyz = np.asarray(coords, float).reshape(-1, 3)
     x = dict(zip(np.asarray(tags, int).tolist(), range(len(tags))))

@@ -36,7 +36,7 @@ from liftoff.meshes.spec import Material
 from liftoff.meshes.stick import StickParams
 
 from . import component_types
-from .params import builder
+from .params import builder, material
 from .values import Where, array_of_tables, boolean, integer, number, string, strings, table, unique_name
 
 SOURCES = ("fe", "stick")
@@ -63,7 +63,6 @@ _NASTRAN = {"file", "units", "grids", "asm", "pch", "op4", "bulk", "stiffness", 
 _NASTRAN_FILES = ("file", "asm", "pch", "op4", "bulk")
 _NASTRAN_RECOVERY = {"name", "disp", "vel", "acc", "rows", "quantity"}
 _SYSTEM = {"n_modes", "f_max", "pad_n_modes", "pad_f_max", "residual_vectors"}
-_MATERIAL = {"E", "nu", "rho"}
 
 
 @dataclass(frozen=True)
@@ -333,15 +332,7 @@ def _materials(where: Where, spec: Any, source: str) -> dict[str, Material]:
         raise where.error("expected a table of volume -> {E, nu, rho}")
     if spec and source == "stick":
         raise where.error("the stick source has no material volumes (beam properties are in [model.stick])")
-    out = {}
-    for vol, mat in spec.items():
-        wm = where / vol
-        mat = table(wm, mat, _MATERIAL, required=("E", "nu", "rho"))
-        try:
-            out[vol] = Material(vol, *(number(wm / k, mat[k]) for k in ("E", "nu", "rho")))
-        except InputError as exc:
-            raise wm.wrap(exc) from None
-    return out
+    return {vol: material(where / vol, vol, mat)[0] for vol, mat in spec.items()}
 
 
 def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig:

@@ -11,7 +11,9 @@ from typing import Any
 
 from liftoff.core.errors import InputError
 
-from .values import Where, boolean, number, string, vector
+from .values import Where, boolean, number, string, table, vector
+
+MATERIAL_KEYS = ("E", "nu", "rho")
 
 
 def _field_value(where: Where, value: Any, default: Any, annotation: str = "") -> Any:
@@ -61,3 +63,21 @@ def builder(where: Where, cls: type, spec: Any, fixed: dict | None = None, defau
     return obj
 
 
+
+
+def material(where: Where, name: str, spec: Any, extra: tuple[str, ...] = ()):
+    """(meshes.spec.Material ``name`` from a ``{E, nu, rho}`` table (Pa, -, kg/m^3), the
+    table): its keys checked (``extra`` allowed and required too), the material's own check
+    worded at ``where``."""
+    from liftoff.meshes.spec import Material
+
+    m = table(where, spec, set(MATERIAL_KEYS) | set(extra), MATERIAL_KEYS + tuple(extra))
+    try:
+        return Material(name, *(number(where / k, m[k]) for k in MATERIAL_KEYS)), m
+    except InputError as exc:
+        raise where.wrap(exc) from None
+
+
+def mesh_size_kw(mesh_size: float | None) -> dict:
+    """``{"mesh_size": mesh_size}``, or nothing when it is None (the builder's default)."""
+    return {} if mesh_size is None else {"mesh_size": mesh_size}

@@ -7,13 +7,10 @@ azimuth deg}``, ``bottom_point``/``top_point = {point = z}`` (a whole ring tied 
 point), ``point_masses = {point = [kg, Ixx, Iyy, Izz]}``, ``arc_deg``, ``axis_xy``."""
 from __future__ import annotations
 
-from liftoff.core.errors import InputError
-
-from ..params import builder
+from ..params import builder, mesh_size_kw
+from ..params import material as read_material
 from ..values import Where, number, table, vector
 from . import ComponentType, Context
-
-_MAT = ("E", "nu", "rho")
 
 
 def _names(where: Where, spec) -> dict:
@@ -23,7 +20,6 @@ def _names(where: Where, spec) -> dict:
 
 def read(ctx: Context, where: Where, params: dict):
     from liftoff.meshes.barrel import BarrelParams
-    from liftoff.meshes.spec import Material
 
     if not isinstance(params, dict):
         raise where.error("expected a table of BarrelParams fields")
@@ -34,12 +30,8 @@ def read(ctx: Context, where: Where, params: dict):
     fixed["point_masses"] = {n: [float(x) for x in vector(where / "point_masses" / n, v, length=4)]
                              for n, v in _names(where / "point_masses", params.get("point_masses", {})).items()}
     if "material" in params:
-        m = table(where / "material", params["material"], set(_MAT), _MAT)
-        try:
-            fixed["material"] = Material(f"{ctx.name}-wall", *(number(where / "material" / k, m[k]) for k in _MAT))
-        except InputError as exc:
-            raise (where / "material").wrap(exc) from None
-    size = {} if ctx.mesh_size is None else {"mesh_size": ctx.mesh_size}
+        fixed["material"] = read_material(where / "material", f"{ctx.name}-wall", params["material"])[0]
+    size = mesh_size_kw(ctx.mesh_size)
     return builder(where, BarrelParams, {k: v for k, v in params.items() if k not in own}, fixed, size)
 
 

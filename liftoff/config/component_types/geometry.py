@@ -22,25 +22,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from liftoff.core.errors import InputError
 from liftoff.core.records import file_sha256
 
+from ..params import material as read_material
 from ..values import Where, integer, number, string, strings, table, vector
 from . import ComponentType, Context
 
 _KEYS = {"file", "solids", "shells", "points", "masses", "clamped", "liquids", "groups"}
-_MAT = ("E", "nu", "rho")
 _LIQUID = {"density", "wetted", "free_surface", "cavity", "center", "points"}
-
-
-def _material(where: Where, name: str, spec: dict, extra: tuple[str, ...] = ()):
-    from liftoff.meshes.spec import Material
-
-    m = table(where, spec, set(_MAT) | set(extra), _MAT + extra)
-    try:
-        return Material(name, *(number(where / k, m[k]) for k in _MAT)), m
-    except InputError as exc:
-        raise where.wrap(exc) from None
 
 
 def read(ctx: Context, where: Where, params: dict):
@@ -52,11 +41,11 @@ def read(ctx: Context, where: Where, params: dict):
         raise (where / "file").error(f"file not found: {str(path)!r}")
     materials, shells = {}, {}
     for g, spec in table(where / "solids", p.get("solids", {}), set(p.get("solids", {}))).items():
-        materials[g], _ = _material(where / "solids" / g, g, spec)
+        materials[g], _ = read_material(where / "solids" / g, g, spec)
     for g, spec in table(where / "shells", p.get("shells", {}), set(p.get("shells", {}))).items():
         if g in materials:
             raise (where / "shells" / g).error("is a solid too: a group is one or the other")
-        materials[g], m = _material(where / "shells" / g, g, spec, ("thickness",))
+        materials[g], m = read_material(where / "shells" / g, g, spec, ("thickness",))
         shells[g] = number(where / "shells" / g / "thickness", m["thickness"], positive=True)
     points = {}
     for name, spec in table(where / "points", p.get("points", {}), set(p.get("points", {}))).items():

@@ -3,7 +3,7 @@ the ground, with hold-down posts under the StackLayout's booster hold-down point
 (meshes.pad.PadParams)."""
 from __future__ import annotations
 
-from ..params import builder
+from ..params import builder, mesh_size_kw
 from ..values import Where
 from . import ComponentType, Context
 
@@ -11,7 +11,7 @@ from . import ComponentType, Context
 def read(ctx: Context, where: Where, params: dict):
     from liftoff.meshes.pad import PadParams
 
-    size = {} if ctx.mesh_size is None else {"mesh_size": ctx.mesh_size}
+    size = mesh_size_kw(ctx.mesh_size)
     return builder(where, PadParams, params, {"layout": ctx.layout}, size)
 
 

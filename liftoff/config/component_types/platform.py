@@ -6,7 +6,7 @@ hold-down posts whose tops are named points (meshes.platform.PlatformParams). Pa
 ``mass`` (deck and posts, kg), ``flange_thickness``."""
 from __future__ import annotations
 
-from ..params import builder
+from ..params import builder, mesh_size_kw
 from ..values import Where, table, vector
 from . import ComponentType, Context
 
@@ -24,7 +24,7 @@ def read(ctx: Context, where: Where, params: dict):
     if not isinstance(holes, list):
         raise (where / "holes").error("expected an array of [x, y, radius] (m)")
     fixed["holes"] = tuple(tuple(float(x) for x in vector(where / "holes" / i, h, length=3)) for i, h in enumerate(holes))
-    size = {} if ctx.mesh_size is None else {"mesh_size": ctx.mesh_size}
+    size = mesh_size_kw(ctx.mesh_size)
     return builder(where, PlatformParams, {k: v for k, v in params.items() if k not in ("posts", "holes")}, fixed, size)
 
 

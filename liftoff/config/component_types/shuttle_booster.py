@@ -4,7 +4,7 @@ attach points on the StackLayout); ``side`` = "left" or "right" says which of th
 two booster positions it takes. walls default to [model]'s."""
 from __future__ import annotations
 
-from ..params import builder
+from ..params import builder, mesh_size_kw
 from ..values import Where
 from . import ComponentType, Context
 
@@ -12,7 +12,7 @@ from . import ComponentType, Context
 def read(ctx: Context, where: Where, params: dict):
     from liftoff.meshes.vehicle import BoosterParams
 
-    size = {} if ctx.mesh_size is None else {"mesh_size": ctx.mesh_size}
+    size = mesh_size_kw(ctx.mesh_size)
     if "side" not in params:
         raise (where / "side").error('missing: which booster position of the layout, "left" (x < 0) or "right"')
     return builder(where, BoosterParams, params, {"layout": ctx.layout}, {**size, "walls": ctx.walls})

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from liftoff.core.errors import InputError
 
+from ..params import mesh_size_kw
 from ..values import Where, number, string, table
 from . import ComponentType, Context
 
@@ -27,7 +28,7 @@ def read(ctx: Context, where: Where, params: dict):
         t = table(w, params["ullage_pressure"], {"lh2", "lox"}, ("lh2", "lox"))
         ullage = {k: number(w / k, v, nonneg=True) for k, v in t.items()}
     attach = string(where / "attach", params["attach"]) if "attach" in params else None
-    size = {} if ctx.mesh_size is None else {"mesh_size": ctx.mesh_size}
+    size = mesh_size_kw(ctx.mesh_size)
     try:
         p = core_stage_params(ctx.layout, **size, walls=ctx.walls, shell_bending_ratio=ratio, liquid=ctx.liquid,
                               ullage_pressure=ullage, attach=attach)

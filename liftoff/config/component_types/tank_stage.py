@@ -9,17 +9,13 @@ material as ``material = {E, nu, rho}`` (default Al 2219). walls and liquid defa
 [model]'s; the volume groups are named after the component (``<name>_wall``, ...)."""
 from __future__ import annotations
 
-from liftoff.core.errors import InputError
-
-from ..params import builder
-from ..values import Where, array_of_tables, number, table, vector
+from ..params import builder, mesh_size_kw
+from ..params import material as read_material
+from ..values import Where, array_of_tables, table, vector
 from . import ComponentType, Context
-
-_MATERIAL = ("E", "nu", "rho")
 
 
 def read(ctx: Context, where: Where, params: dict):
-    from liftoff.meshes.spec import Material
     from liftoff.meshes.tank import AL2219, Compartment, TankParams
 
     if not isinstance(params, dict):
@@ -37,15 +33,10 @@ def read(ctx: Context, where: Where, params: dict):
     patches = {}
     for name, xyz in table(where / "patches", params.get("patches", {}), set(params.get("patches", {}))).items():
         patches[name] = tuple(float(x) for x in vector(where / "patches" / name, xyz, length=3))
-    material = AL2219
-    if "material" in params:
-        m = table(where / "material", params["material"], set(_MATERIAL), _MATERIAL)
-        try:
-            material = Material(f"{ctx.name}-wall", *(number(where / "material" / k, m[k]) for k in _MATERIAL))
-        except InputError as exc:
-            raise (where / "material").wrap(exc) from None
+    material = AL2219 if "material" not in params else \
+        read_material(where / "material", f"{ctx.name}-wall", params["material"])[0]
     rest = {k: v for k, v in params.items() if k not in own}
-    size = {} if ctx.mesh_size is None else {"mesh_size": ctx.mesh_size}
+    size = mesh_size_kw(ctx.mesh_size)
     fixed = {"name": ctx.name, "compartments": tuple(comps), "patches": patches, "material": material}
     return builder(where, TankParams, rest, fixed, {**size, "walls": ctx.walls, "liquid": ctx.liquid})
 
