@@ -1,12 +1,13 @@
-"""Craig-Bampton reduction of the core stage on PETSc/MUMPS/SLEPc (fem.petsc_solver) against
-the fixed-interface eigensolve alone: wall time and peak memory, 1 or more MPI ranks.
+"""Craig-Bampton reduction of the core stage on PETSc/MUMPS (fem.petsc_solver: block Lanczos,
+fem.block_lanczos) against SLEPc's fixed-interface eigensolve alone (one-vector
+Krylov-Schur): wall time and peak memory, 1 or more MPI ranks.
 
 For each core-stage mesh size (meshes.vehicle.build_core_stage, P1; boundary = the 48 DOFs
 of its 8 spider reference points) the component is built once (fem.build_model, saved
 under ``--work``), then every measurement runs in a fresh process (``mpirun -n R`` for R
 ranks), which loads the component and does one of:
 
-* ``eig``: the fixed-interface eigensolve alone, as any modal reduction needs it: K_ii,
+* ``eig``: the fixed-interface eigensolve alone, by SLEPc, as any modal reduction could do it: K_ii,
   M_ii as PETSc matrices, MUMPS factor + SLEPc Krylov-Schur shift-invert, ``--modes``
   modes (fem.petsc_cb.eigensolve_alone; the time excludes building K_ii, M_ii);
 * ``cb``: reduction.craig_bampton(component, boundary, n_modes, solver=petsc_solver()),

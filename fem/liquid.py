@@ -416,6 +416,17 @@ class _DistributedWetMass:
         add = self.Gi.T @ self.solve(self.Gi @ full)
         y.setArray(np.array(y.getArray(readonly=True)) + add[self.r0:self.r1])
 
+    def mult_block(self, X: np.ndarray) -> np.ndarray:
+        """This process's rows of (M_ii + G_i^T H^-1 G_i) X for a dense block X (its rows
+        here): the liquid's solves as one multi-right-hand-side solve of its factor."""
+        from .petsc_cb import _factor_solve, _mat_block
+
+        Y = _mat_block(self.M, X)
+        full = np.vstack(self.comm.allgather(np.ascontiguousarray(X))) if self.comm.size > 1 else X
+        GX = np.asarray(self.Gi @ full)
+        add = self.Gi.T @ _factor_solve(self.ksp, GX, GX.shape[0])
+        return Y + add[self.r0:self.r1]
+
     def destroy(self, mat=None) -> None:       # PETSc calls it when the shell matrix is destroyed
         self.ksp.destroy()
         self.A.destroy()

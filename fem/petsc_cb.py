@@ -1,4 +1,4 @@
-"""The PETSc/SLEPc Craig-Bampton solver: ``reduction.craig_bampton(..., solver=petsc_solver())``.
+"""The PETSc/MUMPS Craig-Bampton solver: ``reduction.craig_bampton(..., solver=petsc_solver())``.
 
 It does the linear algebra of a Craig-Bampton reduction (section 3.0, eq. 13 of Prabhakar &
 Palermo) distributed over the processes of ``comm``; the CB matrices themselves are formed
@@ -7,9 +7,12 @@ by ``reduction.craig_bampton`` (one CB method, the solver injected):
 * the interior block K_ii, M_ii of the component's K and M (boundary DOFs removed) as
   distributed PETSc AIJ matrices, the interior rows split evenly over the processes;
 * ONE MUMPS Cholesky (LDL^T) factor of K_ii. It is the shift-invert operator (sigma = 0)
-  of the SLEPc Krylov-Schur fixed-interface eigensolve K_ii Phi = M_ii Phi omega^2, and it
-  gives the constraint modes Psi = -K_ii^-1 K_ib in one multi-right-hand-side solve
-  (``MatMatSolve`` of the factor: petsc4py 3.18 has no KSP.matSolve);
+  of the fixed-interface eigensolve K_ii Phi = M_ii Phi omega^2, solved by block Lanczos
+  (fem.block_lanczos: blocks of 16-32 right-hand sides through the factor, BLAS-3 in
+  MUMPS; faster than SLEPc's one-vector Krylov-Schur on every default component,
+  benchmarks/bench_cb_default.py), and it gives the constraint
+  modes Psi = -K_ii^-1 K_ib in one multi-right-hand-side solve (``MatMatSolve`` of the
+  factor: petsc4py 3.18 has no KSP.matSolve);
 * a band (``f_max`` without ``n_modes``): the number of eigenvalues below
   (2 pi f_max)^2 is the number of negative pivots of an LDL^T factor of
   K_ii - (2 pi f_max)^2 M_ii (Sylvester's law of inertia, MUMPS INFOG(12)); that many
@@ -43,13 +46,11 @@ _PREFIXES = itertools.count()
 
 @dataclass(frozen=True)
 class PetscSolver:
-    """CB solver on PETSc/MUMPS/SLEPc over ``comm`` (see the module docstring).
-    ``tol``: SLEPc relative residual tolerance; ``ncv``: Krylov subspace size for
-    ``nev`` wanted modes, max(2 nev + 1, nev + 24) by default."""
+    """CB solver on PETSc/MUMPS over ``comm`` (see the module docstring). ``tol``: the
+    relative residual of an eigenpair of the shift-inverted operator (fem.block_lanczos)."""
 
     comm: MPI.Comm = field(default_factory=lambda: MPI.COMM_WORLD)
     tol: float = 1e-10
-    max_it: int = 500
 
     def __call__(self, K: sp.csr_matrix, M: sp.csr_matrix, interior: np.ndarray, boundary: np.ndarray, *,
                  n_modes: int | None, f_max: float | None, band_limit: int, who: str, dof_name=str,
@@ -57,12 +58,12 @@ class PetscSolver:
         timings = {}
         t0 = time.perf_counter()
         Kii, Mii, Kib_loc = interior_matrices(self.comm, K, M, interior, boundary)
-        B = None
+        B = wet = None
         if added_mass is not None:          # hydroelastic liquid: M_ii + M_a,ii as a shell (fem.liquid)
             from .liquid import wet_mass
 
             Gi = added_mass.G[:, interior]
-            B, _ = wet_mass(Mii, added_mass.H, Gi)
+            B, wet = wet_mass(Mii, added_mass.H, Gi)
         timings["partition_s"] = time.perf_counter() - t0
         n_i = Kii.getSize()[0]
         want = n_i if n_modes is None else min(n_modes, n_i)
@@ -82,15 +83,16 @@ class PetscSolver:
                     from_count = f"{count} by the inertia of K_ii - (2 pi f_max)^2 M_ii"
                     raise InputError(_band_error(who, band_limit, f_max, from_count))
                 want = count
-            with _solver(Kii, Mii if B is None else B, max(want, 1), self.tol, self.max_it, who) as eps:
+            with _factor_kii(Kii, who) as ksp:
                 t0 = time.perf_counter()
-                _set_up(eps, who)
+                _set_up(ksp, who)
                 timings["factor_s"] = time.perf_counter() - t0
                 t0 = time.perf_counter()
-                lam, phi_loc = eigenpairs(eps, Mii if B is None else B, want, who) if want else (np.zeros(0), np.zeros((Kib_loc.shape[0], 0)))
+                lam, phi_loc, info = fixed_interface_pairs(ksp, Kii, Mii, wet, want, self.tol, who)
                 timings["eigensolve_s"] = time.perf_counter() - t0
+                timings.update(info)
                 t0 = time.perf_counter()
-                psi_loc = -_factor_solve(eps.getST().getKSP(), Kib_loc, n_i)
+                psi_loc = -_factor_solve(ksp, Kib_loc, n_i)
                 timings["constraint_solve_s"] = time.perf_counter() - t0
                 _check_finite(self.comm, psi_loc, who)
         finally:
@@ -241,35 +243,105 @@ def _solver(Kii: PETSc.Mat, Mii: PETSc.Mat, nev: int, tol: float, max_it: int, w
 MUMPS_SINGULAR = (-6, -10)
 
 
-def _mumps_infog(eps) -> tuple[int, int] | None:
-    """(INFOG(1), INFOG(2)) of the factor of a failed EPSSetUp, None if there is none."""
+def _mumps_infog(ksp) -> tuple[int, int] | None:
+    """(INFOG(1), INFOG(2)) of the factor of a failed KSPSetUp, None if there is none."""
     try:
-        F = eps.getST().getKSP().getPC().getFactorMatrix()
+        F = ksp.getPC().getFactorMatrix()
         return int(F.getMumpsInfog(1)), int(F.getMumpsInfog(2))
     except Exception:            # no factor object (the failure came before it)
         return None
 
 
-def _set_up(eps, who: str) -> None:
-    """Factor K_ii (EPSSetUp); a null or negative pivot means K_ii is singular. A failure of
-    MUMPS that is not a singular matrix (INFOG(1) outside MUMPS_SINGULAR) is said as such, with
+@contextmanager
+def _factor_kii(Kii: PETSc.Mat, who: str):
+    """A KSP that applies K_ii^-1 with one MUMPS Cholesky (LDL^T) factor, null-pivot
+    detection on (its inertia proves K_ii positive definite)."""
+    comm = Kii.getComm().tompi4py()
+    ksp = PETSc.KSP().create(comm)
+    with _mumps_options(comm) as prefix:
+        try:
+            ksp.setOptionsPrefix(prefix)
+            ksp.setOperators(Kii)
+            pb._mumps_cholesky(ksp)
+            yield ksp
+        finally:
+            ksp.destroy()
+
+
+def _set_up(ksp, who: str) -> None:
+    """Factor K_ii; a null or negative pivot means K_ii is singular. A failure of MUMPS
+    that is not a singular matrix (INFOG(1) outside MUMPS_SINGULAR) is said as such, with
     its codes, not as a floating component."""
     try:
-        eps.setUp()
+        ksp.setUp()
     except PETSc.Error as exc:
-        info = _mumps_infog(eps)
+        info = _mumps_infog(ksp)
         if info is not None and info[0] < 0 and info[0] not in MUMPS_SINGULAR:
             raise ResourceError(f"{who}: MUMPS failed to factor K_ii (PETSc error {exc.ierr}, INFOG(1) = {info[0]}, "
                                 f"INFOG(2) = {info[1]}: its workspace or memory, not a singular matrix); run again, "
                                 "with fewer ranks or more memory") from None
         detail = f"PETSc error {exc.ierr}" + ("" if info is None else f", INFOG(1) = {info[0]}")
         raise _factor_error("factorisation of K_ii failed", who, detail) from None
-    F = eps.getST().getKSP().getPC().getFactorMatrix()
+    F = ksp.getPC().getFactorMatrix()
     if F.getMumpsInfog(1) < 0:
         raise _factor_error("MUMPS failed to factor K_ii", who, f"INFOG(1) = {F.getMumpsInfog(1)}")
     nneg, nzero, _ = _inertia(F)
     if nneg or nzero:
         raise _factor_error("K_ii is singular", who, f"{nzero} null and {nneg} negative pivots")
+
+
+def _mat_block(A: PETSc.Mat, X_loc: np.ndarray) -> np.ndarray:
+    """This process's rows of A X for a dense block X (its rows here) and a distributed A."""
+    m, k = X_loc.shape
+    n = A.getSize()[1]
+    X = PETSc.Mat().createDense(((m, n), (PETSc.DECIDE, k)), comm=A.getComm())
+    X.setUp()
+    X.getDenseArray()[:] = X_loc
+    X.assemble()
+    Y = None
+    try:
+        Y = A.matMult(X)
+        return np.array(Y.getDenseArray(), copy=True)
+    finally:
+        X.destroy()
+        if Y is not None:
+            Y.destroy()
+
+
+def fixed_interface_pairs(ksp, Kii: PETSc.Mat, Mii: PETSc.Mat, wet, want: int, tol: float,
+                          who: str) -> tuple[np.ndarray, np.ndarray, dict]:
+    """The ``want`` lowest eigenpairs of K_ii phi = omega^2 (M_ii [+ M_a,ii]) phi with the
+    factored ``ksp``: block shift-invert Lanczos (fem.block_lanczos: blocks of right-hand
+    sides through the one factor), or a dense solve where the interior is too small for a
+    Krylov space (a few blocks beyond ``want``). ``wet``: the wet-mass context of
+    fem.liquid.wet_mass, or None. Returns (omega^2 ascending, this process's rows of the
+    mass-normalised modes, {'eigen_dimension', 'eigen_blocks'})."""
+    from .block_lanczos import block_lanczos, block_size
+
+    comm = Kii.getComm().tompi4py()
+    n_i = Kii.getSize()[0]
+    r0, r1 = Kii.getOwnershipRange()
+    if want == 0:
+        return np.zeros(0), np.zeros((r1 - r0, 0)), {}
+
+    def mass(X):
+        return _mat_block(Mii, X) if wet is None else wet.mult_block(X)
+
+    if n_i <= want + 4 * block_size(want):          # small: every pair, densely
+        import scipy.linalg as sla
+
+        I_loc = np.eye(n_i)[r0:r1]
+        Kd = np.vstack(comm.allgather(_mat_block(Kii, I_loc))) if comm.size > 1 else _mat_block(Kii, I_loc)
+        Bl = mass(I_loc)
+        Bd = np.vstack(comm.allgather(Bl)) if comm.size > 1 else Bl
+        lam, phi = sla.eigh(0.5 * (Kd + Kd.T), 0.5 * (Bd + Bd.T), subset_by_index=[0, want - 1])
+        return lam, phi[r0:r1], {"eigen_dimension": n_i, "eigen_blocks": 0}
+    try:
+        lam, phi, info = block_lanczos(lambda X: _factor_solve(ksp, X, n_i), mass, r1 - r0, n_i, r0, want, comm,
+                                       tol=tol, who=f"{who}: fixed-interface eigensolve")
+    except np.linalg.LinAlgError as exc:
+        raise ConvergenceError(f"{who}: fixed-interface eigensolve failed ({exc})") from None
+    return lam, phi, {"eigen_dimension": info["dimension"], "eigen_blocks": info["blocks"]}
 
 
 def _factor_solve(ksp: PETSc.KSP, B_loc: np.ndarray, n: int) -> np.ndarray:
@@ -342,10 +414,10 @@ def _band_error(who: str, band_limit: int, f_max: float, found: str) -> str:
 # ------------------------------------------------------------------ benchmark helper
 def eigensolve_alone(Kii: PETSc.Mat, Mii: PETSc.Mat, n_modes: int, tol: float = 1e-10,
                      max_it: int = 500) -> tuple[np.ndarray, dict]:
-    """The fixed-interface eigensolve by itself, as any modal reduction needs it (factor
-    K_ii, Krylov-Schur, the ``n_modes`` lowest eigenpairs, vectors left on their ranks):
-    (eigenvalues, timings). What a CB reduction costs is measured against this
-    (benchmarks/bench_cb.py)."""
+    """The fixed-interface eigensolve by SLEPc alone, as any modal reduction could do it
+    (factor K_ii, one-vector Krylov-Schur, the ``n_modes`` lowest eigenpairs, vectors left
+    on their ranks): (eigenvalues, timings). The CB reduction (block Lanczos) is measured
+    against this (benchmarks/bench_cb.py)."""
     timings = {}
     with _solver(Kii, Mii, n_modes, tol, max_it, "fixed-interface eigensolve") as eps:
         t0 = time.perf_counter()

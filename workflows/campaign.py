@@ -162,7 +162,7 @@ def _worker_state(task: CaseTask):
         sc = task.scenario.load()
         case0 = sc.generated_case(task.index)
         stack = build_stack(case0.model, StageCache(Path(task.cache)), progress=False,
-                            where=Where(case0.source, "model"))
+                            where=Where(case0.source, "model"), workers=1)     # (a pool's worker already)
         _MEMO.update(key=key, scenario=sc, stack=stack)
     return _MEMO["scenario"], _MEMO["stack"]
 

@@ -140,7 +140,7 @@ def component_stage(model: ModelConfig, name: str, cache: StageCache, workdir: P
 
 
 def cb_solver(model: ModelConfig):
-    """(solver, its code modules, its name) of the Craig-Bampton stage: PETSc/MUMPS/SLEPc,
+    """(solver, its code modules, its name) of the Craig-Bampton stage: PETSc/MUMPS,
     distributed over the run's processes, for FE components (fem.petsc_solver); the
     default numpy/scipy solver for the stick model's small matrices."""
     if model.source == "stick":
@@ -150,17 +150,30 @@ def cb_solver(model: ModelConfig):
 
     from .parallel import world
 
-    return petsc_solver(fe_comm(world())), ("liftoff.fem.petsc_cb", "liftoff.fem.petsc_backend"), "petsc"
+    return petsc_solver(fe_comm(world())), *_cb_solver_id(model)
+
+
+def _cb_solver_id(model: ModelConfig) -> tuple[tuple, str]:
+    """(code modules, name) of the CB stage's solver (part of its cache key)."""
+    if model.source == "stick":
+        return (), "scipy"
+    return ("liftoff.fem.petsc_cb", "liftoff.fem.block_lanczos", "liftoff.fem.petsc_backend"), "petsc"
+
+
+def _cb_key(model: ModelConfig, name: str, comp: Component, comp_key: str) -> tuple[str, dict]:
+    """(cache key, parameters) of the CB stage of component ``name``."""
+    sel = model.components[name]
+    solver_code, solver_name = _cb_solver_id(model)
+    params = {"boundary": points_labels(boundary_points(comp)), "n_modes": sel.n_modes, "f_max": sel.f_max,
+              "solver": solver_name}
+    return stage_key("cb", params, ("liftoff.reduction", "liftoff.core", *solver_code), (comp_key,)), params
 
 
 def cb_stage(model: ModelConfig, name: str, comp: Component, comp_key: str, cache: StageCache) -> tuple[CBModel, str]:
     """The CB model of a component (from the cache, or reduced with :func:`cb_solver`: a
     cached Component is enough, the PETSc matrices are built from it)."""
-    sel = model.components[name]
-    solver, solver_code, solver_name = cb_solver(model)
-    params = {"boundary": points_labels(boundary_points(comp)), "n_modes": sel.n_modes, "f_max": sel.f_max,
-              "solver": solver_name}
-    key = stage_key("cb", params, ("liftoff.reduction", "liftoff.core", *solver_code), (comp_key,))
+    key, params = _cb_key(model, name, comp, comp_key)
+    solver = cb_solver(model)[0]
     cb = cache.get_or_build("cb", key, ".npz",
                             lambda: craig_bampton(comp, params["boundary"], params["n_modes"], params["f_max"],
                                                   solver=solver),
@@ -210,27 +223,111 @@ def modes_stage(asm: Assembly, n_rigid: int, keys: list[str], cache: StageCache,
     return cache.get_or_build("system", key, ".npz", build, save, load, label=label)
 
 
+# ------------------------------------------------------------------ concurrent CB stages
+#: environment variable: the most processes that reduce components at once (1: one after another)
+WORKERS_ENV = "LIFTOFF_MODEL_WORKERS"
+
+
+def model_workers(requested: int | None = None) -> int:
+    """Processes for the Craig-Bampton stages of a run: ``requested``, else
+    $LIFTOFF_MODEL_WORKERS, else the machine's cores (at least 1)."""
+    if requested is None:
+        env = os.environ.get(WORKERS_ENV, "").strip()
+        if env:
+            try:
+                requested = int(env)
+            except ValueError:
+                from liftoff.core.errors import InputError
+
+                raise InputError(f"${WORKERS_ENV} = {env!r}: not a whole number of processes") from None
+        else:
+            requested = os.cpu_count() or 1
+    return max(1, int(requested))
+
+
+def _cb_worker(model: ModelConfig, name: str, cache_root: str) -> list:
+    """In a pool process: the component's CB stage into the cache at ``cache_root`` (its FE
+    stage is already there); returns the worker's cache log (plain tuples). BLAS on one
+    thread: the pool's processes share the cores."""
+    with threadpool_limits(limits=1, user_api="blas"), tempfile.TemporaryDirectory() as work:
+        cache = StageCache(Path(cache_root))
+        comp, _, key = component_stage(model, name, cache, Path(work))
+        cb_stage(model, name, comp, key, cache)
+        return [tuple(e) for e in cache.log if e[0] == "cb"]
+
+
+def _cb_cached(model: ModelConfig, name: str, comp: Component, comp_key: str, cache: StageCache) -> bool:
+    """Whether the CB stage of ``name`` has a cache entry (its record file; the stage checks it)."""
+    key, _ = _cb_key(model, name, comp, comp_key)
+    p = cache.path("cb", key, ".npz")
+    return p is not None and p.with_name(f"{key}.entry.json").is_file()
+
+
+def reduce_concurrently(model: ModelConfig, comps: dict[str, Component], comp_keys: dict[str, str],
+                        cache: StageCache, workers: int, bar=None) -> dict[str, list]:
+    """The CB stages of the FE components not yet in the cache, on a pool of ``workers``
+    processes (spawned: they import PETSc and the reduction, never dolfinx), written to the
+    cache, from which :func:`cb_stage` then loads them. The components with a liquid (the
+    wet eigenproblem, the most modes) and then the largest are started first. Serial runs
+    with a cache only; a worker that fails leaves its component to the sequential stage,
+    which gives its error. Returns {component: the worker's cache log}."""
+    todo = [n for n in comps if not _cb_cached(model, n, comps[n], comp_keys[n], cache)]
+    if workers < 2 or len(todo) < 2 or cache.root is None or cache.comm.size > 1 or model.source != "fe":
+        return {}
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    from .executors import die_with_parent
+
+    todo.sort(key=lambda n: (comps[n].liquid is None, -comps[n].n_dof))
+    logs = {}
+    with ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=multiprocessing.get_context("spawn"),
+                             initializer=die_with_parent) as pool:
+        futures = {pool.submit(_cb_worker, model, n, str(cache.root)): n for n in todo}
+        for fut in as_completed(futures):
+            name = futures[fut]
+            try:
+                logs[name] = fut.result()
+            except Exception:  # noqa: BLE001 - the sequential stage redoes it and says why it fails
+                continue
+            if bar is not None:
+                bar.set_postfix_str(f"cb {name}")
+    return logs
+
+
 # ------------------------------------------------------------------ the stack
-def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, where: Where | None = None) -> StackModel:
+def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, where: Where | None = None,
+                workers: int | None = None) -> StackModel:
     """All model stages of a checked ``[model]`` (liftoff.config.ModelConfig); ``where``
-    names the scenario's ``model`` key in messages."""
+    names the scenario's ``model`` key in messages. The FE stages run one after another,
+    the Craig-Bampton stages of a serial run with a cache on :func:`model_workers`
+    processes (``workers``; :func:`reduce_concurrently`)."""
     from tqdm import tqdm
 
     t0 = time.perf_counter()
-    comps, cbs, ckeys, thermal = {}, {}, {}, {}
+    comps, cbs, ckeys, thermal, comp_keys = {}, {}, {}, {}, {}
     names = list(model.vehicle) + [PAD]
     on_root(cache.comm, lambda: sweep_stale(tempfile.gettempdir()), share=False)   # geometry folders of killed runs
     with tempfile.TemporaryDirectory(prefix=f"liftoff-geom{TEMP_TAG}{os.getpid()}-") as work:
-        bar = tqdm(names, desc="model stages", unit="component", disable=not progress or cache.comm.rank != 0,
+        bar = tqdm(total=2 * len(names), desc="model stages", unit="stage", disable=not progress or cache.comm.rank != 0,
                    leave=False)
-        for name in bar:
-            bar.set_postfix_str(name)
+        for name in names:
+            if model.components[name].nastran is None:
+                bar.set_postfix_str(f"fe {name}")
+                comps[name], thermal[name], comp_keys[name] = component_stage(model, name, cache, Path(work))
+            bar.update()
+        logs = reduce_concurrently(model, comps, comp_keys, cache, model_workers(workers), bar)
+        for name in names:
+            bar.set_postfix_str(f"cb {name}")
             if model.components[name].nastran is not None:
                 cbs[name], ckeys[name] = nastran_stage(model, name, cache)
                 thermal[name] = {}
-                continue
-            comps[name], thermal[name], k = component_stage(model, name, cache, Path(work))
-            cbs[name], ckeys[name] = cb_stage(model, name, comps[name], k, cache)
+            else:
+                cbs[name], ckeys[name] = cb_stage(model, name, comps[name], comp_keys[name], cache)
+                if name in logs and cache.log and cache.log[-1][2] == "hit":
+                    cache.log[-1:] = logs[name]      # the time its worker took, not the load
+            bar.update()
+        bar.close()
     t1 = time.perf_counter()
     _check_materials(model, thermal, where or Where("scenario", "model"))
     _check_joints(model, cbs, where or Where("scenario", "model"))

@@ -83,6 +83,26 @@ def test_checked_in_figures_are_the_current_codes(figures, tmp_path):
                       "benchmarks/convergence_study.py when the model changed):\n" + "\n".join(diff[:20]))
 
 
+def test_round_off_figures_compare_as_round_off(figures):
+    """A truncation check's shortfall with every mode kept is round-off (~1e-10): it and the
+    DOF where it peaks may differ between machines; a real shortfall and its DOF may not."""
+    a = {"truncation": [{"flexibility_shortfall": 3e-10, "flexibility_dof": "post_1:Ty"}]}
+    b = {"truncation": [{"flexibility_shortfall": 8e-11, "flexibility_dof": "post_4:Tx"}]}
+    assert not figures.differences(a, b)
+    a["truncation"][0]["flexibility_shortfall"] = b["truncation"][0]["flexibility_shortfall"] = 0.02
+    assert figures.differences(a, b) == ["/truncation[0]/flexibility_dof: 'post_1:Ty' vs 'post_4:Tx'"]
+
+
+def test_cb_bench_block_shows_the_benchmark_file(figures):
+    """The eigensolver benchmark (benchmarks/bench_cb_default.py --json) is rendered, not typed."""
+    b = {"date": "2026-01-01", "cpus": 2, "load_average_end": 1.5, "repeat": 2,
+         "rows": [{"component": "core", "interior_dofs": 69918, "modes": 684, "wet": True, "block_dimension": 1504,
+                   "block_lanczos_s": [40.0, 42.0], "slepc_s": [140.0, 150.0], "max_rel_eig_diff": 3e-15}]}
+    text = figures.render_cb_bench(b)
+    assert "| core (wet: M + M_a) | 69,918 | 684 | 40.0 / 41.0 | 1504 | 140.0 / 145.0 | 3.50 | 3e-15 |" in text
+    assert "--repeat 2" in text and "2026-01-01" in text
+
+
 def test_bench_blocks_show_the_benchmark_file(figures):
     """The workflow benchmark's figures (benchmarks/bench_workflow.py --json) are rendered,
     not typed: the summary line and every stage of the file appear in the blocks."""

@@ -303,6 +303,37 @@ def test_cli_bad_liquid_one_line(tmp_path, capsys):
 
 
 @pytest.mark.fem
+@pytest.mark.skipif(not HAVE_FE, reason="needs dolfinx and gmsh")
+def test_cb_stages_on_a_pool_give_the_sequential_stack(tmp_path):
+    """The Craig-Bampton stages reduced by a pool of two processes (pipeline.reduce_concurrently)
+    give the stack of the sequential run: the same fixed-interface and system frequencies
+    (the same block Lanczos, BLAS on one thread instead of two: round-off, far below the
+    1e-9 required) and, once in the cache, a second build is all hits."""
+    import shutil
+
+    from liftoff.config import load_scenario
+    from liftoff.workflows.cache import StageCache
+    from liftoff.workflows.pipeline import build_stack, component_stage, reduce_concurrently
+
+    model = load_scenario(_scenario(tmp_path, COARSE_FE, cases=[{"name": "nominal"}])).cases[0].model
+    seq = build_stack(model, StageCache(tmp_path / "a"), progress=False, workers=1)
+    shutil.copytree(tmp_path / "a" / "fe", tmp_path / "b" / "fe")          # the same FE models
+    cache = StageCache(tmp_path / "b")
+    comps, keys = {}, {}
+    for name in seq.cbs:
+        comps[name], _, keys[name] = component_stage(model, name, cache, tmp_path)
+    logs = reduce_concurrently(model, comps, keys, cache, 2)
+    assert set(logs) == set(seq.cbs) and all(e[2] == "built" for log in logs.values() for e in log)
+    cache.log.clear()
+    con = build_stack(model, cache, progress=False, workers=2)
+    assert all(how == "hit" for stage, _, how, _ in cache.log if stage in ("fe", "cb"))
+    for name, cb in seq.cbs.items():
+        assert np.allclose(con.cbs[name].fixed_omega, cb.fixed_omega, rtol=1e-9, atol=0), name
+    f_seq, f_con = seq.vehicle_modes.freq_hz[6:], con.vehicle_modes.freq_hz[6:]
+    assert np.allclose(f_con, f_seq, rtol=1e-9), np.max(np.abs(f_con / f_seq - 1))
+
+
+@pytest.mark.fem
 @pytest.mark.slow
 @pytest.mark.skipif(not HAVE_FE, reason="needs dolfinx and gmsh")
 def test_fe_scenario_end_to_end_coarse(tmp_path, capsys, monolithic):
