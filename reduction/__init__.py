@@ -35,6 +35,7 @@ _EXPORTS = {
     "read_op4": ".nastran",
     "displacement_recovery": ".recovery",
     "field_recovery": ".recovery",
+    "field_displacement": ".recovery",
     "interface_force_recovery": ".recovery",
     "label_transform": ".assembly",
     "ModalMassTable": ".modal_mass",

@@ -155,17 +155,17 @@ def feedback_factors(n: int, key: str, forcing: Forcing, t0: float):
     until (r,)) acting on [q; v].
 
     Each [matrix, rate_matrix] is factored by SVD (singular values below 1e-14 of the
-    largest dropped: exact to rounding); a feedback given with its ``factors`` (and no rate
-    matrix) is used as it is (O(n r), no SVD of an n x n matrix). Then force = sum_k
+    largest dropped: exact to rounding); a feedback given with its ``factors`` (U, V, and W
+    for a rate matrix) is used as it is (O(n r), no SVD of an n x n matrix). Then force = sum_k
     U[:, k] (V[k] . [q; v]) over the terms with since[k] <= t < until[k]."""
     Us, Vs, sinces, untils = [np.zeros((n, 0))], [np.zeros((0, 2 * n))], [np.zeros(0)], [np.zeros(0)]
     for fb in forcing.feedback:
         if fb.body != key or n == 0:
             continue
-        if fb.factors is not None and fb.rate_matrix is None:
-            U, V = fb.factors
+        if fb.factors is not None and (fb.rate_matrix is None or len(fb.factors) == 3):
+            U, V, *W = fb.factors
             Us.append(U)
-            Vs.append(np.hstack([V, np.zeros_like(V)]))
+            Vs.append(np.hstack([V, W[0] if W else np.zeros_like(V)]))
             sinces.append(np.full(U.shape[1], fb.since))
             untils.append(np.full(U.shape[1], fb.until))
             continue

@@ -128,9 +128,11 @@ def attitude_hold(body: ModalBody, gimbal_labels, bandwidth_hz: float, damping: 
         cg = center_of_gravity(body)[1]
     R, I_cg = rigid_rotation_rows(body, cg)
     G = control_gimbal_matrix(body, gimbal_labels, cg)
-    B = body.rows(gimbal_labels).T @ G @ I_cg @ R          # modal force of alpha = theta (rad/s^2 per rad)
+    U = body.rows(gimbal_labels).T @ G @ I_cg               # B = U R: modal force of alpha = theta (rad/s^2 per rad)
     w = 2 * np.pi * bandwidth_hz
-    return ModalFeedback("a", -w * w * B, rate_matrix=-2 * damping * w * B, since=since)
+    B = U @ R
+    return ModalFeedback("a", -w * w * B, rate_matrix=-2 * damping * w * B, since=since,
+                         factors=(U, -w * w * R, -2 * damping * w * R))      # rank 3: no SVD of n x n
 
 
 # ---------------------------------------------------------------- gravity softening

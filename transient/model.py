@@ -311,7 +311,8 @@ class ModalFeedback:
     ``-matrix`` in the stiffness (the 'softening stiffness' KSOF of eq. 27). ``factors =
     (U, V)`` (n x r, r x n, ``matrix = U @ V``) give the displacement part in rank-factored
     form, so that the solver never factors an n x n matrix (KSOF has rank 3, eq. 27);
-    without them the solver finds factors by an SVD (cubic in n)."""
+    ``(U, V, W)`` the rate part too (``rate_matrix = U @ W``: a control law's P and D terms
+    through the same actuators); without them the solver finds factors by an SVD (cubic in n)."""
 
     body: str
     matrix: np.ndarray
@@ -334,15 +335,21 @@ class ModalFeedback:
         if math.isnan(self.since) or math.isnan(self.until) or not self.since < self.until:
             raise InputError(f"{who}: since = {self.since!r} s must be before until = {self.until!r} s")
         if self.factors is not None:
-            U, V = (_finite(f"{who}: factors", x) for x in self.factors)
+            if len(self.factors) not in (2, 3):
+                raise InputError(f"{who}: factors are (U, V) or (U, V, W), got {len(self.factors)} arrays")
+            U, V, *W = (_finite(f"{who}: factors", x) for x in self.factors)
             n = self.matrix.shape[0]
-            if U.ndim != 2 or V.ndim != 2 or U.shape[0] != n or V.shape != (U.shape[1], n):
-                raise InputError(f"{who}: factors of shapes {U.shape}, {V.shape}, expected (n, r), (r, n) with n = {n}")
-            x = np.cos(np.arange(n) + 0.5)          # one product checks U V = matrix (O(n^2), not O(n^3))
-            y, z = self.matrix @ x, U @ (V @ x)
-            if not np.allclose(y, z, rtol=1e-9, atol=1e-12 * max(float(np.abs(y).max(initial=0.0)), 1e-300)):
-                raise InputError(f"{who}: factors U V differ from the matrix")
-            self.factors = (U, V)
+            for part, A, name in ((V, self.matrix, "matrix"), *((w, self.rate_matrix, "rate_matrix") for w in W)):
+                if A is None:
+                    raise InputError(f"{who}: a rate factor W without a rate_matrix")
+                if U.ndim != 2 or part.ndim != 2 or U.shape[0] != n or part.shape != (U.shape[1], n):
+                    raise InputError(f"{who}: factors of shapes {U.shape}, {part.shape}, expected (n, r), (r, n) "
+                                     f"with n = {n}")
+                x = np.cos(np.arange(n) + 0.5)      # one product checks U V = matrix (O(n^2), not O(n^3))
+                y, z = A @ x, U @ (part @ x)
+                if not np.allclose(y, z, rtol=1e-9, atol=1e-12 * max(float(np.abs(y).max(initial=0.0)), 1e-300)):
+                    raise InputError(f"{who}: factors differ from the {name}")
+            self.factors = (U, V, *W)
 
     def active(self, t: float) -> bool:
         return self.since <= t < self.until

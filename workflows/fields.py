@@ -10,7 +10,8 @@ numbering them in the order of the .pvd's ``parts`` note), with the nodal fields
   displacement: what the snapshots draw.
 
 The fields are recovered through each component's Craig-Bampton model (reduction's
-field_recovery, one matrix per component computed once) from the modal displacements the
+field_displacement: the component's rows of the system modes times the step's modal
+coordinates, then its modes; no full recovery matrix is formed) from the modal displacements the
 transient kept (``keep_modal = "q"``). Open ``fields_<case>.pvd`` in ParaView and warp by
 either vector.
 """
@@ -28,28 +29,28 @@ class FieldFrames:
     """Recovered nodal displacements of every FE component of a stack at any step."""
 
     def __init__(self, stack, result):
-        from liftoff.reduction import field_recovery
-
         if "q_a" not in result.modal:
             raise ValueError("full-field output needs the modal displacements: solve with keep_modal = 'q'")
         self.result = result
         self.n_rigid = int(np.sum(stack.vehicle.omega == 0))
-        self.parts = []          # (name, nodes, cells, cell_type, recovery matrix, on the pad?)
+        self.parts = []          # (name, nodes, cells, cell_type, (assembly, system modes, component), on the pad?)
         for name, comp in stack.components.items():
             if comp.field_map is None or comp.nodes is None:
                 continue
             asm, modes = (stack.pad_asm, stack.pad_modes) if name == "pad" else (stack.vehicle_asm, stack.vehicle_modes)
-            self.parts.append((name, comp.nodes, comp.cells, comp.cell_type,
-                               field_recovery(asm, modes, name, comp), name == "pad"))
+            self.parts.append((name, comp.nodes, comp.cells, comp.cell_type, (asm, modes, comp), name == "pad"))
 
     def at(self, i: int, elastic: bool = True) -> list[np.ndarray]:
         """Per part the (n_nodes, 3) displacement at step i (``elastic``: vehicle rigid-body
         motion removed)."""
+        from liftoff.reduction import field_displacement
+
         qa = self.result.modal["q_a"][i].copy()
         if elastic:
             qa[: self.n_rigid] = 0.0
         qb = self.result.modal["q_b"][i] if "q_b" in self.result.modal else np.zeros(0)
-        return [(R @ (qb if pad else qa)).reshape(-1, 3) for _, _, _, _, R, pad in self.parts]
+        return [field_displacement(asm, modes, name, comp, qb if pad else qa).reshape(-1, 3)
+                for name, _, _, _, (asm, modes, comp), pad in self.parts]
 
 
 def frame_steps(n_t: int, n_frames: int) -> np.ndarray:

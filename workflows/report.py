@@ -458,7 +458,7 @@ def tank_plots(result, cp, out: Path, case: str, finish) -> None:
             continue
         fig, axs = plt.subplots(len(sel), 1, figsize=(10, 3 + 2.5 * len(sel)), sharex=True, squeeze=False)
         for ax, it in zip(axs[:, 0], sel):
-            ax.plot(result.time, it.values * scale, lw=0.8, label=it.name)
+            ax.plot(*display_points(result.time, it.values * scale), lw=0.8, label=it.name)
             ax.set_ylabel(f"{it.name.split()[-1]} ({unit})")
         finish(fig, list(axs[:, 0]), name, title)
 
@@ -657,6 +657,30 @@ def _save_figure(plt, fig, path: Path, legend_from=None, top: float = 0.97, dpi:
     return path
 
 
+#: bins of a drawn time history: a longer history is drawn through the samples where each
+#: bin has its minimum and maximum, in time order (a 10^5-step run draws 4,000 points a line,
+#: fewer than the pixels of a panel: every peak is drawn where and as computed)
+DISPLAY_BINS = 2000
+
+
+def display_points(x: np.ndarray, y: np.ndarray, bins: int = DISPLAY_BINS) -> tuple[np.ndarray, np.ndarray]:
+    """(x, y) to draw: every sample of a short history; of a long one the first and last
+    samples and, in each of ``bins`` equal runs of samples, those at its minimum and
+    maximum, in time order."""
+    x, y = np.asarray(x), np.asarray(y)
+    n = y.size
+    if n <= 2 * bins:
+        return x, y
+    m = -(-n // bins)                        # samples a run (the last one padded with its own end)
+    runs = -(-n // m)
+    padded = np.concatenate([y, np.full(runs * m - n, y[-1])]).reshape(runs, m)
+    finite = np.where(np.isfinite(padded), padded, 0.0)
+    base = np.arange(runs) * m
+    idx = np.concatenate([[0, n - 1], base + np.argmin(finite, axis=1), base + np.argmax(finite, axis=1)])
+    idx = np.unique(np.minimum(idx, n - 1))
+    return x[idx], y[idx]
+
+
 class _Figures:
     """The history plots' common frame: the whole run | the release window (:data:`RELEASE_WINDOW`
     about the first release), engine starts (grey, dotted, named) and the release (red,
@@ -678,10 +702,15 @@ class _Figures:
         return self.plt.subplots(nrows, ncol, figsize=(14 if ncol == 2 else 11, height), squeeze=False,
                                  sharex="col", sharey="row", gridspec_kw={"width_ratios": [2, 1][:ncol]})
 
-    @staticmethod
-    def draw(axs, row: int, x, y, **kw):
+    def draw(self, axs, row: int, x, y, **kw):
+        """A history in the whole-run panel and, restricted to the window, in the release one
+        (each through :func:`display_points`)."""
         for k, ax in enumerate(axs[row]):
-            ax.plot(x, y, **{**kw, "label": kw.get("label") if k == 0 else None})
+            xs, ys = x, y
+            if k == 1 and self.t_rel is not None:
+                lo, hi = np.searchsorted(x, [self.t_rel + RELEASE_WINDOW[0], self.t_rel + RELEASE_WINDOW[1]])
+                xs, ys = x[max(lo - 1, 0):hi + 1], y[max(lo - 1, 0):hi + 1]
+            ax.plot(*display_points(xs, ys), **{**kw, "label": kw.get("label") if k == 0 else None})
 
     def finish(self, fig, ax_list, name, title):
         ax_arr = np.atleast_2d(np.asarray(ax_list, dtype=object))
@@ -748,15 +777,15 @@ def plots(result, cp, out: Path, case: str) -> list[Path]:
     cg_item = result.items("cg_motion")[0]
     cg, cgc = result.recovered[cg_item.name], _translations(cg_item)
     for j in cgc:
-        axs[0].plot(t, cg[:, j], lw=0.9, label=f"c.g. {cg_item.labels[j]} ({cg_item.units[j]})")
+        axs[0].plot(*display_points(t, cg[:, j]), lw=0.9, label=f"c.g. {cg_item.labels[j]} ({cg_item.units[j]})")
     labels = result.output_labels["a"]
     tw = twang(result, cp)
     if tw is not None:
         on = slice(None) if tw.t_ign is None else t <= tw.t_ign   # on the pad (then it flies)
         for j, c in enumerate("xy"):
-            axs[1].plot(t[on], tw.pad[on, j], lw=1.2, label=f"{tw.point} {c}, pad frame (from t0; to release)")
+            axs[1].plot(*display_points(t[on], tw.pad[on, j]), lw=1.2, label=f"{tw.point} {c}, pad frame (from t0; to release)")
         for j, c in enumerate("xy"):
-            axs[1].plot(t, tw.rel_cg[:, j], lw=0.8, ls=":", label=f"{tw.point} {c} rel. to c.g.")
+            axs[1].plot(*display_points(t, tw.rel_cg[:, j]), lw=0.8, ls=":", label=f"{tw.point} {c} rel. to c.g.")
         i = tw.i_peak
         axs[1].plot(t[i], tw.pad[i, 1], "kv", ms=6, label=f"peak {np.hypot(*tw.pad[i]):.2f} m")
         if tw.at_ign is not None:
@@ -764,7 +793,7 @@ def plots(result, cp, out: Path, case: str) -> list[Path]:
                         label=f"at ignition {np.hypot(*tw.at_ign):.2f} m")
     if result.rigid_body_motion_a is not None:
         for j in range(3):
-            axs[2].plot(t, np.degrees(result.rigid_body_motion_a[:, 3 + j]), lw=0.9, label=f"R{'xyz'[j]}")
+            axs[2].plot(*display_points(t, np.degrees(result.rigid_body_motion_a[:, 3 + j])), lw=0.9, label=f"R{'xyz'[j]}")
         axs[2].legend(fontsize=7)
     axs[0].set_ylabel("c.g. motion (m)")
     axs[1].set_ylabel("tank-tip lateral (m)")
@@ -823,7 +852,7 @@ def deformed_fields(stack, result, i: int) -> list:
     """One fem.snapshot.Part per component at step i, elastic part of the vehicle only (its
     rigid-body motion removed, so the picture stays on the pad)."""
     from liftoff.fem.snapshot import Part
-    from liftoff.reduction import field_recovery
+    from liftoff.reduction import field_displacement
 
     out = []
     if "q_a" not in result.modal:
@@ -835,9 +864,9 @@ def deformed_fields(stack, result, i: int) -> list:
         if comp.field_map is None or comp.nodes is None:
             continue
         if name == "pad":
-            u = field_recovery(stack.pad_asm, stack.pad_modes, name, comp) @ qb
+            u = field_displacement(stack.pad_asm, stack.pad_modes, name, comp, qb)
         else:
-            u = field_recovery(stack.vehicle_asm, stack.vehicle_modes, name, comp) @ qa
+            u = field_displacement(stack.vehicle_asm, stack.vehicle_modes, name, comp, qa)
         out.append(Part(comp.nodes, comp.cells, comp.cell_type, u.reshape(-1, 3)))
     return out
 

@@ -7,7 +7,8 @@ import pytest
 from liftoff.fem.snapshot import Part, snapshot_png  # pyvista first (before dolfinx)
 from liftoff.fem import build_model, eigenmodes, mass_properties
 from liftoff.meshes.spec import Geometry, Material, Patch, SmearedMass
-from liftoff.reduction import Component, assemble, cb_check, craig_bampton, field_recovery, system_modes
+from liftoff.reduction import (Component, assemble, cb_check, craig_bampton, field_displacement, field_recovery,
+                               system_modes)
 from liftoff.reduction.component import load_component, save_component
 from liftoff.reduction.models import six_labels
 
@@ -54,6 +55,12 @@ def test_cb_of_shell_against_slepc_modes_and_mass(tube):
     for j in (6, 7):
         c, *_ = np.linalg.lstsq(U, u[:, j], rcond=None)
         assert np.linalg.norm(U @ c - u[:, j]) < 1e-6 * np.linalg.norm(u[:, j])
+    # the displacement of given modal coordinates (the snapshots' and fields' way: T q first)
+    # is the recovery matrix times them: the same sums in another order, round-off apart
+    q = np.random.default_rng(0).standard_normal((sysm.phi.shape[1], 2))
+    d = field_displacement(assemble([cb], "tube"), sysm, "tube", comp, q)
+    assert np.allclose(d, u @ q, rtol=0, atol=1e-12 * np.abs(u @ q).max())
+    assert np.allclose(field_displacement(assemble([cb], "tube"), sysm, "tube", comp, q[:, 0]), d[:, 0])
 
 
 def test_recovered_shell_field_picture(tube, tmp_path):

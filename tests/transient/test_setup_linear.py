@@ -74,7 +74,7 @@ def test_feedback_factors_are_checked_and_used():
     a, b = truss_body(vt, "vehicle", zeta=0.05), toy_pad(4, zeta=0.05)
     rng = np.random.default_rng(2)
     U, V = rng.standard_normal((a.n_modes, 2)), rng.standard_normal((2, a.n_modes))
-    with pytest.raises(InputError, match="factors U V differ from the matrix"):
+    with pytest.raises(InputError, match="factors differ from the matrix"):
         ModalFeedback("a", U @ V + 1e-3, factors=(U, V))
     with pytest.raises(InputError, match="factors of shapes"):
         ModalFeedback("a", U @ V, factors=(U, V[:1]))

@@ -54,3 +54,32 @@ def test_closed_loop_attitude_matches_the_pd_design(axis):
     assert abs(w_fit / w - 1) < 0.05 and abs(z_fit / zeta - 1) < 0.05
     others = [k for k in range(3) if k != axis]
     assert np.abs(theta[:, others]).max() < 1e-3 * np.abs(theta[:, axis]).max()   # axes decoupled (I_cg used)
+
+
+def test_attitude_hold_comes_factored_and_equals_its_svd():
+    """The hold is rank 3 (three gimbal moments): it carries its factors (U, V, W), so the
+    solver never takes the SVD of an n x 2n matrix (0.8 s a call with the default's 1,182
+    modes). Reference: the same law without factors, factored by the solver's SVD; the
+    forces U (V [q; v]) agree to round-off (1e-12 of their size)."""
+    from dataclasses import replace
+
+    from liftoff.core.errors import InputError
+    from liftoff.transient import ModalFeedback
+    from liftoff.transient.assembly import feedback_factors
+
+    body = rigid_vehicle()
+    hold = attitude_hold(body, GIMBALS, 0.5, 0.7)
+    assert hold.factors is not None and len(hold.factors) == 3 and hold.factors[0].shape[1] == 3
+    plain = replace(hold, factors=None)
+    x = np.random.default_rng(1).standard_normal(12)
+    forces = []
+    for fb in (hold, plain):
+        U, V, _, _ = feedback_factors(6, "a", Forcing(feedback=[fb]), 0.0)
+        forces.append(U @ (V @ x))
+    assert np.allclose(forces[0], forces[1], rtol=0, atol=1e-12 * np.abs(forces[1]).max())
+    assert np.allclose(forces[0], hold.matrix @ x[:6] + hold.rate_matrix @ x[6:], rtol=1e-12)
+    U, V, W = hold.factors
+    with pytest.raises(InputError, match="factors differ from the rate_matrix"):
+        ModalFeedback("a", hold.matrix, rate_matrix=hold.rate_matrix, factors=(U, V, 2 * W))
+    with pytest.raises(InputError, match="a rate factor W without a rate_matrix"):
+        ModalFeedback("a", hold.matrix, factors=(U, V, W))

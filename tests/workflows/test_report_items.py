@@ -89,3 +89,25 @@ def test_band_check_warns_when_the_band_reaches_a_component_cut():
     by_band = report.band_lines(40.0, cbs, {"core": 60.0})   # selected by band: cut at f_max, not at 59 Hz
     assert "at 60.0 Hz" in by_band[0] and "'core'" in by_band[0]
     assert "passes" not in report.band_lines(40.0, {})[0]      # a model without CB components
+
+
+def test_display_points_keep_every_peak_where_it_is():
+    """A long history is drawn through fewer points (report.display_points); the reference is
+    the history itself: its global and per-bin extremes are drawn with their own times, in
+    time order, and a short history is drawn as it is."""
+    rng = np.random.default_rng(5)
+    n, bins = 106_383, 2000
+    t = np.linspace(0.0, 9.6, n)
+    y = np.sin(40 * t) + 0.1 * rng.standard_normal(n)
+    y[77_777] = 5.0                                          # a one-sample spike
+    x2, y2 = report.display_points(t, y, bins)
+    assert x2.size <= 2 * bins + 2 and np.all(np.diff(x2) > 0)
+    assert y2.max() == y.max() == 5.0 and x2[np.argmax(y2)] == t[77_777]
+    assert y2.min() == y.min() and x2[np.argmin(y2)] == t[np.argmin(y)]
+    assert x2[0] == t[0] and x2[-1] == t[-1]
+    m = -(-n // bins)                                        # every run's extremes are there
+    for b in (0, 1000, -(-n // m) - 1):
+        seg = y[b * m:(b + 1) * m]
+        assert seg.max() in y2 and seg.min() in y2
+    xs, ys = report.display_points(t[:3000], y[:3000], bins)
+    assert xs is not None and np.array_equal(ys, y[:3000])
