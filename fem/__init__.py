@@ -12,7 +12,7 @@ Public API (SI units throughout)::
     mass_properties(model, about=(0, 0, 0)) -> MassProperties
     write_vtu(path, nodes, cells, cell_type, point_data) / write_modes_vtu(model, modes, path)
     fem.snapshot.snapshot_png(path, nodes, cells, cell_type, displacement, title, scale=None)
-    petsc_solver(comm=MPI.COMM_WORLD, tol=1e-10) -> PetscSolver   # reduction.craig_bampton(solver=...)
+    petsc_solver(comm=MPI.COMM_WORLD, tol=1e-10, eigensolver="block-lanczos") -> PetscSolver   # craig_bampton(solver=...)
 
 Parts: solids (tetrahedra of the volume groups) and Reissner-Mindlin shells (triangles of
 the surface groups in ``Geometry.shells``, fem.shell), tied by node position.

@@ -47,10 +47,18 @@ _PREFIXES = itertools.count()
 @dataclass(frozen=True)
 class PetscSolver:
     """CB solver on PETSc/MUMPS over ``comm`` (see the module docstring). ``tol``: the
-    relative residual of an eigenpair of the shift-inverted operator (fem.block_lanczos)."""
+    relative residual of an eigenpair of the shift-inverted operator. ``eigensolver``:
+    ``"block-lanczos"`` (fem.block_lanczos, the default) or ``"slepc"`` (SLEPc's one-vector
+    Krylov-Schur on the same factor, the solver before 2026-11-26: an independent second
+    method, several times slower)."""
 
     comm: MPI.Comm = field(default_factory=lambda: MPI.COMM_WORLD)
     tol: float = 1e-10
+    eigensolver: str = "block-lanczos"
+
+    def __post_init__(self) -> None:
+        if self.eigensolver not in EIGENSOLVERS:
+            raise InputError(f"CB eigensolver {self.eigensolver!r}: one of {', '.join(EIGENSOLVERS)}")
 
     def __call__(self, K: sp.csr_matrix, M: sp.csr_matrix, interior: np.ndarray, boundary: np.ndarray, *,
                  n_modes: int | None, f_max: float | None, band_limit: int, who: str, dof_name=str,
@@ -83,14 +91,19 @@ class PetscSolver:
                     from_count = f"{count} by the inertia of K_ii - (2 pi f_max)^2 M_ii"
                     raise InputError(_band_error(who, band_limit, f_max, from_count))
                 want = count
-            with _factor_kii(Kii, who) as ksp:
+            with _operator(Kii, Mii if B is None else B, want, self.tol, who, self.eigensolver) as (ksp, eps):
                 t0 = time.perf_counter()
-                _set_up(ksp, who)
+                _set_up(ksp, who, setup=None if eps is None else eps.setUp)
                 timings["factor_s"] = time.perf_counter() - t0
                 t0 = time.perf_counter()
-                lam, phi_loc, info = fixed_interface_pairs(ksp, Kii, Mii, wet, want, self.tol, who)
+                if eps is None:
+                    lam, phi_loc, info = fixed_interface_pairs(ksp, Kii, Mii, wet, want, self.tol, who)
+                    timings.update(info)
+                elif want:
+                    lam, phi_loc = eigenpairs(eps, Mii if B is None else B, want, who)
+                else:
+                    lam, phi_loc = np.zeros(0), np.zeros((Kib_loc.shape[0], 0))
                 timings["eigensolve_s"] = time.perf_counter() - t0
-                timings.update(info)
                 t0 = time.perf_counter()
                 psi_loc = -_factor_solve(ksp, Kib_loc, n_i)
                 timings["constraint_solve_s"] = time.perf_counter() - t0
@@ -101,7 +114,7 @@ class PetscSolver:
             Kii.destroy()
             Mii.destroy()
         if n_modes is None and lam.size and lam[-1] > lam_max * (1 + 1e-8):
-            raise ConvergenceError(f"{who}: SLEPc returned a mode at {np.sqrt(lam[-1]) / (2 * np.pi):.6g} Hz "
+            raise ConvergenceError(f"{who}: the eigensolver returned a mode at {np.sqrt(lam[-1]) / (2 * np.pi):.6g} Hz "
                                    f"above f_max = {f_max:g} Hz although {want} modes lie below it: "
                                    "a mode of a near-multiple cluster was missed")
         t0 = time.perf_counter()
@@ -110,9 +123,26 @@ class PetscSolver:
         return lam, phi, psi, timings
 
 
-def petsc_solver(comm: MPI.Comm | None = None, tol: float = 1e-10) -> PetscSolver:
-    """The PETSc/SLEPc CB solver over ``comm`` (default MPI.COMM_WORLD)."""
-    return PetscSolver(MPI.COMM_WORLD if comm is None else comm, tol)
+#: the fixed-interface eigensolvers of :class:`PetscSolver`
+EIGENSOLVERS = ("block-lanczos", "slepc")
+
+
+def petsc_solver(comm: MPI.Comm | None = None, tol: float = 1e-10, eigensolver: str = "block-lanczos") -> PetscSolver:
+    """The PETSc/MUMPS CB solver over ``comm`` (default MPI.COMM_WORLD); ``eigensolver`` as
+    :class:`PetscSolver`'s."""
+    return PetscSolver(MPI.COMM_WORLD if comm is None else comm, tol, eigensolver)
+
+
+@contextmanager
+def _operator(Kii: PETSc.Mat, B: PETSc.Mat, want: int, tol: float, who: str, eigensolver: str):
+    """(ksp, eps): the KSP holding the factor of K_ii and, for ``"slepc"``, the SLEPc
+    solver whose shift-invert operator it is (else None)."""
+    if eigensolver == "slepc":
+        with _solver(Kii, B, max(want, 1), tol, 500, who) as eps:
+            yield eps.getST().getKSP(), eps
+    else:
+        with _factor_kii(Kii, who) as ksp:
+            yield ksp, None
 
 
 # ------------------------------------------------------------------ pieces
@@ -268,12 +298,13 @@ def _factor_kii(Kii: PETSc.Mat, who: str):
             ksp.destroy()
 
 
-def _set_up(ksp, who: str) -> None:
-    """Factor K_ii; a null or negative pivot means K_ii is singular. A failure of MUMPS
-    that is not a singular matrix (INFOG(1) outside MUMPS_SINGULAR) is said as such, with
-    its codes, not as a floating component."""
+def _set_up(ksp, who: str, setup=None) -> None:
+    """Factor K_ii (``setup``: what factors it, default ``ksp.setUp``; SLEPc's EPSSetUp);
+    a null or negative pivot means K_ii is singular. A failure of MUMPS that is not a
+    singular matrix (INFOG(1) outside MUMPS_SINGULAR) is said as such, with its codes, not
+    as a floating component."""
     try:
-        ksp.setUp()
+        (setup or ksp.setUp)()
     except PETSc.Error as exc:
         info = _mumps_infog(ksp)
         if info is not None and info[0] < 0 and info[0] not in MUMPS_SINGULAR:

@@ -45,13 +45,14 @@ def _wet_modes(m, keep_free, n):
     return wet_eigensolve(Ki, Mi, [m.liquid], n, dofs=inner)[0]
 
 
-@pytest.mark.parametrize("which", ["petsc", "scipy"])
+@pytest.mark.parametrize("which", ["petsc", "petsc-slepc", "scipy"])
 def test_fixed_interface_modes_include_the_liquid(tank, which):
     from liftoff.fem import petsc_solver
     from liftoff.reduction import craig_bampton
 
     _, _, m, comp = tank
-    cb = craig_bampton(comp, comp.dof_labels, n_modes=10, solver=petsc_solver() if which == "petsc" else None)
+    solver = {"petsc": petsc_solver(), "petsc-slepc": petsc_solver(eigensolver="slepc"), "scipy": None}[which]
+    cb = craig_bampton(comp, comp.dof_labels, n_modes=10, solver=solver)
     ref = _wet_modes(m, np.zeros(0, np.int64), 10)
     assert cb.fixed_omega ** 2 == pytest.approx(ref, rel=1e-7)
     # the liquid's recovery items
