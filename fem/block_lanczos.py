@@ -154,7 +154,6 @@ def block_lanczos(solve: Block, mass: Block, n_local: int, n_global: int, row0: 
             # a block converges about p / 3 pairs: the next check when about half the rest may have
             next_check = blocks + max(1, (3 * bad) // (2 * p))
             if m + p > cap_dim:
-                bad = int(np.sum(resid > tol * np.abs(theta)))
                 raise ConvergenceError(f"{who}: block Lanczos left {bad} of {want} eigenpairs unconverged at "
                                        f"{m} basis vectors (largest relative residual "
                                        f"{float(np.max(resid / np.abs(theta))):.2g})")

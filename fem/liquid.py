@@ -403,29 +403,24 @@ class _DistributedWetMass:
         self.comm = Mii.getComm().tompi4py()
         self.r0, self.r1 = Mii.getOwnershipRange()
 
-    def solve(self, b: np.ndarray) -> np.ndarray:
-        x, y = self.A.createVecRight(), self.A.createVecLeft()
-        y.setArray(np.asarray(b, float))
-        self.ksp.solve(y, x)
-        return np.array(x.getArray(readonly=True))
+    def _liquid(self, X: np.ndarray) -> np.ndarray:
+        """This process's rows of G_i^T H^-1 G_i X for a dense block X (its rows here): the
+        liquid's solves as one multi-right-hand-side solve of its factor."""
+        from .petsc_cb import _factor_solve, gather_rows
+
+        GX = np.asarray(self.Gi @ gather_rows(self.comm, X))
+        return (self.Gi.T @ _factor_solve(self.ksp, GX, GX.shape[0]))[self.r0:self.r1]
 
     def mult(self, mat, x, y):
         self.M.mult(x, y)
-        xa = np.array(x.getArray(readonly=True))
-        full = np.concatenate(self.comm.allgather(xa)) if self.comm.size > 1 else xa
-        add = self.Gi.T @ self.solve(self.Gi @ full)
-        y.setArray(np.array(y.getArray(readonly=True)) + add[self.r0:self.r1])
+        add = self._liquid(np.array(x.getArray(readonly=True))[:, None])[:, 0]
+        y.setArray(np.array(y.getArray(readonly=True)) + add)
 
     def mult_block(self, X: np.ndarray) -> np.ndarray:
-        """This process's rows of (M_ii + G_i^T H^-1 G_i) X for a dense block X (its rows
-        here): the liquid's solves as one multi-right-hand-side solve of its factor."""
-        from .petsc_cb import _factor_solve, _mat_block
+        """This process's rows of (M_ii + G_i^T H^-1 G_i) X for a dense block X (its rows here)."""
+        from .petsc_cb import _mat_block
 
-        Y = _mat_block(self.M, X)
-        full = np.vstack(self.comm.allgather(np.ascontiguousarray(X))) if self.comm.size > 1 else X
-        GX = np.asarray(self.Gi @ full)
-        add = self.Gi.T @ _factor_solve(self.ksp, GX, GX.shape[0])
-        return Y + add[self.r0:self.r1]
+        return _mat_block(self.M, X) + self._liquid(X)
 
     def destroy(self, mat=None) -> None:       # PETSc calls it when the shell matrix is destroyed
         self.ksp.destroy()

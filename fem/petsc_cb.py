@@ -362,9 +362,7 @@ def fixed_interface_pairs(ksp, Kii: PETSc.Mat, Mii: PETSc.Mat, wet, want: int, t
         import scipy.linalg as sla
 
         I_loc = np.eye(n_i)[r0:r1]
-        Kd = np.vstack(comm.allgather(_mat_block(Kii, I_loc))) if comm.size > 1 else _mat_block(Kii, I_loc)
-        Bl = mass(I_loc)
-        Bd = np.vstack(comm.allgather(Bl)) if comm.size > 1 else Bl
+        Kd, Bd = gather_rows(comm, _mat_block(Kii, I_loc)), gather_rows(comm, mass(I_loc))
         lam, phi = sla.eigh(0.5 * (Kd + Kd.T), 0.5 * (Bd + Bd.T), subset_by_index=[0, want - 1])
         return lam, phi[r0:r1], {"eigen_dimension": n_i, "eigen_blocks": 0}
     try:

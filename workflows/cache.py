@@ -105,6 +105,12 @@ class StageCache:
             return None
         return Path(self.root) / stage / f"{key}{suffix}"
 
+    def has(self, stage: str, key: str, suffix: str) -> bool:
+        """Whether an entry of ``stage`` under ``key`` is recorded (its record file; loading
+        it still checks its files)."""
+        p = self.path(stage, key, suffix)
+        return p is not None and p.with_name(f"{key}.entry.json").is_file()
+
     def get_or_build(self, stage: str, key: str, suffix: str, build: Callable[[], Any],
                      save: Callable[[Any, Path], Any], load: Callable[[Path], Any], label: str = "") -> Any:
         """Load the product of ``stage`` under ``key`` if its entry checks, else build and save it."""

@@ -258,9 +258,7 @@ def _cb_worker(model: ModelConfig, name: str, cache_root: str) -> list:
 
 def _cb_cached(model: ModelConfig, name: str, comp: Component, comp_key: str, cache: StageCache) -> bool:
     """Whether the CB stage of ``name`` has a cache entry (its record file; the stage checks it)."""
-    key, _ = _cb_key(model, name, comp, comp_key)
-    p = cache.path("cb", key, ".npz")
-    return p is not None and p.with_name(f"{key}.entry.json").is_file()
+    return cache.has("cb", _cb_key(model, name, comp, comp_key)[0], ".npz")
 
 
 def reduce_concurrently(model: ModelConfig, comps: dict[str, Component], comp_keys: dict[str, str],
