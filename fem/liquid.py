@@ -82,6 +82,8 @@ class LiquidOperator:
     Hs: sp.csr_matrix | None = None              # H as scipy CSR (for reduction.liquid.LiquidMass)
     groups: tuple = ()                           # liquid volume groups, in volume_ids order
     p_group: np.ndarray | None = None            # (n_p,) index into groups of each kept pressure DOF
+    free: "FreeSurface | None" = None            # the free surface's pressure DOFs (fem.slosh)
+    centroids: dict = field(default_factory=dict)  # liquid volume group -> (3,) m, of its meshed volume
 
     @property
     def n_p(self) -> int:
@@ -176,6 +178,26 @@ class LiquidOperator:
         self.H.destroy()
 
 
+@dataclass
+class FreeSurface:
+    """The pressure DOFs on the free surface(s) that the p = 0 model removes, kept for the
+    gravity free-surface condition (fem.slosh): the blocks of the liquid's Laplacian between
+    the kept DOFs (k) and these (f), the surface mass, and the wall coupling of these rows.
+    All divided by each liquid's density, as LiquidOperator.H."""
+
+    Hkf: sp.csr_matrix             # (n_p, n_f) m / (kg/m^3)
+    Hff: sp.csr_matrix             # (n_f, n_f)
+    Sff: sp.csr_matrix             # (n_f, n_f) int_fs N_i N_j dS / rho, m^2 / (kg/m^3)
+    Gf: sp.csr_matrix              # (n_f, n_c) m^2: int_wet N_i psi_j.n dS of the surface DOFs
+    coords: np.ndarray             # (n_f, 3) m
+    group: np.ndarray              # (n_f,) index into LiquidOperator.groups
+    pinned: np.ndarray             # (n_groups,) bool: the liquid also has p = 0 DOFs off its surface
+
+    @property
+    def n_f(self) -> int:
+        return self.Hff.shape[0]
+
+
 # ---- building -----------------------------------------------------------------------------
 def _facets(tm, name: str, liquid: str, what: str) -> np.ndarray:
     tags = tm.surface_tags.get(name)
@@ -258,9 +280,11 @@ def liquid_operator(tm, name: str, density, wetted, free_surface=None, dirichlet
     p, q = ufl.TrialFunction(Q), ufl.TestFunction(Q)
     H = pb.gather_csr(pb.assemble_matrix(inv_rho * ufl.inner(ufl.grad(p), ufl.grad(q)) * ufl.dx))
     fixed = [] if dirichlet is None else [np.asarray(dirichlet, np.int64)]
+    surface = np.zeros(0, np.int64)
     if free_surface is not None:
-        fixed.append(np.asarray(fem.locate_dofs_topological(Q, 2, _union(tm, free_surface, name, "free surface")),
-                                np.int64))
+        fs_facets = _union(tm, free_surface, name, "free surface")
+        surface = np.asarray(fem.locate_dofs_topological(Q, 2, fs_facets), np.int64)
+        fixed.append(surface)
     fixed = np.unique(np.concatenate(fixed)) if fixed else np.zeros(0, np.int64)
     if fixed.size == 0:
         raise InputError(f"liquid {name!r} has no free surface (p = 0): its free surface "
@@ -270,14 +294,22 @@ def liquid_operator(tm, name: str, density, wetted, free_surface=None, dirichlet
     Vc = fem.VectorFunctionSpace(mesh, ("CG", coupling_degree))
     G = pb.gather_csr(pb.assemble_matrix(q * ufl.dot(ufl.TrialFunction(Vc), ufl.FacetNormal(mesh)) * ds))
     blocks = np.asarray(fem.locate_dofs_topological(Vc, 2, wet), np.int64)
-    G = sp.csr_matrix(G[keep][:, (3 * blocks[:, None] + np.arange(3)).ravel()])
+    G = sp.csr_matrix(G[:, (3 * blocks[:, None] + np.arange(3)).ravel()])
     G.eliminate_zeros()
+    free_dofs = np.setdiff1d(surface, np.zeros(0, np.int64) if dirichlet is None else np.asarray(dirichlet, np.int64))
+    if free_dofs.size:
+        dfs = ufl.Measure("ds", domain=mesh, subdomain_data=dolfinx_meshtags(mesh, fs_facets))(1)
+        S = pb.gather_csr(pb.assemble_matrix(inv_rho * p * q * dfs))
+        Gf = sp.csr_matrix(G[free_dofs])
+    G = sp.csr_matrix(G[keep])
     Xc, Xp = Vc.tabulate_dof_coordinates(), Q.tabulate_dof_coordinates()[keep]
     x, dx = ufl.SpatialCoordinate(mesh), ufl.Measure("dx", domain=mesh, subdomain_data=tm.cell_tags)
     vols = {g: fem.assemble_scalar(fem.form(fem.Constant(mesh, 1.0) * dx(gid))) for g, gid in tm.volume_ids.items()}
     vol = sum(vols.values())
     mass = sum(rho[g] * v for g, v in vols.items())
     cg = np.array([fem.assemble_scalar(fem.form(x[i] / inv_rho * ufl.dx)) for i in range(3)]) / mass
+    cgs = {g: np.array([fem.assemble_scalar(fem.form(x[i] * dx(gid))) for i in range(3)]) / vols[g]
+           for g, gid in tm.volume_ids.items()}
     Hk, ksp = _factor(sp.csr_matrix(H[keep][:, keep]), name)
     pts = {}
     if points:
@@ -292,9 +324,16 @@ def liquid_operator(tm, name: str, density, wetted, free_surface=None, dirichlet
     p_group = np.zeros(Q.dofmap.index_map.size_local * Q.dofmap.index_map_bs, np.int64)
     for k, gid in enumerate(tm.volume_ids.values()):          # a pressure DOF belongs to one liquid
         p_group[np.unique(Q.dofmap.list.array.reshape(-1, Q.dofmap.dof_layout.num_dofs)[tm.cell_tags.find(gid)])] = k
+    free = None
+    if free_dofs.size:
+        f_group = p_group[free_dofs]
+        pinned = np.array([np.any(p_group[np.setdiff1d(fixed, free_dofs)] == k) for k in range(len(groups))], bool)
+        free = FreeSurface(sp.csr_matrix(H[keep][:, free_dofs]), sp.csr_matrix(H[free_dofs][:, free_dofs]),
+                           sp.csr_matrix(S[free_dofs][:, free_dofs]), Gf,
+                           Q.tabulate_dof_coordinates()[free_dofs].copy(), f_group, pinned)
     return LiquidOperator(name, rho, G, Hk, ksp, Xp, np.repeat(Xc[blocks], 3, axis=0), np.tile(np.arange(3), blocks.size),
                           float(vol), cg, float(mass), vols, pts, Hs=sp.csr_matrix(H[keep][:, keep]), groups=groups,
-                          p_group=p_group[keep])
+                          p_group=p_group[keep], free=free, centroids=cgs)
 
 
 def dolfinx_meshtags(mesh, facets: np.ndarray, value: int = 1):
@@ -633,6 +672,6 @@ def convective_mass(op: LiquidOperator, tm, geometry, nodes: np.ndarray, T: sp.c
     return sp.csr_matrix(out)
 
 
-__all__ = ["LiquidOperator", "liquid_operator", "rigid_translation", "surface_triangles", "cavity_volume_row",
+__all__ = ["LiquidOperator", "FreeSurface", "liquid_operator", "rigid_translation", "surface_triangles", "cavity_volume_row",
            "mass_with_liquid", "wet_eigensolve", "model_liquid", "count_below_wet", "wet_mass",
            "convective_mass"]
