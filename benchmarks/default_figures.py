@@ -28,6 +28,7 @@ TWANG_JSON = FIGURES / "twang_study.json"
 MESH_JSON = FIGURES / "mesh_study.json"
 BENCH_JSON = FIGURES / "bench_workflow.json"       # benchmarks/bench_workflow.py --json (machine-dependent)
 CB_BENCH_JSON = FIGURES / "bench_cb_default.json"  # benchmarks/bench_cb_default.py --json (machine-dependent)
+SLOSH_JSON = FIGURES / "slosh_default.json"        # benchmarks/slosh_default.py
 EXAMPLE_JSONS = {n: FIGURES / f"{n}.json" for n in ("single_stick", "saturn_v")}   # benchmarks/example_figures.py
 DOCS = (ROOT / "README.md", ROOT / "docs" / "workflow.md")
 #: figures agree when within this relative difference (of the larger of the two or, inside a
@@ -139,7 +140,8 @@ def _mn(x: float) -> str:
 
 def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
                   mesh: dict | None = None, bench: dict | None = None,
-                  examples: dict | None = None, cb_bench: dict | None = None) -> dict[str, str]:
+                  examples: dict | None = None, cb_bench: dict | None = None,
+                  slosh: dict | None = None) -> dict[str, str]:
     """{block name: markdown} from the figures (and the convergence, twang and mesh studies,
     the workflow benchmark and the launcher examples' figures {name: figures}, if any)."""
     tw, twn = fig["twang"]["nominal"], fig["twang"]
@@ -208,6 +210,8 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
         blocks.update(render_bench(bench))
     if cb_bench:
         blocks["bench-cb-default"] = render_cb_bench(cb_bench)
+    if slosh:
+        blocks["slosh-default"] = render_slosh(slosh)
     if examples:
         import runpy
 
@@ -250,6 +254,21 @@ def render_cb_bench(b: dict) -> str:
                     f"{min(bl):.1f} / {statistics.median(bl):.1f} | {r['block_dimension']} | "
                     f"{min(sl):.1f} / {statistics.median(sl):.1f} | {min(sl) / min(bl):.2f} | "
                     f"{r['max_rel_eig_diff']:.0e} |")
+    return "\n".join(rows) + "\n"
+
+
+def render_slosh(fig: dict) -> str:
+    """The default's slosh modes (benchmarks/slosh_default.py): each core liquid in its rigid
+    tank at 1 g, its first lateral mode (P2 pressure; P1 on the same mesh beside it)."""
+    rows = ["| liquid | mass (t) | impulsive mass (t) at z (m) | first slosh mode (Hz), P2 (P1) | its slosh mass (t) "
+            "at z (m) | pendulum length (m) |", "|---|---|---|---|---|---|"]
+    for name, r in fig.items():
+        m = r["modes"][0]
+        f1 = r["p1_first_hz"]
+        rows.append(f"| {name.split('/')[-1]} | {r['mass_kg'] / 1e3:.1f} | {r['impulsive_kg'] / 1e3:.1f} at "
+                    f"{r['impulsive_z_m']:.2f} | {m['frequency_hz']:.3f} ({'-' if f1 is None else format(f1, '.3f')}) | "
+                    f"{m['mass_kg'] / 1e3:.1f} at {m['height_m']:.2f} | "
+                    f"{r['g_eff'] / (2 * 3.141592653589793 * m['frequency_hz']) ** 2:.2f} |")
     return "\n".join(rows) + "\n"
 
 
@@ -340,7 +359,8 @@ def studies() -> tuple[dict | None, ...]:
     out = tuple(json.loads(p.read_text()) if p.is_file() else None
                 for p in (CONVERGENCE_JSON, TWANG_JSON, MESH_JSON, BENCH_JSON))
     return out + ({n: json.loads(p.read_text()) for n, p in EXAMPLE_JSONS.items() if p.is_file()},
-                  json.loads(CB_BENCH_JSON.read_text()) if CB_BENCH_JSON.is_file() else None)
+                  json.loads(CB_BENCH_JSON.read_text()) if CB_BENCH_JSON.is_file() else None,
+                  json.loads(SLOSH_JSON.read_text()) if SLOSH_JSON.is_file() else None)
 
 
 # ------------------------------------------------------------------ comparing

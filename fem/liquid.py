@@ -564,6 +564,17 @@ def _cad_ratio(tm, geometry, group: str) -> float:
     return float(cad) / float(v) if v > 0 else 1.0
 
 
+def geometry_liquid_operator(tm, geometry, degree: int = 1, coupling_degree: int = 1) -> LiquidOperator:
+    """The liquids of a ``meshes.spec.Geometry`` as one operator (uncoupled), each with its
+    density scaled to carry the CAD volume's mass (:func:`_cad_ratio`)."""
+    liquids = geometry.liquids
+    points = {n: xyz for liq in liquids.values() for n, xyz in liq.points.items()}
+    density = {g: liq.density * _cad_ratio(tm, geometry, g) for g, liq in liquids.items()}
+    return liquid_operator(tm, f"{geometry.name} liquids", density,
+                           [liq.wetted for liq in liquids.values()], [liq.free_surface for liq in liquids.values()],
+                           None, degree, coupling_degree, points)
+
+
 def model_liquid(tm, geometry, parts, nodes: np.ndarray, T: sp.csr_matrix, coupling_degree: int,
                  degree: int = 1) -> tuple[LiquidOperator, dict]:
     """The liquids of a ``meshes.spec.Geometry`` (its ``liquids``: one operator for all, each
@@ -574,18 +585,15 @@ def model_liquid(tm, geometry, parts, nodes: np.ndarray, T: sp.csr_matrix, coupl
     liquids = geometry.liquids
     for g, liq in liquids.items():
         if liq.slosh_modes:
-            raise InputError(f"liquid {g!r}: slosh_modes = {liq.slosh_modes}: gravity slosh is not modelled "
-                             "(p = 0 on the free surface, docs/hydro.md); use 0")
+            raise InputError(f"liquid {g!r}: slosh_modes = {liq.slosh_modes}: gravity slosh is not in the "
+                             "Craig-Bampton model yet (p = 0 on the free surface; the rigid-tank slosh modes: "
+                             "liftoff slosh, docs/hydro.md); use 0")
         if g not in tm.volume_ids:
             raise InputError(f"liquid {g!r} is not a physical volume of mesh {tm.path!r}")
         if liq.wetted not in tm.surface_tags or not np.any(tm.surface_tags[liq.wetted].values == 1):
             raise InputError(f"liquid {g!r} does not touch the wall: no face of its wetted surface {liq.wetted!r} "
                              "lies on the liquid")
-    points = {n: xyz for liq in liquids.values() for n, xyz in liq.points.items()}
-    density = {g: liq.density * _cad_ratio(tm, geometry, g) for g, liq in liquids.items()}
-    op = liquid_operator(tm, f"{geometry.name} liquids", density,
-                         [liq.wetted for liq in liquids.values()], [liq.free_surface for liq in liquids.values()],
-                         None, degree, coupling_degree, points)
+    op = geometry_liquid_operator(tm, geometry, degree, coupling_degree)
     op.couple(nodes, T)
     rows = {}
     for g, liq in liquids.items():
@@ -672,6 +680,6 @@ def convective_mass(op: LiquidOperator, tm, geometry, nodes: np.ndarray, T: sp.c
     return sp.csr_matrix(out)
 
 
-__all__ = ["LiquidOperator", "FreeSurface", "liquid_operator", "rigid_translation", "surface_triangles", "cavity_volume_row",
+__all__ = ["LiquidOperator", "FreeSurface", "liquid_operator", "geometry_liquid_operator", "rigid_translation", "surface_triangles", "cavity_volume_row",
            "mass_with_liquid", "wet_eigensolve", "model_liquid", "count_below_wet", "wet_mass",
            "convective_mass"]

@@ -53,8 +53,6 @@ separate regions: H is block diagonal and each liquid is solved alone). Units SI
 """
 from __future__ import annotations
 
-import csv
-import io
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -211,3 +209,25 @@ def slosh_modes(op, gravity: float = G0, n_modes: int = 6, lateral_only: bool = 
     if not out:
         raise InputError(f"liquid {op.name!r}: no liquid has a free surface to slosh")
     return out
+
+
+def geometry_slosh(geometry, gravity: float = G0, n_modes: int = 6, degree: int = 2) -> dict:
+    """:func:`slosh_modes` of the hydroelastic liquids of a meshed ``meshes.spec.Geometry``
+    (its ``liquids``; each density scaled to the CAD volume's mass as in the structural
+    model), pressure P_``degree``, serial: {liquid group: LiquidSlosh}."""
+    from mpi4py import MPI
+
+    from .liquid import geometry_liquid_operator
+    from .mesh import read_mesh_parts
+
+    if not geometry.liquids:
+        raise InputError(f"{geometry.name}: no hydroelastic liquid to slosh (a smeared liquid has no free surface)")
+    tm = read_mesh_parts(geometry.msh_path, MPI.COMM_SELF, tuple(geometry.shells), liquids=tuple(geometry.liquids))[2]
+    op = geometry_liquid_operator(tm, geometry, degree)
+    try:
+        return slosh_modes(op, gravity, n_modes)
+    finally:
+        op.destroy()
+
+
+__all__ = ["SloshMode", "LiquidSlosh", "slosh_modes", "geometry_slosh", "G0", "LATERAL_MASS"]

@@ -169,8 +169,9 @@ def summary(scenario, result, path: Path, wall: float, est=None) -> str:
 # ------------------------------------------------------------------ entry point
 from liftoff.workflows.init import add_parser as _add_init  # noqa: E402  `liftoff init` (workflows/init.py)
 from liftoff.workflows.run import add_parser as _add_run  # noqa: E402  `liftoff run` (workflows/run.py)
+from liftoff.workflows.slosh import add_parser as _add_slosh  # noqa: E402  `liftoff slosh` (workflows/slosh.py)
 
-COMMANDS: list[Callable[[argparse._SubParsersAction], None]] = [_add_transient, _add_run, _add_init]
+COMMANDS: list[Callable[[argparse._SubParsersAction], None]] = [_add_transient, _add_run, _add_init, _add_slosh]
 
 
 class _Parser(argparse.ArgumentParser):

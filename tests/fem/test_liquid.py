@@ -478,6 +478,6 @@ def test_slosh_modes_are_refused_not_ignored(tank_model):
 
     _, g, _ = tank_model
     g2 = replace(g, liquids={k: replace(v, slosh_modes=2) for k, v in g.liquids.items()})
-    with pytest.raises(InputError, match="slosh_modes = 2: gravity slosh is not modelled") as e:
+    with pytest.raises(InputError, match="slosh_modes = 2: gravity slosh is not in the Craig-Bampton model yet") as e:
         build_model(g2)
     assert "'tank_lox_liquid'" in str(e.value) and "\n" not in str(e.value)

@@ -152,6 +152,10 @@ def test_all_modes_add_up_to_the_whole_liquid(tmp_path):
         assert moment == pytest.approx(RHO * (op.volume * zc + s.surface_second_moment[0]), rel=1e-9)
         # the slosh masses it reports are these
         assert s.modes[0].mass == pytest.approx(float(np.hypot(beta[1, 0], beta[1, 1]) ** 2 / lam[1]), rel=1e-6)
+        # lambda does not depend on g_eff: omega scales as sqrt(g_eff), the masses not at all
+        s4 = slosh_modes(op, 4 * G, 6, lateral_only=False)["liquid"]
+        assert [m.frequency for m in s4.modes] == pytest.approx([2 * m.frequency for m in s.modes], rel=1e-8)
+        assert [m.mass for m in s4.modes] == pytest.approx([m.mass for m in s.modes], rel=1e-6)
     finally:
         op.destroy()
 

@@ -112,3 +112,18 @@ def test_bench_blocks_show_the_benchmark_file(figures):
     b = figures.render_bench(bench)
     assert "123 s cold" in b["bench-summary"] and "46 s warm" in b["bench-summary"] and "1000 steps" in b["bench-summary"]
     assert "| fe core (built) | 3.2 | 0.1 |" in b["bench-workflow"] and "**123.4**" in b["bench-workflow"]
+
+
+@pytest.mark.fem
+@pytest.mark.skipif(not HAVE_FE, reason="needs dolfinx and gmsh")
+def test_slosh_figures_are_the_current_codes(figures):
+    """README's slosh table (benchmarks/slosh_default.py): the checked-in figures are what
+    `liftoff slosh` of the embedded default gives now (12 s: the core is meshed, its liquids
+    solved at P2 and P1), to the figures' tolerance."""
+    spec = importlib.util.spec_from_file_location("slosh_default", ROOT / "benchmarks" / "slosh_default.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    fresh = json.loads(json.dumps(mod.slosh_figures()))
+    assert not figures.differences(fresh, json.loads(figures.SLOSH_JSON.read_text()))
+    text = figures.render_slosh(fresh)
+    assert "core_lox_liquid" in text and "core_lh2_liquid" in text

@@ -1,0 +1,63 @@
+"""`liftoff slosh` (issue 25): the slosh modes of the scenario's tanks and their equivalent
+mechanical model, end to end on a coarse hydroelastic core; bad input refused before any
+meshing. The physics is checked against closed forms in tests/fem/test_slosh.py."""
+import csv
+import importlib.util
+
+import numpy as np
+import pytest
+
+from liftoff.workflows.cli import main
+
+HAVE_FE = all(importlib.util.find_spec(m) is not None for m in ("dolfinx", "gmsh", "slepc4py"))
+pytestmark = [pytest.mark.fem, pytest.mark.skipif(not HAVE_FE, reason="needs dolfinx")]
+G = 9.80665
+
+
+def _scenario(tmp_path, extra=""):
+    p = tmp_path / "s.toml"
+    p.write_text('extends = "shuttle"\ntitle = "slosh"\n[model.component.core]\nmesh_size = 1.2\n' + extra)
+    return p
+
+
+def test_slosh_table_of_the_core_tanks(tmp_path, capsys):
+    out = tmp_path / "slosh.csv"
+    assert main(["slosh", str(_scenario(tmp_path)), "--modes", "2", "--csv", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "core / core_lox_liquid" in text and "core / core_lh2_liquid" in text and "convergence: P2 against P1" in text
+    lines = out.read_text().splitlines()
+    assert lines[0].startswith("# ") and "SI units" in lines[0]
+    rows = list(csv.DictReader(lines[1:]))
+    for liquid in ("core_lox_liquid", "core_lh2_liquid"):
+        mine = [r for r in rows if r["liquid"] == liquid]
+        assert [r["kind"] for r in mine] == ["impulsive", "impulsive", "slosh", "slosh"]
+        m0 = float(mine[0]["mass_kg"])
+        for r in mine[2:]:
+            f, m = float(r["frequency_Hz"]), float(r["mass_kg"])
+            w2 = (2 * np.pi * f) ** 2
+            assert 0.1 < f < 2.0 and 0 < m < m0                     # metre-size tanks: tenths of a Hz
+            assert float(r["stiffness_N_per_m"]) == pytest.approx(m * w2, rel=1e-8)
+            assert float(r["pendulum_length_m"]) == pytest.approx(G / w2, rel=1e-8)
+            assert np.hypot(float(r["direction_x"]), float(r["direction_y"])) == pytest.approx(1.0, rel=1e-8)
+            assert float(r["g_eff_m_per_s2"]) == G
+        # the first pair's force acts above the impulsive mass's (the waves ride on top)
+        assert float(mine[2]["height_m"]) > float(mine[0]["height_m"])
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--g-eff", "0"], "--g-eff must be > 0"),
+    (["--g-eff", "nan"], "--g-eff must be > 0"),
+    (["--modes", "0"], "--modes must be >= 1"),
+    (["--csv", "/nonexistent-folder/x.csv"], "does not exist"),
+])
+def test_bad_arguments_refused_before_meshing(tmp_path, capsys, args, message):
+    assert main(["slosh", str(_scenario(tmp_path)), *args]) == 2
+    err = capsys.readouterr()
+    assert message in err.err and len(err.err.strip().splitlines()) == 1 and "meshing" not in err.out
+
+
+def test_a_stick_model_has_no_tanks_to_slosh(tmp_path, capsys):
+    p = tmp_path / "stick.toml"
+    p.write_text('extends = "shuttle"\ntitle = "stick"\n[model]\nsource = "stick"\n')
+    assert main(["slosh", str(p)]) == 2
+    assert 'needs [model] source = "fe"' in capsys.readouterr().err
