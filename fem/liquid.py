@@ -576,7 +576,7 @@ def geometry_liquid_operator(tm, geometry, degree: int = 1, coupling_degree: int
 
 
 def model_liquid(tm, geometry, parts, nodes: np.ndarray, T: sp.csr_matrix, coupling_degree: int,
-                 degree: int = 1) -> tuple[LiquidOperator, dict]:
+                 degree: int = 1, slosh: bool = False) -> tuple[LiquidOperator, dict]:
     """The liquids of a ``meshes.spec.Geometry`` (its ``liquids``: one operator for all, each
     with its density scaled to carry the CAD volume's mass, :func:`_cad_ratio`), coupled to
     the structure's ``nodes`` and field map ``T``; and the
@@ -584,10 +584,9 @@ def model_liquid(tm, geometry, parts, nodes: np.ndarray, T: sp.csr_matrix, coupl
     cavity's triangles on the structural ``parts`` (solid facets or shell cells)."""
     liquids = geometry.liquids
     for g, liq in liquids.items():
-        if liq.slosh_modes:
-            raise InputError(f"liquid {g!r}: slosh_modes = {liq.slosh_modes}: gravity slosh is not in the "
-                             "Craig-Bampton model yet (p = 0 on the free surface; the rigid-tank slosh modes: "
-                             "liftoff slosh, docs/hydro.md); use 0")
+        if liq.slosh_modes and not slosh:
+            raise InputError(f"liquid {g!r}: slosh_modes = {liq.slosh_modes} needs the slosh pendulums "
+                             "(convective = 'slosh', docs/hydro.md); use 0 with 'wall' or 'free'")
         if g not in tm.volume_ids:
             raise InputError(f"liquid {g!r} is not a physical volume of mesh {tm.path!r}")
         if liq.wetted not in tm.surface_tags or not np.any(tm.surface_tags[liq.wetted].values == 1):
@@ -634,8 +633,23 @@ def _exp_weights(a: np.ndarray, z: np.ndarray, z_target: float, what: str) -> np
     return mean(0.5 * (lo + hi))
 
 
+def wetted_nodes(tm, liq, g: str, nodes: np.ndarray, tree=None) -> tuple[np.ndarray, np.ndarray]:
+    """(structure node indices, nodal wetted area m^2) of liquid ``g``'s wetted surface
+    (``liq.wetted``: its flat triangles' vertices, each a third of the triangle's area)."""
+    from scipy.spatial import cKDTree
+
+    tree = cKDTree(nodes) if tree is None else tree
+    tris = surface_triangles(tm, liq.wetted)
+    area = np.repeat(0.5 * np.linalg.norm(np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0]), axis=1) / 3, 3)
+    dist, idx = tree.query(tris.reshape(-1, 3))
+    if np.any(dist > 1e-7 * float(np.ptp(nodes, axis=0).max())):
+        raise InputError(f"liquid {g!r}: a wetted vertex is not a node of the structure")
+    node, inv = np.unique(idx, return_inverse=True)
+    return node, np.bincount(inv, weights=area)
+
+
 def convective_mass(op: LiquidOperator, tm, geometry, nodes: np.ndarray, T: sp.csr_matrix,
-                    rb: np.ndarray) -> sp.csr_matrix:
+                    rb: np.ndarray, carried: dict | None = None) -> sp.csr_matrix:
     """Lateral (x, y) lumped mass M_c on each liquid's wetted nodes that carries the part of
     the liquid the p = 0 model leaves free laterally (its convective, sloshing part), with
     the first moment that puts the liquid's rigid-body mass and c.g. where a rigid liquid
@@ -644,7 +658,9 @@ def convective_mass(op: LiquidOperator, tm, geometry, nodes: np.ndarray, T: sp.c
     w_i = A_i e^{k z_i} (A_i the nodal wetted area, k such that the weights' mean height is
     the deficit's), positive; M_c = T_x^T W T_x + T_y^T W T_y. The slosh-frequency-to-infinity
     limit for the convective part (the smeared model's assumption for the whole liquid);
-    ``rb``: the model DOFs' rigid-body shape about the origin (n_dof, 6)."""
+    ``rb``: the model DOFs' rigid-body shape about the origin (n_dof, 6); ``carried``:
+    {liquid group: ((m_x, m_x z_x), (m_y, m_y z_y))} of the convective part that something
+    else already carries (the slosh pendulums of fem.slosh), left out of the lumped mass."""
     import ufl
     from dolfinx import fem
     from scipy.spatial import cKDTree
@@ -663,15 +679,11 @@ def convective_mass(op: LiquidOperator, tm, geometry, nodes: np.ndarray, T: sp.c
         vol = fem.assemble_scalar(fem.form(fem.Constant(tm.mesh, 1.0) * dx(gid)))
         zc = fem.assemble_scalar(fem.form(x[2] * dx(gid))) / vol
         m = op.density[g] * vol
-        tris = surface_triangles(tm, liq.wetted)
-        area = np.repeat(0.5 * np.linalg.norm(np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0]), axis=1) / 3, 3)
-        dist, idx = tree.query(tris.reshape(-1, 3))
-        if np.any(dist > 1e-7 * float(np.ptp(nodes, axis=0).max())):
-            raise InputError(f"liquid {g!r}: a wetted vertex is not a node of the structure")
-        node, inv = np.unique(idx, return_inverse=True)
-        a = np.bincount(inv, weights=area)
+        node, a = wetted_nodes(tm, liq, g, nodes, tree)
+        have = (carried or {}).get(g, ((0.0, 0.0), (0.0, 0.0)))
         # per direction: the convective part and its first moment (Tx-Ry: + sum m z, Ty-Rx: - sum m z)
         for k, (dm, ds) in enumerate(((m - Mi[0, 0], m * zc - Mi[0, 3]), (m - Mi[1, 1], m * zc + Mi[1, 2]))):
+            dm, ds = dm - have[k][0], ds - have[k][1]
             if dm <= 1e-9 * m:
                 continue
             w = dm * _exp_weights(a, nodes[node, 2], ds / dm, f"liquid {g!r}")
@@ -682,4 +694,4 @@ def convective_mass(op: LiquidOperator, tm, geometry, nodes: np.ndarray, T: sp.c
 
 __all__ = ["LiquidOperator", "FreeSurface", "liquid_operator", "geometry_liquid_operator", "rigid_translation", "surface_triangles", "cavity_volume_row",
            "mass_with_liquid", "wet_eigensolve", "model_liquid", "count_below_wet", "wet_mass",
-           "convective_mass"]
+           "convective_mass", "wetted_nodes"]

@@ -97,6 +97,7 @@ class FEModel:
     clamped: tuple[str, ...] = ()
     liquid: object = None          # fem.liquid.LiquidOperator of the geometry's liquids (coupled), or None
     liquid_volume_rows: dict = field(default_factory=dict)   # liquid group -> cavity volume-change row (m^3/m)
+    slosh: object = None           # fem.slosh.SloshPendulums (convective = "slosh"): DOFs after the model's n_dof
     _cache: dict = field(default_factory=dict, repr=False)
 
     @property
@@ -162,14 +163,36 @@ class FEModel:
         """Keyword fields of ``reduction.component.Component`` (all but ``name`` and
         ``liquid``; :meth:`liquid_fields` gives the latter's)."""
         K, M = self.matrices()
+        T = self.field_map()
+        if self.slosh is not None:          # the slosh pendulums' DOFs after the model's (fem.slosh)
+            K, M = self.slosh.augment(K, M)
+            T = sp.hstack([T, sp.csr_matrix((T.shape[0], self.slosh.n))], format="csr")
         return dict(K=K, M=M, dof_labels=self.dof_labels, label_dofs=self.label_dofs,
                     points=self.points, point_coords=self.point_coords.copy(), nodes=self.nodes.copy(),
-                    cells=self.cells.copy(), cell_type=self.cell_type, field_map=self.field_map())
+                    cells=self.cells.copy(), cell_type=self.cell_type, field_map=T)
+
+    def pad_dofs(self, x: np.ndarray) -> np.ndarray:
+        """A vector (n_dof,) or rows (k, n_dof) over the model's DOFs extended with zeros over
+        the slosh pendulums' DOFs (the component's DOF vector)."""
+        x = np.asarray(x, float)
+        if self.slosh is None:
+            return x
+        return np.concatenate([x, np.zeros(x.shape[:-1] + (self.slosh.n,))], axis=-1)
 
     def liquid_fields(self) -> dict | None:
         """Keyword fields of ``reduction.liquid.LiquidMass`` of the model's hydroelastic
-        liquids (cavity volume rows named by liquid group), or None without liquids."""
-        return None if self.liquid is None else self.liquid.liquid_fields(self.liquid_volume_rows)
+        liquids (cavity volume rows named by liquid group), over the component's DOFs, or
+        None without liquids."""
+        if self.liquid is None:
+            return None
+        out = self.liquid.liquid_fields(self.liquid_volume_rows)
+        if self.slosh is not None:
+            pad = sp.csr_matrix((0, self.slosh.n))
+            for key in ("G", "volume_rows"):
+                A = sp.csr_matrix(out[key])
+                out[key] = sp.hstack([A, sp.csr_matrix((A.shape[0], self.slosh.n))], format="csr") if A.shape[0] \
+                    else sp.csr_matrix((0, A.shape[1] + pad.shape[1]))
+        return out
 
 
 # ---- parts -------------------------------------------------------------------------------
@@ -447,11 +470,14 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
     (``Geometry.liquids``) become ``FEModel.liquid`` (fem.liquid: pressure P_``liquid_degree``,
     coupled through the wall's P1 (P1 solids) or P2 translations), an added mass that K and M
     do not hold; ``convective``: ``"free"`` (the p = 0 liquid's sloshing part moves freely of
-    the tank laterally) or ``"wall"`` (that part is lumped on the wetted wall laterally, in
-    M, so that the liquid's rigid-body mass and c.g. are a rigid liquid's).
+    the tank laterally), ``"wall"`` (that part is lumped on the wetted wall laterally, in
+    M, so that the liquid's rigid-body mass and c.g. are a rigid liquid's) or ``"slosh"``
+    (that part is the liquids' slosh modes, as tank-referenced pendulums on extra DOFs after
+    the model's: fem.slosh.SloshPendulums, ``FEModel.slosh``; what the modes kept do not carry
+    is lumped on the wall as with "wall").
     """
-    if convective not in ("free", "wall"):
-        raise InputError(f"model: convective must be 'free' or 'wall' (got {convective!r})")
+    if convective not in ("free", "wall", "slosh"):
+        raise InputError(f"model: convective must be 'free', 'wall' or 'slosh' (got {convective!r})")
     if isinstance(geometry, (str, Path)):
         from liftoff.meshes.spec import Geometry
         geometry = Geometry.load(geometry)
@@ -498,14 +524,14 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
         K = relative_to_reference(K, dof_rb(dof_coords - ref_coords[0], dof_comp), n_keep + np.arange(6))
     dof_node = np.concatenate([dof_node, -np.ones(6 * len(patches), dtype=np.int64)])
     cells, cell_type = _output_cells(part_cells, nodes.xyz)
-    liquid, rows = None, {}
+    liquid, rows, slosh = None, {}, None
     if liquid_tm is not None:
-        liquid, rows = _liquid(comm, geometry, liquid_tm, parts, nodes.xyz, T, M, dof_coords, dof_comp,
-                               2 if solid_tm is None or degree == 2 else 1, liquid_degree, convective)
+        liquid, rows, slosh = _liquid(comm, geometry, liquid_tm, parts, nodes.xyz, T, M, dof_coords, dof_comp,
+                                      2 if solid_tm is None or degree == 2 else 1, liquid_degree, convective)
     return FEModel(name=name, comm=comm, parts=tuple(parts), degree=degree, K=K, M=M, points=tuple(pnames),
                    point_coords=ref_coords, dof_coords=dof_coords, dof_comp=dof_comp, dof_node=dof_node,
                    nodes=nodes.xyz, cells=cells, cell_type=cell_type, T=T, clamped=clamped, liquid=liquid,
-                   liquid_volume_rows=rows)
+                   liquid_volume_rows=rows, slosh=slosh)
 
 
 def _pressure_stiffened(parts: list[Part], geometry) -> bool:
@@ -528,8 +554,10 @@ def _pressure_stiffened(parts: list[Part], geometry) -> bool:
 
 def _liquid(comm, geometry, liquid_tm, parts, nodes, T, M, dof_coords, dof_comp, coupling_degree: int,
             liquid_degree: int, convective: str):
-    """The model's liquids (fem.liquid.model_liquid) and, with ``convective = "wall"``, their
-    convective part as lateral mass on the wetted wall added to M (fem.liquid.convective_mass)."""
+    """The model's liquids (fem.liquid.model_liquid), their cavity rows and, with ``convective
+    = "slosh"``, their slosh pendulums (fem.slosh); with "wall" or "slosh", their convective
+    part (less what the pendulums carry) as lateral mass on the wetted wall added to M
+    (fem.liquid.convective_mass)."""
     from liftoff.core.rigid import dof_rb
 
     from .liquid import convective_mass, model_liquid
@@ -537,10 +565,17 @@ def _liquid(comm, geometry, liquid_tm, parts, nodes, T, M, dof_coords, dof_comp,
     if comm.size > 1:       # the liquid is small: every process holds all of it (serial operator)
         liquid_tm = read_mesh_parts(geometry.msh_path, MPI.COMM_SELF, tuple(geometry.shells),
                                     liquids=tuple(geometry.liquids))[2]
-    liquid, rows = model_liquid(liquid_tm, geometry, parts, nodes, T, coupling_degree, liquid_degree)
-    if convective == "wall":
-        pb.add_csr(M, convective_mass(liquid, liquid_tm, geometry, nodes, T, dof_rb(dof_coords, dof_comp)))
-    return liquid, rows
+    liquid, rows = model_liquid(liquid_tm, geometry, parts, nodes, T, coupling_degree, liquid_degree,
+                                slosh=convective == "slosh")
+    slosh = None
+    if convective == "slosh":
+        from .slosh import slosh_pendulums
+
+        slosh = slosh_pendulums(liquid_tm, geometry, nodes, T)
+    if convective in ("wall", "slosh"):
+        pb.add_csr(M, convective_mass(liquid, liquid_tm, geometry, nodes, T, dof_rb(dof_coords, dof_comp),
+                                      None if slosh is None else slosh.carried()))
+    return liquid, rows, slosh
 
 
 def _reduce(comm, parts, nodes, role, slot, ref_coords, n_keep, n_dof):

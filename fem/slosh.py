@@ -144,12 +144,13 @@ def _eigen(A: sp.csr_matrix, B: sp.csr_matrix, want: int, sigma: float, what: st
         Bp.destroy()
 
 
-def slosh_modes(op, gravity: float = G0, n_modes: int = 6, lateral_only: bool = True) -> dict:
+def slosh_modes(op, gravity: float = G0, n_modes: int = 6, lateral_only: bool = True, groups=None) -> dict:
     """The ``n_modes`` lowest sloshing modes of each liquid of ``op`` (a fem.liquid.LiquidOperator
     built with a free surface) in a rigid tank under ``gravity`` (m/s^2, g_eff): {liquid group:
     LiquidSlosh}. Modes without lateral force (axisymmetric, n >= 2 waves of an axisymmetric
     tank: slosh mass below LATERAL_MASS of the liquid's) are left out when ``lateral_only``;
-    ``LiquidSlosh.mass_kept`` says how much of the liquid the kept modes and m_0 carry."""
+    ``LiquidSlosh.mass_kept`` says how much of the liquid the kept modes and m_0 carry;
+    ``groups``: only these liquids (default all)."""
     if isinstance(gravity, bool) or not np.isfinite(gravity) or not gravity > 0:
         raise InputError(f"liquid {op.name!r}: slosh needs an apparent acceleration g_eff > 0 m/s^2 (got {gravity!r})")
     if isinstance(n_modes, bool) or int(n_modes) != n_modes or n_modes < 1:
@@ -159,6 +160,8 @@ def slosh_modes(op, gravity: float = G0, n_modes: int = 6, lateral_only: bool = 
         raise InputError(f"liquid {op.name!r} has no free surface: it cannot slosh")
     out = {}
     for c, g in enumerate(op.groups):
+        if groups is not None and g not in groups:
+            continue
         rho = op.density[g]
         k = np.flatnonzero(op.p_group == c)
         f = np.flatnonzero(fs.group == c)
@@ -206,7 +209,7 @@ def slosh_modes(op, gravity: float = G0, n_modes: int = 6, lateral_only: bool = 
         z0 = (Mi[0, 4] / Mi[0, 0] if Mi[0, 0] > 0 else np.nan, -Mi[1, 3] / Mi[1, 1] if Mi[1, 1] > 0 else np.nan)
         out[g] = LiquidSlosh(g, float(gravity), float(rho * op.volumes[g]), np.asarray(op.centroids[g], float).copy(),
                              m0, (float(z0[0]), float(z0[1])), (float(I_fs[0]), float(I_fs[1])), modes)
-    if not out:
+    if not out and groups is None:
         raise InputError(f"liquid {op.name!r}: no liquid has a free surface to slosh")
     return out
 
@@ -230,4 +233,128 @@ def geometry_slosh(geometry, gravity: float = G0, n_modes: int = 6, degree: int 
         op.destroy()
 
 
-__all__ = ["SloshMode", "LiquidSlosh", "slosh_modes", "geometry_slosh", "G0", "LATERAL_MASS"]
+# ---- the slosh modes in a structural model: tank-referenced pendulums ----------------------------
+DEFAULT_MODES = 4          # lateral modes per liquid when Liquid.slosh_modes is 0: two pairs in a round tank
+
+
+@dataclass
+class SloshPendulums:
+    """Slosh modes of a model's liquids as extra DOFs of its component (``convective =
+    "slosh"``; docs/hydro.md, "Slosh in the model"). Pendulum n (mass m_n, length L_n, hinged
+    at z_n: fem.slosh's mode n) has its bob at z_n - L_n; its DOF s_n is the bob's lateral
+    displacement along d_n, and its spring k_n = m_n omega_n^2 acts on the stretch
+    s_n - r_n . x, r_n the tank wall's displacement along d_n at the bob's height (two rings of
+    wetted nodes, averaged and interpolated: rigid-body motions of the tank stretch nothing).
+    The bobs' masses at z_n - L_n give the liquid's c.g. exactly over all modes
+    (sum m_n L_n = rho I_fs, module docstring); the gravity moment F_n L_n of a swinging
+    pendulum (the pendulum effect, like the vehicle's own gravity softening) is not in this
+    linear, stress-free model."""
+
+    names: tuple               # "liquid:n"
+    liquid: tuple              # liquid group of each
+    mass: np.ndarray           # (n,) kg
+    stiffness: np.ndarray      # (n,) N/m
+    direction: np.ndarray      # (n, 2)
+    position: np.ndarray       # (n, 3) m: the bob's (x, y on the rings' mean, z_n - L_n)
+    R: sp.csr_matrix           # (n, n_dof): r_n
+    frequency: np.ndarray      # (n,) Hz (rigid tank, g_eff)
+    gravity: dict = field(default_factory=dict)   # liquid group -> g_eff m/s^2
+
+    @property
+    def n(self) -> int:
+        return int(self.mass.size)
+
+    def carried(self) -> dict:
+        """{liquid: ((m_x, m_x z_x), (m_y, m_y z_y))}: what the bobs carry laterally
+        (fem.liquid.convective_mass leaves it out of the wall's lumped mass)."""
+        out = {}
+        for g in dict.fromkeys(self.liquid):
+            on = np.array([lq == g for lq in self.liquid])
+            wx, wy = self.mass[on] * self.direction[on, 0] ** 2, self.mass[on] * self.direction[on, 1] ** 2
+            z = self.position[on, 2]
+            out[g] = ((float(wx.sum()), float(wx @ z)), (float(wy.sum()), float(wy @ z)))
+        return out
+
+    def augment(self, K: sp.spmatrix, M: sp.spmatrix) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+        """K and M over the model's DOFs and then the n bob DOFs:
+        K + R^T k R, -R^T k / -k R, k; M, m."""
+        k = sp.diags(self.stiffness)
+        R = sp.csr_matrix(self.R)
+        Ka = sp.bmat([[sp.csr_matrix(K) + R.T @ k @ R, -(R.T @ k)], [-(k @ R), k]], format="csr")
+        Ma = sp.bmat([[sp.csr_matrix(M), None], [None, sp.diags(self.mass)]], format="csr")
+        return Ka, Ma
+
+
+def _ring_row(node: np.ndarray, area: np.ndarray, xyz: np.ndarray, z_target: float, d: np.ndarray,
+              T: sp.csr_matrix, what: str) -> tuple[sp.csr_matrix, np.ndarray]:
+    """Row r (1, n_dof) of the wall's displacement along (d, 0) at height ``z_target``: the
+    area-weighted means of two rings of wetted nodes (bands at z_target +- a sixth of the
+    wetted height, kept inside it), interpolated (or extrapolated) linearly to z_target; and
+    the point (x, y, z_target) whose rigid-body displacement r returns exactly."""
+    z = xyz[:, 2]
+    lo, hi = float(z.min()), float(z.max())
+    span = hi - lo
+    if not span > 0:
+        raise InputError(f"{what}: the wetted wall has no height to hang a slosh pendulum on")
+    delta = span / 6
+    centres = np.clip([z_target - delta, z_target + delta], lo + delta / 2, hi - delta / 2)
+    if centres[1] - centres[0] < delta:
+        centres = (centres[0], centres[0] + delta) if centres[0] + delta <= hi - delta / 2 else (centres[1] - delta, centres[1])
+    rings = []
+    for c in centres:
+        on = np.abs(z - c) <= delta / 2
+        if not np.any(on):
+            raise InputError(f"{what}: no wetted node within {delta / 2:.3g} m of z = {c:.4g} m (a finer mesh)")
+        w = np.zeros(z.size)
+        w[on] = area[on] / area[on].sum()
+        rings.append(w)
+    za, zb = (float(w @ z) for w in rings)
+    t = (z_target - za) / (zb - za)
+    w = (1 - t) * rings[0] + t * rings[1]                   # sum w = 1, sum w z = z_target
+    Tx, Ty = sp.csr_matrix(T)[3 * node], sp.csr_matrix(T)[3 * node + 1]
+    r = sp.csr_matrix(w[None, :]) @ (d[0] * Tx + d[1] * Ty)
+    r.eliminate_zeros()
+    return sp.csr_matrix(r), np.array([w @ xyz[:, 0], w @ xyz[:, 1], z_target])
+
+
+def slosh_pendulums(tm, geometry, nodes: np.ndarray, T: sp.csr_matrix, degree: int = 2) -> SloshPendulums:
+    """The slosh modes of the liquids of ``geometry`` (its liquid mesh ``tm``, pressure
+    P_``degree``; each liquid's ``slosh_modes`` lateral modes, DEFAULT_MODES when 0, at its
+    ``gravity``) as tank-referenced pendulums on the structure (``nodes``, field map ``T``)."""
+    from scipy.spatial import cKDTree
+
+    from .liquid import geometry_liquid_operator, wetted_nodes
+
+    op = geometry_liquid_operator(tm, geometry, degree)
+    tree = cKDTree(nodes)
+    rows, names, liquid, mass, k, dirs, pos, freq, grav = [], [], [], [], [], [], [], [], {}
+    try:
+        for g, liq in geometry.liquids.items():
+            n = liq.slosh_modes or DEFAULT_MODES
+            s = slosh_modes(op, liq.gravity, n, groups=(g,)).get(g) if op.free is not None else None
+            if s is None:
+                continue
+            grav[g] = s.gravity
+            node, area = wetted_nodes(tm, liq, g, nodes, tree)
+            for j, md in enumerate(s.modes, 1):
+                d = np.array(md.direction, float)
+                z_bob = md.height - s.pendulum_length(md)
+                r, p = _ring_row(node, area, nodes[node], z_bob, d, T, f"liquid {g!r} slosh mode {j}")
+                rows.append(r)
+                names.append(f"{g}:{j}")
+                liquid.append(g)
+                mass.append(md.mass)
+                k.append(md.stiffness)
+                dirs.append(d)
+                pos.append(p)
+                freq.append(md.frequency)
+    finally:
+        op.destroy()
+    if not rows:
+        raise InputError(f"model {geometry.name!r}: convective = 'slosh' but no liquid has a free surface")
+    return SloshPendulums(tuple(names), tuple(liquid), np.array(mass), np.array(k), np.array(dirs), np.array(pos),
+                          sp.vstack(rows, format="csr"), np.array(freq), grav)
+
+
+__all__ = ["SloshMode", "LiquidSlosh", "slosh_modes", "geometry_slosh", "G0", "LATERAL_MASS", "SloshPendulums",
+           "slosh_pendulums", "DEFAULT_MODES"]

@@ -65,5 +65,5 @@ def build_component(comp: ComponentModel, model: ModelConfig, workdir: Path):
 
         liquid = LiquidMass(**liquid)
     component = Component(name=comp.name, **fe.component_fields(), liquid=liquid)
-    thermal = {vol: np.asarray(thermal_load(fe, [vol], 1.0, 1.0), float) for vol in geo.volumes}
+    thermal = {vol: fe.pad_dofs(np.asarray(thermal_load(fe, [vol], 1.0, 1.0), float)) for vol in geo.volumes}
     return component, thermal

@@ -55,7 +55,7 @@ _MODEL = {"source", "mesh_size", "degree", "zeta", "vehicle", "pad", "component"
           "walls", "max_elements", "liquid", "convective", "joint"}
 WALLS = ("solid", "shell")
 LIQUIDS = ("smeared", "hydroelastic")     # [model] liquid: the core stage's propellants (meshes.tank)
-CONVECTIVE = ("wall", "free")             # [model] convective: a hydroelastic liquid's sloshing part (fem.liquid)
+CONVECTIVE = ("wall", "free", "slosh")    # [model] convective: a hydroelastic liquid's sloshing part (fem.liquid, fem.slosh)
 _VEHICLE = {"mesh_size", "params"}
 _COMP = {"type", "mesh_size", "n_modes", "f_max", "params", "nastran"}
 _JOINT = {"name", "components"}
