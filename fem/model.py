@@ -179,6 +179,19 @@ class FEModel:
             return x
         return np.concatenate([x, np.zeros(x.shape[:-1] + (self.slosh.n,))], axis=-1)
 
+    def slosh_fields(self) -> dict | None:
+        """Keyword fields of ``reduction.slosh.SloshDOFs`` of the model's slosh pendulums
+        (their DOFs after the model's n_dof), or None without them."""
+        S = self.slosh
+        if S is None:
+            return None
+        n = self.n_dof
+        stretch = sp.hstack([-S.R, sp.identity(S.n, format="csr")], format="csr")
+        return dict(names=S.names, liquid=S.liquid, dofs=n + np.arange(S.n), mass=S.mass.copy(),
+                    stiffness=S.stiffness.copy(), frequency=S.frequency.copy(),
+                    gravity=np.array([S.gravity[g] for g in S.liquid]), direction=S.direction.copy(),
+                    position=S.position.copy(), stretch=stretch)
+
     def liquid_fields(self) -> dict | None:
         """Keyword fields of ``reduction.liquid.LiquidMass`` of the model's hydroelastic
         liquids (cavity volume rows named by liquid group), over the component's DOFs, or

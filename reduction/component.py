@@ -32,6 +32,10 @@ field_map/*         CSR arrays       (3 n_nodes, n) DOF vector -> nodal u [optio
 liquid_*            CSR and arrays   hydroelastic liquid (reduction.liquid):  [optional]
                                      H, G, volume_rows (CSR), pressure_points,
                                      pressure_dofs, volume_names, mass, centroid
+slosh_*             arrays, CSR      slosh pendulums (reduction.slosh):       [optional]
+                                     names, liquid, dofs, mass (kg), stiffness (N/m),
+                                     frequency (Hz), gravity (m/s^2), direction,
+                                     position (m), stretch (CSR, n x n_dof)
 ==================  ===============  ================================================
 """
 from __future__ import annotations
@@ -66,6 +70,7 @@ class Component:
     cell_type: str = ""
     field_map: sp.csr_matrix | None = None
     liquid: object = None          # reduction.liquid.LiquidMass: the added mass of the liquids, or None
+    slosh: object = None           # reduction.slosh.SloshDOFs: the liquids' slosh pendulums, or None
 
     def __post_init__(self) -> None:
         self.K = sp.csr_matrix(self.K, dtype=float)
@@ -106,6 +111,10 @@ class Component:
             raise InputError(f"{who}: field_map has {self.field_map.shape[1]} columns, expected {n}")
         if self.liquid is not None and self.liquid.n_dof != n:
             raise InputError(f"{who}: the liquid's coupling has {self.liquid.n_dof} columns, expected {n}")
+        if self.slosh is not None and (self.slosh.n_dof != n or (self.slosh.n and (self.slosh.dofs.min() < 0
+                                                                                   or self.slosh.dofs.max() >= n))):
+            raise InputError(f"{who}: the slosh pendulums' rows have {self.slosh.n_dof} columns or DOFs outside "
+                             f"0..{n - 1}")
 
     def dofs_of(self, labels) -> np.ndarray:
         """Indices into K of the given DOF labels; InputError naming the first unknown label."""
@@ -150,11 +159,14 @@ def save_component(c: Component, path) -> Path:
         data["field_map"] = _csr_record(c.field_map)
     if c.liquid is not None:
         data.update(c.liquid.record())
+    if c.slosh is not None:
+        data.update(c.slosh.record())
     return write_record(path, FORMAT, VERSION, data, units="SI", attrs={"name": c.name}, suffixes=(".npz",))
 
 
 def load_component(path) -> Component:
     from .liquid import LiquidMass
+    from .slosh import SloshDOFs
 
     rec = read_record(path, FORMAT, (VERSION,), what="component file")
     z = rec.data
@@ -166,7 +178,7 @@ def load_component(path) -> Component:
             nodes=z.get("nodes"), cells=z.get("cells"),
             cell_type=str(z["cell_type"]) if "cell_type" in z else "",
             field_map=_csr_from(z["field_map"]) if "field_map" in z else None,
-            liquid=LiquidMass.from_record(z))
+            liquid=LiquidMass.from_record(z), slosh=SloshDOFs.from_record(z))
     except InputError:
         raise
     except Exception as exc:

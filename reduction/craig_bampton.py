@@ -329,7 +329,8 @@ def craig_bampton(component: Component, boundary_labels, n_modes: int | None = N
                    dof_labels=component.dof_labels,
                    label_transform=np.hstack([fim[component.label_dofs], cm[component.label_dofs]]),
                    n_dof=n, constraint_modes=cm, fixed_interface_modes=fim, timings=timings,
-                   recovery=() if liquid is None else liquid.cb_recovery(fim, cm, rigid=cm @ _axial(boundary_labels)))
+                   recovery=(() if liquid is None else liquid.cb_recovery(fim, cm, rigid=cm @ _axial(boundary_labels)))
+                   + (() if component.slosh is None else component.slosh.cb_recovery(fim, cm)))
 
 
 def _axial(boundary_labels) -> np.ndarray:

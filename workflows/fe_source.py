@@ -64,6 +64,11 @@ def build_component(comp: ComponentModel, model: ModelConfig, workdir: Path):
         from liftoff.reduction.liquid import LiquidMass
 
         liquid = LiquidMass(**liquid)
-    component = Component(name=comp.name, **fe.component_fields(), liquid=liquid)
+    slosh = fe.slosh_fields()
+    if slosh is not None:
+        from liftoff.reduction.slosh import SloshDOFs
+
+        slosh = SloshDOFs(**slosh)
+    component = Component(name=comp.name, **fe.component_fields(), liquid=liquid, slosh=slosh)
     thermal = {vol: fe.pad_dofs(np.asarray(thermal_load(fe, [vol], 1.0, 1.0), float)) for vol in geo.volumes}
     return component, thermal

@@ -22,6 +22,7 @@ def tanks(tmp_path_factory):
     from liftoff.meshes.tank import Compartment, TankParams, build_tank
     from liftoff.reduction import Component
     from liftoff.reduction.liquid import LiquidMass
+    from liftoff.reduction.slosh import SloshDOFs
 
     p = TankParams(radius=1.0, wall_thickness=0.1, compartments=(Compartment("lox", 1.5, 0.72, 1.6, 0.5, 1141.0),),
                    patches={"bot": (0, 0, 0), "top": (0, 0, 0.72 + 1.5 + 1.6)}, patch_half_width=0.3,
@@ -30,7 +31,9 @@ def tanks(tmp_path_factory):
     out = {}
     for conv in ("wall", "slosh"):
         m = build_model(g, convective=conv)
-        out[conv] = (m, Component(name="tank", **m.component_fields(), liquid=LiquidMass(**m.liquid_fields())))
+        sl = m.slosh_fields()
+        out[conv] = (m, Component(name="tank", **m.component_fields(), liquid=LiquidMass(**m.liquid_fields()),
+                                  slosh=None if sl is None else SloshDOFs(**sl)))
     g2 = replace(g, liquids={k: replace(v, slosh_modes=2) for k, v in g.liquids.items()})
     out["two"] = build_model(g2, convective="slosh")
     return g, out
@@ -116,3 +119,30 @@ def test_slosh_needs_a_free_surface_and_refuses_counts_elsewhere(tanks):
         build_model(g2, convective="wall")
     with pytest.raises(InputError, match="'free', 'wall' or 'slosh'"):
         build_model(g, convective="pendulum")
+
+
+def test_component_file_keeps_the_pendulums_and_cb_recovers_their_force(tanks, tmp_path):
+    """Saved and loaded (npz, no pickle) the component keeps the pendulums; its CB model has
+    the recovery item slosh_force (N). In each slosh mode (fixed interface, q = 1) the bob's
+    equation of motion m s'' + k (s - r.x) = 0 gives its force k (s - r.x) = omega^2 m s
+    exactly; and with the wall nearly rigid the mode is the bob alone, s = 1/sqrt(m) (mass-
+    normalised), so F = omega^2 sqrt(m): measured 7e-11, asserted 1e-6."""
+    from liftoff.fem import petsc_solver
+    from liftoff.reduction import craig_bampton
+    from liftoff.reduction.component import load_component
+
+    _, out = tanks
+    m, comp = out["slosh"]
+    back = load_component(comp.save(tmp_path / "tank.npz"))
+    assert back.slosh.names == comp.slosh.names
+    assert np.array_equal(back.slosh.dofs, comp.slosh.dofs)
+    assert (back.slosh.stretch != comp.slosh.stretch).nnz == 0
+    cb = craig_bampton(back, back.dof_labels, n_modes=8, solver=petsc_solver())
+    item = cb.recovery_item("slosh_force")
+    assert item.labels == comp.slosh.names and item.units == ("N",) * 4
+    for j in range(4):
+        s = cb.fixed_interface_modes[comp.slosh.dofs, j]
+        bob = int(np.argmax(np.abs(s)))
+        F = item.disp[:, j]
+        assert F == pytest.approx(cb.fixed_omega[j] ** 2 * comp.slosh.mass * s, rel=1e-9, abs=1e-9 * abs(F).max())
+        assert abs(F[bob]) == pytest.approx(cb.fixed_omega[j] ** 2 * np.sqrt(comp.slosh.mass[bob]), rel=1e-6)
