@@ -29,6 +29,7 @@ MESH_JSON = FIGURES / "mesh_study.json"
 BENCH_JSON = FIGURES / "bench_workflow.json"       # benchmarks/bench_workflow.py --json (machine-dependent)
 CB_BENCH_JSON = FIGURES / "bench_cb_default.json"  # benchmarks/bench_cb_default.py --json (machine-dependent)
 SLOSH_JSON = FIGURES / "slosh_default.json"        # benchmarks/slosh_default.py
+SLOSH_COMPARE_JSON = FIGURES / "slosh_compare.json"  # benchmarks/slosh_compare.py
 EXAMPLE_JSONS = {n: FIGURES / f"{n}.json" for n in ("single_stick", "saturn_v")}   # benchmarks/example_figures.py
 DOCS = (ROOT / "README.md", ROOT / "docs" / "workflow.md")
 #: figures agree when within this relative difference (of the larger of the two or, inside a
@@ -141,7 +142,7 @@ def _mn(x: float) -> str:
 def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
                   mesh: dict | None = None, bench: dict | None = None,
                   examples: dict | None = None, cb_bench: dict | None = None,
-                  slosh: dict | None = None) -> dict[str, str]:
+                  slosh: dict | None = None, slosh_compare: dict | None = None) -> dict[str, str]:
     """{block name: markdown} from the figures (and the convergence, twang and mesh studies,
     the workflow benchmark and the launcher examples' figures {name: figures}, if any)."""
     tw, twn = fig["twang"]["nominal"], fig["twang"]
@@ -212,6 +213,8 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
         blocks["bench-cb-default"] = render_cb_bench(cb_bench)
     if slosh:
         blocks["slosh-default"] = render_slosh(slosh)
+    if slosh_compare:
+        blocks["slosh-compare"] = render_slosh_compare(slosh_compare)
     if examples:
         import runpy
 
@@ -269,6 +272,34 @@ def render_slosh(fig: dict) -> str:
                     f"{r['impulsive_z_m']:.2f} | {m['frequency_hz']:.3f} ({'-' if f1 is None else format(f1, '.3f')}) | "
                     f"{m['mass_kg'] / 1e3:.1f} at {m['height_m']:.2f} | "
                     f"{r['g_eff'] / (2 * 3.141592653589793 * m['frequency_hz']) ** 2:.2f} |")
+    return "\n".join(rows) + "\n"
+
+
+def render_slosh_compare(fig: dict) -> str:
+    """The default run with the liquids' sloshing part three ways (benchmarks/slosh_compare.py)."""
+    names = {"wall": '"wall" (default: rigid on the wall)', "free": '"free" (left out)',
+             "slosh": '"slosh" (pendulums)'}
+    keys = [k for k in ("wall", "free", "slosh") if k in fig]
+    rows = ["| `convective` | " + " | ".join(names[k] for k in keys) + " |", "|---" * (len(keys) + 1) + "|"]
+
+    def row(label, fn):
+        rows.append(f"| {label} | " + " | ".join(fn(fig[k]) for k in keys) + " |")
+
+    row("vehicle modes kept, lateral mass (t)", lambda r: f"{r['vehicle_modes']}, {r['vehicle_mass_t']:.1f}")
+    row("twang, nominal (m)", lambda r: f"{r['twang_m']:.3f}")
+    row("peak post compression (MN)", lambda r: f"{r['peak_post_compression_n'] / 1e6:.2f}")
+    for j in range(3):
+        row(f"attach load {j + 1} (MN): " + fig[keys[0]]["largest_attach"][j]["item"],
+            lambda r, j=j: next((f"{a['value'] / 1e6:.2f}" for a in r["largest_attach"]
+                                 if a["item"] == fig[keys[0]]["largest_attach"][j]["item"]), "-"))
+    row("LOX tank-bottom pressure, min .. max (kPa)",
+        lambda r: f"{r['lox_bottom_pressure_pa'][0] / 1e3:.0f} .. {r['lox_bottom_pressure_pa'][1] / 1e3:.0f}")
+    row("vehicle c.g. at the end, x, y (m); attitude rx, ry (mrad)",
+        lambda r: (f"{r['cg_motion_end'][0]:.3f}, {r['cg_motion_end'][1]:.3f}; "
+                   f"{1e3 * r['cg_motion_end'][3]:.2f}, {1e3 * r['cg_motion_end'][4]:.2f}"))
+    row("first slosh mode (Hz): " + ", ".join(s["liquid"] for s in fig.get("slosh", {}).get("slosh", [])),
+        lambda r: ", ".join(f"{s['hz']:.3f}" for s in r["slosh"]) or "-")
+    row("peak slosh force (kN)", lambda r: "-" if r["peak_slosh_force_n"] is None else f"{r['peak_slosh_force_n'] / 1e3:.1f}")
     return "\n".join(rows) + "\n"
 
 
@@ -360,7 +391,8 @@ def studies() -> tuple[dict | None, ...]:
                 for p in (CONVERGENCE_JSON, TWANG_JSON, MESH_JSON, BENCH_JSON))
     return out + ({n: json.loads(p.read_text()) for n, p in EXAMPLE_JSONS.items() if p.is_file()},
                   json.loads(CB_BENCH_JSON.read_text()) if CB_BENCH_JSON.is_file() else None,
-                  json.loads(SLOSH_JSON.read_text()) if SLOSH_JSON.is_file() else None)
+                  json.loads(SLOSH_JSON.read_text()) if SLOSH_JSON.is_file() else None,
+                  json.loads(SLOSH_COMPARE_JSON.read_text()) if SLOSH_COMPARE_JSON.is_file() else None)
 
 
 # ------------------------------------------------------------------ comparing

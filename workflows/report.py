@@ -446,6 +446,30 @@ def bulge_modes(cbs: dict, threshold: float = 0.25) -> list[dict]:
     return rows
 
 
+def slosh_summary(cbs: dict, rows_env: list) -> list[dict]:
+    """Each liquid's slosh pendulums (``convective = "slosh"``) from its component's CB model:
+    the lowest fixed-interface mode in which the liquid's pendulums carry a quarter of their
+    largest force per unit modal coordinate (the first slosh mode), and the peak force of its
+    pendulums over the cases (``rows_env``: the envelope rows)."""
+    out = []
+    for name, cb in cbs.items():
+        rec = {it.name: it for it in getattr(cb, "recovery", ())}
+        it = rec.get("slosh_force")
+        if it is None or not cb.n_modes:
+            continue
+        F = np.abs(it.disp[:, :cb.n_modes])
+        for liquid in dict.fromkeys(lab.rpartition(":")[0] for lab in it.labels):
+            on = np.array([lab.rpartition(":")[0] == liquid for lab in it.labels])
+            per_mode = F[on].max(axis=0)
+            j = int(np.flatnonzero(per_mode >= 0.25 * per_mode.max())[0])
+            peak = [r for r in rows_env if r["item"].startswith(f"{name}_slosh_force {liquid}:")]
+            big = max(peak, key=lambda r: max(abs(r["max"]), abs(r["min"])), default=None)
+            out.append({"component": name, "liquid": liquid, "mode": j + 1, "hz": float(cb.fixed_freq_hz[j]),
+                        "peak_n": None if big is None else max(abs(big["max"]), abs(big["min"])),
+                        "peak_item": None if big is None else big["item"]})
+    return out
+
+
 def tank_plots(result, cp, out: Path, case: str, finish) -> None:
     """ullage_volume_<case>.png and tank_pressure_<case>.png (the reference's figures 5, 6)."""
     import matplotlib.pyplot as plt
@@ -975,6 +999,12 @@ def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[di
         for b in bulges:
             lines.append(f"    {b['tank']:<24} {b['hz']:7.2f} Hz (mode {b['mode']}), dV {b['dv_m3']:.3g} m^3, axial "
                          f"effective liquid mass {b['m_eff_kg'] / 1e3:.0f} t of {b['m_liquid_kg'] / 1e3:.0f} t")
+    slosh = slosh_summary(getattr(stack, "cbs", {}), rows_env)
+    if slosh:
+        lines.append("  slosh pendulums (convective = 'slosh'; first slosh mode fixed-interface, peak force over cases):")
+        for r in slosh:
+            pk = "" if r["peak_n"] is None else f", peak slosh force {r['peak_n'] / 1e3:.4g} kN ({r['peak_item']})"
+            lines.append(f"    {r['liquid']:<24} {r['hz']:7.3f} Hz (mode {r['mode']}){pk}")
     lines += stage_time_lines(stage_times, wall)
     return "\n".join(lines)
 

@@ -7,9 +7,9 @@ For each component whose geometry has hydroelastic liquids (``[model] liquid =
 the modes: pressure P2 (reported) and P1 on the same mesh, whose difference in the first
 mode says how converged the reported figures are. ``--csv FILE`` writes the spring-mass
 and pendulum table (SI units, one row per mode and the impulsive mass per direction),
-atomically. The modes are those of a rigid tank at ``--g-eff``; the lift-off transient does
-not carry them yet (``[model] convective`` holds the sloshing part rigidly on the wall, or
-leaves it out).
+atomically. The modes are those of a rigid tank at ``--g-eff``; ``[model] convective =
+"slosh"`` puts the same modes (at each liquid's ``gravity``) into the run's structural model
+as pendulums (fem.slosh.SloshPendulums; docs/hydro.md).
 """
 from __future__ import annotations
 

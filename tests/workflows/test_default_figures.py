@@ -127,3 +127,25 @@ def test_slosh_figures_are_the_current_codes(figures):
     assert not figures.differences(fresh, json.loads(figures.SLOSH_JSON.read_text()))
     text = figures.render_slosh(fresh)
     assert "core_lox_liquid" in text and "core_lh2_liquid" in text
+
+
+def test_slosh_comparison_is_of_the_current_default(figures):
+    """README's wall / free / slosh comparison (benchmarks/slosh_compare.py, a study rerun by
+    its script like the convergence study): its "wall" column is the default run, so it must
+    give the default run's checked-in figures (which test_default_figures keeps current);
+    the "slosh" column has each core liquid's first slosh mode at the rigid-tank frequency
+    of `liftoff slosh` (slosh_default.json, the same P2 modes), and carries the whole liquid
+    laterally as "wall" does."""
+    fig = json.loads(figures.DEFAULT_JSON.read_text())
+    cmp = json.loads(figures.SLOSH_COMPARE_JSON.read_text())
+    wall = cmp["wall"]
+    assert wall["vehicle_modes"] == fig["vehicle"]["modes"]
+    assert not figures.differences([wall["twang_m"], wall["peak_post_compression_n"]],
+                                   [fig["twang"]["nominal"]["peak_m"], fig["peak_post_compression_n"]])
+    slosh = json.loads(figures.SLOSH_JSON.read_text())
+    first = {r["liquid"]: r["hz"] for r in cmp["slosh"]["slosh"]}
+    assert set(first) == {k.split("/")[-1] for k in slosh}
+    for k, r in slosh.items():
+        assert first[k.split("/")[-1]] == pytest.approx(r["modes"][0]["frequency_hz"], rel=1e-3)
+    assert cmp["slosh"]["vehicle_mass_t"] == pytest.approx(wall["vehicle_mass_t"], rel=1e-9)
+    assert cmp["free"]["vehicle_mass_t"] < wall["vehicle_mass_t"]

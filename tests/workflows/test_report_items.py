@@ -111,3 +111,29 @@ def test_display_points_keep_every_peak_where_it_is():
         assert seg.max() in y2 and seg.min() in y2
     xs, ys = report.display_points(t[:3000], y[:3000], bins)
     assert xs is not None and np.array_equal(ys, y[:3000])
+
+
+def test_slosh_summary_finds_each_liquids_first_slosh_mode_and_peak_force():
+    """report.slosh_summary on a CB model whose recovery item slosh_force has two liquids'
+    pendulums: each liquid's first slosh mode is the lowest fixed-interface mode where its
+    pendulums carry a quarter of their largest force per unit modal coordinate; its peak
+    force is the largest |max|, |min| of its envelope rows."""
+    from types import SimpleNamespace
+
+    from liftoff.reduction.craig_bampton import CBRecovery
+
+    labels = ("lox:1", "lox:2", "lh2:1", "lh2:2")
+    disp = np.zeros((4, 5 + 6))
+    disp[2, 0] = disp[3, 0] = 5.0          # mode 1: lh2 sloshes
+    disp[0, 1] = 1.0                       # mode 2: lox at a tenth of its largest (below a quarter)
+    disp[0, 2] = 10.0                      # mode 3: lox's own mode
+    disp[1, 4] = 3.0                       # mode 5: lox again, smaller
+    cb = SimpleNamespace(recovery=(CBRecovery("slosh_force", labels, ("N",) * 4, disp=disp),), n_modes=5,
+                         fixed_freq_hz=np.array([0.34, 0.38, 0.41, 0.6, 0.7]))
+    rows = [{"item": "core_slosh_force lox:1", "max": 2.0e3, "min": -5.0e3},
+            {"item": "core_slosh_force lox:2", "max": 1.0e3, "min": -1.0e3},
+            {"item": "core_slosh_force lh2:1", "max": 7.0e2, "min": -1.0e2}]
+    out = {r["liquid"]: r for r in report.slosh_summary({"core": cb}, rows)}
+    assert out["lox"]["mode"] == 3 and out["lox"]["hz"] == 0.41 and out["lox"]["peak_n"] == 5.0e3
+    assert out["lh2"]["mode"] == 1 and out["lh2"]["hz"] == 0.34 and out["lh2"]["peak_n"] == 7.0e2
+    assert out["lox"]["peak_item"] == "core_slosh_force lox:1"
