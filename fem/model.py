@@ -190,7 +190,7 @@ class FEModel:
         return dict(names=S.names, liquid=S.liquid, dofs=n + np.arange(S.n), mass=S.mass.copy(),
                     stiffness=S.stiffness.copy(), frequency=S.frequency.copy(),
                     gravity=np.array([S.gravity[g] for g in S.liquid]), direction=S.direction.copy(),
-                    position=S.position.copy(), stretch=stretch)
+                    position=S.position.copy(), stretch=stretch, wave_per_force=S.wave_per_force.copy())
 
     def liquid_fields(self) -> dict | None:
         """Keyword fields of ``reduction.liquid.LiquidMass`` of the model's hydroelastic

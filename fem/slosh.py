@@ -74,6 +74,7 @@ class SloshMode:
     direction: tuple            # (x, y) unit vector of the mode's lateral force
     height: float               # m, z at which the mode's force acts (its moment / force)
     axial_force_ratio: float    # |F_z| / |F_xy| of the mode (0 for a lateral mode)
+    wave_per_force: float = np.nan   # m/N: the mode's largest free-surface rise per newton of its force
 
     @property
     def stiffness(self) -> float:       # N/m, k_n = m_n omega_n^2
@@ -198,9 +199,11 @@ def slosh_modes(op, gravity: float = G0, n_modes: int = 6, lateral_only: bool = 
         for j in np.flatnonzero(keep)[: int(n_modes)]:
             d = beta[j, :2] / Fxy[j] if Fxy[j] > 0 else np.array([1.0, 0.0])
             height = (d[0] * beta[j, 4] - d[1] * beta[j, 3]) / Fxy[j] if Fxy[j] > 0 else np.nan
+            eta = np.abs(X[k.size:, j]).max() / (rho * gravity)     # eta = p / (rho g_eff) on the surface (eq. 1)
             modes.append(SloshMode(g, float(np.sqrt(gravity * lam[j]) / (2 * np.pi)), float(mass_n[j]),
                                    (float(d[0]), float(d[1])), float(height),
-                                   float(abs(beta[j, 2]) / Fxy[j]) if Fxy[j] > 0 else np.inf))
+                                   float(abs(beta[j, 2]) / Fxy[j]) if Fxy[j] > 0 else np.inf,
+                                   float(eta / Fxy[j]) if Fxy[j] > 0 else np.nan))
         # impulsive mass (p = 0 on the surface: fem.liquid's added mass), this liquid's rows
         on = (op.p_group == c).astype(float)[:, None]
         GR = op.G @ R
@@ -259,6 +262,7 @@ class SloshPendulums:
     R: sp.csr_matrix           # (n, n_dof): r_n
     frequency: np.ndarray      # (n,) Hz (rigid tank, g_eff)
     gravity: dict = field(default_factory=dict)   # liquid group -> g_eff m/s^2
+    wave_per_force: np.ndarray | None = None      # (n,) m/N: largest free-surface rise per newton of force
 
     @property
     def n(self) -> int:
@@ -327,7 +331,7 @@ def slosh_pendulums(tm, geometry, nodes: np.ndarray, T: sp.csr_matrix, degree: i
 
     op = geometry_liquid_operator(tm, geometry, degree)
     tree = cKDTree(nodes)
-    rows, names, liquid, mass, k, dirs, pos, freq, grav = [], [], [], [], [], [], [], [], {}
+    rows, names, liquid, mass, k, dirs, pos, freq, grav, wave = [], [], [], [], [], [], [], [], {}, []
     try:
         for g, liq in geometry.liquids.items():
             n = liq.slosh_modes or DEFAULT_MODES
@@ -348,12 +352,13 @@ def slosh_pendulums(tm, geometry, nodes: np.ndarray, T: sp.csr_matrix, degree: i
                 dirs.append(d)
                 pos.append(p)
                 freq.append(md.frequency)
+                wave.append(md.wave_per_force)
     finally:
         op.destroy()
     if not rows:
         raise InputError(f"model {geometry.name!r}: convective = 'slosh' but no liquid has a free surface")
     return SloshPendulums(tuple(names), tuple(liquid), np.array(mass), np.array(k), np.array(dirs), np.array(pos),
-                          sp.vstack(rows, format="csr"), np.array(freq), grav)
+                          sp.vstack(rows, format="csr"), np.array(freq), grav, np.array(wave))
 
 
 __all__ = ["SloshMode", "LiquidSlosh", "slosh_modes", "geometry_slosh", "G0", "LATERAL_MASS", "SloshPendulums",

@@ -8,8 +8,9 @@ Pendulum n is one DOF of the component (``dofs[n]``: the bob's lateral displacem
 stretch s_n - r_n . x; ``stretch`` holds the rows e_{s_n} - r_n (n x n_dof), so that the
 spring force on the bob is -k_n stretch_n . x and the pendulum's force on the tank
 F_n = k_n stretch_n . x (N, along ``direction[n]``). ``frequency`` (Hz) is the rigid-tank
-slosh frequency at the liquid's g_eff (``gravity``, m/s^2), ``position`` the bob's point (m).
-Units SI.
+slosh frequency at the liquid's g_eff (``gravity``, m/s^2), ``position`` the bob's point (m),
+``wave_per_force`` (m/N) the mode's largest free-surface rise per newton of its force (so
+that the wave height of mode n is wave_per_force[n] F_n). Units SI.
 """
 from __future__ import annotations
 
@@ -33,6 +34,7 @@ class SloshDOFs:
     direction: np.ndarray
     position: np.ndarray
     stretch: sp.csr_matrix
+    wave_per_force: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         self.names, self.liquid = tuple(str(s) for s in self.names), tuple(str(s) for s in self.liquid)
@@ -43,8 +45,11 @@ class SloshDOFs:
         self.position = np.asarray(self.position, float).reshape(-1, 3)
         self.stretch = sp.csr_matrix(self.stretch, dtype=float)
         n = self.dofs.size
+        self.wave_per_force = (np.full(n, np.nan) if self.wave_per_force is None
+                               else np.asarray(self.wave_per_force, float).reshape(-1))
         sizes = {len(self.names), len(self.liquid), self.mass.size, self.stiffness.size, self.frequency.size,
-                 self.gravity.size, self.direction.shape[0], self.position.shape[0], self.stretch.shape[0]}
+                 self.gravity.size, self.direction.shape[0], self.position.shape[0], self.stretch.shape[0],
+                 self.wave_per_force.size}
         if sizes != {n}:
             raise InputError(f"slosh pendulums: inconsistent sizes {sorted(sizes)} for {n} DOFs")
         if not (np.all(self.mass > 0) and np.all(self.stiffness > 0)):
@@ -63,11 +68,17 @@ class SloshDOFs:
         return sp.diags(self.stiffness) @ self.stretch
 
     def cb_recovery(self, fim: np.ndarray, cm: np.ndarray, prefix: str = "") -> tuple:
-        """``<prefix>slosh_force`` (disp rows, N) over a CB model's DOFs [q; x_b]."""
+        """``<prefix>slosh_force`` (disp rows, N) and ``<prefix>slosh_wave_height`` (disp rows,
+        m: each mode's crest, signed as its force) over a CB model's DOFs [q; x_b]."""
         from .craig_bampton import CBRecovery
 
         T = np.hstack([fim, cm])
-        return (CBRecovery(f"{prefix}slosh_force", self.names, ("N",) * self.n, disp=np.asarray(self.force_rows() @ T)),)
+        F = np.asarray(self.force_rows() @ T)
+        out = [CBRecovery(f"{prefix}slosh_force", self.names, ("N",) * self.n, disp=F)]
+        if np.all(np.isfinite(self.wave_per_force)):
+            out.append(CBRecovery(f"{prefix}slosh_wave_height", self.names, ("m",) * self.n,
+                                  disp=self.wave_per_force[:, None] * F))
+        return tuple(out)
 
     def record(self) -> dict:
         from .component import _csr_record
@@ -75,7 +86,8 @@ class SloshDOFs:
         return {"slosh_names": np.array(self.names, dtype="U"), "slosh_liquid": np.array(self.liquid, dtype="U"),
                 "slosh_dofs": self.dofs, "slosh_mass": self.mass, "slosh_stiffness": self.stiffness,
                 "slosh_frequency": self.frequency, "slosh_gravity": self.gravity, "slosh_direction": self.direction,
-                "slosh_position": self.position, "slosh_stretch": _csr_record(self.stretch)}
+                "slosh_position": self.position, "slosh_stretch": _csr_record(self.stretch),
+                "slosh_wave_per_force": self.wave_per_force}
 
     @classmethod
     def from_record(cls, z: dict) -> "SloshDOFs | None":
@@ -85,4 +97,4 @@ class SloshDOFs:
             return None
         return cls(tuple(z["slosh_names"]), tuple(z["slosh_liquid"]), z["slosh_dofs"], z["slosh_mass"],
                    z["slosh_stiffness"], z["slosh_frequency"], z["slosh_gravity"], z["slosh_direction"],
-                   z["slosh_position"], _csr_from(z["slosh_stretch"]))
+                   z["slosh_position"], _csr_from(z["slosh_stretch"]), z.get("slosh_wave_per_force"))

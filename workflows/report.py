@@ -449,8 +449,9 @@ def bulge_modes(cbs: dict, threshold: float = 0.25) -> list[dict]:
 def slosh_summary(cbs: dict, rows_env: list) -> list[dict]:
     """Each liquid's slosh pendulums (``convective = "slosh"``) from its component's CB model:
     the lowest fixed-interface mode in which the liquid's pendulums carry a quarter of their
-    largest force per unit modal coordinate (the first slosh mode), and the peak force of its
-    pendulums over the cases (``rows_env``: the envelope rows)."""
+    largest force per unit modal coordinate (the first slosh mode), the peak force of its
+    pendulums and the largest crest of one of its modes over the cases (``rows_env``: the
+    envelope rows)."""
     out = []
     for name, cb in cbs.items():
         rec = {it.name: it for it in getattr(cb, "recovery", ())}
@@ -464,9 +465,12 @@ def slosh_summary(cbs: dict, rows_env: list) -> list[dict]:
             j = int(np.flatnonzero(per_mode >= 0.25 * per_mode.max())[0])
             peak = [r for r in rows_env if r["item"].startswith(f"{name}_slosh_force {liquid}:")]
             big = max(peak, key=lambda r: max(abs(r["max"]), abs(r["min"])), default=None)
+            waves = [max(abs(r["max"]), abs(r["min"])) for r in rows_env
+                     if r["item"].startswith(f"{name}_slosh_wave_height {liquid}:")]
             out.append({"component": name, "liquid": liquid, "mode": j + 1, "hz": float(cb.fixed_freq_hz[j]),
                         "peak_n": None if big is None else max(abs(big["max"]), abs(big["min"])),
-                        "peak_item": None if big is None else big["item"]})
+                        "peak_item": None if big is None else big["item"],
+                        "peak_wave_m": max(waves) if waves else None})
     return out
 
 
@@ -1004,6 +1008,7 @@ def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[di
         lines.append("  slosh pendulums (convective = 'slosh'; first slosh mode fixed-interface, peak force over cases):")
         for r in slosh:
             pk = "" if r["peak_n"] is None else f", peak slosh force {r['peak_n'] / 1e3:.4g} kN ({r['peak_item']})"
+            pk += "" if r.get("peak_wave_m") is None else f", largest crest of one mode {r['peak_wave_m']:.3g} m"
             lines.append(f"    {r['liquid']:<24} {r['hz']:7.3f} Hz (mode {r['mode']}){pk}")
     lines += stage_time_lines(stage_times, wall)
     return "\n".join(lines)

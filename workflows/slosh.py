@@ -22,7 +22,7 @@ import numpy as np
 from liftoff.core.errors import InputError
 
 COLUMNS = ("component", "liquid", "kind", "mode", "frequency_Hz", "mass_kg", "direction_x", "direction_y",
-           "height_m", "stiffness_N_per_m", "pendulum_length_m", "g_eff_m_per_s2")
+           "height_m", "stiffness_N_per_m", "pendulum_length_m", "g_eff_m_per_s2", "wave_height_per_force_m_per_N")
 
 
 def check_args(g_eff: float, n_modes: int, csv: Path | None) -> None:
@@ -74,10 +74,10 @@ def rows(result: dict) -> list[tuple]:
         for g, (s, _) in liquids.items():
             for k, d in enumerate(((1.0, 0.0), (0.0, 1.0))):
                 out.append((comp, g, "impulsive", 0, "", s.impulsive_mass[k], d[0], d[1], s.impulsive_height[k],
-                            "", "", s.gravity))
+                            "", "", s.gravity, ""))
             for j, m in enumerate(s.modes, 1):
                 out.append((comp, g, "slosh", j, m.frequency, m.mass, m.direction[0], m.direction[1], m.height,
-                            m.stiffness, s.pendulum_length(m), s.gravity))
+                            m.stiffness, s.pendulum_length(m), s.gravity, m.wave_per_force))
     return out
 
 
@@ -88,7 +88,8 @@ def csv_text(result: dict) -> str:
     lines = ["# liftoff slosh: equivalent mechanical model of each liquid in its rigid tank (fem.slosh); SI units. "
              "kind = impulsive: the mass m_0 that moves with the tank, its force at z = height_m; kind = slosh: a "
              "mass on a spring (stiffness) along (direction_x, direction_y), its force at z = height_m, or a "
-             "pendulum of pendulum_length_m hinged at height_m",
+             "pendulum of pendulum_length_m hinged at height_m; the mode's largest free-surface rise is "
+             "wave_height_per_force_m_per_N times its force",
              ",".join(COLUMNS)]
     lines += [",".join(cell(v) if not isinstance(v, (int, np.integer)) or isinstance(v, bool) else str(v)
                        for v in r) for r in rows(result)]

@@ -94,7 +94,8 @@ def test_cylinder_slosh_against_sp106(tmp_path, aspect):
     """First two lateral slosh modes of h/R = 0.5, 1, 2: frequency, slosh mass, height.
     Measured (P2) at h_mesh = R/10: frequencies +0.06 .. +0.09 %, slosh masses -0.21 ..
     +0.24 %, heights -0.15 .. -0.02 %; at R/5: +0.24 .. +0.67 %, -1.3 .. +1.0 %, -0.57 ..
-    -0.06 %. Within 1 % at R/10, mode 1 and mode 2's frequency closer at R/10 than at R/5."""
+    -0.06 %. Within 1 % at R/10, mode 1 and mode 2's frequency closer at R/10 than at R/5.
+    Mode 1's crest per newton of its force: +0.06 .. +0.08 % at R/10 (+0.2 .. +0.3 % at R/5)."""
     from liftoff.fem.slosh import slosh_modes
 
     fill = aspect * R
@@ -115,9 +116,14 @@ def test_cylinder_slosh_against_sp106(tmp_path, aspect):
         for n, (f, mx, z) in enumerate(_pairs(s)):
             err[h_mesh, n] = np.array([f / f_ref[n] - 1, mx / m_ref[n] - 1, z / z_ref[n] - 1])
         assert all(md.axial_force_ratio < 1e-3 for md in s.modes)               # lateral modes
+        # crest per newton of mode 1: p = A J1(xi r/R) cos(th) cosh(xi z/R), eta = p/(rho g) at
+        # r = R, z = h (J1 largest there for xi_1); F = A J1(xi_1) pi R^2 sinh(xi_1 h/R)/xi_1
+        wave_ref = XI[0] / (RHO * G * np.pi * R ** 2 * np.tanh(XI[0] * fill / R))
+        err[h_mesh, "wave"] = s.modes[0].wave_per_force / wave_ref - 1
         assert s.mass == pytest.approx(RHO * op.volume, rel=1e-12)
     for n in (0, 1):
         assert np.all(np.abs(err[0.1, n]) < 0.01), (n, err[0.1, n])
+    assert abs(err[0.1, "wave"]) < 0.01, err[0.1, "wave"]
     # mesh convergence: mode 1's frequency and mass, mode 2's frequency approach the reference
     assert abs(err[0.1, 0][0]) < abs(err[0.2, 0][0]) and abs(err[0.1, 0][1]) < abs(err[0.2, 0][1])
     assert abs(err[0.1, 1][0]) < abs(err[0.2, 1][0])

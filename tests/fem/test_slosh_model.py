@@ -140,6 +140,9 @@ def test_component_file_keeps_the_pendulums_and_cb_recovers_their_force(tanks, t
     cb = craig_bampton(back, back.dof_labels, n_modes=8, solver=petsc_solver())
     item = cb.recovery_item("slosh_force")
     assert item.labels == comp.slosh.names and item.units == ("N",) * 4
+    wave = cb.recovery_item("slosh_wave_height")                 # crest = (m/N of the mode) x its force
+    assert wave.units == ("m",) * 4 and np.all(comp.slosh.wave_per_force > 0)
+    assert wave.disp == pytest.approx(back.slosh.wave_per_force[:, None] * item.disp, rel=1e-12)
     for j in range(4):
         s = cb.fixed_interface_modes[comp.slosh.dofs, j]
         bob = int(np.argmax(np.abs(s)))

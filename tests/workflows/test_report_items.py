@@ -132,8 +132,10 @@ def test_slosh_summary_finds_each_liquids_first_slosh_mode_and_peak_force():
                          fixed_freq_hz=np.array([0.34, 0.38, 0.41, 0.6, 0.7]))
     rows = [{"item": "core_slosh_force lox:1", "max": 2.0e3, "min": -5.0e3},
             {"item": "core_slosh_force lox:2", "max": 1.0e3, "min": -1.0e3},
-            {"item": "core_slosh_force lh2:1", "max": 7.0e2, "min": -1.0e2}]
+            {"item": "core_slosh_force lh2:1", "max": 7.0e2, "min": -1.0e2},
+            {"item": "core_slosh_wave_height lox:2", "max": 0.02, "min": -0.03}]
     out = {r["liquid"]: r for r in report.slosh_summary({"core": cb}, rows)}
     assert out["lox"]["mode"] == 3 and out["lox"]["hz"] == 0.41 and out["lox"]["peak_n"] == 5.0e3
     assert out["lh2"]["mode"] == 1 and out["lh2"]["hz"] == 0.34 and out["lh2"]["peak_n"] == 7.0e2
     assert out["lox"]["peak_item"] == "core_slosh_force lox:1"
+    assert out["lox"]["peak_wave_m"] == 0.03 and out["lh2"]["peak_wave_m"] is None

@@ -40,6 +40,7 @@ def test_slosh_table_of_the_core_tanks(tmp_path, capsys):
             assert float(r["pendulum_length_m"]) == pytest.approx(G / w2, rel=1e-8)
             assert np.hypot(float(r["direction_x"]), float(r["direction_y"])) == pytest.approx(1.0, rel=1e-8)
             assert float(r["g_eff_m_per_s2"]) == G
+            assert float(r["wave_height_per_force_m_per_N"]) > 0
         # the first pair's force acts above the impulsive mass's (the waves ride on top)
         assert float(mine[2]["height_m"]) > float(mine[0]["height_m"])
 
