@@ -18,34 +18,11 @@ from .component import Component
 # ----------------------------------------------------------------------------- frame
 def frame_element(x1, x2, E, G, A, Iy, Iz, J, rho, vref=(0.0, 0.0, 1.0)):
     """Global 12 x 12 stiffness and consistent mass of a straight 3-D Euler-Bernoulli beam
-    (DOFs ux uy uz rx ry rz at each end; Przemieniecki's matrices)."""
-    x1, x2 = np.asarray(x1, float), np.asarray(x2, float)
-    L = float(np.linalg.norm(x2 - x1))
-    ex = (x2 - x1) / L
-    v = np.asarray(vref, float)
-    if np.linalg.norm(np.cross(ex, v)) < 1e-8:
-        v = np.array([0.0, 1.0, 0.0])
-    ez = np.cross(ex, v)
-    ez /= np.linalg.norm(ez)
-    ey = np.cross(ez, ex)
-    k = np.zeros((12, 12))
-    m = np.zeros((12, 12))
-    for a, b, val in ((0, 6, E * A / L), (3, 9, G * J / L)):
-        k[np.ix_([a, b], [a, b])] = val * np.array([[1, -1], [-1, 1]])
-    m[np.ix_([0, 6], [0, 6])] = rho * A * L / 6 * np.array([[2, 1], [1, 2]])
-    m[np.ix_([3, 9], [3, 9])] = rho * (Iy + Iz) * L / 6 * np.array([[2, 1], [1, 2]])
-    kb = np.array([[12, 6 * L, -12, 6 * L], [6 * L, 4 * L**2, -6 * L, 2 * L**2],
-                   [-12, -6 * L, 12, -6 * L], [6 * L, 2 * L**2, -6 * L, 4 * L**2]]) / L**3
-    mb = rho * A * L / 420 * np.array([[156, 22 * L, 54, -13 * L], [22 * L, 4 * L**2, 13 * L, -3 * L**2],
-                                       [54, 13 * L, 156, -22 * L], [-13 * L, -3 * L**2, -22 * L, 4 * L**2]])
-    flip = np.diag([1, -1, 1, -1])                   # x-z plane: theta_y = -dw/dx
-    k[np.ix_([1, 5, 7, 11], [1, 5, 7, 11])] = E * Iz * kb
-    k[np.ix_([2, 4, 8, 10], [2, 4, 8, 10])] = E * Iy * flip @ kb @ flip
-    m[np.ix_([1, 5, 7, 11], [1, 5, 7, 11])] = mb
-    m[np.ix_([2, 4, 8, 10], [2, 4, 8, 10])] = flip @ mb @ flip
-    lam = np.vstack([ex, ey, ez])
-    T = np.kron(np.eye(4), lam)
-    return T.T @ k @ T, T.T @ m @ T
+    (DOFs ux uy uz rx ry rz at each end; Przemieniecki's matrices): liftoff.core.beam's
+    element without shear areas or rotary inertia."""
+    from liftoff.core.beam import Section, beam_element
+
+    return beam_element(x1, x2, E, G, Section(A, Iy, Iz, J), rho, vref, rotary=False)
 
 
 def frame_matrices(nodes, elements, E, G, A, Iy, Iz, J, rho, vref=(0.0, 0.0, 1.0)):

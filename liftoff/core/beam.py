@@ -1,0 +1,170 @@
+"""The straight 3-D beam element (issue 26): Timoshenko (shear-deformable, with rotary
+inertia) or Euler-Bernoulli, 2 nodes, 6 DOFs a node (ux uy uz rx ry rz), in one place for
+every layer that builds beams (reduction.models' reference frames, workflows.stick, fem).
+Numpy only; SI units (m, Pa, kg/m^3, N, rad).
+
+Local axes: x along the beam (node 1 to node 2), y and z its principal axes, z = x cross
+``vref`` normalised, y = z cross x (``vref`` the orientation vector, as Nastran CBEAM's v).
+Section: area A, second moments Iy (about y: bending in the x-z plane) and Iz (about z:
+bending in the x-y plane), torsion constant J, shear areas Ay, Az (the effective areas for
+shear along y and z; None: no shear deformation, Euler-Bernoulli).
+
+Stiffness (Przemieniecki, Theory of Matrix Structural Analysis, 1968, eq. 5.116): axial
+EA/L, torsion GJ/L, and in the x-y plane with phi_y = 12 E Iz / (G Ay L^2)
+
+    E Iz / ((1 + phi) L^3) [[12, 6L, -12, 6L], [6L, (4 + phi) L^2, -6L, (2 - phi) L^2], ...]
+
+(the x-z plane the same with Iy, Az and the sign of theta_y = -dw/dx). It is the exact
+stiffness of the Timoshenko beam under end loads: nodal displacements of point-loaded
+frames are exact with one element per span.
+
+Mass (consistent, Przemieniecki eq. 11.41-11.42 / Archer 1965): translational
+rho A L / (1 + phi)^2 [[13/35 + 7 phi/10 + phi^2/3, ...]] plus, with ``rotary``, the
+rotary inertia of the section rho I / ((1 + phi)^2 L) [[6/5, (1/10 - phi/2) L, ...]]; axial
+rho A L/6 [[2, 1], [1, 2]], torsion rho (Iy + Iz) L/6 [[2, 1], [1, 2]]. With phi = 0 and no
+rotary inertia it is the Euler-Bernoulli element of Przemieniecki's eq. 11.32 (rho A L/420
+[[156, 22L, 54, -13L], ...]).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import InputError
+
+
+@dataclass(frozen=True)
+class Section:
+    """Beam section properties (m^2, m^4): A, Iy, Iz, J, shear areas Ay, Az (None: rigid in
+    shear, Euler-Bernoulli)."""
+
+    A: float
+    Iy: float
+    Iz: float
+    J: float
+    Ay: float | None = None
+    Az: float | None = None
+
+    def __post_init__(self):
+        for k in ("A", "Iy", "Iz", "J"):
+            v = getattr(self, k)
+            if isinstance(v, bool) or not np.isfinite(v) or not v > 0:
+                raise InputError(f"beam section: {k} must be > 0 (got {v!r})")
+        for k in ("Ay", "Az"):
+            v = getattr(self, k)
+            if v is not None and (isinstance(v, bool) or not np.isfinite(v) or not v > 0):
+                raise InputError(f"beam section: shear area {k} must be > 0 or None (got {v!r})")
+
+
+def _axes(x1: np.ndarray, x2: np.ndarray, vref) -> tuple[float, np.ndarray]:
+    d = x2 - x1
+    L = float(np.linalg.norm(d))
+    if not L > 0:
+        raise InputError(f"beam element from {x1.tolist()} to {x2.tolist()} m has zero length")
+    ex = d / L
+    v = np.asarray(vref, float)
+    if np.linalg.norm(np.cross(ex, v)) < 1e-8 * max(np.linalg.norm(v), 1e-300):
+        v = np.array([0.0, 1.0, 0.0])          # the default vref along the beam: take y
+    ez = np.cross(ex, v)
+    ez /= np.linalg.norm(ez)
+    ey = np.cross(ez, ex)
+    return L, np.vstack([ex, ey, ez])
+
+
+def _bending(EI: float, L: float, phi: float) -> np.ndarray:
+    return EI / ((1 + phi) * L ** 3) * np.array([
+        [12, 6 * L, -12, 6 * L], [6 * L, (4 + phi) * L ** 2, -6 * L, (2 - phi) * L ** 2],
+        [-12, -6 * L, 12, -6 * L], [6 * L, (2 - phi) * L ** 2, -6 * L, (4 + phi) * L ** 2]])
+
+
+def _translational_mass(rhoA: float, L: float, phi: float) -> np.ndarray:
+    a = 13 / 35 + 7 * phi / 10 + phi ** 2 / 3
+    b = (11 / 210 + 11 * phi / 120 + phi ** 2 / 24) * L
+    c = 9 / 70 + 3 * phi / 10 + phi ** 2 / 6
+    d = (13 / 420 + 3 * phi / 40 + phi ** 2 / 24) * L
+    e = (1 / 105 + phi / 60 + phi ** 2 / 120) * L ** 2
+    f = (1 / 140 + phi / 60 + phi ** 2 / 120) * L ** 2
+    return rhoA * L / (1 + phi) ** 2 * np.array([[a, b, c, -d], [b, e, d, -f], [c, d, a, -b], [-d, -f, -b, e]])
+
+
+def _rotary_mass(rhoI: float, L: float, phi: float) -> np.ndarray:
+    a = 6 / 5
+    b = (1 / 10 - phi / 2) * L
+    e = (2 / 15 + phi / 6 + phi ** 2 / 3) * L ** 2
+    f = (-1 / 30 - phi / 6 + phi ** 2 / 6) * L ** 2
+    return rhoI / ((1 + phi) ** 2 * L) * np.array([[a, b, -a, b], [b, e, -b, f], [-a, -b, a, -b], [b, f, -b, e]])
+
+
+def beam_element(x1, x2, E: float, G: float, section: Section, rho: float, vref=(0.0, 0.0, 1.0),
+                 rotary: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """Global 12 x 12 stiffness and consistent mass of a straight beam from ``x1`` to ``x2``
+    (module docstring): Timoshenko where the section has shear areas, Euler-Bernoulli
+    where it has none; ``rotary``: the bending rotary inertia rho I in the mass."""
+    x1, x2 = np.asarray(x1, float), np.asarray(x2, float)
+    L, lam = _axes(x1, x2, vref)
+    s = section
+    phi_y = 0.0 if s.Ay is None else 12 * E * s.Iz / (G * s.Ay * L ** 2)     # x-y plane (v, theta_z)
+    phi_z = 0.0 if s.Az is None else 12 * E * s.Iy / (G * s.Az * L ** 2)     # x-z plane (w, theta_y)
+    k = np.zeros((12, 12))
+    m = np.zeros((12, 12))
+    for a, b, val in ((0, 6, E * s.A / L), (3, 9, G * s.J / L)):
+        k[np.ix_([a, b], [a, b])] = val * np.array([[1, -1], [-1, 1]])
+    m[np.ix_([0, 6], [0, 6])] = rho * s.A * L / 6 * np.array([[2, 1], [1, 2]])
+    m[np.ix_([3, 9], [3, 9])] = rho * (s.Iy + s.Iz) * L / 6 * np.array([[2, 1], [1, 2]])
+    flip = np.diag([1, -1, 1, -1])                   # x-z plane: theta_y = -dw/dx
+    xy, xz = [1, 5, 7, 11], [2, 4, 8, 10]
+    k[np.ix_(xy, xy)] = _bending(E * s.Iz, L, phi_y)
+    k[np.ix_(xz, xz)] = flip @ _bending(E * s.Iy, L, phi_z) @ flip
+    m[np.ix_(xy, xy)] = _translational_mass(rho * s.A, L, phi_y) + (_rotary_mass(rho * s.Iz, L, phi_y) if rotary else 0)
+    m[np.ix_(xz, xz)] = flip @ (_translational_mass(rho * s.A, L, phi_z)
+                                + (_rotary_mass(rho * s.Iy, L, phi_z) if rotary else 0)) @ flip
+    T = np.kron(np.eye(4), lam)
+    return T.T @ k @ T, T.T @ m @ T
+
+
+# ---- sections of standard shapes ------------------------------------------------------------------
+def tube(r_out: float, t: float, nu: float = 0.3) -> Section:
+    """Circular tube, outer radius ``r_out``, wall ``t`` (m): exact A, I, J (= 2 I); shear
+    area k A with Cowper's coefficient (J. Appl. Mech. 33, 1966, Table 1) for a hollow
+    circle, m = r_in / r_out: k = 6 (1 + nu)(1 + m^2)^2 / ((7 + 6 nu)(1 + m^2)^2 + (20 + 12 nu) m^2)
+    (0.53 for a thin tube, 6 (1 + nu)/(7 + 6 nu) = 0.886 for a solid bar at nu = 0.3)."""
+    if not (r_out > 0 and 0 < t <= r_out):
+        raise InputError(f"tube section: need r_out > 0 and 0 < t <= r_out (got {r_out!r}, {t!r})")
+    ri = r_out - t
+    A = np.pi * (r_out ** 2 - ri ** 2)
+    I = np.pi / 4 * (r_out ** 4 - ri ** 4)
+    m2 = (ri / r_out) ** 2
+    k = 6 * (1 + nu) * (1 + m2) ** 2 / ((7 + 6 * nu) * (1 + m2) ** 2 + (20 + 12 * nu) * m2)
+    return Section(A, I, I, 2 * I, k * A, k * A)
+
+
+def rectangle(b: float, h: float, nu: float = 0.3) -> Section:
+    """Solid rectangle, width ``b`` (along y), height ``h`` (along z): A = b h,
+    Iy = b h^3/12, Iz = h b^3/12, J from Saint-Venant's series (Timoshenko & Goodier,
+    Theory of Elasticity, eq. 167: J = a^3 c (1/3 - 64 a/(pi^5 c) sum tanh(n pi c/(2a))/n^5),
+    a <= c the sides, n odd), shear areas with Cowper's 10 (1 + nu)/(12 + 11 nu)."""
+    if not (b > 0 and h > 0):
+        raise InputError(f"rectangle section: need b, h > 0 (got {b!r}, {h!r})")
+    a, c = min(b, h), max(b, h)
+    n = np.arange(1, 200, 2)
+    J = a ** 3 * c * (1 / 3 - 64 * a / (np.pi ** 5 * c) * np.sum(np.tanh(n * np.pi * c / (2 * a)) / n ** 5))
+    k = 10 * (1 + nu) / (12 + 11 * nu)
+    return Section(b * h, b * h ** 3 / 12, h * b ** 3 / 12, float(J), k * b * h, k * b * h)
+
+
+def i_section(h: float, b: float, tw: float, tf: float) -> Section:
+    """Doubly symmetric thin-walled I: depth ``h`` (along z, flange centre to centre),
+    flange width ``b``, web ``tw``, flanges ``tf`` (m), thin-wall formulas: A = 2 b tf + h tw,
+    Iy = tw h^3/12 + 2 b tf (h/2)^2 (strong axis, bending in x-z), Iz = 2 tf b^3/12,
+    J = (2 b tf^3 + h tw^3)/3 (open section); shear areas: the web (h tw) along z, the
+    flanges (5/6 2 b tf) along y."""
+    for nm, v in (("h", h), ("b", b), ("tw", tw), ("tf", tf)):
+        if not v > 0:
+            raise InputError(f"I section: {nm} must be > 0 (got {v!r})")
+    A = 2 * b * tf + h * tw
+    return Section(A, tw * h ** 3 / 12 + 2 * b * tf * (h / 2) ** 2, 2 * tf * b ** 3 / 12,
+                   (2 * b * tf ** 3 + h * tw ** 3) / 3, 5 / 6 * 2 * b * tf, h * tw)
+
+
+__all__ = ["Section", "beam_element", "tube", "rectangle", "i_section"]
