@@ -153,3 +153,73 @@ def chain_component(name, nodes, first_index=0, **section) -> Component:
     n = nodes.shape[0]
     return frame_component(name, nodes, [(i, i + 1) for i in range(n - 1)],
                            [f"n{first_index + i}" for i in range(n)], **section)
+
+
+# ----------------------------------------------------------------------------- rigid mass
+from dataclasses import dataclass as _dataclass  # noqa: E402
+
+
+@_dataclass
+class RigidMass:
+    """A rigid body joined to the rest at one point (``[model.component.<name>] type =
+    "rigid_mass"``): ``point`` (its name, the joint's), ``at`` (m), ``mass`` (kg), ``cg``
+    (m; empty: at the point), ``inertia`` (kg m^2 about the c.g., [Ixx, Iyy, Izz] or
+    [Ixx, Iyy, Izz, Ixy, Ixz, Iyz], products of inertia as the tensor's off-diagonal
+    terms)."""
+
+    point: str = "cg"
+    at: tuple = (0.0, 0.0, 0.0)
+    mass: float = 0.0
+    cg: tuple = ()
+    inertia: tuple = (0.0, 0.0, 0.0)
+
+    def check(self) -> None:
+        if not isinstance(self.point, str) or not self.point:
+            raise InputError("rigid mass: point must be a non-empty name")
+        for nm in ("at", "cg"):
+            v = np.asarray(getattr(self, nm), float).reshape(-1)
+            if not ((v.size == 3 or (nm == "cg" and v.size == 0)) and np.all(np.isfinite(v))):
+                raise InputError(f"rigid mass: {nm} must be [x, y, z] m (got {list(getattr(self, nm))!r})")
+        self.at = tuple(float(x) for x in self.at)
+        self.cg = self.at if len(self.cg) == 0 else tuple(float(x) for x in self.cg)
+        if not (np.isfinite(self.mass) and self.mass > 0):
+            raise InputError(f"rigid mass: mass must be > 0 kg (got {self.mass!r})")
+        I = np.asarray(self.inertia, float).reshape(-1)
+        if I.size not in (3, 6) or not np.all(np.isfinite(I)):
+            raise InputError(f"rigid mass: inertia is [Ixx, Iyy, Izz] or [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] kg m^2 "
+                             f"(got {list(self.inertia)!r})")
+        T = self.tensor()
+        w = np.linalg.eigvalsh(T)
+        scale = max(float(np.abs(w).max()), 1e-300)
+        if w.min() < -1e-12 * scale or any(w[i] + w[j] < w[k] * (1 - 1e-12) - 1e-12 * scale
+                                           for i, j, k in ((0, 1, 2), (0, 2, 1), (1, 2, 0))):
+            raise InputError(f"rigid mass: inertia {list(self.inertia)!r} kg m^2 is not a body's (principal "
+                             f"moments {np.round(w, 6).tolist()}: each >= 0 and none above the sum of the other two)")
+
+    def tensor(self) -> np.ndarray:
+        """The 3 x 3 inertia tensor about the c.g. (kg m^2)."""
+        I = np.asarray(self.inertia, float).reshape(-1)
+        xx, yy, zz = I[:3]
+        xy, xz, yz = I[3:] if I.size == 6 else (0.0, 0.0, 0.0)
+        return np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+
+
+def rigid_mass_cb(params: RigidMass, name: str = "rigid_mass"):
+    """The Craig-Bampton model of a rigid mass: no modes, its point's six DOFs the boundary,
+    M = RB^T diag(m, m, m, I_cg) RB with RB the rigid motion of the c.g. from the point's
+    (liftoff.core.rigid.dof_rb), K = 0."""
+    from liftoff.core.rigid import dof_rb
+
+    from .craig_bampton import CBModel
+
+    at, cg = np.asarray(params.at, float), np.asarray(params.cg, float)
+    RB = dof_rb(np.repeat((cg - at)[None, :], 6, axis=0), np.arange(6))
+    Mc = np.zeros((6, 6))
+    Mc[:3, :3] = params.mass * np.eye(3)
+    Mc[3:, 3:] = params.tensor()
+    M = RB.T @ Mc @ RB
+    labels = tuple(f"{params.point}:{c}" for c in COMPONENTS)
+    return CBModel(name=name, boundary_labels=labels, fixed_omega=np.zeros(0), M=0.5 * (M + M.T), K=np.zeros((6, 6)),
+                   points=(params.point,), point_coords=at[None, :].copy(), dof_labels=labels,
+                   label_transform=np.eye(6), n_dof=6, constraint_modes=np.eye(6),
+                   fixed_interface_modes=np.zeros((6, 0)))

@@ -116,6 +116,17 @@ def build_component(model: ModelConfig, comp: ComponentModel, workdir: Path) -> 
     return fe_source.build_component(comp, model, workdir)
 
 
+def given_model(comp: ComponentModel):
+    """The function giving the component's CB model directly (a registered type with
+    ``model``, such as rigid_mass), or None (built, imported from Nastran, or a stick)."""
+    if not comp.type or comp.nastran is not None:
+        return None
+    from liftoff.config import component_types
+
+    t = component_types.types().get(comp.type)
+    return None if t is None else t.model_builder()
+
+
 def component_stage(model: ModelConfig, name: str, cache: StageCache, workdir: Path) -> tuple[Component, dict, str]:
     comp = model.components[name]
     code = (("liftoff.workflows.stick", "liftoff.meshes", "liftoff.reduction", "liftoff.core") if model.source == "stick"
@@ -310,15 +321,22 @@ def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, wh
         bar = tqdm(total=2 * len(names), desc="model stages", unit="stage", disable=not progress or cache.comm.rank != 0,
                    leave=False)
         for name in names:
-            if model.components[name].nastran is None:
+            if model.components[name].nastran is None and given_model(model.components[name]) is None:
                 bar.set_postfix_str(f"fe {name}")
                 comps[name], thermal[name], comp_keys[name] = component_stage(model, name, cache, Path(work))
             bar.update()
         logs = reduce_concurrently(model, comps, comp_keys, cache, model_workers(workers), bar)
         for name in names:
             bar.set_postfix_str(f"cb {name}")
+            given = given_model(model.components[name])
             if model.components[name].nastran is not None:
                 cbs[name], ckeys[name] = nastran_stage(model, name, cache)
+                thermal[name] = {}
+            elif given is not None:          # a type whose CB model is given (rigid_mass): no stage to cache
+                comp = model.components[name]
+                cbs[name] = given(comp.builder, name)
+                ckeys[name] = stage_key("given", {"name": name, "type": comp.type, "params": asdict(comp.builder)},
+                                        ("liftoff.reduction", "liftoff.core"))
                 thermal[name] = {}
             else:
                 cbs[name], ckeys[name] = cb_stage(model, name, comps[name], comp_keys[name], cache)

@@ -51,9 +51,11 @@ def tank_slosh(scenario, g_eff: float, n_modes: int, progress=print) -> dict:
                          "come from the tanks' liquid meshes")
     out = {}
     with tempfile.TemporaryDirectory(prefix="liftoff-slosh-") as work:
+        from .pipeline import given_model
+
         for name, comp in model.components.items():
-            if comp.type in ("nastran", "stick"):
-                continue
+            if comp.type in ("nastran", "stick") or comp.nastran is not None or given_model(comp) is not None:
+                continue                                   # imported or given, not meshed: no liquid mesh
             progress(f"liftoff slosh: meshing {name} ...")
             geo = geometry(comp, Path(work) / name)
             if not geo.liquids:

@@ -37,6 +37,10 @@ def test_every_builtin_type_is_its_own_file_and_name():
     for module in component_types.BUILTIN:
         t = importlib.import_module(f"liftoff.config.component_types.{module}").TYPE
         assert t.name == module and types[module] is t
+        if t.model:                                       # a type given as its CB model (rigid_mass): no mesh
+            assert not t.build and callable(t.model_builder())
+            assert t.model.split(":")[0].startswith("liftoff.reduction.")
+            continue
         mod, func = t.build.split(":")
         assert mod.startswith("liftoff.meshes.")           # gmsh builders live in meshes/
     assert component_types.NASTRAN not in types           # imported, not built

@@ -144,3 +144,53 @@ def test_saturn_v_runs_with_a_controlled_release(saturn):
     df.loader.exec_module(dmod)
     diff = dmod.differences(json.loads(json.dumps(fig)), json.loads(figures.EXAMPLES["saturn_v"].json.read_text()))
     assert not diff, f"run `python benchmarks/example_figures.py saturn_v`: {diff}"
+
+
+def test_a_rigid_mass_payload_gives_the_vehicle_the_nastran_payloads_mass_and_cg(run, tmp_path_factory):
+    """single_stick with its Nastran payload replaced by ``type = "rigid_mass"`` (issue 23)
+    whose mass, c.g. and inertia are the Nastran model's rigid-body mass matrix about
+    payload_if (RB^T M_B RB, the independent reference): the vehicle weighs the same and has
+    the same c.g. (1e-9; the rest of the stack is the same cached FE), with fewer system
+    modes (no payload modes, no payload_top grid); the run goes end to end."""
+    import shutil
+
+    pytest.importorskip("pyyeti.nastran")
+    from liftoff.core.labels import split_label
+    from liftoff.core.rigid import dof_rb
+    from liftoff.reduction.nastran import import_nastran
+    from liftoff.transient.effects import center_of_gravity
+    from liftoff.workflows.run import run as run_api
+
+    cb = import_nastran(EXAMPLE / "payload.pch", name="payload", units="in-lbf-s",
+                        grid_names={1: "payload_if", 2: "payload_top"})
+    at = cb.point_coord("payload_if")
+    labs = cb.boundary_labels
+    RB = dof_rb(np.array([cb.point_coord(split_label(lab)[0]) for lab in labs]) - at,
+                np.array([split_label(lab)[1] for lab in labs]))
+    M6 = RB.T @ cb.M_B @ RB
+    m = M6[0, 0]
+    S = -M6[:3, 3:] / m                                      # [r]x, r = c.g. - payload_if
+    r = np.array([S[2, 1], S[0, 2], S[1, 0]])
+    Icg = M6[3:, 3:] - m * S.T @ S
+    folder = tmp_path_factory.mktemp("rigid_payload")
+    for f in ("interstage.geo", "fairing.geo", "pad.geo", "payload.pch"):
+        shutil.copy(EXAMPLE / f, folder / f)
+    inertia = [Icg[0, 0], Icg[1, 1], Icg[2, 2], Icg[0, 1], Icg[0, 2], Icg[1, 2]]
+    (folder / "scenario.toml").write_text(
+        f'extends = "{EXAMPLE / "scenario.toml"}"\ntitle = "rigid payload"\n'
+        '[model.component.payload]\ntype = "rigid_mass"\n[model.component.payload.params]\npoint = "payload_if"\n'
+        f'at = {[float(x) for x in at]}\nmass = {float(m)!r}\ncg = {[float(x) for x in at + r]}\n'
+        f'inertia = {[float(x) for x in inertia]}\n'
+        '[recovery]\ntop = "payload_if"\npayload = "payload_if"\n')
+    cache = tmp_path_factory.getbasetemp() / "examples_cache"
+    kw = dict(cache_dir=cache, progress=False, plots=False, snapshots=False, echo=lambda *a, **k: None,
+              error_estimate=False)
+    rigid = run_api(folder / "scenario.toml", out=folder / "out", **kw)
+    nastran = run_api(EXAMPLE / "scenario.toml", out=folder / "out_nastran", **kw)
+    (va, vb) = (next(iter(o.stacks.values())).vehicle for o in (rigid, nastran))
+    (ma, ca), (mb, cb_) = center_of_gravity(va), center_of_gravity(vb)
+    assert ma == pytest.approx(mb, rel=1e-9)
+    assert np.abs(np.asarray(ca) - np.asarray(cb_)).max() < 1e-9 * 60.0
+    # the rigid payload has no modes and no second grid (payload_top's six DOFs): fewer system modes
+    assert va.n_modes < vb.n_modes
+    assert (folder / "out" / "maxmin_envelope.csv").is_file()

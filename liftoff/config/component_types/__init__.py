@@ -24,7 +24,7 @@ from liftoff.core.errors import InputError
 
 #: the types shipped with liftoff: module names of this package, each with a ``TYPE``
 BUILTIN = ("shuttle_core", "shuttle_booster", "shuttle_orbiter", "launch_table", "tank_stage", "barrel", "platform",
-           "geometry", "barge_hull", "barge_cargo", "dock")
+           "geometry", "barge_hull", "barge_cargo", "dock", "rigid_mass")
 #: the type of a component imported from a Nastran Craig-Bampton model (no builder)
 NASTRAN = "nastran"
 ENTRY_POINTS = "liftoff.component_types"
@@ -52,17 +52,28 @@ class ComponentType:
     """A registered component type: ``name`` (the scenario's ``type``), ``read(ctx, where,
     params) -> dataclass`` (checked; ``where`` names the params table in errors),
     ``build`` ("module:function", ``function(params, out_dir) -> Geometry``), ``role``
-    (where it may stand: "vehicle", "pad" or "any") and a one-line ``doc``."""
+    (where it may stand: "vehicle", "pad" or "any"), a one-line ``doc`` and, for a type
+    without a mesh, ``model`` ("module:function", ``function(params, name) -> CBModel``: the
+    component's Craig-Bampton model given directly; then ``build`` is empty)."""
 
     name: str
     read: Callable
     build: str
     role: str = "any"
     doc: str = ""
+    model: str = ""         # "module:function": function(params, name) -> reduction.CBModel, no mesh nor FE
 
     def builder(self) -> Callable:
         """The gmsh builder function (imports meshes/ and gmsh)."""
         module, func = self.build.split(":")
+        return getattr(importlib.import_module(module), func)
+
+    def model_builder(self) -> Callable | None:
+        """The function that gives the component's Craig-Bampton model directly (a type
+        without a mesh, ``model``), or None."""
+        if not self.model:
+            return None
+        module, func = self.model.split(":")
         return getattr(importlib.import_module(module), func)
 
 
