@@ -223,3 +223,37 @@ def rigid_mass_cb(params: RigidMass, name: str = "rigid_mass"):
                    points=(params.point,), point_coords=at[None, :].copy(), dof_labels=labels,
                    label_transform=np.eye(6), n_dof=6, constraint_modes=np.eye(6),
                    fixed_interface_modes=np.zeros((6, 0)))
+
+
+# ----------------------------------------------------------------------------- rigid ground
+@_dataclass
+class RigidGround:
+    """Immovable ground as the pad (``[model.pad] type = "rigid_ground"``): named points
+    (``points = {name: (x, y, z)}``, m) that never move, for the posts to hold the vehicle
+    to."""
+
+    points: dict = None
+
+    def check(self) -> None:
+        if not isinstance(self.points, dict) or not self.points:
+            raise InputError("rigid ground: give its points = {name = [x, y, z]} (the posts' pad points)")
+        out = {}
+        for name, xyz in self.points.items():
+            v = np.asarray(xyz, float).reshape(-1)
+            if v.size != 3 or not np.all(np.isfinite(v)):
+                raise InputError(f"rigid ground: point {name!r} must be [x, y, z] m (got {xyz!r})")
+            out[str(name)] = tuple(float(x) for x in v)
+        self.points = out
+
+
+def rigid_ground_cb(params: RigidGround, name: str = "pad"):
+    """The Craig-Bampton model of immovable ground: no DOFs at all; its points are labelled
+    DOFs whose displacement is identically zero (label_transform rows of zeros)."""
+    from .craig_bampton import CBModel
+
+    names = tuple(params.points)
+    labels = tuple(f"{p}:{c}" for p in names for c in COMPONENTS)
+    return CBModel(name=name, boundary_labels=(), fixed_omega=np.zeros(0), M=np.zeros((0, 0)), K=np.zeros((0, 0)),
+                   points=names, point_coords=np.array([params.points[p] for p in names], float).reshape(-1, 3),
+                   dof_labels=labels, label_transform=np.zeros((len(labels), 0)), n_dof=len(labels),
+                   constraint_modes=np.zeros((len(labels), 0)), fixed_interface_modes=np.zeros((len(labels), 0)))

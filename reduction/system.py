@@ -140,6 +140,8 @@ def system_modes(assembly: Assembly, n_rigid: int = 6, f_max: float | None = Non
                              f"unconnected part); lowest elastic eigenvalue {elastic[0]:.2e}")
         omega = np.concatenate([np.zeros(6), np.sqrt(elastic)])
         phi = np.hstack([R, vec[:, 6:]])
+    elif n_rigid == 0 and K.shape[0] == 0:          # immovable ground (rigid_ground): no DOFs, no modes
+        omega, phi = np.zeros(0), np.zeros((0, 0))
     elif n_rigid == 0:
         lam, phi = eigh_massless(K, M, who)
         if lam[0] < 1e-10 * abs(scale):

@@ -189,6 +189,8 @@ class TruncationCheck:
         return self.flex_error <= TRUNCATION_WARN and self.worst_mass >= 1.0 - TRUNCATION_WARN
 
     def line(self) -> str:
+        if self.n_space == 0:
+            return f"{self.body}: rigid ground, no modes (nothing to truncate)"
         kept = (f"all {self.n_space} modes" if self.f_cut is None else
                 f"{self.n_kept} of {self.n_space} modes (to {self.f_cut:.1f} Hz)"
                 + (f" + {self.n_residual} residual vectors" if self.n_residual else ", no residual vectors"))

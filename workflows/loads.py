@@ -12,6 +12,8 @@
 """
 from __future__ import annotations
 
+import dataclasses
+
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -73,7 +75,10 @@ def contacts(case: Case, stack: StackModel) -> list[ContactPoint]:
         w = (case.at("post") / i).named(p.name)
         _check_point(stack.vehicle, p.vehicle, w / "vehicle")
         _check_point(stack.pad, p.pad, w / "pad")
-        out.append(p.contact())
+        c = p.contact()
+        if stack.pad.is_ground:             # rigid ground (type = "rigid_ground"): the post holds to a fixed point
+            c = dataclasses.replace(c, labels_b=(None,) * len(c.labels_b))
+        out.append(c)
     return out
 
 
@@ -282,5 +287,6 @@ def stack_mass_summary(stack: StackModel) -> str:
         f" (axial {m_z / 1e3:.1f} t: a hydroelastic liquid's sloshing part is not carried laterally, docs/hydro.md)"
     return (f"vehicle: {stack.vehicle.n_modes} modes ({np.sum(stack.vehicle.omega > 0)} elastic, first "
             f"{stack.vehicle.omega[6] / 2 / np.pi if stack.vehicle.n_modes > 6 else float('nan'):.2f} Hz), "
-            f"mass {m / 1e3:.1f} t{axial}, c.g. {np.round(cg, 2).tolist()} m; pad: {stack.pad.n_modes} modes "
-            f"(first {stack.pad.omega[0] / 2 / np.pi:.2f} Hz)")
+            f"mass {m / 1e3:.1f} t{axial}, c.g. {np.round(cg, 2).tolist()} m; pad: "
+            + (f"{stack.pad.n_modes} modes (first {stack.pad.omega[0] / 2 / np.pi:.2f} Hz)" if stack.pad.n_modes
+               else "rigid ground (no modes)"))

@@ -69,6 +69,7 @@ class StackModel:
         """The truncation checks (reduction/truncation.py) of the vehicle at its contact
         labels ``contact_a`` and attach labels ``attach``, and of the pad at ``contact_b``;
         computed once per set of labels."""
+        contact_b = [lab for lab in contact_b if lab is not None]     # None: a post on rigid ground
         key = (tuple(contact_a), tuple(contact_b), tuple(attach))
         if key not in self._checks:
             self._checks[key] = (

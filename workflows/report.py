@@ -240,7 +240,7 @@ def write_modal_tables(stack, cp, out: Path) -> list[Path]:
     (the vehicle's free-free system modes the transient uses: rigid, elastic, residual
     vectors), ``modal_mass_vehicle_held.csv`` (the vehicle held at its contact DOFs: modes
     and effective mass under the posts' rigid translation) and ``modal_mass_pad.csv`` (the
-    grounded pad's modes and their effective mass)."""
+    grounded pad's modes and their effective mass; none for rigid ground)."""
     from liftoff.analysis.aggregate import write_rows_csv
     from liftoff.reduction.modal_mass import modal_mass_table
 
@@ -253,8 +253,10 @@ def write_modal_tables(stack, cp, out: Path) -> list[Path]:
     files = [write_text(out / "modes_vehicle.csv", "\n".join(lines) + "\n")]
     files.append(write_mode_shapes(stack, out / "modes_vehicle.h5"))
     contact_a = [lab for c in cp.problem.contacts for lab in c.labels_a]
-    for table, name in ((modal_mass_table(vm, contact_a, "vehicle"), "modal_mass_vehicle_held.csv"),
-                        (modal_mass_table(stack.pad_modes, [], "pad"), "modal_mass_pad.csv")):
+    tables = [(modal_mass_table(vm, contact_a, "vehicle"), "modal_mass_vehicle_held.csv")]
+    if not stack.pad.is_ground:          # rigid ground (type = "rigid_ground") has no modes to tabulate
+        tables.append((modal_mass_table(stack.pad_modes, [], "pad"), "modal_mass_pad.csv"))
+    for table, name in tables:
         head = (f"# liftoff modal effective mass, {table.body} {table.condition} (reduction/modal_mass.py): per mode "
                 "the frequency (Hz) and the effective mass (kg) under a rigid translation x, y, z of the supports, "
                 "its percent and cumulative percent of the total; total mass (kg) x/y/z "

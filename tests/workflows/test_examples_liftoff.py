@@ -194,3 +194,36 @@ def test_a_rigid_mass_payload_gives_the_vehicle_the_nastran_payloads_mass_and_cg
     # the rigid payload has no modes and no second grid (payload_top's six DOFs): fewer system modes
     assert va.n_modes < vb.n_modes
     assert (folder / "out" / "maxmin_envelope.csv").is_file()
+
+
+def test_single_stick_on_rigid_ground(run, tmp_path_factory):
+    """single_stick with its .geo launch table replaced by ``[model.pad] type =
+    "rigid_ground"`` at the same post points (issue 23): no pad modes, the posts hold the
+    vehicle to fixed points, and at t0 (static, before any engine) the posts' axial forces
+    add up to the vehicle's weight, m g (the static initial state on the pad: 1e-9); the
+    clamps release and the vehicle lifts off."""
+    import shutil
+
+    from liftoff.transient.effects import center_of_gravity
+    from liftoff.workflows.run import run as run_api
+
+    folder = tmp_path_factory.mktemp("rigid_ground")
+    for f in ("interstage.geo", "fairing.geo", "payload.pch"):
+        shutil.copy(EXAMPLE / f, folder / f)
+    (folder / "scenario.toml").write_text(
+        f'extends = "{EXAMPLE / "scenario.toml"}"\ntitle = "on rigid ground"\n'
+        '[model.pad]\ntype = "rigid_ground"\n[model.pad.params.points]\n'
+        'pad_post_1 = [1.294005, 1.294005, 3.6]\npad_post_2 = [-1.294005, 1.294005, 3.6]\n'
+        'pad_post_3 = [-1.294005, -1.294005, 3.6]\npad_post_4 = [1.294005, -1.294005, 3.6]\n')
+    out = run_api(folder / "scenario.toml", out=folder / "out", cache_dir=tmp_path_factory.getbasetemp() / "examples_cache",
+                  progress=False, plots=False, snapshots=False, echo=lambda *a, **k: None, error_estimate=False)
+    stack = next(iter(out.stacks.values()))
+    assert stack.pad.is_ground and stack.pad.n_modes == 0
+    res, cp = out.results["nominal"]
+    m, _ = center_of_gravity(stack.vehicle)
+    g = -float(np.asarray(res.metadata["gravity"])[2])
+    tz = [j for j, d in enumerate(res.contact_directions) if d.component == "Tz"]
+    assert len(tz) == 4
+    assert res.contact_force[0, tz].sum() == pytest.approx(m * g, rel=1e-9)
+    assert all(r["separation_time"] is not None for r in res.contact_summary())
+    assert "pad: rigid ground" in out.summary
