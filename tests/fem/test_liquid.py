@@ -471,13 +471,15 @@ def test_p2_structure_couples_through_edge_midpoints(tank_model, liquid_degree):
 
 
 def test_slosh_modes_are_refused_not_ignored(tank_model):
-    """Liquid.slosh_modes > 0 asks for gravity slosh, which is not modelled: one-line error."""
+    """Liquid.slosh_modes > 0 asks for the slosh pendulums (convective = "slosh",
+    tests/fem/test_slosh_model.py); with "free" or "wall" it is refused in one line, not
+    ignored."""
     from dataclasses import replace
 
     from liftoff.fem import build_model
 
     _, g, _ = tank_model
     g2 = replace(g, liquids={k: replace(v, slosh_modes=2) for k, v in g.liquids.items()})
-    with pytest.raises(InputError, match="slosh_modes = 2: gravity slosh is not in the Craig-Bampton model yet") as e:
+    with pytest.raises(InputError, match="slosh_modes = 2 needs the slosh pendulums") as e:
         build_model(g2)
     assert "'tank_lox_liquid'" in str(e.value) and "\n" not in str(e.value)
