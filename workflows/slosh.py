@@ -39,13 +39,17 @@ def check_args(g_eff: float, n_modes: int, csv: Path | None) -> None:
 
 
 def tank_slosh(scenario, g_eff: float, n_modes: int, progress=print) -> dict:
-    """{component: {liquid: (LiquidSlosh at P2, LiquidSlosh at P1)}} of the scenario's FE
-    components with hydroelastic liquids; InputError when there is none."""
+    """{component: {liquid: (LiquidSlosh at P2, LiquidSlosh at P1)}} of the FE components with
+    hydroelastic liquids of ``scenario`` (a lift-off Scenario or a ModelConfig, as a barge
+    scenario's model view); InputError when there is none."""
     from liftoff.fem.slosh import geometry_slosh
 
     from .fe_source import geometry
 
-    model = scenario.cases[0].model            # the model stages are shared by the cases (workflows.pipeline)
+    from liftoff.config.model import ModelConfig
+
+    # a lift-off Scenario: the model stages are shared by its cases (workflows.pipeline); or a ModelConfig
+    model = scenario if isinstance(scenario, ModelConfig) else scenario.cases[0].model
     if model.source != "fe":
         raise InputError(f"liftoff slosh needs [model] source = \"fe\" (got {model.source!r}): the slosh modes "
                          "come from the tanks' liquid meshes")
@@ -141,9 +145,13 @@ def _run(args: argparse.Namespace) -> int:
     from liftoff.config.scenario import load_scenario
     from liftoff.core.records import write_text
 
+    from liftoff.config.barge import load_barge, scenario_kind
+
     check_args(args.g_eff, args.modes, args.csv)
-    scenario = load_scenario(args.scenario)
-    result = tank_slosh(scenario, args.g_eff, args.modes)
+    if args.scenario is not None and scenario_kind(args.scenario) == "barge":    # kind = "barge": its model view
+        result = tank_slosh(load_barge(args.scenario).cases[0].model.model_config(), args.g_eff, args.modes)
+    else:
+        result = tank_slosh(load_scenario(args.scenario), args.g_eff, args.modes)
     print(summary(result))
     if args.csv is not None:
         write_text(args.csv, csv_text(result))

@@ -62,3 +62,14 @@ def test_a_stick_model_has_no_tanks_to_slosh(tmp_path, capsys):
     p.write_text('extends = "shuttle"\ntitle = "stick"\n[model]\nsource = "stick"\n')
     assert main(["slosh", str(p)]) == 2
     assert 'needs [model] source = "fe"' in capsys.readouterr().err
+
+
+def test_a_barge_scenario_is_read_as_its_model(tmp_path, capsys):
+    """kind = "barge": its three FE parts are meshed; none holds a hydroelastic liquid, which
+    is said in one line (exit 2), not a parse error of the barge's own keys."""
+    from liftoff.workflows.init import init
+
+    path = init("barge", tmp_path / "b")
+    assert main(["slosh", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "nothing sloshes" in err and len(err.strip().splitlines()) == 1
