@@ -395,6 +395,11 @@ def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig
                             integer(where / "system" / k, v, 1) if "n_modes" in k else
                             number(where / "system" / k, v, positive=True) for k, v in s.items()})
     max_elements = integer(where / "max_elements", m.get("max_elements", MAX_ELEMENTS[source]), 1)
+    if convective == "slosh" and not any(getattr(c.builder, "liquid", "") == "hydroelastic"
+                                         for c in components.values()):
+        raise (where / "convective").error('"slosh" needs a hydroelastic liquid, and no component has one '
+                                           '([model] liquid = "hydroelastic" or a component\'s own liquid); '
+                                           "it would be silently ignored")
     return ModelConfig(source, degree, zeta, layout, components,
                        _materials(where / "materials", m.get("materials", {}), source), system, max_elements,
                        convective, names, joints)

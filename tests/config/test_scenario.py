@@ -310,12 +310,20 @@ def test_liquid_option_reaches_the_core_tank(base):
 
 def test_convective_option(base):
     """[model] convective: a hydroelastic liquid's sloshing part lumped on the wetted wall
-    ("wall", the default) or left free laterally ("free"); anything else is one line."""
+    ("wall", the default), left free laterally ("free") or hung as slosh pendulums ("slosh",
+    which needs a hydroelastic liquid); anything else is one line."""
     d = copy.deepcopy(base)
     assert parse_scenario(d, "s.toml").cases[0].model.convective == "wall"
     d["model"]["convective"] = "free"
     assert parse_scenario(d, "s.toml").cases[0].model.convective == "free"
+    d["model"]["convective"] = "slosh"
+    assert parse_scenario(d, "s.toml").cases[0].model.convective == "slosh"
     d["model"]["convective"] = "glued"
-    with pytest.raises(InputError, match=r"model\.convective: must be one of wall, free") as e:
+    with pytest.raises(InputError, match=r"model\.convective: must be one of wall, free, slosh") as e:
+        parse_scenario(d, "s.toml")
+    assert "\n" not in str(e.value)
+    # "slosh" without a hydroelastic liquid would be silently ignored: refused
+    d["model"]["convective"], d["model"]["liquid"] = "slosh", "smeared"
+    with pytest.raises(InputError, match=r'model\.convective: "slosh" needs a hydroelastic liquid') as e:
         parse_scenario(d, "s.toml")
     assert "\n" not in str(e.value)
