@@ -131,12 +131,14 @@ def _grid(z0, z1, must, dz):
 def _add_tank(stick: _Stick, p, must, dz=0.1) -> None:
     """A tank stage: its mass from the wall's cross-section (union of the compartments'
     capsule shells and the intertank skirts, thickened: rho and E of the builder's equivalent
-    material) and the propellant below each height (meshes.tank.liquid_volume), smeared on
-    the wall as the FE model has it (its rotary inertia that of a ring); its stiffness from
+    material) and the propellant smeared on the wall as the FE model has it: each
+    compartment's liquid mass uniform per wetted area up to its fill level
+    (meshes.tank.wetted_area; not the liquid's own distribution, which puts less of it on the
+    domes), its rotary inertia that of a ring; its stiffness from
     the walls continuous along the axis there: the barrels and the intertank skirts (a dome
     hangs on its barrel's end and carries no bending across the intertank), the domes
     themselves only beyond the end barrels."""
-    from liftoff.meshes.tank import liquid_volume, tank_layout, wall_volume
+    from liftoff.meshes.tank import tank_layout, wall_volume, wetted_area
 
     R, t, lay = p.radius, p.wall_thickness, tank_layout(p)
     rho = p.dry_mass / wall_volume(p)
@@ -160,9 +162,10 @@ def _add_tank(stick: _Stick, p, must, dz=0.1) -> None:
         iv += [(R - t, R) for lo, hi in zip(lay[:-1], lay[1:]) if lo.z_cyl_top <= z <= hi.z_cyl_bottom]
         return iv
 
-    def liquid_below(z):
-        return sum(c.liquid_density * liquid_volume(l.r_inner, l.a_bottom_inner, l.a_top_inner, l.cyl_length,
-                                                    min(max(z - l.z_inner_bottom, 0.0), l.fill_height))
+    def liquid_below(z):            # the FE's smeared liquid: each compartment's mass uniform per wetted area
+        return sum(c.liquid_density * l.liquid_volume()
+                   * wetted_area(l.r_inner, l.a_bottom_inner, l.a_top_inner, l.cyl_length,
+                                 min(max(z - l.z_inner_bottom, 0.0), l.fill_height)) / l.wetted_area()
                    for l, c in zip(lay, p.compartments))
 
     zs = _grid(p.z_bottom, lay[-1].z_cyl_top + lay[-1].a_top, must, dz)
