@@ -18,10 +18,11 @@ joints keep plane sections; the FE joins the stages at four patches and tied arc
 walls ovalise); both carry the propellant as the FE smears it, uniform per wetted area.
 On the first stage alone the FE (P1, 0.9 m) is 0.1 % below the stick (3.386 vs 3.389 Hz);
 on the stack 1.8 % (1.916 vs 1.951 Hz). The FE is asserted within [0.95, 1.0] of the
-stick: more than twice the measured gap, never above it. The Saturn V's FE is 22 % below
-its stick (1.264 vs 1.629 Hz; P2 1.238 Hz) and its first stage alone 10 % (7.36 vs
-8.19 Hz): that gap is not explained yet (docs/workflow.md), so its bending is not asserted
-against the stick, only recorded.
+stick: more than twice the measured gap, never above it. The Saturn V's interstages are
+tied to the stages at 16 points on each ring (bolted all round); with 4 points its FE was
+22 % below the stick (1.264 vs 1.629 Hz), with 8 4.4 %, with 16 1.1 % (1.611 Hz): the
+joints, not the stages, made the gap (docs/workflow.md). It is asserted like
+single_stick's.
 """
 from __future__ import annotations
 
@@ -129,7 +130,8 @@ def test_example_runs_end_to_end_with_payload_interface_loads(run):
 def test_saturn_v_runs_with_a_controlled_release(saturn):
     """Five engines started 1-2-2 and four hold-down arms: every case lifts off; the
     controlled release holds the arms until the pins are drawn out (15.2 cm of travel)
-    and lowers the spacecraft's axial load factor; its figures are the checked-in ones."""
+    and lowers the spacecraft's axial load factor; the first bending is within the
+    stick's bound; its figures are the checked-in ones."""
     out, _ = saturn
     summary = (out / "summary.txt").read_text()
     sep = {case: [float(x) for x in re.findall(r"arm_1\s+3\.500\s+([0-9.]+)", block)]
@@ -140,6 +142,8 @@ def test_saturn_v_runs_with_a_controlled_release(saturn):
     c = fig["cases"]
     assert c["controlled-release"]["payload_nz_max_g"] < c["instantaneous"]["payload_nz_max_g"]
     assert abs(fig["vehicle_mass_kg"] / fig["stick_mass_kg"] - 1) < 5e-3
+    # first free-free bending against the Timoshenko stick (module docstring: the same bound as single_stick's)
+    assert 0.95 <= fig["first_bending_fe_hz"] / fig["first_bending_stick_hz"] <= 1.0, fig
     df = importlib.util.spec_from_file_location("default_figures", ROOT / "benchmarks" / "default_figures.py")
     dmod = importlib.util.module_from_spec(df)
     df.loader.exec_module(dmod)
