@@ -661,24 +661,18 @@ def convective_mass(op: LiquidOperator, tm, geometry, nodes: np.ndarray, T: sp.c
     ``rb``: the model DOFs' rigid-body shape about the origin (n_dof, 6); ``carried``:
     {liquid group: ((m_x, m_x z_x), (m_y, m_y z_y))} of the convective part that something
     else already carries (the slosh pendulums of fem.slosh), left out of the lumped mass."""
-    import ufl
-    from dolfinx import fem
     from scipy.spatial import cKDTree
 
     out = sp.csr_matrix((T.shape[1], T.shape[1]))
     GR = op.Gm @ rb[:, [0, 1, 3, 4]]
     Y = op.solve(GR)
-    x = ufl.SpatialCoordinate(tm.mesh)
-    dx = ufl.Measure("dx", domain=tm.mesh, subdomain_data=tm.cell_tags)
     tree = cKDTree(nodes)
     for c, g in enumerate(op.groups):
         liq = geometry.liquids[g]
         on = (op.p_group == c).astype(float)[:, None]
         Mi = (on * GR).T @ Y                              # impulsive: [Tx, Ty, Rx, Ry] block of liquid c
-        gid = tm.volume_ids[g]
-        vol = fem.assemble_scalar(fem.form(fem.Constant(tm.mesh, 1.0) * dx(gid)))
-        zc = fem.assemble_scalar(fem.form(x[2] * dx(gid))) / vol
-        m = op.density[g] * vol
+        zc = float(op.centroids[g][2])                    # the meshed liquid's centroid and volume (liquid_operator)
+        m = op.density[g] * op.volumes[g]
         node, a = wetted_nodes(tm, liq, g, nodes, tree)
         have = (carried or {}).get(g, ((0.0, 0.0), (0.0, 0.0)))
         # per direction: the convective part and its first moment (Tx-Ry: + sum m z, Ty-Rx: - sum m z)

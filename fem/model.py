@@ -166,7 +166,7 @@ class FEModel:
         T = self.field_map()
         if self.slosh is not None:          # the slosh pendulums' DOFs after the model's (fem.slosh)
             K, M = self.slosh.augment(K, M)
-            T = sp.hstack([T, sp.csr_matrix((T.shape[0], self.slosh.n))], format="csr")
+            T = _pad_columns(T, self.slosh.n)
         return dict(K=K, M=M, dof_labels=self.dof_labels, label_dofs=self.label_dofs,
                     points=self.points, point_coords=self.point_coords.copy(), nodes=self.nodes.copy(),
                     cells=self.cells.copy(), cell_type=self.cell_type, field_map=T)
@@ -200,12 +200,16 @@ class FEModel:
             return None
         out = self.liquid.liquid_fields(self.liquid_volume_rows)
         if self.slosh is not None:
-            pad = sp.csr_matrix((0, self.slosh.n))
             for key in ("G", "volume_rows"):
-                A = sp.csr_matrix(out[key])
-                out[key] = sp.hstack([A, sp.csr_matrix((A.shape[0], self.slosh.n))], format="csr") if A.shape[0] \
-                    else sp.csr_matrix((0, A.shape[1] + pad.shape[1]))
+                out[key] = _pad_columns(out[key], self.slosh.n)
         return out
+
+
+def _pad_columns(A: sp.spmatrix, k: int) -> sp.csr_matrix:
+    """A with k zero columns appended (the slosh pendulums' DOFs): the same CSR arrays, a
+    wider shape."""
+    A = sp.csr_matrix(A)
+    return sp.csr_matrix((A.data, A.indices, A.indptr), shape=(A.shape[0], A.shape[1] + k))
 
 
 # ---- parts -------------------------------------------------------------------------------

@@ -176,7 +176,8 @@ def slosh_modes(op, gravity: float = G0, n_modes: int = 6, lateral_only: bool = 
         n_null = 0 if fs.pinned[c] else 1
         x0 = np.array([xy0[0], xy0[1], 0.0])
         R = _rigid(op, x0)
-        g_rows = np.vstack([op.G[k] @ R, fs.Gf[f] @ R])          # (k + f, 5): G r over both blocks (eq. 4)
+        GR = op.G @ R                                          # (n_p, 5): G r over the kept DOFs (eq. 4)
+        g_rows = np.vstack([GR[k], fs.Gf[f] @ R])              # (k + f, 5): over both blocks
         sigma = -1e-3 / np.sqrt(area)                         # below lambda_1 ~ xi / R, off the null mode
         want = int(n_modes) + n_null + (int(n_modes) + 4 if lateral_only else 0)
         while True:                 # axisymmetric and higher-wave modes lie between the lateral ones
@@ -206,7 +207,6 @@ def slosh_modes(op, gravity: float = G0, n_modes: int = 6, lateral_only: bool = 
                                    float(eta / Fxy[j]) if Fxy[j] > 0 else np.nan))
         # impulsive mass (p = 0 on the surface: fem.liquid's added mass), this liquid's rows
         on = (op.p_group == c).astype(float)[:, None]
-        GR = op.G @ R
         Mi = (on * GR).T @ op.solve(on * GR)                   # kg: op's H is divided by rho
         m0 = (float(Mi[0, 0]), float(Mi[1, 1]))
         z0 = (Mi[0, 4] / Mi[0, 0] if Mi[0, 0] > 0 else np.nan, -Mi[1, 3] / Mi[1, 1] if Mi[1, 1] > 0 else np.nan)
@@ -217,10 +217,11 @@ def slosh_modes(op, gravity: float = G0, n_modes: int = 6, lateral_only: bool = 
     return out
 
 
-def geometry_slosh(geometry, gravity: float = G0, n_modes: int = 6, degree: int = 2) -> dict:
+def geometry_slosh(geometry, gravity: float = G0, n_modes: int = 6, degrees=(2,)) -> dict:
     """:func:`slosh_modes` of the hydroelastic liquids of a meshed ``meshes.spec.Geometry``
     (its ``liquids``; each density scaled to the CAD volume's mass as in the structural
-    model), pressure P_``degree``, serial: {liquid group: LiquidSlosh}."""
+    model), with pressure P_k for each k of ``degrees`` on the same mesh (read once), serial:
+    {k: {liquid group: LiquidSlosh}}."""
     from mpi4py import MPI
 
     from .liquid import geometry_liquid_operator
@@ -229,11 +230,14 @@ def geometry_slosh(geometry, gravity: float = G0, n_modes: int = 6, degree: int 
     if not geometry.liquids:
         raise InputError(f"{geometry.name}: no hydroelastic liquid to slosh (a smeared liquid has no free surface)")
     tm = read_mesh_parts(geometry.msh_path, MPI.COMM_SELF, tuple(geometry.shells), liquids=tuple(geometry.liquids))[2]
-    op = geometry_liquid_operator(tm, geometry, degree)
-    try:
-        return slosh_modes(op, gravity, n_modes)
-    finally:
-        op.destroy()
+    out = {}
+    for degree in degrees:
+        op = geometry_liquid_operator(tm, geometry, degree)
+        try:
+            out[degree] = slosh_modes(op, gravity, n_modes)
+        finally:
+            op.destroy()
+    return out
 
 
 # ---- the slosh modes in a structural model: tank-referenced pendulums ----------------------------

@@ -5,6 +5,8 @@ dolfinx. SI units (m, kg, N, Pa).
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -156,10 +158,7 @@ def chain_component(name, nodes, first_index=0, **section) -> Component:
 
 
 # ----------------------------------------------------------------------------- rigid mass
-from dataclasses import dataclass as _dataclass  # noqa: E402
-
-
-@_dataclass
+@dataclass
 class RigidMass:
     """A rigid body joined to the rest at one point (``[model.component.<name>] type =
     "rigid_mass"``): ``point`` (its name, the joint's), ``at`` (m), ``mass`` (kg), ``cg``
@@ -226,7 +225,7 @@ def rigid_mass_cb(params: RigidMass, name: str = "rigid_mass"):
 
 
 # ----------------------------------------------------------------------------- rigid ground
-@_dataclass
+@dataclass
 class RigidGround:
     """Immovable ground as the pad (``[model.pad] type = "rigid_ground"``): named points
     (``points = {name: (x, y, z)}``, m) that never move, for the posts to hold the vehicle

@@ -42,11 +42,11 @@ def tank_slosh(scenario, g_eff: float, n_modes: int, progress=print) -> dict:
     """{component: {liquid: (LiquidSlosh at P2, LiquidSlosh at P1)}} of the FE components with
     hydroelastic liquids of ``scenario`` (a lift-off Scenario or a ModelConfig, as a barge
     scenario's model view); InputError when there is none."""
+    from liftoff.config.model import ModelConfig
     from liftoff.fem.slosh import geometry_slosh
 
     from .fe_source import geometry
-
-    from liftoff.config.model import ModelConfig
+    from .pipeline import given_model
 
     # a lift-off Scenario: the model stages are shared by its cases (workflows.pipeline); or a ModelConfig
     model = scenario if isinstance(scenario, ModelConfig) else scenario.cases[0].model
@@ -55,18 +55,15 @@ def tank_slosh(scenario, g_eff: float, n_modes: int, progress=print) -> dict:
                          "come from the tanks' liquid meshes")
     out = {}
     with tempfile.TemporaryDirectory(prefix="liftoff-slosh-") as work:
-        from .pipeline import given_model
-
         for name, comp in model.components.items():
-            if comp.type in ("nastran", "stick") or comp.nastran is not None or given_model(comp) is not None:
+            if comp.nastran is not None or given_model(comp) is not None:
                 continue                                   # imported or given, not meshed: no liquid mesh
             progress(f"liftoff slosh: meshing {name} ...")
             geo = geometry(comp, Path(work) / name)
             if not geo.liquids:
                 continue
-            p2 = geometry_slosh(geo, g_eff, n_modes, degree=2)
-            p1 = geometry_slosh(geo, g_eff, n_modes, degree=1)
-            out[name] = {g: (p2[g], p1.get(g)) for g in p2}
+            by_degree = geometry_slosh(geo, g_eff, n_modes, degrees=(2, 1))
+            out[name] = {g: (s, by_degree[1].get(g)) for g, s in by_degree[2].items()}
     if not out:
         raise InputError("no FE component of the scenario has a hydroelastic liquid ([model] liquid = "
                          "\"hydroelastic\"): nothing sloshes")
