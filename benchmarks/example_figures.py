@@ -75,11 +75,11 @@ def _dome(z: float, zc: float, a: float, r: float) -> float:
 
 
 def _timoshenko(EI: float, kGA: float, L: float) -> np.ndarray:
-    """Planar Timoshenko beam element (w, theta at both ends), phi = 12 EI / (k G A L^2)."""
-    ph = 12 * EI / (kGA * L * L)
-    c = EI / ((1 + ph) * L ** 3)
-    return c * np.array([[12, 6 * L, -12, 6 * L], [6 * L, (4 + ph) * L * L, -6 * L, (2 - ph) * L * L],
-                         [-12, -6 * L, 12, -6 * L], [6 * L, (2 - ph) * L * L, -6 * L, (4 + ph) * L * L]])
+    """Planar Timoshenko beam element (w, theta at both ends), phi = 12 EI / (k G A L^2):
+    liftoff.core.beam's bending plane."""
+    from liftoff.core.beam import bending_stiffness
+
+    return bending_stiffness(EI, L, 12 * EI / (kGA * L * L))
 
 
 class _Stick:

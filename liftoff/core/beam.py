@@ -72,7 +72,9 @@ def _axes(x1: np.ndarray, x2: np.ndarray, vref) -> tuple[float, np.ndarray]:
     return L, np.vstack([ex, ey, ez])
 
 
-def _bending(EI: float, L: float, phi: float) -> np.ndarray:
+def bending_stiffness(EI: float, L: float, phi: float = 0.0) -> np.ndarray:
+    """4 x 4 stiffness of one bending plane (w, theta at both ends), phi = 12 E I / (G A_s L^2)
+    (0: Euler-Bernoulli)."""
     return EI / ((1 + phi) * L ** 3) * np.array([
         [12, 6 * L, -12, 6 * L], [6 * L, (4 + phi) * L ** 2, -6 * L, (2 - phi) * L ** 2],
         [-12, -6 * L, 12, -6 * L], [6 * L, (2 - phi) * L ** 2, -6 * L, (4 + phi) * L ** 2]])
@@ -114,8 +116,8 @@ def beam_element(x1, x2, E: float, G: float, section: Section, rho: float, vref=
     m[np.ix_([3, 9], [3, 9])] = rho * (s.Iy + s.Iz) * L / 6 * np.array([[2, 1], [1, 2]])
     flip = np.diag([1, -1, 1, -1])                   # x-z plane: theta_y = -dw/dx
     xy, xz = [1, 5, 7, 11], [2, 4, 8, 10]
-    k[np.ix_(xy, xy)] = _bending(E * s.Iz, L, phi_y)
-    k[np.ix_(xz, xz)] = flip @ _bending(E * s.Iy, L, phi_z) @ flip
+    k[np.ix_(xy, xy)] = bending_stiffness(E * s.Iz, L, phi_y)
+    k[np.ix_(xz, xz)] = flip @ bending_stiffness(E * s.Iy, L, phi_z) @ flip
     m[np.ix_(xy, xy)] = _translational_mass(rho * s.A, L, phi_y) + (_rotary_mass(rho * s.Iz, L, phi_y) if rotary else 0)
     m[np.ix_(xz, xz)] = flip @ (_translational_mass(rho * s.A, L, phi_z)
                                 + (_rotary_mass(rho * s.Iy, L, phi_z) if rotary else 0)) @ flip
@@ -167,4 +169,4 @@ def i_section(h: float, b: float, tw: float, tf: float) -> Section:
                    (2 * b * tf ** 3 + h * tw ** 3) / 3, 5 / 6 * 2 * b * tf, h * tw)
 
 
-__all__ = ["Section", "beam_element", "tube", "rectangle", "i_section"]
+__all__ = ["Section", "beam_element", "bending_stiffness", "tube", "rectangle", "i_section"]
