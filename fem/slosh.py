@@ -293,12 +293,13 @@ class SloshPendulums:
         return Ka, Ma
 
 
-def _ring_row(node: np.ndarray, area: np.ndarray, xyz: np.ndarray, z_target: float, d: np.ndarray,
-              T: sp.csr_matrix, what: str) -> tuple[sp.csr_matrix, np.ndarray]:
+def _ring_row(area: np.ndarray, xyz: np.ndarray, z_target: float, d: np.ndarray, Txy: tuple,
+              what: str) -> tuple[sp.csr_matrix, np.ndarray]:
     """Row r (1, n_dof) of the wall's displacement along (d, 0) at height ``z_target``: the
     area-weighted means of two rings of wetted nodes (bands at z_target +- a sixth of the
     wetted height, kept inside it), interpolated (or extrapolated) linearly to z_target; and
-    the point (x, y, z_target) whose rigid-body displacement r returns exactly."""
+    the point (x, y, z_target) whose rigid-body displacement r returns exactly. ``Txy``: the
+    field map's x and y rows of the wetted nodes (at ``xyz``, nodal areas ``area``)."""
     z = xyz[:, 2]
     lo, hi = float(z.min()), float(z.max())
     span = hi - lo
@@ -319,8 +320,7 @@ def _ring_row(node: np.ndarray, area: np.ndarray, xyz: np.ndarray, z_target: flo
     za, zb = (float(w @ z) for w in rings)
     t = (z_target - za) / (zb - za)
     w = (1 - t) * rings[0] + t * rings[1]                   # sum w = 1, sum w z = z_target
-    Tx, Ty = sp.csr_matrix(T)[3 * node], sp.csr_matrix(T)[3 * node + 1]
-    r = sp.csr_matrix(w[None, :]) @ (d[0] * Tx + d[1] * Ty)
+    r = sp.csr_matrix(w[None, :]) @ (d[0] * Txy[0] + d[1] * Txy[1])
     r.eliminate_zeros()
     return sp.csr_matrix(r), np.array([w @ xyz[:, 0], w @ xyz[:, 1], z_target])
 
@@ -335,6 +335,7 @@ def slosh_pendulums(tm, geometry, nodes: np.ndarray, T: sp.csr_matrix, degree: i
 
     op = geometry_liquid_operator(tm, geometry, degree)
     tree = cKDTree(nodes)
+    Tc = sp.csr_matrix(T)
     rows, names, liquid, mass, k, dirs, pos, freq, grav, wave = [], [], [], [], [], [], [], [], {}, []
     try:
         for g, liq in geometry.liquids.items():
@@ -344,10 +345,11 @@ def slosh_pendulums(tm, geometry, nodes: np.ndarray, T: sp.csr_matrix, degree: i
                 continue
             grav[g] = s.gravity
             node, area = wetted_nodes(tm, liq, g, nodes, tree)
+            Txy = (Tc[3 * node], Tc[3 * node + 1])            # the wetted nodes' x, y rows, once per liquid
             for j, md in enumerate(s.modes, 1):
                 d = np.array(md.direction, float)
                 z_bob = md.height - s.pendulum_length(md)
-                r, p = _ring_row(node, area, nodes[node], z_bob, d, T, f"liquid {g!r} slosh mode {j}")
+                r, p = _ring_row(area, nodes[node], z_bob, d, Txy, f"liquid {g!r} slosh mode {j}")
                 rows.append(r)
                 names.append(f"{g}:{j}")
                 liquid.append(g)
