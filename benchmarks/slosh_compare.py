@@ -1,6 +1,6 @@
 """The default run with the liquids' sloshing part three ways (issue 25): ``[model]
-convective = "wall"`` (the default: lumped rigidly on the wetted wall), ``"free"`` (left
-out) and ``"slosh"`` (the slosh modes as tank-referenced pendulums, fem.slosh). Writes
+convective = "slosh"`` (the default: the slosh modes as tank-referenced pendulums,
+fem.slosh), ``"wall"`` (lumped rigidly on the wetted wall) and ``"free"`` (left out). Writes
 docs/figures/slosh_compare.json, rendered into README.md by benchmarks/default_figures.py.
 
     .venv/bin/python benchmarks/slosh_compare.py [--cache DIR] [--json FILE]
@@ -19,7 +19,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
 JSON = ROOT / "docs" / "figures" / "slosh_compare.json"
-VARIANTS = ("wall", "free", "slosh")
+VARIANTS = ("slosh", "wall", "free")
 
 
 def variant_figures(conv: str, cache: Path | None) -> dict:

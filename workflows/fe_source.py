@@ -56,6 +56,8 @@ def build_component(comp: ComponentModel, model: ModelConfig, workdir: Path):
     for vol, mat in component_materials(model, comp.name).items():   # those in the stage's cache key
         if vol in geo.volumes:
             geo.volumes[vol] = mat
+    for liq in geo.liquids.values():      # the slosh modes' g_eff is the model's, [model] slosh_gravity
+        liq.gravity = model.slosh_gravity
     from liftoff.fem.parallel import fe_comm
 
     fe = build_model(geo, model.degree, comm=fe_comm(world()), convective=model.convective)

@@ -102,7 +102,9 @@ def _component_key(model: ModelConfig, comp: ComponentModel) -> dict:
     return {"source": model.source, "name": comp.name, "mesh_size": comp.mesh_size, "degree": model.degree,
             "builder": {type(comp.builder).__name__: asdict(comp.builder)},
             "materials": {vol: asdict(m) for vol, m in component_materials(model, comp.name).items()},
-            **({"convective": model.convective} if getattr(comp.builder, "liquid", "") == "hydroelastic" else {})}
+            **({"convective": model.convective} if getattr(comp.builder, "liquid", "") == "hydroelastic" else {}),
+            **({"slosh_gravity": model.slosh_gravity}
+               if model.convective == "slosh" and getattr(comp.builder, "liquid", "") == "hydroelastic" else {})}
 
 
 def build_component(model: ModelConfig, comp: ComponentModel, workdir: Path) -> tuple[Component, dict]:

@@ -448,12 +448,13 @@ def bulge_modes(cbs: dict, threshold: float = 0.25) -> list[dict]:
     return rows
 
 
-def slosh_summary(cbs: dict, rows_env: list) -> list[dict]:
+def slosh_summary(cbs: dict, rows_env: list, components: dict | None = None) -> list[dict]:
     """Each liquid's slosh pendulums (``convective = "slosh"``) from its component's CB model:
     the lowest fixed-interface mode in which the liquid's pendulums carry a quarter of their
     largest force per unit modal coordinate (the first slosh mode), the peak force of its
     pendulums and the largest crest of one of its modes over the cases (``rows_env``: the
-    envelope rows)."""
+    envelope rows); with ``components`` (reduction.Component by name), the g_eff (m/s^2) of
+    the liquid's slosh modes."""
     out = []
     for name, cb in cbs.items():
         rec = {it.name: it for it in getattr(cb, "recovery", ())}
@@ -473,6 +474,9 @@ def slosh_summary(cbs: dict, rows_env: list) -> list[dict]:
                         "peak_n": None if big is None else max(abs(big["max"]), abs(big["min"])),
                         "peak_item": None if big is None else big["item"],
                         "peak_wave_m": max(waves) if waves else None})
+            sd = getattr((components or {}).get(name), "slosh", None)
+            if sd is not None and liquid in sd.liquid:
+                out[-1]["g_eff"] = float(sd.gravity[sd.liquid.index(liquid)])
     return out
 
 
@@ -1005,13 +1009,14 @@ def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[di
         for b in bulges:
             lines.append(f"    {b['tank']:<24} {b['hz']:7.2f} Hz (mode {b['mode']}), dV {b['dv_m3']:.3g} m^3, axial "
                          f"effective liquid mass {b['m_eff_kg'] / 1e3:.0f} t of {b['m_liquid_kg'] / 1e3:.0f} t")
-    slosh = slosh_summary(getattr(stack, "cbs", {}), rows_env)
+    slosh = slosh_summary(getattr(stack, "cbs", {}), rows_env, getattr(stack, "components", {}))
     if slosh:
         lines.append("  slosh pendulums (convective = 'slosh'; first slosh mode fixed-interface, peak force over cases):")
         for r in slosh:
+            g = "" if r.get("g_eff") is None else f" at g_eff {r['g_eff']:.4g} m/s^2"
             pk = "" if r["peak_n"] is None else f", peak slosh force {r['peak_n'] / 1e3:.4g} kN ({r['peak_item']})"
             pk += "" if r.get("peak_wave_m") is None else f", largest crest of one mode {r['peak_wave_m']:.3g} m"
-            lines.append(f"    {r['liquid']:<24} {r['hz']:7.3f} Hz (mode {r['mode']}){pk}")
+            lines.append(f"    {r['liquid']:<24} {r['hz']:7.3f} Hz (mode {r['mode']}){g}{pk}")
     lines += stage_time_lines(stage_times, wall)
     return "\n".join(lines)
 

@@ -52,10 +52,15 @@ STICK_ELEMENT = 4.0         # m, default beam element length of the stick source
 MAX_ELEMENTS = {"fe": 1_000_000, "stick": 2_000}
 
 _MODEL = {"source", "mesh_size", "degree", "zeta", "vehicle", "pad", "component", "materials", "system", "stick",
-          "walls", "max_elements", "liquid", "convective", "joint"}
+          "walls", "max_elements", "liquid", "convective", "slosh_gravity", "joint"}
 WALLS = ("solid", "shell")
 LIQUIDS = ("smeared", "hydroelastic")     # [model] liquid: the core stage's propellants (meshes.tank)
 CONVECTIVE = ("wall", "free", "slosh")    # [model] convective: a hydroelastic liquid's sloshing part (fem.liquid, fem.slosh)
+#: [model] slosh_gravity (m/s^2): the apparent axial acceleration g_eff of the slosh modes
+#: (1 g on the pad); the range a launch vehicle's axial acceleration spans (0.1 g coasting
+#: to 10 g), beyond which the rigid-tank slosh frequencies sqrt(g_eff) mean nothing here
+G0 = 9.80665
+SLOSH_GRAVITY_RANGE = (0.1 * G0, 10.0 * G0)
 _VEHICLE = {"mesh_size", "params"}
 _COMP = {"type", "mesh_size", "n_modes", "f_max", "params", "nastran"}
 _JOINT = {"name", "components"}
@@ -142,7 +147,8 @@ class ModelConfig:
     materials: dict[str, Material]
     system: SystemModel
     max_elements: int = MAX_ELEMENTS["fe"]
-    convective: str = "wall"      # hydroelastic liquids: their sloshing part on the wetted wall, or "free"
+    convective: str = "wall"      # hydroelastic liquids' sloshing part: "slosh" pendulums, on the "wall" or "free"
+    slosh_gravity: float = G0     # convective = "slosh": g_eff of the slosh modes, m/s^2
     vehicle: tuple[str, ...] = ()      # the vehicle's components, in assembly order
     joints: tuple[Joint, ...] = ()
 
@@ -372,9 +378,14 @@ def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig
         raise (where / "liquid").error(f"must be one of {', '.join(LIQUIDS)}, got {liquid!r}")
     if source == "stick" and "liquid" in m:
         raise (where / "liquid").error("[model] liquid is for source = \"fe\" (the stick model has lumped masses)")
-    convective = string(where / "convective", m.get("convective", "wall"))
-    if convective not in CONVECTIVE:
+    convective = string(where / "convective", m["convective"]) if "convective" in m else None
+    if convective is not None and convective not in CONVECTIVE:
         raise (where / "convective").error(f"must be one of {', '.join(CONVECTIVE)}, got {convective!r}")
+    slosh_gravity = number(where / "slosh_gravity", m.get("slosh_gravity", G0), positive=True)
+    if not SLOSH_GRAVITY_RANGE[0] <= slosh_gravity <= SLOSH_GRAVITY_RANGE[1]:
+        raise (where / "slosh_gravity").error(
+            f"must lie in [{SLOSH_GRAVITY_RANGE[0]:.4g}, {SLOSH_GRAVITY_RANGE[1]:.4g}] m/s^2 (0.1 to 10 g), "
+            f"got {slosh_gravity!r}")
     if source == "fe":
         ctx = {"layout": layout, "walls": walls, "liquid": liquid, "base": base}
         builders = _fe_builders(where, ctx, sel, sizes, names)
@@ -395,11 +406,19 @@ def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig
                             integer(where / "system" / k, v, 1) if "n_modes" in k else
                             number(where / "system" / k, v, positive=True) for k, v in s.items()})
     max_elements = integer(where / "max_elements", m.get("max_elements", MAX_ELEMENTS[source]), 1)
-    if convective == "slosh" and not any(getattr(c.builder, "liquid", "") == "hydroelastic"
-                                         for c in components.values()):
+    hydroelastic = any(getattr(c.builder, "liquid", "") == "hydroelastic" for c in components.values())
+    if convective == "slosh" and not hydroelastic:
         raise (where / "convective").error('"slosh" needs a hydroelastic liquid, and no component has one '
                                            '([model] liquid = "hydroelastic" or a component\'s own liquid); '
                                            "it would be silently ignored")
+    if "slosh_gravity" in m and (convective or "slosh") != "slosh":
+        raise (where / "slosh_gravity").error(f'is for convective = "slosh" (this model has {convective!r}); '
+                                              "it would be silently ignored")
+    if "slosh_gravity" in m and not hydroelastic:
+        raise (where / "slosh_gravity").error("needs a hydroelastic liquid, and no component has one; "
+                                              "it would be silently ignored")
+    # the default: the liquids' slosh modes where there are hydroelastic liquids (issue 25)
+    convective = convective or ("slosh" if hydroelastic else "wall")
     return ModelConfig(source, degree, zeta, layout, components,
                        _materials(where / "materials", m.get("materials", {}), source), system, max_elements,
-                       convective, names, joints)
+                       convective, slosh_gravity, names, joints)

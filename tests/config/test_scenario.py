@@ -309,10 +309,12 @@ def test_liquid_option_reaches_the_core_tank(base):
 
 
 def test_convective_option(base):
-    """[model] convective: a hydroelastic liquid's sloshing part lumped on the wetted wall
-    ("wall", the default), left free laterally ("free") or hung as slosh pendulums ("slosh",
-    which needs a hydroelastic liquid); anything else is one line."""
+    """[model] convective: a hydroelastic liquid's sloshing part hung as slosh pendulums
+    ("slosh", the default where there is a hydroelastic liquid), lumped on the wetted wall
+    ("wall") or left free laterally ("free"); anything else is one line."""
     d = copy.deepcopy(base)
+    assert parse_scenario(d, "s.toml").cases[0].model.convective == "slosh"
+    d["model"]["convective"] = "wall"
     assert parse_scenario(d, "s.toml").cases[0].model.convective == "wall"
     d["model"]["convective"] = "free"
     assert parse_scenario(d, "s.toml").cases[0].model.convective == "free"
@@ -322,8 +324,33 @@ def test_convective_option(base):
     with pytest.raises(InputError, match=r"model\.convective: must be one of wall, free, slosh") as e:
         parse_scenario(d, "s.toml")
     assert "\n" not in str(e.value)
-    # "slosh" without a hydroelastic liquid would be silently ignored: refused
+    # "slosh" without a hydroelastic liquid would be silently ignored: refused; left out, the
+    # key is moot there
     d["model"]["convective"], d["model"]["liquid"] = "slosh", "smeared"
     with pytest.raises(InputError, match=r'model\.convective: "slosh" needs a hydroelastic liquid') as e:
         parse_scenario(d, "s.toml")
     assert "\n" not in str(e.value)
+    del d["model"]["convective"]
+    assert parse_scenario(d, "s.toml").cases[0].model.convective == "wall"
+
+
+def test_slosh_gravity_option(base):
+    """[model] slosh_gravity: the slosh modes' g_eff (m/s^2, default 1 g on the pad), in the
+    range 0.1 to 10 g; refused where it would be ignored (no slosh modes)."""
+    d = copy.deepcopy(base)
+    assert parse_scenario(d, "s.toml").cases[0].model.slosh_gravity == pytest.approx(9.80665, abs=0)
+    d["model"]["slosh_gravity"] = 2.5 * 9.80665
+    assert parse_scenario(d, "s.toml").cases[0].model.slosh_gravity == pytest.approx(2.5 * 9.80665, abs=0)
+    for bad, msg in ((0.5, r"must lie in \[0\.9807, 98\.07\] m/s\^2"), (-9.8, "must be positive"),
+                     ("1g", "expected a number")):
+        d["model"]["slosh_gravity"] = bad
+        with pytest.raises(InputError, match=r"model\.slosh_gravity: " + msg) as e:
+            parse_scenario(d, "s.toml")
+        assert "\n" not in str(e.value)
+    d["model"]["slosh_gravity"], d["model"]["convective"] = 9.8, "wall"
+    with pytest.raises(InputError, match=r'model\.slosh_gravity: is for convective = "slosh"'):
+        parse_scenario(d, "s.toml")
+    del d["model"]["convective"]
+    d["model"]["liquid"] = "smeared"
+    with pytest.raises(InputError, match=r"model\.slosh_gravity: needs a hydroelastic liquid"):
+        parse_scenario(d, "s.toml")
