@@ -7,9 +7,10 @@ For each component whose geometry has hydroelastic liquids (``[model] liquid =
 the modes: pressure P2 (reported) and P1 on the same mesh, whose difference in the first
 mode says how converged the reported figures are. ``--csv FILE`` writes the spring-mass
 and pendulum table (SI units, one row per mode and the impulsive mass per direction),
-atomically. The modes are those of a rigid tank at ``--g-eff``; ``[model] convective =
-"slosh"`` puts the same modes (at each liquid's ``gravity``) into the run's structural model
-as pendulums (fem.slosh.SloshPendulums; docs/hydro.md).
+atomically. The modes are those of a rigid tank at ``--g-eff`` (default: the scenario's
+``[model] slosh_gravity``, 1 g on the pad); ``[model] convective = "slosh"`` (the default)
+puts the same modes, at ``slosh_gravity``, into the run's structural model as pendulums
+(fem.slosh.SloshPendulums; docs/hydro.md).
 """
 from __future__ import annotations
 
@@ -25,9 +26,9 @@ COLUMNS = ("component", "liquid", "kind", "mode", "frequency_Hz", "mass_kg", "di
            "height_m", "stiffness_N_per_m", "pendulum_length_m", "g_eff_m_per_s2", "wave_height_per_force_m_per_N")
 
 
-def check_args(g_eff: float, n_modes: int, csv: Path | None) -> None:
-    """Everything the run needs, before any meshing."""
-    if not (np.isfinite(g_eff) and g_eff > 0):
+def check_args(g_eff: float | None, n_modes: int, csv: Path | None) -> None:
+    """Everything the run needs, before any meshing (``g_eff`` None: the scenario's)."""
+    if g_eff is not None and not (np.isfinite(g_eff) and g_eff > 0):
         raise InputError(f"--g-eff must be > 0 m/s^2 (got {g_eff!r})")
     if n_modes < 1:
         raise InputError(f"--modes must be >= 1 (got {n_modes!r})")
@@ -130,8 +131,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                     "spring stiffness and pendulum length per mode, and the impulsive mass. SI units.")
     p.add_argument("scenario", nargs="?", type=Path, default=None, metavar="SCENARIO",
                    help="scenario file (default: the embedded default)")
-    p.add_argument("--g-eff", type=float, default=9.80665, metavar="G",
-                   help="apparent axial acceleration, m/s^2 [9.80665: on the pad]")
+    p.add_argument("--g-eff", type=float, default=None, metavar="G",
+                   help="apparent axial acceleration, m/s^2 [the scenario's [model] slosh_gravity: "
+                        "9.80665, on the pad]")
     p.add_argument("--modes", type=int, default=4, metavar="N", help="lateral modes per liquid [4]")
     p.add_argument("--csv", type=Path, default=None, metavar="FILE",
                    help="write the spring-mass / pendulum table here (SI units)")
@@ -146,9 +148,12 @@ def _run(args: argparse.Namespace) -> int:
 
     check_args(args.g_eff, args.modes, args.csv)
     if args.scenario is not None and scenario_kind(args.scenario) == "barge":    # kind = "barge": its model view
-        result = tank_slosh(load_barge(args.scenario).cases[0].model.model_config(), args.g_eff, args.modes)
+        scenario = load_barge(args.scenario).cases[0].model.model_config()
+        model = scenario
     else:
-        result = tank_slosh(load_scenario(args.scenario), args.g_eff, args.modes)
+        scenario = load_scenario(args.scenario)
+        model = scenario.cases[0].model
+    result = tank_slosh(scenario, model.slosh_gravity if args.g_eff is None else args.g_eff, args.modes)
     print(summary(result))
     if args.csv is not None:
         write_text(args.csv, csv_text(result))

@@ -73,3 +73,28 @@ def test_a_barge_scenario_is_read_as_its_model(tmp_path, capsys):
     assert main(["slosh", str(path)]) == 2
     err = capsys.readouterr().err
     assert "nothing sloshes" in err and len(err.strip().splitlines()) == 1
+
+
+def test_g_eff_defaults_to_the_scenarios_slosh_gravity(tmp_path, capsys):
+    """Without --g-eff the modes are at the scenario's [model] slosh_gravity (what a run's
+    pendulums use); omega^2 = g_eff lambda on the same mesh, so the frequencies scale as
+    sqrt(g_eff) to the eigensolver's accuracy (1e-8 in tests/fem/test_slosh.py; 1e-6 here)."""
+    two = tmp_path / "two.csv"
+    one = tmp_path / "one.csv"
+    (tmp_path / "a").mkdir()
+    assert main(["slosh", str(_scenario(tmp_path / "a", f"[model]\nslosh_gravity = {2 * G!r}\n")), "--modes", "1",
+                 "--csv", str(two)]) == 0
+    assert main(["slosh", str(_scenario(tmp_path, f"[model]\nslosh_gravity = {2 * G!r}\n")), "--modes", "1",
+                 "--g-eff", str(G), "--csv", str(one)]) == 0
+    capsys.readouterr()
+
+    def slosh(path):
+        rows = [r for r in csv.DictReader(path.read_text().splitlines()[1:]) if r["kind"] == "slosh"]
+        return {(r["liquid"], r["mode"]): r for r in rows}
+
+    a, b = slosh(two), slosh(one)
+    assert a.keys() == b.keys() and len(a) == 2
+    for k in a:
+        assert float(a[k]["g_eff_m_per_s2"]) == 2 * G and float(b[k]["g_eff_m_per_s2"]) == G
+        assert float(a[k]["frequency_Hz"]) == pytest.approx(np.sqrt(2) * float(b[k]["frequency_Hz"]), rel=1e-6)
+        assert float(a[k]["mass_kg"]) == pytest.approx(float(b[k]["mass_kg"]), rel=1e-6)   # masses do not depend on g
