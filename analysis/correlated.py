@@ -13,6 +13,13 @@ the hull of the cases' hulls (the hull of a union is the hull of the union of th
 Each hull vertex is a sample of one case at one time, so it is a load the structure saw;
 a straight hull edge between two vertices is the (conservative) convex combination.
 
+A hull of a finely stepped run traces smooth curves with thousands of vertices (the
+default's: 6,522 in all). :func:`simplify` keeps a subset of them (Douglas-Peucker on the
+closed convex polygon, in coordinates scaled by each axis's range): the extremes of each
+axis (the single-component envelopes) always, and every dropped vertex lies within
+``tolerance`` of that range outside the kept polygon (``CorrelatedHull.shortfall`` says by
+how much at most), so the kept vertices are still loads the structure saw.
+
 numpy/scipy only.
 """
 from __future__ import annotations
@@ -80,6 +87,44 @@ class CorrelatedHull:
     y: np.ndarray
     time: np.ndarray
     case: list[str]
+    shortfall: float = 0.0       # largest distance of a dropped vertex outside the kept polygon / axis range
+
+
+def simplify(h: CorrelatedHull, tolerance: float) -> CorrelatedHull:
+    """``h`` with the fewest vertices :func:`simplify`'s Douglas-Peucker keeps: the extremes
+    of x and y, and any vertex farther than ``tolerance`` (a fraction of each axis's range)
+    outside the polygon of those kept; ``tolerance`` 0 keeps every vertex."""
+    if not (np.isfinite(tolerance) and tolerance >= 0):
+        raise InputError(f"correlated loads: simplification tolerance must be >= 0 (got {tolerance!r})")
+    n = h.x.size
+    if n <= 4 or tolerance == 0:
+        return h
+    span = np.array([np.ptp(h.x), np.ptp(h.y)])
+    pts = np.column_stack([h.x, h.y]) / np.where(span > 0, span, 1.0)
+    keep = np.zeros(n, bool)
+    keep[[np.argmin(h.x), np.argmax(h.x), np.argmin(h.y), np.argmax(h.y)]] = True
+    worst = 0.0
+    anchors = np.flatnonzero(keep)
+    stack = [(int(a), int(b)) for a, b in zip(anchors, np.roll(anchors, -1))]
+    while stack:
+        a, b = stack.pop()
+        idx = (np.arange(a + 1, b if b > a else b + n) % n)
+        if idx.size == 0:
+            continue
+        d = pts[b] - pts[a]
+        rel = pts[idx] - pts[a]
+        # distance to the chord's segment: at least the vertex's distance to the kept polygon
+        t = np.clip(rel @ d / max(float(d @ d), 1e-300), 0.0, 1.0)
+        dist = np.hypot(*(rel - t[:, None] * d).T)
+        j = int(np.argmax(dist))
+        if dist[j] > tolerance:
+            keep[idx[j]] = True
+            stack += [(a, int(idx[j])), (int(idx[j]), b)]
+        else:
+            worst = max(worst, float(dist[j]))
+    k = np.flatnonzero(keep)
+    return CorrelatedHull(h.interface, h.pair, h.x_name, h.y_name, h.x_unit, h.y_unit, h.x[k], h.y[k], h.time[k],
+                          [h.case[i] for i in k], max(h.shortfall, worst))
 
 
 def correlated(time: np.ndarray, interfaces: Iterable, case: str) -> list[CorrelatedHull]:

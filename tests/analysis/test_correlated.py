@@ -67,3 +67,42 @@ def test_degenerate_and_bad_histories():
     rows = cl.rows(cl.correlated(np.linspace(0, 1, 50), [_itf(np.linspace(0, 1, 50), 4)], "c"))
     assert {r["pair"] for r in rows} == {"axial-bending", "shear-torque"}
     assert {(r["x_unit"], r["y_unit"]) for r in rows} == {("N", "N m")}
+
+
+def _segment_distance(px, py, hx, hy):
+    """Distance of each point (px, py) to the closed polygon (hx, hy)'s boundary."""
+    ax, ay = hx, hy
+    bx, by = np.roll(hx, -1), np.roll(hy, -1)
+    dx, dy = bx - ax, by - ay
+    rx, ry = px[:, None] - ax[None, :], py[:, None] - ay[None, :]
+    t = np.clip((rx * dx + ry * dy) / np.maximum(dx * dx + dy * dy, 1e-300), 0, 1)
+    return np.hypot(rx - t * dx, ry - t * dy).min(axis=1)
+
+
+@pytest.mark.parametrize("tol", [1e-2, 1e-3, 1e-4])
+def test_simplified_hull_keeps_samples_extremes_and_the_stated_shortfall(tol):
+    """The simplified hull's vertices are a subset of the hull's (loads the structure saw),
+    keep each axis's extremes exactly, and every sample lies inside it or within the
+    tolerance (of each axis's range) outside, which the hull states as its shortfall; the
+    check is independent: each sample's distance to the kept polygon, by brute force."""
+    t = np.linspace(0, 20, 20001)
+    itf = _itf(t, 5)
+    full = cl.correlated(t, [itf], "nominal")
+    for h in full:
+        s = cl.simplify(h, tol)
+        assert s.x.size < h.x.size and s.x.size >= 4
+        assert set(zip(s.x, s.y, s.time)) <= set(zip(h.x, h.y, h.time))
+        assert (s.x.max(), s.x.min(), s.y.max(), s.y.min()) == (h.x.max(), h.x.min(), h.y.max(), h.y.min())
+        x = cl.pair_values(LABELS, itf.values, h.x_name) / np.ptp(h.x)
+        y = cl.pair_values(LABELS, itf.values, h.y_name) / np.ptp(h.y)
+        sx, sy = s.x / np.ptp(h.x), s.y / np.ptp(h.y)
+        ex, ey = np.roll(sx, -1) - sx, np.roll(sy, -1) - sy
+        outside = np.any(ex[:, None] * (y[None, :] - sy[:, None]) - ey[:, None] * (x[None, :] - sx[:, None]) < 0,
+                         axis=0)
+        d = _segment_distance(x[outside], y[outside], sx, sy)
+        assert 0 <= s.shortfall <= tol
+        assert d.size == 0 or d.max() <= s.shortfall * (1 + 1e-9) + 1e-12
+    # tolerance 0 keeps the hull; a bad tolerance is refused
+    assert cl.simplify(full[0], 0.0).x.size == full[0].x.size
+    with pytest.raises(InputError, match="tolerance"):
+        cl.simplify(full[0], -1.0)
