@@ -48,6 +48,15 @@ class Aggregate:
         self.run_mx, self.run_mn = Running(n), Running(n)
         self.top_mx, self.top_mn = Largest(n, self.r), Largest(n, self.r)
         self.srs_items = s.srs_items
+        # correlated loads (analysis.correlated): the support functions' envelope over every
+        # case and, over the generated ones, their statistics per direction
+        self.support_items = s.support_items
+        if s.support is not None:
+            self.support_env = np.full(np.shape(s.support), -np.inf)
+            self.support_run = Running(np.shape(s.support))
+            self.support_top = Largest(int(np.size(s.support)), self.r)
+        else:
+            self.support_env = None
         if s.srs is not None:
             self.srs_env = np.full(s.srs.shape, -np.inf)
             self.srs_case = np.full(s.srs.shape, "", dtype=object)
@@ -59,7 +68,9 @@ class Aggregate:
         """Feed one :class:`~.campaign.CaseSummary`."""
         if self.items is None:
             self._init(s)
-        if s.items != self.items or s.srs_items != self.srs_items:
+        if s.items != self.items or s.srs_items != self.srs_items or s.support_items != self.support_items \
+                or (s.support is None) != (self.support_env is None) \
+                or (s.support is not None and np.shape(s.support) != self.support_env.shape):
             raise InputError(f"case {s.name}: its recovery items differ from those of the first case")
         up = s.mx > self.mx
         self.mx[up], self.t_mx[up] = s.mx[up], s.t_mx[up]
@@ -75,6 +86,8 @@ class Aggregate:
             better = s.srs > self.srs_env
             self.srs_env[better] = s.srs[better]
             self.srs_case[better] = s.name
+        if self.support_env is not None:
+            np.maximum(self.support_env, s.support, out=self.support_env)
         if generated:
             k = len(self.case_names)
             self.case_names.append(s.name)
@@ -84,6 +97,9 @@ class Aggregate:
             self.top_mn.add(-s.mn, k)
             if self.srs_env is not None and s.srs is not None:
                 self.srs_run.add(s.srs)
+            if self.support_env is not None:
+                self.support_run.add(s.support)
+                self.support_top.add(np.ravel(s.support), k)
 
     # ------------------------------------------------------------ tables
     def envelope_rows(self) -> list[dict]:
@@ -108,6 +124,15 @@ class Aggregate:
                 "order_max": omx, "order_case_max": [name(c) for c in cmx],
                 "mean_min": self.run_mn.mean, "std_min": self.run_mn.std, "normal_min": self.run_mn.bound(-self.k),
                 "order_min": -omn, "order_case_min": [name(c) for c in cmn]}
+
+
+    def support_statistics(self) -> dict:
+        """Per correlated-load pair and direction (analysis.correlated): the support
+        functions' envelope over every case, and over the generated cases the P/C normal
+        bound mean + k std and the order-statistic bound (the r-th largest; NaN if too few
+        cases), each (n_support_items, n_directions)."""
+        order = self.support_top.rth()[0].reshape(self.support_env.shape)
+        return {"envelope": self.support_env.copy(), "normal": self.support_run.bound(self.k), "order": order}
 
 
 STAT_FIELDS = ("item", "unit", "category", "mean_max", "std_max", "normal_max", "order_max", "order_case_max",
@@ -162,6 +187,49 @@ def write_statistics(agg: Aggregate, out: Path, freq=None, q=None) -> list[Path]
     paths.append(write_record(out / "statistics.h5", "liftoff-statistics", 1, data, units="SI per item",
                               attrs={"n_cases": agg.n, "p": agg.p, "c": agg.c, "k": agg.k, "r": agg.r}))
     return paths
+
+
+CONTOUR_FIELDS = ("interface", "pair", "contour", "vertex", "x_name", "x", "x_unit", "y_name", "y", "y_unit")
+
+
+def contour_rows(agg: Aggregate) -> list[dict]:
+    """The rows of correlated_statistics.csv: per interface and pair (analysis.correlated) the
+    polygons of the support functions' envelope over every case and of their P/C normal and
+    order-statistic bounds over the generated cases, vertices counter-clockwise."""
+    from .correlated import PAIRS, contour
+
+    if agg.support_env is None or agg.n < 2:
+        return []
+    names = {pair: (xn, yn) for pair, xn, yn in PAIRS}
+    rows = []
+    for kind, h in agg.support_statistics().items():
+        for j, item in enumerate(agg.support_items):
+            interface, _, pair = item.rpartition("|")
+            if not np.all(np.isfinite(h[j])):
+                continue                       # too few cases for the order statistic
+            x, y = contour(h[j])
+            xn, yn = names.get(pair, ("x", "y"))
+            rows += [{"interface": interface, "pair": pair, "contour": kind, "vertex": v + 1, "x_name": xn,
+                      "x": float(x[v]), "x_unit": "N", "y_name": yn, "y": float(y[v]), "y_unit": "N m"}
+                     for v in range(x.size)]
+    return rows
+
+
+def write_contours(agg: Aggregate, out: Path) -> Path | None:
+    """correlated_statistics.csv (:func:`contour_rows`); None without correlated loads or
+    with fewer than two generated cases."""
+    from .correlated import MOMENT_ARM, N_DIRECTIONS
+
+    rows = contour_rows(agg)
+    if not rows:
+        return None
+    head = (f"# liftoff correlated-load contours over {agg.n} dispersed cases (and the envelope over every case): "
+            "per attach point (force on the named component) and pair, the polygon {p : n_k . p <= h_k} of the "
+            f"support functions h_k = max over time of n_k . (x, y / {MOMENT_ARM:g} m) in {N_DIRECTIONS} directions; "
+            f"contour = envelope (max over every case), normal (P{agg.p * 100:g}/{agg.c * 100:g} bound mean + k std, "
+            f"k = {agg.k:.6g}) or order (the {agg.r}-th largest over the dispersed cases); each direction's bound "
+            "holds alone, not jointly; vertices counter-clockwise; units in x_unit, y_unit\n")
+    return write_rows_csv(rows, CONTOUR_FIELDS, head, out / "correlated_statistics.csv")
 
 
 def write_srs(agg: Aggregate, freq: np.ndarray, q: tuple, out: Path) -> Path | None:

@@ -172,3 +172,72 @@ def rows(hulls: list[CorrelatedHull]) -> list[dict]:
                         "x": float(h.x[v]), "x_unit": h.x_unit, "y_name": h.y_name, "y": float(h.y[v]),
                         "y_unit": h.y_unit, "time": float(h.time[v]), "case": h.case[v]})
     return out
+
+
+# ------------------------------------------------------------ statistical contour
+#: directions of the support function (every 5 degrees), in the plane (x, y / MOMENT_ARM):
+#: a moment (N m) over 1 m compares with a force (N); the directions' spacing sets only how
+#: closely the polygon follows a round contour, never whether it holds the loads
+N_DIRECTIONS = 72
+MOMENT_ARM = 1.0
+
+
+def directions(n: int = N_DIRECTIONS) -> np.ndarray:
+    """(n, 2) unit normals at angles 2 pi k / n (n a multiple of 4: the axes are among them)."""
+    if n < 4 or n % 4:
+        raise InputError(f"correlated loads: the number of directions must be a multiple of 4 >= 4 (got {n})")
+    a = 2 * np.pi * np.arange(n) / n
+    return np.column_stack([np.cos(a), np.sin(a)])
+
+
+def support(x: np.ndarray, y: np.ndarray, n: int = N_DIRECTIONS) -> np.ndarray:
+    """The support function h_k = max over the samples of n_k . (x, y / MOMENT_ARM) in each
+    direction (:func:`directions`): a history's pair reduced to n numbers; the polygon
+    {p : n_k . p <= h_k} (:func:`contour`) holds every sample and is the hull cut by n lines."""
+    d = directions(n)
+    pts = np.column_stack([np.asarray(x, float), np.asarray(y, float) / MOMENT_ARM])
+    if not np.isfinite(pts).all():
+        raise InputError("correlated loads: a history holds NaN or inf")
+    return (pts @ d.T).max(axis=0)
+
+
+def case_support(interfaces: Iterable, n: int = N_DIRECTIONS) -> tuple[tuple[str, ...], np.ndarray]:
+    """(names ``<interface>|<pair>``, (n_names, n) support functions) of every pair
+    (:data:`PAIRS`) of every interface of one run: what a campaign keeps of each case's
+    correlated loads."""
+    names, rows = [], []
+    for itf in interfaces:
+        for pair, xn, yn in PAIRS:
+            names.append(f"{itf.name}|{pair}")
+            rows.append(support(pair_values(itf.labels, itf.values, xn), pair_values(itf.labels, itf.values, yn), n))
+    return tuple(names), np.array(rows).reshape(len(rows), n)
+
+
+def contour(h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The polygon {p : n_k . p <= h_k} of support values ``h`` (:func:`directions`), vertices
+    (x, y) counter-clockwise in the pair's units (y back in N m); empty arrays when the
+    half-planes hold no point (values that are no support function of any set)."""
+    h = np.asarray(h, float)
+    d = directions(h.size)
+    q = h.size // 4
+    # the box of the four axis directions, clipped by each other half-plane (Sutherland-Hodgman)
+    poly = np.array([[h[0], h[q]], [-h[2 * q], h[q]], [-h[2 * q], -h[3 * q]], [h[0], -h[3 * q]]])
+    if h[0] < -h[2 * q] or h[q] < -h[3 * q]:
+        return np.zeros(0), np.zeros(0)
+    scale = max(float(np.abs(h).max()), 1e-300)
+    for k in range(h.size):
+        if k % q == 0 or poly.shape[0] == 0:
+            continue
+        s = poly @ d[k] - h[k]
+        inside = s <= 1e-12 * scale
+        out = []
+        for i in range(poly.shape[0]):
+            j = (i + 1) % poly.shape[0]
+            if inside[i]:
+                out.append(poly[i])
+            if inside[i] != inside[j]:
+                out.append(poly[i] + (poly[j] - poly[i]) * (s[i] / (s[i] - s[j])))
+        poly = np.array(out).reshape(-1, 2)
+    if poly.shape[0] < 3:
+        return np.zeros(0), np.zeros(0)
+    return poly[:, 0].copy(), poly[:, 1] * MOMENT_ARM

@@ -103,6 +103,8 @@ class CaseSummary:
     wall: float = 0.0
     err_mx: np.ndarray | None = None       # estimated error of each max/min (Richardson, a run at h/2)
     err_mn: np.ndarray | None = None
+    support_items: tuple[str, ...] = ()   # "<interface>|<pair>" of the correlated loads (analysis.correlated)
+    support: np.ndarray | None = None      # (n_support_items, N_DIRECTIONS) their support functions
 
 
 # ------------------------------------------------------------------ one case
@@ -129,7 +131,10 @@ def summarize(result, cp, name: str, index: int, post, wall: float = 0.0, check=
         raw = np.column_stack([its[j].history for j in sel]) if sel else None
         srs_arr = np.stack([srs(raw, result.h, freq, q) for q in post.srs.q]) if sel else None
     cs = result.contact_summary()
-    return CaseSummary(
+    from liftoff.analysis.correlated import case_support
+
+    support_items, support = case_support(report.interface_histories(result, cp.attach))
+    summary = CaseSummary(
         name, index, tuple(it.name for it in its), tuple(it.unit for it in its), tuple(it.category for it in its),
         V[imax, cols].copy(), t[imax].copy(), V[imin, cols].copy(), t[imin].copy(), srs_items, srs_arr,
         tuple(c["name"] for c in cs), np.array([np.nan if c["separation_time"] is None else c["separation_time"]
@@ -137,6 +142,8 @@ def summarize(result, cp, name: str, index: int, post, wall: float = 0.0, check=
         np.array([c["recontacts"] for c in cs], dtype=np.int64), np.array([c["peak_compression"] for c in cs]),
         int(t.size - 1), float(result.h), float(wall), *_errors(its, report.items(check, cp.attach, report.liquid_heads(cp), band), error_estimate)
         if check is not None else (None, None))
+    summary.support_items, summary.support = support_items, support if support_items else None
+    return summary
 
 
 def _errors(its, its_half, estimate) -> tuple[np.ndarray, np.ndarray]:
@@ -242,6 +249,8 @@ def save_summary(s: CaseSummary, path: Path, key: str) -> Path:
                 srs_items=np.array(s.srs_items, dtype=str), scalars=np.array([s.index, s.n_steps, s.h, s.wall]))
     if s.srs is not None:
         data["srs"] = s.srs
+    if s.support is not None:
+        data.update(support_items=np.array(s.support_items, dtype=str), support=s.support)
     return write_record(path, RECORD_FORMAT, RECORD_VERSION, data, units="SI per item (column units); s",
                         attrs={"name": s.name, "metadata": json.dumps({"key": key})}, suffixes=(".npz",))
 
@@ -266,7 +275,9 @@ def _summary_of(rec, path: Path) -> CaseSummary:
     return CaseSummary(str(rec.attrs["name"]), int(index), tup(d["items"]), tup(d["units"]), tup(d["categories"]),
                        d["mx"], d["t_mx"], d["mn"], d["t_mn"], tup(d["srs_items"]) if d["srs_items"].size else (),
                        d.get("srs"), tup(d["posts"]), d["separation"], d["recontacts"], d["compression"],
-                       int(n_steps), float(h), float(wall))
+                       int(n_steps), float(h), float(wall),
+                       support_items=tup(d["support_items"]) if "support" in d and "support_items" in d else (),
+                       support=d.get("support") if "support_items" in d else None)
 
 
 def record_problem(path: Path, name: str, index: int, key: str) -> str | None:
@@ -285,6 +296,9 @@ def record_problem(path: Path, name: str, index: int, key: str) -> str | None:
         return "its key is not this case's"
     if not all(np.all(np.isfinite(np.asarray(a, dtype=float))) for a in (s.mx, s.mn, s.t_mx, s.t_mn)):
         return "it holds NaN or infinite peaks"
+    if s.support is not None and (np.ndim(s.support) != 2 or np.shape(s.support)[0] != len(s.support_items)
+                                  or not np.all(np.isfinite(s.support))):
+        return "its correlated-load support functions are malformed or not finite"
     return None
 
 

@@ -324,6 +324,39 @@ def _plot_correlated(hulls, per_case: dict, out: Path) -> Path:
     return _save_figure(plt, fig, out / "correlated_loads.png", axs[0][0], top=0.98, dpi=100)
 
 
+def plot_contours(csv_path: Path, out: Path) -> Path:
+    """correlated_statistics.png from correlated_statistics.csv: a row per attach point, a
+    column per pair; the envelope polygon over every case and the P99/90 normal and
+    order-statistic contours over the dispersed cases."""
+    from liftoff.analysis import correlated as cl
+    from liftoff.analysis.workbook import read_csv_table
+
+    plt = _pyplot()
+    _, cols, table = read_csv_table(csv_path)
+    ci = {c: k for k, c in enumerate(cols)}
+    poly: dict = {}
+    for r in table:
+        key = (r[ci["interface"]], r[ci["pair"]], r[ci["contour"]])
+        poly.setdefault(key, ([], [], r[ci["x_name"]], r[ci["y_name"]]))
+        poly[key][0].append(float(r[ci["x"]]))
+        poly[key][1].append(float(r[ci["y"]]))
+    names = list(dict.fromkeys(k[0] for k in poly))
+    pairs = [p for p, _, _ in cl.PAIRS]
+    style = {"envelope": ("k", "-", "envelope, every case"), "normal": ("C3", "--", "P99/90 normal"),
+             "order": ("C0", ":", "P99/90 order statistic")}
+    fig, axs = plt.subplots(len(names), len(pairs), figsize=(10, 2.6 * len(names) + 1), squeeze=False)
+    for (itf, pair, kind), (x, y, xn, yn) in poly.items():
+        ax = axs[names.index(itf)][pairs.index(pair)]
+        c, ls, label = style.get(kind, ("C2", "-", kind))
+        ax.fill(np.array(x) / 1e6, np.array(y) / 1e6, fill=False, ec=c, ls=ls, lw=1.2, label=label)
+        ax.set_xlabel(f"{xn} (MN)", fontsize=8)
+        ax.set_ylabel(f"{yn} (MN m)", fontsize=8)
+        ax.set_title(itf, fontsize=8)
+        ax.grid(True, alpha=0.3)
+    fig.suptitle("Correlated loads over the dispersed cases: support-function contours")
+    return _save_figure(plt, fig, out / "correlated_statistics.png", axs[0][0], top=0.98, dpi=100)
+
+
 def plot_spectra(ctx) -> list[Path]:
     """``srs.png`` (the SRS envelope over the cases of every selected item, one panel per
     item, a line per Q, log-log; from srs.csv) and ``psd_<case>.png`` (each case's PSD of the

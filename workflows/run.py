@@ -337,7 +337,7 @@ def write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, e
         files.append(feed_records(sc, camp_run, agg, out / "cases.csv"))
         files += _generated_outputs(sc, prep, camp, agg, out, stage_times, results, plots, want_pics)
         stage_times.append(("campaign tables and histories", time.perf_counter() - t0))
-    files += _loads_tables(sc, agg, out, echo, camp)
+    files += _loads_tables(sc, agg, out, echo, camp, plots)
     partial = ("the generated cases other than the governing one are not in this table (their histories are not "
                "kept; see envelope_histories.h5)") if camp_run is not None else ""
     t0 = time.perf_counter()
@@ -442,8 +442,9 @@ def _generated_outputs(sc, prep: Prepared, camp: _Campaign, agg, out: Path, stag
     return files
 
 
-def _loads_tables(sc, agg, out: Path, echo, camp) -> list:
-    """maxmin_envelope.csv, statistics, SRS, design loads and the comparison table."""
+def _loads_tables(sc, agg, out: Path, echo, camp, plots: bool = False) -> list:
+    """maxmin_envelope.csv, statistics, correlated-load contours, SRS, design loads and the
+    comparison table."""
     from liftoff.analysis import aggregate
 
     env = agg.envelope_rows()
@@ -457,6 +458,11 @@ def _loads_tables(sc, agg, out: Path, echo, camp) -> list:
     freq = srs_frequencies(s.f_min, s.f_max, s.n_freq) if s is not None else None
     if agg.n >= 2:
         files += aggregate.write_statistics(agg, out, freq, s.q if s is not None else None)
+        f = aggregate.write_contours(agg, out)
+        if f is not None:
+            files.append(f)
+            if plots:
+                files.append(report.plot_contours(f, out))
     if s is not None:
         f = aggregate.write_srs(agg, freq, s.q, out)
         files += [f] if f else []

@@ -106,3 +106,59 @@ def test_simplified_hull_keeps_samples_extremes_and_the_stated_shortfall(tol):
     assert cl.simplify(full[0], 0.0).x.size == full[0].x.size
     with pytest.raises(InputError, match="tolerance"):
         cl.simplify(full[0], -1.0)
+
+
+def test_contour_of_a_disc_and_of_samples():
+    """contour(support) against closed forms: a disc's support c . n + r gives the regular
+    72-gon circumscribed about it (vertices at r / cos(pi / 72)); the contour of a history's
+    support holds every sample and each of its edges touches the hull (h_k is attained)."""
+    d = cl.directions()
+    c, r = np.array([1.0e6, 3.0e6]), 2.0e6
+    x, y = cl.contour(d @ c + r)
+    assert x.size == 72
+    np.testing.assert_allclose(np.hypot(x - c[0], y - c[1]), r / np.cos(np.pi / 72), rtol=1e-12)
+    assert np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y) > 0          # counter-clockwise
+    t = np.linspace(0, 5, 2001)
+    itf = _itf(t, 6)
+    names, h = cl.case_support([itf])
+    assert names == ("attach p on core|axial-bending", "attach p on core|shear-torque")
+    for j, (pair, xn, yn) in enumerate(cl.PAIRS):
+        sx, sy = cl.pair_values(LABELS, itf.values, xn), cl.pair_values(LABELS, itf.values, yn)
+        px, py = cl.contour(h[j])
+        scale = max(np.abs(sx).max(), np.abs(sy).max())
+        assert _inside(px, py, sx, sy, 1e-12 * scale * scale)
+        np.testing.assert_allclose((np.column_stack([sx, sy]) @ d.T).max(axis=0), h[j], rtol=1e-14)
+    # half-planes that hold no point, and bad direction counts
+    assert cl.contour(np.full(72, -1.0))[0].size == 0
+    with pytest.raises(InputError, match="multiple of 4"):
+        cl.directions(30)
+
+
+def test_campaign_contours_of_scaled_cases_are_the_scaled_support():
+    """Over dispersed cases whose loads are one history scaled by a_i (a_i > 0, so h_i = a_i
+    h), the aggregate's P99/90 normal contour is the support of (mean(a) + k std(a)) h and
+    its order-statistic contour the r-th largest a_i times h: closed forms per direction
+    from numpy's batch mean/std and a sort, against the streaming aggregate."""
+    from liftoff.analysis.aggregate import Aggregate, contour_rows
+    from liftoff.analysis.stats import k_factor, order_rank
+    from liftoff.workflows.campaign import CaseSummary
+
+    t = np.linspace(0, 5, 501)
+    names, h = cl.case_support([_itf(t, 7)])
+    h = h - h.min() + 1.0                   # positive in every direction (the origin inside), so h_i = a_i h
+    n = 300
+    a = np.random.default_rng(8).normal(1.0, 0.1, n)
+    agg = Aggregate(n)
+    one = np.zeros(1)
+    for i, ai in enumerate(a):
+        agg.add(CaseSummary(f"d{i:04d}", i, ("x",), ("N",), ("c",), one, one, one, one,
+                            support_items=names, support=ai * h), generated=True)
+    st = agg.support_statistics()
+    k, r = k_factor(0.99, 0.90, n), order_rank(0.99, 0.90, n)
+    assert r >= 1
+    np.testing.assert_allclose(st["normal"], (a.mean() + k * a.std(ddof=1)) * h, rtol=1e-10)
+    np.testing.assert_allclose(st["order"], np.sort(a)[::-1][r - 1] * h, rtol=1e-14)
+    np.testing.assert_allclose(st["envelope"], a.max() * h, rtol=1e-14)
+    rows = contour_rows(agg)
+    assert {(r_["pair"], r_["contour"]) for r_ in rows} == {(p, c) for p, _, _ in cl.PAIRS
+                                                             for c in ("envelope", "normal", "order")}

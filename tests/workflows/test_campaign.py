@@ -1,6 +1,7 @@
 """Load campaigns on the stick model: the runner's envelope equals that of the same cases run
 one by one; a restarted campaign skips the cases already done; statistics equal the batch
 formulas; envelope histories, ParaView output, the comparison table and the command line."""
+import csv
 import pickle
 
 import numpy as np
@@ -103,6 +104,50 @@ def test_campaign_outputs(campaign4):
         assert [env.dims[k][0].name for k in range(3)] == ["/srs/q", "/srs/freq_Hz", "/srs/srs_items"]
         assert g["freq_Hz"].attrs["units"] == "Hz" and g["freq_Hz"][0] > 0 and list(g["q"][()]) == [10.0, 25.0]
         assert env.attrs["units"] and g["srs_items"].shape[0] < f["items"].shape[0]
+
+
+def test_correlated_contours_over_the_campaign(campaign4):
+    """correlated_statistics.csv (analysis.correlated, aggregate.write_contours): each pair's
+    support functions, computed here from every case solved one by one, give the envelope
+    (max over the 6 cases) and the P99/90 normal bound (batch mean + k std over the 4
+    dispersed cases) that the streaming aggregate holds; the envelope polygon holds every
+    sample of every case (the polygon is the hull cut by 72 lines: it contains the hull)."""
+    from liftoff.analysis import correlated as cl
+    from liftoff.analysis.stats import k_factor
+
+    tmp, _, out = campaign4
+    sc, stack = out.scenario, next(iter(out.stacks.values()))
+    supports, samples = {}, {}
+    for case in list(sc.cases) + [sc.generated_case(i) for i in range(sc.n_generated)]:
+        cp = build_problem(case, stack, progress=False)
+        res = solve(cp.problem)
+        itfs = report.interface_histories(res, cp.attach)
+        names, supports[case.name] = cl.case_support(itfs)
+        samples[case.name] = {f"{i.name}|{pair}": (cl.pair_values(i.labels, i.values, xn),
+                                                   cl.pair_values(i.labels, i.values, yn))
+                              for i in itfs for pair, xn, yn in cl.PAIRS}
+    agg = out.aggregate
+    assert agg.support_items == names and len(names) == 14           # 7 attach points x 2 pairs
+    st = agg.support_statistics()
+    every = np.array(list(supports.values()))
+    gen = np.array([supports[f"d000{i}"] for i in range(4)])
+    scale = np.abs(every).max()
+    np.testing.assert_allclose(st["envelope"], every.max(axis=0), rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(st["normal"], gen.mean(axis=0) + k_factor(0.99, 0.90, 4) * gen.std(axis=0, ddof=1),
+                               rtol=1e-10, atol=1e-10 * scale)
+    assert np.all(np.isnan(st["order"]))            # 4 cases: too few for a P99/90 order statistic
+    rows = list(csv.DictReader(ln for ln in (tmp / "out" / "correlated_statistics.csv").read_text().splitlines()
+                               if not ln.startswith("#")))
+    assert {r["contour"] for r in rows} == {"envelope", "normal"}
+    for j, name in enumerate(names):
+        itf, _, pair = name.rpartition("|")
+        poly = [r for r in rows if r["interface"] == itf and r["pair"] == pair and r["contour"] == "envelope"]
+        px, py = np.array([float(r["x"]) for r in poly]), np.array([float(r["y"]) for r in poly])
+        ex, ey = np.roll(px, -1) - px, np.roll(py, -1) - py
+        for x, y in (samples[c][name] for c in samples):
+            cross = ex[:, None] * (y[None, :] - py[:, None]) - ey[:, None] * (x[None, :] - px[:, None])
+            # 7 printed digits of the vertices: 1e-6 of the pair's scale, squared (a cross product)
+            assert cross.min() >= -1e-6 * (np.abs(px).max() + np.abs(py).max()) ** 2, name
 
 
 def test_tasks_carry_no_model(campaign4):
