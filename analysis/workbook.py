@@ -68,16 +68,31 @@ def maxmin_sheets(path: Path) -> list[Sheet]:
     return [s for s in sheets.values() if s.rows]
 
 
-def from_csv(tables: list[tuple[str, Path]], maxmin: Path | None = None, title: str = "") -> list[Sheet]:
+def from_csv(tables: list[tuple[str, Path]], maxmin: Path | None = None, title: str = "",
+             units: str = "SI") -> list[Sheet]:
     """The sheets of a run: a 'contents' sheet, the max/min envelope by category (``maxmin``),
-    then one sheet per (name, CSV path) in ``tables``."""
+    then one sheet per (name, CSV path) in ``tables``; numbers in the unit system ``units``
+    (analysis.units: the CSV files' SI, or converted for the reader)."""
+    from .units import SYSTEMS, check_system, convert_table
+
+    check_system(units)
     sheets = maxmin_sheets(maxmin) if maxmin is not None else []
     for name, path in tables:
         notes, columns, rows = read_csv_table(path)
         sheets.append(Sheet(name, columns, rows, notes))
-    contents = Sheet("contents", ["sheet", "rows", "what"], [[s.name, float(len(s.rows)), s.notes[0] if s.notes else ""]
-                                                            for s in sheets],
-                     [title or "liftoff run", "SI units throughout (each sheet says which)"])
+    what = [s.notes[0] if s.notes else "" for s in sheets]
+    if units == "SI":
+        say = "SI units throughout (each sheet says which)"
+    else:
+        names = ", ".join(f"{si} -> {new}" for si, (new, _) in SYSTEMS[units].items())
+        say = (f"{units} units ({names}; g, s, rad, Hz unchanged): converted from the run's SI CSV files, whose "
+               "notes above each sheet still say SI; each unit column and header gives the unit")
+        for s in sheets:
+            s.columns, s.rows = convert_table(s.columns, s.rows, units)
+            s.notes = [f"numbers in {units} units (converted from the SI CSV file described below)"] + s.notes
+    contents = Sheet("contents", ["sheet", "rows", "what"], [[s.name, float(len(s.rows)), w]
+                                                            for s, w in zip(sheets, what)],
+                     [title or "liftoff run", say])
     return [contents] + sheets
 
 

@@ -46,13 +46,15 @@ class RunContext:
     """What a ``"run"``-stage output gets: ``results`` {case: (TransientResult, CaseProblem)}
     of the named cases and the governing generated case, the staging folder ``out``,
     ``plots`` (pictures wanted), the scenario ``title`` and ``partial`` (non-empty when the
-    cases' histories do not cover a campaign's generated cases: a note for the tables)."""
+    cases' histories do not cover a campaign's generated cases: a note for the tables) and
+    ``units``, the report unit system of the workbook ([postprocess] units, analysis.units)."""
 
     results: dict
     out: Path
     plots: bool
     title: str
     partial: str = ""
+    units: str = "SI"
 
 
 OUTPUTS: dict[str, Output] = {}
@@ -93,7 +95,7 @@ def _register_builtin() -> None:
     register_output("correlated_loads", "run", "correlated_loads.csv/.png")(
         lambda ctx: report.write_correlated(ctx.results, ctx.out, ctx.plots, ctx.partial))
     register_output("spectra_plots", "run", "srs.png, psd_<case>.png")(report.plot_spectra)
-    register_output("workbook", "run", "loads.xlsx")(lambda ctx: report.write_workbook(ctx.out, ctx.title))
+    register_output("workbook", "run", "loads.xlsx")(lambda ctx: report.write_workbook(ctx.out, ctx.title, ctx.units))
 
 
 _register_builtin()

@@ -414,15 +414,17 @@ WORKBOOK_TABLES = (("time-consistent loads", "interface_loads_envelope.csv"), ("
                    ("modal mass vehicle held", "modal_mass_vehicle_held.csv"), ("modal mass pad", "modal_mass_pad.csv"))
 
 
-def write_workbook(out: Path, title: str) -> list[Path]:
+def write_workbook(out: Path, title: str, units: str = "SI") -> list[Path]:
     """``loads.xlsx`` (analysis/workbook.py): the max/min envelope by category and the run's
-    other tables, made from the CSV files in ``out`` (the same numbers, cell for cell)."""
+    other tables, made from the CSV files in ``out`` (the same numbers, cell for cell, in SI;
+    or in the report unit system ``units``, analysis.units)."""
     from liftoff.analysis import workbook
 
     if not (out / "maxmin_envelope.csv").is_file():
         return []
     tables = [(name, out / f) for name, f in WORKBOOK_TABLES if (out / f).is_file()]
-    return [workbook.write_workbook(workbook.from_csv(tables, out / "maxmin_envelope.csv", title), out / "loads.xlsx")]
+    return [workbook.write_workbook(workbook.from_csv(tables, out / "maxmin_envelope.csv", title, units),
+                                    out / "loads.xlsx")]
 
 
 # ------------------------------------------------------------------ hydroelastic tanks

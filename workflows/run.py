@@ -341,7 +341,7 @@ def write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, e
     partial = ("the generated cases other than the governing one are not in this table (their histories are not "
                "kept; see envelope_histories.h5)") if camp_run is not None else ""
     t0 = time.perf_counter()
-    files += outputs.write("run", outputs.RunContext(results, out, plots, sc.title, partial))
+    files += outputs.write("run", outputs.RunContext(results, out, plots, sc.title, partial, sc.post.units))
     stage_times.append(("interface, correlated loads, workbook", time.perf_counter() - t0))
     files += _fields(sc, prep, results, agg, out, camp, stage_times)
     env = agg.envelope_rows()

@@ -15,7 +15,9 @@
   pressures, liquid inertia forces, a Nastran ATM). Their peaks are set by the highest modes,
   which a Craig-Bampton model does not converge (issue 22: 10x between component cuts);
   within the band where its system modes are converged they are. SRS and PSD use the
-  unfiltered histories.
+  unfiltered histories;
+* ``units``: the unit system of the workbook loads.xlsx, ``"SI"`` (default) or ``"in-lbf-s"``
+  (analysis.units: lbf, lbf in, in, in/s^2, psi); the CSV and HDF5 files stay SI.
 """
 from __future__ import annotations
 
@@ -25,7 +27,8 @@ from typing import Any
 from .values import Where, boolean, integer, number, strings, table
 
 CATEGORIES = ("contact_force", "interface_force", "cg_motion", "displacement", "acceleration")
-KEYS = {"uncertainty", "srs", "psd", "fields", "acceleration_band_hz"}
+KEYS = {"uncertainty", "srs", "psd", "fields", "acceleration_band_hz", "units"}
+UNITS = ("SI", "in-lbf-s")     # [postprocess] units: the workbook's (analysis.units); CSV and HDF5 stay SI
 ACCELERATION_BAND_HZ = 40.0   # the default model's components to 60 Hz: the filter passes < 0.2 % there
 SRS_KEYS = {"categories", "q", "f_min", "f_max", "n_freq"}
 PSD_KEYS = {"categories", "segment"}
@@ -61,6 +64,7 @@ class PostProcess:
     psd: PSDSpec | None = None
     fields: FieldsSpec = FieldsSpec()
     acceleration_band_hz: float = ACCELERATION_BAND_HZ
+    units: str = "SI"
 
 
 def _categories(where: Where, value: Any) -> tuple[str, ...]:
@@ -98,4 +102,8 @@ def postprocess(where: Where, spec: Any) -> PostProcess:
                                                                                    10_000),
                         boolean(w / "gif", f.get("gif", True)))
     band = number(where / "acceleration_band_hz", p.get("acceleration_band_hz", ACCELERATION_BAND_HZ), nonneg=True)
-    return PostProcess(unc, srs, psd, fields, band)
+    units = p.get("units", "SI")
+    if units not in UNITS:
+        raise (where / "units").error(f"must be one of {', '.join(map(repr, UNITS))} (the workbook's units; the CSV "
+                                      f"and HDF5 files stay SI), got {units!r}")
+    return PostProcess(unc, srs, psd, fields, band, units)

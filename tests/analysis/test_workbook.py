@@ -63,3 +63,44 @@ def test_bad_sheets_are_refused(tmp_path):
     (tmp_path / "empty.csv").write_text("# only a note\n")
     with pytest.raises(InputError, match="no table"):
         workbook.read_csv_table(tmp_path / "empty.csv")
+
+
+def test_workbook_in_inch_pound_units(tmp_path):
+    """[postprocess] units = "in-lbf-s": every number with an SI unit divided by the exact
+    definition of its US unit (1 in = 0.0254 m, 1 lbf = 0.45359237 kg x 9.80665 m/s^2: N ->
+    lbf, N m -> lbf in, m -> in, m/s^2 -> in/s^2), the unit cells and headers renamed; load
+    factors (g), times and case names unchanged; the notes say so. Read back with openpyxl."""
+    lbf, inch = 0.45359237 * 9.80665, 0.0254
+    (tmp_path / "maxmin_envelope.csv").write_text(MAXMIN)
+    (tmp_path / "tcl.csv").write_text(TABLE)
+    (tmp_path / "cl.csv").write_text("# correlated\ninterface,pair,vertex,x_name,x,x_unit,y_name,y,y_unit,time,case\n"
+                                     "a,axial-bending,1,Tz,4.448222e+00,N,Mb,1.129848e-01,N m,1.0,nominal\n")
+    (tmp_path / "t1.csv").write_text("case,x_m,rx_rad\n1) gravity only,2.54e-02,1.0e-03\n")
+    sheets = workbook.from_csv([("time-consistent loads", tmp_path / "tcl.csv"), ("correlated loads", tmp_path / "cl.csv"),
+                                ("table 1", tmp_path / "t1.csv")], tmp_path / "maxmin_envelope.csv", "test run",
+                               units="in-lbf-s")
+    book = openpyxl.load_workbook(workbook.write_workbook(sheets, tmp_path / "loads.xlsx"), read_only=True)
+    rows = _values(book["max-min posts"])
+    assert rows[0][0].startswith("numbers in in-lbf-s units") and rows[1][0].startswith("liftoff max/min table")
+    post = rows[4]
+    assert post[1] == "lbf" and post[2] == pytest.approx(1.25e6 / lbf, rel=1e-15)
+    assert post[6] == pytest.approx(-3e5 / lbf, rel=1e-15) and post[4] == 6.6       # the time stays in s
+    att = _values(book["max-min attach"])[4]
+    assert att[3] == pytest.approx(0.1 / lbf, rel=1e-15)                           # the error estimate too
+    lf = _values(book["max-min load factors"])[4]
+    assert lf[1] == "g" and lf[2] == 1.997548
+    acc = _values(book["max-min accelerations"])[4]
+    assert acc[1] == "in/s^2" and acc[2] == pytest.approx(0.4897 / inch, rel=1e-15)
+    other = _values(book["max-min other"])[4]
+    assert other[1] == "in" and other[2] == pytest.approx(1.764e-3 / inch, rel=1e-15)
+    tcl = _values(book["time-consistent loads"])
+    assert tcl[4][:6] == ["interface", "peak", "case", "t (s)", "Tx (lbf)", "Ty (lbf)"]
+    assert tcl[5][4] == pytest.approx(1000.0 / lbf, rel=1e-15) and tcl[5][3] == 6.7
+    cl = _values(book["correlated loads"])[4]
+    assert cl[4] == pytest.approx(1.0, rel=1e-6) and cl[5] == "lbf"               # 1 lbf, 1 lbf in, to 7 digits
+    assert cl[7] == pytest.approx(1.0, rel=1e-6) and cl[8] == "lbf in"
+    t1 = _values(book["table 1"])[2:]
+    assert t1[0][:3] == ["case", "x_in", "rx_rad"] and t1[1][1] == pytest.approx(1.0, rel=1e-15) and t1[1][2] == 1e-3
+    assert "in-lbf-s units" in _values(book["contents"])[1][0]
+    with pytest.raises(InputError, match="unit system 'mks' is not one of SI, in-lbf-s"):
+        workbook.from_csv([], tmp_path / "maxmin_envelope.csv", units="mks")

@@ -354,3 +354,16 @@ def test_slosh_gravity_option(base):
     d["model"]["liquid"] = "smeared"
     with pytest.raises(InputError, match=r"model\.slosh_gravity: needs a hydroelastic liquid"):
         parse_scenario(d, "s.toml")
+
+
+def test_report_units_option(base):
+    """[postprocess] units: the workbook's unit system (analysis.units), SI by default;
+    anything else one line naming the key."""
+    d = copy.deepcopy(base)
+    assert parse_scenario(d, "s.toml").post.units == "SI"
+    d.setdefault("postprocess", {})["units"] = "in-lbf-s"
+    assert parse_scenario(d, "s.toml").post.units == "in-lbf-s"
+    d["postprocess"]["units"] = "imperial"
+    with pytest.raises(InputError, match=r"postprocess\.units: must be one of 'SI', 'in-lbf-s'") as e:
+        parse_scenario(d, "s.toml")
+    assert "\n" not in str(e.value)

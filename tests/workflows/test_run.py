@@ -500,11 +500,16 @@ def test_a_registered_output_is_written_with_the_run(tmp_path):
         return [path]
 
     try:
-        p = _scenario(tmp_path, STICK, cases=[{"name": "nominal"}], t_end=7.0)
+        post = dict(tomllib.loads(default_text()).get("postprocess", {}), units="in-lbf-s")   # the workbook's units
+        p = _scenario(tmp_path, STICK, cases=[{"name": "nominal"}], t_end=7.0, postprocess=post)
         run(p, tmp_path / "o", cache_dir=tmp_path / "cache", progress=False, plots=False, snapshots=False,
             echo=lambda *a, **k: None, error_estimate=False)
     finally:
         outputs.OUTPUTS.pop("test_post_sum", None)
+    # [postprocess] units reaches the workbook (analysis.units; tests/analysis/test_workbook.py checks the numbers)
+    openpyxl = pytest.importorskip("openpyxl")
+    book = openpyxl.load_workbook(tmp_path / "o" / "loads.xlsx", read_only=True)
+    assert "in-lbf-s units" in next(book["contents"].iter_rows(min_row=2, max_row=2, values_only=True))[0]
     assert seen == ["nominal"]
     assert (tmp_path / "o" / "post_sum_nominal.csv").read_text().startswith("t,sum_N\n")
     assert "post_sum_nominal.csv" in (tmp_path / "o" / "MANIFEST.json").read_text()
