@@ -704,6 +704,30 @@ def read_op4(path, names=None) -> dict[str, np.ndarray]:
     return _read_op4(p, names)
 
 
+_STATED = re.compile(r"^\$ units: (?P<name>\S+) \(length (?P<length>\S+) m, mass (?P<mass>\S+) kg, "
+                     r"time (?P<time>\S+) s")
+
+
+def stated_units(path, lines: int = 20) -> UnitSystem | None:
+    """The unit system a punch file states in its ``$ units:`` comment (:func:`write_dmig`
+    writes one), None when its first ``lines`` lines state none (Nastran's own files)."""
+    try:
+        with open(path, "r", errors="replace") as f:
+            for _, line in zip(range(lines), f):
+                m = _STATED.match(line)
+                if m:
+                    return UnitSystem(m["name"], float(m["length"]), float(m["mass"]), float(m["time"]))
+    except (OSError, ValueError):
+        return None
+    return None
+
+
+def same_units(a: UnitSystem, b: UnitSystem, rtol: float = 1e-9) -> bool:
+    """Whether two unit systems have the same length, mass and time (``describe``'s 10
+    digits: 1e-9)."""
+    return all(abs(x - y) <= rtol * abs(y) for x, y in ((a.length, b.length), (a.mass, b.mass), (a.time, b.time)))
+
+
 def write_dmig(cb: CBModel, path, *, units="SI", grid_ids: Mapping | None = None, spoint1: int | None = None,
                stiffness: str = "KAAX", mass: str = "MAAX"):
     """Write ``cb`` as a Nastran punch file: GRID cards of its boundary points (basic

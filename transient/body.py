@@ -215,7 +215,7 @@ RIGID_OMEGA = 0.1
 def consistency_problems(body: ModalBody) -> list[str]:
     """What a body file's arrays say about one another that cannot be true (empty: none
     found). ``rigid_body_mass`` = RB^T M RB is symmetric positive semidefinite (all zero:
-    not given; rigid-body outputs are then undefined). On the rigid-body components it gives
+    not given, with no ``participation`` either; rigid-body outputs are then undefined). On the rigid-body components it gives
     (nonzero diagonal, ``sel``), where ``participation`` (Phi^T M RB) is given, the modes
     satisfy what mass-normalised modes of a free body must: the rigid ones (omega <
     RIGID_OMEGA) are rigid motions, Phi_r = RB M_rb^-1 P_r^T at every labelled DOF of a point
@@ -231,6 +231,10 @@ def consistency_problems(body: ModalBody) -> list[str]:
     M = body.rigid_body_mass
     scale = float(np.abs(M).max(initial=0.0))
     if scale == 0:
+        # RB^T M RB = 0 means M RB = 0 (M >= 0), and then participation = Phi^T M RB = 0 too
+        if np.abs(body.participation).max(initial=0.0) > 0:
+            return ["rigid_body_mass is all zero while participation (Phi^T M RB) is not: a body with mass has "
+                    "RB^T M RB > 0; give it, or leave out both"]
         return []
     if np.abs(M - M.T).max() > 1e-9 * scale:
         return ["rigid_body_mass is not symmetric"]

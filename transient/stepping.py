@@ -200,6 +200,11 @@ def _steps(span: float, h_max: float) -> int:
     return max(int(n), 1)
 
 
+#: frequencies (Hz) a structure's modes and contact springs may set; a step set by higher ones
+#: points at the stiffnesses or frequencies given, a lower one at the run's length
+PLAUSIBLE_HZ = 1e6
+
+
 def _check_resolution(t0: float, t_end: float, h: float, f_h: float | None = None, f_s: float | None = None) -> None:
     """InputError when floats near the run's times are coarser than TIME_RESOLUTION h. Said
     as what can be changed: a run far from t = 0 (shift it), or a step that bodies with
@@ -214,6 +219,9 @@ def _check_resolution(t0: float, t_end: float, h: float, f_h: float | None = Non
     if abs(t0) > span:             # a run far from t = 0: shifting it helps
         raise InputError(head + "start the run near t0 = 0 (shift the times of the scenario)")
     fast = max(f for f in (f_h, f_s, 0.0) if f is not None and math.isfinite(f))
+    if fast <= PLAUSIBLE_HZ:        # a structure's step: the run is what is too long
+        raise InputError(head + f"the run to t_end = {t_end:.6g} s would take {span / h:.3g} steps of it: give a "
+                         "shorter run (t_end)")
     which = (f"the contact stiffnesses set f_h = {f_h:.4g} Hz" if f_h and fast == f_h else
              f"the bodies' highest mode is {fast:.4g} Hz") if fast > 0 else "the step given is that small"
     raise InputError(head + f"{which}, far beyond a structure's: check the stiffnesses and mode frequencies "

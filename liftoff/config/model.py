@@ -156,7 +156,7 @@ class ModelConfig:
 # ---------------------------------------------------------------- [model]
 def _nastran(where: Where, spec: Any, base: Path) -> NastranSource:
     """``[model.component.<name>.nastran]``, files checked and units understood when read."""
-    from liftoff.reduction.nastran import unit_system
+    from liftoff.reduction.nastran import same_units, stated_units, unit_system
 
     n = table(where, spec, _NASTRAN, required=("file", "units"))
     paths = {}
@@ -167,8 +167,13 @@ def _nastran(where: Where, spec: Any, base: Path) -> NastranSource:
                 raise (where / key).error(f"file not found: {str(p)!r}")
             paths[key] = str(p)
     units, wu = n["units"], where / "units"
-    unit_system(units if isinstance(units, str) else table(wu, units, {"length", "mass", "time", "force"}),
-                f"{wu.source}: {wu.key}")           # its one-line error then names file and key
+    given = unit_system(units if isinstance(units, str) else table(wu, units, {"length", "mass", "time", "force"}),
+                        f"{wu.source}: {wu.key}")           # its one-line error then names file and key
+    for key in ("file", "pch"):                  # a punch that states its units (liftoff's write_dmig does)
+        stated = stated_units(paths[key]) if key in paths else None
+        if stated is not None and not same_units(stated, given):
+            raise wu.error(f"{Path(paths[key]).name} states its units as {stated.describe()}, not "
+                           f"{given.describe()}")
     grids = table(where / "grids", n.get("grids", {}), set(n.get("grids", {})))
     names: dict[int, str] = {}
     for gid, name in grids.items():
@@ -180,6 +185,9 @@ def _nastran(where: Where, spec: Any, base: Path) -> NastranSource:
     for k in ("stiffness", "mass"):
         if k in options:
             string(where / k, options[k])
+    if str(options.get("mass", "MAAX")).upper() == str(options.get("stiffness", "KAAX")).upper():
+        raise (where / "mass").error(f"names the stiffness matrix {options.get('stiffness', 'KAAX')!r}: give the mass "
+                                     "matrix's name (MAAX by default)")
     if "se" in options:
         options["se"] = integer(where / "se", options["se"], 1)
     recovery = []
