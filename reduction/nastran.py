@@ -704,6 +704,36 @@ def read_op4(path, names=None) -> dict[str, np.ndarray]:
     return _read_op4(p, names)
 
 
+def interface_otm(path, *, name: str, units, disp: str | None = None, vel: str | None = None,
+                  acc: str | None = None, rows=None, quantity="displacement") -> tuple:
+    """A payload provider's output transformation matrices applied at one interface point
+    (issue 24): matrices ``disp``/``vel``/``acc`` of the OUTPUT4 file ``path``, each
+    (rows x 6) over the point's motion (T1 T2 T3 R1 R2 R3 in liftoff's axes, source units),
+    so that y = disp @ x + vel @ xdot + acc @ xddot. Returns (labels, SI units per row,
+    {part: (rows x 6) matrix in SI}): Y_SI = diag(r) Y_src diag(c) t^p, with r the rows'
+    quantities' SI factors (``quantity`` as :class:`NastranRecovery`'s), c = 1/length on the
+    translation columns (x_src = x_SI / length) and 1 on the rotations (rad), p = 0, 1, 2."""
+    spec = NastranRecovery(name=name, disp=disp, vel=vel, acc=acc, rows=list(rows) if rows is not None else None,
+                           quantity=quantity)
+    who = f"OTM {name!r} ({Path(path).name})"
+    if not spec.parts:
+        raise InputError(f"{who}: give at least one of disp, vel, acc (matrix names)")
+    us = unit_system(units, f"{who}: units")
+    mats = _read_op4(_need_file(path, f"OP4 file of {who}"), list(spec.parts.values()))
+    n_rows = next(iter(mats.values())).shape[0]
+    for mname, Y in mats.items():
+        if Y.shape != (n_rows, 6):
+            raise InputError(f"{who}: matrix {mname!r} is {Y.shape[0]} x {Y.shape[1]}, expected {n_rows} x 6 "
+                             "(rows x the interface point's T1 T2 T3 R1 R2 R3)")
+    labels, comps = _row_labels(who, spec, n_rows, None, None)
+    qty = _row_quantities(who, spec, comps)
+    r = np.array([us.factor(*QUANTITIES[q][1]) for q in qty])
+    c = np.array([1.0 / us.length] * 3 + [1.0] * 3)
+    out = {key: r[:, None] * mats[mname] * c[None, :] * us.time ** {"disp": 0, "vel": 1, "acc": 2}[key]
+           for key, mname in spec.parts.items()}
+    return tuple(labels), tuple(QUANTITIES[q][0] for q in qty), out
+
+
 _STATED = re.compile(r"^\$ units: (?P<name>\S+) \(length (?P<length>\S+) m, mass (?P<mass>\S+) kg, "
                      r"time (?P<time>\S+) s")
 

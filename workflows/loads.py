@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 from liftoff.transient import (
@@ -185,8 +186,9 @@ def recoveries(case: Case, stack: StackModel) -> tuple[list[Recovery], dict, dic
                             description=f"net acceleration of {comp}'s c.g. (rigid-body mass x/y/z "
                                         f"{'/'.join(f'{m:.6g}' for m in mass)} kg)"))
     out += component_recoveries(stack)
-    outputs = []
     w = case.at("recovery")
+    out += otm_recoveries(case.recovery.otm, body, w / "otm")
+    outputs = []
     for key in ("top", "payload"):
         pt = getattr(case.recovery, key)
         if pt:
@@ -196,6 +198,33 @@ def recoveries(case: Case, stack: StackModel) -> tuple[list[Recovery], dict, dic
         _check_point(body, pt, w / "stations" / i)
         outputs += [f"{pt}:{c}" for c in TRANSLATIONS if f"{pt}:{c}" not in outputs]
     return out, attach, {"a": outputs, "b": []}
+
+
+def otm_recoveries(otms, body, where: Where) -> list[Recovery]:
+    """``[[recovery.otm]]``: each payload OTM (reduction.nastran.interface_otm, SI) composed
+    with the vehicle's modes at its point, y = OTM (Phi_p q) per part: an item
+    ``otm_<name>`` of category "otm" on body a."""
+    from liftoff.reduction.nastran import interface_otm
+
+    out = []
+    for i, o in enumerate(otms):
+        _check_point(body, o.point, where / i / "point")
+        labels = [f"{o.point}:{c}" for c in COMPONENTS]
+        try:
+            rows = np.array([body.dof_index(lab) for lab in labels])
+        except InputError as exc:
+            raise (where / i / "point").error(f"an OTM needs the point's six DOFs T1..R3 on the vehicle model "
+                                              f"({exc})") from None
+        try:
+            names, units, parts = interface_otm(o.file, name=o.name, units=o.units, disp=o.disp, vel=o.vel, acc=o.acc,
+                                                rows=o.rows, quantity=o.quantity)
+        except InputError as exc:
+            raise (where / i).wrap(exc) from None
+        phi = body.phi[rows]
+        out.append(Recovery(f"otm_{o.name}", "a", names, units=units, category="otm",
+                            description=f"payload OTM {o.name!r} ({Path(o.file).name}) at {o.point}",
+                            **{k: Y @ phi for k, Y in parts.items()}))
+    return out
 
 
 def component_recoveries(stack: StackModel) -> list[Recovery]:

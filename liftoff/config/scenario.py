@@ -61,7 +61,8 @@ _SCENARIO_ONLY = ("case", "title", "description", "kind", "dispersion", "postpro
 _PROFILE = {"time", "value", "csv"}
 _POST = {"name", "vehicle", "pad"} | LAW_KEYS
 _ENGINE = {"name", "mount", "direction", "start", "time", "thrust", "profile", "scale"}
-_RECOVERY = {"attach", "stations", "top", "payload"}
+_RECOVERY = {"attach", "stations", "top", "payload", "otm"}
+_OTM = {"name", "file", "point", "disp", "vel", "acc", "rows", "quantity", "units"}
 _OUTPUT = {"plots", "snapshots", "progress"}
 _CASE = _TOP - set(_SCENARIO_ONLY) | {"name"}
 
@@ -113,6 +114,26 @@ class RecoveryPoints:
     stations: tuple[str, ...] = ()
     top: str | None = None
     payload: str | None = None
+    otm: tuple["InterfaceOTM", ...] = ()
+
+
+@dataclass(frozen=True)
+class InterfaceOTM:
+    """``[[recovery.otm]]``: a payload provider's output transformation matrices applied at
+    a vehicle ``point`` (reduction.nastran.interface_otm): matrices ``disp``/``vel``/``acc``
+    of the OUTPUT4 ``file`` (rows x 6 over the point's T1..R3), row labels ``rows``, their
+    ``quantity`` and the matrices' ``units`` (a unit system name or table, as Nastran
+    components give theirs)."""
+
+    name: str
+    file: str
+    point: str
+    disp: str | None = None
+    vel: str | None = None
+    acc: str | None = None
+    rows: tuple[str, ...] | None = None
+    quantity: str | tuple[str, ...] = "displacement"
+    units: Any = "SI"
 
 
 @dataclass(frozen=True)
@@ -275,11 +296,39 @@ def _forces(w: Where, forces: Any, base: Path) -> list[Force]:
     return out
 
 
-def _recovery(w: Where, spec: Any) -> RecoveryPoints:
+def _recovery(w: Where, spec: Any, base: Path) -> RecoveryPoints:
     r = table(w, spec, _RECOVERY)
     return RecoveryPoints(strings(w / "attach", r.get("attach", [])), strings(w / "stations", r.get("stations", [])),
                           string(w / "top", r["top"]) if "top" in r else None,
-                          string(w / "payload", r["payload"]) if "payload" in r else None)
+                          string(w / "payload", r["payload"]) if "payload" in r else None,
+                          _otms(w / "otm", r.get("otm", []), base))
+
+
+def _otms(w: Where, spec: Any, base: Path) -> tuple[InterfaceOTM, ...]:
+    """``[[recovery.otm]]``: the file found, the names and units understood (the matrices
+    are read when the case is built: they need pyyeti, the ``nastran`` extra)."""
+    from liftoff.reduction.nastran import unit_system
+
+    out, names = [], set()
+    for i, o in enumerate(array_of_tables(w, spec, "recovery.otm")):
+        o = table(w / i, o, _OTM, required=("name", "file", "point"))
+        name = unique_name(w / i / "name", o["name"], names, "OTM")
+        path = (base / string(w / i / "file", o["file"])).resolve()
+        if not path.is_file():
+            raise (w / i / "file").error(f"file not found: {str(path)!r}")
+        parts = {k: string(w / i / k, o[k]) for k in ("disp", "vel", "acc") if k in o}
+        if not parts:
+            raise (w / i).error("give at least one of disp, vel, acc: the names of its matrices in the file")
+        units = o.get("units", "SI")
+        wu = w / i / "units"
+        unit_system(units if isinstance(units, str) else table(wu, units, {"length", "mass", "time", "force"}),
+                    f"{wu.source}: {wu.key}")
+        q = o.get("quantity", "displacement")
+        quantity = string(w / i / "quantity", q) if isinstance(q, str) else strings(w / i / "quantity", q)
+        rows = strings(w / i / "rows", o["rows"]) if "rows" in o else None
+        out.append(InterfaceOTM(name, str(path), string(w / i / "point", o["point"]), rows=rows, quantity=quantity,
+                                units=units, **parts))
+    return tuple(out)
 
 
 def _case(w: Where, d: dict, name: str, base: Path) -> Case:
@@ -297,7 +346,7 @@ def _case(w: Where, d: dict, name: str, base: Path) -> Case:
         softening=softening(w / "softening", d.get("softening", {})),
         forces=_forces(w / "force", d.get("force", []), base),
         time=time_span(w / "time", d.get("time", {})),
-        recovery=_recovery(w / "recovery", d.get("recovery", {})),
+        recovery=_recovery(w / "recovery", d.get("recovery", {}), base),
         output=OutputFlags(**{k: boolean(w / "output" / k, o.get(k, True)) for k in _OUTPUT}))
 
 
