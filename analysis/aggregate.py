@@ -139,13 +139,15 @@ STAT_FIELDS = ("item", "unit", "category", "mean_max", "std_max", "normal_max", 
                "mean_min", "std_min", "normal_min", "order_min", "order_case_min")
 
 
-def write_rows_csv(rows: list[dict], fields, head: str, path: Path) -> Path:
-    """Dict rows as a CSV table under the comment ``head`` (floats as %.6e), atomically."""
+def write_rows_csv(rows: list[dict], fields, head: str, path: Path, digits: int = 7) -> Path:
+    """Dict rows as a CSV table under the comment ``head`` (floats to ``digits`` significant
+    digits, %.6e by default), atomically."""
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=list(fields), extrasaction="ignore")
     w.writeheader()
+    fmt = f".{digits - 1}e"
     for r in rows:
-        w.writerow({k: (f"{v:.6e}" if isinstance(v, float) else v) for k, v in r.items()})
+        w.writerow({k: (format(v, fmt) if isinstance(v, float) else v) for k, v in r.items()})
     return write_text(path, head + buf.getvalue())
 
 

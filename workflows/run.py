@@ -63,6 +63,7 @@ class Options:
     keep_histories: bool = False        # results_<case>.h5 of every envelope-setting generated case
     fields: bool | None = None          # ParaView .pvd/.vtu + GIF of the governing case (None: [postprocess.fields])
     compare: Path | None = None         # an earlier run's folder or max/min CSV
+    contributions: Path | None = None   # the earlier run's scenario: the compared peaks split (workflows/contributions.py)
 
 
 def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None | bool = None,
@@ -114,6 +115,10 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
         old_modes = report.earlier_modes(opt.compare)
         if old_modes.is_file():           # the earlier run's modes, paired with this run's at the end
             on_root(comm, lambda: report.read_mode_shapes(old_modes), share=False)
+    if opt.contributions is not None:     # the earlier scenario read and matched before any stage
+        from . import contributions
+
+        on_root(comm, lambda: contributions.check(sc, opt, sc.n_generated), share=False)
     want_pics = snapshots and any(c.output.snapshots for c in sc.cases)
     if want_pics or _fields_wanted(sc, opt):  # pyvista (fem.snapshot) before dolfinx (FENICSX-NOTES.md)
         import liftoff.fem.snapshot  # noqa: F401
@@ -338,6 +343,16 @@ def write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, e
         files += _generated_outputs(sc, prep, camp, agg, out, stage_times, results, plots, want_pics)
         stage_times.append(("campaign tables and histories", time.perf_counter() - t0))
     files += _loads_tables(sc, agg, out, echo, camp, plots)
+    if camp is not None and camp.options.contributions is not None:
+        from liftoff.analysis.aggregate import read_maxmin
+
+        from . import contributions
+
+        t0 = time.perf_counter()
+        old_sc = contributions.check(sc, camp.options, sc.n_generated)
+        files += contributions.write(sc, old_sc, prep, camp.cache, results, read_maxmin(Path(camp.options.compare)),
+                                     out, echo)
+        stage_times.append(("contributions (3 transients per named case)", time.perf_counter() - t0))
     partial = ("the generated cases other than the governing one are not in this table (their histories are not "
                "kept; see envelope_histories.h5)") if camp_run is not None else ""
     t0 = time.perf_counter()
@@ -556,6 +571,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="ParaView .pvd/.vtu series and GIF of the governing case ([postprocess.fields])")
     g.add_argument("--compare", type=Path, default=None, metavar="PATH",
                    help="an earlier run's folder or max/min CSV: writes compare.csv (percent change)")
+    g.add_argument("--contributions", type=Path, default=None, metavar="SCENARIO",
+                   help="with --compare: the earlier run's scenario; splits each compared peak into forcing, "
+                        "modes and damping (contributions.csv; three more transients per named case)")
     p.add_argument("--ranks", type=int, default=None, metavar="N",
                    help="run on N MPI processes: launches `mpirun -n N liftoff run ...` (the same as "
                         "starting it under mpirun yourself); the FE stages are distributed over them")
@@ -584,7 +602,8 @@ def _cli(args: argparse.Namespace) -> int:
         if args.ranks > 1 and launched_size() == 1:
             return launch(args.ranks, _child_args(args))
     opt = Options(workers=args.workers, dask=args.dask, mpi=args.mpi, campaign=args.campaign,
-                  keep_histories=args.keep_histories, fields=args.fields, compare=args.compare)
+                  keep_histories=args.keep_histories, fields=args.fields, compare=args.compare,
+                  contributions=args.contributions)
     if args.cases is not None and args.cases < 0:
         raise InputError(f"--cases {args.cases}: must be 0 or more")
     run(args.scenario, args.out, n_cases=args.cases, options=opt, error_estimate=not args.no_error_estimate,
