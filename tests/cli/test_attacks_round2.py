@@ -130,7 +130,6 @@ import os
 import re
 import resource
 import shutil
-import socket
 import subprocess
 import threading
 import time
@@ -271,33 +270,13 @@ def _user_folder(folder: Path, files: dict[str, str | bytes]) -> None:
 
 def _server(ctx, answer: bytes | None) -> str:
     """A TCP server on a free port that sends ``answer`` (None: nothing, as a web server
-    waiting for a request) and holds the connection; returns its tcp:// address."""
-    srv = socket.socket()
-    srv.bind(("127.0.0.1", 0))
-    srv.listen(8)
-    srv.settimeout(0.2)
-    held, stop = [], threading.Event()
+    waiting for a request) and holds the connection (tests/workflows/test_dask_address.py's);
+    returns its tcp:// address, closed when the case ends."""
+    from ..workflows.test_dask_address import _server as dask_server
 
-    def serve():
-        while not stop.is_set():
-            try:
-                c = srv.accept()[0]
-            except OSError:
-                continue
-            if answer is not None:
-                c.sendall(answer)
-            held.append(c)
-
-    threading.Thread(target=serve, daemon=True).start()
-
-    def close():
-        stop.set()
-        srv.close()
-        for c in held:
-            c.close()
-
+    address, close = dask_server(answer)
     ctx.defer(close)
-    return f"tcp://127.0.0.1:{srv.getsockname()[1]}"
+    return address
 
 
 def _http_server(ctx) -> str:
