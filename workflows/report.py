@@ -1,6 +1,8 @@
-"""Reports of a lift-off run: its histories as max/min items (the tables themselves:
-analysis/tables.py), time-history plots, deformed-shape snapshots of stack and pad, and the
-printed summary. SI units.
+"""Reports of a lift-off run that need its model: the modal deliverables (mode shapes, OP4
+recovery matrices, modal tables), the files made from several cases (interface and
+correlated loads, workbook), deformed-shape snapshots of stack and pad, spectra files and
+the printed summary. The histories as items, the max/min tables and the plots are
+analysis/'s (histories.py, tables.py, plots.py), re-exported here. SI units.
 
 Sign conventions: post forces are the forces the pad applies to the vehicle at the
 hold-down points (Tz > 0: compression); attach forces are the forces the rest of the
@@ -8,96 +10,22 @@ vehicle applies to the named component at the attach point (reduction.recovery).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from liftoff.transient.effects import center_of_gravity
 
+# the histories, tables and plots live in analysis/ (issue 24); the run's callers find them here too
+from liftoff.analysis.histories import (CG_ACCELERATION, G0, LIQUID_PRESSURE, ULLAGE, Twang,  # noqa: F401
+                                        _translations, interface_histories, items, liquid_heads, load_factor_items,
+                                        release_time, tank_items, twang)
+from liftoff.analysis.plots import (RELEASE_WINDOW, _Figures, _plot_correlated, _pyplot, _save_figure,  # noqa: F401
+                                    plot_contours, plot_spectra, plots, tank_plots)
 from liftoff.analysis.tables import (CSV_HEADER, DISPLAY_BINS, FIELDS, NAN, Item, display_points,  # noqa: F401
                                      envelope, format_changes, format_table, is_force, maxmin, write_csv)
 from liftoff.core.errors import InputError
-from liftoff.core.labels import TRANSLATIONS, point_labels
+from liftoff.core.labels import TRANSLATIONS
 from liftoff.core.records import write_text
-
-
-def items(result, attach: dict, heads: dict | None = None, band_hz: float = 0.0) -> list[Item]:
-    """Every reported history: post forces, recovered items (attach forces, c.g. motion; not
-    the modal coordinates), output points, and with ``heads`` (:func:`liquid_heads`) the
-    total tank pressures and ullage volumes. Names, units and kinds come from the result's
-    contact directions and recovery items; ``attach``: recovery name -> (point, component).
-    ``band_hz`` > 0: the acceleration-type histories low-pass filtered to that band
-    (analysis/spectra.lowpass; ``[postprocess] acceleration_band_hz``), the unfiltered
-    history kept as ``raw``: the output-point accelerations and every recovery made from
-    the modal accelerations alone (``RecoveryItem.from_acceleration``: liquid pressures,
-    liquid inertia forces, a Nastran ATM), whose peaks are set by the highest modes."""
-    from liftoff.analysis.spectra import lowpass
-
-    out = []
-    for j, d in enumerate(result.contact_directions):
-        out.append(Item(f"post {d.contact} {d.component}", d.unit, result.contact_force[:, j], "contact_force"))
-    for it in result.recovery_items.values():
-        if it.category == CG_ACCELERATION:
-            out += load_factor_items(result, it, band_hz)
-            continue
-        if it.category == "modal":
-            continue
-        arr = result.recovered[it.name]
-        head = it.name
-        if it.category == "interface_force" and it.name in attach:
-            point, comp = attach[it.name]
-            head = f"attach {point} on {comp}"
-        band = band_hz if it.from_acceleration else 0.0
-        filtered = lowpass(arr, result.h, band)
-        for j, (lab, unit) in enumerate(zip(it.labels, it.units)):
-            out.append(Item(f"{head} {lab}", unit, filtered[:, j], it.category, raw=arr[:, j] if band > 0 else None))
-    dunits, aunits = result.output_units("a", "disp"), result.output_units("a", "acc")
-    for j, lab in enumerate(result.output_labels["a"]):
-        out.append(Item(f"disp {lab}", dunits[j], result.displacement["a"][:, j], "displacement"))
-        acc = result.acceleration["a"][:, j]
-        out.append(Item(f"acc {lab}", aunits[j], lowpass(acc, result.h, band_hz), "acceleration",
-                        raw=acc if band_hz > 0 else None))
-    if heads is not None:
-        out += tank_items(result, heads, band_hz)
-    return out
-
-
-G0 = 9.80665          # m/s^2, standard gravity: load factors are in units of it
-#: recovery category of a vehicle component's net c.g. acceleration (reduction.cg_acceleration_recovery,
-#: workflows/loads.recoveries): the reports turn it into the net c.g. load factor (:func:`load_factor_items`)
-CG_ACCELERATION = "cg_acceleration"
-
-
-def load_factor_items(result, it, band_hz: float = 0.0) -> list[Item]:
-    """A component's net c.g. load factor (g) from its c.g. acceleration item (category
-    ``cg_acceleration``, m/s^2; reduction.cg_acceleration_recovery): n = (a - g) / g0 with g the
-    run's gravity field (result metadata), the specific force of the component's c.g.: the net
-    non-gravity force on it over its weight, +1 g upward (z) at rest on the pad. An
-    acceleration-type history: band-limited like the other accelerations (``band_hz``)."""
-    from liftoff.analysis.spectra import lowpass
-
-    comp = it.name.removeprefix("cg_accel_")
-    gvec = np.asarray(result.metadata.get("gravity", (0.0, 0.0, 0.0)), dtype=float)
-    a = result.recovered[it.name]
-    n = (a - gvec[None, :]) / G0
-    filtered = lowpass(n, result.h, band_hz)
-    return [Item(f"load factor {comp} N{lab[-1].lower()}", "g", filtered[:, j], "cg_load_factor",
-                 raw=n[:, j] if band_hz > 0 else None) for j, lab in enumerate(it.labels)]
-
-
-def interface_histories(result, attach: dict) -> list:
-    """The attach points' load histories as analysis.interface_loads.InterfaceHistory, named as
-    the max/min rows name them (``attach <point> on <component>``); ``attach``: recovery name
-    -> (point, component)."""
-    from liftoff.analysis.interface_loads import InterfaceHistory
-
-    out = []
-    for it in result.recovery_items.values():
-        if it.category == "interface_force" and it.name in attach:
-            point, comp = attach[it.name]
-            out.append(InterfaceHistory(f"attach {point} on {comp}", tuple(it.labels), tuple(it.units),
-                                        result.recovered[it.name]))
-    return out
 
 
 def write_interface_loads(results: dict, out: Path, name: str, note: str = "") -> list[Path]:
@@ -284,112 +212,6 @@ def write_correlated(results: dict, out: Path, plots: bool = True, note: str = "
     return files
 
 
-def _plot_correlated(hulls, per_case: dict, out: Path) -> Path:
-    """correlated_loads.png: a row per attach point, a column per pair; every case's
-    trajectory (thin) and the hull (black)."""
-    from liftoff.analysis import correlated as cl
-
-    plt = _pyplot()
-    names = list(dict.fromkeys(h.interface for h in hulls))
-    pairs = [p for p, _, _ in cl.PAIRS]
-    fig, axs = plt.subplots(len(names), len(pairs), figsize=(10, 2.6 * len(names) + 1), squeeze=False)
-    for h in hulls:
-        ax = axs[names.index(h.interface)][pairs.index(h.pair)]
-        for case, (_, itfs) in per_case.items():
-            itf = next(i for i in itfs if i.name == h.interface)
-            ax.plot(cl.pair_values(itf.labels, itf.values, h.x_name) / 1e6,
-                    cl.pair_values(itf.labels, itf.values, h.y_name) / 1e6, lw=0.5, alpha=0.7, label=case)
-        ax.fill(h.x / 1e6, h.y / 1e6, fill=False, ec="k", lw=1.2)
-        ax.set_xlabel(f"{h.x_name} (M{h.x_unit})", fontsize=8)
-        ax.set_ylabel(f"{h.y_name} (M{h.y_unit})", fontsize=8)
-        ax.set_title(h.interface, fontsize=8)
-        ax.grid(True, alpha=0.3)
-    fig.suptitle("Correlated loads: axial force with bending moment, shear with torque (hull over time and cases)")
-    return _save_figure(plt, fig, out / "correlated_loads.png", axs[0][0], top=0.98, dpi=100)
-
-
-def plot_contours(csv_path: Path, out: Path) -> Path:
-    """correlated_statistics.png from correlated_statistics.csv: a row per attach point, a
-    column per pair; the envelope polygon over every case and the P99/90 normal and
-    order-statistic contours over the dispersed cases."""
-    from liftoff.analysis import correlated as cl
-    from liftoff.analysis.workbook import read_csv_table
-
-    plt = _pyplot()
-    _, cols, table = read_csv_table(csv_path)
-    ci = {c: k for k, c in enumerate(cols)}
-    poly: dict = {}
-    for r in table:
-        key = (r[ci["interface"]], r[ci["pair"]], r[ci["contour"]])
-        poly.setdefault(key, ([], [], r[ci["x_name"]], r[ci["y_name"]]))
-        poly[key][0].append(float(r[ci["x"]]))
-        poly[key][1].append(float(r[ci["y"]]))
-    names = list(dict.fromkeys(k[0] for k in poly))
-    pairs = [p for p, _, _ in cl.PAIRS]
-    style = {"envelope": ("k", "-", "envelope, every case"), "normal": ("C3", "--", "P99/90 normal"),
-             "order": ("C0", ":", "P99/90 order statistic")}
-    fig, axs = plt.subplots(len(names), len(pairs), figsize=(10, 2.6 * len(names) + 1), squeeze=False)
-    for (itf, pair, kind), (x, y, xn, yn) in poly.items():
-        ax = axs[names.index(itf)][pairs.index(pair)]
-        c, ls, label = style.get(kind, ("C2", "-", kind))
-        ax.fill(np.array(x) / 1e6, np.array(y) / 1e6, fill=False, ec=c, ls=ls, lw=1.2, label=label)
-        ax.set_xlabel(f"{xn} (MN)", fontsize=8)
-        ax.set_ylabel(f"{yn} (MN m)", fontsize=8)
-        ax.set_title(itf, fontsize=8)
-        ax.grid(True, alpha=0.3)
-    fig.suptitle("Correlated loads over the dispersed cases: support-function contours")
-    return _save_figure(plt, fig, out / "correlated_statistics.png", axs[0][0], top=0.98, dpi=100)
-
-
-def plot_spectra(ctx) -> list[Path]:
-    """``srs.png`` (the SRS envelope over the cases of every selected item, one panel per
-    item, a line per Q, log-log; from srs.csv) and ``psd_<case>.png`` (each case's PSD of the
-    selected items, log-log; from psd_<case>.csv): the spectra the tables hold, drawn."""
-    if not ctx.plots:
-        return []
-    from liftoff.analysis.workbook import read_csv_table
-
-    plt = _pyplot()
-
-    files = []
-    if (ctx.out / "srs.csv").is_file():
-        _, cols, rows = read_csv_table(ctx.out / "srs.csv")
-        ci = {c: k for k, c in enumerate(cols)}
-        items = list(dict.fromkeys(r[ci["item"]] for r in rows))
-        n = len(items)
-        fig, axs = plt.subplots((n + 1) // 2, 2, figsize=(11, 2.8 * ((n + 1) // 2) + 1), squeeze=False)
-        for ax, item in zip(axs.flat, items):
-            sel = [r for r in rows if r[ci["item"]] == item]
-            for q in dict.fromkeys(r[ci["Q"]] for r in sel):
-                rq = [r for r in sel if r[ci["Q"]] == q]
-                ax.loglog([r[ci["freq_Hz"]] for r in rq], [r[ci["envelope"]] for r in rq], lw=1, label=f"Q = {q:g}")
-            ax.set_title(item, fontsize=8)
-            ax.set_xlabel("frequency (Hz)", fontsize=8)
-            ax.set_ylabel(f"SRS ({sel[0][ci['unit']]})", fontsize=8)
-            ax.grid(True, which="both", alpha=0.3)
-            ax.legend(fontsize=7)
-        for ax in list(axs.flat)[n:]:
-            ax.set_visible(False)
-        fig.suptitle("Shock response spectra, absolute acceleration, envelope over the cases")
-        files.append(_save_figure(plt, fig, ctx.out / "srs.png", dpi=100))
-    for case in ctx.results:
-        src = ctx.out / f"psd_{case}.csv"
-        if not src.is_file():
-            continue
-        _, cols, rows = read_csv_table(src)
-        data = np.array(rows, dtype=float)
-        fig, ax = plt.subplots(figsize=(10, 5))
-        for k, col in enumerate(cols[1:], start=1):
-            y = np.where(data[:, k] > 0, data[:, k], np.nan)
-            ax.loglog(data[1:, 0], y[1:], lw=0.8, label=col)
-        ax.set_xlabel("frequency (Hz)")
-        ax.set_ylabel("PSD (unit^2/Hz of each item)")
-        ax.grid(True, which="both", alpha=0.3)
-        fig.suptitle(f"Power spectral density (Welch) — case {case}")
-        files.append(_save_figure(plt, fig, ctx.out / f"psd_{case}.png", ax, dpi=100, right=0.7))   # long labels
-    return files
-
-
 #: (sheet, CSV file) of the run's tables the workbook holds, in order (those present)
 WORKBOOK_TABLES = (("time-consistent loads", "interface_loads_envelope.csv"), ("correlated loads", "correlated_loads.csv"),
                    ("design loads", "design_loads.csv"),
@@ -412,43 +234,6 @@ def write_workbook(out: Path, title: str, units: str = "SI") -> list[Path]:
 
 
 # ------------------------------------------------------------------ hydroelastic tanks
-LIQUID_PRESSURE, ULLAGE = "_liquid_pressure", "_ullage_volume"     # component recovery names end so
-
-
-def liquid_heads(cp) -> dict[str, np.ndarray]:
-    """{recovery name: head (Pa) per column} of the liquids' pressure items: the pressure
-    rows (over the vehicle's modes) times the modal acceleration of a uniform acceleration
-    -g, Phi^T M RB (-g) (eq. 14; exact for the rigid-body part, which is all a uniform field
-    has): the hydrostatic head under gravity, which the total tank pressure adds to the
-    dynamic pressure from the accelerations (reduction.liquid)."""
-    pr = cp.problem
-    g = np.asarray(pr.forcing.gravity, float).reshape(-1)[:3]
-    out = {}
-    for r in pr.recoveries:
-        if r.name.endswith(LIQUID_PRESSURE) and r.acc is not None and r.body == "a":
-            out[r.name] = r.acc @ pr.body_a.modal_gravity(-g)
-    return out
-
-
-def tank_items(result, heads: dict, band_hz: float = 0.0) -> list[Item]:
-    """Total tank pressure (dynamic + head) and ullage volume change histories; ``band_hz``
-    > 0: the dynamic pressure (from the accelerations) in that band, as in :func:`items`."""
-    from liftoff.analysis.spectra import lowpass
-
-    out = []
-    for it in result.recovery_items.values():
-        if it.name in heads:
-            dynamic, head = result.recovered[it.name], heads[it.name]
-            band = band_hz if it.from_acceleration else 0.0
-            arr = lowpass(dynamic, result.h, band) + head
-            raw = dynamic + head if band > 0 else None
-            out += [Item(f"tank pressure {lab}", "Pa", arr[:, j], "tank_pressure", raw=None if raw is None else raw[:, j])
-                    for j, lab in enumerate(it.labels)]
-        elif it.name.endswith(ULLAGE):
-            arr = result.recovered[it.name]
-            out += [Item(f"ullage volume change {lab}", "m^3", arr[:, j], "ullage_volume")
-                    for j, lab in enumerate(it.labels)]
-    return out
 
 
 def bulge_modes(cbs: dict, threshold: float = 0.25) -> list[dict]:
@@ -509,23 +294,6 @@ def slosh_summary(cbs: dict, rows_env: list, components: dict | None = None) -> 
     return out
 
 
-def tank_plots(result, cp, out: Path, case: str, finish) -> None:
-    """ullage_volume_<case>.png and tank_pressure_<case>.png (the reference's figures 5, 6)."""
-    import matplotlib.pyplot as plt
-
-    its = tank_items(result, liquid_heads(cp))
-    for cat, name, title, scale, unit in (("ullage_volume", "ullage_volume", "Ullage volume change", 1e3, "litre"),
-                                          ("tank_pressure", "tank_pressure", "Tank-bottom pressure", 1e-3, "kPa")):
-        sel = [it for it in its if it.category == cat]
-        if not sel:
-            continue
-        fig, axs = plt.subplots(len(sel), 1, figsize=(10, 3 + 2.5 * len(sel)), sharex=True, squeeze=False)
-        for ax, it in zip(axs[:, 0], sel):
-            ax.plot(*display_points(result.time, it.values * scale), lw=0.8, label=it.name)
-            ax.set_ylabel(f"{it.name.split()[-1]} ({unit})")
-        finish(fig, list(axs[:, 0]), name, title)
-
-
 def with_errors(rows: list[dict], rows_half: list[dict] | None) -> list[dict]:
     """The max/min ``rows`` of a run at step h with ``max_err`` and ``min_err``: the estimated
     error (value - reported, signed) of each extreme from the same rows of the run at h/2
@@ -542,242 +310,9 @@ def with_errors(rows: list[dict], rows_half: list[dict] | None) -> list[dict]:
 
 
 # ------------------------------------------------------------------ twang
-def release_time(cp) -> float | None:
-    """The first hold-down release (booster ignition in the lift-off scenario), None if none."""
-    rel = [p.release_time for p in cp.case.posts if np.isfinite(p.release_time)]
-    return min(rel) if rel else None
-
-
-@dataclass
-class Twang:
-    """Lateral (x, y) motion of the recovery's ``top`` point (the tank tip), m.
-
-    ``pad``: in the pad frame (the pad's foundation is the ground), from its position at t0
-    (the static state on the pad before main-engine start): the twang as engineers quote
-    it. ``rel_cg``: the top's lateral displacement less the c.g.'s (eq. 23), as before.
-    Peaks are taken before the first hold-down release ``t_ign`` (the whole run without
-    one); ``at_ign``: the pad-frame twang at ``t_ign``, interpolated in time."""
-
-    point: str
-    time: np.ndarray
-    pad: np.ndarray
-    rel_cg: np.ndarray
-    t_ign: float | None
-
-    def _peak(self, xy: np.ndarray) -> int:
-        n = self.time.size if self.t_ign is None else max(int(np.searchsorted(self.time, self.t_ign, "right")), 1)
-        return int(np.argmax(np.hypot(xy[:n, 0], xy[:n, 1])))
-
-    @property
-    def i_peak(self) -> int:
-        return self._peak(self.pad)
-
-    @property
-    def i_peak_cg(self) -> int:
-        return self._peak(self.rel_cg)
-
-    @property
-    def at_ign(self) -> np.ndarray | None:
-        if self.t_ign is None or not self.time[0] <= self.t_ign <= self.time[-1]:
-            return None
-        return np.array([np.interp(self.t_ign, self.time, self.pad[:, j]) for j in range(2)])
-
-    def line(self) -> str:
-        """One summary line: pad-frame peak and value at the first hold-down release (the
-        Shuttle's booster ignition), relative-to-c.g. peak."""
-        i, k = self.i_peak, self.i_peak_cg
-        peak = float(np.hypot(*self.pad[i]))
-        out = (f"twang at {self.point} (pad frame, from t0): peak {peak:.3f} m at t = {self.time[i]:.2f} s "
-               f"(x {self.pad[i, 0]:+.3f}, y {self.pad[i, 1]:+.3f} m)")
-        ign = self.at_ign
-        if ign is not None:
-            v = float(np.hypot(*ign))
-            out += (f"; at hold-down release (t = {self.t_ign:.2f} s) {v:.3f} m"
-                    + (f" = {100 * v / peak:.0f} % of the peak" if peak > 0 else ""))
-        return out + f"; relative to the c.g.: peak {float(np.hypot(*self.rel_cg[k])):.3f} m at t = {self.time[k]:.2f} s"
-
-
-def twang(result, cp) -> Twang | None:
-    """The twang of a lift-off case (None without a ``[recovery] top`` point)."""
-    top = cp.case.recovery.top
-    if not top:
-        return None
-    labels = result.output_labels["a"]
-    cg_item = result.items("cg_motion")[0]
-    cg = result.recovered[cg_item.name][:, _translations(cg_item)[:2]]
-    u = result.displacement["a"][:, [labels.index(lab) for lab in point_labels(top, TRANSLATIONS[:2])]]
-    return Twang(top, result.time, u - u[0], u - cg, release_time(cp))
 
 
 # ------------------------------------------------------------------ plots
-RELEASE_WINDOW = (-0.05, 0.45)   # s about the first release: the zoom panel of the plots
-
-
-def _pyplot():
-    """matplotlib.pyplot on the Agg backend (files only, no display)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def _save_figure(plt, fig, path: Path, legend_from=None, top: float = 0.97, dpi: int = 110,
-                 right: float = 0.84) -> Path:
-    """Lay out, save and close a figure: tight layout below the title (a fixed layout where
-    matplotlib cannot fit one, instead of its warning on stderr) and, with ``legend_from`` (an
-    axes), that axes' legend right of the panels (which end at ``right``), outside the data."""
-    import warnings
-
-    with warnings.catch_warnings(record=True) as caught:    # matplotlib's "tight layout not applied"
-        warnings.simplefilter("always")
-        fig.tight_layout(rect=(0, 0, 1, top))
-    if any("tight" in str(w.message).lower() for w in caught):
-        fig.subplots_adjust(left=0.09, bottom=0.08, top=0.9, hspace=0.4, wspace=0.2)
-    handles, labs = legend_from.get_legend_handles_labels() if legend_from is not None else ([], [])
-    if handles:
-        fig.subplots_adjust(right=right)
-        fig.legend(handles, labs, fontsize=7, loc="center left", bbox_to_anchor=(right + 0.015, 0.5), frameon=False)
-    fig.savefig(path, dpi=dpi)
-    plt.close(fig)
-    return path
-
-
-class _Figures:
-    """The history plots' common frame: the whole run | the release window (:data:`RELEASE_WINDOW`
-    about the first release), engine starts (grey, dotted, named) and the release (red,
-    dashed) marked, the legend right of the panels; ``paths`` collects the PNGs written."""
-
-    def __init__(self, plt, result, cp, out: Path, case: str):
-        self.plt, self.out, self.case, self.paths = plt, out, case, []
-        t = result.time
-        rel = [p.release_time for p in cp.case.posts if np.isfinite(p.release_time)]
-        self.t_rel = min(rel) if rel else None
-        self.starts: dict[float, list[str]] = {}
-        for e in cp.case.engines:
-            if t[0] <= e.start <= t[-1]:
-                self.starts.setdefault(round(float(e.start), 6), []).append(e.name)
-
-    def panels(self, nrows: int, height: float):
-        """(fig, axes (nrows, 2)): the whole run | the release window, each row sharing y."""
-        ncol = 2 if self.t_rel is not None else 1
-        return self.plt.subplots(nrows, ncol, figsize=(14 if ncol == 2 else 11, height), squeeze=False,
-                                 sharex="col", sharey="row", gridspec_kw={"width_ratios": [2, 1][:ncol]})
-
-    def draw(self, axs, row: int, x, y, **kw):
-        """A history in the whole-run panel and, restricted to the window, in the release one
-        (each through :func:`display_points`)."""
-        for k, ax in enumerate(axs[row]):
-            xs, ys = x, y
-            if k == 1 and self.t_rel is not None:
-                lo, hi = np.searchsorted(x, [self.t_rel + RELEASE_WINDOW[0], self.t_rel + RELEASE_WINDOW[1]])
-                xs, ys = x[max(lo - 1, 0):hi + 1], y[max(lo - 1, 0):hi + 1]
-            ax.plot(*display_points(xs, ys), **{**kw, "label": kw.get("label") if k == 0 else None})
-
-    def finish(self, fig, ax_list, name, title):
-        ax_arr = np.atleast_2d(np.asarray(ax_list, dtype=object))
-        if ax_arr.shape[0] == 1 and ax_arr.shape[1] > 1 and not isinstance(ax_list[0], np.ndarray):
-            ax_arr = ax_arr.T                      # a plain list of axes: one column
-        t_rel, lo, hi = self.t_rel, *RELEASE_WINDOW
-        for r, row in enumerate(ax_arr):
-            for k, ax in enumerate(row):
-                for ts, names in self.starts.items():
-                    ax.axvline(ts, color="0.45", ls=":", lw=0.9)
-                    if r == 0:
-                        ax.annotate(", ".join(names), (ts, 1.0), xycoords=("data", "axes fraction"), rotation=90,
-                                    fontsize=6, va="top", ha="right", color="0.3")
-                if t_rel is not None:
-                    ax.axvline(t_rel, color="red", ls="--", lw=1, label="release" if (r == 0 and k == 0) else None)
-                ax.grid(True, alpha=0.3)
-                if k == 1:
-                    ax.set_xlim(t_rel + lo, t_rel + hi)
-                    if r == 0:
-                        ax.set_title(f"release window ({t_rel + lo:g} to {t_rel + hi:g} s)", fontsize=8)
-        for ax in ax_arr[-1]:
-            ax.set_xlabel("time (s)")
-        fig.suptitle(f"{title} — case {self.case}")
-        self.paths.append(_save_figure(self.plt, fig, self.out / f"{name}_{self.case}.png", ax_arr[0][0]))
-
-
-def plots(result, cp, out: Path, case: str) -> list[Path]:
-    """PNG time histories: post forces, attach forces and moments, c.g./top motion, payload
-    acceleration, tank pressures (:class:`_Figures`: the whole run beside the release window,
-    engine starts and release marked, legends outside the data)."""
-    plt = _pyplot()
-    t = result.time
-    kit = _Figures(plt, result, cp, out, case)
-    panels, draw, finish, paths = kit.panels, kit.draw, kit.finish, kit.paths
-
-    # post forces: axial (normal, + compression) and the magnitude of the lateral translations
-    fig, axs = panels(2, 7)
-    dirs, F = result.contact_directions, result.contact_force
-    for c, name in enumerate(result.contact_names):
-        ax = result.axial_column(c)
-        lat = [j for j in result.directions_of(c) if not dirs[j].axial and dirs[j].component in TRANSLATIONS]
-        draw(axs, 0, t, dirs[ax].normal_sign * F[:, ax] / 1e6, lw=0.8, label=name)
-        draw(axs, 1, t, np.sqrt(np.sum(F[:, lat] ** 2, axis=1)) / 1e6, lw=0.8)
-    axs[0][0].set_ylabel("axial force on vehicle (MN)\n(+ compression)")
-    axs[1][0].set_ylabel("lateral force magnitude (MN)")
-    finish(fig, axs, "post_forces", "Hold-down post forces")
-
-    att = [it for it in result.items("interface_force") if it.name in cp.attach]
-    for kind, title, unit_scale in (("T", "Attach forces (on the named component)", "MN"),
-                                    ("R", "Attach moments (on the named component)", "MN m")):
-        cols = [k for k, lab in enumerate(att[0].labels) if lab.startswith(kind)] if att else []
-        if not cols:
-            continue
-        fig, axs = panels(len(cols), 2.6 * len(cols) + 1)
-        for it in att:
-            point, comp = cp.attach[it.name]
-            for r, j in enumerate(cols):
-                draw(axs, r, t, result.recovered[it.name][:, j] / 1e6, lw=0.8, label=f"{point} ({comp})")
-        for r, j in enumerate(cols):
-            axs[r][0].set_ylabel(f"{att[0].labels[j]} ({unit_scale})")
-        finish(fig, axs, "attach_forces" if kind == "T" else "attach_moments", title)
-
-    fig, axs = plt.subplots(3, 1, figsize=(10, 9), sharex=True)
-    cg_item = result.items("cg_motion")[0]
-    cg, cgc = result.recovered[cg_item.name], _translations(cg_item)
-    for j in cgc:
-        axs[0].plot(*display_points(t, cg[:, j]), lw=0.9, label=f"c.g. {cg_item.labels[j]} ({cg_item.units[j]})")
-    labels = result.output_labels["a"]
-    tw = twang(result, cp)
-    if tw is not None:
-        on = slice(None) if tw.t_ign is None else t <= tw.t_ign   # on the pad (then it flies)
-        for j, c in enumerate("xy"):
-            axs[1].plot(*display_points(t[on], tw.pad[on, j]), lw=1.2, label=f"{tw.point} {c}, pad frame (from t0; to release)")
-        for j, c in enumerate("xy"):
-            axs[1].plot(*display_points(t, tw.rel_cg[:, j]), lw=0.8, ls=":", label=f"{tw.point} {c} rel. to c.g.")
-        i = tw.i_peak
-        axs[1].plot(t[i], tw.pad[i, 1], "kv", ms=6, label=f"peak {np.hypot(*tw.pad[i]):.2f} m")
-        if tw.at_ign is not None:
-            axs[1].plot(tw.t_ign, tw.at_ign[1], "ko", mfc="none", ms=6,
-                        label=f"at ignition {np.hypot(*tw.at_ign):.2f} m")
-    if result.rigid_body_motion_a is not None:
-        for j in range(3):
-            axs[2].plot(*display_points(t, np.degrees(result.rigid_body_motion_a[:, 3 + j])), lw=0.9, label=f"R{'xyz'[j]}")
-        axs[2].legend(fontsize=7)
-    axs[0].set_ylabel("c.g. motion (m)")
-    axs[1].set_ylabel("tank-tip lateral (m)")
-    axs[2].set_ylabel("attitude, rigid-body\nrotation (deg)")
-    axs[1].legend(fontsize=7, loc="upper left")
-    finish(fig, list(axs), "motion", "C.g. motion, tank-tip twang, attitude")
-
-    pay = cp.case.recovery.payload
-    if pay:
-        fig, axs = panels(1, 4.5)
-        for lab in point_labels(pay, TRANSLATIONS):
-            draw(axs, 0, t, result.acceleration["a"][:, labels.index(lab)] / G0, lw=0.8, label=lab)
-        axs[0][0].set_ylabel(f"{pay} acceleration\n(g = {G0} m/s^2, unfiltered)")
-        finish(fig, axs, "payload_acc", "Payload-station acceleration")
-    tank_plots(result, cp, out, case, finish)
-    return paths
-
-
-def _translations(item) -> list[int]:
-    """Columns of a recovery item labelled with a translation component (Tx Ty Tz), in order."""
-    return [item.labels.index(c) for c in TRANSLATIONS if c in item.labels]
 
 
 # ------------------------------------------------------------------ snapshots
