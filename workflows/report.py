@@ -147,6 +147,57 @@ def write_recovery_op4(stack, cp, out: Path) -> list[Path]:
     return files + [write_text(out / "recovery_vehicle_op4.csv", "\n".join(index) + "\n")]
 
 
+def write_cb_checks(stack, cp, out: Path) -> list[Path]:
+    """``cb_checks.txt`` and ``cb_checks.json``: reduction.cb_check of every component's
+    Craig-Bampton model (symmetry, definiteness, rigid-body residual about its first boundary
+    point, mass properties, fixed-interface effective masses, free-free frequencies of the CB
+    model; SI units), the checks a Nastran user runs on a delivered CB model (pyyeti's
+    cbcheck). The FE comparison is not run here (a free-free eigensolve of each FE model:
+    ``cb_check(cb, component)`` from Python)."""
+    import json
+
+    from liftoff.reduction import cb_check
+
+    checks = [cb_check(cb) for cb in stack.cbs.values()]
+    text = "\n\n".join(c.text for c in checks)
+    return [write_text(out / "cb_checks.txt", text + "\n"),
+            write_text(out / "cb_checks.json", json.dumps({"units": "SI (kg, m, kg m^2, Hz)",
+                                                           "components": [c.summary for c in checks]},
+                                                          indent=1, default=float) + "\n")]
+
+
+#: the vehicle's elastic system modes written as FE fields (modes_vehicle.vtu)
+MODE_SHAPE_FIELDS = 12
+
+
+def write_mode_shapes_vtu(stack, cp, out: Path, n_modes: int = MODE_SHAPE_FIELDS) -> list[Path]:
+    """``modes_vehicle.vtu``: the vehicle's first ``n_modes`` elastic system modes as nodal
+    vector fields ``mode_<k>_<f>Hz`` (m per unit modal coordinate, unit modal mass) over
+    every FE component of the vehicle (cell data ``part``: 0, 1, ... in the order of the
+    vehicle's components, as the summary lists them), recovered through each
+    component's CB model (reduction.field_displacement); nothing without FE components."""
+    from liftoff.fem.output import write_vtu
+    from liftoff.reduction import field_displacement
+
+    parts = [(name, comp) for name, comp in stack.components.items()
+             if name != "pad" and comp.field_map is not None and comp.nodes is not None]
+    vm = stack.vehicle_modes
+    modes = list(range(vm.n_rigid, min(vm.n_rigid + n_modes, vm.n_modes)))
+    if not parts or not modes:
+        return []
+    offsets = np.cumsum([0] + [c.nodes.shape[0] for _, c in parts])
+    nodes = np.vstack([c.nodes for _, c in parts])
+    blocks = [(c.cell_type, np.asarray(c.cells) + off) for (_, c), off in zip(parts, offsets)]
+    fields = {}
+    for j in modes:
+        q = np.zeros(vm.n_modes)
+        q[j] = 1.0
+        fields[f"mode_{j + 1:03d}_{vm.freq_hz[j]:.4g}Hz"] = np.vstack(
+            [field_displacement(stack.vehicle_asm, vm, name, c, q).reshape(-1, 3) for name, c in parts])
+    part_ids = [np.full(len(c.cells), k, dtype=np.int32) for k, (_, c) in enumerate(parts)]
+    return [write_vtu(out / "modes_vehicle.vtu", nodes, blocks, None, fields, cell_data={"part": part_ids})]
+
+
 def write_modal_tables(stack, cp, out: Path) -> list[Path]:
     """The modal deliverables of the stack (reduction/modal_mass.py): ``modes_vehicle.csv``
     (the vehicle's free-free system modes the transient uses: rigid, elastic, residual

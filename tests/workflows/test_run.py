@@ -336,6 +336,36 @@ def test_cb_stages_on_a_pool_give_the_sequential_stack(tmp_path):
 @pytest.mark.fem
 @pytest.mark.slow
 @pytest.mark.skipif(not HAVE_FE, reason="needs dolfinx and gmsh")
+def _check_modal_deliverables(out, stack):
+    """cb_checks.json: every vehicle component's CB model free-free (rigid-body residual OK)
+    and their CB masses adding up to the vehicle's rigid-body mass (the assembly adds none:
+    1e-9); modes_vehicle.vtu: the first elastic system modes as finite, distinct nodal fields
+    over the vehicle's FE nodes, named with the frequencies of modes_vehicle.csv."""
+    import json
+
+    import meshio
+
+    checks = {c["name"]: c for c in json.loads((out / "cb_checks.json").read_text())["components"]}
+    assert set(checks) == set(stack.cbs)
+    vehicle = [n for n in checks if n != "pad"]
+    assert all(checks[n]["rb_ok"] for n in vehicle)
+    mass = sum(checks[n]["mass_properties_cb"]["mass"] for n in vehicle)
+    assert mass == pytest.approx(stack.vehicle.rigid_body_mass[0, 0], rel=1e-9)
+    assert "Craig-Bampton check: core" in (out / "cb_checks.txt").read_text()
+    mesh = meshio.read(out / "modes_vehicle.vtu")
+    assert mesh.points.shape[0] == sum(stack.components[n].nodes.shape[0] for n in vehicle)
+    names = sorted(mesh.point_data)
+    assert len(names) == min(12, stack.vehicle_modes.n_modes - 6)
+    freqs = [float(ln.split(",")[1]) for ln in (out / "modes_vehicle.csv").read_text().splitlines()
+             if ln[:1].isdigit()]
+    for k, name in enumerate(names):
+        assert name == f"mode_{k + 7:03d}_{freqs[k + 6]:.4g}Hz"
+        u = mesh.point_data[name]
+        assert u.shape == (mesh.points.shape[0], 3) and np.all(np.isfinite(u)) and np.abs(u).max() > 0
+    a, b = (mesh.point_data[n].ravel() for n in names[:2])
+    assert abs(a @ b) < 0.999 * np.linalg.norm(a) * np.linalg.norm(b)     # two modes, two shapes
+
+
 def test_fe_scenario_end_to_end_coarse(tmp_path, capsys, monolithic):
     """The default stack in 3-D solids on coarse meshes, few modes: geometry -> FE -> CB ->
     system modes -> transient -> reports, in one go (under a minute on 2 cores). Then,
@@ -360,6 +390,7 @@ def test_fe_scenario_end_to_end_coarse(tmp_path, capsys, monolithic):
     cache = StageCache(tmp_path / "cache")
     stack = build_stack(case.model, cache, progress=False)
     assert all(how == "hit" for _, _, how, _ in cache.log)
+    _check_modal_deliverables(tmp_path / "fe", stack)
     case = replace(case, time=replace(case.time, t_end=3.0), control=replace(case.control, enabled=False),
                    softening=replace(case.softening, enabled=False))
     errs = monolithic.errors(build_problem(case, stack, progress=False).problem, (2, 4))
