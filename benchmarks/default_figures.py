@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import json
 import re
+import shutil
 import sys
 import tempfile
 from pathlib import Path
@@ -77,10 +78,26 @@ def _peak(row: dict) -> tuple[float, float, str]:
     return row["min"], row["t_min"], row["case_min"]
 
 
-def default_figures(cache: Path | None) -> dict:
-    """Every figure of the default run that the documents quote (SI units)."""
+#: the default run's plots README shows (analysis.plots: post and attach forces of the
+#: nominal case, the whole run and the release window), copied to docs/figures/default_<name>
+README_PLOTS = ("post_forces_nominal.png", "attach_forces_nominal.png")
+
+
+def default_figures(cache: Path | None, plots_to: Path | None = None) -> dict:
+    """Every figure of the default run that the documents quote (SI units); with
+    ``plots_to``, the plots README shows (:data:`README_PLOTS`) drawn from the same run into
+    that folder as ``default_<name>``."""
     with tempfile.TemporaryDirectory() as tmp:
         out = run_default_like(lambda d: d, Path(tmp) / "run", cache)
+        if plots_to is not None:
+            from liftoff.analysis.plots import plots
+
+            res, cp = out.results["nominal"]
+            drawn = Path(tmp) / "plots"
+            drawn.mkdir()
+            plots(res, cp, drawn, "nominal")
+            for name in README_PLOTS:
+                shutil.copyfile(drawn / name, Path(plots_to) / f"default_{name}")
     stack = next(iter(out.stacks.values()))
     v, p = stack.vehicle, stack.pad
     res, cp = out.results["nominal"]
@@ -463,8 +480,8 @@ def main(argv=None) -> int:
 
     if args.render_only:
         fig = json.loads(DEFAULT_JSON.read_text())
-    else:
-        fig = json.loads(json.dumps(default_figures(args.cache)))     # as the JSON file holds it
+    else:                                                             # as the JSON file holds it
+        fig = json.loads(json.dumps(default_figures(args.cache, None if args.check else FIGURES)))
     if args.check:
         diff = differences(fig, json.loads(DEFAULT_JSON.read_text()))
         print("\n".join(diff) if diff else "the checked-in figures are the current code's")
