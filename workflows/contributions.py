@@ -8,12 +8,15 @@ envelope, which is then the compared one). After the new run's cases, each named
 solved three more times: the earlier case on the earlier model (its stages from the stage
 cache, or built), the new case on the earlier model, and the new case on the new model
 with the earlier damping (every elastic mode's ratio scaled by old zeta / new zeta). The
-rows go to ``contributions.csv`` (SI units, column ``unit``).
+rows go to ``contributions.csv`` (SI units, column ``unit``). Where the swapped problems
+cannot be built (a new case that names points the earlier model lacks), the run's other
+outputs are written and a warning says that no split was.
 """
 from __future__ import annotations
 
 import dataclasses
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -100,7 +103,11 @@ def write(sc, old_sc, prep, cache, results: dict, old_rows: dict, out: Path, ech
     from liftoff.analysis.contributions import FIELDS, split
 
     t0 = time.perf_counter()
-    rows = split(old_rows, states(sc, old_sc, prep, cache, results, echo))
+    try:
+        rows = split(old_rows, states(sc, old_sc, prep, cache, results, echo))
+    except InputError as exc:       # the run's other outputs stand; the split is said not made
+        warnings.warn(f"--contributions: no split written ({exc})")
+        return []
     head = ("# liftoff contributions: each compared peak (side max or min of an envelope row) split into other "
             "(the earlier run against its scenario rebuilt on today's code: code, files or cases changed), "
             "forcing (the new cases on the earlier model), modes (the new model, earlier damping) and damping "

@@ -115,3 +115,23 @@ def test_contributions_are_checked_before_any_stage(earlier, tmp_path, capsys):
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and expect in err, err
         assert not (tmp_path / "c").exists()            # refused before the model stages
+
+
+def test_a_split_that_cannot_be_made_leaves_the_run_and_warns(earlier, monkeypatch, capsys):
+    """A new case that cannot run on the earlier model: the run's outputs are written, a
+    one-line warning says no split was, and there is no contributions.csv."""
+    from liftoff.core.errors import InputError
+    from liftoff.workflows import contributions
+
+    def fail(*a, **k):
+        raise InputError("the new case 'nominal' cannot run on the earlier model (point 'x' is not on it)")
+
+    monkeypatch.setattr(contributions, "states", fail)
+    tmp, old = earlier
+    new = _write(tmp / "same.toml", _base())
+    assert main(["run", str(new), "--out", str(tmp / "same"), "--cache", str(tmp / "c"), "--no-progress",
+                 "--no-snapshots", "--no-plots", "--no-error-estimate", "--compare", str(tmp / "old"),
+                 "--contributions", str(old)]) == 0
+    err = capsys.readouterr().err
+    assert "liftoff: warning: --contributions: no split written (the new case 'nominal' cannot run" in err
+    assert (tmp / "same" / "compare.csv").is_file() and not (tmp / "same" / "contributions.csv").exists()
