@@ -158,8 +158,13 @@ def write_cb_checks(stack, cp, out: Path) -> list[Path]:
 
     from liftoff.reduction import cb_check
 
-    checks = [cb_check(cb) for cb in stack.cbs.values()]
-    text = "\n\n".join(c.text for c in checks)
+    checks, skipped = [], []
+    for name, cb in stack.cbs.items():
+        if cb.n_boundary == 0:           # rigid ground (type = "rigid_ground"): nothing moves, nothing to check
+            skipped.append(f"Craig-Bampton check: {name}: no boundary DOFs ({cb.n_modes} modes), not checked")
+            continue
+        checks.append(cb_check(cb))
+    text = "\n\n".join([c.text for c in checks] + skipped)
     return [write_text(out / "cb_checks.txt", text + "\n"),
             write_text(out / "cb_checks.json", json.dumps({"units": "SI (kg, m, kg m^2, Hz)",
                                                            "components": [c.summary for c in checks]},

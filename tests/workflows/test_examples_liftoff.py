@@ -232,3 +232,6 @@ def test_single_stick_on_rigid_ground(run, tmp_path_factory):
     assert res.contact_force[0, tz].sum() == pytest.approx(m * g, rel=1e-9)
     assert all(r["separation_time"] is not None for r in res.contact_summary())
     assert "pad: rigid ground" in out.summary
+    # the modal deliverables say the ground has no CB model to check (it has no boundary DOFs)
+    assert "Craig-Bampton check: pad: no boundary DOFs (0 modes), not checked" in \
+        (folder / "out" / "cb_checks.txt").read_text()
