@@ -16,6 +16,12 @@ Writes ``docs/figures/convergence.json`` (default ``--json``), which
 ``benchmarks/default_figures.py`` renders into README.md and docs/workflow.md; the test
 tests/workflows/test_default_figures.py checks that its default row is what the current
 code gives. Model stages use the stage cache (default out/.liftoff-cache).
+
+Memory: the "mesh x0.7" variant built its Craig-Bampton stages two at a time (the default
+$LIFTOFF_MODEL_WORKERS on 2 cores) past the 24 GB of this machine (killed at 17 GB resident,
+2026-11-26); with ``LIFTOFF_MODEL_WORKERS=1`` it ran. Variants can be run a few at a time
+with ``--only NAME ... --reuse`` (the others taken from the JSON file), so that a killed run
+loses only its own variants.
 """
 from __future__ import annotations
 
