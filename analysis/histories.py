@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from liftoff.core.labels import TRANSLATIONS, point_labels
+from liftoff.core.units import G0        # standard gravity: load factors are in units of it
 
 from .tables import Item
 
@@ -54,9 +55,6 @@ def items(result, attach: dict, heads: dict | None = None, band_hz: float = 0.0)
     if heads is not None:
         out += tank_items(result, heads, band_hz)
     return out
-
-
-G0 = 9.80665          # m/s^2, standard gravity: load factors are in units of it
 
 
 #: recovery category of a vehicle component's net c.g. acceleration (reduction.cg_acceleration_recovery,

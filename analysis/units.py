@@ -18,9 +18,8 @@ from __future__ import annotations
 import re
 
 from liftoff.core.errors import InputError
-
-_IN = 0.0254                          # m, exact
-_LBF = 0.45359237 * 9.80665           # N, exact
+from liftoff.core.units import INCH as _IN
+from liftoff.core.units import LBF as _LBF
 
 #: unit system -> {SI unit: (its unit, SI value of one of it)}; units absent stay as they are
 SYSTEMS: dict[str, dict[str, tuple[str, float]]] = {
@@ -40,6 +39,7 @@ _SUFFIX = {"_m": "m", "_pa": "Pa", "_n": "N", "_kg": "kg"}
 
 
 def check_system(system: str) -> str:
+    """``system`` if it is one of :data:`SYSTEMS`, else a one-line InputError."""
     if system not in SYSTEMS:
         raise InputError(f"unit system {system!r} is not one of {', '.join(SYSTEMS)}")
     return system
@@ -47,8 +47,7 @@ def check_system(system: str) -> str:
 
 def factor(unit: str, system: str) -> tuple[str, float]:
     """(the unit in ``system``, the number to divide an SI value by) for an SI ``unit``."""
-    new, si = SYSTEMS[check_system(system)].get(str(unit).strip(), (unit, 1.0))
-    return new, si
+    return SYSTEMS[check_system(system)].get(str(unit).strip(), (unit, 1.0))
 
 
 def convert_table(columns: list[str], rows: list[list], system: str) -> tuple[list[str], list[list]]:
@@ -73,7 +72,7 @@ def convert_table(columns: list[str], rows: list[list], system: str) -> tuple[li
             cols[j] = f"{c} ({new})"
             continue
         for suffix, unit in _SUFFIX.items():
-            if low.endswith(suffix) and low not in ("unit",):
+            if low.endswith(suffix):
                 new, f = factor(unit, system)
                 if f != 1.0:
                     cols[j], col_factor[j] = c[: -len(suffix)] + "_" + new.replace(" ", "_").replace("/", "_per_"), f

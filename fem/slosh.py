@@ -59,8 +59,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from liftoff.core.errors import InputError
+from liftoff.core.units import G0
 
-G0 = 9.80665
 LATERAL_MASS = 1e-3       # a mode with a slosh mass below this fraction of its liquid's is not reported
 
 

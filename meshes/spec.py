@@ -48,6 +48,7 @@ import numpy as np
 
 from liftoff.core.errors import InputError
 from liftoff.core.records import write_text
+from liftoff.core.units import G0
 
 
 def require_positive(owner: str, **values: float) -> None:
@@ -233,7 +234,7 @@ class Liquid:
     center: np.ndarray = field(default_factory=lambda: np.zeros(3))
     points: dict = field(default_factory=dict)
     slosh_modes: int = 0
-    gravity: float = 9.80665
+    gravity: float = G0
     ullage_pressure: float = 0.0
 
     def __post_init__(self) -> None:

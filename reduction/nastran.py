@@ -52,6 +52,7 @@ import scipy.linalg as sla
 
 from liftoff.core.errors import InputError
 from liftoff.core.labels import COMPONENTS
+from liftoff.core.units import FOOT, INCH, LBF  # noqa: F401  (exact; LBF is imported from here too)
 
 from .craig_bampton import CBModel, CBRecovery, validate_cb
 
@@ -60,9 +61,6 @@ CB_FORM_TOL = 1e-6     # |K_qb| / sqrt(K_qq K_bb), |M_qq - I|, off-diagonal K_qq
 FRAME_TOL = 1e-12      # |T - I| below which an output frame is taken as basic
 
 # ------------------------------------------------------------------------------ units
-LBF = 4.4482216152605  # N, exact (0.45359237 kg x 9.80665 m/s^2)
-INCH = 0.0254          # m, exact
-FOOT = 0.3048          # m, exact
 
 
 @dataclass(frozen=True)

@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 from liftoff.core.errors import InputError
+from liftoff.core.units import G0
 from liftoff.meshes.layout import StackLayout
 from liftoff.meshes.pad import PadParams
 from liftoff.meshes.spec import Material
@@ -59,7 +60,6 @@ CONVECTIVE = ("wall", "free", "slosh")    # [model] convective: a hydroelastic l
 #: [model] slosh_gravity (m/s^2): the apparent axial acceleration g_eff of the slosh modes
 #: (1 g on the pad); the range a launch vehicle's axial acceleration spans (0.1 g coasting
 #: to 10 g), beyond which the rigid-tank slosh frequencies sqrt(g_eff) mean nothing here
-G0 = 9.80665
 SLOSH_GRAVITY_RANGE = (0.1 * G0, 10.0 * G0)
 _VEHICLE = {"mesh_size", "params"}
 _COMP = {"type", "mesh_size", "n_modes", "f_max", "params", "nastran"}
@@ -154,9 +154,18 @@ class ModelConfig:
 
 
 # ---------------------------------------------------------------- [model]
+def unit_system_at(where: Where, units: Any):
+    """The reduction.nastran UnitSystem a ``units`` key gives (a system's name or a table of
+    SI factors: length, mass, time, force), its one-line error naming file and key."""
+    from liftoff.reduction.nastran import unit_system
+
+    return unit_system(units if isinstance(units, str) else table(where, units, {"length", "mass", "time", "force"}),
+                       f"{where.source}: {where.key}")
+
+
 def _nastran(where: Where, spec: Any, base: Path) -> NastranSource:
     """``[model.component.<name>.nastran]``, files checked and units understood when read."""
-    from liftoff.reduction.nastran import same_units, stated_units, unit_system
+    from liftoff.reduction.nastran import same_units, stated_units
 
     n = table(where, spec, _NASTRAN, required=("file", "units"))
     paths = {}
@@ -167,8 +176,7 @@ def _nastran(where: Where, spec: Any, base: Path) -> NastranSource:
                 raise (where / key).error(f"file not found: {str(p)!r}")
             paths[key] = str(p)
     units, wu = n["units"], where / "units"
-    given = unit_system(units if isinstance(units, str) else table(wu, units, {"length", "mass", "time", "force"}),
-                        f"{wu.source}: {wu.key}")           # its one-line error then names file and key
+    given = unit_system_at(wu, units)
     for key in ("file", "pch"):                  # a punch that states its units (liftoff's write_dmig does)
         stated = stated_units(paths[key]) if key in paths else None
         if stated is not None and not same_units(stated, given):

@@ -15,6 +15,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from liftoff.core.units import G0
 from liftoff.transient.effects import softening_factors
 from liftoff.transient.model import METHODS, ContactPoint, ModalFeedback, PointForce, TabulatedForce
 
@@ -42,7 +43,7 @@ CONTROL_KEYS = {"enabled", "gimbals", "start", "ramp", "law", "bandwidth_hz", "d
 MAX_BANDWIDTH_HZ = 20.0
 CONTROL_LAWS = ("moment", "attitude-hold")
 CRYO_KEYS = {"enabled", "component", "volumes", "delta_T", "alpha"}
-STANDARD_GRAVITY = (0.0, 0.0, -9.80665)
+STANDARD_GRAVITY = (0.0, 0.0, -G0)
 
 
 # ---------------------------------------------------------------- time
