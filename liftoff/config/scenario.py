@@ -27,7 +27,7 @@ from liftoff.transient.model import ContactPoint
 from .dispersion import Dispersion, case_name, check_case_count, dispersion
 from .extends import merge, read_scenario, resolve
 from .files import parse_toml
-from .model import ModelConfig, model_config
+from .model import ModelConfig, model_config, unit_system_at
 from .postprocess import PostProcess, postprocess
 from .sections import (
     FORCE_KEYS,
@@ -307,8 +307,6 @@ def _recovery(w: Where, spec: Any, base: Path) -> RecoveryPoints:
 def _otms(w: Where, spec: Any, base: Path) -> tuple[InterfaceOTM, ...]:
     """``[[recovery.otm]]``: the file found, the names and units understood (the matrices
     are read when the case is built: they need pyyeti, the ``nastran`` extra)."""
-    from liftoff.reduction.nastran import unit_system
-
     out, names = [], set()
     for i, o in enumerate(array_of_tables(w, spec, "recovery.otm")):
         o = table(w / i, o, _OTM, required=("name", "file", "point"))
@@ -320,9 +318,7 @@ def _otms(w: Where, spec: Any, base: Path) -> tuple[InterfaceOTM, ...]:
         if not parts:
             raise (w / i).error("give at least one of disp, vel, acc: the names of its matrices in the file")
         units = o.get("units", "SI")
-        wu = w / i / "units"
-        unit_system(units if isinstance(units, str) else table(wu, units, {"length", "mass", "time", "force"}),
-                    f"{wu.source}: {wu.key}")
+        unit_system_at(w / i / "units", units)
         q = o.get("quantity", "displacement")
         quantity = string(w / i / "quantity", q) if isinstance(q, str) else strings(w / i / "quantity", q)
         rows = strings(w / i / "rows", o["rows"]) if "rows" in o else None
