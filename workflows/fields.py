@@ -34,9 +34,7 @@ class FieldFrames:
         self.result = result
         self.n_rigid = int(np.sum(stack.vehicle.omega == 0))
         self.parts = []          # (name, nodes, cells, cell_type, (assembly, system modes, component), on the pad?)
-        for name, comp in stack.components.items():
-            if comp.field_map is None or comp.nodes is None:
-                continue
+        for name, comp in fe_parts(stack):
             asm, modes = (stack.pad_asm, stack.pad_modes) if name == "pad" else (stack.vehicle_asm, stack.vehicle_modes)
             self.parts.append((name, comp.nodes, comp.cells, comp.cell_type, (asm, modes, comp), name == "pad"))
 
@@ -53,6 +51,52 @@ class FieldFrames:
                 for name, _, _, _, (asm, modes, comp), pad in self.parts]
 
 
+def fe_parts(stack) -> list[tuple[str, object]]:
+    """(name, component) of every FE component of ``stack`` (a field map and nodes), in the
+    stack's order."""
+    return [(name, comp) for name, comp in stack.components.items()
+            if comp.field_map is not None and comp.nodes is not None]
+
+
+def merged_mesh(comps) -> tuple[np.ndarray, list, list]:
+    """One mesh of several components (each with ``nodes``, ``cells``, ``cell_type``): the
+    nodes stacked, a cell block per component (indices shifted) and the cell data ``part``
+    numbering the blocks in order."""
+    offsets = np.cumsum([0] + [c.nodes.shape[0] for c in comps])
+    nodes = np.vstack([c.nodes for c in comps])
+    blocks = [(c.cell_type, np.asarray(c.cells) + off) for c, off in zip(comps, offsets)]
+    part_ids = [np.full(len(c.cells), k, dtype=np.int32) for k, c in enumerate(comps)]
+    return nodes, blocks, part_ids
+
+
+#: the vehicle's elastic system modes written as FE fields (modes_vehicle.vtu)
+MODE_SHAPE_FIELDS = 12
+
+
+def write_mode_shapes_vtu(stack, cp, out: Path, n_modes: int = MODE_SHAPE_FIELDS) -> list[Path]:
+    """``modes_vehicle.vtu``: the vehicle's first ``n_modes`` elastic system modes as nodal
+    vector fields ``mode_<k>_<f>Hz`` (m per unit modal coordinate, unit modal mass) over
+    every FE component of the vehicle (cell data ``part``: 0, 1, ... in the order of the
+    vehicle's components, as the summary lists them), recovered through each
+    component's CB model (reduction.field_displacement); nothing without FE components."""
+    from liftoff.fem.output import write_vtu
+    from liftoff.reduction import field_displacement
+
+    parts = [(name, comp) for name, comp in fe_parts(stack) if name != "pad"]
+    vm = stack.vehicle_modes
+    modes = list(range(vm.n_rigid, min(vm.n_rigid + n_modes, vm.n_modes)))
+    if not parts or not modes:
+        return []
+    nodes, blocks, part_ids = merged_mesh([c for _, c in parts])
+    fields = {}
+    for j in modes:
+        q = np.zeros(vm.n_modes)
+        q[j] = 1.0
+        fields[f"mode_{j + 1:03d}_{vm.freq_hz[j]:.4g}Hz"] = np.vstack(
+            [field_displacement(stack.vehicle_asm, vm, name, c, q).reshape(-1, 3) for name, c in parts])
+    return [write_vtu(out / "modes_vehicle.vtu", nodes, blocks, None, fields, cell_data={"part": part_ids})]
+
+
 def frame_steps(n_t: int, n_frames: int) -> np.ndarray:
     """``n_frames`` step indices evenly spread over 0..n_t - 1 (first and last included)."""
     return np.unique(np.round(np.linspace(0, n_t - 1, min(n_frames, n_t))).astype(int))
@@ -65,10 +109,7 @@ def write_pvd(stack, result, out: Path, case: str, n_frames: int = 48) -> list[P
     ff = FieldFrames(stack, result)
     if not ff.parts:
         return []
-    offsets = np.cumsum([0] + [p[1].shape[0] for p in ff.parts])
-    nodes = np.vstack([p[1] for p in ff.parts])
-    blocks = [(p[3], np.asarray(p[2]) + off) for p, off in zip(ff.parts, offsets)]
-    part_ids = [np.full(len(p[2]), k, dtype=np.int32) for k, p in enumerate(ff.parts)]
+    nodes, blocks, part_ids = merged_mesh([p[4][2] for p in ff.parts])
     paths, entries = [], []
     for k, i in enumerate(frame_steps(result.time.size, n_frames)):
         total, elastic = np.vstack(ff.at(i, elastic=False)), np.vstack(ff.at(i))

@@ -83,13 +83,13 @@ def write(stage: str, *args) -> list[Path]:
 
 # ------------------------------------------------------------------ liftoff's own deliverables
 def _register_builtin() -> None:
-    from . import report
+    from . import fields, report
 
     register_output("modal_tables", "model", "modes_vehicle.csv/.h5, modal_mass_vehicle_held.csv, "
                     "modal_mass_pad.csv")(report.write_modal_tables)
     register_output("recovery_op4", "model", "recovery_vehicle.op4 and its index")(report.write_recovery_op4)
     register_output("cb_checks", "model", "cb_checks.txt/.json")(report.write_cb_checks)
-    register_output("mode_shapes_vtu", "model", "modes_vehicle.vtu")(report.write_mode_shapes_vtu)
+    register_output("mode_shapes_vtu", "model", "modes_vehicle.vtu")(fields.write_mode_shapes_vtu)
     register_output("interface_loads", "case", "interface_loads_<case>.csv")(
         lambda res, cp, out, case: report.write_interface_loads({case: (res, cp)}, out, case))
     register_output("interface_loads_envelope", "run", "interface_loads_envelope.csv")(

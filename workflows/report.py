@@ -16,16 +16,20 @@ import numpy as np
 from liftoff.transient.effects import center_of_gravity
 
 # the histories, tables and plots live in analysis/ (issue 24); the run's callers find them here too
-from liftoff.analysis.histories import (CG_ACCELERATION, G0, LIQUID_PRESSURE, ULLAGE, Twang,  # noqa: F401
-                                        _translations, interface_histories, items, liquid_heads, load_factor_items,
-                                        release_time, tank_items, twang)
-from liftoff.analysis.plots import (RELEASE_WINDOW, _Figures, _plot_correlated, _pyplot, _save_figure,  # noqa: F401
-                                    plot_contours, plot_spectra, plots, tank_plots)
-from liftoff.analysis.tables import (CSV_HEADER, DISPLAY_BINS, FIELDS, NAN, Item, display_points,  # noqa: F401
-                                     envelope, format_changes, format_table, is_force, maxmin, write_csv)
+from liftoff.analysis.histories import (CG_ACCELERATION, _translations, interface_histories, items,  # noqa: F401
+                                        liquid_heads, load_factor_items, twang)
+from liftoff.analysis.plots import _plot_correlated, plot_contours, plot_spectra, plots  # noqa: F401
+from liftoff.analysis.tables import (Item, display_points, envelope, format_changes, format_table,  # noqa: F401
+                                     is_force, maxmin, write_csv)
 from liftoff.core.errors import InputError
 from liftoff.core.labels import TRANSLATIONS
 from liftoff.core.records import write_text
+
+
+def case_maxmin(result, cp, case: str, band_hz: float) -> list[dict]:
+    """The max/min rows of one case's result (the items of its case problem ``cp``: attach
+    points and the liquids' heads; acceleration-type histories filtered to ``band_hz``)."""
+    return maxmin(result.time, items(result, cp.attach, liquid_heads(cp), band_hz), case)
 
 
 def write_interface_loads(results: dict, out: Path, name: str, note: str = "") -> list[Path]:
@@ -169,38 +173,6 @@ def write_cb_checks(stack, cp, out: Path) -> list[Path]:
             write_text(out / "cb_checks.json", json.dumps({"units": "SI (kg, m, kg m^2, Hz)",
                                                            "components": [c.summary for c in checks]},
                                                           indent=1, default=float) + "\n")]
-
-
-#: the vehicle's elastic system modes written as FE fields (modes_vehicle.vtu)
-MODE_SHAPE_FIELDS = 12
-
-
-def write_mode_shapes_vtu(stack, cp, out: Path, n_modes: int = MODE_SHAPE_FIELDS) -> list[Path]:
-    """``modes_vehicle.vtu``: the vehicle's first ``n_modes`` elastic system modes as nodal
-    vector fields ``mode_<k>_<f>Hz`` (m per unit modal coordinate, unit modal mass) over
-    every FE component of the vehicle (cell data ``part``: 0, 1, ... in the order of the
-    vehicle's components, as the summary lists them), recovered through each
-    component's CB model (reduction.field_displacement); nothing without FE components."""
-    from liftoff.fem.output import write_vtu
-    from liftoff.reduction import field_displacement
-
-    parts = [(name, comp) for name, comp in stack.components.items()
-             if name != "pad" and comp.field_map is not None and comp.nodes is not None]
-    vm = stack.vehicle_modes
-    modes = list(range(vm.n_rigid, min(vm.n_rigid + n_modes, vm.n_modes)))
-    if not parts or not modes:
-        return []
-    offsets = np.cumsum([0] + [c.nodes.shape[0] for _, c in parts])
-    nodes = np.vstack([c.nodes for _, c in parts])
-    blocks = [(c.cell_type, np.asarray(c.cells) + off) for (_, c), off in zip(parts, offsets)]
-    fields = {}
-    for j in modes:
-        q = np.zeros(vm.n_modes)
-        q[j] = 1.0
-        fields[f"mode_{j + 1:03d}_{vm.freq_hz[j]:.4g}Hz"] = np.vstack(
-            [field_displacement(stack.vehicle_asm, vm, name, c, q).reshape(-1, 3) for name, c in parts])
-    part_ids = [np.full(len(c.cells), k, dtype=np.int32) for k, (_, c) in enumerate(parts)]
-    return [write_vtu(out / "modes_vehicle.vtu", nodes, blocks, None, fields, cell_data={"part": part_ids})]
 
 
 def write_modal_tables(stack, cp, out: Path) -> list[Path]:
