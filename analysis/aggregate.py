@@ -69,8 +69,7 @@ class Aggregate:
         if self.items is None:
             self._init(s)
         if s.items != self.items or s.srs_items != self.srs_items or s.support_items != self.support_items \
-                or (s.support is None) != (self.support_env is None) \
-                or (s.support is not None and np.shape(s.support) != self.support_env.shape):
+                or np.shape(s.support) != np.shape(self.support_env):        # np.shape(None): ()
             raise InputError(f"case {s.name}: its recovery items differ from those of the first case")
         up = s.mx > self.mx
         self.mx[up], self.t_mx[up] = s.mx[up], s.t_mx[up]

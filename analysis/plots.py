@@ -11,8 +11,7 @@ import numpy as np
 
 from liftoff.core.labels import TRANSLATIONS, point_labels
 
-from .histories import (CG_ACCELERATION, G0, LIQUID_PRESSURE, ULLAGE, Twang, _translations, items,  # noqa: F401
-                        liquid_heads, load_factor_items, release_time, tank_items, twang)
+from .histories import G0, _translations, items, liquid_heads, tank_items, twang
 from .tables import display_points
 
 

@@ -215,8 +215,8 @@ RIGID_OMEGA = 0.1
 def consistency_problems(body: ModalBody) -> list[str]:
     """What a body file's arrays say about one another that cannot be true (empty: none
     found). ``rigid_body_mass`` = RB^T M RB is symmetric positive semidefinite (all zero:
-    not given, with no ``participation`` either; rigid-body outputs are then undefined). On the rigid-body components it gives
-    (nonzero diagonal, ``sel``), where ``participation`` (Phi^T M RB) is given, the modes
+    not given, with no ``participation`` either; rigid-body outputs are then undefined). On
+    the rigid-body components it gives (nonzero diagonal, ``sel``), where ``participation`` (Phi^T M RB) is given, the modes
     satisfy what mass-normalised modes of a free body must: the rigid ones (omega <
     RIGID_OMEGA) are rigid motions, Phi_r = RB M_rb^-1 P_r^T at every labelled DOF of a point
     with coordinates, with unit modal mass, P_r M_rb^-1 P_r^T = I; the elastic ones are

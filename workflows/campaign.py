@@ -134,16 +134,14 @@ def summarize(result, cp, name: str, index: int, post, wall: float = 0.0, check=
     from liftoff.analysis.correlated import case_support
 
     support_items, support = case_support(report.interface_histories(result, cp.attach))
-    summary = CaseSummary(
+    return CaseSummary(
         name, index, tuple(it.name for it in its), tuple(it.unit for it in its), tuple(it.category for it in its),
         V[imax, cols].copy(), t[imax].copy(), V[imin, cols].copy(), t[imin].copy(), srs_items, srs_arr,
         tuple(c["name"] for c in cs), np.array([np.nan if c["separation_time"] is None else c["separation_time"]
                                                  for c in cs]),
         np.array([c["recontacts"] for c in cs], dtype=np.int64), np.array([c["peak_compression"] for c in cs]),
         int(t.size - 1), float(result.h), float(wall), *_errors(its, report.items(check, cp.attach, report.liquid_heads(cp), band), error_estimate)
-        if check is not None else (None, None))
-    summary.support_items, summary.support = support_items, support if support_items else None
-    return summary
+        if check is not None else (None, None), support_items=support_items, support=support if support_items else None)
 
 
 def _errors(its, its_half, estimate) -> tuple[np.ndarray, np.ndarray]:
@@ -276,8 +274,8 @@ def _summary_of(rec, path: Path) -> CaseSummary:
                        d["mx"], d["t_mx"], d["mn"], d["t_mn"], tup(d["srs_items"]) if d["srs_items"].size else (),
                        d.get("srs"), tup(d["posts"]), d["separation"], d["recontacts"], d["compression"],
                        int(n_steps), float(h), float(wall),
-                       support_items=tup(d["support_items"]) if "support" in d and "support_items" in d else (),
-                       support=d.get("support") if "support_items" in d else None)
+                       **({"support_items": tup(d["support_items"]), "support": d["support"]}
+                          if "support" in d and "support_items" in d else {}))
 
 
 def record_problem(path: Path, name: str, index: int, key: str) -> str | None:

@@ -62,8 +62,7 @@ def with_damping(stack, old_zeta: float, new_zeta: float):
 def _peaks(cp, name: str, band: float) -> list[dict]:
     from liftoff.transient import solve
 
-    res = solve(cp.problem)
-    return report.maxmin(res.time, report.items(res, cp.attach, report.liquid_heads(cp), band), name)
+    return report.case_maxmin(solve(cp.problem), cp, name, band)
 
 
 def states(sc, old_sc, prep, cache, results: dict, echo=print) -> list[list[dict]]:
@@ -73,13 +72,12 @@ def states(sc, old_sc, prep, cache, results: dict, echo=print) -> list[list[dict
     from .run import _stack_for
 
     band = sc.post.acceleration_band_hz
-    old_stacks: dict = {}
+    old_stacks = dict(prep.stacks)      # an earlier model equal to the new one: the stack in memory
     per: list[dict] = [{}, {}, {}, {}]
     for case in sc.cases:
         old_case = next(c for c in old_sc.cases if c.name == case.name)
         old_stack = old_stacks[_stack_for(old_case, old_stacks, cache, False, echo, [])]
-        new_cp, mkey = prep.problems[case.name]
-        new_stack = prep.stacks[mkey]
+        new_stack = prep.stacks[prep.problems[case.name][1]]
         echo(f"  contributions [{case.name}]: the earlier case, the new case on the earlier model, "
              "the new model with the earlier damping")
         per[0][case.name] = _peaks(build_problem(old_case, old_stack, progress=False), case.name, band)
@@ -92,8 +90,7 @@ def states(sc, old_sc, prep, cache, results: dict, echo=print) -> list[list[dict
         damped = with_damping(new_stack, old_case.model.zeta, case.model.zeta)
         per[2][case.name] = _peaks(build_problem(case, damped, progress=False), case.name, band)
         res, cp = results[case.name]
-        per[3][case.name] = report.maxmin(res.time, report.items(res, cp.attach, report.liquid_heads(cp), band),
-                                          case.name)
+        per[3][case.name] = report.case_maxmin(res, cp, case.name, band)
     return [report.envelope(p) for p in per]
 
 

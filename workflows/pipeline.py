@@ -99,12 +99,13 @@ def _component_key(model: ModelConfig, comp: ComponentModel) -> dict:
     """Everything a component stage depends on (its cache key's parameters); of the materials,
     those that may apply to it (:func:`component_materials`), so that changing one component's
     material rebuilds that component only."""
+    liquid = {}                         # what a hydroelastic liquid's model depends on
+    if getattr(comp.builder, "liquid", "") == "hydroelastic":
+        liquid = {"convective": model.convective,
+                  **({"slosh_gravity": model.slosh_gravity} if model.convective == "slosh" else {})}
     return {"source": model.source, "name": comp.name, "mesh_size": comp.mesh_size, "degree": model.degree,
             "builder": {type(comp.builder).__name__: asdict(comp.builder)},
-            "materials": {vol: asdict(m) for vol, m in component_materials(model, comp.name).items()},
-            **({"convective": model.convective} if getattr(comp.builder, "liquid", "") == "hydroelastic" else {}),
-            **({"slosh_gravity": model.slosh_gravity}
-               if model.convective == "slosh" and getattr(comp.builder, "liquid", "") == "hydroelastic" else {})}
+            "materials": {vol: asdict(m) for vol, m in component_materials(model, comp.name).items()}, **liquid}
 
 
 def build_component(model: ModelConfig, comp: ComponentModel, workdir: Path) -> tuple[Component, dict]:

@@ -410,11 +410,10 @@ def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, sta
     files = [Path(res.save(out / f"results_{name}.h5"))]
     if not generated:                   # a generated case's summary comes from its record
         agg.add(summarize(res, cp, name, -1, sc.post, check=half), generated=False)
-    heads = report.liquid_heads(cp)
     band = sc.post.acceleration_band_hz
-    rows = report.maxmin(res.time, report.items(res, cp.attach, heads, band), name)
+    rows = report.case_maxmin(res, cp, name, band)
     if half is not None:
-        report.with_errors(rows, report.maxmin(half.time, report.items(half, cp.attach, heads, band), name))
+        report.with_errors(rows, report.case_maxmin(half, cp, name, band))
     files.append(report.write_csv(rows, out / f"maxmin_{name}.csv"))
     files += outputs.write("case", res, cp, out, name)
     if plots:

@@ -144,6 +144,8 @@ import pytest
 
 from liftoff.workflows.cli import main
 
+from .test_bad_input import _edit_body
+
 REPO = Path(__file__).resolve().parents[2]
 EXAMPLE = REPO / "examples" / "vehicle_on_pad"
 S = 'extends = "shuttle"\n[model]\nsource = "stick"\n'     # the stick default of the issue
@@ -237,15 +239,6 @@ def _in_table(table: str, line: str) -> Callable[[str], str]:
         body = re.sub(rf"(?m)^{re.escape(key)}\s*=.*\n", "", text[i:end])
         return text[:i] + line + "\n" + body + text[end:]
     return edit
-
-
-def _edit_body(path: Path, **edits) -> None:
-    """Rewrite a body file with arrays replaced (as another tool might write it)."""
-    with np.load(path) as z:
-        data = {k: z[k] for k in z.files}
-    for key, fn in edits.items():
-        data[key] = fn(data[key])
-    np.savez(path, **data)
 
 
 def _stick(tmp: Path, extra: str = "", name: str = "s.toml") -> Path:
