@@ -51,7 +51,8 @@ check-install:
 	cd $(PLAIN)/case && ../venv/bin/liftoff transient scenario.toml --out out --no-progress > transient.txt
 	cd $(PLAIN) && venv/bin/python -c "from liftoff.reduction.nastran import from_extseout; \
 	  cb = from_extseout('inboard.op4', name='inboard', units='mm-kg-s'); print('nastran import:', cb.n_modes, 'modes')"
-	@echo "check-install: a plain pip install runs liftoff transient and the Nastran import"
+	cd $(PLAIN) && venv/bin/liftoff init --example single_stick stick && test -s stick/payload.pch -a -s stick/pad.geo
+	@echo "check-install: a plain pip install runs liftoff transient, the Nastran import and liftoff init"
 
 bench: $(STAMP)
 	for b in benchmarks/bench_*.py; do $(PY) $$b || exit 1; done

@@ -10,7 +10,7 @@ the line asks to report it), 130/143 interrupted by SIGINT/SIGTERM.
     liftoff transient SCENARIO.toml --out DIR [--method direct|fixed-point] [--no-progress]
                       [--no-error-estimate] [--max-memory GB]
     liftoff run [SCENARIO.toml] --out DIR ...      (workflows/run.py)
-    liftoff init DIR [--example shuttle|barge|saturn_v] [--full]   (workflows/init.py)
+    liftoff init DIR [--example shuttle|barge|saturn_v|single_stick] [--full]   (workflows/init.py)
 
 Under ``mpirun -n N`` (or ``liftoff run --ranks N``) every rank prints its own error line
 and exits at once (workflows/parallel.py: errors are raised on every rank).

@@ -1,6 +1,9 @@
 """``liftoff init --example NAME DIR``: an editable scenario that starts from an embedded
 example (liftoff.config.extends).
 
+The files an example's scenario names (single_stick's .geo geometry and Nastran payload)
+are written beside it: they are the user's to edit, and paths resolve against DIR.
+
 By default DIR/scenario.toml is a short file, ``extends = "NAME"`` and a title, with the
 keys users change most written as comments; every other key is the example's and follows
 it when liftoff is updated. ``--full`` writes the example in full instead (a frozen,
@@ -61,6 +64,30 @@ _GUIDE = {
 # [[case]]
 # name = "my-case"              # a case besides "controlled-release" and "instantaneous"
 ''',
+    "single_stick": '''
+# Everything not set here is the "single_stick" example's (liftoff init --example single_stick
+# --full DIR writes it in full): two tank stages, the interstage, fairing and launch table from
+# the .geo files beside this one, the payload from payload.pch (a Nastran Craig-Bampton model,
+# inch-pound-second). Those files are yours to edit: paths resolve against this folder.
+# docs/workflow.md, "The vehicle and the pad".
+#
+# [model.component.stage1]
+# mesh_size = 0.9               # m
+#
+# [model.component.payload.nastran]
+# file = "payload.pch"          # the payload's Craig-Bampton model: replace the file, or name yours
+# units = "in-lbf-s"            # the units it is written in
+#
+# [post_defaults]
+# release_time = 2.5            # s: the clamps open
+#
+# [[engine]]
+# name = "engines_a"            # three of the nine engines: only the keys given change
+# start = 0.0                   # s
+#
+# [[case]]
+# name = "my-case"              # a case besides "nominal" and "controlled-release"
+''',
     "barge": '''
 # Everything not set here is the "barge" example's (liftoff init --example barge --full DIR
 # writes it in full). Tables merge key by key, and the entries of the arrays of tables
@@ -87,17 +114,25 @@ def scenario_text(example: str, full: bool) -> str:
 
 
 def init(example: str, folder: Path, full: bool = False) -> Path:
-    """Write ``folder``/scenario.toml (atomically; an existing one is refused); returns its path."""
+    """Write ``folder``/scenario.toml and the files the example's scenario names (geometry,
+    Nastran; each atomically; an existing file is refused before anything is written);
+    returns the scenario's path."""
+    from liftoff.config.extends import example_files
     from liftoff.core.errors import InputError
-    from liftoff.core.records import write_text
+    from liftoff.core.records import write_bytes, write_text
 
     text = scenario_text(example, full)
+    files = example_files(example)
     if folder.exists() and not folder.is_dir():
         raise InputError(f"{folder}: exists and is not a folder")
     path = folder / SCENARIO_NAME
-    if path.exists():
-        raise InputError(f"{path}: exists; liftoff init never overwrites a file (remove it or give another folder)")
+    for target in (path, *(folder / f for f in files)):
+        if target.exists():
+            raise InputError(f"{target}: exists; liftoff init never overwrites a file (remove it or give "
+                             "another folder)")
     folder.mkdir(parents=True, exist_ok=True)
+    for name, content in files.items():
+        write_bytes(folder / name, content)
     return write_text(path, text)
 
 
@@ -118,5 +153,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 def _run(args: argparse.Namespace) -> int:
     path = init(args.example, args.folder, args.full)
-    print(f"liftoff init: wrote {path} (run it: liftoff run {path} --out DIR)")
+    from liftoff.config.extends import EXAMPLES
+
+    files = EXAMPLES[args.example].files
+    also = f" and {', '.join(files)}" if files else ""
+    print(f"liftoff init: wrote {path}{also} (run it: liftoff run {path} --out DIR)")
     return 0

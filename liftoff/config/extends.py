@@ -22,6 +22,7 @@ Unknown keys still fail with one line, naming the file that is run and the key.
 from __future__ import annotations
 
 import copy
+from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
@@ -30,8 +31,33 @@ from liftoff.core.errors import InputError
 from .files import parse_toml, read_toml
 from .values import Where, string
 
-#: example name -> embedded scenario (package data of liftoff.config)
-EXAMPLES = {"shuttle": "default_scenario.toml", "barge": "barge_scenario.toml", "saturn_v": "saturn_v_scenario.toml"}
+
+
+@dataclass(frozen=True)
+class Example:
+    """An embedded example: its scenario ``scenario`` in package ``package`` and the
+    ``files`` its scenario names (geometry, Nastran), beside it in the same folder, which
+    ``liftoff init`` copies next to the scenario it writes."""
+
+    package: str
+    scenario: str
+    files: tuple[str, ...] = ()
+
+    def resource(self, name: str):
+        """The package resource ``name`` (the scenario's folder)."""
+        folder, _, _ = self.scenario.rpartition("/")
+        return resources.files(self.package).joinpath(f"{folder}/{name}" if folder else name)
+
+
+#: example name -> embedded scenario (package data of liftoff.config and liftoff.examples)
+EXAMPLES = {
+    "shuttle": Example("liftoff.config", "default_scenario.toml"),
+    "barge": Example("liftoff.config", "barge_scenario.toml"),
+    "saturn_v": Example("liftoff.config", "saturn_v_scenario.toml"),
+    # examples/single_stick: the user's .geo interstage, fairing and pad, a Nastran payload
+    "single_stick": Example("liftoff.examples", "single_stick/scenario.toml",
+                            ("interstage.geo", "fairing.geo", "pad.geo", "payload.pch")),
+}
 #: how deep ``extends`` may chain (a longer chain is a mistake, not a design)
 MAX_DEPTH = 8
 
@@ -55,7 +81,15 @@ def merge(base: dict, over: dict) -> dict:
 
 def example_text(name: str) -> str:
     """The text of an embedded example scenario (:data:`EXAMPLES`)."""
-    return resources.files("liftoff.config").joinpath(EXAMPLES[name]).read_text(encoding="utf-8")
+    ex = EXAMPLES[name]
+    return resources.files(ex.package).joinpath(ex.scenario).read_text(encoding="utf-8")
+
+
+def example_files(name: str) -> dict[str, bytes]:
+    """The files an embedded example's scenario names (file name -> content), which must lie
+    beside a scenario that extends it (paths resolve against the folder of the file run)."""
+    ex = EXAMPLES[name]
+    return {f: ex.resource(f).read_bytes() for f in ex.files}
 
 
 def _model_source(data: dict) -> str:

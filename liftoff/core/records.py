@@ -128,6 +128,13 @@ def write_text(path: str | os.PathLike, text: str) -> Path:
     return Path(path)
 
 
+def write_bytes(path: str | os.PathLike, data: bytes) -> Path:
+    """Write a binary file atomically; returns its path."""
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(data)
+    return Path(path)
+
+
 # ------------------------------------------------------------------ records
 class Dataset:
     """An array with HDF5 attributes (``units`` and others) for :func:`write_record`;

@@ -106,7 +106,7 @@ def test_init_writes_a_short_scenario_whose_guide_is_valid(tmp_path):
         loader(path)
         guide = re.sub(r"^# (?=\[|[a-z_]+ = )", "", text, flags=re.M)     # uncomment the keys and tables
         assert guide != text
-        loader(_write(tmp_path / f"{name}_all.toml", guide))
+        loader(_write(path.parent / "all.toml", guide))     # beside the example's files (single_stick)
         full = init(name, tmp_path / f"{name}_full", full=True)
         assert full.read_text() == example_text(name)
 
@@ -118,6 +118,29 @@ def test_init_never_overwrites(tmp_path):
         init("shuttle", tmp_path)
     assert (tmp_path / "scenario.toml").read_text() == "mine"
     assert scenario_text("shuttle", True) == default_text()
+
+
+def test_init_writes_the_files_the_example_names(tmp_path):
+    """``liftoff init --example single_stick``: the .geo geometry and the Nastran payload are
+    written beside the scenario, byte for byte examples/single_stick's (the package data is
+    that folder), so the short scenario runs from DIR; an existing one of them is refused
+    before anything is written; without them, a scenario that extends the example fails
+    naming the missing file."""
+    folder = Path(__file__).resolve().parents[2] / "examples" / "single_stick"
+    assert example_text("single_stick") == (folder / "scenario.toml").read_text()
+    path = init("single_stick", tmp_path / "a")
+    for name in EXAMPLES["single_stick"].files:
+        assert (path.parent / name).read_bytes() == (folder / name).read_bytes(), name
+    sc = load_scenario(path)
+    assert set(sc.cases[0].model.components) >= {"stage1", "interstage", "fairing", "payload"}
+    (tmp_path / "b").mkdir()
+    (tmp_path / "b" / "pad.geo").write_text("mine")
+    with pytest.raises(InputError, match="pad.geo: exists; liftoff init never overwrites"):
+        init("single_stick", tmp_path / "b")
+    assert sorted(p.name for p in (tmp_path / "b").iterdir()) == ["pad.geo"]
+    lone = _write(tmp_path / "lone.toml", 'extends = "single_stick"\n')
+    with pytest.raises(InputError, match=r"file not found: .*\.(pch|geo)"):
+        load_scenario(lone)
 
 
 def test_init_cli(tmp_path):

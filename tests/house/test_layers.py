@@ -134,7 +134,7 @@ def test_wheel_adds_one_import_name(tmp_path):
     Built from a copy of the sources, so that setuptools' build/ folder stays out of the tree."""
     src = tmp_path / "src"
     src.mkdir()
-    for name in ("pyproject.toml", "README.md", *PACKAGES_DIRS):
+    for name in ("pyproject.toml", "README.md", *PACKAGES_DIRS, "examples"):
         (shutil.copytree if (ROOT / name).is_dir() else shutil.copy)(ROOT / name, src / name)
     proc = subprocess.run([sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "--no-build-isolation",
                            "-w", str(tmp_path), str(src)], capture_output=True, text=True, cwd=tmp_path)
@@ -147,6 +147,11 @@ def test_wheel_adds_one_import_name(tmp_path):
     for sub in ("meshes", "fem", "reduction", "transient", "analysis", "workflows", "core", "config"):
         assert f"liftoff/{sub}/__init__.py" in names
     assert "liftoff/config/default_scenario.toml" in names
+    from liftoff.config.extends import EXAMPLES     # liftoff init --example single_stick writes these
+
+    ex = EXAMPLES["single_stick"]
+    assert {f"liftoff/examples/single_stick/{f}" for f in (*ex.files, "scenario.toml")} <= set(names)
+    assert not [n for n in names if n.startswith("liftoff/examples/") and n.endswith((".npz", "make_files.py"))]
 
 
 def test_functions_fit_on_a_screen():
