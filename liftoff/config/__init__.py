@@ -21,7 +21,7 @@ _EXPORTS = {
     "read_csv_table": ".files",
     "TimeSpan": ".sections",
     "Force": ".sections",
-    "ContactLaw": ".sections",
+    "at_point": ".sections",
     "Softening": ".sections",
     "Control": ".sections",
     "Cryo": ".sections",

@@ -33,12 +33,12 @@ from .sections import (
     FORCE_KEYS,
     LAW_KEYS,
     STANDARD_GRAVITY,
-    ContactLaw,
     Control,
     Cryo,
     Force,
     Softening,
     TimeSpan,
+    at_point,
     contact_law,
     control,
     cryo,
@@ -70,13 +70,14 @@ _CASE = _TOP - set(_SCENARIO_ONLY) | {"name"}
 # --------------------------------------------------------------------- dataclasses
 @dataclass(frozen=True)
 class Post:
-    """A hold-down post: vehicle point on pad point, coupled in Tx, Ty, Tz by ``law``
-    (normal direction ``axial``, default Tz; bolted until ``law.release_time``)."""
+    """A hold-down post: vehicle point on pad point, coupled in Tx, Ty, Tz by ``law`` (a
+    ContactPoint over the vehicle point's directions, sections.contact_law; normal direction
+    ``axial``, default Tz; bolted until ``law.release_time``)."""
 
     name: str
     vehicle: str
     pad: str
-    law: ContactLaw
+    law: ContactPoint
 
     DIRECTIONS = TRANSLATIONS
 
@@ -86,8 +87,8 @@ class Post:
 
     def contact(self) -> ContactPoint:
         """The transient model's contact point (vehicle = body a, pad = body b)."""
-        return self.law.contact(self.name, point_labels(self.vehicle, self.DIRECTIONS),
-                                point_labels(self.pad, self.DIRECTIONS))
+        return at_point(self.law, self.name, point_labels(self.vehicle, self.DIRECTIONS),
+                        point_labels(self.pad, self.DIRECTIONS))
 
 
 @dataclass(frozen=True)

@@ -8,6 +8,7 @@ K, rad); the keys are documented in docs/transient-cli.md and docs/workflow.md.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,6 +16,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from liftoff.core.errors import InputError
 from liftoff.core.units import G0
 from liftoff.transient.effects import softening_factors
 from liftoff.transient.model import METHODS, ContactPoint, ModalFeedback, PointForce, TabulatedForce
@@ -180,33 +182,61 @@ def gravity(where: Where, spec: Any, default: Sequence[float] | None = None) -> 
 
 
 # ---------------------------------------------------------------- contact law
-@dataclass(frozen=True)
-class ContactLaw:
-    """How a post or contact point couples its directions (eq. 2-3, section 2.7): penalty
-    ``stiffness`` K_C per direction (N/m, N m/rad) or a ``rigid`` bolt; the normal
-    direction ``axial`` (index) with ``normal_sign``; ``gap`` (m); bolted while
-    t < ``release_time`` (s), then compression-only on the normal; with ``release_force``
-    (travel m, force N) a soft release: the normal also carries a tension up to F(travel)
-    until the travel passes the table's end (ContactPoint.release_force)."""
+def contact_law(where: Where, spec: dict, directions: Sequence[str], default_axial: int | str = 0) -> ContactPoint:
+    """The LAW_KEYS of a ``[[contact]]`` or ``[[post]]`` table coupling ``directions``: a
+    ContactPoint over them (body b ground), which :func:`at_point` binds to a point's labels.
 
-    stiffness: np.ndarray
-    rigid: bool = False
-    axial: int = 0
-    normal_sign: float = 1.0
-    gap: float = 0.0
-    release_time: float = math.inf
-    normal: tuple | None = None        # oriented normal over the directions (ContactPoint.normal)
-    friction: float = 0.0              # Coulomb coefficient on the tangent directions
-    damping: np.ndarray | float = 0.0  # N s/m (N m s/rad) per direction, a dashpot in parallel with K_C
-    latch_force: float | None = None   # N, capture latch (None: none)
-    release_force: tuple | None = None  # ((travel m...), (force N...)): soft release (None: instantaneous)
+    transient.model.ContactPoint is the one description of a contact law (eq. 2-3, section
+    2.7, and the laws beyond it): it checks every value and this parser only reads the
+    TOML (types, the keys' spellings, stiffness or ``rigid``, ``axial`` by name, a gap >= 0:
+    the scenario's posts and contacts start open or touching); its errors are re-worded at
+    the key they name."""
+    n = len(directions)
+    rigid = boolean(where / "rigid", spec.get("rigid", False))
+    if rigid:
+        if "stiffness" in spec:
+            raise (where / "stiffness").error("a rigid contact takes no stiffness (remove one of the two)")
+        k: Any = 0.0
+    else:
+        if "stiffness" not in spec:
+            raise where.error("missing required key 'stiffness' (N/m or N m/rad) or rigid = true")
+        s = spec["stiffness"]
+        k = vector(where / "stiffness", s, length=n) if isinstance(s, list) else number(where / "stiffness", s)
+    law: dict[str, Any] = {"stiffness": k, "rigid": rigid,
+                           "normal_sign": number(where / "normal_sign", spec.get("normal_sign", 1.0)),
+                           "gap": number(where / "gap", spec.get("gap", 0.0), nonneg=True),
+                           "release_time": number(where / "release_time", spec.get("release_time", math.inf),
+                                                  allow_inf=True)}
+    if "normal" in spec:
+        if "axial" in spec:
+            raise (where / "normal").error("give either axial (a direction) or normal (a vector), not both")
+        law["normal"] = vector(where / "normal", spec["normal"], length=n)
+    else:
+        law["axial"] = axial_index(where / "axial", spec.get("axial", default_axial), directions)
+    for key in ("friction", "latch_force"):
+        if key in spec:
+            law[key] = number(where / key, spec[key])
+    if "damping" in spec:
+        d = spec["damping"]
+        law["damping"] = vector(where / "damping", d, length=n) if isinstance(d, list) else \
+            number(where / "damping", d)
+    if "release_force" in spec:
+        r = table(where / "release_force", spec["release_force"], RELEASE_FORCE_KEYS, required=("travel", "force"))
+        law["release_force"] = (vector(where / "release_force" / "travel", r["travel"]),
+                                vector(where / "release_force" / "force", r["force"]))
+    try:
+        return ContactPoint("law", tuple(directions), (None,) * n, **law)
+    except InputError as exc:
+        msg = " ".join(str(exc).split()).removeprefix("contact 'law': ")
+        key = msg.split(" ", 1)[0].rstrip(":")
+        if key in LAW_KEYS:
+            raise (where / key).error(msg.removeprefix(key).lstrip(": ")) from None
+        raise where.error(msg) from None
 
-    def contact(self, name: str, labels_a: Sequence[str], labels_b: Sequence[str | None]) -> ContactPoint:
-        """The transient model's contact point with this law."""
-        return ContactPoint(name, list(labels_a), list(labels_b), self.stiffness, axial=self.axial,
-                            normal_sign=self.normal_sign, gap=self.gap, release_time=self.release_time,
-                            rigid=self.rigid, normal=self.normal, friction=self.friction, damping=self.damping,
-                            latch_force=self.latch_force, release_force=self.release_force)
+
+def at_point(law: ContactPoint, name: str, labels_a: Sequence[str], labels_b: Sequence[str | None]) -> ContactPoint:
+    """The contact point ``name`` with ``law`` (:func:`contact_law`) between ``labels_a`` and ``labels_b``."""
+    return dataclasses.replace(law, name=name, labels_a=tuple(labels_a), labels_b=tuple(labels_b))
 
 
 def axial_index(where: Where, value: Any, directions: Sequence[str]) -> int:
@@ -218,86 +248,6 @@ def axial_index(where: Where, value: Any, directions: Sequence[str]) -> int:
             raise where.error(f"{value!r} is not one of the directions {', '.join(directions)}")
         return hits[0]
     return integer(where, value, 0, len(directions) - 1)
-
-
-def contact_law(where: Where, spec: dict, directions: Sequence[str], default_axial: int | str = 0) -> ContactLaw:
-    """The LAW_KEYS of a ``[[contact]]`` or ``[[post]]`` table coupling ``directions``."""
-    n = len(directions)
-    rigid = boolean(where / "rigid", spec.get("rigid", False))
-    if rigid:
-        if "stiffness" in spec:
-            raise (where / "stiffness").error("a rigid contact takes no stiffness (remove one of the two)")
-        k = np.zeros(n)
-    else:
-        if "stiffness" not in spec:
-            raise where.error("missing required key 'stiffness' (N/m or N m/rad) or rigid = true")
-        s = spec["stiffness"]
-        k = vector(where / "stiffness", s, length=n, nonneg=True) if isinstance(s, list) else \
-            np.full(n, number(where / "stiffness", s, nonneg=True))
-        if not np.all(k > 0):
-            raise (where / "stiffness").error("zero stiffness: give a positive coupling stiffness")
-    sign = number(where / "normal_sign", spec.get("normal_sign", 1.0))
-    if sign not in (1.0, -1.0):
-        raise (where / "normal_sign").error(f"must be 1 or -1, got {sign:g}")
-    gap = number(where / "gap", spec.get("gap", 0.0), nonneg=True)
-    release = number(where / "release_time", spec.get("release_time", math.inf), allow_inf=True)
-    return ContactLaw(k, rigid, *_orientation(where, spec, directions, default_axial), sign, gap, release,
-                      **_laws(where, spec, n, rigid))
-
-
-def _orientation(where: Where, spec: dict, directions: Sequence[str], default_axial: int | str) -> tuple:
-    """(axial, normal): the normal direction by ``axial`` (index, label or component), or an
-    oriented ``normal`` vector over the directions (then direction 0 of the contact's frame)."""
-    if "normal" not in spec:
-        return (axial_index(where / "axial", spec.get("axial", default_axial), directions),)
-    if "axial" in spec:
-        raise (where / "normal").error("give either axial (a direction) or normal (a vector), not both")
-    if any(d.rpartition(":")[2] not in ("Tx", "Ty", "Tz") for d in directions):
-        raise (where / "normal").error("a normal vector needs translation directions (Tx, Ty, Tz) only")
-    nv = vector(where / "normal", spec["normal"], length=len(directions))
-    if not np.linalg.norm(nv) > 0:
-        raise (where / "normal").error("the normal vector is zero")
-    return (0,)
-
-
-def _laws(where: Where, spec: dict, n: int, rigid: bool) -> dict:
-    """friction, damping, latch_force, release_force and the normal vector of a contact law (ContactPoint
-    checks the rest)."""
-    out = {}
-    if "normal" in spec:
-        out["normal"] = tuple(float(x) for x in vector(where / "normal", spec["normal"], length=n))
-    if "friction" in spec:
-        out["friction"] = number(where / "friction", spec["friction"], nonneg=True)
-        if out["friction"] > 0 and (rigid or n < 2):
-            raise (where / "friction").error("friction needs a penalty contact (stiffness, not rigid) with a "
-                                             "normal and at least one tangent direction")
-    if "damping" in spec:
-        d = spec["damping"]
-        out["damping"] = vector(where / "damping", d, length=n, nonneg=True) if isinstance(d, list) else \
-            number(where / "damping", d, nonneg=True)
-        if rigid and np.any(np.asarray(out["damping"]) > 0):
-            raise (where / "damping").error("a rigid contact takes no damping (the dashpot is in parallel with K_C)")
-    if "latch_force" in spec:
-        out["latch_force"] = number(where / "latch_force", spec["latch_force"], nonneg=True)
-    if "release_force" in spec:
-        out["release_force"] = _release_force(where / "release_force", spec["release_force"], rigid)
-    return out
-
-
-def _release_force(where: Where, spec: Any, rigid: bool) -> tuple:
-    """``release_force = { travel = [...], force = [...] }`` (m, N): the soft release's table."""
-    r = table(where, spec, RELEASE_FORCE_KEYS, required=("travel", "force"))
-    travel = vector(where / "travel", r["travel"], nonneg=True)
-    force = vector(where / "force", r["force"], nonneg=True, length=travel.size)
-    if travel.size < 2:
-        raise (where / "travel").error(f"needs at least 2 points, got {travel.size}")
-    if travel[0] != 0.0:
-        raise (where / "travel").error(f"must start at 0 m, got {travel[0]:g}")
-    if np.any(np.diff(travel) <= 0):
-        raise (where / "travel").error("must be strictly increasing (m)")
-    if rigid:
-        raise where.error("a soft release needs a penalty contact (stiffness, not rigid)")
-    return tuple(float(x) for x in travel), tuple(float(x) for x in force)
 
 
 # ---------------------------------------------------------------- effects (section 4)

@@ -25,6 +25,7 @@ from .sections import (
     LAW_KEYS,
     Softening,
     check_table,
+    at_point,
     contact_law,
     csv_table,
     force,
@@ -178,7 +179,7 @@ def _contacts(where: Where, spec: Any, body_a: ModalBody, body_b: ModalBody) -> 
                 raise (w / "labels_b").error(f"has {len(labels_b)} labels but labels_a has {len(labels_a)}")
         law = contact_law(w, c, labels_a)           # its errors name their key already
         try:
-            out.append(law.contact(name, labels_a, labels_b))
+            out.append(at_point(law, name, labels_a, labels_b))
         except InputError as exc:
             raise w.wrap(exc) from None
     return out

@@ -247,7 +247,7 @@ def test_post_defaults_and_post_read_release_force():
     np.testing.assert_array_equal(s, [0.0, 0.05])
     np.testing.assert_array_equal(f, [1e5, 0.0])
     d["post"][1]["release_force"] = {"travel": [0.0, 0.05, 0.04], "force": [1.0, 1.0, 1.0]}
-    with pytest.raises(InputError, match=r"post\[1\] 'left_2'.release_force.travel: must be strictly increasing"):
+    with pytest.raises(InputError, match=r"post\[1\] 'left_2'.release_force: travel must be strictly increasing"):
         parse_scenario(d, "x.toml")
     d["post"][1]["release_force"] = {"travel": [0.0, 0.05], "forces": [1.0, 1.0]}
     with pytest.raises(InputError, match=r"post\[1\] 'left_2'.release_force: unknown key 'forces'"):
@@ -255,11 +255,11 @@ def test_post_defaults_and_post_read_release_force():
 
 
 @pytest.mark.parametrize("inline, expect", [
-    ("{ travel = [0.0, 0.02], force = [1.0, -1.0] }", "contact[0] 'post'.release_force.force[1]: negative value"),
-    ("{ travel = [0.0, 0.02, 0.01], force = [1.0, 1.0, 1.0] }", "release_force.travel: must be strictly increasing"),
-    ("{ travel = [0.0], force = [1.0] }", "release_force.travel: needs at least 2 points"),
-    ("{ travel = [0.01, 0.02], force = [1.0, 1.0] }", "release_force.travel: must start at 0 m"),
-    ("{ travel = [0.0, 0.02], force = [1.0] }", "release_force.force: has 1 entries, expected 2"),
+    ("{ travel = [0.0, 0.02], force = [1.0, -1.0] }", "contact[0] 'post'.release_force: forces must be >= 0 N"),
+    ("{ travel = [0.0, 0.02, 0.01], force = [1.0, 1.0, 1.0] }", "release_force: travel must be strictly increasing"),
+    ("{ travel = [0.0], force = [1.0] }", "release_force: needs at least 2 points"),
+    ("{ travel = [0.01, 0.02], force = [1.0, 1.0] }", "release_force: travel must start at 0 m"),
+    ("{ travel = [0.0, 0.02], force = [1.0] }", "release_force: 2 travel values but 1 forces"),
     ("{ travel = [0.0, 0.02] }", "release_force: missing required key 'force'"),
     ("{ travel = [0.0, nan], force = [1.0, 1.0] }", "release_force.travel[1]: value is NaN"),
     ("[0.0, 0.02]", "release_force: expected a table"),
