@@ -200,11 +200,8 @@ def build_problem(case: BargeCase, models: BargeModels, progress: bool = True) -
     recs, interface = recoveries(models)
     outputs = {"a": [f"{p}:{c}" for p in models.stations for c in ("Tx", "Tz")] + [f"{p}:Tx" for p in models.bow_points],
                "b": [f"{p}:Tx" for p in models.fender_points]}
-    t = case.time
-    prob = TransientProblem(barge, models.dock, contacts(case, models), Forcing(constant=constant, tables=tables),
-                            t_end=t.t_end, h=t.h, t0=t.t0, method=t.method, tol=t.tol, max_iter=t.max_iter,
-                            initial=init, outputs=outputs, recoveries=recs,
-                            progress=progress and case.output.progress)
+    prob = case.time.problem(barge, models.dock, contacts(case, models), Forcing(constant=constant, tables=tables),
+                             initial=init, outputs=outputs, recoveries=recs, progress=progress and case.output.progress)
     est = series_spring(models, case)
     est["F_wave"] = abs(case.velocity) * impedance(models, case)
     return BargeProblem(case, prob, interface, est)

@@ -39,7 +39,7 @@ def main(argv=None) -> None:
     if not args.stick:
         import pyvista  # noqa: F401  (before dolfinx, FENICSX-NOTES.md)
     from liftoff.reduction import assemble, craig_bampton, keep_modes, system_modes
-    from liftoff.transient import Forcing, PointForce, TabulatedForce, TransientProblem, estimate_step, solve
+    from liftoff.transient import Forcing, PointForce, TabulatedForce, estimate_step, solve
     from liftoff.transient.effects import center_of_gravity, cg_static_report
     from liftoff.workflows.loads import applied_forces, attitude_feedback, contacts, control_table
     from liftoff.workflows.loads import recoveries, softening
@@ -114,9 +114,7 @@ def main(argv=None) -> None:
     # 8. The two-body transient from the static initial state (2.6), with recovery of the
     #    interface forces at the attach points and the c.g. motion (eq. 23).
     recs, attach, outputs = recoveries(case, stack)
-    t = case.time
-    problem = TransientProblem(vehicle, pad, posts, forcing, t_end=t.t_end, h=t.h, t0=t.t0, method=t.method,
-                               initial="static", outputs=outputs, recoveries=recs)
+    problem = case.time.problem(vehicle, pad, posts, forcing, initial="static", outputs=outputs, recoveries=recs)
     result = solve(problem)
     path = result.save(args.out / "results.h5")
     for c in result.contact_summary():

@@ -280,11 +280,8 @@ def build_problem(case: Case, stack: StackModel, progress: bool = True, keep_mod
         feedback.append(attitude_feedback(case, stack))
     forcing = Forcing(constant=constant, tables=tables, feedback=feedback, gravity=case.gravity)
     recs, attach, outputs = recoveries(case, stack)
-    t = case.time
-    problem = TransientProblem(body, stack.pad, cps, forcing, t_end=t.t_end, h=t.h, t0=t.t0, method=t.method,
-                               tol=t.tol, max_iter=t.max_iter, accuracy=t.accuracy, initial="static", outputs=outputs,
-                               recoveries=recs, keep_modal=keep_modal,
-                               progress=progress and case.output.progress)
+    problem = case.time.problem(body, stack.pad, cps, forcing, initial="static", outputs=outputs, recoveries=recs,
+                                keep_modal=keep_modal, progress=progress and case.output.progress)
     checks = stack.truncation([lab for c in cps for lab in c.labels_a], [lab for c in cps for lab in c.labels_b],
                               [f"{point}:{c}" for point, _ in attach.values() for c in COMPONENTS])
     return CaseProblem(case, problem, cryo, ctab, soft, attach, gravity_only=Forcing(gravity=case.gravity),

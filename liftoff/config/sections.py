@@ -19,7 +19,7 @@ import numpy as np
 from liftoff.core.errors import InputError
 from liftoff.core.units import G0
 from liftoff.transient.effects import softening_factors
-from liftoff.transient.model import METHODS, ContactPoint, ModalFeedback, PointForce, TabulatedForce
+from liftoff.transient.model import METHODS, ContactPoint, ModalFeedback, PointForce, TabulatedForce, TransientProblem
 
 from .files import file_path, read_csv_table
 from .values import Where, boolean, choice, integer, label, labels, number, string, strings, table, vector
@@ -64,6 +64,15 @@ class TimeSpan:
     tol: float = 1.0
     max_iter: int = 100
     accuracy: float | None = None
+
+    def problem(self, body_a, body_b, contacts: list, forcing, **rest) -> TransientProblem:
+        """The one translation of a scenario into a :class:`TransientProblem` (lift-off
+        cases, barge cases, two-body files): bodies, contacts and forcing as the scenario
+        built them, this ``[time]``, and the rest (``initial``, ``outputs``, ``recoveries``,
+        ``keep_modal``, ``progress``) by keyword."""
+        return TransientProblem(body_a, body_b, contacts, forcing, t_end=self.t_end, h=self.h, t0=self.t0,
+                                method=self.method, tol=self.tol, max_iter=self.max_iter, accuracy=self.accuracy,
+                                **rest)
 
 
 def time_span(where: Where, spec: Any, *, method: str | None = None) -> TimeSpan:

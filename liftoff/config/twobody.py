@@ -339,10 +339,8 @@ def parse_twobody(data: dict, base: Path, source: str = "scenario", *, method: s
     outputs, keep_modal = _outputs(top / "output", data.get("output", {}), body_a, body_b)
     recoveries = _recoveries(top / "recovery", data.get("recovery", []), bodies, base)
     try:
-        problem = TransientProblem(body_a, body_b, contacts, forcing, t.t_end, h=t.h, t0=t.t0, method=t.method,
-                                   tol=t.tol, max_iter=t.max_iter, initial=initial, outputs=outputs,
-                                   recoveries=recoveries, keep_modal=keep_modal, progress=progress,
-                                   accuracy=t.accuracy)
+        problem = t.problem(body_a, body_b, contacts, forcing, initial=initial, outputs=outputs,
+                            recoveries=recoveries, keep_modal=keep_modal, progress=progress)
     except InputError as exc:
         raise top.wrap(exc) from None
     check_step(top / "time", problem)

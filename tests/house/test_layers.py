@@ -167,3 +167,19 @@ def test_functions_fit_on_a_screen():
                 if len(node.args.args) + len(node.args.posonlyargs) > 16:
                     wide.append(where)
     assert not long and not wide, f"too long: {long}; too wide: {wide}"
+
+
+def test_one_translation_of_a_scenario_into_a_transient_problem():
+    """Lift-off cases, barge cases and two-body files become a TransientProblem in one place,
+    liftoff.config.sections.TimeSpan.problem (issue 23: three copies of the [time] mapping had
+    drifted: the step-by-step script dropped tol, max_iter and accuracy). Only the transient
+    layer itself (and its tests and benchmarks, outside these folders) builds one directly."""
+    direct = []
+    for pkg, module, path in _modules():
+        if pkg == "transient" or module == "liftoff.config.sections":
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Call) and getattr(node.func, "id", getattr(node.func, "attr", None)) \
+                    == "TransientProblem":
+                direct.append(f"{path.relative_to(ROOT)}:{node.lineno}")
+    assert not direct, direct
