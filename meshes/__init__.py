@@ -32,6 +32,7 @@ _EXPORTS = {
     "TankParams": ".tank",
     "build_tank": ".tank",
     "BoosterParams": ".vehicle",
+    "SolidMotorParams": ".solid_motor",
     "OrbiterParams": ".vehicle",
     "build_booster": ".vehicle",
     "build_core_stage": ".vehicle",

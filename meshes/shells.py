@@ -226,8 +226,8 @@ def booster_skirt_section(p) -> list[tuple[float, float]]:
     """Meridian polygon of the solid aft skirt of a shell-cased booster: the solid variant's
     skirt, its top end reaching the case mid-surface (radius R - t/2) over the joint band
     [case_bottom_z, case_bottom_z + skirt_joint_height], where the two share nodes."""
-    R, t = p.layout.srb_radius, p.case_thickness
-    Rb, ts, hf = p.layout.srb_skirt_radius, p.layout.srb_skirt_thickness, p.skirt_foot_height
+    R, t = p.radius, p.case_thickness
+    Rb, ts, hf = p.skirt_radius, p.skirt_thickness, p.skirt_foot_height
     zc, zj = p.case_bottom_z, p.case_bottom_z + p.skirt_joint_height
     return [(Rb - ts, 0.0), (Rb, 0.0), (Rb, hf), (R, zj), (R - 0.5 * t, zj), (R - 0.5 * t, zc), (Rb - ts, hf)]
 
@@ -238,23 +238,23 @@ def build_shell_booster(p, out_dir: Path) -> Geometry:
     ``srb_<side>_skirt`` a solid; same patches and masses as the solid variant."""
     from .vehicle import AL2219, STEEL_D6AC, booster_point_masses
 
-    lay = p.layout
-    R, t = lay.srb_radius, p.case_thickness
+    R, t = p.radius, p.case_thickness
     rm, am_b, am_t = R - 0.5 * t, p.aft_dome_ratio * R - 0.5 * t, p.nose_ratio * R - 0.5 * t
-    axis = lay.srb_axis(p.side)
+    axis = p.axis
     case_g, skirt_g = f"{p.name}_case", f"{p.name}_skirt"
     w = p.attach_patch_half_width
     with _occ.gmsh_session(p.name):
         skirt = _occ.revolve_to_z(_occ.polygon(booster_skirt_section(p)), axis)
         case = _occ.capsule_surface(rm, am_b, am_t, p.case_bottom_z, p.cyl_top_z - p.case_bottom_z, axis)
         tools, refs = [], {}
-        for name, pt in lay.holddown_points(p.side).items():
+        holddown = p.holddown_points()
+        for name, pt in holddown.items():
             tools.append(_occ.cylinder_tool(name, pt[:2], p.holddown_patch_radius, -1.0, 0.5 * p.skirt_foot_height))
             refs[name] = pt
         gimbal = f"{p.name}_gimbal"
         tools.append(_apex_tool(gimbal, axis, w, rm, am_b, p.case_bottom_z - am_b, top=False))
         refs[gimbal] = np.array([axis[0], axis[1], p.case_bottom_z - p.aft_dome_ratio * R])
-        attach = lay.srb_attach_points(p.side)
+        attach = p.attach_points()
         rings = ring_heights(attach, axis, [(p.case_bottom_z, p.cyl_top_z)]) \
             if check_attach(p.name, p.walls, p.attach) == "ring" else {}
         tools += _wall_tools(attach, rings, axis, rm, w)
@@ -262,7 +262,7 @@ def build_shell_booster(p, out_dir: Path) -> Geometry:
         vols, faces = _occ.imprint_parts({skirt_g: skirt}, {case_g: case}, tools)
         cand = _occ.boundary_faces(vols[skirt_g]) + faces[case_g]
         patches = _patches_on(cand, tools, refs, lambda n: min(p.mesh_size, 0.6 * (
-            p.holddown_patch_radius if "_hd_" in n else w)))
+            p.holddown_patch_radius if n in holddown else w)))
         patches += ring_patches(faces[case_g], p.name, rings, attach, axis, rm)
         _occ.add_physical(2, f"{p.name}_case_inner", faces[case_g])
         _occ.add_physical(2, case_g, faces[case_g])
@@ -270,7 +270,7 @@ def build_shell_booster(p, out_dir: Path) -> Geometry:
         volume = _occ.group_volume(vols[skirt_g])
         areas = _occ.physical_measures(2)
         n_curv = max(shell_curvature_elements(rm, p.mesh_size),
-                     _occ.curvature_elements(lay.srb_skirt_thickness, lay.srb_skirt_radius))
+                     _occ.curvature_elements(p.skirt_thickness, p.skirt_radius))
         n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size, n_curv)
     case_mat, tc = shell_section(STEEL_D6AC, areas[case_g], p.case_mass, p.case_shell_thickness, t)
     mats = {case_g: case_mat, skirt_g: equivalent(AL2219, p.skirt_mass, volume, "Al2219-equivalent-skirt")}

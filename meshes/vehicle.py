@@ -114,12 +114,47 @@ class BoosterParams:
     case_shell_bending_ratio: float = 1.0       # shell case: 12 I / t^3 (1 = bare skin)
     attach: str | None = None           # shell case: core attach points as rigid "patch"es or "ring"s (None: ring)
 
+    # ---- placement: the StackLayout's booster position ``side`` (SolidMotorParams: its own)
     @property
     def name(self) -> str:
         return f"srb_{self.side}"
 
+    @property
+    def radius(self) -> float:
+        """Outer radius of the case (m)."""
+        return self.layout.srb_radius
+
+    @property
+    def axis(self) -> np.ndarray:
+        """(x, y) of the motor's axis (m)."""
+        return self.layout.srb_axis(self.side)
+
+    @property
+    def skirt_radius(self) -> float:
+        """Outer radius of the aft skirt's bottom (m)."""
+        return self.layout.srb_skirt_radius
+
+    @property
+    def skirt_thickness(self) -> float:
+        """Radial thickness of the aft skirt's foot ring (m)."""
+        return self.layout.srb_skirt_thickness
+
+    def holddown_points(self) -> dict[str, np.ndarray]:
+        """{name: (x, y, 0)}: hold-down points on the skirt's bottom (z = 0)."""
+        return self.layout.holddown_points(self.side)
+
+    def attach_points(self) -> dict[str, np.ndarray]:
+        """{name: (x, y, z)}: points tied to a patch of the case wall facing them."""
+        return self.layout.srb_attach_points(self.side)
+
+    def _check_placement(self, o: str) -> None:
+        self.layout.check()
+        self.layout.srb_axis(self.side)
+        if self.cyl_top_z <= max(self.layout.srb_fwd_attach_z, self.case_bottom_z) + 1.0:
+            raise InputError(f"{o}.length: case too short for the forward attach at z = {self.layout.srb_fwd_attach_z}")
+
     def check(self) -> None:
-        o = f"BoosterParams({self.side})"
+        o = f"{type(self).__name__}({self.name})"
         check_walls(o, self.walls)
         check_attach(o, self.walls, self.attach)
         if self.case_shell_thickness is not None:
@@ -134,27 +169,26 @@ class BoosterParams:
                          nozzle_cg_below_gimbal=self.nozzle_cg_below_gimbal,
                          holddown_patch_radius=self.holddown_patch_radius,
                          attach_patch_half_width=self.attach_patch_half_width, mesh_size=self.mesh_size)
-        self.layout.check()
-        self.layout.srb_axis(self.side)
-        R, t = self.layout.srb_radius, self.case_thickness
+        R, t = self.radius, self.case_thickness
         if t >= 0.5 * R:
-            raise InputError(f"{o}.case_thickness must be < srb_radius/2")
+            raise InputError(f"{o}.case_thickness must be < the case radius/2 ({R:g} m)")
         if self.aft_dome_ratio * R <= 2 * t or self.nose_ratio * R <= 2 * t:
             raise InputError(f"{o}: dome heights must exceed 2 x case_thickness")
         if self.case_bottom_z - self.aft_dome_ratio * R <= 0.2:
             raise InputError(f"{o}.case_bottom_z: the aft dome reaches below the skirt bottom")
-        if self.cyl_top_z <= max(self.layout.srb_fwd_attach_z, self.case_bottom_z) + 1.0:
-            raise InputError(f"{o}.length: case too short for the forward attach at z = {self.layout.srb_fwd_attach_z}")
+        if self.cyl_top_z <= self.case_bottom_z + 1.0:
+            raise InputError(f"{o}.length: the case's cylinder would be shorter than 1 m")
+        self._check_placement(o)
         if self.skirt_foot_height >= self.case_bottom_z - self.aft_dome_ratio * R:
             raise InputError(f"{o}.skirt_foot_height must be below the aft dome apex")
-        if self.layout.srb_skirt_radius - self.layout.srb_skirt_thickness <= R:
+        if self.skirt_radius - self.skirt_thickness <= R:
             raise InputError(f"{o}: skirt bottom inner radius must exceed the case radius")
-        if 2 * self.holddown_patch_radius >= self.layout.srb_skirt_thickness:
+        if 2 * self.holddown_patch_radius >= self.skirt_thickness:
             raise InputError(f"{o}.holddown_patch_radius must be < skirt thickness / 2")
 
     @property
     def cyl_top_z(self) -> float:
-        return self.length - self.nose_ratio * self.layout.srb_radius
+        return self.length - self.nose_ratio * self.radius
 
 
 def booster_closed_form_volumes(p: BoosterParams) -> dict[str, float]:
@@ -162,12 +196,12 @@ def booster_closed_form_volumes(p: BoosterParams) -> dict[str, float]:
     from scipy.integrate import quad
 
     from .tank import capsule_volume
-    R, t = p.layout.srb_radius, p.case_thickness
+    R, t = p.radius, p.case_thickness
     L = p.cyl_top_z - p.case_bottom_z
     a_b, a_t = p.aft_dome_ratio * R, p.nose_ratio * R
     case = capsule_volume(R, a_b, a_t, L) - capsule_volume(R - t, a_b - t, a_t - t, L)
     zc, z3 = p.case_bottom_z, p.case_bottom_z + p.skirt_joint_height
-    hf, Rb, ts = p.skirt_foot_height, p.layout.srb_skirt_radius, p.layout.srb_skirt_thickness
+    hf, Rb, ts = p.skirt_foot_height, p.skirt_radius, p.skirt_thickness
 
     def skirt_area(z: float) -> float:  # skirt cross-section outside the case solid at height z
         ro = np.interp(z, [0.0, hf, z3], [Rb, Rb, R])
@@ -182,8 +216,8 @@ def booster_closed_form_volumes(p: BoosterParams) -> dict[str, float]:
 
 
 def _skirt_quad(p: BoosterParams):
-    R, t = p.layout.srb_radius, p.case_thickness
-    Rb, ts = p.layout.srb_skirt_radius, p.layout.srb_skirt_thickness
+    R, t = p.radius, p.case_thickness
+    Rb, ts = p.skirt_radius, p.skirt_thickness
     hf = p.skirt_foot_height
     return [(Rb - ts, 0.0), (Rb, 0.0), (Rb, hf), (R, p.case_bottom_z + p.skirt_joint_height),
             (R - 0.5 * t, p.case_bottom_z), (Rb - ts, hf)]
@@ -206,10 +240,10 @@ def build_booster(p: BoosterParams, out_dir) -> Geometry:
     if p.walls == "shell":
         from .shells import build_shell_booster
         return build_shell_booster(p, Path(out_dir))
-    lay, out_dir = p.layout, Path(out_dir)
-    R, t = lay.srb_radius, p.case_thickness
+    out_dir = Path(out_dir)
+    R, t = p.radius, p.case_thickness
     a_b, a_t = p.aft_dome_ratio * R, p.nose_ratio * R
-    axis = lay.srb_axis(p.side)
+    axis = p.axis
     case_g, skirt_g = f"{p.name}_case", f"{p.name}_skirt"
     gimbal = np.array([axis[0], axis[1], p.case_bottom_z - a_b])
     with _occ.gmsh_session(p.name):
@@ -224,14 +258,15 @@ def build_booster(p: BoosterParams, out_dir) -> Geometry:
         vol_skirt = _occ.revolve_to_z(skirt_f, axis)
         occ.synchronize()
         tools, refs = [], {}
-        for name, pt in lay.holddown_points(p.side).items():
+        holddown = p.holddown_points()
+        for name, pt in holddown.items():
             tools.append(_occ.cylinder_tool(name, pt[:2], p.holddown_patch_radius, -1.0, 0.5 * p.skirt_foot_height))
             refs[name] = pt
         w = p.attach_patch_half_width
         drop = a_b * (1 - math.sqrt(1 - (w / R) ** 2))
         tools.append(_occ.cylinder_tool(f"{p.name}_gimbal", axis, w, gimbal[2] - 1.0, gimbal[2] + 0.5 * (drop + t)))
         refs[f"{p.name}_gimbal"] = gimbal
-        for name, pt in lay.srb_attach_points(p.side).items():
+        for name, pt in p.attach_points().items():
             d = pt[:2] - axis
             tools.append(_occ.wall_patch(name, axis, math.atan2(d[1], d[0]), pt[2], R, R - t, w, w))
             refs[name] = pt
@@ -239,7 +274,7 @@ def build_booster(p: BoosterParams, out_dir) -> Geometry:
         allv = groups[case_g] + groups[skirt_g]
         bfaces = _occ.boundary_faces(allv)
         patches = _occ.patch_groups(bfaces, tools, refs,
-                                    lambda n: min(p.mesh_size, 0.6 * (p.holddown_patch_radius if "_hd_" in n else w)))
+                                    lambda n: min(p.mesh_size, 0.6 * (p.holddown_patch_radius if n in holddown else w)))
         ri = R - t
         inner = _occ.faces_inside(bfaces, (axis[0] - ri, axis[1] - ri, p.case_bottom_z - (a_b - t),
                                            axis[0] + ri, axis[1] + ri, p.cyl_top_z + a_t - t), tol=1e-3 * R)

@@ -133,7 +133,7 @@ BAD = [
     ("model.vehicle.params", {"n_modes": 5}, "model.vehicle.params: unknown key 'n_modes'"),
     ("model.vehicle.n_modes", 5, "model.vehicle: unknown key 'n_modes'"),
     ("model.component.srb_left.params", {"side": "left", "case_thickness": 2.0}, "model.component.srb_left.params: "
-     "BoosterParams(left).case_thickness must be < srb_radius/2"),
+     "BoosterParams(srb_left).case_thickness must be < the case radius/2"),
     ("model.component.srb_left.params", {"side": "up"}, "model.component.srb_left.params: booster side must be one of"),
     ("model.component.srb_left.params", {"walls": "solid"}, "model.component.srb_left.params.side: missing"),
     ("model.component.orbiter.params", {"wing_spam": 20.0}, "model.component.orbiter.params: unknown key 'wing_spam'"),
@@ -148,7 +148,7 @@ BAD = [
     ("model.component.srb_left.params", {"side": "left", "case_shell_thickness": "0.01"},
      "model.component.srb_left.params.case_shell_thickness: expected a number"),
     ("model.component.srb_left.params", {"side": "left", "walls": "solid", "attach": "ring"},
-     "model.component.srb_left.params: BoosterParams(left).attach = 'ring' needs walls = 'shell' (got 'solid')"),
+     "model.component.srb_left.params: BoosterParams(srb_left).attach = 'ring' needs walls = 'shell' (got 'solid')"),
     ("model.stick", {"core_wall": 0.01}, "model.stick: [model.stick] is for source = \"stick\""),
 ]
 

@@ -1,0 +1,34 @@
+"""``type = "solid_motor"``: a solid rocket motor anywhere, an in-line solid stage or a
+strap-on booster (meshes.solid_motor.SolidMotorParams, built as the Shuttle booster is:
+case with aft dome and nose, aft skirt, propellant smeared on the case's inner wall, nozzle
+at ``<name>_gimbal``), placed by its own ``axis_xy``, ``case_radius``,
+``skirt_bottom_radius`` and ``skirt_foot_thickness`` (m), with ``holddown = {name = [x, y,
+0]}`` on the skirt's foot ring and ``points = {name = [x, y, z]}`` tied to a patch of the
+case wall facing them. walls default to [model]'s."""
+from __future__ import annotations
+
+from ..params import builder, mesh_size_kw
+from ..values import Where, table, vector
+from . import ComponentType, Context
+
+
+def _points(where: Where, spec) -> dict:
+    return {n: tuple(float(x) for x in vector(where / n, v, length=3))
+            for n, v in table(where, spec, set(spec) if isinstance(spec, dict) else set()).items()}
+
+
+def read(ctx: Context, where: Where, params: dict):
+    from liftoff.meshes.solid_motor import SolidMotorParams
+
+    if not isinstance(params, dict):
+        raise where.error("expected a table of SolidMotorParams fields")
+    own = {"holddown", "points"}
+    fixed = {"motor": ctx.name, "side": "left", "holddown": _points(where / "holddown", params.get("holddown", {})),
+             "points": _points(where / "points", params.get("points", {}))}
+    size = mesh_size_kw(ctx.mesh_size)
+    return builder(where, SolidMotorParams, {k: v for k, v in params.items() if k not in own}, fixed,
+                   {**size, "walls": ctx.walls})
+
+
+TYPE = ComponentType("solid_motor", read, "liftoff.meshes.vehicle:build_booster", "vehicle",
+                     "a solid motor anywhere: in-line stage or strap-on booster (meshes.solid_motor)")
