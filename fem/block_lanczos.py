@@ -141,7 +141,7 @@ def block_lanczos(solve: Block, mass: Block, n_local: int, n_global: int, row0: 
         H[:m, j0:m] = C + C2
         blocks += 1
         BW = mass(W)
-        if m >= want and blocks >= next_check:
+        if m >= want and (blocks >= next_check or m + p > cap_dim):     # a last check when the basis is full
             theta, Y = _ritz(H, m, p, want)
             G = _dot(comm, W, BW)            # ||W y_last||_B: the exact residual of each pair
             Yl = Y[j0:m]

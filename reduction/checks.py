@@ -88,8 +88,8 @@ def cb_check(cb: CBModel, component: Component | None = None, ref_point=None,
     kb_eig = sla.eigvalsh(0.5 * (cb.K_B + cb.K_B.T))
     s["M_min_eig_rel"] = float(m_eig[0] / m_eig[-1])
     k_scale = stiffness_scale(cb)
-    s["K_B_min_eig_rel"] = float(kb_eig[0] / k_scale)
-    s["K_B_n_zero_eig"] = int(np.sum(np.abs(kb_eig) < 1e-9 * k_scale))
+    s["K_B_min_eig_rel"] = float(kb_eig[0] / k_scale) if k_scale > 0 else 0.0    # 0: no stiffness (a rigid mass)
+    s["K_B_n_zero_eig"] = int(np.sum(np.abs(kb_eig) <= 1e-9 * k_scale))     # <=: a rigid mass (K_B = 0) has 6
     s["M_positive_definite"] = bool(m_eig[0] > MASSLESS_TOL * m_eig[-1])
     s["M_n_massless"] = int(np.sum(m_eig <= MASSLESS_TOL * m_eig[-1]))
     s["K_positive_semidefinite"] = bool(kb_eig[0] > -1e-9 * k_scale and np.all(cb.fixed_omega >= 0))

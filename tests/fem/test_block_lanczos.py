@@ -77,3 +77,19 @@ def test_unconverged_is_a_convergence_error_and_small_problems_are_refused():
         block_lanczos(lu.solve, lambda Y: Y, n, n, 0, 40, max_dim=48, who="grid")
     with pytest.raises(ValueError, match="solve it densely"):
         block_lanczos(lu.solve, lambda Y: Y, 100, 100, 0, 40)
+
+
+def test_a_full_basis_is_checked_before_it_would_overflow():
+    """A problem small enough that the basis reaches n - p before the next scheduled
+    convergence check (a beam stick's 234 interior DOFs for 69 pairs): the last block is
+    checked, and the result is the converged pairs or a ConvergenceError, never a write past
+    the basis (it was a numpy broadcasting ValueError)."""
+    K, exact = grid_laplacian(15)
+    n, want = K.shape[0], 69
+    lu = spla.splu(K)
+    try:
+        lam, _, info = block_lanczos(lu.solve, lambda Y: Y, n, n, 0, want)
+    except ConvergenceError as exc:
+        assert "unconverged at" in str(exc)
+    else:
+        assert np.max(np.abs(lam / exact[:want] - 1)) < 1e-11, info

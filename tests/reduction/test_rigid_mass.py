@@ -26,6 +26,14 @@ def test_mass_matrix_is_the_parallel_axis_theorem():
     assert cb.n_modes == 0 and cb.boundary_labels == tuple(f"pif:{c}" for c in ("Tx", "Ty", "Tz", "Rx", "Ry", "Rz"))
     assert not np.any(cb.K)
     assert cb.points == ("pif",) and cb.point_coords[0] == pytest.approx(p.at)
+    import warnings
+
+    from liftoff.reduction.checks import cb_check
+
+    with warnings.catch_warnings():             # a run's cb_checks.txt: no 0/0 for a body without stiffness
+        warnings.simplefilter("error")
+        s = cb_check(cb).summary
+    assert s["K_B_min_eig_rel"] == 0.0 and s["K_B_n_zero_eig"] == 6 and s["M_positive_definite"]
 
 
 @pytest.mark.parametrize("kw, message", [
