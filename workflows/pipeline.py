@@ -115,19 +115,27 @@ def build_component(model: ModelConfig, comp: ComponentModel, workdir: Path) -> 
         from .stick import build
 
         return build(comp.name, comp.builder, comp.mesh_size, model.max_elements)
+    t = component_types_of(comp)
+    if t is not None and t.matrices:           # a type that gives its matrices directly (beam)
+        return t.matrices_builder()(comp.builder, comp.name)
     from . import fe_source
 
     return fe_source.build_component(comp, model, workdir)
 
 
-def given_model(comp: ComponentModel):
-    """The function giving the component's CB model directly (a registered type with
-    ``model``, such as rigid_mass), or None (built, imported from Nastran, or a stick)."""
+def component_types_of(comp: ComponentModel):
+    """The registered type of a component (None: a Nastran import, or no type)."""
     if not comp.type or comp.nastran is not None:
         return None
     from liftoff.config import component_types
 
-    t = component_types.types().get(comp.type)
+    return component_types.types().get(comp.type)
+
+
+def given_model(comp: ComponentModel):
+    """The function giving the component's CB model directly (a registered type with
+    ``model``, such as rigid_mass), or None (built, imported from Nastran, or a stick)."""
+    t = component_types_of(comp)
     return None if t is None else t.model_builder()
 
 
@@ -135,7 +143,7 @@ def component_stage(model: ModelConfig, name: str, cache: StageCache, workdir: P
     comp = model.components[name]
     code = (("liftoff.workflows.stick", "liftoff.meshes", "liftoff.reduction", "liftoff.core") if model.source == "stick"
             else ("liftoff.meshes", "liftoff.fem", "liftoff.reduction.component", "liftoff.reduction.liquid",
-                  "liftoff.workflows.fe_source",
+                  "liftoff.reduction.beam_stick", "liftoff.workflows.fe_source",
                   "liftoff.core"))
     key = stage_key("component", _component_key(model, comp), code)
 

@@ -24,7 +24,7 @@ from liftoff.core.errors import InputError
 
 #: the types shipped with liftoff: module names of this package, each with a ``TYPE``
 BUILTIN = ("shuttle_core", "shuttle_booster", "shuttle_orbiter", "launch_table", "tank_stage", "barrel", "platform",
-           "solid_motor", "geometry", "barge_hull", "barge_cargo", "dock", "rigid_mass", "rigid_ground")
+           "solid_motor", "beam", "geometry", "barge_hull", "barge_cargo", "dock", "rigid_mass", "rigid_ground")
 #: the type of a component imported from a Nastran Craig-Bampton model (no builder)
 NASTRAN = "nastran"
 ENTRY_POINTS = "liftoff.component_types"
@@ -54,7 +54,9 @@ class ComponentType:
     ``build`` ("module:function", ``function(params, out_dir) -> Geometry``), ``role``
     (where it may stand: "vehicle", "pad" or "any"), a one-line ``doc`` and, for a type
     without a mesh, ``model`` ("module:function", ``function(params, name) -> CBModel``: the
-    component's Craig-Bampton model given directly; then ``build`` is empty)."""
+    component's Craig-Bampton model given directly; then ``build`` is empty) or ``matrices``
+    ("module:function", ``function(params, name) -> (Component, {volume: load})``: its FE
+    matrices given directly, reduced by the CB stage; the beam stick)."""
 
     name: str
     read: Callable
@@ -62,6 +64,15 @@ class ComponentType:
     role: str = "any"
     doc: str = ""
     model: str = ""         # "module:function": function(params, name) -> reduction.CBModel, no mesh nor FE
+    matrices: str = ""      # "module:function": function(params, name) -> (reduction.Component, {volume: load}):
+                            # FE matrices given directly (no gmsh), reduced by the CB stage as a meshed one's
+
+    def matrices_builder(self) -> Callable | None:
+        """The function that gives the component's FE matrices directly (``matrices``), or None."""
+        if not self.matrices:
+            return None
+        module, func = self.matrices.split(":")
+        return getattr(importlib.import_module(module), func)
 
     def builder(self) -> Callable:
         """The gmsh builder function (imports meshes/ and gmsh)."""

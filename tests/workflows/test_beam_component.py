@@ -1,0 +1,68 @@
+"""Any launcher as sticks (issue 23): tests/data/beam_stick/scenario.toml, a two-stage vehicle
+of two ``type = "beam"`` components joined at ``is_1``, a ``rigid_mass`` payload (its c.g. at
+its point) on ``rigid_ground``, run end to end by ``liftoff run``'s API.
+
+* A second method for the vehicle's free-free modes: the same structure as ONE stick
+  (stations 0, 2, 40, 52 m; the payload as a lumped mass at its point) solved densely,
+  without Craig-Bampton or assembly. The nodes are the same, so the models are the same
+  and the difference is the CB truncation at f_max = 100 Hz, from above (a Ritz
+  reduction's eigenvalues are upper bounds): 3e-6 for the first bending at 1.54 Hz
+  (required 1e-5), 7e-5 up to 7 Hz (required 2e-4).
+* The vehicle's mass: the segments, the payload and the four hold-down links (LINK's line
+  density over 1.83 m each), 1e-9.
+* At t0 the four posts carry the vehicle's weight m g (the static initial state: 1e-9)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.linalg as sla
+
+SCENARIO = Path(__file__).resolve().parents[1] / "data" / "beam_stick" / "scenario.toml"
+HD = [(1.294005, 1.294005), (-1.294005, 1.294005), (-1.294005, -1.294005), (1.294005, -1.294005)]
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    pytest.importorskip("petsc4py")
+    from liftoff.workflows.run import run as run_api
+
+    folder = tmp_path_factory.mktemp("beam_stick")
+    return run_api(SCENARIO, out=folder / "out", cache_dir=folder / "cache", progress=False, plots=False,
+                   snapshots=False, echo=lambda *a, **k: None, error_estimate=False)
+
+
+def test_free_free_modes_equal_one_stick_solved_densely(run):
+    from liftoff.reduction.beam_stick import BeamStick, beam_stick_component
+
+    stack = next(iter(run.stacks.values()))
+    one = BeamStick(name="one", stations=(0.0, 2.0, 40.0, 52.0), radius=(1.83,), thickness=(0.01, 0.01, 0.008),
+                    mass_per_length=(3000.0, 10000.0, 8000.0),
+                    points={"engine_mount": 0.0, **{f"hd_{k + 1}": [x, y, 2.0] for k, (x, y) in enumerate(HD)},
+                            "is_1": 40.0, "payload_if": 52.0},
+                    masses={"payload_if": (5000.0, 8000.0, 8000.0, 3000.0)}, element_length=1.0)
+    comp, _ = beam_stick_component(one)
+    w = sla.eigh(comp.K.toarray(), comp.M.toarray(), eigvals_only=True, subset_by_index=[0, 11])
+    ref = np.sqrt(np.abs(w[6:])) / (2 * np.pi)
+    got = stack.vehicle.omega[6:12] / (2 * np.pi)
+    assert np.all(got >= ref * (1 - 1e-12))                 # CB is a Ritz reduction: upper bounds
+    np.testing.assert_allclose(got[:2], ref[:2], rtol=1e-5)
+    np.testing.assert_allclose(got, ref, rtol=2e-4)
+    assert 1.0 < got[0] < 2.0
+
+
+def test_vehicle_mass_and_the_posts_carry_its_weight(run):
+    from liftoff.reduction.beam_stick import LINK
+    from liftoff.transient.effects import center_of_gravity
+
+    stack = next(iter(run.stacks.values()))
+    m, cg = center_of_gravity(stack.vehicle)
+    link = LINK["mass_per_length"] * np.hypot(*HD[0])
+    assert m == pytest.approx(3000.0 * 2 + 10000.0 * 38 + 8000.0 * 12 + 5000.0 + 4 * link, rel=1e-9)
+    assert stack.pad.is_ground
+    res, _ = run.results["nominal"]
+    g = -float(np.asarray(res.metadata["gravity"])[2])
+    tz = [j for j, d in enumerate(res.contact_directions) if d.component == "Tz"]
+    assert len(tz) == 4 and res.contact_force[0, tz].sum() == pytest.approx(m * g, rel=1e-9)
+    assert {c["name"]: c["separation_time"] for c in res.contact_summary()}["clamp_1"] == pytest.approx(1.5, abs=1e-3)
