@@ -11,16 +11,13 @@ stiffness under the posts are only approximate. Defaults and sources: docs/meshe
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from liftoff.core.errors import InputError
 
-from . import _occ
-from ._occ import occ
 from .layout import SIDES, StackLayout
-from .spec import Geometry, Material, Patch, require_positive, require_range
+from .spec import Geometry, Material, require_positive, require_range
 
 STEEL = Material("steel", 200e9, 0.29, 7850.0)
 
@@ -86,6 +83,23 @@ class PadParams:
         hi = np.array([c[0] + self.deck_length_x / 2, c[1] + self.deck_width_y / 2, -self.post_height])
         return lo, hi
 
+    def platform(self):
+        """The launch table as a platform (meshes.platform.PlatformParams): posts under the
+        layout's booster hold-down points, the boosters' round exhaust holes and the
+        orbiter engines' square one."""
+        from .platform import PlatformParams
+
+        lo, hi = self.deck_bounds()
+        return PlatformParams(
+            name=self.name, deck_size=(self.deck_length_x, self.deck_width_y),
+            deck_center_xy=tuple(self.deck_center_xy), deck_thickness=self.deck_thickness, deck_top_z=float(hi[2]),
+            posts={n: tuple(float(v) for v in pt) for n, pt in self.post_points().items()}, post_size=self.post_size,
+            holes=tuple((*(float(v) for v in self.layout.srb_axis(side)), self.srb_hole_radius) for side in SIDES),
+            square_holes=((0.0, float(self.layout.orbiter_axis_y), self.ssme_hole_half_size),),
+            pedestals=tuple(self.pedestal_xy), pedestal_size=self.pedestal_size, pedestal_height=self.pedestal_height,
+            pedestal_wall_thickness=self.pedestal_wall_thickness, mass=self.mlp_mass,
+            flange_thickness=self.deck_flange_thickness, mesh_size=self.mesh_size, post_mesh_size=self.post_mesh_size)
+
     def post_points(self) -> dict[str, np.ndarray]:
         """``{"pad_post_<side>_<k>": point}``: the booster hold-down points of the layout."""
         out = {}
@@ -132,57 +146,14 @@ def pedestal_material(size: float, wall: float) -> Material:
 def build_pad(p: PadParams, out_dir) -> Geometry:
     """Pad: volumes ``pad_deck``, ``pad_posts``, ``pad_pedestals``; post-top patches
     ``pad_post_<side>_<k>`` (reference points = booster hold-down points); clamped
-    surfaces ``pad_pedestal_<k>_base``."""
+    surfaces ``pad_pedestal_<k>_base``: the platform (meshes/platform.py) the layout places,
+    :meth:`PadParams.platform`."""
     if not isinstance(p, PadParams):
         raise InputError(f"build_pad expects PadParams, got {type(p).__name__}")
     p.check()
-    out_dir = Path(out_dir)
-    lo, hi = p.deck_bounds()
-    H, s, ps = p.deck_thickness, p.post_size, p.pedestal_size
-    with _occ.gmsh_session(p.name):
-        deck = [(3, occ.addBox(*lo, *(hi - lo)))]
-        holes = [(3, occ.addCylinder(*p.layout.srb_axis(side), lo[2] - 1, 0, 0, H + 2, p.srb_hole_radius))
-                 for side in SIDES]
-        oy = p.layout.orbiter_axis_y
-        hs = p.ssme_hole_half_size
-        holes.append((3, occ.addBox(-hs, oy - hs, lo[2] - 1, 2 * hs, 2 * hs, H + 2)))
-        deck, _ = occ.cut(deck, holes)
-        posts = {n: (3, occ.addBox(pt[0] - s / 2, pt[1] - s / 2, hi[2], s, s, p.post_height))
-                 for n, pt in p.post_points().items()}
-        peds = [(3, occ.addBox(x - ps / 2, y - ps / 2, lo[2] - p.pedestal_height, ps, ps, p.pedestal_height))
-                for x, y in p.pedestal_xy]
-        occ.synchronize()
-        groups = _occ.imprint({"pad_deck": deck, "pad_posts": list(posts.values()), "pad_pedestals": peds}, [])
-        allv = [d for ds in groups.values() for d in ds]
-        bfaces = _occ.boundary_faces(allv)
-        patches, clamped = [], []
-        tol = 1e-3
-        for name, pt in p.post_points().items():
-            faces = _occ.faces_inside(bfaces, (pt[0] - s / 2, pt[1] - s / 2, -tol, pt[0] + s / 2, pt[1] + s / 2, tol))
-            _occ.add_physical(2, name, faces)
-            patches.append(Patch(name, pt))
-        post_faces = _occ.boundary_faces(groups["pad_posts"], combined=False)
-        _occ.refine_faces(post_faces, min(p.mesh_size, p.post_mesh_size))
-        zb = lo[2] - p.pedestal_height
-        for k, (x, y) in enumerate(p.pedestal_xy):
-            faces = _occ.faces_inside(bfaces, (x - ps / 2, y - ps / 2, zb - tol, x + ps / 2, y + ps / 2, zb + tol))
-            name = f"pad_pedestal_{k + 1}_base"
-            _occ.add_physical(2, name, faces)
-            clamped.append(name)
-        for g, ds in groups.items():
-            _occ.add_physical(3, g, [tg for _, tg in ds])
-        vols = {g: _occ.group_volume(ds) for g, ds in groups.items()}
-        areas = _occ.physical_measures(2)
-        n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size)
-    post_mass = STEEL.rho * vols["pad_posts"]
-    if p.mlp_mass <= post_mass:
-        raise InputError(f"PadParams.mlp_mass {p.mlp_mass} kg is less than the posts' mass {post_mass:.0f} kg")
-    mats = {"pad_deck": deck_material("MLP-deck-equivalent", p.mlp_mass - post_mass, vols["pad_deck"],
-                                      p.deck_flange_thickness, H),
-            "pad_posts": STEEL, "pad_pedestals": pedestal_material(ps, p.pedestal_wall_thickness)}
-    geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), mats, patches, [], [], clamped, vols, n_nodes, areas)
-    geo.save(out_dir / f"{p.name}.json")
-    return geo
+    from .platform import build_platform
+
+    return build_platform(p.platform(), out_dir, deck_material_name="MLP-deck-equivalent")
 
 
 def default_pad(mesh_size: float | None = None, out_dir="out/meshes", layout: StackLayout | None = None) -> Geometry:

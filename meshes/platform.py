@@ -29,7 +29,8 @@ class PlatformParams:
     """Platform geometry and mass (SI): deck ``deck_size`` (x, y) centred at
     ``deck_center_xy``, ``deck_thickness``, its top at ``deck_top_z``; ``posts``: {point
     name: [x, y, z]} of each post top (square posts of side ``post_size`` rising from the
-    deck top to z); ``holes``: [[x, y, radius]] exhaust holes through the deck;
+    deck top to z); ``holes``: [[x, y, radius]] exhaust holes through the deck,
+    ``square_holes``: [[x, y, half side]] square ones;
     ``pedestals``: [[x, y]] square columns of side ``pedestal_size`` and height
     ``pedestal_height`` under the deck, their bottoms fixed to ground; ``mass``: deck and
     posts (kg)."""
@@ -42,6 +43,7 @@ class PlatformParams:
     posts: dict = field(default_factory=dict)
     post_size: float = 1.0
     holes: tuple = ()
+    square_holes: tuple = ()
     pedestals: tuple = ((-15.0, -15.0), (15.0, -15.0), (-15.0, 15.0), (15.0, 15.0))
     pedestal_size: float = 2.0
     pedestal_height: float = 6.7
@@ -75,6 +77,9 @@ class PlatformParams:
             for k, (hx, hy, r) in enumerate(self.holes):
                 if math.hypot(x - hx, y - hy) - h * math.sqrt(2) <= r:
                     raise InputError(f"{o}.holes[{k}]: the exhaust hole undercuts the post {n!r}")
+            for k, (hx, hy, a) in enumerate(self.square_holes):
+                if abs(x - hx) < a + h and abs(y - hy) < a + h:
+                    raise InputError(f"{o}.square_holes[{k}]: the exhaust hole undercuts the post {n!r}")
         check_pedestals(o, "pedestals", self.pedestals, self.pedestal_size, self.pedestal_wall_thickness, lo, hi)
         if self.flange_thickness >= 0.5 * self.deck_thickness:
             raise InputError(f"{o}.flange_thickness must be < deck_thickness/2")
@@ -85,9 +90,10 @@ class PlatformParams:
                 np.array([cx + sx / 2, cy + sy / 2, self.deck_top_z]))
 
 
-def build_platform(p: PlatformParams, out_dir) -> Geometry:
+def build_platform(p: PlatformParams, out_dir, deck_material_name: str | None = None) -> Geometry:
     """Volumes ``<name>_deck``, ``<name>_posts``, ``<name>_pedestals``; post-top patches
-    named after the posts; clamped pedestal bases ``<name>_pedestal_<k>_base``."""
+    named after the posts; clamped pedestal bases ``<name>_pedestal_<k>_base``. The deck's
+    material is named ``deck_material_name`` (default ``<name>-deck-equivalent``)."""
     if not isinstance(p, PlatformParams):
         raise InputError(f"build_platform expects PlatformParams, got {type(p).__name__}")
     p.check()
@@ -97,8 +103,10 @@ def build_platform(p: PlatformParams, out_dir) -> Geometry:
     posts = {k: np.asarray(v, float) for k, v in p.posts.items()}
     with _occ.gmsh_session(n):
         deck = [(3, occ.addBox(*lo, *(hi - lo)))]
-        if p.holes:
-            deck, _ = occ.cut(deck, [(3, occ.addCylinder(x, y, lo[2] - 1, 0, 0, H + 2, r)) for x, y, r in p.holes])
+        holes = [(3, occ.addCylinder(x, y, lo[2] - 1, 0, 0, H + 2, r)) for x, y, r in p.holes]
+        holes += [(3, occ.addBox(x - a, y - a, lo[2] - 1, 2 * a, 2 * a, H + 2)) for x, y, a in p.square_holes]
+        if holes:
+            deck, _ = occ.cut(deck, holes)
         post_vols = [(3, occ.addBox(x - s / 2, y - s / 2, hi[2], s, s, z - hi[2])) for x, y, z in posts.values()]
         peds = [(3, occ.addBox(x - ps / 2, y - ps / 2, lo[2] - p.pedestal_height, ps, ps, p.pedestal_height))
                 for x, y in p.pedestals]
@@ -125,8 +133,8 @@ def build_platform(p: PlatformParams, out_dir) -> Geometry:
     post_mass = STEEL.rho * vols[f"{n}_posts"]
     if p.mass <= post_mass:
         raise InputError(f"PlatformParams({n}).mass {p.mass} kg is less than the posts' mass {post_mass:.0f} kg")
-    mats = {f"{n}_deck": deck_material(f"{n}-deck-equivalent", p.mass - post_mass, vols[f"{n}_deck"],
-                                       p.flange_thickness, H),
+    mats = {f"{n}_deck": deck_material(deck_material_name or f"{n}-deck-equivalent", p.mass - post_mass,
+                                       vols[f"{n}_deck"], p.flange_thickness, H),
             f"{n}_posts": STEEL, f"{n}_pedestals": pedestal_material(ps, p.pedestal_wall_thickness)}
     geo = Geometry(n, str(out_dir / f"{n}.msh"), mats, patches, [], [], clamped, vols, n_nodes, areas)
     geo.save(out_dir / f"{n}.json")

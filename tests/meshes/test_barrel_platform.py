@@ -78,8 +78,8 @@ def test_platform_posts_mass_and_clamps(tmp_path):
 
     posts = {f"arm_{k}": (3.5, 3.5 * (-1) ** k, 6.3) for k in range(2)}
     p = PlatformParams("ml", deck_size=(30.0, 30.0), deck_thickness=6.0, deck_top_z=0.0, posts=posts,
-                       holes=((0.0, 0.0, 2.0),), pedestals=((-10.0, -10.0), (10.0, 10.0), (-10.0, 10.0)),
-                       mass=2.0e6, mesh_size=3.0)
+                       holes=((0.0, 0.0, 2.0),), square_holes=((-8.0, 0.0, 1.5),),
+                       pedestals=((-10.0, -10.0), (10.0, 10.0), (-10.0, 10.0)), mass=2.0e6, mesh_size=3.0)
     geo = build_platform(p, tmp_path)
     for n, xyz in posts.items():
         assert np.allclose(geo.patch(n).ref_point, xyz)
@@ -88,7 +88,7 @@ def test_platform_posts_mass_and_clamps(tmp_path):
     deck_posts = geo.volumes["ml_deck"].rho * vols["ml_deck"] + STEEL.rho * vols["ml_posts"]
     assert deck_posts == pytest.approx(2.0e6, rel=1e-9)
     assert vols["ml_posts"] == pytest.approx(2 * 1.0 * 1.0 * 6.3, rel=1e-9)
-    assert vols["ml_deck"] == pytest.approx(30 * 30 * 6.0 - math.pi * 2.0 ** 2 * 6.0, rel=1e-6)
+    assert vols["ml_deck"] == pytest.approx(30 * 30 * 6.0 - (math.pi * 2.0 ** 2 + 3.0 ** 2) * 6.0, rel=1e-6)
     assert len(geo.clamped) == 3
 
 
@@ -97,3 +97,23 @@ def test_platform_post_off_the_deck_is_one_line():
 
     with pytest.raises(InputError, match=r"PlatformParams\(pad\)\.posts\.far: the post at \(50.0, 0.0\) is off the deck"):
         PlatformParams(posts={"far": (50.0, 0.0, 3.0)}).check()
+    with pytest.raises(InputError, match=r"PlatformParams\(pad\)\.square_holes\[0\]: the exhaust hole undercuts the post 'p'"):
+        PlatformParams(posts={"p": (2.0, 0.0, 3.0)}, square_holes=((0.0, 0.0, 1.6),)).check()
+
+
+def test_the_launch_table_is_a_platform_placed_by_the_layout():
+    """meshes.pad.build_pad builds PadParams.platform(): posts at the layout's hold-down
+    points (their tops at z = 0), the boosters' round exhaust holes and the orbiter's square
+    one, the deck top at -post_height; its closed-form volumes (pad_closed_form_volumes) are
+    the platform's."""
+    from liftoff.meshes.pad import PadParams, pad_closed_form_volumes
+
+    pad = PadParams()
+    p = pad.platform()
+    p.check()
+    assert p.name == "pad" and p.deck_top_z == -pad.post_height and len(p.posts) == 8
+    assert all(xyz[2] == 0.0 for xyz in p.posts.values()) and len(p.holes) == 2 and len(p.square_holes) == 1
+    lo, hi = p.deck_bounds()
+    deck = float(np.prod(hi - lo) - sum(math.pi * r ** 2 for *_, r in p.holes) * p.deck_thickness
+                 - sum((2 * a) ** 2 for *_, a in p.square_holes) * p.deck_thickness)
+    assert deck == pytest.approx(pad_closed_form_volumes(pad)["pad_deck"], rel=1e-12)

@@ -1,7 +1,7 @@
 """``type = "platform"``: a launch platform for any vehicle: a deck on pedestals with
 hold-down posts whose tops are named points (meshes.platform.PlatformParams). Params:
 ``posts = {point = [x, y, z]}`` (post tops: where the vehicle's hold-down points stand),
-``holes = [[x, y, radius]]``, ``pedestals = [[x, y]]``, ``deck_size``, ``deck_center_xy``,
+``holes = [[x, y, radius]]``, ``square_holes = [[x, y, half side]]``, ``pedestals = [[x, y]]``, ``deck_size``, ``deck_center_xy``,
 ``deck_thickness``, ``deck_top_z``, ``post_size``, ``pedestal_size``, ``pedestal_height``,
 ``mass`` (deck and posts, kg), ``flange_thickness``."""
 from __future__ import annotations
@@ -20,12 +20,14 @@ def read(ctx: Context, where: Where, params: dict):
     fixed = {"name": ctx.name,
              "posts": {n: tuple(float(x) for x in vector(where / "posts" / n, v, length=3))
                        for n, v in table(where / "posts", posts, set(posts) if isinstance(posts, dict) else set()).items()}}
-    holes = params.get("holes", [])
-    if not isinstance(holes, list):
-        raise (where / "holes").error("expected an array of [x, y, radius] (m)")
-    fixed["holes"] = tuple(tuple(float(x) for x in vector(where / "holes" / i, h, length=3)) for i, h in enumerate(holes))
+    for key, what in (("holes", "[x, y, radius]"), ("square_holes", "[x, y, half side]")):
+        holes = params.get(key, [])
+        if not isinstance(holes, list):
+            raise (where / key).error(f"expected an array of {what} (m)")
+        fixed[key] = tuple(tuple(float(x) for x in vector(where / key / i, h, length=3)) for i, h in enumerate(holes))
     size = mesh_size_kw(ctx.mesh_size)
-    return builder(where, PlatformParams, {k: v for k, v in params.items() if k not in ("posts", "holes")}, fixed, size)
+    return builder(where, PlatformParams, {k: v for k, v in params.items() if k not in ("posts", "holes", "square_holes")},
+                   fixed, size)
 
 
 TYPE = ComponentType("platform", read, "liftoff.meshes.platform:build_platform", "pad",
