@@ -47,11 +47,45 @@ def epsilon(u):
     return ufl.sym(ufl.grad(u))
 
 
+#: Poisson's ratio from which a solid is nearly incompressible (lambda/mu >= 49: a bonded
+#: propellant grain, an elastomer): its volumetric term is integrated at one point
+NEARLY_INCOMPRESSIBLE_NU = 0.49
+
+
+def nearly_incompressible(nu) -> bool:
+    """Whether any cell of the DG0 field ``nu`` (on any process) is nearly incompressible."""
+    comm = nu.function_space.mesh.comm
+    local = bool(nu.x.array.size) and float(nu.x.array.max()) >= NEARLY_INCOMPRESSIBLE_NU
+    return bool(comm.allreduce(local, op=_lor()))
+
+
+def _lor():
+    from mpi4py import MPI
+
+    return MPI.LOR
+
+
 def stiffness_form(V, E, nu):
+    """a(u, v) = int 2 mu eps(u) : eps(v) + lambda div u div v dx. Where nu >=
+    NEARLY_INCOMPRESSIBLE_NU the volumetric term is integrated at one point (the centroid):
+    for P2 tetrahedra div u is linear, its mean is its centroid value, so this is exactly
+    the P2-P0 mixed displacement-pressure element with its cell-wise pressure condensed,
+    stable as nu -> 1/2 (Boffi, Brezzi & Fortin, Mixed Finite Element Methods, 2013, 8.6);
+    fully integrated, P2 locks (tests/fem/test_incompressible.py). Needs degree 2: on P1
+    the one-point rule is the full integral, and P1 locks."""
     lmbda, mu = lame(E, nu)
     u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
     eu = epsilon(u)
-    return ufl.inner(lmbda * ufl.tr(eu) * ufl.Identity(3) + 2 * mu * eu, epsilon(v)) * ufl.dx
+    if not nearly_incompressible(nu):
+        return ufl.inner(lmbda * ufl.tr(eu) * ufl.Identity(3) + 2 * mu * eu, epsilon(v)) * ufl.dx
+    if V.ufl_element().degree() < 2:
+        raise InputError(f"a nearly incompressible solid (nu >= {NEARLY_INCOMPRESSIBLE_NU}) needs degree 2: "
+                         "P1 tetrahedra lock")
+    inc = ufl.conditional(ufl.ge(nu, NEARLY_INCOMPRESSIBLE_NU), 1.0, 0.0)
+    ev = epsilon(v)
+    one_point = ufl.dx(metadata={"quadrature_degree": 1})
+    return (2 * mu * ufl.inner(eu, ev) + (1 - inc) * lmbda * ufl.tr(eu) * ufl.tr(ev)) * ufl.dx \
+        + inc * lmbda * ufl.tr(eu) * ufl.tr(ev) * one_point
 
 
 def mass_form(V, rho):

@@ -216,8 +216,12 @@ def _pad_columns(A: sp.spmatrix, k: int) -> sp.csr_matrix:
 def _solid_part(tm: TaggedMesh, materials: dict, degree: int) -> Part:
     from dolfinx import fem
 
-    from .elasticity import mass_form, material_fields, stiffness_form
+    from .elasticity import NEARLY_INCOMPRESSIBLE_NU, mass_form, material_fields, stiffness_form
 
+    for name, mat in materials.items():
+        if degree < 2 and float(mat.nu) >= NEARLY_INCOMPRESSIBLE_NU:
+            raise InputError(f"volume {name!r}: material {mat.name!r} (nu = {float(mat.nu):g}) is nearly "
+                             "incompressible and needs degree 2 ([model] degree = 2): P1 tetrahedra lock")
     E, nu, rho = material_fields(tm, materials)
     V = fem.VectorFunctionSpace(tm.mesh, ("CG", degree))
     imap = V.dofmap.index_map
