@@ -241,7 +241,7 @@ def build_shell_booster(p, out_dir: Path) -> Geometry:
     R, t = p.radius, p.case_thickness
     rm, am_b, am_t = R - 0.5 * t, p.aft_dome_ratio * R - 0.5 * t, p.nose_ratio * R - 0.5 * t
     axis = p.axis
-    case_g, skirt_g = f"{p.name}_case", f"{p.name}_skirt"
+    case_g, skirt_g, grain_g = f"{p.name}_case", f"{p.name}_skirt", f"{p.name}_grain"
     w = p.attach_patch_half_width
     with _occ.gmsh_session(p.name):
         skirt = _occ.revolve_to_z(_occ.polygon(booster_skirt_section(p)), axis)
@@ -259,7 +259,11 @@ def build_shell_booster(p, out_dir: Path) -> Geometry:
             if check_attach(p.name, p.walls, p.attach) == "ring" else {}
         tools += _wall_tools(attach, rings, axis, rm, w)
         refs.update(attach)
-        vols, faces = _occ.imprint_parts({skirt_g: skirt}, {case_g: case}, tools)
+        parts = {skirt_g: skirt}
+        if p.grain:                     # the propellant grain: a bored cylinder bonded to the case's barrel
+            zc, zt, rb = p.case_bottom_z, p.cyl_top_z, p.grain_bore_radius
+            parts[grain_g] = _occ.revolve_to_z(_occ.polygon([(rb, zc), (rm, zc), (rm, zt), (rb, zt)]), axis)
+        vols, faces = _occ.imprint_parts(parts, {case_g: case}, tools)
         cand = _occ.boundary_faces(vols[skirt_g]) + faces[case_g]
         patches = _patches_on(cand, tools, refs, lambda n: min(p.mesh_size, 0.6 * (
             p.holddown_patch_radius if n in holddown else w)))
@@ -268,14 +272,22 @@ def build_shell_booster(p, out_dir: Path) -> Geometry:
         _occ.add_physical(2, case_g, faces[case_g])
         _occ.add_physical(3, skirt_g, [tg for _, tg in vols[skirt_g]])
         volume = _occ.group_volume(vols[skirt_g])
+        group_volumes = {skirt_g: volume}
+        if p.grain:
+            _occ.add_physical(3, grain_g, [tg for _, tg in vols[grain_g]])
+            group_volumes[grain_g] = _occ.group_volume(vols[grain_g])
         areas = _occ.physical_measures(2)
         n_curv = max(shell_curvature_elements(rm, p.mesh_size),
                      _occ.curvature_elements(p.skirt_thickness, p.skirt_radius))
         n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size, n_curv)
     case_mat, tc = shell_section(STEEL_D6AC, areas[case_g], p.case_mass, p.case_shell_thickness, t)
     mats = {case_g: case_mat, skirt_g: equivalent(AL2219, p.skirt_mass, volume, "Al2219-equivalent-skirt")}
+    smeared = [SmearedMass(f"{p.name}_case_inner", p.propellant_mass)]
+    if p.grain:                         # the propellant's mass is the grain's: its density from the CAD volume
+        mats[grain_g] = Material("propellant-grain", p.grain_E, p.grain_nu, p.propellant_mass / group_volumes[grain_g])
+        smeared = []
     geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), mats, patches, booster_point_masses(p),
-                   [SmearedMass(f"{p.name}_case_inner", p.propellant_mass)], [], {skirt_g: volume}, n_nodes, areas,
+                   smeared, [], group_volumes, n_nodes, areas,
                    shells={case_g: tc}, shell_bending={case_g: p.case_shell_bending_ratio})
     geo.save(out_dir / f"{p.name}.json")
     return geo

@@ -113,6 +113,10 @@ class BoosterParams:
     case_shell_thickness: float | None = None   # shell case: None = the D6AC thickness that weighs case_mass
     case_shell_bending_ratio: float = 1.0       # shell case: 12 I / t^3 (1 = bare skin)
     attach: str | None = None           # shell case: core attach points as rigid "patch"es or "ring"s (None: ring)
+    grain: bool = False                 # shell case: the propellant as a bonded solid grain, not smeared mass
+    grain_bore_radius: float = 0.6      # the grain's perforation (m): a cylindrical bore on the axis
+    grain_E: float = 7.5e6              # Pa: a composite propellant's order (docs/fem.md)
+    grain_nu: float = 0.4999            # nearly incompressible (fem.elasticity: one-point volumetric term)
 
     # ---- placement: the StackLayout's booster position ``side`` (SolidMotorParams: its own)
     @property
@@ -160,6 +164,15 @@ class BoosterParams:
         if self.case_shell_thickness is not None:
             require_positive(o, case_shell_thickness=self.case_shell_thickness)
         require_positive(o, case_shell_bending_ratio=self.case_shell_bending_ratio)
+        if self.grain:
+            if self.walls != "shell":
+                raise InputError(f"{o}.grain needs walls = 'shell' (the grain is bonded to the case's mid-surface)")
+            require_positive(o, grain_bore_radius=self.grain_bore_radius, grain_E=self.grain_E)
+            if self.grain_bore_radius >= self.radius - self.case_thickness:
+                raise InputError(f"{o}.grain_bore_radius {self.grain_bore_radius:g} m leaves no grain inside the "
+                                 f"case (inner radius {self.radius - self.case_thickness:g} m)")
+            if not -1.0 < self.grain_nu < 0.5:
+                raise InputError(f"{o}.grain_nu must be in (-1, 0.5), got {self.grain_nu!r}")
         require_positive(o, length=self.length, case_thickness=self.case_thickness,
                          case_bottom_z=self.case_bottom_z, aft_dome_ratio=self.aft_dome_ratio,
                          nose_ratio=self.nose_ratio, skirt_joint_height=self.skirt_joint_height,
