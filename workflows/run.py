@@ -317,7 +317,20 @@ def write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, e
     """Table 1, then per named case the transient, its results file, max/min table, plots,
     snapshots and spectra; the generated cases' records; the envelope over all cases,
     statistics, SRS, design loads; the governing generated case's histories and pictures;
-    ParaView output; the comparison and the summary. Everything goes to ``out``."""
+    ParaView output; the comparison and the summary. Everything goes to ``out``. The named
+    cases' results files, plots and snapshots are written beside the run (workflows/beside.py)."""
+    from .beside import Beside, available
+
+    beside = Beside(available())
+    try:
+        return _write_results(sc, prep, out, plots, want_pics, echo, t_start, camp, error_estimate, beside)
+    except BaseException:
+        beside.kill()
+        raise
+
+
+def _write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, echo, t_start: float,
+                   camp, error_estimate: bool, beside) -> RunOutput:
     from liftoff.analysis.aggregate import Aggregate
 
     stage_times = list(prep.stage_times)
@@ -331,7 +344,7 @@ def write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, e
             files += f1
         res, f2 = _full_case(sc, stack, cp, case.name, out, plots and case.output.plots,
                              want_pics and case.output.snapshots, stage_times, agg, generated=False,
-                             error_estimate=error_estimate)
+                             error_estimate=error_estimate, beside=beside)
         files += f2
         results[case.name] = (res, cp)
     camp_run = camp.run if camp else None
@@ -359,6 +372,12 @@ def write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, e
     files += outputs.write("run", outputs.RunContext(results, out, plots, sc.title, partial, sc.post.units))
     stage_times.append(("interface, correlated loads, workbook", time.perf_counter() - t0))
     files += _fields(sc, prep, results, agg, out, camp, stage_times)
+    t0 = time.perf_counter()
+    files += beside.wait()
+    for name, secs in beside.seconds.items():
+        stage_times.append((f"results file, pictures [{name}]" + (" (beside the run)" if beside.forked else ""), secs))
+    if beside.forked:
+        stage_times.append(("waiting for the pictures", time.perf_counter() - t0))
     env = agg.envelope_rows()
     first = next(iter(prep.stacks.values()))
     text = report.summary(sc, first, results, stage_times, env, time.perf_counter() - t_start)
@@ -383,11 +402,13 @@ def _table1(stack, cp, case, out: Path, echo, stage_times: list):
 
 
 def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, stage_times: list, agg,
-               generated: bool, solved=None, error_estimate: bool = False):
+               generated: bool, solved=None, error_estimate: bool = False, beside=None):
     """A case with full outputs: the transient (modal displacements kept; with
     ``error_estimate`` or an ``accuracy`` setting also at h/2, so that each max/min carries
     an estimated error), its results file, max/min table, plots, snapshots and spectra;
-    its summary fed to ``agg`` (named cases; a generated case's summary comes from its record)."""
+    its summary fed to ``agg`` (named cases; a generated case's summary comes from its record).
+    ``beside`` (workflows/beside.py): writes the results file and draws the plots and
+    snapshots beside the run, its files returned by its ``wait``; None: inline."""
     from dataclasses import replace
 
     from liftoff.transient import solve, solve_estimated
@@ -407,7 +428,7 @@ def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, sta
                         time.perf_counter() - t0 if secs is None else secs))
     t0 = time.perf_counter()
     res.metadata["truncation"] = [c.as_dict() for c in cp.truncation]
-    files = [Path(res.save(out / f"results_{name}.h5"))]
+    files = []
     if not generated:                   # a generated case's summary comes from its record
         agg.add(summarize(res, cp, name, -1, sc.post, check=half), generated=False)
     band = sc.post.acceleration_band_hz
@@ -416,10 +437,15 @@ def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, sta
         report.with_errors(rows, report.case_maxmin(half, cp, name, band))
     files.append(report.write_csv(rows, out / f"maxmin_{name}.csv"))
     files += outputs.write("case", res, cp, out, name)
-    if plots:
-        files += report.plots(res, cp, out, name)
-    if pics:
-        files += report.snapshots(stack, res, cp, out, name)
+
+    def results_and_pictures() -> list:     # nothing the run reads again: written beside it
+        return [Path(res.save(out / f"results_{name}.h5"))] + (report.plots(res, cp, out, name) if plots else []) \
+            + (report.snapshots(stack, res, cp, out, name) if pics else [])
+
+    if beside is not None:
+        beside.submit(f"case {name!r}", results_and_pictures)
+    else:
+        files += results_and_pictures()
     files += report.spectra(res, cp, sc.post, out, name)
     stage_times.append((f"reports [{name}]", time.perf_counter() - t0))
     return res, files

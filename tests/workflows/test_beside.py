@@ -1,0 +1,87 @@
+"""Work done beside the run (workflows/beside.py, issue 28): a named case's results file,
+plots and snapshots written by a forked child while the run goes on.
+
+* The job's files come back in submission order; an inline Beside (LIFTOFF_BESIDE = 0, MPI)
+  gives the same.
+* A failing job's error comes back naming it, an InputError as an InputError and anything
+  else as a RuntimeError, after every child has been waited for.
+* kill() leaves no child behind.
+* A run (tests/data/beam_stick, a few seconds) writes the same files with the same contents
+  (but the HDF5 creation stamps) forked and inline."""
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from liftoff.core.errors import InputError
+from liftoff.workflows.beside import Beside
+
+
+def _write(path: Path, text: str) -> list[Path]:
+    path.write_text(text)
+    return [path]
+
+
+@pytest.mark.parametrize("forked", [True, False])
+def test_jobs_return_their_files_in_order(tmp_path, forked):
+    b = Beside(forked)
+    b.submit("one", lambda: _write(tmp_path / "a.txt", "a"))
+    b.submit("two", lambda: _write(tmp_path / "b.txt", "b") + _write(tmp_path / "c.txt", "c"))
+    assert b.wait() == [tmp_path / "a.txt", tmp_path / "b.txt", tmp_path / "c.txt"]
+    assert (tmp_path / "c.txt").read_text() == "c" and set(b.seconds) == {"one", "two"}
+
+
+def test_errors_come_back_naming_the_job(tmp_path):
+    def bad_input():
+        raise InputError("a key is wrong")
+
+    def broken():
+        raise ZeroDivisionError("division by zero")
+
+    b = Beside(True)
+    b.submit("case 'a'", bad_input)
+    b.submit("case 'b'", lambda: _write(tmp_path / "ok.txt", "ok"))
+    with pytest.raises(InputError, match=r"^pictures of case 'a': a key is wrong$"):
+        b.wait()
+    assert (tmp_path / "ok.txt").is_file()          # the other job ran to its end
+    b.submit("case 'c'", broken)
+    with pytest.raises(RuntimeError, match=r"pictures of case 'c': ZeroDivisionError: division by zero"):
+        b.wait()
+
+
+def test_kill_leaves_no_child(tmp_path):
+    b = Beside(True)
+    b.submit("slow", lambda: time.sleep(60) or [])
+    pid = b._jobs[0][1]
+    b.kill()
+    with pytest.raises(ChildProcessError):
+        os.waitpid(pid, os.WNOHANG)
+
+
+def test_a_run_writes_the_same_files_forked_and_inline(tmp_path, monkeypatch):
+    pytest.importorskip("petsc4py")
+    import h5py
+
+    from liftoff.workflows.run import run
+
+    scenario = Path(__file__).resolve().parents[1] / "data" / "beam_stick" / "scenario.toml"
+    outs = {}
+    for mode in ("1", "0"):
+        monkeypatch.setenv("LIFTOFF_BESIDE", mode)
+        outs[mode] = run(scenario, out=tmp_path / f"out{mode}", cache_dir=tmp_path / "cache", progress=False,
+                         echo=lambda *a, **k: None, error_estimate=False)
+    names = {m: sorted(p.name for p in o.out.iterdir()) for m, o in outs.items()}
+    assert names["1"] == names["0"] and "results_nominal.h5" in names["1"] and any(n.endswith(".png") for n in names["1"])
+    assert any("(beside the run)" in s for s, _ in outs["1"].stage_times)
+    for n in names["1"]:
+        a, b = outs["1"].out / n, outs["0"].out / n
+        if n.startswith("results_"):
+            with h5py.File(a) as fa, h5py.File(b) as fb:
+                assert sorted(fa["recovered"]) == sorted(fb["recovered"])
+                np.testing.assert_array_equal(fa["contact/force"][()], fb["contact/force"][()])
+        elif n.endswith((".csv", ".txt")) and n != "summary.txt":
+            assert a.read_bytes() == b.read_bytes(), n

@@ -1,0 +1,128 @@
+"""Work done beside the run (issue 28): a case's results file, plots and snapshots in a
+forked child process while the parent marches the next case's transient and writes the tables.
+
+A named case's results file (1 GB of modal histories in the default) and pictures took 40 %
+of a warm default run and nothing the run computes after them reads them, so they are
+forked off as soon as the case's results exist: the
+child inherits the model and the results (copy-on-write, nothing pickled), draws, sends the
+list of files it wrote back through a pipe and exits; :meth:`Beside.wait` collects them
+before the summary. A child's error comes back as the run's one-line error naming the case;
+a child dies with its parent (PR_SET_PDEATHSIG), so an interrupted run leaves no child
+writing into its staging folder.
+
+Only in a serial run on Linux (a forked MPI rank is undefined behaviour) and unless
+$LIFTOFF_BESIDE = 0; otherwise the work runs inline, in the same order, with the same files.
+"""
+from __future__ import annotations
+
+import json
+import os
+import signal
+import sys
+import time
+from pathlib import Path
+from typing import Callable
+
+from liftoff.core.errors import InputError
+
+#: environment variable: "0" draws every picture inline (one process), as before issue 28
+ENV = "LIFTOFF_BESIDE"
+
+
+def available() -> bool:
+    """Whether this process may fork its pictures off (serial, Linux, not switched off)."""
+    if os.environ.get(ENV, "").strip() == "0" or not sys.platform.startswith("linux") or not hasattr(os, "fork"):
+        return False
+    from .parallel import world
+
+    return world().size == 1
+
+
+def _die_with_parent() -> None:
+    try:
+        import ctypes
+
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)   # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+
+
+class Beside:
+    """Runs ``work() -> list[Path]`` jobs in forked children (or inline when ``forked`` is
+    False); :meth:`wait` returns their files, in submission order."""
+
+    def __init__(self, forked: bool):
+        self.forked = forked
+        self._jobs: list[tuple[str, int, int, float]] = []     # (name, pid, read fd, start)
+        self._inline: list[Path] = []
+        self.seconds: dict[str, float] = {}
+
+    def submit(self, name: str, work: Callable[[], list]) -> None:
+        if not self.forked:
+            t0 = time.perf_counter()
+            self._inline += [Path(p) for p in work()]
+            self.seconds[name] = time.perf_counter() - t0
+            return
+        sys.stdout.flush()
+        sys.stderr.flush()
+        r, w = os.pipe()
+        t0 = time.perf_counter()
+        pid = os.fork()
+        if pid == 0:                                # the child: draw, report, leave without cleanup
+            status = 1
+            try:
+                os.close(r)
+                _die_with_parent()
+                msg = {"files": [str(p) for p in work()]}
+                status = 0
+            except BaseException as exc:            # noqa: BLE001 - everything goes back to the parent
+                bad_input = isinstance(exc, InputError)
+                msg = {"error": " ".join((str(exc) if bad_input else f"{type(exc).__name__}: {exc}").split()),
+                       "input": bad_input}
+            try:
+                data = json.dumps(msg).encode()
+                while data:
+                    data = data[os.write(w, data):]
+            finally:
+                os._exit(status)
+        os.close(w)
+        self._jobs.append((name, pid, r, t0))
+
+    def wait(self) -> list[Path]:
+        """Every job's files; the first failed job's error, naming it (an InputError stays
+        one; the others are still waited for, so none outlives the run)."""
+        files, error = list(self._inline), None
+        for name, pid, r, t0 in self._jobs:
+            chunks = []
+            while True:
+                chunk = os.read(r, 1 << 16)
+                if not chunk:
+                    break
+                chunks.append(chunk)
+            os.close(r)
+            _, status = os.waitpid(pid, 0)
+            self.seconds[name] = time.perf_counter() - t0
+            try:
+                msg = json.loads(b"".join(chunks) or b"{}")
+            except ValueError:
+                msg = {}
+            if "files" in msg and os.WEXITSTATUS(status) == 0 and os.WIFEXITED(status):
+                files += [Path(p) for p in msg["files"]]
+            elif error is None:
+                why = msg.get("error") or f"the drawing process ended with status {status}"
+                error = (InputError if msg.get("input") else RuntimeError)(f"pictures of {name}: {why}")
+        self._jobs = []
+        if error is not None:
+            raise error
+        return files
+
+    def kill(self) -> None:
+        """Stop every child still drawing (the run failed)."""
+        for _, pid, r, _ in self._jobs:
+            try:
+                os.kill(pid, signal.SIGKILL)
+                os.waitpid(pid, 0)
+            except OSError:
+                pass
+            os.close(r)
+        self._jobs = []
