@@ -32,6 +32,7 @@ from liftoff.core.errors import InputError, ResourceError
 from liftoff.core.labels import COMPONENTS
 
 from .component import Component
+from .models import assemble_frame
 
 #: the link from the axis to an off-axis point: a stiff steel fitting (E Pa, section m^2/m^4,
 #: line density kg/m), the Shuttle stick's skirts and attach fittings (workflows/stick.py)
@@ -158,17 +159,13 @@ def beam_stick_component(p: BeamStick, name: str | None = None) -> tuple[Compone
             elems.append((k, len(coords) - 1, LINK["E"], LINK["E"] / 2.6, link_sec, LINK["mass_per_length"] / LINK["A"]))
     X = np.array(coords)
     ndof = 6 * len(X)
-    rows, cols, kv, mv = [], [], [], []
-    for a, b, E, G_, sec, rho in elems:
+
+    def element(a, b, E, G_, sec, rho):
         d = X[b] - X[a]
         vref = (1.0, 0.0, 0.0) if abs(d[2]) < 0.9 * np.linalg.norm(d) else (0.0, 1.0, 0.0)
-        ke, me = beam_element(X[a], X[b], E, G_, sec, rho, vref, rotary=p.shear)
-        dofs = np.r_[6 * a:6 * a + 6, 6 * b:6 * b + 6]
-        rows.append(np.repeat(dofs, 12)), cols.append(np.tile(dofs, 12))
-        kv.append(ke.ravel()), mv.append(me.ravel())
-    r, c = np.concatenate(rows), np.concatenate(cols)
-    K = sp.csr_matrix((np.concatenate(kv), (r, c)), shape=(ndof, ndof))
-    M = sp.csr_matrix((np.concatenate(mv), (r, c)), shape=(ndof, ndof))
+        return (a, b, *beam_element(X[a], X[b], E, G_, sec, rho, vref, rotary=p.shear))
+
+    K, M = assemble_frame(len(X), (element(*e) for e in elems))
     lumped = np.zeros(ndof)
     for n, m in p.masses.items():
         i = names.index(n)

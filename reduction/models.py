@@ -27,22 +27,28 @@ def frame_element(x1, x2, E, G, A, Iy, Iz, J, rho, vref=(0.0, 0.0, 1.0)):
     return beam_element(x1, x2, E, G, Section(A, Iy, Iz, J), rho, vref, rotary=False)
 
 
-def frame_matrices(nodes, elements, E, G, A, Iy, Iz, J, rho, vref=(0.0, 0.0, 1.0)):
-    """Assembled sparse K, M (6 DOFs per node, node-major) of a frame of identical beams."""
-    nodes = np.asarray(nodes, float)
-    n = 6 * nodes.shape[0]
+def assemble_frame(n_nodes: int, elements) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+    """Sparse K, M (6 DOFs per node, node-major) from ``elements``: (node a, node b, 12 x 12
+    stiffness, 12 x 12 mass) each, in global axes (liftoff.core.beam.beam_element)."""
+    n = 6 * int(n_nodes)
     rows, cols, kv, mv = [], [], [], []
-    for a, b in elements:
-        ke, me = frame_element(nodes[a], nodes[b], E, G, A, Iy, Iz, J, rho, vref)
+    for a, b, ke, me in elements:
         dofs = np.r_[6 * a:6 * a + 6, 6 * b:6 * b + 6]
         rows.append(np.repeat(dofs, 12))
         cols.append(np.tile(dofs, 12))
-        kv.append(ke.ravel())
-        mv.append(me.ravel())
+        kv.append(np.asarray(ke).ravel())
+        mv.append(np.asarray(me).ravel())
     r, c = np.concatenate(rows), np.concatenate(cols)
     K = sp.csr_matrix((np.concatenate(kv), (r, c)), shape=(n, n))
     M = sp.csr_matrix((np.concatenate(mv), (r, c)), shape=(n, n))
     return K, M
+
+
+def frame_matrices(nodes, elements, E, G, A, Iy, Iz, J, rho, vref=(0.0, 0.0, 1.0)):
+    """Assembled sparse K, M (6 DOFs per node, node-major) of a frame of identical beams."""
+    nodes = np.asarray(nodes, float)
+    return assemble_frame(nodes.shape[0], ((a, b, *frame_element(nodes[a], nodes[b], E, G, A, Iy, Iz, J, rho, vref))
+                                           for a, b in elements))
 
 
 def frame_component(name, nodes, elements, point_names, E=70e9, nu=0.3, A=1e-3, Iy=1e-6,

@@ -21,7 +21,7 @@ import numpy as np
 import scipy.sparse as sp
 from liftoff.meshes.stick import StickParams
 from liftoff.reduction.component import Component
-from liftoff.reduction.models import frame_element
+from liftoff.reduction.models import assemble_frame, frame_element
 
 from liftoff.core.errors import InputError, ResourceError
 from liftoff.core.labels import COMPONENTS
@@ -78,16 +78,9 @@ class _Frame:
     def component(self, clamped=()) -> Component:
         nodes = np.array(self.nodes)
         n = 6 * len(nodes)
-        rows, cols, kv, mv = [], [], [], []
-        for a, b, E, A, I, mpl, _ in self.elems:
-            rho = mpl / A if mpl > 0 else 1e-6
-            ke, me = frame_element(nodes[a], nodes[b], E, E / 2.6, A, I, I, 2 * I, rho)
-            d = np.r_[6 * a:6 * a + 6, 6 * b:6 * b + 6]
-            rows.append(np.repeat(d, 12)), cols.append(np.tile(d, 12))
-            kv.append(ke.ravel()), mv.append(me.ravel())
-        r, c = np.concatenate(rows), np.concatenate(cols)
-        K = sp.csr_matrix((np.concatenate(kv), (r, c)), shape=(n, n))
-        M = sp.csr_matrix((np.concatenate(mv), (r, c)), shape=(n, n))
+        K, M = assemble_frame(len(nodes), ((a, b, *frame_element(nodes[a], nodes[b], E, E / 2.6, A, I, I, 2 * I,
+                                                                   mpl / A if mpl > 0 else 1e-6))
+                                           for a, b, E, A, I, mpl, _ in self.elems))
         if self.masses:                  # lumped masses (translations; small rotary inertia)
             d = np.zeros(n)
             for i, m in self.masses.items():
