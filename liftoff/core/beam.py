@@ -169,4 +169,41 @@ def i_section(h: float, b: float, tw: float, tf: float) -> Section:
                    (2 * b * tf ** 3 + h * tw ** 3) / 3, 5 / 6 * 2 * b * tf, h * tw)
 
 
-__all__ = ["Section", "beam_element", "bending_stiffness", "tube", "rectangle", "i_section"]
+def t_section(h: float, b: float, tw: float, tf: float) -> tuple[Section, float]:
+    """A T: web ``tw`` wide and ``h`` deep (along z) under a flange ``b`` wide, ``tf`` thick
+    (m), composed exactly of its two rectangles; returns (Section about the centroid, the
+    centroid's height above the web's bottom, m). Iy (bending in x-z) by the parallel-axis
+    theorem, Iz = (tf b^3 + h tw^3)/12; J = (b tf^3 + h tw^3)/3 (open thin-walled); shear
+    areas: the web (h tw) along z, 5/6 of the flange (b tf) along y. The element's axis is
+    the centroid's (no offset: place the nodes there)."""
+    for nm, v in (("h", h), ("b", b), ("tw", tw), ("tf", tf)):
+        if not v > 0:
+            raise InputError(f"T section: {nm} must be > 0 (got {v!r})")
+    a_web, a_fl = h * tw, b * tf
+    A = a_web + a_fl
+    zc = (a_web * h / 2 + a_fl * (h + tf / 2)) / A
+    Iy = tw * h ** 3 / 12 + a_web * (h / 2 - zc) ** 2 + b * tf ** 3 / 12 + a_fl * (h + tf / 2 - zc) ** 2
+    Iz = (tf * b ** 3 + h * tw ** 3) / 12
+    return Section(A, Iy, Iz, (b * tf ** 3 + h * tw ** 3) / 3, 5 / 6 * a_fl, a_web), zc
+
+
+def hat_section(h: float, b: float, c: float, t: float) -> tuple[Section, float]:
+    """A hat stringer of uniform wall ``t`` (m), thin-walled (its mid-line): a crown ``b``
+    wide at height ``h`` on two vertical webs ``h`` high, each with a foot flange ``c`` wide
+    at z = 0 (on the skin), symmetric about z; returns (Section about the centroid, the
+    centroid's height above the feet's mid-line, m). A = t (b + 2 h + 2 c); Iy, Iz by
+    composition (the walls' own t^3 terms across their thickness dropped: thin walls);
+    J = t^3 (b + 2 h + 2 c)/3 (open section); shear areas: the webs (2 h t) along z, 5/6 of
+    the crown and feet along y."""
+    for nm, v in (("h", h), ("b", b), ("c", c), ("t", t)):
+        if not v > 0:
+            raise InputError(f"hat section: {nm} must be > 0 (got {v!r})")
+    A = t * (b + 2 * h + 2 * c)
+    zc = (b * t * h + 2 * h * t * h / 2) / A
+    Iy = b * t * (h - zc) ** 2 + 2 * (t * h ** 3 / 12 + h * t * (h / 2 - zc) ** 2) + 2 * c * t * zc ** 2
+    Iz = t * b ** 3 / 12 + 2 * h * t * (b / 2) ** 2 + 2 * (t * c ** 3 / 12 + c * t * (b / 2 + c / 2) ** 2)
+    return Section(A, Iy, Iz, t ** 3 * (b + 2 * h + 2 * c) / 3, 5 / 6 * t * (b + 2 * c), 2 * h * t), zc
+
+
+__all__ = ["Section", "beam_element", "bending_stiffness", "tube", "rectangle", "i_section", "t_section",
+           "hat_section"]

@@ -153,3 +153,51 @@ def test_sections_of_standard_shapes():
         Section(1.0, 0.0, 1.0, 1.0)
     with pytest.raises(InputError, match="zero length"):
         beam_element([0, 0, 0], [0, 0, 0], E, G, Section(1, 1, 1, 1), RHO)
+
+
+def _grid_properties(rects, n=400):
+    """A, centroid z, Iy, Iz of a union of disjoint axis-aligned rectangles (y0, y1, z0, z1)
+    by the midpoint rule on an n x n grid in each (exact for A and the centroid, O(1/n^2) for I)."""
+    A = Sz = Iyy = Izz = 0.0
+    pts = []
+    for y0, y1, z0, z1 in rects:
+        dy, dz = (y1 - y0) / n, (z1 - z0) / n
+        y = y0 + dy * (np.arange(n) + 0.5)
+        z = z0 + dz * (np.arange(n) + 0.5)
+        Y, Z = np.meshgrid(y, z)
+        pts.append((Y.ravel(), Z.ravel(), dy * dz))
+    for Y, Z, da in pts:
+        A += da * Y.size
+        Sz += da * Z.sum()
+    zc = Sz / A
+    for Y, Z, da in pts:
+        Iyy += da * np.sum((Z - zc) ** 2)
+        Izz += da * np.sum(Y ** 2)
+    return A, zc, Iyy, Izz
+
+
+def test_t_and_hat_sections_against_integration():
+    """The T (exact composition) against the grid integral of its two rectangles (1e-5: the
+    midpoint rule's O(1/n^2) on the rectangles' own I); the hat (thin-walled mid-line
+    formulas) against the grid integral of its five walls of thickness t = h/100 (5e-3: the
+    mid-line formulas count each corner's t x t square once where the walls meet, an error
+    of order t / (b + 2 h + 2 c) = 0.3 % here, and drop the walls' own t^3 terms)."""
+    from liftoff.core.beam import hat_section, t_section
+
+    h, b, tw, tf = 0.30, 0.20, 0.01, 0.015
+    sec, zc = t_section(h, b, tw, tf)
+    A, zg, Iy, Iz = _grid_properties([(-tw / 2, tw / 2, 0.0, h), (-b / 2, b / 2, h, h + tf)])
+    assert sec.A == pytest.approx(A, rel=1e-12) and zc == pytest.approx(zg, rel=1e-12)
+    assert sec.Iy == pytest.approx(Iy, rel=1e-5) and sec.Iz == pytest.approx(Iz, rel=1e-5)
+    assert sec.J == pytest.approx((b * tf ** 3 + h * tw ** 3) / 3, rel=1e-12)
+
+    h, b, c, t = 0.04, 0.03, 0.02, 0.0004
+    sec, zc = hat_section(h, b, c, t)
+    walls = [(-b / 2 - t / 2, b / 2 + t / 2, h - t / 2, h + t / 2),                 # crown
+             (-b / 2 - t / 2, -b / 2 + t / 2, t / 2, h - t / 2), (b / 2 - t / 2, b / 2 + t / 2, t / 2, h - t / 2),
+             (-b / 2 - c, -b / 2 + t / 2, -t / 2, t / 2), (b / 2 - t / 2, b / 2 + c, -t / 2, t / 2)]   # feet
+    A, zg, Iy, Iz = _grid_properties(walls)
+    assert sec.A == pytest.approx(A, rel=5e-3) and zc == pytest.approx(zg, rel=5e-3)
+    assert sec.Iy == pytest.approx(Iy, rel=5e-3) and sec.Iz == pytest.approx(Iz, rel=5e-3)
+    with pytest.raises(InputError, match="hat section: t must be > 0"):
+        hat_section(h, b, c, 0.0)
