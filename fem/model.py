@@ -218,11 +218,11 @@ def _solid_part(tm: TaggedMesh, materials: dict, degree: int) -> Part:
 
     from .elasticity import NEARLY_INCOMPRESSIBLE_NU, mass_form, material_fields, stiffness_form
 
+    E, nu, rho = material_fields(tm, materials)          # checks every material first
     for name, mat in materials.items():
         if degree < 2 and float(mat.nu) >= NEARLY_INCOMPRESSIBLE_NU:
             raise InputError(f"volume {name!r}: material {mat.name!r} (nu = {float(mat.nu):g}) is nearly "
                              "incompressible and needs degree 2 ([model] degree = 2): P1 tetrahedra lock")
-    E, nu, rho = material_fields(tm, materials)
     V = fem.VectorFunctionSpace(tm.mesh, ("CG", degree))
     imap = V.dofmap.index_map
     n_all = imap.size_local + imap.num_ghosts
