@@ -50,7 +50,7 @@ def _labels(points: list[str], extra: tuple[str, ...] = ()) -> tuple[str, ...]:
     return tuple(f"{p}:{c}" for p in points for c in ("Tx", "Ty", "Tz")) + extra
 
 
-def vehicle(rng: np.random.Generator) -> ModalBody:
+def vehicle(rng: np.random.Generator, n_modes: int = N_VEH) -> ModalBody:
     """Free-free vehicle: 6 exact rigid-body modes about its c.g. plus 194 elastic modes
     (1-150 Hz, 1 % damping) whose rows at the hold-down points are random but mass-normalised
     in scale (|phi| ~ 1/sqrt(modal mass share)); an engine point at the c.g. axis carries thrust."""
@@ -66,36 +66,40 @@ def vehicle(rng: np.random.Generator) -> ModalBody:
         rb[i, comp] = 1.0
         skew = np.array([[0, -r[2], r[1]], [r[2], 0, -r[0]], [-r[1], r[0], 0]])
         rb[i, 3:] = -skew[comp]
-    phi = np.zeros((len(labels), N_VEH))
+    phi = np.zeros((len(labels), n_modes))
     phi[:, :N_RIGID] = rb @ np.diag(1 / np.sqrt(np.diag(mrb)))
-    phi[:, N_RIGID:] = rng.standard_normal((len(labels), N_VEH - N_RIGID)) / math.sqrt(MASS_VEH / 20)
-    omega = np.r_[np.zeros(N_RIGID), 2 * np.pi * np.geomspace(1.0, 150.0, N_VEH - N_RIGID)]
-    part = np.zeros((N_VEH, 6))
+    phi[:, N_RIGID:] = rng.standard_normal((len(labels), n_modes - N_RIGID)) / math.sqrt(MASS_VEH / 20)
+    omega = np.r_[np.zeros(N_RIGID), 2 * np.pi * np.geomspace(1.0, 150.0, n_modes - N_RIGID)]
+    part = np.zeros((n_modes, 6))
     part[:N_RIGID] = np.diag(np.sqrt(np.diag(mrb)))             # Phi^T M RB for the rigid modes
-    return ModalBody("vehicle", omega=omega, zeta=np.r_[np.zeros(N_RIGID), np.full(N_VEH - N_RIGID, 0.01)],
+    return ModalBody("vehicle", omega=omega, zeta=np.r_[np.zeros(N_RIGID), np.full(n_modes - N_RIGID, 0.01)],
                      dof_labels=labels, phi=phi, participation=part, ref_point=cg,
                      points=tuple(points) + ("engine",), point_coords=allc, rigid_body_mass=mrb)
 
 
-def pad(rng: np.random.Generator) -> ModalBody:
+def pad(rng: np.random.Generator, n_modes: int = N_PAD) -> ModalBody:
     """Grounded pad: 100 elastic modes (5-400 Hz, 2 % damping), random rows of mass-normalised scale."""
     points, coords = _points()
     labels = _labels(points)
-    omega = 2 * np.pi * np.geomspace(5.0, 400.0, N_PAD)
-    phi = rng.standard_normal((len(labels), N_PAD)) / math.sqrt(MASS_PAD / 10)
-    part = np.zeros((N_PAD, 6))
+    omega = 2 * np.pi * np.geomspace(5.0, 400.0, n_modes)
+    phi = rng.standard_normal((len(labels), n_modes)) / math.sqrt(MASS_PAD / 10)
+    part = np.zeros((n_modes, 6))
     part[:, 2] = phi[2::3].mean(axis=0) * MASS_PAD / 10       # some vertical participation
     return ModalBody("pad", omega=omega, zeta=0.02, dof_labels=labels, phi=phi, participation=part,
                      points=tuple(points), point_coords=coords)
 
 
-def problem(n_steps: int, progress: bool = False) -> TransientProblem:
+def problem(n_steps: int, progress: bool = False, n_veh: int = N_VEH, n_pad: int = N_PAD,
+            release: float | None = 0.5) -> TransientProblem:
+    """The benchmark's problem; ``n_veh``, ``n_pad`` modes; the bolts released at ``release``
+    of the run (None: bolted throughout)."""
     rng = np.random.default_rng(20260521)
-    veh, pd = vehicle(rng), pad(rng)
+    veh, pd = vehicle(rng, n_veh), pad(rng, n_pad)
     t_end = n_steps * H
     points, _ = _points()
+    release_time = math.inf if release is None else release * t_end
     contacts = [ContactPoint(p, [f"{p}:Tx", f"{p}:Ty", f"{p}:Tz"], [f"{p}:Tx", f"{p}:Ty", f"{p}:Tz"],
-                             K_CONTACT, axial=2, release_time=0.5 * t_end) for p in points]
+                             K_CONTACT, axial=2, release_time=release_time) for p in points]
     ramp = np.array([0.0, 0.4 * t_end, t_end])
     forcing = Forcing(constant=[PointForce("a", "engine:Tx", 1.0e4)],
                       tables=[TabulatedForce("a", "engine:Tz", ramp, np.array([0.0, THRUST, THRUST]))],
