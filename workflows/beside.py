@@ -1,5 +1,6 @@
 """Work done beside the run (issue 28): a case's results file, plots and snapshots in a
-forked child process while the parent marches the next case's transient and writes the tables.
+forked child process while the parent marches the next case's transient and writes the
+tables; the animation (``--fields``) while the parent writes the ParaView series.
 
 A named case's results file (1 GB of modal histories in the default) and pictures took 40 %
 of a warm default run and nothing the run computes after them reads them, so they are
@@ -110,7 +111,7 @@ class Beside:
                 files += [Path(p) for p in msg["files"]]
             elif error is None:
                 why = msg.get("error") or f"the drawing process ended with status {status}"
-                error = (InputError if msg.get("input") else RuntimeError)(f"pictures of {name}: {why}")
+                error = (InputError if msg.get("input") else RuntimeError)(f"{name}: {why}")
         self._jobs = []
         if error is not None:
             raise error

@@ -371,11 +371,11 @@ def _write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, 
     t0 = time.perf_counter()
     files += outputs.write("run", outputs.RunContext(results, out, plots, sc.title, partial, sc.post.units))
     stage_times.append(("interface, correlated loads, workbook", time.perf_counter() - t0))
-    files += _fields(sc, prep, results, agg, out, camp, stage_times)
+    files += _fields(sc, prep, results, agg, out, camp, stage_times, beside)
     t0 = time.perf_counter()
     files += beside.wait()
     for name, secs in beside.seconds.items():
-        stage_times.append((f"results file, pictures [{name}]" + (" (beside the run)" if beside.forked else ""), secs))
+        stage_times.append((name + (" (beside the run)" if beside.forked else ""), secs))
     if beside.forked:
         stage_times.append(("waiting for the pictures", time.perf_counter() - t0))
     env = agg.envelope_rows()
@@ -443,7 +443,7 @@ def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, sta
             + (report.snapshots(stack, res, cp, out, name) if pics else [])
 
     if beside is not None:
-        beside.submit(f"case {name!r}", results_and_pictures)
+        beside.submit(f"results file, plots, snapshots [{name}]", results_and_pictures)
     else:
         files += results_and_pictures()
     files += report.spectra(res, cp, sc.post, out, name)
@@ -521,9 +521,10 @@ def _loads_tables(sc, agg, out: Path, echo, camp, plots: bool = False) -> list:
     return files
 
 
-def _fields(sc, prep: Prepared, results: dict, agg, out: Path, camp, stage_times: list) -> list:
+def _fields(sc, prep: Prepared, results: dict, agg, out: Path, camp, stage_times: list, beside=None) -> list:
     """ParaView series and GIF of the governing case (the case setting the most force
-    envelope values), when asked."""
+    envelope values), when asked; the GIF drawn beside the series (``beside``,
+    workflows/beside.py; None: after it)."""
     opt = camp.options if camp else Options()
     if not _fields_wanted(sc, opt) or not results:
         return []
@@ -536,11 +537,19 @@ def _fields(sc, prep: Prepared, results: dict, agg, out: Path, camp, stage_times
     name = cp.case.name
     stack = prep.stacks[prep.gen_model] if name not in prep.problems else prep.stacks[prep.problems[name][1]]
     n = sc.post.fields.frames
-    files = fields.write_pvd(stack, res, out, name, n)
+    files = []
     if sc.post.fields.gif:
-        g = fields.write_gif(stack, res, out, name, n)
-        files += [g] if g else []
-    stage_times.append((f"ParaView fields and animation [{name}]", time.perf_counter() - t0))
+        def gif() -> list:
+            g = fields.write_gif(stack, res, out, name, n)
+            return [g] if g else []
+
+        if beside is not None:
+            beside.submit(f"animation [{name}]", gif)
+        else:
+            files += gif()
+    files += fields.write_pvd(stack, res, out, name, n)
+    stage_times.append((f"ParaView fields" + (" (the animation beside)" if beside is not None and beside.forked
+                                              else " and animation") + f" [{name}]", time.perf_counter() - t0))
     return files
 
 

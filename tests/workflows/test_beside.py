@@ -45,11 +45,11 @@ def test_errors_come_back_naming_the_job(tmp_path):
     b = Beside(True)
     b.submit("case 'a'", bad_input)
     b.submit("case 'b'", lambda: _write(tmp_path / "ok.txt", "ok"))
-    with pytest.raises(InputError, match=r"^pictures of case 'a': a key is wrong$"):
+    with pytest.raises(InputError, match=r"^case 'a': a key is wrong$"):
         b.wait()
     assert (tmp_path / "ok.txt").is_file()          # the other job ran to its end
     b.submit("case 'c'", broken)
-    with pytest.raises(RuntimeError, match=r"pictures of case 'c': ZeroDivisionError: division by zero"):
+    with pytest.raises(RuntimeError, match=r"case 'c': ZeroDivisionError: division by zero"):
         b.wait()
 
 
