@@ -54,15 +54,10 @@ NEARLY_INCOMPRESSIBLE_NU = 0.49
 
 def nearly_incompressible(nu) -> bool:
     """Whether any cell of the DG0 field ``nu`` (on any process) is nearly incompressible."""
-    comm = nu.function_space.mesh.comm
-    local = bool(nu.x.array.size) and float(nu.x.array.max()) >= NEARLY_INCOMPRESSIBLE_NU
-    return bool(comm.allreduce(local, op=_lor()))
-
-
-def _lor():
     from mpi4py import MPI
 
-    return MPI.LOR
+    local = bool(nu.x.array.size) and float(nu.x.array.max()) >= NEARLY_INCOMPRESSIBLE_NU
+    return bool(nu.function_space.mesh.comm.allreduce(local, op=MPI.LOR))
 
 
 def stiffness_form(V, E, nu):

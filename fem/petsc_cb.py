@@ -344,10 +344,10 @@ def fixed_interface_pairs(ksp, Kii: PETSc.Mat, Mii: PETSc.Mat, wet, want: int, t
     """The ``want`` lowest eigenpairs of K_ii phi = omega^2 (M_ii [+ M_a,ii]) phi with the
     factored ``ksp``: block shift-invert Lanczos (fem.block_lanczos: blocks of right-hand
     sides through the one factor), or a dense solve where the interior is too small for the
-    Krylov space block_lanczos would build (6 want + 10 blocks). ``wet``: the wet-mass context of
+    Krylov space block_lanczos would build (block_lanczos.default_max_dim). ``wet``: the wet-mass context of
     fem.liquid.wet_mass, or None. Returns (omega^2 ascending, this process's rows of the
     mass-normalised modes, {'eigen_dimension', 'eigen_blocks'})."""
-    from .block_lanczos import block_lanczos, block_size
+    from .block_lanczos import block_lanczos, block_size, default_max_dim
 
     comm = Kii.getComm().tompi4py()
     n_i = Kii.getSize()[0]
@@ -359,8 +359,8 @@ def fixed_interface_pairs(ksp, Kii: PETSc.Mat, Mii: PETSc.Mat, wet, want: int, t
         return _mat_block(Mii, X) if wet is None else wet.mult_block(X)
 
     p = block_size(want)
-    if n_i - p <= 6 * want + 10 * p:   # small: the Krylov space would be capped by the size, not block_lanczos's
-        #                                max_dim (a beam stick's 234 interior DOFs left 22 of 69 pairs unconverged)
+    if n_i - p <= default_max_dim(want, p):   # small: the Krylov space would be capped by the size (a beam
+        #                                       stick's 234 interior DOFs left 22 of 69 pairs unconverged)
         import scipy.linalg as sla
 
         I_loc = np.eye(n_i)[r0:r1]
