@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 import re
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -62,6 +62,18 @@ def table(where: Where, value: Any, allowed: set[str], required: tuple[str, ...]
         if key not in value:
             raise where.error(f"missing required key {key!r}")
     return value
+
+
+def named(where: Where, value: Any, read: Callable[[Where, Any], Any] | None = None) -> dict:
+    """A table of any names (points, joints, masses), each value read by ``read(where /
+    name, value)`` (None: as given)."""
+    t = table(where, value, set(value) if isinstance(value, dict) else set())
+    return t if read is None else {n: read(where / n, v) for n, v in t.items()}
+
+
+def xyz(where: Where, value: Any) -> tuple[float, float, float]:
+    """A point ``[x, y, z]`` (m) as a tuple of floats."""
+    return tuple(float(x) for x in vector(where, value, length=3))
 
 
 def array_of_tables(where: Where, value: Any, what: str, *, nonempty: bool = False) -> list[dict]:

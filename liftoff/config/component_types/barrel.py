@@ -9,13 +9,8 @@ from __future__ import annotations
 
 from ..params import builder, mesh_size_kw
 from ..params import material as read_material
-from ..values import Where, number, table, vector
+from ..values import Where, named, number, vector
 from . import ComponentType, Context
-
-
-def _names(where: Where, spec) -> dict:
-    """A table of any names (points), checked to be a table."""
-    return table(where, spec, set(spec) if isinstance(spec, dict) else set())
 
 
 def read(ctx: Context, where: Where, params: dict):
@@ -26,9 +21,9 @@ def read(ctx: Context, where: Where, params: dict):
     own = {"joints_bottom", "joints_top", "bottom_point", "top_point", "point_masses", "material"}
     fixed = {"name": ctx.name}
     for key in ("joints_bottom", "joints_top", "bottom_point", "top_point"):
-        fixed[key] = {n: number(where / key / n, v) for n, v in _names(where / key, params.get(key, {})).items()}
-    fixed["point_masses"] = {n: [float(x) for x in vector(where / "point_masses" / n, v, length=4)]
-                             for n, v in _names(where / "point_masses", params.get("point_masses", {})).items()}
+        fixed[key] = named(where / key, params.get(key, {}), number)
+    fixed["point_masses"] = named(where / "point_masses", params.get("point_masses", {}),
+                                  lambda w, v: [float(x) for x in vector(w, v, length=4)])
     if "material" in params:
         fixed["material"] = read_material(where / "material", f"{ctx.name}-wall", params["material"])[0]
     size = mesh_size_kw(ctx.mesh_size)

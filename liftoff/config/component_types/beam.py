@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..params import builder
-from ..values import Where, number, table, vector
+from ..values import Where, named, number, vector, xyz
 from . import ComponentType, Context
 
 
@@ -20,14 +20,10 @@ def read(ctx: Context, where: Where, params: dict):
 
     if not isinstance(params, dict):
         raise where.error("expected a table of BeamStick fields")
-    points = {}
-    raw = params.get("points", {})
-    for n, v in table(where / "points", raw, set(raw) if isinstance(raw, dict) else set()).items():
-        points[n] = tuple(float(x) for x in vector(where / "points" / n, v, length=3)) if isinstance(v, list) \
-            else number(where / "points" / n, v)
-    raw = params.get("masses", {})
-    masses = {n: tuple(float(x) for x in vector(where / "masses" / n, v, length=4))
-              for n, v in table(where / "masses", raw, set(raw) if isinstance(raw, dict) else set()).items()}
+    points = named(where / "points", params.get("points", {}),
+                   lambda w, v: xyz(w, v) if isinstance(v, list) else number(w, v))
+    masses = named(where / "masses", params.get("masses", {}),
+                   lambda w, v: tuple(float(x) for x in vector(w, v, length=4)))
     fixed = {"name": ctx.name, "points": points, "masses": masses}
     if ctx.mesh_size is not None:
         fixed["element_length"] = float(ctx.mesh_size)

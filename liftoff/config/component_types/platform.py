@@ -7,7 +7,7 @@ hold-down posts whose tops are named points (meshes.platform.PlatformParams). Pa
 from __future__ import annotations
 
 from ..params import builder, mesh_size_kw
-from ..values import Where, table, vector
+from ..values import Where, named, xyz
 from . import ComponentType, Context
 
 
@@ -16,15 +16,12 @@ def read(ctx: Context, where: Where, params: dict):
 
     if not isinstance(params, dict):
         raise where.error("expected a table of PlatformParams fields")
-    posts = params.get("posts", {})
-    fixed = {"name": ctx.name,
-             "posts": {n: tuple(float(x) for x in vector(where / "posts" / n, v, length=3))
-                       for n, v in table(where / "posts", posts, set(posts) if isinstance(posts, dict) else set()).items()}}
+    fixed = {"name": ctx.name, "posts": named(where / "posts", params.get("posts", {}), xyz)}
     for key, what in (("holes", "[x, y, radius]"), ("square_holes", "[x, y, half side]")):
         holes = params.get(key, [])
         if not isinstance(holes, list):
             raise (where / key).error(f"expected an array of {what} (m)")
-        fixed[key] = tuple(tuple(float(x) for x in vector(where / key / i, h, length=3)) for i, h in enumerate(holes))
+        fixed[key] = tuple(xyz(where / key / i, h) for i, h in enumerate(holes))
     size = mesh_size_kw(ctx.mesh_size)
     return builder(where, PlatformParams, {k: v for k, v in params.items() if k not in ("posts", "holes", "square_holes")},
                    fixed, size)

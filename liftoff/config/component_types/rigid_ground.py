@@ -4,7 +4,7 @@ mesh, no DOFs; its named points never move (reduction.models.RigidGround,
 rigid_ground_cb). Params: ``points = {name = [x, y, z]}`` (m), the posts' pad points."""
 from __future__ import annotations
 
-from ..values import Where, table, vector
+from ..values import Where, named, table, xyz
 from . import ComponentType, Context
 
 
@@ -14,8 +14,7 @@ def read(ctx: Context, where: Where, params: dict):
     if ctx.mesh_size is not None:
         raise where.error("rigid ground has no mesh: remove the pad's mesh_size")
     p = table(where, params, {"points"}, ("points",))
-    pts = table(where / "points", p["points"], set(p["points"]) if isinstance(p["points"], dict) else set())
-    g = RigidGround({n: tuple(float(x) for x in vector(where / "points" / n, v, length=3)) for n, v in pts.items()})
+    g = RigidGround(named(where / "points", p["points"], xyz))
     try:
         g.check()
     except Exception as exc:

@@ -8,13 +8,8 @@ case wall facing them. walls default to [model]'s."""
 from __future__ import annotations
 
 from ..params import builder, mesh_size_kw
-from ..values import Where, table, vector
+from ..values import Where, named, xyz
 from . import ComponentType, Context
-
-
-def _points(where: Where, spec) -> dict:
-    return {n: tuple(float(x) for x in vector(where / n, v, length=3))
-            for n, v in table(where, spec, set(spec) if isinstance(spec, dict) else set()).items()}
 
 
 def read(ctx: Context, where: Where, params: dict):
@@ -23,8 +18,8 @@ def read(ctx: Context, where: Where, params: dict):
     if not isinstance(params, dict):
         raise where.error("expected a table of SolidMotorParams fields")
     own = {"holddown", "points"}
-    fixed = {"motor": ctx.name, "side": "left", "holddown": _points(where / "holddown", params.get("holddown", {})),
-             "points": _points(where / "points", params.get("points", {}))}
+    fixed = {"motor": ctx.name, "side": "left", "holddown": named(where / "holddown", params.get("holddown", {}), xyz),
+             "points": named(where / "points", params.get("points", {}), xyz)}
     size = mesh_size_kw(ctx.mesh_size)
     return builder(where, SolidMotorParams, {k: v for k, v in params.items() if k not in own}, fixed,
                    {**size, "walls": ctx.walls})

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from ..params import builder, mesh_size_kw
 from ..params import material as read_material
-from ..values import Where, array_of_tables, table, vector
+from ..values import Where, array_of_tables, named, xyz
 from . import ComponentType, Context
 
 
@@ -30,9 +30,7 @@ def read(ctx: Context, where: Where, params: dict):
     names = [c.name for c in comps]
     if len(set(names)) != len(names):
         raise (where / "compartments").error(f"compartment names repeat: {names}")
-    patches = {}
-    for name, xyz in table(where / "patches", params.get("patches", {}), set(params.get("patches", {}))).items():
-        patches[name] = tuple(float(x) for x in vector(where / "patches" / name, xyz, length=3))
+    patches = named(where / "patches", params.get("patches", {}), xyz)
     material = AL2219 if "material" not in params else \
         read_material(where / "material", f"{ctx.name}-wall", params["material"])[0]
     rest = {k: v for k, v in params.items() if k not in own}

@@ -13,14 +13,10 @@ from __future__ import annotations
 
 from ..params import builder, mesh_size_kw
 from ..params import material as read_material
-from ..values import Where, number, table, vector
+from ..values import Where, named, number, vector
 from . import ComponentType, Context
 
 OWN = {"joints", "mounts", "engine_mass", "engine_inertia", "material"}
-
-
-def _azimuths(where: Where, spec) -> dict:
-    return {n: number(where / n, v) for n, v in table(where, spec, set(spec) if isinstance(spec, dict) else set()).items()}
 
 
 def read(ctx: Context, where: Where, params: dict):
@@ -34,7 +30,7 @@ def read(ctx: Context, where: Where, params: dict):
                 "joints": "the points joining the stage, {point = azimuth deg} on the top ring",
                 "mounts": "the engine mounts, {point = azimuth deg} on the bottom ring",
                 "engine_mass": "each engine's mass (kg), at its mount"}[key])
-    mounts = _azimuths(where / "mounts", params["mounts"])
+    mounts = named(where / "mounts", params["mounts"], number)
     if not mounts:
         raise (where / "mounts").error("no mounts: a thrust structure carries at least one engine")
     m = number(where / "engine_mass", params["engine_mass"], positive=True)
@@ -44,7 +40,7 @@ def read(ctx: Context, where: Where, params: dict):
     for key in ("joints_top", "joints_bottom", "top_point", "bottom_point", "point_masses"):
         if key in barrel:
             raise (where / key).error("not a thrust structure key (joints, mounts, engine_mass, engine_inertia)")
-    fixed = {"name": ctx.name, "joints_top": _azimuths(where / "joints", params["joints"]), "joints_bottom": mounts,
+    fixed = {"name": ctx.name, "joints_top": named(where / "joints", params["joints"], number), "joints_bottom": mounts,
              "point_masses": {n: [m, *inertia] for n in mounts}}
     if "material" in params:
         fixed["material"] = read_material(where / "material", f"{ctx.name}-wall", params["material"])[0]
