@@ -167,12 +167,14 @@ class BoosterParams:
         if self.grain:
             if self.walls != "shell":
                 raise InputError(f"{o}.grain needs walls = 'shell' (the grain is bonded to the case's mid-surface)")
-            require_positive(o, grain_bore_radius=self.grain_bore_radius, grain_E=self.grain_E)
+            require_positive(o, grain_bore_radius=self.grain_bore_radius)
             if self.grain_bore_radius >= self.radius - self.case_thickness:
                 raise InputError(f"{o}.grain_bore_radius {self.grain_bore_radius:g} m leaves no grain inside the "
                                  f"case (inner radius {self.radius - self.case_thickness:g} m)")
-            if not -1.0 < self.grain_nu < 0.5:
-                raise InputError(f"{o}.grain_nu must be in (-1, 0.5), got {self.grain_nu!r}")
+            try:                        # grain_E, grain_nu: the one material check, before any meshing
+                Material("propellant-grain", self.grain_E, self.grain_nu, 1.0)
+            except InputError as exc:
+                raise InputError(f"{o}: {exc}") from None
         require_positive(o, length=self.length, case_thickness=self.case_thickness,
                          case_bottom_z=self.case_bottom_z, aft_dome_ratio=self.aft_dome_ratio,
                          nose_ratio=self.nose_ratio, skirt_joint_height=self.skirt_joint_height,

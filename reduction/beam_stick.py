@@ -35,7 +35,7 @@ from .component import Component
 from .models import assemble_frame
 
 #: the link from the axis to an off-axis point: a stiff steel fitting (E Pa, section m^2/m^4,
-#: line density kg/m), the Shuttle stick's skirts and attach fittings (workflows/stick.py)
+#: line density kg/m), also the Shuttle stick's skirts and attach fittings (workflows/stick.py)
 LINK = dict(E=2.0e11, A=0.5, I=0.05, mass_per_length=500.0)
 
 
@@ -130,7 +130,7 @@ def beam_stick_component(p: BeamStick, name: str | None = None) -> tuple[Compone
     name = name or p.name
     x0, y0 = (float(v) for v in p.axis_xy)
     zs = set(np.asarray(p.stations, float).round(9))
-    for i, (za, zb) in enumerate(zip(p.stations[:-1], p.stations[1:])):
+    for za, zb in zip(p.stations[:-1], p.stations[1:]):
         n = max(1, math.ceil((zb - za) / p.element_length))
         zs |= set(np.linspace(za, zb, n + 1).round(9))
     on_axis = {n: float(np.asarray(v).reshape(-1)[-1]) for n, v in p.points.items()}

@@ -21,12 +21,13 @@ import numpy as np
 import scipy.sparse as sp
 from liftoff.meshes.stick import StickParams
 from liftoff.reduction.component import Component
+from liftoff.reduction import beam_stick
 from liftoff.reduction.models import assemble_frame, frame_element
 
 from liftoff.core.errors import InputError, ResourceError
 from liftoff.core.labels import COMPONENTS
 
-LINK = dict(E=2.0e11, A=0.5, I=0.05, mass_per_length=500.0, link=True)   # stiff steel links (skirts, fittings)
+LINK = {**beam_stick.LINK, "link": True}    # stiff steel links (skirts, fittings): the beam component's
 
 
 def _tube(R: float, t: float) -> tuple[float, float]:
