@@ -548,8 +548,8 @@ def _fields(sc, prep: Prepared, results: dict, agg, out: Path, camp, stage_times
         else:
             files += gif()
     files += fields.write_pvd(stack, res, out, name, n)
-    stage_times.append((f"ParaView fields" + (" (the animation beside)" if beside is not None and beside.forked
-                                              else " and animation") + f" [{name}]", time.perf_counter() - t0))
+    drawn = " (the animation beside)" if beside is not None and beside.forked else " and animation"
+    stage_times.append((f"ParaView fields{drawn} [{name}]", time.perf_counter() - t0))
     return files
 
 

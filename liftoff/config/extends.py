@@ -32,7 +32,6 @@ from .files import parse_toml, read_toml
 from .values import Where, string
 
 
-
 @dataclass(frozen=True)
 class Example:
     """An embedded example: its scenario ``scenario`` in package ``package`` and the
