@@ -14,8 +14,9 @@ Public API (SI units throughout)::
     fem.snapshot.snapshot_png(path, nodes, cells, cell_type, displacement, title, scale=None)
     petsc_solver(comm=MPI.COMM_WORLD, tol=1e-10, eigensolver="block-lanczos") -> PetscSolver   # craig_bampton(solver=...)
 
-Parts: solids (tetrahedra of the volume groups) and Reissner-Mindlin shells (triangles of
-the surface groups in ``Geometry.shells``, fem.shell), tied by node position.
+Parts: solids (tetrahedra of the volume groups), Reissner-Mindlin shells (triangles of
+the surface groups in ``Geometry.shells``, fem.shell) and 3-D Timoshenko beams (the line
+elements of the curve groups in ``Geometry.beams``, fem.beam), tied by node position.
 Import pyvista (fem.snapshot) before dolfinx when both are used (FENICSX-NOTES.md).
 Only this package and meshes/ import gmsh or dolfinx; PETSc/SLEPc live in petsc_backend.
 """

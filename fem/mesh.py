@@ -270,6 +270,95 @@ def read_mesh_parts(path, comm: MPI.Comm = MPI.COMM_WORLD, shells=(), rank: int 
     return out[0], out[1], out[2]
 
 
+@dataclass
+class BeamLines:
+    """The line elements of a mesh's beam curve groups (fem.beam), on every rank: ``x``
+    (n, 3) m, the nodes they use; ``lines`` (m, 2) into x; ``group`` (m,) index into
+    ``names``; ``node_groups``: every physical point or curve group -> its nodes among x
+    (clamps and patches may name them)."""
+
+    path: str
+    x: np.ndarray
+    lines: np.ndarray
+    group: np.ndarray
+    names: tuple
+    node_groups: dict
+    surface_tags: dict = field(default_factory=dict)     # none (the TaggedMesh interface of fem.model's parts)
+    volume_ids: dict = field(default_factory=dict)       # none
+
+    @property
+    def curve_tags(self) -> dict:
+        return self.node_groups
+
+
+def _read_lines_rank0(path: str, names: tuple[str, ...]) -> BeamLines:
+    import gmsh
+
+    was_initialized = _gmsh_is_initialized(gmsh)
+    if not was_initialized:
+        gmsh.initialize(["-nopopup"])
+    gmsh.option.setNumber("General.Terminal", 0)
+    previous = gmsh.model.getCurrent() if was_initialized else None
+    gmsh.model.add("liftoff_beam_reader")
+    try:
+        gmsh.merge(path)
+        gmsh.model.mesh.renumberNodes()
+        tags, coords, _ = gmsh.model.mesh.getNodes()
+        x = np.zeros((len(tags), 3))
+        x[np.asarray(tags, dtype=np.int64) - 1] = coords.reshape(-1, 3)
+        groups = {(d, gmsh.model.getPhysicalName(d, t)): t for d, t in gmsh.model.getPhysicalGroups()}
+        lines, group = [], []
+        for k, name in enumerate(names):
+            if (1, name) not in groups:
+                have = sorted(n for d, n in groups if d == 1)
+                raise InputError(f"mesh {path!r}: beam curve {name!r} is not a physical curve "
+                                 f"(has: {', '.join(have) or 'none'})")
+            et, c = _elements(gmsh, 1, groups[(1, name)])
+            if et is not None and et != 1:
+                raise InputError(f"mesh {path!r}: beam curve {name!r} must be meshed with 2-node lines "
+                                 f"(gmsh element type 1, got {et})")
+            if c.shape[0] == 0:
+                raise InputError(f"mesh {path!r}: beam curve {name!r} holds no line elements (was it meshed?)")
+            lines.append(c)
+            group.append(np.full(c.shape[0], k, dtype=np.int64))
+        lines, group = np.vstack(lines), np.concatenate(group)
+        used = np.unique(lines)
+        new = np.full(x.shape[0], -1, dtype=np.int64)
+        new[used] = np.arange(used.size)
+        node_groups = {}
+        for (d, name), t in groups.items():
+            if d <= 1:
+                on = new[np.unique(_elements(gmsh, d, t)[1])]
+                node_groups[name] = on[on >= 0]
+        return BeamLines(path, x[used], new[lines], group, tuple(names), node_groups)
+    finally:
+        gmsh.model.remove()
+        if was_initialized and previous:
+            gmsh.model.setCurrent(previous)
+        if not was_initialized:
+            gmsh.finalize()
+
+
+def read_beam_lines(path, names, comm: MPI.Comm = MPI.COMM_WORLD, rank: int = 0) -> BeamLines:
+    """The line elements of the physical curve groups ``names`` of ``path`` (every rank:
+    beams are small, rank ``rank`` reads and broadcasts); InputError naming the file and
+    the group if one is not a physical curve of 2-node lines."""
+    out = None
+    if comm.rank == rank:
+        try:
+            if not Path(path).is_file():
+                raise InputError(f"mesh file not found: {str(path)!r}")
+            out = _read_lines_rank0(str(path), tuple(names))
+        except InputError as exc:
+            out = str(exc)
+        except Exception as exc:  # gmsh raises plain Exception on unreadable files
+            out = f"mesh {str(path)!r} cannot be read by gmsh: {exc}"
+    out = comm.bcast(out, root=rank)
+    if isinstance(out, str):
+        raise InputError(out)
+    return out
+
+
 def read_msh(path, comm: MPI.Comm = MPI.COMM_WORLD, rank: int = 0) -> TaggedMesh:
     """The solid part of ``path`` (InputError if it has no 3-D physical group)."""
     return read_mesh_parts(path, comm, (), rank)[0]

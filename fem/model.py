@@ -44,10 +44,11 @@ quiet_compiler_log()    # no gcc command lines on the terminal when forms compil
 class Part:
     """One dolfinx space of a model and its link to the model's DOFs."""
 
-    kind: str                      # "solid" or "shell"
-    tagged: TaggedMesh
-    V: object                      # solid: VectorFunctionSpace P1/P2; shell: fem.shell.shell_space
-    fields: object                 # solid: (E, nu, rho) DG0 Functions; shell: fem.shell.ShellFields
+    kind: str                      # "solid", "shell" or "beam" (fem.beam.BeamPart)
+    tagged: TaggedMesh             # beam: fem.mesh.BeamLines
+    V: object                      # solid: VectorFunctionSpace P1/P2; shell: fem.shell.shell_space; beam: None
+    fields: object                 # solid: (E, nu, rho) DG0 Functions; shell: fem.shell.ShellFields;
+    #                                beam: its meshes.spec.BeamGroup list
     coords: np.ndarray             # (n_local, 3) position of each local DOF (owned first, then ghosts)
     comp: np.ndarray               # (n_local,) 0..5 = Tx..Rz
     n_own: int                     # owned DOFs (this rank's PETSc rows)
@@ -507,14 +508,19 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
         raise InputError(f"model {name!r}: degree {degree!r} not supported (use 1 or 2)")
     if lumped_smeared_mass and degree != 1:
         raise InputError(f"model {name!r}: lumped smeared mass needs degree 1")
-    solid_tm, shell_tm, liquid_tm = read_mesh_parts(geometry.msh_path, comm, tuple(geometry.shells),
-                                                    liquids=tuple(geometry.liquids))
+    solid_tm = shell_tm = liquid_tm = None
+    if geometry.volumes or geometry.liquids:
+        solid_tm, shell_tm, liquid_tm = read_mesh_parts(geometry.msh_path, comm, tuple(geometry.shells),
+                                                        liquids=tuple(geometry.liquids))
     meshes = {"solid": solid_tm, "shell": shell_tm}
     solids = [g for g in geometry.volumes if g not in geometry.shells]
     if meshes["solid"] is None and solids:
         raise InputError(f"volume group {solids[0]!r} is not a physical volume of mesh {geometry.msh_path!r} "
                          "(it has none)")
     parts = [PART_BUILDERS[k](tm, geometry, degree) for k, tm in meshes.items() if tm is not None]
+    if geometry.beams:
+        from .beam import beam_part
+        parts.append(beam_part(geometry, comm, midpoints=bool(geometry.shells) or degree == 2))
     _smeared_masses(parts, geometry, comm, lumped_smeared_mass)
     patches = list(geometry.patches)
     pnames = [p.name for p in patches]
@@ -673,6 +679,10 @@ def _part_cells(comm: MPI.Comm, part: Part, label: np.ndarray) -> np.ndarray:
     """All cells of a part (VTK order, every rank) as node indices."""
     from dolfinx.plot import create_vtk_mesh
 
+    if part.kind == "beam":           # every rank holds the elements; rank 0 the DOFs
+        cells = label[part.global_dofs(6 * part.elements.ravel())].reshape(-1, 2) if part.n_own else None
+        return comm.bcast(cells, root=0)
+
     V, to_parent = (part.V, None) if part.kind == "solid" else part.V.sub(0).collapse()
     topology, _, _ = create_vtk_mesh(V)
     k = V.dofmap.dof_layout.num_dofs
@@ -701,7 +711,14 @@ def _boundary_faces(tets: np.ndarray, xyz: np.ndarray) -> np.ndarray:
 def _output_cells(cells: dict, xyz: np.ndarray) -> tuple[np.ndarray, str]:
     """(cells, meshio cell type) for pictures and VTU from {part kind: cells}: the solid's
     tets, the shell's triangle6, or, for both, the solid's exterior faces (outward) with the
-    shell triangles (split into four 3-node triangles next to P1 solids)."""
+    shell triangles (split into four 3-node triangles next to P1 solids); a model of beams
+    alone: its 2-node lines. Beams beside shells or solids are not drawn (one cell type per
+    model: meshio and the pictures take one block)."""
+    if "beam" in cells:
+        cells = dict(cells)
+        lines = cells.pop("beam")
+        if not cells:
+            return lines, "line"
     if len(cells) == 1:
         kind, c = next(iter(cells.items()))
         return c, {4: "tetra", 10: "tetra10", 6: "triangle6"}[c.shape[1]]

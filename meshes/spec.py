@@ -33,7 +33,13 @@ Optional extras: ``shells`` and ``shell_bending`` (absent = no shells), ``liquid
 slosh_modes, gravity}``), ``group_volumes``
 (CAD volume of each physical volume group, m^3, from ``gmsh.model.occ.getMass``),
 ``surface_areas`` (CAD area of each physical surface group, m^2) and ``mesh_nodes`` (node
-count of the written mesh).
+count of the written mesh); ``beams`` (absent = none; each ``{material, section, vref,
+offset, radial_offset, axis_point, axis_direction, rotary}``, :class:`BeamGroup`) and
+``curve_lengths`` (CAD length of each beam curve group, m).
+
+- ``beams``: physical CURVE group name -> :class:`BeamGroup`: the group's line elements are
+  3-D Timoshenko beams (fem.beam, liftoff.core.beam), 6 DOFs a node, with their own
+  material and section; they share nodes with the shells and solids they lie on.
 """
 from __future__ import annotations
 
@@ -287,6 +293,68 @@ class Liquid:
 
 
 @dataclass
+class BeamGroup:
+    """Beams on a physical curve group (fem.beam): ``material`` (E, nu, rho), ``section``
+    (liftoff.core.beam.Section: A, Iy, Iz, J, shear areas; m^2, m^4), the orientation
+    vector ``vref`` (global 3-vector, Nastran CBEAM's v: local z = x cross vref) or
+    ``"radial"`` (the direction away from the axis through ``axis_point`` along
+    ``axis_direction``, at each element), and the offset of the beam's axis from its nodes
+    (Nastran's WA/WB): a global vector ``offset`` (m) plus ``radial_offset`` (m, away from
+    that axis; a frame inside a wall has a negative one). ``rotary``: the sections' bending
+    rotary inertia in the consistent mass."""
+
+    material: Material
+    section: object
+    vref: object = (0.0, 0.0, 1.0)
+    offset: tuple = (0.0, 0.0, 0.0)
+    radial_offset: float = 0.0
+    axis_point: tuple = (0.0, 0.0, 0.0)
+    axis_direction: tuple = (0.0, 0.0, 1.0)
+    rotary: bool = True
+
+    def __post_init__(self) -> None:
+        from liftoff.core.beam import Section
+
+        if isinstance(self.section, dict):
+            self.section = Section(**self.section)
+        if not isinstance(self.section, Section):
+            raise InputError(f"beam group: section must be a liftoff.core.beam.Section (got {self.section!r})")
+        if not isinstance(self.material, Material):
+            self.material = Material(**self.material)
+        if isinstance(self.vref, str):
+            if self.vref != "radial":
+                raise InputError(f"beam group: vref must be a 3-vector or 'radial' (got {self.vref!r})")
+        else:
+            self.vref = _vector("beam group: vref", self.vref, nonzero=True)
+        self.offset = _vector("beam group: offset", self.offset)
+        self.axis_point = _vector("beam group: axis_point", self.axis_point)
+        self.axis_direction = _vector("beam group: axis_direction", self.axis_direction, nonzero=True)
+        self.radial_offset = float(self.radial_offset)
+        if not math.isfinite(self.radial_offset):
+            raise InputError(f"beam group: radial_offset must be finite (got {self.radial_offset!r} m)")
+        self.rotary = bool(self.rotary)
+
+    def to_dict(self) -> dict:
+        m, s = self.material, self.section
+        return {"material": {"name": m.name, "E": m.E, "nu": m.nu, "rho": m.rho},
+                "section": {k: getattr(s, k) for k in ("A", "Iy", "Iz", "J", "Ay", "Az")},
+                "vref": self.vref if isinstance(self.vref, str) else list(self.vref),
+                "offset": list(self.offset), "radial_offset": self.radial_offset,
+                "axis_point": list(self.axis_point), "axis_direction": list(self.axis_direction),
+                "rotary": self.rotary}
+
+
+def _vector(what: str, v, nonzero: bool = False) -> tuple:
+    try:
+        a = np.asarray(v, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        a = np.zeros(0)
+    if a.shape != (3,) or not np.all(np.isfinite(a)) or (nonzero and not np.any(a)):
+        raise InputError(f"{what} must be 3 finite numbers{' not all zero' if nonzero else ''} (got {v!r})")
+    return tuple(float(x) for x in a)
+
+
+@dataclass
 class Geometry:
     """A meshed component: ``.msh`` path, materials per volume group, patches and masses (SI)."""
 
@@ -303,11 +371,19 @@ class Geometry:
     shells: dict[str, float] = field(default_factory=dict)         # shell surface group -> thickness (m)
     shell_bending: dict[str, float] = field(default_factory=dict)  # shell surface group -> 12 I / t^3
     liquids: dict[str, Liquid] = field(default_factory=dict)      # liquid volume group -> Liquid
+    beams: dict[str, BeamGroup] = field(default_factory=dict)     # beam curve group -> BeamGroup
+    curve_lengths: dict[str, float] = field(default_factory=dict)  # CAD lengths of beam curve groups (m)
 
     def __post_init__(self) -> None:
         self.msh_path = str(self.msh_path)
-        if not self.volumes:
-            raise InputError(f"geometry {self.name!r}: no volume groups")
+        if not self.volumes and not self.beams:
+            raise InputError(f"geometry {self.name!r}: no volume groups and no beams")
+        for g, b in self.beams.items():
+            _check_name("beam curve", g)
+            if not isinstance(b, BeamGroup):
+                raise InputError(f"geometry {self.name!r}: beams[{g!r}] is not a BeamGroup")
+            if g in self.volumes or g in self.liquids:
+                raise InputError(f"geometry {self.name!r}: {g!r} is both a beam curve and a volume or shell")
         for g, liq in self.liquids.items():
             _check_name("liquid volume", g)
             if not isinstance(liq, Liquid):
@@ -344,14 +420,17 @@ class Geometry:
 
     def nominal_mass(self) -> float:
         """Sum of rho * CAD volume over volume groups and liquids, rho * thickness * CAD area
-        over shell surfaces, + smeared + point masses (kg)."""
+        over shell surfaces, rho * A * CAD length over beam curves, + smeared + point masses
+        (kg)."""
         missing = [g for g in (*self.volumes, *self.liquids) if g not in self.shells and g not in self.group_volumes]
         missing += [g for g in self.shells if g not in self.surface_areas]
+        missing += [g for g in self.beams if g not in self.curve_lengths]
         if missing:
             raise InputError(f"geometry {self.name!r}: no CAD volume/area recorded for groups {missing}")
         structural = sum(m.rho * (self.shells[g] * self.surface_areas[g] if g in self.shells else self.group_volumes[g])
                          for g, m in self.volumes.items())
         liquid = sum(liq.density * self.group_volumes[g] for g, liq in self.liquids.items())
+        structural += sum(b.material.rho * b.section.A * self.curve_lengths[g] for g, b in self.beams.items())
         return structural + liquid + sum(s.mass for s in self.smeared_masses) + sum(p.mass for p in self.point_masses)
 
     # ---- JSON sidecar ----------------------------------------------------------------
@@ -379,6 +458,8 @@ class Geometry:
             "shells": dict(self.shells),
             "shell_bending": dict(self.shell_bending),
             "liquids": {g: liq.to_dict() for g, liq in self.liquids.items()},
+            "beams": {g: b.to_dict() for g, b in self.beams.items()},
+            "curve_lengths": dict(self.curve_lengths),
         }
 
     def save(self, path) -> Path:
@@ -416,6 +497,8 @@ class Geometry:
                 shells={g: float(v) for g, v in d.get("shells", {}).items()},
                 shell_bending={g: float(v) for g, v in d.get("shell_bending", {}).items()},
                 liquids={g: Liquid(**v) for g, v in d.get("liquids", {}).items()},
+                beams={g: BeamGroup(**v) for g, v in d.get("beams", {}).items()},
+                curve_lengths={g: float(v) for g, v in d.get("curve_lengths", {}).items()},
             )
         except (KeyError, TypeError) as e:
             raise InputError(f"{path}: malformed {FORMAT} file ({e!r})") from None

@@ -49,7 +49,8 @@ def test_two_ranks_match_serial(msh):
 
 
 def test_two_ranks_match_serial_shells(msh):
-    """Shell and shell-on-solid models: nodes are gathered by position across ranks and parts."""
+    """Shell, shell-on-solid and beam-on-shell models: nodes are gathered by position across
+    ranks and parts (the beam part lives on rank 0)."""
     tube = msh("shell_tube", R=0.1, L=1.0, n_around=24, n_along=20)
     glued = msh("glued_plate", a=0.2, L=1.0, b=0.2, d=0.1, h=0.05)
     for degree in (1, 2):
@@ -59,6 +60,8 @@ def test_two_ranks_match_serial_shells(msh):
         assert parallel["n_rigid"] == serial["n_rigid"] == 6
         assert np.allclose(parallel["freq"][6:], serial["freq"][6:], rtol=1e-8)
         assert np.allclose(parallel["hybrid_freq"][6:], serial["hybrid_freq"][6:], rtol=1e-8)
+        assert parallel["framed_n_dof"] == serial["framed_n_dof"]
+        assert np.allclose(parallel["framed_freq"], serial["framed_freq"], rtol=1e-8)
         assert parallel["mass"] == pytest.approx(serial["mass"], rel=1e-12)
         assert parallel["hybrid_mass"] == pytest.approx(serial["hybrid_mass"], rel=1e-12)
         assert np.allclose(parallel["tip"], serial["tip"], rtol=1e-8, atol=1e-14)
