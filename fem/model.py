@@ -399,8 +399,9 @@ def _roles(comm: MPI.Comm, parts: list[Part], nodes: _Nodes, patches: list, clam
         if patches[p].nodes is not None:
             continue
         on = _group_nodes(comm, parts, nodes, name, "patch")
-        if on.size < 3:
-            raise InputError(f"patch {name!r}: its surface has {on.size} nodes; a rigid spider needs >= 3")
+        if on.size < 3 and not (on.size and nodes.comps[on].all()):      # (one beam node carries all six)
+            raise InputError(f"patch {name!r}: its surface has {on.size} nodes; a rigid spider needs >= 3 "
+                             "(or a node with rotations: a beam's)")
         clash = role[on][role[on] >= 0]
         if clash.size:
             raise InputError(f"patches {pnames[int(clash[0])]!r} and {name!r} share nodes; "

@@ -26,7 +26,7 @@ import numpy as np
 from liftoff.core.errors import InputError
 
 from . import _occ
-from .spec import Geometry, Material, Patch, SmearedMass, check_attach, equivalent
+from .spec import BeamGroup, Geometry, Material, Patch, SmearedMass, check_attach, equivalent
 from .tank import TankParams, tank_layout
 
 #: elements per 2 pi of curvature on shell walls (gmsh Mesh.MeshSizeFromCurvature), at most:
@@ -85,33 +85,69 @@ def ring_heights(refs: dict, axis_xy, cyl_ranges: list[tuple[float, float]]) -> 
     return out
 
 
-def ring_patches(wall_faces: list[int], prefix: str, heights: dict[float, list[str]], refs: dict, axis_xy,
-                 radius: float, reach: dict | None = None) -> list[Patch]:
-    """Interpolation patches (fem: RBE3) of the attach rings: the wall's edges of radius
-    ``radius`` about the axis at each height (imprinted by ``_occ.plane_cut``, or a rim)
-    become the curve group ``<prefix>_ring_<k>``; each point at that height interpolates its
-    nodes within RING_REACH x ``radius`` of it (``reach[name]`` (m) where given)."""
+def ring_edges(wall_faces: list[int], z: float, axis_xy, radius: float) -> list[int]:
+    """The wall's edges of radius ``radius`` about the axis at height ``z`` (imprinted by
+    ``_occ.plane_cut``, or a rim)."""
     import gmsh
 
     edges = {abs(t) for _, t in gmsh.model.getBoundary([(2, f) for f in wall_faces], combined=False,
                                                        oriented=False)}
-
     tol = 1e-5 * max(1.0, radius)          # heights are keyed rounded to 1e-6 m
 
-    def on_ring(e: int, z: float) -> bool:
+    def on_ring(e: int) -> bool:
         lo, hi = gmsh.model.getParametrizationBounds(1, e)
         x = np.asarray(gmsh.model.getValue(1, e, [0.5 * (lo[0] + hi[0])]))
         b = gmsh.model.getBoundingBox(1, e)
         return (abs(b[2] - z) < tol and abs(b[5] - z) < tol
                 and abs(np.hypot(*(x[:2] - np.asarray(axis_xy, float))) - radius) < 1e-3 * radius)
 
+    return [e for e in sorted(edges) if on_ring(e)]
+
+
+def ring_patches(wall_faces: list[int], prefix: str, heights: dict[float, list[str]], refs: dict, axis_xy,
+                 radius: float, reach: dict | None = None) -> list[Patch]:
+    """Interpolation patches (fem: RBE3) of the attach rings: the wall's ring edges at each
+    height (:func:`ring_edges`) become the curve group ``<prefix>_ring_<k>``; each point at
+    that height interpolates its nodes within RING_REACH x ``radius`` of it (``reach[name]``
+    (m) where given)."""
     out, reach = [], reach or {}
     for k, (z, names) in enumerate(sorted(heights.items())):
         group = f"{prefix}_ring_{k}"
-        _occ.add_physical(1, group, [e for e in sorted(edges) if on_ring(e, z)])
+        _occ.add_physical(1, group, ring_edges(wall_faces, z, axis_xy, radius))
         out += [Patch(n, np.asarray(refs[n], float), nodes=group, reach=reach.get(n, RING_REACH * radius))
                 for n in names]
     return out
+
+
+def ring_frames(p: TankParams, wall_faces: list[int], radius: float, wall_thickness: float,
+                wall_mass: float | None) -> tuple[dict, dict, float | None]:
+    """The tank's ring frames (``TankParams.frames``) as beams: the wall's ring edges at the
+    frame heights become the curve group ``<name>_frames``, a BeamGroup of the frame
+    section on the wall's inner face (its axis offset inward from the mid-surface by half the
+    geometric ``wall_thickness`` and the section's base to centroid distance; local z
+    radial, y along the axis). Returns ({group: BeamGroup}, {group: length of the frames'
+    centroid circles, m}, the wall's own share of ``wall_mass`` (the frames' mass taken off
+    it; None stays None))."""
+    from liftoff.core.beam import standard_section
+
+    if not p.frames:
+        return {}, {}, wall_mass
+    group = f"{p.name}_frames"
+    _occ.add_physical(1, group, [e for z in p.frames for e in ring_edges(wall_faces, float(z), p.axis_xy, radius)])
+    length = _occ.physical_measures(1)[group]
+    section, base = standard_section(p.frame_section, f"TankParams({p.name}).frame_section")
+    mat = p.frame_material or p.material
+    offset = -(0.5 * wall_thickness + base)
+    beams = {group: BeamGroup(mat, section, vref=(0.0, 0.0, 1.0), radial_offset=offset,
+                              axis_point=(p.axis_xy[0], p.axis_xy[1], 0.0))}
+    axis_length = length * (radius + offset) / radius         # the frames' centroid circles
+    if wall_mass is None:
+        return beams, {group: axis_length}, None
+    frames_mass = mat.rho * section.A * axis_length
+    if frames_mass >= wall_mass:
+        raise InputError(f"TankParams({p.name}).frames: the frames weigh {frames_mass:.0f} kg, not less than the "
+                         f"dry mass {wall_mass:.0f} kg they are part of")
+    return beams, {group: axis_length}, wall_mass - frames_mass
 
 
 def shell_section(material: Material, area: float, dry_mass: float | None, thickness: float | None,
@@ -166,8 +202,11 @@ def build_shell_tank(p: TankParams, out_dir: Path) -> Geometry:
                                   cyl, w, lay[0].a_bottom - 0.5 * t, lay[-1].a_top - 0.5 * t)
                  for n, ref in p.patches.items() if not any(n in names for names in rings.values())]
         tools += [_occ.plane_cut(z) for z in rings]
-        tools += [_occ.plane_cut(cav.z_fill) for c, cav in zip(lay, cavities)       # (one cut per height)
-                  if c.fill_height < (c.z_inner_top - c.z_inner_bottom) and round(cav.z_fill, 6) not in rings]
+        fills = [cav.z_fill for c, cav in zip(lay, cavities)
+                 if c.fill_height < (c.z_inner_top - c.z_inner_bottom) and round(cav.z_fill, 6) not in rings]
+        tools += [_occ.plane_cut(z) for z in fills]                                   # (one cut per height)
+        cut = set(rings) | {round(z, 6) for z in fills}
+        tools += [_occ.plane_cut(float(z)) for z in p.frames if round(float(z), 6) not in cut]
         wall_faces = _occ.imprint_surfaces({wall: faces}, tools)[wall]
         liquids = liquid_solids(p, cavities)
         if liquids:
@@ -179,11 +218,12 @@ def build_shell_tank(p: TankParams, out_dir: Path) -> Geometry:
         _occ.add_physical(2, wall, wall_faces)
         areas = _occ.physical_measures(2)
         volumes = {g: _occ.group_volume(v) for g, v in liquids.items()}
-        mat, ts = shell_section(p.material, areas[wall], p.dry_mass, p.shell_thickness, t)
+        beams, lengths, wall_mass = ring_frames(p, wall_faces, rm, t, p.dry_mass)
+        mat, ts = shell_section(p.material, areas[wall], wall_mass, p.shell_thickness, t)
         n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size, shell_curvature_elements(rm, p.mesh_size))
     geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), {wall: mat}, patches, [], smeared, [],
                    volumes, n_nodes, areas, shells={wall: ts}, shell_bending={wall: p.shell_bending_ratio},
-                   liquids=specs)
+                   liquids=specs, beams=beams, curve_lengths=lengths)
     geo.save(out_dir / f"{p.name}.json")
     return geo
 

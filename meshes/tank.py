@@ -100,6 +100,9 @@ class TankParams:
     liquid: str = "smeared"               # "smeared" (wetted-wall mass) or "hydroelastic" (liquid volumes, fem.liquid)
     slosh_modes: int = 0                  # hydroelastic: gravity slosh modes kept per compartment (0: p = 0 free surface)
     attach: str = "patch"                 # shell walls: wall points as rigid "patch"es or "ring" interpolations (RBE3)
+    frames: tuple = ()                    # shell walls: heights z (m) of ring frames on the cylindrical wall (beams)
+    frame_section: dict = field(default_factory=dict)   # their {shape, dims} (liftoff.core.beam.standard_section)
+    frame_material: Material | None = None  # the frames' material (None: `material`)
 
     def check(self) -> None:
         o = f"TankParams({self.name})"
@@ -141,6 +144,28 @@ class TankParams:
                                  f"(needs > {need + self.wall_thickness:.3f} m)")
         if len({c.name for c in self.compartments}) != len(self.compartments):
             raise InputError(f"{o}.compartments: duplicate names")
+        self.check_frames()
+
+    def check_frames(self) -> None:
+        """Ring frames: shell walls, heights strictly inside the cylindrical wall, a section."""
+        o = f"TankParams({self.name})"
+        if not self.frames:
+            return
+        if self.walls != "shell":
+            raise InputError(f"{o}.frames: ring frames are beams on a shell wall; they need walls = 'shell' "
+                             f"(got {self.walls!r})")
+        from liftoff.core.beam import standard_section
+
+        standard_section(self.frame_section, f"{o}.frame_section")
+        lay = tank_layout(self)
+        lo, hi = lay[0].z_cyl_bottom, lay[-1].z_cyl_top
+        for z in self.frames:
+            if isinstance(z, bool) or not isinstance(z, (int, float)) or not lo < z < hi:
+                raise InputError(f"{o}.frames: height {z!r} m is not on the cylindrical wall ({lo:.3f} to {hi:.3f} m)")
+        if len({round(float(z), 6) for z in self.frames}) != len(self.frames):
+            raise InputError(f"{o}.frames: heights repeat ({list(self.frames)})")
+        if self.frame_material is not None and not isinstance(self.frame_material, Material):
+            raise InputError(f"{o}.frame_material must be a Material (E, nu, rho)")
 
 
 # ---- closed forms (inner cavity of one compartment; heights h from the inner bottom apex) ----

@@ -205,5 +205,45 @@ def hat_section(h: float, b: float, c: float, t: float) -> tuple[Section, float]
     return Section(A, Iy, Iz, t ** 3 * (b + 2 * h + 2 * c) / 3, 5 / 6 * t * (b + 2 * c), 2 * h * t), zc
 
 
-__all__ = ["Section", "beam_element", "bending_stiffness", "tube", "rectangle", "i_section", "t_section",
+#: standard shapes by name: (section function, the distance (m) from the face the member
+#: sits on (a frame's or stringer's base on the skin) to its centroid, from the dimensions
+#: and the function's result)
+SHAPES = {
+    "tube": (tube, lambda d, out: d["r_out"]),
+    "rectangle": (rectangle, lambda d, out: 0.5 * d["h"]),
+    "i": (i_section, lambda d, out: 0.5 * (d["h"] + d["tf"])),
+    "t": (t_section, lambda d, out: out[1]),
+    "hat": (hat_section, lambda d, out: 0.5 * d["t"] + out[1]),
+}
+
+
+def standard_section(spec: dict, where: str = "section") -> tuple[Section, float]:
+    """(Section, distance from the base to the centroid, m) of ``spec`` = {"shape": one of
+    :data:`SHAPES`, the shape function's dimensions (m)}: e.g. {"shape": "t", "h": 0.15,
+    "b": 0.06, "tw": 0.004, "tf": 0.006}. Base: the flat face the member sits on (the web's
+    foot of a T or I frame, the feet of a hat stringer, a side of a rectangle or tube).
+    InputError naming ``where`` and the culprit on an unknown shape or a wrong dimension."""
+    import inspect
+
+    if not isinstance(spec, dict) or "shape" not in spec:
+        raise InputError(f"{where}: expected a table with shape = one of {', '.join(SHAPES)} and its dimensions (m)")
+    shape = spec["shape"]
+    if shape not in SHAPES:
+        raise InputError(f"{where}: unknown shape {shape!r} (one of {', '.join(SHAPES)})")
+    make, base = SHAPES[shape]
+    dims = {k: v for k, v in spec.items() if k != "shape"}
+    params = inspect.signature(make).parameters
+    bad = sorted(set(dims) - set(params))
+    missing = [n for n, par in params.items() if par.default is inspect.Parameter.empty and n not in dims]
+    if bad or missing:
+        raise InputError(f"{where}: shape {shape!r} takes {', '.join(params)} (m)"
+                         + (f"; unknown {', '.join(bad)}" if bad else "") + (f"; missing {', '.join(missing)}" if missing else ""))
+    for k, v in dims.items():
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v):
+            raise InputError(f"{where}.{k}: expected a number (got {v!r})")
+    out = make(**dims)
+    return (out[0] if isinstance(out, tuple) else out), float(base(dims, out))
+
+
+__all__ = ["Section", "SHAPES", "standard_section", "beam_element", "bending_stiffness", "tube", "rectangle", "i_section", "t_section",
            "hat_section"]

@@ -201,3 +201,28 @@ def test_t_and_hat_sections_against_integration():
     assert sec.Iy == pytest.approx(Iy, rel=5e-3) and sec.Iz == pytest.approx(Iz, rel=5e-3)
     with pytest.raises(InputError, match="hat section: t must be > 0"):
         hat_section(h, b, c, 0.0)
+
+
+def test_standard_sections_by_name():
+    """standard_section: the shape function's Section and the base-to-centroid distance
+    (a frame's or stringer's axis offset from the skin it sits on): h/2 for a rectangle,
+    r_out for a tube, h/2 + tf/2 for an I (h between flange centres), the T's and hat's own
+    centroid heights (the hat's above its feet's mid-line, + t/2 to their base)."""
+    from liftoff.core.beam import SHAPES, hat_section, standard_section, t_section
+
+    specs = {"tube": dict(r_out=0.1, t=0.01), "rectangle": dict(b=0.01, h=0.08),
+             "i": dict(h=0.2, b=0.1, tw=0.005, tf=0.008), "t": dict(h=0.15, b=0.06, tw=0.004, tf=0.006),
+             "hat": dict(h=0.03, b=0.02, c=0.015, t=0.002)}
+    assert set(specs) == set(SHAPES)
+    base = {"tube": 0.1, "rectangle": 0.04, "i": 0.104, "t": t_section(**specs["t"])[1],
+            "hat": 0.001 + hat_section(**specs["hat"])[1]}
+    for shape, dims in specs.items():
+        sec, b = standard_section({"shape": shape, **dims})
+        want = SHAPES[shape][0](**dims)
+        assert sec == (want[0] if isinstance(want, tuple) else want) and b == pytest.approx(base[shape], rel=1e-12)
+    with pytest.raises(InputError, match="frame: unknown shape 'z'"):
+        standard_section({"shape": "z"}, "frame")
+    with pytest.raises(InputError, match=r"frame: shape 'i' takes h, b, tw, tf \(m\); unknown d; missing tf"):
+        standard_section({"shape": "i", "h": 0.2, "b": 0.1, "tw": 0.005, "d": 1.0}, "frame")
+    with pytest.raises(InputError, match=r"frame.h: expected a number"):
+        standard_section({"shape": "rectangle", "b": 0.1, "h": "deep"}, "frame")
