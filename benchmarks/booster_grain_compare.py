@@ -1,0 +1,90 @@
+"""The default run with its boosters as today's thickened solid and as a shell case bonded
+to a nearly incompressible propellant grain (issue 26): ``[model.component.srb_*.params]
+walls = "shell"``, ``grain = true`` (meshes.shells.build_shell_booster, fem.elasticity),
+with the boosters' Craig-Bampton cut ``f_max`` at each of ``--f-max`` (the grain's own
+modes are so many, 6,439 fixed-interface modes below the default's 60 Hz per booster, that
+the cut is what the comparison must show converged). Cold stages (no cache), so the
+boosters' FE and CB times are measured. Writes docs/figures/booster_grain.json, rendered
+into README.md by benchmarks/default_figures.py.
+
+    .venv/bin/python benchmarks/booster_grain_compare.py [--f-max 15 25] [--json FILE]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import runpy
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+JSON = ROOT / "docs" / "figures" / "booster_grain.json"
+BOOSTERS = ("srb_left", "srb_right")
+
+
+def variant_figures(grain: bool, f_max: float | None) -> dict:
+    """Figures of the default run with grain boosters (``grain``) cut at ``f_max`` Hz, or the
+    default itself."""
+    fig = runpy.run_path(str(ROOT / "benchmarks" / "default_figures.py"), run_name="default_figures")
+
+    def edit(d):
+        for b in BOOSTERS:
+            if grain:
+                d["model"]["component"][b]["params"].update(walls="shell", grain=True)
+                d["model"]["component"][b]["f_max"] = f_max
+                # the default's [model.materials] srb_*_case is the thickened solid's equivalent
+                # (rho 1024 kg/m^3, E 17.4 GPa): the shell case is the steel wall itself
+                d["model"].get("materials", {}).pop(f"{b}_case", None)
+        return d
+
+    t0 = time.perf_counter()
+    with tempfile.TemporaryDirectory() as tmp:
+        out = fig["run_default_like"](edit, Path(tmp) / "run", None, error_estimate=False)
+        wall_s = time.perf_counter() - t0
+    stack = next(iter(out.stacks.values()))
+    v = stack.vehicle
+    m, _ = fig["_mass_cg"](v)
+    rows = out.envelope
+    posts = [r for r in rows if r["category"] == "contact_force" and r["item"].endswith("Tz")]
+    attach = [r for r in rows if r["category"] == "interface_force" and r["unit"] == "N"]
+    times = {label.split(" (")[0]: s for label, s in out.stage_times if " (built)" in label}
+    cb = stack.cbs[BOOSTERS[0]]
+    return {
+        "wall_s": wall_s,
+        "booster_fe_dofs": fig["_fe_dofs"](stack.components.get(BOOSTERS[0])),
+        "booster_cb_modes": cb.n_modes, "booster_f_max_hz": f_max if grain else 60.0,
+        "booster_fe_s": times.get(f"fe {BOOSTERS[0]}"), "booster_cb_s": times.get(f"cb {BOOSTERS[0]}"),
+        "vehicle_modes": v.n_modes, "vehicle_mass_t": m / 1e3,
+        "first_elastic_hz": [float(w / (2 * np.pi)) for w in v.omega[6:10]],
+        "steps": int(out.results["nominal"][0].time.size - 1),
+        "twang": fig["twang_figures"](out, "nominal"),
+        "peak_post_compression_n": max(r["max"] for r in posts),
+        "attach_n": {r["item"]: fig["_peak"](r)[0] for r in attach},
+        "truncation": [c.as_dict() for c in out.results["nominal"][1].truncation],
+    }
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--f-max", type=float, nargs="+", default=[15.0, 25.0])
+    ap.add_argument("--json", type=Path, default=JSON)
+    args = ap.parse_args(argv)
+    import pyvista  # noqa: F401  (before dolfinx, FENICSX-NOTES.md)
+
+    out = {"solid": None, "grain": {}}
+    print("booster_grain_compare: the default (thickened solid boosters) ...", flush=True)
+    out["solid"] = variant_figures(False, None)
+    for f in args.f_max:
+        print(f"booster_grain_compare: case + grain boosters, f_max = {f:g} Hz ...", flush=True)
+        out["grain"][f"{f:g}"] = variant_figures(True, f)
+    args.json.write_text(json.dumps(out, indent=1, default=float) + "\n")
+    print(f"wrote {args.json}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
