@@ -18,8 +18,9 @@ are those of the offset axis, carried to the nodes by the rigid link of each end
 u_axis = u_node + theta x e, i.e. k = B^T k_axis B with B = [[I, -[e]x], [0, I]] per node
 (Przemieniecki, ch. 5; the same rigid-body kinematics as fem.spiders).
 
-Orientation: ``vref`` global, or "radial" (e_r at the element's midpoint; a stringer on a
-wall: local z radial, y tangential). Units SI: m, Pa, kg/m^3.
+Orientation: ``vref`` global, or "radial" (e_r at the element's midpoint: local y radial)
+or "tangential" (axis x e_r: local y tangential, z radial: a stringer along a wall with its
+web's depth radial). Units SI: m, Pa, kg/m^3.
 
 Layout: rank 0 holds every beam DOF (beams are small next to the shells and solids);
 other ranks hold none. Node j of the part owns local DOFs 6 j .. 6 j + 5.
@@ -103,8 +104,12 @@ def beam_matrices(x: np.ndarray, elements: np.ndarray, element_group: np.ndarray
         if grp.radial_offset != 0.0:
             used = np.unique(el)
             e[used] += grp.radial_offset * _radial(x[used], grp, what)
-        vref = _radial(0.5 * (x[el[:, 0]] + x[el[:, 1]]), grp, what) if grp.vref == "radial" else \
-            np.broadcast_to(np.asarray(grp.vref, float), (el.shape[0], 3))
+        if isinstance(grp.vref, str):             # "radial" or "tangential", at each element's midpoint
+            vref = _radial(0.5 * (x[el[:, 0]] + x[el[:, 1]]), grp, what)
+            if grp.vref == "tangential":
+                vref = np.cross(np.asarray(grp.axis_direction, float), vref)
+        else:
+            vref = np.broadcast_to(np.asarray(grp.vref, float), (el.shape[0], 3))
         for (a, b), v in zip(el, vref):
             k, m = beam_element(x[a] + e[a], x[b] + e[b], mat.E, G, sec, mat.rho, v, grp.rotary)
             if e[a].any() or e[b].any():

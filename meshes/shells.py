@@ -26,6 +26,7 @@ import numpy as np
 from liftoff.core.errors import InputError
 
 from . import _occ
+from ._occ import occ
 from .spec import BeamGroup, Geometry, Material, Patch, SmearedMass, check_attach, equivalent
 from .tank import TankParams, tank_layout
 
@@ -119,35 +120,75 @@ def ring_patches(wall_faces: list[int], prefix: str, heights: dict[float, list[s
     return out
 
 
-def ring_frames(p: TankParams, wall_faces: list[int], radius: float, wall_thickness: float,
-                wall_mass: float | None) -> tuple[dict, dict, float | None]:
-    """The tank's ring frames (``TankParams.frames``) as beams: the wall's ring edges at the
-    frame heights become the curve group ``<name>_frames``, a BeamGroup of the frame
-    section on the wall's inner face (its axis offset inward from the mid-surface by half the
-    geometric ``wall_thickness`` and the section's base to centroid distance; local z
-    radial, y along the axis). Returns ({group: BeamGroup}, {group: length of the frames'
-    centroid circles, m}, the wall's own share of ``wall_mass`` (the frames' mass taken off
-    it; None stays None))."""
+def stringer_tools(p: TankParams, radius: float) -> list:
+    """One straight line (an OCC tool) per stringer along the whole cylindrical wall of
+    radius ``radius``, at equal azimuths from ``p.stringer_azimuth``."""
+    lay = tank_layout(p)
+    z0, z1 = lay[0].z_cyl_bottom, lay[-1].z_cyl_top
+    x0, y0 = p.axis_xy
+    out = []
+    for k in range(p.stringers):
+        a = math.radians(p.stringer_azimuth) + 2 * math.pi * k / p.stringers
+        x, y = x0 + radius * math.cos(a), y0 + radius * math.sin(a)
+        line = occ.addLine(occ.addPoint(x, y, z0), occ.addPoint(x, y, z1))
+        out.append(_occ.Tool(None, (1, line), (x, y, z0, x, y, z1)))
+    return out
+
+
+def stringer_edges(p: TankParams, wall_faces: list[int], radius: float) -> list[int]:
+    """The wall's straight edges along the axis at the stringers' azimuths."""
+    import gmsh
+
+    x0, y0 = p.axis_xy
+    a = math.radians(p.stringer_azimuth) + 2 * math.pi * np.arange(p.stringers) / p.stringers
+    xs, ys = x0 + radius * np.cos(a), y0 + radius * np.sin(a)
+    tol = 1e-5 * max(1.0, radius)
+    out = []
+    for e in sorted({abs(t) for _, t in gmsh.model.getBoundary([(2, f) for f in wall_faces], combined=False,
+                                                                oriented=False)}):
+        b = gmsh.model.getBoundingBox(1, e)
+        if b[5] - b[2] > tol and b[3] - b[0] < tol and b[4] - b[1] < tol \
+                and np.min(np.hypot(xs - b[0], ys - b[1])) < tol:
+            out.append(e)
+    return out
+
+
+def wall_beams(p: TankParams, wall_faces: list[int], radius: float, wall_thickness: float,
+               wall_mass: float | None) -> tuple[dict, dict, float | None]:
+    """The tank's ring frames (``TankParams.frames``) and stringers (``stringers``) as beams
+    on the wall's inner face: the wall's ring edges at the frame heights become the curve
+    group ``<name>_frames``, its edges at the stringers' azimuths ``<name>_stringers``, each a
+    BeamGroup of its section with the axis offset inward from the mid-surface by half the
+    geometric ``wall_thickness`` and the section's base to centroid distance, local z
+    radial (frames: y along the axis; stringers: y tangential). Returns ({group: BeamGroup},
+    {group: length of the members' centroid lines, m}, the wall's own share of ``wall_mass``
+    (the members' mass taken off it; None stays None))."""
     from liftoff.core.beam import standard_section
 
-    if not p.frames:
-        return {}, {}, wall_mass
-    group = f"{p.name}_frames"
-    _occ.add_physical(1, group, [e for z in p.frames for e in ring_edges(wall_faces, float(z), p.axis_xy, radius)])
-    length = _occ.physical_measures(1)[group]
-    section, base = standard_section(p.frame_section, f"TankParams({p.name}).frame_section")
-    mat = p.frame_material or p.material
-    offset = -(0.5 * wall_thickness + base)
-    beams = {group: BeamGroup(mat, section, vref=(0.0, 0.0, 1.0), radial_offset=offset,
-                              axis_point=(p.axis_xy[0], p.axis_xy[1], 0.0))}
-    axis_length = length * (radius + offset) / radius         # the frames' centroid circles
-    if wall_mass is None:
-        return beams, {group: axis_length}, None
-    frames_mass = mat.rho * section.A * axis_length
-    if frames_mass >= wall_mass:
-        raise InputError(f"TankParams({p.name}).frames: the frames weigh {frames_mass:.0f} kg, not less than the "
-                         f"dry mass {wall_mass:.0f} kg they are part of")
-    return beams, {group: axis_length}, wall_mass - frames_mass
+    beams, lengths, members_mass = {}, {}, 0.0
+    axis = (p.axis_xy[0], p.axis_xy[1], 0.0)
+    for kind, edges, spec, mat, vref in (
+            ("frames", lambda: [e for z in p.frames for e in ring_edges(wall_faces, float(z), p.axis_xy, radius)],
+             p.frame_section, p.frame_material, (0.0, 0.0, 1.0)),
+            ("stringers", lambda: stringer_edges(p, wall_faces, radius), p.stringer_section, p.stringer_material,
+             "tangential")):
+        if not (p.frames if kind == "frames" else p.stringers):
+            continue
+        group = f"{p.name}_{kind}"
+        _occ.add_physical(1, group, edges())
+        length = _occ.physical_measures(1)[group]
+        section, base = standard_section(spec, f"TankParams({p.name}).{kind[:-1]}_section")
+        mat = mat or p.material
+        offset = -(0.5 * wall_thickness + base)
+        beams[group] = BeamGroup(mat, section, vref=vref, radial_offset=offset, axis_point=axis)
+        lengths[group] = length * (radius + offset) / radius if kind == "frames" else length
+        members_mass += mat.rho * section.A * lengths[group]
+    if wall_mass is None or not beams:
+        return beams, lengths, wall_mass
+    if members_mass >= wall_mass:
+        raise InputError(f"TankParams({p.name}): the frames and stringers weigh {members_mass:.0f} kg, not less than "
+                         f"the dry mass {wall_mass:.0f} kg they are part of")
+    return beams, lengths, wall_mass - members_mass
 
 
 def shell_section(material: Material, area: float, dry_mass: float | None, thickness: float | None,
@@ -207,6 +248,7 @@ def build_shell_tank(p: TankParams, out_dir: Path) -> Geometry:
         tools += [_occ.plane_cut(z) for z in fills]                                   # (one cut per height)
         cut = set(rings) | {round(z, 6) for z in fills}
         tools += [_occ.plane_cut(float(z)) for z in p.frames if round(float(z), 6) not in cut]
+        tools += stringer_tools(p, rm)
         wall_faces = _occ.imprint_surfaces({wall: faces}, tools)[wall]
         liquids = liquid_solids(p, cavities)
         if liquids:
@@ -218,7 +260,7 @@ def build_shell_tank(p: TankParams, out_dir: Path) -> Geometry:
         _occ.add_physical(2, wall, wall_faces)
         areas = _occ.physical_measures(2)
         volumes = {g: _occ.group_volume(v) for g, v in liquids.items()}
-        beams, lengths, wall_mass = ring_frames(p, wall_faces, rm, t, p.dry_mass)
+        beams, lengths, wall_mass = wall_beams(p, wall_faces, rm, t, p.dry_mass)
         mat, ts = shell_section(p.material, areas[wall], wall_mass, p.shell_thickness, t)
         n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size, shell_curvature_elements(rm, p.mesh_size))
     geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), {wall: mat}, patches, [], smeared, [],

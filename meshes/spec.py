@@ -296,9 +296,11 @@ class Liquid:
 class BeamGroup:
     """Beams on a physical curve group (fem.beam): ``material`` (E, nu, rho), ``section``
     (liftoff.core.beam.Section: A, Iy, Iz, J, shear areas; m^2, m^4), the orientation
-    vector ``vref`` (global 3-vector, Nastran CBEAM's v: local z = x cross vref) or
-    ``"radial"`` (the direction away from the axis through ``axis_point`` along
-    ``axis_direction``, at each element), and the offset of the beam's axis from its nodes
+    vector ``vref`` (global 3-vector, Nastran CBEAM's v: local y towards it, z = x cross
+    vref), ``"radial"`` (the direction away from the axis through ``axis_point`` along
+    ``axis_direction``, at each element: local y radial) or ``"tangential"`` (axis_direction
+    x radial: local y tangential, so a stringer along the axis has local z radial, its web's
+    depth), and the offset of the beam's axis from its nodes
     (Nastran's WA/WB): a global vector ``offset`` (m) plus ``radial_offset`` (m, away from
     that axis; a frame inside a wall has a negative one). ``rotary``: the sections' bending
     rotary inertia in the consistent mass."""
@@ -322,8 +324,8 @@ class BeamGroup:
         if not isinstance(self.material, Material):
             self.material = Material(**self.material)
         if isinstance(self.vref, str):
-            if self.vref != "radial":
-                raise InputError(f"beam group: vref must be a 3-vector or 'radial' (got {self.vref!r})")
+            if self.vref not in ("radial", "tangential"):
+                raise InputError(f"beam group: vref must be a 3-vector, 'radial' or 'tangential' (got {self.vref!r})")
         else:
             self.vref = _vector("beam group: vref", self.vref, nonzero=True)
         self.offset = _vector("beam group: offset", self.offset)

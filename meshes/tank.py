@@ -103,6 +103,10 @@ class TankParams:
     frames: tuple = ()                    # shell walls: heights z (m) of ring frames on the cylindrical wall (beams)
     frame_section: dict = field(default_factory=dict)   # their {shape, dims} (liftoff.core.beam.standard_section)
     frame_material: Material | None = None  # the frames' material (None: `material`)
+    stringers: int = 0                    # shell walls: stringers (beams) along the whole cylindrical wall
+    stringer_azimuth: float = 0.0         # azimuth (deg) of the first; the others equally spaced
+    stringer_section: dict = field(default_factory=dict)   # their {shape, dims}, web radial
+    stringer_material: Material | None = None  # (None: `material`)
 
     def check(self) -> None:
         o = f"TankParams({self.name})"
@@ -147,15 +151,27 @@ class TankParams:
         self.check_frames()
 
     def check_frames(self) -> None:
-        """Ring frames: shell walls, heights strictly inside the cylindrical wall, a section."""
+        """Ring frames and stringers: shell walls, a section, frame heights strictly inside
+        the cylindrical wall, a whole number of stringers."""
+        from liftoff.core.beam import standard_section
+
         o = f"TankParams({self.name})"
+        if isinstance(self.stringers, bool) or not isinstance(self.stringers, (int, float)) \
+                or self.stringers != int(self.stringers) or self.stringers < 0:
+            raise InputError(f"{o}.stringers must be a whole number >= 0 (got {self.stringers!r})")
+        self.stringers = int(self.stringers)
+        if self.stringers:
+            if self.walls != "shell":
+                raise InputError(f"{o}.stringers: stringers are beams on a shell wall; they need walls = 'shell' "
+                                 f"(got {self.walls!r})")
+            standard_section(self.stringer_section, f"{o}.stringer_section")
+            if self.stringer_material is not None and not isinstance(self.stringer_material, Material):
+                raise InputError(f"{o}.stringer_material must be a Material (E, nu, rho)")
         if not self.frames:
             return
         if self.walls != "shell":
             raise InputError(f"{o}.frames: ring frames are beams on a shell wall; they need walls = 'shell' "
                              f"(got {self.walls!r})")
-        from liftoff.core.beam import standard_section
-
         standard_section(self.frame_section, f"{o}.frame_section")
         lay = tank_layout(self)
         lo, hi = lay[0].z_cyl_bottom, lay[-1].z_cyl_top

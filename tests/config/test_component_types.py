@@ -105,18 +105,21 @@ def test_the_default_is_described_by_types_and_joints():
     assert set(model.joints) == set(shuttle_joints(lay))
 
 
-def test_tank_stage_ring_frames_from_toml():
-    """A tank stage's ring frames (beams, fem.beam) from the scenario: heights, a standard
-    section by shape and dimensions, their own material; a wrong section named by its key."""
+def test_tank_stage_frames_and_stringers_from_toml():
+    """A tank stage's ring frames and stringers (beams, fem.beam) from the scenario: heights
+    or a count, a standard section by shape and dimensions, their own material; a wrong
+    section named by its key."""
     d = tomllib.loads(default_text())
     d["model"]["component"]["spare"] = {"type": "tank_stage", "params": {
         "walls": "shell", "frames": [4.0, 5.0], "frame_section": {"shape": "i", "h": 0.2, "b": 0.1, "tw": 0.005,
                                                                    "tf": 0.008},
         "frame_material": {"E": 70e9, "nu": 0.33, "rho": 2700.0},
+        "stringers": 12, "stringer_section": {"shape": "hat", "h": 0.05, "b": 0.04, "c": 0.02, "t": 0.003},
         "compartments": [{"name": "lox", "cyl_length": 4.6}], "patches": {"foot": [0.0, 0.0, 0.0]}}}
     d["model"]["joint"].append({"name": "spare_1", "components": ["core", "spare"]})
     b = parse_scenario(d, "s.toml").cases[0].model.components["spare"].builder
     assert b.frames == (4.0, 5.0) and b.frame_section["shape"] == "i" and b.frame_material.rho == 2700.0
+    assert b.stringers == 12 and b.stringer_section["shape"] == "hat" and b.stringer_material is None
     bad = copy.deepcopy(d)
     bad["model"]["component"]["spare"]["params"]["frame_section"] = {"shape": "z", "h": 0.2}
     with pytest.raises(InputError, match=r"s\.toml: model\.component\.spare\.params\.frame_section: .*unknown shape 'z'"):

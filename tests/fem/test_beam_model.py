@@ -261,6 +261,27 @@ def test_tank_ring_frames_from_the_builder(tmp_path):
     assert set(np.round(xyz[:, 2], 6)) == set(np.round(z, 6))
     print(f"tank lowest elastic mode: bare {f1[0]:.2f} Hz, seven frames {f1[7]:.2f} Hz")
     assert f1[7] > 2 * f1[0]
+    # eight hat stringers along the whole cylinder as well: their mass comes off the wall's too
+    hat = {"shape": "hat", "h": 0.05, "b": 0.04, "c": 0.02, "t": 0.003}
+    geo = build_tank(TankParams(**base, frames=z, frame_section=tee, stringers=8, stringer_azimuth=22.5,
+                                stringer_section=hat), tmp_path / "ts")
+    st = geo.beams["t_stringers"]
+    assert st.vref == "tangential" and geo.curve_lengths["t_stringers"] == pytest.approx(8 * 8.0, rel=1e-9)
+    dry = wall.rho * geo.shells["t_wall"] * geo.surface_areas["t_wall"] + sum(
+        g.material.rho * g.section.A * geo.curve_lengths[n] for n, g in geo.beams.items())
+    assert dry == pytest.approx(3000.0, rel=1e-12)
+    model = build_model(geo)
+    xyz = model.part("beam").xyz
+    on = np.min(np.abs(xyz[:, 2, None] - np.array(z)[None, :]), axis=1) > 0.01      # off the frames
+    az = np.degrees(np.arctan2(xyz[on, 1], xyz[on, 0])) % 45.0
+    assert np.allclose(az, 22.5, atol=1e-6)
+    f_st = eigenmodes(model, n_modes=7).freq_hz[6]
+    print(f"with eight hat stringers too: {f_st:.2f} Hz")
+    assert f_st > f1[7] * 0.9
+    with pytest.raises(InputError, match=r"stringers: stringers are beams on a shell wall"):
+        TankParams(**{**base, "walls": "solid"}, stringers=4, stringer_section=hat).check()
+    with pytest.raises(InputError, match=r"stringers must be a whole number"):
+        TankParams(**base, stringers=2.5, stringer_section=hat).check()
     with pytest.raises(InputError, match=r"frames: ring frames are beams on a shell wall"):
         TankParams(**{**base, "walls": "solid"}, frames=z, frame_section=tee).check()
     with pytest.raises(InputError, match=r"frames: height 12.0 m is not on the cylindrical wall"):
@@ -314,8 +335,8 @@ def _stringer_tube(path, n_str: int, R: float, L: float, h: float) -> str:
         faces = [t for d, t in gmsh.model.getEntities(2)]
         gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, faces), "wall")
         curves = {t: gmsh.model.getBoundingBox(1, t) for _, t in gmsh.model.getEntities(1)}
-        gen = [t for t, b in curves.items() if b[5] - b[2] > 0.5 * L and abs(np.hypot(b[0], b[1]) - R) < 1e-3
-               and abs(b[3] - b[0]) < 1e-5]
+        gen = [t for t, b in curves.items() if b[5] - b[2] > 0.5 * L and abs(b[3] - b[0]) < 1e-5
+               and np.min(np.hypot(b[0] - R * np.cos(a), b[1] - R * np.sin(a))) < 1e-5]   # (not the seam)
         assert len(gen) == n_str, (len(gen), n_str)
         gmsh.model.setPhysicalName(1, gmsh.model.addPhysicalGroup(1, gen), "stringers")
         for name, z in (("root", 0.0), ("tip", L)):
@@ -332,7 +353,7 @@ def test_stringer_stiffened_tube_against_beam_theory(tmp_path):
     centroid's radius), shear area pi R t (the skin's webs). The stringers carry a third of
     the bending stiffness, so the test sees them; tolerance 2 %: the bare tube's shell model
     against beam theory is within 1.5 % (tests/fem/test_shell_model.py: the rigid tip and
-    the clamp stop the section's warping), measured ... here."""
+    the clamp stop the section's warping); measured +0.5 % bare, +0.9 % with stringers."""
     from liftoff.fem import point_load, static_solve
     from liftoff.meshes.spec import Patch
 

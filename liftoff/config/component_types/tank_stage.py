@@ -7,10 +7,11 @@ dome apex (an engine mount, a payload adapter), any other a patch on the cylindr
 ``[[model.component.<name>.params.compartments]]`` (meshes.tank.Compartment fields), the wall
 material as ``material = {E, nu, rho}`` (default Al 2219). walls and liquid default to
 [model]'s; the volume groups are named after the component (``<name>_wall``, ...). Shell
-walls may carry ring frames as beams (fem.beam): ``frames = [z, ...]`` (m, on the
-cylindrical wall), ``frame_section = {shape = "t", h = ..., b = ..., tw = ..., tf = ...}``
-(liftoff.core.beam.SHAPES: tube, rectangle, i, t, hat; m) and ``frame_material = {E, nu,
-rho}`` (default: the wall's)."""
+walls may carry ring frames and stringers as beams (fem.beam): ``frames = [z, ...]`` (m, on
+the cylindrical wall), ``frame_section = {shape = "t", h = ..., b = ..., tw = ..., tf =
+...}`` (liftoff.core.beam.SHAPES: tube, rectangle, i, t, hat; m) and ``frame_material =
+{E, nu, rho}`` (default: the wall's); ``stringers = N`` (equally spaced from
+``stringer_azimuth``, deg), ``stringer_section``, ``stringer_material`` likewise."""
 from __future__ import annotations
 
 from liftoff.core.errors import InputError
@@ -26,7 +27,8 @@ def read(ctx: Context, where: Where, params: dict):
 
     if not isinstance(params, dict):
         raise where.error("expected a table of TankParams fields")
-    own = {"compartments", "patches", "material", "frame_section", "frame_material"}
+    own = {"compartments", "patches", "material", "frame_section", "frame_material", "stringer_section",
+           "stringer_material"}
     comps = []
     for i, c in enumerate(array_of_tables(where / "compartments", params.get("compartments", []), "compartment",
                                           nonempty=True)):
@@ -39,20 +41,22 @@ def read(ctx: Context, where: Where, params: dict):
     patches = named(where / "patches", params.get("patches", {}), xyz)
     material = AL2219 if "material" not in params else \
         read_material(where / "material", f"{ctx.name}-wall", params["material"])[0]
-    frame_section = params.get("frame_section", {})
-    if "frame_section" in params:
-        from liftoff.core.beam import standard_section
+    members = {}
+    for kind in ("frame", "stringer"):
+        section = params.get(f"{kind}_section", {})
+        if f"{kind}_section" in params:
+            from liftoff.core.beam import standard_section
 
-        try:
-            standard_section(frame_section, "frame_section")
-        except InputError as exc:
-            raise (where / "frame_section").wrap(exc) from None
-    frame_material = None if "frame_material" not in params else \
-        read_material(where / "frame_material", f"{ctx.name}-frames", params["frame_material"])[0]
+            try:
+                standard_section(section, f"{kind}_section")
+            except InputError as exc:
+                raise (where / f"{kind}_section").wrap(exc) from None
+        members[f"{kind}_section"] = dict(section)
+        members[f"{kind}_material"] = None if f"{kind}_material" not in params else \
+            read_material(where / f"{kind}_material", f"{ctx.name}-{kind}s", params[f"{kind}_material"])[0]
     rest = {k: v for k, v in params.items() if k not in own}
     size = mesh_size_kw(ctx.mesh_size)
-    fixed = {"name": ctx.name, "compartments": tuple(comps), "patches": patches, "material": material,
-             "frame_section": dict(frame_section), "frame_material": frame_material}
+    fixed = {"name": ctx.name, "compartments": tuple(comps), "patches": patches, "material": material, **members}
     return builder(where, TankParams, rest, fixed, {**size, "walls": ctx.walls, "liquid": ctx.liquid})
 
 
