@@ -7,7 +7,11 @@ the cut is what the comparison must show converged). Cold stages (no cache), so 
 boosters' FE and CB times are measured. Writes docs/figures/booster_grain.json, rendered
 into README.md by benchmarks/default_figures.py.
 
-    .venv/bin/python benchmarks/booster_grain_compare.py [--f-max 15 25] [--json FILE]
+    .venv/bin/python benchmarks/booster_grain_compare.py [--f-max 15 25] [--no-solid] [--json FILE]
+
+Each variant is a whole cold run; run them one per process where memory is short (the
+file is updated, not overwritten), with LIFTOFF_MODEL_WORKERS=1 for the grain boosters
+(two P2 grain models reduced at once need about 16 GB).
 """
 from __future__ import annotations
 
@@ -70,17 +74,20 @@ def variant_figures(grain: bool, f_max: float | None) -> dict:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--f-max", type=float, nargs="+", default=[15.0, 25.0])
+    ap.add_argument("--f-max", type=float, nargs="*", default=[15.0, 25.0])
+    ap.add_argument("--no-solid", action="store_true", help="keep the file's solid-booster figures")
     ap.add_argument("--json", type=Path, default=JSON)
     args = ap.parse_args(argv)
     import pyvista  # noqa: F401  (before dolfinx, FENICSX-NOTES.md)
 
-    out = {"solid": None, "grain": {}}
-    print("booster_grain_compare: the default (thickened solid boosters) ...", flush=True)
-    out["solid"] = variant_figures(False, None)
+    out = json.loads(args.json.read_text()) if args.json.is_file() else {"solid": None, "grain": {}}
+    if not args.no_solid:
+        print("booster_grain_compare: the default (thickened solid boosters) ...", flush=True)
+        out["solid"] = variant_figures(False, None)
     for f in args.f_max:
         print(f"booster_grain_compare: case + grain boosters, f_max = {f:g} Hz ...", flush=True)
         out["grain"][f"{f:g}"] = variant_figures(True, f)
+    out["grain"] = dict(sorted(out["grain"].items(), key=lambda kv: float(kv[0])))
     args.json.write_text(json.dumps(out, indent=1, default=float) + "\n")
     print(f"wrote {args.json}")
     return 0

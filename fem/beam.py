@@ -111,7 +111,7 @@ def beam_matrices(x: np.ndarray, elements: np.ndarray, element_group: np.ndarray
         else:
             vref = np.broadcast_to(np.asarray(grp.vref, float), (el.shape[0], 3))
         for (a, b), v in zip(el, vref):
-            k, m = beam_element(x[a] + e[a], x[b] + e[b], mat.E, G, sec, mat.rho, v, grp.rotary)
+            k, m = beam_element(x[a] + e[a], x[b] + e[b], mat.E, G, sec, mat.rho, v, grp.rotary, grp.nsm)
             if e[a].any() or e[b].any():
                 B = np.eye(12)
                 B[0:3, 3:6], B[6:9, 9:12] = -_skew(e[a]), -_skew(e[b])

@@ -45,6 +45,8 @@ class PadParams:
                           (-20.0, 18.5), (0.0, 18.5), (20.0, 18.5))
     mesh_size: float = 1.6
     post_mesh_size: float = 0.35
+    deck: str = "solid"                   # or "girders": beams (meshes.platform.build_girder_platform)
+    girder_section: dict = field(default_factory=dict)
 
     name = "pad"
 
@@ -75,6 +77,8 @@ class PadParams:
         check_pedestals(o, "pedestal_xy", self.pedestal_xy, self.pedestal_size, self.pedestal_wall_thickness, lo, hi)
         if self.deck_flange_thickness >= 0.5 * self.deck_thickness:
             raise InputError(f"{o}.deck_flange_thickness must be < deck_thickness/2")
+        if self.deck != "solid":        # the deck's kind and girders: the platform's own check
+            self.platform().check()
 
     def deck_bounds(self) -> tuple[np.ndarray, np.ndarray]:
         c = np.asarray(self.deck_center_xy, float)
@@ -98,7 +102,8 @@ class PadParams:
             square_holes=((0.0, float(self.layout.orbiter_axis_y), self.ssme_hole_half_size),),
             pedestals=tuple(self.pedestal_xy), pedestal_size=self.pedestal_size, pedestal_height=self.pedestal_height,
             pedestal_wall_thickness=self.pedestal_wall_thickness, mass=self.mlp_mass,
-            flange_thickness=self.deck_flange_thickness, mesh_size=self.mesh_size, post_mesh_size=self.post_mesh_size)
+            flange_thickness=self.deck_flange_thickness, mesh_size=self.mesh_size, post_mesh_size=self.post_mesh_size,
+            deck=self.deck, girder_section=dict(self.girder_section))
 
     def post_points(self) -> dict[str, np.ndarray]:
         """``{"pad_post_<side>_<k>": point}``: the booster hold-down points of the layout."""

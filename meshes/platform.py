@@ -52,9 +52,17 @@ class PlatformParams:
     flange_thickness: float = 0.05
     mesh_size: float = 2.0
     post_mesh_size: float = 0.5
+    deck: str = "solid"                   # "solid" (an equivalent box) or "girders" (beams, fem.beam)
+    girder_section: dict = field(default_factory=dict)   # deck = "girders": {shape, dims} (core.beam.standard_section)
 
     def check(self) -> None:
         o = f"PlatformParams({self.name})"
+        if self.deck not in ("solid", "girders"):
+            raise InputError(f"{o}.deck must be 'solid' or 'girders' (got {self.deck!r})")
+        if self.deck == "girders":
+            from liftoff.core.beam import standard_section
+
+            standard_section(self.girder_section, f"{o}.girder_section")
         require_positive(o, deck_thickness=self.deck_thickness, post_size=self.post_size,
                          pedestal_size=self.pedestal_size, pedestal_height=self.pedestal_height,
                          pedestal_wall_thickness=self.pedestal_wall_thickness, mass=self.mass,
@@ -97,6 +105,8 @@ def build_platform(p: PlatformParams, out_dir, deck_material_name: str | None = 
     if not isinstance(p, PlatformParams):
         raise InputError(f"build_platform expects PlatformParams, got {type(p).__name__}")
     p.check()
+    if p.deck == "girders":
+        return build_girder_platform(p, Path(out_dir))
     out_dir = Path(out_dir)
     lo, hi = p.deck_bounds()
     H, s, ps, n = p.deck_thickness, p.post_size, p.pedestal_size, p.name
@@ -137,5 +147,110 @@ def build_platform(p: PlatformParams, out_dir, deck_material_name: str | None = 
                                        vols[f"{n}_deck"], p.flange_thickness, H),
             f"{n}_posts": STEEL, f"{n}_pedestals": pedestal_material(ps, p.pedestal_wall_thickness)}
     geo = Geometry(n, str(out_dir / f"{n}.msh"), mats, patches, [], [], clamped, vols, n_nodes, areas)
+    geo.save(out_dir / f"{n}.json")
+    return geo
+
+
+def _crosses_hole(p: PlatformParams, a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether the deck segment a-b (x, y) passes through an exhaust hole."""
+    d = b - a
+    for hx, hy, r in p.holes:
+        s = np.clip(np.dot(np.array([hx, hy]) - a, d) / np.dot(d, d), 0.0, 1.0)
+        if np.hypot(*(a + s * d - np.array([hx, hy]))) < r:
+            return True
+    for hx, hy, h in p.square_holes:
+        pts = a + np.linspace(0.0, 1.0, 65)[:, None] * d
+        if np.any((np.abs(pts[:, 0] - hx) < h) & (np.abs(pts[:, 1] - hy) < h)):
+            return True
+    return False
+
+
+def girder_grid(p: PlatformParams) -> tuple[list, list]:
+    """The deck's girders as segments [(x0, y0), (x1, y1)] between consecutive grid points:
+    a girder along x through every post's and pedestal's y, and one along y through every
+    post's and pedestal's x, each spanning between the outermost crossing girders (no
+    overhangs: the deck beyond them is carried as their non-structural mass), less the
+    segments through an exhaust hole; (girders along x, girders along y). InputError if a post or
+    a pedestal is left without a girder."""
+    pts = [(float(v[0]), float(v[1])) for v in p.posts.values()] + [(float(q[0]), float(q[1])) for q in p.pedestals]
+    lines_x = sorted({round(y, 9) for _, y in pts})          # girders along x, at these y
+    lines_y = sorted({round(x, 9) for x, _ in pts})          # girders along y, at these x
+    xs, ys = lines_y, lines_x                                # girders end on the outermost crossing lines
+    along_x = [((x0, y), (x1, y)) for y in lines_x for x0, x1 in zip(xs[:-1], xs[1:])
+               if not _crosses_hole(p, np.array([x0, y]), np.array([x1, y]))]
+    along_y = [((x, y0), (x, y1)) for x in lines_y for y0, y1 in zip(ys[:-1], ys[1:])
+               if not _crosses_hole(p, np.array([x, y0]), np.array([x, y1]))]
+    ends = {e for seg in along_x + along_y for e in seg}
+    for what, named in (("post", {n: (v[0], v[1]) for n, v in p.posts.items()}),
+                        ("pedestal", {str(k): (q[0], q[1]) for k, q in enumerate(p.pedestals)})):
+        for n, (x, y) in named.items():
+            if (round(float(x), 9), round(float(y), 9)) not in ends:
+                raise InputError(f"PlatformParams({p.name}): the {what} {n} at ({x}, {y}) has no girder (every grid "
+                                 "line to it crosses an exhaust hole)")
+    return along_x, along_y
+
+
+def build_girder_platform(p: PlatformParams, out_dir: Path) -> Geometry:
+    """``deck = "girders"``: the deck as a grid of girders (beams of ``girder_section`` at
+    the deck's mid-depth; :func:`girder_grid`), the posts as square steel bars of
+    ``post_size`` from the grid up to their tops and the pedestals as hollow square steel
+    columns (``pedestal_size``, ``pedestal_wall_thickness``) from the grid down to the
+    ground, all beams (fem.beam) on the curve groups ``<name>_girders_x``,
+    ``<name>_girders_y``, ``<name>_posts``, ``<name>_pedestals``. Each post top is a physical
+    point, the post's patch (its one node, six DOFs); each pedestal base the physical point
+    ``<name>_pedestal_<k>_base``, clamped. All steel; the deck's mass beyond its posts' and
+    girders' steel (``mass`` less theirs) is carried by the girders as non-structural mass
+    per length (translational: no rotary inertia)."""
+    from liftoff.core.beam import box_section, rectangle, standard_section
+
+    from .spec import BeamGroup
+
+    lo, hi = p.deck_bounds()
+    zm = 0.5 * (lo[2] + hi[2])
+    zb = lo[2] - p.pedestal_height
+    n = p.name
+    along_x, along_y = girder_grid(p)
+    with _occ.gmsh_session(n):
+        def line(a, b):
+            return occ.addLine(occ.addPoint(*a), occ.addPoint(*b))
+
+        gx = [line((x0, y0, zm), (x1, y1, zm)) for (x0, y0), (x1, y1) in along_x]
+        gy = [line((x0, y0, zm), (x1, y1, zm)) for (x0, y0), (x1, y1) in along_y]
+        posts = {k: line((v[0], v[1], zm), tuple(float(c) for c in v)) for k, v in p.posts.items()}
+        peds = [line((x, y, zb), (x, y, zm)) for x, y in p.pedestals]
+        every = [(1, t) for t in gx + gy + list(posts.values()) + peds]
+        _, pieces = occ.fragment(every, [])
+        occ.synchronize()
+        new = {t: [c for d, c in kids if d == 1] for (_, t), kids in zip(every, pieces)}
+        for group, tags in ((f"{n}_girders_x", gx), (f"{n}_girders_y", gy), (f"{n}_posts", list(posts.values())),
+                            (f"{n}_pedestals", peds)):
+            if tags:                   # (a grid may have no girder along y, or along x)
+                _occ.add_physical(1, group, sorted({c for t in tags for c in new[t]}))
+        lengths = _occ.physical_measures(1)
+        patches, clamped = [], []
+        for name, v in p.posts.items():
+            _occ.add_physical(0, name, [_occ.point_at(v, 1e-6)])
+            patches.append(Patch(name, np.asarray(v, float)))
+        for k, (x, y) in enumerate(p.pedestals):
+            name = f"{n}_pedestal_{k + 1}_base"
+            _occ.add_physical(0, name, [_occ.point_at((x, y, zb), 1e-6)])
+            clamped.append(name)
+        n_nodes = _occ.mesh_and_write(out_dir / f"{n}.msh", p.mesh_size)
+    girder, _ = standard_section(p.girder_section, f"PlatformParams({n}).girder_section")
+    post = rectangle(p.post_size, p.post_size, STEEL.nu)
+    girder_length = lengths.get(f"{n}_girders_x", 0.0) + lengths.get(f"{n}_girders_y", 0.0)
+    steel = STEEL.rho * (post.A * lengths[f"{n}_posts"] + girder.A * girder_length)
+    if p.mass <= steel:
+        raise InputError(f"PlatformParams({n}).mass {p.mass:.0f} kg is less than its posts' and girders' steel, "
+                         f"{steel:.0f} kg (girder_section {p.girder_section})")
+    nsm = (p.mass - steel) / girder_length            # the deck's other mass, carried by its girders (kg/m)
+    beams = {g: BeamGroup(STEEL, girder, vref=v, nsm=nsm) for g, v in ((f"{n}_girders_x", (0.0, 1.0, 0.0)),
+                                                                     (f"{n}_girders_y", (1.0, 0.0, 0.0)))
+             if g in lengths}
+    beams[f"{n}_posts"] = BeamGroup(STEEL, post, vref=(1.0, 0.0, 0.0))
+    beams[f"{n}_pedestals"] = BeamGroup(STEEL, box_section(p.pedestal_size, p.pedestal_size, p.pedestal_wall_thickness),
+                                        vref=(1.0, 0.0, 0.0))
+    geo = Geometry(n, str(out_dir / f"{n}.msh"), {}, patches, [], [], clamped, {}, n_nodes, {},
+                   beams=beams, curve_lengths=lengths)
     geo.save(out_dir / f"{n}.json")
     return geo

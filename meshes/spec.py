@@ -34,7 +34,7 @@ slosh_modes, gravity}``), ``group_volumes``
 (CAD volume of each physical volume group, m^3, from ``gmsh.model.occ.getMass``),
 ``surface_areas`` (CAD area of each physical surface group, m^2) and ``mesh_nodes`` (node
 count of the written mesh); ``beams`` (absent = none; each ``{material, section, vref,
-offset, radial_offset, axis_point, axis_direction, rotary}``, :class:`BeamGroup`) and
+offset, radial_offset, axis_point, axis_direction, rotary, nsm}``, :class:`BeamGroup`) and
 ``curve_lengths`` (CAD length of each beam curve group, m).
 
 - ``beams``: physical CURVE group name -> :class:`BeamGroup`: the group's line elements are
@@ -303,7 +303,8 @@ class BeamGroup:
     depth), and the offset of the beam's axis from its nodes
     (Nastran's WA/WB): a global vector ``offset`` (m) plus ``radial_offset`` (m, away from
     that axis; a frame inside a wall has a negative one). ``rotary``: the sections' bending
-    rotary inertia in the consistent mass."""
+    rotary inertia in the consistent mass; ``nsm``: non-structural mass per length (kg/m,
+    translational only: equipment or a deck carried by a girder)."""
 
     material: Material
     section: object
@@ -313,6 +314,7 @@ class BeamGroup:
     axis_point: tuple = (0.0, 0.0, 0.0)
     axis_direction: tuple = (0.0, 0.0, 1.0)
     rotary: bool = True
+    nsm: float = 0.0
 
     def __post_init__(self) -> None:
         from liftoff.core.beam import Section
@@ -335,6 +337,9 @@ class BeamGroup:
         if not math.isfinite(self.radial_offset):
             raise InputError(f"beam group: radial_offset must be finite (got {self.radial_offset!r} m)")
         self.rotary = bool(self.rotary)
+        self.nsm = float(self.nsm)
+        if not (math.isfinite(self.nsm) and self.nsm >= 0):
+            raise InputError(f"beam group: nsm must be >= 0 kg/m (got {self.nsm!r})")
 
     def to_dict(self) -> dict:
         m, s = self.material, self.section
@@ -343,7 +348,7 @@ class BeamGroup:
                 "vref": self.vref if isinstance(self.vref, str) else list(self.vref),
                 "offset": list(self.offset), "radial_offset": self.radial_offset,
                 "axis_point": list(self.axis_point), "axis_direction": list(self.axis_direction),
-                "rotary": self.rotary}
+                "rotary": self.rotary, "nsm": self.nsm}
 
 
 def _vector(what: str, v, nonzero: bool = False) -> tuple:
@@ -432,7 +437,7 @@ class Geometry:
         structural = sum(m.rho * (self.shells[g] * self.surface_areas[g] if g in self.shells else self.group_volumes[g])
                          for g, m in self.volumes.items())
         liquid = sum(liq.density * self.group_volumes[g] for g, liq in self.liquids.items())
-        structural += sum(b.material.rho * b.section.A * self.curve_lengths[g] for g, b in self.beams.items())
+        structural += sum((b.material.rho * b.section.A + b.nsm) * self.curve_lengths[g] for g, b in self.beams.items())
         return structural + liquid + sum(s.mass for s in self.smeared_masses) + sum(p.mass for p in self.point_masses)
 
     # ---- JSON sidecar ----------------------------------------------------------------

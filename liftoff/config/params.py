@@ -78,6 +78,18 @@ def material(where: Where, name: str, spec: Any, extra: tuple[str, ...] = ()):
         raise where.wrap(exc) from None
 
 
+def beam_section(where: Where, spec: Any) -> dict:
+    """A beam section table ``{shape = "i", h = ..., ...}`` (liftoff.core.beam.standard_section:
+    tube, rectangle, box, i, t, hat; m) checked, errors worded at ``where``; the table."""
+    from liftoff.core.beam import standard_section
+
+    try:
+        standard_section(spec, "section")
+    except InputError as exc:
+        raise where.wrap(exc) from None
+    return dict(spec)
+
+
 def mesh_size_kw(mesh_size: float | None) -> dict:
     """``{"mesh_size": mesh_size}``, or nothing when it is None (the builder's default)."""
     return {} if mesh_size is None else {"mesh_size": mesh_size}

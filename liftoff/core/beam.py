@@ -99,10 +99,12 @@ def _rotary_mass(rhoI: float, L: float, phi: float) -> np.ndarray:
 
 
 def beam_element(x1, x2, E: float, G: float, section: Section, rho: float, vref=(0.0, 0.0, 1.0),
-                 rotary: bool = True) -> tuple[np.ndarray, np.ndarray]:
+                 rotary: bool = True, nsm: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """Global 12 x 12 stiffness and consistent mass of a straight beam from ``x1`` to ``x2``
     (module docstring): Timoshenko where the section has shear areas, Euler-Bernoulli
-    where it has none; ``rotary``: the bending rotary inertia rho I in the mass."""
+    where it has none; ``rotary``: the bending rotary inertia rho I in the mass; ``nsm``:
+    non-structural mass per length (kg/m, Nastran PBEAM's NSM), translational only (no
+    rotary or torsional inertia)."""
     x1, x2 = np.asarray(x1, float), np.asarray(x2, float)
     L, lam = _axes(x1, x2, vref)
     s = section
@@ -112,14 +114,15 @@ def beam_element(x1, x2, E: float, G: float, section: Section, rho: float, vref=
     m = np.zeros((12, 12))
     for a, b, val in ((0, 6, E * s.A / L), (3, 9, G * s.J / L)):
         k[np.ix_([a, b], [a, b])] = val * np.array([[1, -1], [-1, 1]])
-    m[np.ix_([0, 6], [0, 6])] = rho * s.A * L / 6 * np.array([[2, 1], [1, 2]])
+    mA = rho * s.A + nsm                             # translational mass per length (kg/m)
+    m[np.ix_([0, 6], [0, 6])] = mA * L / 6 * np.array([[2, 1], [1, 2]])
     m[np.ix_([3, 9], [3, 9])] = rho * (s.Iy + s.Iz) * L / 6 * np.array([[2, 1], [1, 2]])
     flip = np.diag([1, -1, 1, -1])                   # x-z plane: theta_y = -dw/dx
     xy, xz = [1, 5, 7, 11], [2, 4, 8, 10]
     k[np.ix_(xy, xy)] = bending_stiffness(E * s.Iz, L, phi_y)
     k[np.ix_(xz, xz)] = flip @ bending_stiffness(E * s.Iy, L, phi_z) @ flip
-    m[np.ix_(xy, xy)] = _translational_mass(rho * s.A, L, phi_y) + (_rotary_mass(rho * s.Iz, L, phi_y) if rotary else 0)
-    m[np.ix_(xz, xz)] = flip @ (_translational_mass(rho * s.A, L, phi_z)
+    m[np.ix_(xy, xy)] = _translational_mass(mA, L, phi_y) + (_rotary_mass(rho * s.Iz, L, phi_y) if rotary else 0)
+    m[np.ix_(xz, xz)] = flip @ (_translational_mass(mA, L, phi_z)
                                 + (_rotary_mass(rho * s.Iy, L, phi_z) if rotary else 0)) @ flip
     T = np.kron(np.eye(4), lam)
     return T.T @ k @ T, T.T @ m @ T
@@ -205,12 +208,29 @@ def hat_section(h: float, b: float, c: float, t: float) -> tuple[Section, float]
     return Section(A, Iy, Iz, t ** 3 * (b + 2 * h + 2 * c) / 3, 5 / 6 * t * (b + 2 * c), 2 * h * t), zc
 
 
+def box_section(b: float, h: float, t: float) -> Section:
+    """A thin-walled rectangular hollow section (a box girder, a square column): outer width
+    ``b`` (along y), depth ``h`` (along z), wall ``t`` (m), by its mid-line (bm = b - t,
+    hm = h - t; the walls' own t^3 terms dropped): A = 2 t (bm + hm), Iy = t hm^3/6 +
+    bm t hm^2/2, Iz likewise, J = 4 (bm hm)^2 t / (2 (bm + hm)) (Bredt-Batho, closed cell),
+    shear areas the walls parallel to each axis (2 hm t along z, 2 bm t along y)."""
+    for nm, v in (("b", b), ("h", h), ("t", t)):
+        if not v > 0:
+            raise InputError(f"box section: {nm} must be > 0 (got {v!r})")
+    if not 2 * t < min(b, h):
+        raise InputError(f"box section: the wall t = {t!r} m must be < half the smaller side ({min(b, h)!r} m)")
+    bm, hm = b - t, h - t
+    return Section(2 * t * (bm + hm), t * hm ** 3 / 6 + bm * t * hm ** 2 / 2, t * bm ** 3 / 6 + hm * t * bm ** 2 / 2,
+                   2 * t * bm ** 2 * hm ** 2 / (bm + hm), 2 * bm * t, 2 * hm * t)
+
+
 #: standard shapes by name: (section function, the distance (m) from the face the member
 #: sits on (a frame's or stringer's base on the skin) to its centroid, from the dimensions
 #: and the function's result)
 SHAPES = {
     "tube": (tube, lambda d, out: d["r_out"]),
     "rectangle": (rectangle, lambda d, out: 0.5 * d["h"]),
+    "box": (box_section, lambda d, out: 0.5 * d["h"]),
     "i": (i_section, lambda d, out: 0.5 * (d["h"] + d["tf"])),
     "t": (t_section, lambda d, out: out[1]),
     "hat": (hat_section, lambda d, out: 0.5 * d["t"] + out[1]),
@@ -245,5 +265,5 @@ def standard_section(spec: dict, where: str = "section") -> tuple[Section, float
     return (out[0] if isinstance(out, tuple) else out), float(base(dims, out))
 
 
-__all__ = ["Section", "SHAPES", "standard_section", "beam_element", "bending_stiffness", "tube", "rectangle", "i_section", "t_section",
+__all__ = ["Section", "SHAPES", "standard_section", "box_section", "beam_element", "bending_stiffness", "tube", "rectangle", "i_section", "t_section",
            "hat_section"]

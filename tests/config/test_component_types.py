@@ -128,3 +128,20 @@ def test_tank_stage_frames_and_stringers_from_toml():
     bad["model"]["component"]["spare"]["params"]["frames"] = [4.0, 40.0]
     with pytest.raises(InputError, match=r"frames: height 40.0 m is not on the cylindrical wall"):
         parse_scenario(bad, "s.toml")
+
+
+def test_launch_table_girder_deck_from_toml():
+    """``deck = "girders"`` with a girder section on the launch table (and any platform):
+    the builder's parameters carry them; a wrong section or deck kind is named by its key."""
+    d = tomllib.loads(default_text())
+    d["model"]["pad"]["params"] = {"deck": "girders",
+                                   "girder_section": {"shape": "i", "h": 7.0, "b": 3.0, "tw": 0.03, "tf": 0.05}}
+    b = parse_scenario(d, "s.toml").cases[0].model.components["pad"].builder
+    assert b.deck == "girders" and b.platform().girder_section["h"] == 7.0
+    bad = copy.deepcopy(d)
+    bad["model"]["pad"]["params"]["girder_section"] = {"shape": "i", "h": 7.0}
+    with pytest.raises(InputError, match=r"s\.toml: model\.pad\.params\.girder_section: .*missing b, tw, tf"):
+        parse_scenario(bad, "s.toml")
+    bad["model"]["pad"]["params"] = {"deck": "trusses"}
+    with pytest.raises(InputError, match=r"deck must be 'solid' or 'girders'"):
+        parse_scenario(bad, "s.toml")

@@ -375,3 +375,49 @@ def test_stringer_stiffened_tube_against_beam_theory(tmp_path):
         out[with_str] = x[model.dof_index("tip:Tx")] / want
     print(f"tip deflection / beam theory: bare {out[False]:.4f}, with stringers {out[True]:.4f}")
     assert out[False] == pytest.approx(1.0, abs=0.02) and out[True] == pytest.approx(1.0, abs=0.02)
+
+
+def test_girder_platform_against_slope_deflection(tmp_path):
+    """meshes.platform with ``deck = "girders"``: the deck as a grid of girders through its
+    posts and pedestals, posts and pedestals as beams. A platform with two pedestals 16 m
+    apart and one post between them is a fixed-base portal whose girder carries the post's
+    load at midspan; with the builder's sections made Euler-Bernoulli and nearly axially
+    rigid (A = 100 m^2), slope-deflection gives the joint rotation
+    theta = P L / (8 (4 E Ic/h + 2 E Ig/L)) and the post top's drop P L^3/(192 E Ig) +
+    theta L/4 (fixed-fixed girder plus the sagging end rotations), plus the columns' and
+    the post's axial shortening; 1e-4 for what it leaves out, the girder's axial stretch
+    letting the column tops sway (measured 1.4e-5). Ig is the I girder's
+    strong axis (Iy 20x its Iz): a girder turned on its side would be 20x softer. Mass:
+    the platform's ``mass`` plus its pedestals' steel, exactly."""
+    from dataclasses import replace
+
+    from liftoff.core.beam import box_section, i_section
+    from liftoff.meshes.pad import STEEL as PAD_STEEL
+    from liftoff.meshes.platform import PlatformParams, build_platform
+
+    P, girder = 1e6, {"shape": "i", "h": 0.8, "b": 0.4, "tw": 0.02, "tf": 0.03}
+    p = PlatformParams(name="t", deck_size=(20.0, 4.0), deck_thickness=1.0, deck_top_z=0.0, posts={"p": (0.0, 0.0, 1.0)},
+                       pedestals=((-8.0, 0.0), (8.0, 0.0)), pedestal_size=1.0, pedestal_height=4.0,
+                       pedestal_wall_thickness=0.05, post_size=0.5, mass=2.0e5, deck="girders",
+                       girder_section=girder, mesh_size=0.5)
+    geo = build_platform(p, tmp_path)
+    ped = box_section(1.0, 1.0, 0.05)
+    assert geo.nominal_mass() == pytest.approx(2.0e5 + PAD_STEEL.rho * ped.A * 2 * 4.5, rel=1e-12)
+    assert set(geo.beams) == {"t_girders_x", "t_posts", "t_pedestals"}      # (one line: no girder along y)
+    assert geo.curve_lengths["t_girders_x"] == pytest.approx(16.0)
+    stiff = {g: replace(b, section=Section(100.0, b.section.Iy, b.section.Iz, b.section.J)) for g, b in geo.beams.items()}
+    model = build_model(replace(geo, beams=stiff))
+    K, _ = model.matrices()
+    f = np.zeros(model.n_dof)
+    f[model.dof_index("p:Tz")] = -P
+    drop = -sla.spsolve(K.tocsc(), f)[model.dof_index("p:Tz")]
+    Ig, Ic, L, h = i_section(0.8, 0.4, 0.02, 0.03).Iy, ped.Iy, 16.0, 4.5
+    theta = P * L / (8 * (4 * PAD_STEEL.E * Ic / h + 2 * PAD_STEEL.E * Ig / L))
+    want = P * L ** 3 / (192 * PAD_STEEL.E * Ig) + theta * L / 4 + P / 2 * h / (PAD_STEEL.E * 100.0) \
+        + P * 1.5 / (PAD_STEEL.E * 100.0)                  # + the columns' and the post's axial shortening
+    print(f"girder platform: post drop {drop:.6e} m, slope-deflection {want:.6e} m")
+    assert drop == pytest.approx(want, rel=1e-4)
+    with pytest.raises(InputError, match=r"girder_section: shape 'i' takes h, b, tw, tf"):
+        replace(p, girder_section={"shape": "i", "h": 0.8}).check()
+    with pytest.raises(InputError, match=r"is less than its posts' and girders' steel"):
+        build_platform(replace(p, mass=5.0e3), tmp_path / "light")

@@ -3,10 +3,12 @@ hold-down posts whose tops are named points (meshes.platform.PlatformParams). Pa
 ``posts = {point = [x, y, z]}`` (post tops: where the vehicle's hold-down points stand),
 ``holes = [[x, y, radius]]``, ``square_holes = [[x, y, half side]]``, ``pedestals = [[x, y]]``, ``deck_size``, ``deck_center_xy``,
 ``deck_thickness``, ``deck_top_z``, ``post_size``, ``pedestal_size``, ``pedestal_height``,
-``mass`` (deck and posts, kg), ``flange_thickness``."""
+``mass`` (deck and posts, kg), ``flange_thickness``; ``deck = "girders"`` with
+``girder_section = {shape = "i", h = ..., b = ..., tw = ..., tf = ...}`` models the deck as a
+grid of girders and the posts and pedestals as beams (fem.beam)."""
 from __future__ import annotations
 
-from ..params import builder, mesh_size_kw
+from ..params import beam_section, builder, mesh_size_kw
 from ..values import Where, named, xyz
 from . import ComponentType, Context
 
@@ -22,9 +24,10 @@ def read(ctx: Context, where: Where, params: dict):
         if not isinstance(holes, list):
             raise (where / key).error(f"expected an array of {what} (m)")
         fixed[key] = tuple(xyz(where / key / i, h) for i, h in enumerate(holes))
+    if "girder_section" in params:
+        fixed["girder_section"] = beam_section(where / "girder_section", params["girder_section"])
     size = mesh_size_kw(ctx.mesh_size)
-    return builder(where, PlatformParams, {k: v for k, v in params.items() if k not in ("posts", "holes", "square_holes")},
-                   fixed, size)
+    return builder(where, PlatformParams, {k: v for k, v in params.items() if k not in fixed}, fixed, size)
 
 
 TYPE = ComponentType("platform", read, "liftoff.meshes.platform:build_platform", "pad",

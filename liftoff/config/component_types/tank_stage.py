@@ -14,9 +14,7 @@ the cylindrical wall), ``frame_section = {shape = "t", h = ..., b = ..., tw = ..
 ``stringer_azimuth``, deg), ``stringer_section``, ``stringer_material`` likewise."""
 from __future__ import annotations
 
-from liftoff.core.errors import InputError
-
-from ..params import builder, mesh_size_kw
+from ..params import beam_section, builder, mesh_size_kw
 from ..params import material as read_material
 from ..values import Where, array_of_tables, named, xyz
 from . import ComponentType, Context
@@ -43,15 +41,8 @@ def read(ctx: Context, where: Where, params: dict):
         read_material(where / "material", f"{ctx.name}-wall", params["material"])[0]
     members = {}
     for kind in ("frame", "stringer"):
-        section = params.get(f"{kind}_section", {})
-        if f"{kind}_section" in params:
-            from liftoff.core.beam import standard_section
-
-            try:
-                standard_section(section, f"{kind}_section")
-            except InputError as exc:
-                raise (where / f"{kind}_section").wrap(exc) from None
-        members[f"{kind}_section"] = dict(section)
+        key = f"{kind}_section"
+        members[key] = beam_section(where / key, params[key]) if key in params else {}
         members[f"{kind}_material"] = None if f"{kind}_material" not in params else \
             read_material(where / f"{kind}_material", f"{ctx.name}-{kind}s", params[f"{kind}_material"])[0]
     rest = {k: v for k, v in params.items() if k not in own}
