@@ -96,6 +96,7 @@ class FEModel:
     cell_type: str                 # "tetra", "tetra10", "triangle6" (shells) or "triangle" (P1 + shells)
     T: sp.csr_matrix               # field map (3 n_nodes x n_dof): nodal translations = T x
     clamped: tuple[str, ...] = ()
+    line_cells: np.ndarray | None = None   # (k, 2) beams beside shells or solids (drawn as lines), or None
     liquid: object = None          # fem.liquid.LiquidOperator of the geometry's liquids (coupled), or None
     liquid_volume_rows: dict = field(default_factory=dict)   # liquid group -> cavity volume-change row (m^3/m)
     slosh: object = None           # fem.slosh.SloshPendulums (convective = "slosh"): DOFs after the model's n_dof
@@ -170,7 +171,8 @@ class FEModel:
             T = _pad_columns(T, self.slosh.n)
         return dict(K=K, M=M, dof_labels=self.dof_labels, label_dofs=self.label_dofs,
                     points=self.points, point_coords=self.point_coords.copy(), nodes=self.nodes.copy(),
-                    cells=self.cells.copy(), cell_type=self.cell_type, field_map=T)
+                    cells=self.cells.copy(), cell_type=self.cell_type, field_map=T,
+                    line_cells=None if self.line_cells is None else self.line_cells.copy())
 
     def pad_dofs(self, x: np.ndarray) -> np.ndarray:
         """A vector (n_dof,) or rows (k, n_dof) over the model's DOFs extended with zeros over
@@ -551,7 +553,7 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
         from .prestress import relative_to_reference
         K = relative_to_reference(K, dof_rb(dof_coords - ref_coords[0], dof_comp), n_keep + np.arange(6))
     dof_node = np.concatenate([dof_node, -np.ones(6 * len(patches), dtype=np.int64)])
-    cells, cell_type = _output_cells(part_cells, nodes.xyz)
+    cells, cell_type, line_cells = _output_cells(part_cells, nodes.xyz)
     liquid, rows, slosh = None, {}, None
     if liquid_tm is not None:
         liquid, rows, slosh = _liquid(comm, geometry, liquid_tm, parts, nodes.xyz, T, M, dof_coords, dof_comp,
@@ -559,7 +561,7 @@ def build_model(geometry, degree: int = 1, comm: MPI.Comm = MPI.COMM_WORLD,
     return FEModel(name=name, comm=comm, parts=tuple(parts), degree=degree, K=K, M=M, points=tuple(pnames),
                    point_coords=ref_coords, dof_coords=dof_coords, dof_comp=dof_comp, dof_node=dof_node,
                    nodes=nodes.xyz, cells=cells, cell_type=cell_type, T=T, clamped=clamped, liquid=liquid,
-                   liquid_volume_rows=rows, slosh=slosh)
+                   liquid_volume_rows=rows, slosh=slosh, line_cells=line_cells)
 
 
 def _pressure_stiffened(parts: list[Part], geometry) -> bool:
@@ -709,22 +711,23 @@ def _boundary_faces(tets: np.ndarray, xyz: np.ndarray) -> np.ndarray:
     return faces[count[inv.ravel()] == 1]
 
 
-def _output_cells(cells: dict, xyz: np.ndarray) -> tuple[np.ndarray, str]:
-    """(cells, meshio cell type) for pictures and VTU from {part kind: cells}: the solid's
-    tets, the shell's triangle6, or, for both, the solid's exterior faces (outward) with the
-    shell triangles (split into four 3-node triangles next to P1 solids); a model of beams
-    alone: its 2-node lines. Beams beside shells or solids are not drawn (one cell type per
-    model: meshio and the pictures take one block)."""
+def _output_cells(cells: dict, xyz: np.ndarray) -> tuple[np.ndarray, str, np.ndarray | None]:
+    """(cells, meshio cell type, line cells) for pictures and VTU from {part kind: cells}:
+    the solid's tets, the shell's triangle6, or, for both, the solid's exterior faces
+    (outward) with the shell triangles (split into four 3-node triangles next to P1
+    solids); a model of beams alone: its 2-node lines as the cells; beams beside shells or
+    solids: their lines as the third item (a second block), else None."""
+    lines = None
     if "beam" in cells:
         cells = dict(cells)
         lines = cells.pop("beam")
         if not cells:
-            return lines, "line"
+            return lines, "line", None
     if len(cells) == 1:
         kind, c = next(iter(cells.items()))
-        return c, {4: "tetra", 10: "tetra10", 6: "triangle6"}[c.shape[1]]
+        return c, {4: "tetra", 10: "tetra10", 6: "triangle6"}[c.shape[1]], lines
     faces, shells = _boundary_faces(cells["solid"], xyz), cells["shell"]
     if faces.shape[1] == 6:
-        return np.vstack([faces, shells]), "triangle6"
+        return np.vstack([faces, shells]), "triangle6", lines
     split = np.vstack([shells[:, s] for s in ((0, 3, 5), (3, 1, 4), (5, 4, 2), (3, 4, 5))])
-    return np.vstack([faces, split]), "triangle"
+    return np.vstack([faces, split]), "triangle", lines

@@ -47,4 +47,14 @@ def write_modes_vtu(model, modes, path) -> Path | None:
     fields = {}
     for j, f in enumerate(modes.freq_hz):
         fields[f"mode_{j + 1:03d}_{f:.4g}Hz"] = (T @ modes.shapes[:, j]).reshape(-1, 3)
-    return write_vtu(path, model.nodes, model.cells, model.cell_type, fields)
+    return write_vtu(path, model.nodes, cell_blocks(model), None, fields)
+
+
+def cell_blocks(mesh) -> list:
+    """[(meshio cell type, cells)] of an FEModel or reduction.Component: its cells, then its
+    beams' lines where it has both (``line_cells``)."""
+    blocks = [(mesh.cell_type, mesh.cells)]
+    lines = getattr(mesh, "line_cells", None)
+    if lines is not None and len(lines):
+        blocks.append(("line", lines))
+    return blocks

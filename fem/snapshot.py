@@ -69,6 +69,17 @@ class Part:
         return pyvista.UnstructuredGrid(conn, types, self.nodes)
 
 
+def mesh_parts(mesh, displacement) -> list[Part]:
+    """The picture parts of a mesh-bearing object (an FEModel or a reduction.Component:
+    ``nodes``, ``cells``, ``cell_type`` and ``line_cells``, the beams beside its cells, or
+    None) deformed by ``displacement`` (n_nodes, 3)."""
+    out = [Part(mesh.nodes, mesh.cells, mesh.cell_type, displacement)]
+    lines = getattr(mesh, "line_cells", None)
+    if lines is not None and len(lines):
+        out.append(Part(mesh.nodes, lines, "line", displacement))
+    return out
+
+
 def auto_scale(parts: list[Part], fraction: float = 0.1) -> float:
     """Scale factor that makes the largest displacement ``fraction`` of the largest extent."""
     size = max(float(np.ptp(np.vstack([p.nodes for p in parts]), axis=0).max()), 1e-9)
@@ -189,7 +200,7 @@ def snapshot_mode(path, model, modes, j: int, scale: float | None = None) -> Pat
     if model.comm.rank != 0:
         return None
     title = f"{model.name}: mode {j + 1}, {modes.freq_hz[j]:.4g} Hz"
-    return snapshot_png(path, Part(model.nodes, model.cells, model.cell_type, u), title, scale)
+    return snapshot_png(path, mesh_parts(model, u), title, scale)
 
 
 def _render_in_subprocess(path: Path, parts: list[Part], options: dict) -> Path:

@@ -28,6 +28,7 @@ point_coords        (n_p, 3)         their coordinates (m)
 nodes               (n_nodes, 3)     mesh node coordinates (m)            [optional]
 cells               (n_cells, k)     cell connectivity into nodes         [optional]
 cell_type           str              meshio cell type, e.g. "tetra"       [optional]
+line_cells          (n_lines, 2)     beams beside the cells, into nodes   [optional]
 field_map/*         CSR arrays       (3 n_nodes, n) DOF vector -> nodal u [optional]
 liquid_*            CSR and arrays   hydroelastic liquid (reduction.liquid):  [optional]
                                      H, G, volume_rows (CSR), pressure_points,
@@ -69,6 +70,7 @@ class Component:
     cells: np.ndarray | None = None
     cell_type: str = ""
     field_map: sp.csr_matrix | None = None
+    line_cells: np.ndarray | None = None   # (k, 2) beams beside ``cells`` (drawn as lines), or None
     liquid: object = None          # reduction.liquid.LiquidMass: the added mass of the liquids, or None
     slosh: object = None           # reduction.slosh.SloshDOFs: the liquids' slosh pendulums, or None
 
@@ -155,6 +157,8 @@ def save_component(c: Component, path) -> Path:
     if c.cells is not None:
         data["cells"] = np.asarray(c.cells, np.int64)
         data["cell_type"] = np.array(c.cell_type)
+    if c.line_cells is not None:
+        data["line_cells"] = np.asarray(c.line_cells, np.int64)
     if c.field_map is not None:
         data["field_map"] = _csr_record(c.field_map)
     if c.liquid is not None:
@@ -178,7 +182,7 @@ def load_component(path) -> Component:
             nodes=z.get("nodes"), cells=z.get("cells"),
             cell_type=str(z["cell_type"]) if "cell_type" in z else "",
             field_map=_csr_from(z["field_map"]) if "field_map" in z else None,
-            liquid=LiquidMass.from_record(z), slosh=SloshDOFs.from_record(z))
+            line_cells=z.get("line_cells"), liquid=LiquidMass.from_record(z), slosh=SloshDOFs.from_record(z))
     except InputError:
         raise
     except Exception as exc:

@@ -193,7 +193,7 @@ def frame_steps(result, n: int) -> np.ndarray:
 
 def _fields(models, result, i: int) -> list:
     """fem.snapshot.Part of the barge and the cargo at step i, elastic part (rigid-body motion removed)."""
-    from liftoff.fem.snapshot import Part
+    from liftoff.fem.snapshot import mesh_parts
     from liftoff.reduction import field_displacement
 
     q = result.recovered["modal_q_a"][i].copy()
@@ -204,7 +204,7 @@ def _fields(models, result, i: int) -> list:
         if comp.field_map is None or comp.nodes is None:
             continue
         u = field_displacement(models.barge_asm, models.barge_modes, name, comp, q)
-        out.append(Part(comp.nodes, comp.cells, comp.cell_type, u.reshape(-1, 3)))
+        out += mesh_parts(comp, u.reshape(-1, 3))
     return out
 
 

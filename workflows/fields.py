@@ -64,8 +64,13 @@ def merged_mesh(comps) -> tuple[np.ndarray, list, list]:
     numbering the blocks in order."""
     offsets = np.cumsum([0] + [c.nodes.shape[0] for c in comps])
     nodes = np.vstack([c.nodes for c in comps])
-    blocks = [(c.cell_type, np.asarray(c.cells) + off) for c, off in zip(comps, offsets)]
-    part_ids = [np.full(len(c.cells), k, dtype=np.int32) for k, c in enumerate(comps)]
+    from liftoff.fem.output import cell_blocks
+
+    blocks, part_ids = [], []
+    for k, (c, off) in enumerate(zip(comps, offsets)):
+        for kind, cells in cell_blocks(c):             # (its cells, then its beams' lines)
+            blocks.append((kind, np.asarray(cells) + off))
+            part_ids.append(np.full(len(cells), k, dtype=np.int32))
     return nodes, blocks, part_ids
 
 
@@ -129,13 +134,13 @@ def write_pvd(stack, result, out: Path, case: str, n_frames: int = 48) -> list[P
 def write_gif(stack, result, out: Path, case: str, n_frames: int = 48) -> Path | None:
     """animation_<case>.gif: the elastic deformation of stack and pad over the run (one
     frame per step of :func:`frame_steps`), one displacement scale for all frames."""
-    from liftoff.fem.snapshot import Part, animation_gif
+    from liftoff.fem.snapshot import animation_gif, mesh_parts
 
     ff = FieldFrames(stack, result)
     if not ff.parts:
         return None
     steps = frame_steps(result.time.size, n_frames)
-    frames = [[Part(p[1], p[2], p[3], u) for p, u in zip(ff.parts, ff.at(i))] for i in steps]
+    frames = [[q for p, u in zip(ff.parts, ff.at(i)) for q in mesh_parts(p[4][2], u)] for i in steps]
     titles = [f"{case}: t = {result.time[i]:.2f} s" for i in steps]
     return animation_gif(out / f"animation_{case}.gif", frames, titles, fraction=0.03, note="elastic part",
                          azimuth=35, elevation=12)

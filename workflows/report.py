@@ -375,9 +375,9 @@ def snapshot_times(result, cp) -> dict[str, int]:
 
 
 def deformed_fields(stack, result, i: int) -> list:
-    """One fem.snapshot.Part per component at step i, elastic part of the vehicle only (its
+    """fem.snapshot.Parts of each component at step i (its cells; its beams as lines), elastic part of the vehicle only (its
     rigid-body motion removed, so the picture stays on the pad)."""
-    from liftoff.fem.snapshot import Part
+    from liftoff.fem.snapshot import mesh_parts
     from liftoff.reduction import field_displacement
 
     out = []
@@ -393,7 +393,7 @@ def deformed_fields(stack, result, i: int) -> list:
             u = field_displacement(stack.pad_asm, stack.pad_modes, name, comp, qb)
         else:
             u = field_displacement(stack.vehicle_asm, stack.vehicle_modes, name, comp, qa)
-        out.append(Part(comp.nodes, comp.cells, comp.cell_type, u.reshape(-1, 3)))
+        out += mesh_parts(comp, u.reshape(-1, 3))
     return out
 
 

@@ -421,3 +421,28 @@ def test_girder_platform_against_slope_deflection(tmp_path):
         replace(p, girder_section={"shape": "i", "h": 0.8}).check()
     with pytest.raises(InputError, match=r"is less than its posts' and girders' steel"):
         build_platform(replace(p, mass=5.0e3), tmp_path / "light")
+
+
+def test_beams_beside_shells_are_written_and_drawn(tmp_path):
+    """A shell wall with beams keeps its shells as the cells and its beams as a second block
+    of lines: in the FE model, the exported Component (saved and loaded), the VTU (two
+    blocks, read back by meshio) and the pictures (one part each)."""
+    import meshio
+
+    from liftoff.fem import write_modes_vtu
+    from liftoff.fem.snapshot import mesh_parts, snapshot_mode
+    from liftoff.reduction.component import Component, load_component, save_component
+
+    msh = _stringer_tube(tmp_path / "s.msh", 4, 1.0, 4.0, 0.5)
+    model = build_model(Geometry("s", msh, {"wall": STEEL}, shells={"wall": 0.004}, clamped=["root"],
+                                 beams={"stringers": BeamGroup(STEEL, rectangle(0.02, 0.1), vref="tangential",
+                                                               radial_offset=-0.052)}))
+    assert model.cell_type == "triangle6" and model.line_cells.shape[1] == 2
+    assert np.allclose(model.nodes[model.line_cells][:, :, 2].max(), 4.0)              # along the wall
+    comp = load_component(save_component(Component(name="s", **model.component_fields()), tmp_path / "s.npz"))
+    assert np.array_equal(comp.line_cells, model.line_cells)
+    modes = eigenmodes(model, n_modes=2)
+    mesh = meshio.read(write_modes_vtu(model, modes, tmp_path / "s.vtu"))
+    assert [b.type for b in mesh.cells] == ["triangle6", "line"] and len(mesh.cells[1].data) == len(model.line_cells)
+    assert [p.cell_type for p in mesh_parts(comp, np.zeros((len(comp.nodes), 3)))] == ["triangle6", "line"]
+    assert snapshot_mode(tmp_path / "s.png", model, modes, 0).stat().st_size > 0
