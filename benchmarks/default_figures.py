@@ -31,6 +31,7 @@ BENCH_JSON = FIGURES / "bench_workflow.json"       # benchmarks/bench_workflow.p
 CB_BENCH_JSON = FIGURES / "bench_cb_default.json"  # benchmarks/bench_cb_default.py --json (machine-dependent)
 SLOSH_JSON = FIGURES / "slosh_default.json"        # benchmarks/slosh_default.py
 SLOSH_COMPARE_JSON = FIGURES / "slosh_compare.json"  # benchmarks/slosh_compare.py
+BOOSTER_GRAIN_JSON = FIGURES / "booster_grain.json"  # benchmarks/booster_grain_compare.py
 EXAMPLE_JSONS = {n: FIGURES / f"{n}.json" for n in ("single_stick", "saturn_v")}   # benchmarks/example_figures.py
 DOCS = (ROOT / "README.md", ROOT / "docs" / "workflow.md")
 #: figures agree when within this relative difference (of the larger of the two or, inside a
@@ -171,7 +172,8 @@ def _mn(x: float) -> str:
 def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
                   mesh: dict | None = None, bench: dict | None = None,
                   examples: dict | None = None, cb_bench: dict | None = None,
-                  slosh: dict | None = None, slosh_compare: dict | None = None) -> dict[str, str]:
+                  slosh: dict | None = None, slosh_compare: dict | None = None,
+                  booster_grain: dict | None = None) -> dict[str, str]:
     """{block name: markdown} from the figures (and the convergence, twang and mesh studies,
     the workflow benchmark and the launcher examples' figures {name: figures}, if any)."""
     tw, twn = fig["twang"]["nominal"], fig["twang"]
@@ -245,6 +247,8 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
         blocks["slosh-default"] = render_slosh(slosh)
     if slosh_compare:
         blocks["slosh-compare"] = render_slosh_compare(slosh_compare)
+    if booster_grain and booster_grain.get("solid") and booster_grain.get("grain"):
+        blocks["booster-grain"] = render_booster_grain(booster_grain)
     if examples:
         import runpy
 
@@ -330,6 +334,35 @@ def render_slosh_compare(fig: dict) -> str:
     row("first slosh mode (Hz): " + ", ".join(s["liquid"] for s in fig.get("slosh", {}).get("slosh", [])),
         lambda r: ", ".join(f"{s['hz']:.3f}" for s in r["slosh"]) or "-")
     row("peak slosh force (kN)", lambda r: "-" if r["peak_slosh_force_n"] is None else f"{r['peak_slosh_force_n'] / 1e3:.1f}")
+    return "\n".join(rows) + "\n"
+
+
+def render_booster_grain(fig: dict) -> str:
+    """The default run with thickened solid boosters against case + grain boosters at each
+    Craig-Bampton cut (benchmarks/booster_grain_compare.py)."""
+    cols = [("thickened solid (default)", fig["solid"])] + [
+        (f"case + grain, CB to {k} Hz", v) for k, v in fig["grain"].items()]
+    rows = ["| boosters | " + " | ".join(c for c, _ in cols) + " |", "|---" * (len(cols) + 1) + "|"]
+
+    def row(label, fn):
+        rows.append(f"| {label} | " + " | ".join(fn(v) for _, v in cols) + " |")
+
+    def sec(x):
+        return "-" if x is None else f"{x:.0f}"
+
+    row("booster FE DOFs; fixed-interface modes (below f_max Hz)",
+        lambda v: f"{v['booster_fe_dofs']}; {v['booster_cb_modes']} ({v['booster_f_max_hz']:g})")
+    row("booster FE, CB stage times, cold (s, this machine)", lambda v: f"{sec(v['booster_fe_s'])}, {sec(v['booster_cb_s'])}")
+    row("vehicle system modes; mass (t)", lambda v: f"{v['vehicle_modes']}; {v['vehicle_mass_t']:.1f}")
+    row("first four elastic vehicle modes (Hz)", lambda v: ", ".join(f"{f:.3f}" for f in v["first_elastic_hz"]))
+    row("twang, pad frame: peak (m) at t (s); relative to the c.g. (m)",
+        lambda v: f"{v['twang']['peak_m']:.3f} at {v['twang']['t_peak_s']:.2f}; {v['twang']['rel_cg_peak_m']:.3f}")
+    row("twang at hold-down release (m)", lambda v: f"{v['twang']['at_ignition_m']:.3f}")
+    row("peak post compression (MN)", lambda v: f"{v['peak_post_compression_n'] / 1e6:.2f}")
+    base = fig["solid"]["attach_n"]
+    for item in sorted(base, key=lambda k: -abs(base[k]))[:5]:
+        row(f"{item} (MN)", lambda v, item=item: f"{v['attach_n'][item] / 1e6:.2f}" if item in v["attach_n"] else "-")
+    row("steps; run wall time (s)", lambda v: f"{v['steps']}; {v['wall_s']:.0f}")
     return "\n".join(rows) + "\n"
 
 
@@ -422,7 +455,8 @@ def studies() -> tuple[dict | None, ...]:
     return out + ({n: json.loads(p.read_text()) for n, p in EXAMPLE_JSONS.items() if p.is_file()},
                   json.loads(CB_BENCH_JSON.read_text()) if CB_BENCH_JSON.is_file() else None,
                   json.loads(SLOSH_JSON.read_text()) if SLOSH_JSON.is_file() else None,
-                  json.loads(SLOSH_COMPARE_JSON.read_text()) if SLOSH_COMPARE_JSON.is_file() else None)
+                  json.loads(SLOSH_COMPARE_JSON.read_text()) if SLOSH_COMPARE_JSON.is_file() else None,
+                  json.loads(BOOSTER_GRAIN_JSON.read_text()) if BOOSTER_GRAIN_JSON.is_file() else None)
 
 
 # ------------------------------------------------------------------ comparing

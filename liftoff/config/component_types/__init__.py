@@ -24,7 +24,7 @@ from liftoff.core.errors import InputError
 
 #: the types shipped with liftoff: module names of this package, each with a ``TYPE``
 BUILTIN = ("shuttle_core", "shuttle_booster", "shuttle_orbiter", "launch_table", "tank_stage", "barrel", "platform",
-           "solid_motor", "beam", "thrust_structure", "geometry", "barge_hull", "barge_cargo", "dock", "rigid_mass",
+           "solid_motor", "beam", "strut", "thrust_structure", "geometry", "barge_hull", "barge_cargo", "dock", "rigid_mass",
            "rigid_ground")
 #: the type of a component imported from a Nastran Craig-Bampton model (no builder)
 NASTRAN = "nastran"

@@ -16,7 +16,7 @@ def read(ctx: Context, where: Where, params: dict):
     if isinstance(params, dict) and "girder_section" in params:
         fixed["girder_section"] = beam_section(where / "girder_section", params["girder_section"])
     size = mesh_size_kw(ctx.mesh_size)
-    rest = {k: v for k, v in params.items() if k not in fixed} if isinstance(params, dict) else params
+    rest = {k: v for k, v in params.items() if k != "girder_section"} if isinstance(params, dict) else params
     return builder(where, PadParams, rest, fixed, size)
 
 

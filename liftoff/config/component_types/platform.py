@@ -27,7 +27,8 @@ def read(ctx: Context, where: Where, params: dict):
     if "girder_section" in params:
         fixed["girder_section"] = beam_section(where / "girder_section", params["girder_section"])
     size = mesh_size_kw(ctx.mesh_size)
-    return builder(where, PlatformParams, {k: v for k, v in params.items() if k not in fixed}, fixed, size)
+    own = ("posts", "holes", "square_holes", "girder_section")
+    return builder(where, PlatformParams, {k: v for k, v in params.items() if k not in own}, fixed, size)
 
 
 TYPE = ComponentType("platform", read, "liftoff.meshes.platform:build_platform", "pad",

@@ -1,0 +1,94 @@
+"""A component that is one straight member between two named points (``type = "strut"``):
+an attach strut, a thrust beam, a truss member joining two other components, as the
+3-D Timoshenko beams of liftoff.core.beam (numpy only; reduced by the CB stage like any
+component, its two end points its boundary).
+
+``ends = {name = [x, y, z], other = [x, y, z]}`` (m): the two end points, named as the
+joints the strut shares with the components it links (each end's six DOFs are the joint's);
+``section``: a liftoff.core.beam.Section or a standard shape's table (``{shape = "tube",
+r_out = ..., t = ...}``, liftoff.core.beam.standard_section); material ``E`` (Pa), ``nu``,
+``rho`` (kg/m^3); ``elements`` along it; ``vref``: the section's orientation vector (local
+y towards it; default: whichever global axis is most normal to the strut). A pinned end (a
+clevis) is not modelled: both ends take moments. SI units.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from liftoff.core.beam import Section, beam_element, standard_section
+from liftoff.core.errors import InputError
+from liftoff.core.labels import COMPONENTS
+
+from .component import Component
+from .models import assemble_frame
+
+
+@dataclass
+class Strut:
+    """One straight member (module docstring); lengths in m, modulus in Pa, density kg/m^3."""
+
+    name: str = "strut"
+    ends: dict = field(default_factory=dict)
+    section: object = field(default_factory=dict)
+    E: float = 200e9
+    nu: float = 0.3
+    rho: float = 7850.0
+    elements: int = 4
+    vref: tuple = ()
+
+    def check(self) -> None:
+        o = f"Strut({self.name})"
+        if len(self.ends) != 2:
+            raise InputError(f"{o}.ends: give exactly two named end points (got {len(self.ends)})")
+        a, b = (np.asarray(v, float).reshape(-1) for v in self.ends.values())
+        if a.shape != (3,) or b.shape != (3,) or not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
+            raise InputError(f"{o}.ends: each end is [x, y, z] in m")
+        if not np.linalg.norm(b - a) > 0:
+            raise InputError(f"{o}.ends: its two ends coincide at {a.tolist()} m")
+        for k, v in (("E", self.E), ("rho", self.rho)):
+            if isinstance(v, bool) or not (np.isfinite(v) and v > 0):
+                raise InputError(f"{o}.{k} must be > 0 (got {v!r})")
+        if not -1.0 < self.nu < 0.5:
+            raise InputError(f"{o}.nu must be in (-1, 0.5) (got {self.nu!r})")
+        if isinstance(self.elements, bool) or int(self.elements) != self.elements or not self.elements >= 1:
+            raise InputError(f"{o}.elements must be a whole number >= 1 (got {self.elements!r})")
+        self.section_of()
+        if len(self.vref) and (np.shape(self.vref) != (3,) or
+                               np.linalg.norm(np.cross(b - a, np.asarray(self.vref, float))) == 0):
+            raise InputError(f"{o}.vref must be 3 numbers not along the strut (got {list(self.vref)})")
+
+    def section_of(self) -> Section:
+        """The section: a Section as given, or a standard shape's (its table)."""
+        if isinstance(self.section, Section):
+            return self.section
+        return standard_section(self.section, f"Strut({self.name}).section")[0]
+
+
+def strut_component(p: Strut, name: str | None = None) -> tuple[Component, dict]:
+    """The strut's Component: ``elements`` beams between its ends (named by ``ends``; the
+    nodes between ``<name>_n<k>``), every node six labelled DOFs; no thermal loads."""
+    p.check()
+    name = name or p.name
+    (na, a), (nb, b) = ((n, np.asarray(v, float)) for n, v in p.ends.items())
+    n = int(p.elements)
+    X = a + np.linspace(0.0, 1.0, n + 1)[:, None] * (b - a)
+    names = [na] + [f"{name}_n{k}" for k in range(1, n)] + [nb]
+    d = (b - a) / np.linalg.norm(b - a)
+    vref = np.asarray(p.vref, float) if len(p.vref) else np.eye(3)[int(np.argmin(np.abs(d)))]
+    sec, G = p.section_of(), p.E / (2 * (1 + p.nu))
+    K, M = assemble_frame(n + 1, ((k, k + 1, *beam_element(X[k], X[k + 1], p.E, G, sec, p.rho, vref))
+                                  for k in range(n)))
+    ndof = 6 * (n + 1)
+    fmap = sp.csr_matrix((np.ones(3 * (n + 1)), (np.arange(3 * (n + 1)),
+                                                 np.concatenate([6 * i + np.arange(3) for i in range(n + 1)]))),
+                         shape=(3 * (n + 1), ndof))
+    comp = Component(name=name, K=K, M=M, dof_labels=[f"{nm}:{c}" for nm in names for c in COMPONENTS],
+                     label_dofs=np.arange(ndof), points=tuple(names), point_coords=X, nodes=X,
+                     cells=np.column_stack([np.arange(n), np.arange(1, n + 1)]), cell_type="line", field_map=fmap)
+    return comp, {}
+
+
+__all__ = ["Strut", "strut_component"]
