@@ -17,6 +17,7 @@ import re
 import shutil
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 import numpy as np
@@ -56,6 +57,20 @@ def run_default_like(edit, out: Path, cache: Path | None, error_estimate: bool =
     sc = parse_scenario(data, "default_scenario.toml")
     return run(sc, out=out, cache_dir=cache if cache is not None else False, progress=False, plots=False,
                snapshots=False, echo=lambda *a, **k: None, error_estimate=error_estimate)
+
+
+def timed_variant(edit, cache: Path | None):
+    """(RunOutput, wall time s) of :func:`run_default_like` without the error estimate, its
+    files in a temporary folder (the returned object holds what the figures need)."""
+    t0 = time.perf_counter()
+    with tempfile.TemporaryDirectory() as tmp:
+        out = run_default_like(edit, Path(tmp) / "run", cache, error_estimate=False)
+    return out, time.perf_counter() - t0
+
+
+def post_tz_rows(rows: list) -> list:
+    """The envelope's rows of the posts' axial (Tz) forces."""
+    return [r for r in rows if r["category"] == "contact_force" and r["item"].endswith("Tz")]
 
 
 def twang_figures(out, case: str = "nominal") -> dict:
@@ -104,7 +119,7 @@ def default_figures(cache: Path | None, plots_to: Path | None = None) -> dict:
     res, cp = out.results["nominal"]
     m, cg = _mass_cg(v)
     rows = out.envelope
-    posts = [r for r in rows if r["category"] == "contact_force" and r["item"].endswith("Tz")]
+    posts = post_tz_rows(rows)
     pressure = [r for r in rows if r["item"].startswith("tank pressure core_lox")]
     largest = sorted((r for r in rows if r["category"] in ("contact_force", "interface_force") and r["unit"] == "N"),
                      key=lambda r: -abs(_peak(r)[0]))[:5]

@@ -11,8 +11,6 @@ import argparse
 import json
 import runpy
 import sys
-import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
@@ -29,32 +27,29 @@ def variant_figures(conv: str, cache: Path | None) -> dict:
         d["model"]["convective"] = conv
         return d
 
-    t0 = time.perf_counter()
-    with tempfile.TemporaryDirectory() as tmp:
-        out = fig["run_default_like"](edit, Path(tmp) / "run", cache, error_estimate=False)
-        wall_s = time.perf_counter() - t0
-        stack = next(iter(out.stacks.values()))
-        m, cg = fig["_mass_cg"](stack.vehicle)
-        rows = out.envelope
-        posts = [r for r in rows if r["category"] == "contact_force" and r["item"].endswith("Tz")]
-        attach = sorted((r for r in rows if r["category"] == "interface_force" and r["unit"] == "N"),
-                        key=lambda r: -abs(fig["_peak"](r)[0]))[:3]
-        pressure = [r for r in rows if r["item"].startswith("tank pressure core_lox")]
-        slosh = [r for r in rows if "_slosh_force " in r["item"]]
-        from liftoff.workflows.report import slosh_summary
+    out, wall_s = fig["timed_variant"](edit, cache)
+    stack = next(iter(out.stacks.values()))
+    m, cg = fig["_mass_cg"](stack.vehicle)
+    rows = out.envelope
+    posts = fig["post_tz_rows"](rows)
+    attach = sorted((r for r in rows if r["category"] == "interface_force" and r["unit"] == "N"),
+                    key=lambda r: -abs(fig["_peak"](r)[0]))[:3]
+    pressure = [r for r in rows if r["item"].startswith("tank pressure core_lox")]
+    slosh = [r for r in rows if "_slosh_force " in r["item"]]
+    from liftoff.workflows.report import slosh_summary
 
-        res = out.results["nominal"][0]
-        return {
-            "wall_s": wall_s, "vehicle_modes": stack.vehicle.n_modes, "vehicle_mass_t": m / 1e3,
-            "twang_m": fig["twang_figures"](out, "nominal")["peak_m"],
-            "peak_post_compression_n": max(r["max"] for r in posts),
-            "largest_attach": [{"item": r["item"], "value": fig["_peak"](r)[0]} for r in attach],
-            "lox_bottom_pressure_pa": [min(r["min"] for r in pressure), max(r["max"] for r in pressure)],
-            "t_end_s": float(res.time[-1]),
-            "cg_motion_end": [float(x) for x in res.recovered["cg_motion"][-1]],     # m, m, m, rad, rad, rad
-            "slosh": slosh_summary(stack.cbs, rows),
-            "peak_slosh_force_n": max((max(abs(r["max"]), abs(r["min"])) for r in slosh), default=None),
-        }
+    res = out.results["nominal"][0]
+    return {
+        "wall_s": wall_s, "vehicle_modes": stack.vehicle.n_modes, "vehicle_mass_t": m / 1e3,
+        "twang_m": fig["twang_figures"](out, "nominal")["peak_m"],
+        "peak_post_compression_n": max(r["max"] for r in posts),
+        "largest_attach": [{"item": r["item"], "value": fig["_peak"](r)[0]} for r in attach],
+        "lox_bottom_pressure_pa": [min(r["min"] for r in pressure), max(r["max"] for r in pressure)],
+        "t_end_s": float(res.time[-1]),
+        "cg_motion_end": [float(x) for x in res.recovered["cg_motion"][-1]],     # m, m, m, rad, rad, rad
+        "slosh": slosh_summary(stack.cbs, rows),
+        "peak_slosh_force_n": max((max(abs(r["max"]), abs(r["min"])) for r in slosh), default=None),
+    }
 
 
 def main(argv=None) -> int:

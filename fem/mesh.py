@@ -23,6 +23,7 @@ facets, or shell cells) of every surface group, and ``curve_tags`` (shell part o
 """
 from __future__ import annotations
 
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -114,8 +115,10 @@ def _rows_in(rows: np.ndarray, table: np.ndarray) -> np.ndarray:
     return np.isin(a.view(view).ravel(), b.view(view).ravel())
 
 
-def _read_rank0(path: str, shells: tuple[str, ...], liquids: tuple[str, ...] = ()):
-    """On the reading rank: nodes, the solid and shell parts, and the groups' entities."""
+@contextmanager
+def _merged(path: str, model_name: str):
+    """(gmsh, x): ``path`` merged into a gmsh model of its own (nodes renumbered 1..n) and its
+    node coordinates x (n, 3); gmsh's earlier state restored afterwards."""
     import gmsh
 
     was_initialized = _gmsh_is_initialized(gmsh)
@@ -123,13 +126,25 @@ def _read_rank0(path: str, shells: tuple[str, ...], liquids: tuple[str, ...] = (
         gmsh.initialize(["-nopopup"])
     gmsh.option.setNumber("General.Terminal", 0)
     previous = gmsh.model.getCurrent() if was_initialized else None
-    gmsh.model.add("liftoff_fem_reader")
+    gmsh.model.add(model_name)
     try:
         gmsh.merge(path)
         gmsh.model.mesh.renumberNodes()
         tags, coords, _ = gmsh.model.mesh.getNodes()
         x = np.zeros((len(tags), 3))
         x[np.asarray(tags, dtype=np.int64) - 1] = coords.reshape(-1, 3)
+        yield gmsh, x
+    finally:
+        gmsh.model.remove()
+        if was_initialized and previous:
+            gmsh.model.setCurrent(previous)
+        if not was_initialized:
+            gmsh.finalize()
+
+
+def _read_rank0(path: str, shells: tuple[str, ...], liquids: tuple[str, ...] = ()):
+    """On the reading rank: nodes, the solid and shell parts, and the groups' entities."""
+    with _merged(path, "liftoff_fem_reader") as (gmsh, x):
         groups = []
         for dim, tag in gmsh.model.getPhysicalGroups():
             name = gmsh.model.getPhysicalName(dim, tag)
@@ -171,12 +186,6 @@ def _read_rank0(path: str, shells: tuple[str, ...], liquids: tuple[str, ...] = (
             parts["liquid"] = (ct, cells, vals, list(liquids))
         entities = {d: {n: _elements(gmsh, d, t) for dd, t, n in groups if dd == d} for d in (1, 2)}
         return x, parts, entities
-    finally:
-        gmsh.model.remove()
-        if was_initialized and previous:
-            gmsh.model.setCurrent(previous)
-        if not was_initialized:
-            gmsh.finalize()
 
 
 def _part_entities(kind: str, cells: np.ndarray, entities: dict, hybrid: bool) -> dict:
@@ -292,20 +301,7 @@ class BeamLines:
 
 
 def _read_lines_rank0(path: str, names: tuple[str, ...]) -> BeamLines:
-    import gmsh
-
-    was_initialized = _gmsh_is_initialized(gmsh)
-    if not was_initialized:
-        gmsh.initialize(["-nopopup"])
-    gmsh.option.setNumber("General.Terminal", 0)
-    previous = gmsh.model.getCurrent() if was_initialized else None
-    gmsh.model.add("liftoff_beam_reader")
-    try:
-        gmsh.merge(path)
-        gmsh.model.mesh.renumberNodes()
-        tags, coords, _ = gmsh.model.mesh.getNodes()
-        x = np.zeros((len(tags), 3))
-        x[np.asarray(tags, dtype=np.int64) - 1] = coords.reshape(-1, 3)
+    with _merged(path, "liftoff_beam_reader") as (gmsh, x):
         groups = {(d, gmsh.model.getPhysicalName(d, t)): t for d, t in gmsh.model.getPhysicalGroups()}
         lines, group = [], []
         for k, name in enumerate(names):
@@ -331,12 +327,6 @@ def _read_lines_rank0(path: str, names: tuple[str, ...]) -> BeamLines:
                 on = new[np.unique(_elements(gmsh, d, t)[1])]
                 node_groups[name] = on[on >= 0]
         return BeamLines(path, x[used], new[lines], group, tuple(names), node_groups)
-    finally:
-        gmsh.model.remove()
-        if was_initialized and previous:
-            gmsh.model.setCurrent(previous)
-        if not was_initialized:
-            gmsh.finalize()
 
 
 def read_beam_lines(path, names, comm: MPI.Comm = MPI.COMM_WORLD, rank: int = 0) -> BeamLines:
