@@ -2,7 +2,7 @@
 to a nearly incompressible propellant grain (issue 26): ``[model.component.srb_*.params]
 walls = "shell"``, ``grain = true`` (meshes.shells.build_shell_booster, fem.elasticity),
 with the boosters' Craig-Bampton cut ``f_max`` at each of ``--f-max`` (the grain's own
-modes are so many, 6,439 fixed-interface modes below the default's 60 Hz per booster, that
+modes are so many, thousands of fixed-interface modes below the default's 60 Hz per booster, that
 the cut is what the comparison must show converged). Cold stages (no cache), so the
 boosters' FE and CB times are measured. Writes docs/figures/booster_grain.json, rendered
 into README.md by benchmarks/default_figures.py.
@@ -10,8 +10,9 @@ into README.md by benchmarks/default_figures.py.
     .venv/bin/python benchmarks/booster_grain_compare.py [--f-max 15 25] [--no-solid] [--json FILE]
 
 Each variant is a whole cold run; run them one per process where memory is short (the
-file is updated, not overwritten), with LIFTOFF_MODEL_WORKERS=1 for the grain boosters
-(two P2 grain models reduced at once need about 16 GB).
+file is updated, not overwritten). Measured here (24 GB): f_max = 15 and 20 Hz run; 25 Hz
+was killed for memory (24 GB resident with LIFTOFF_MODEL_WORKERS=1), so the cut is not
+shown converged on this machine.
 """
 from __future__ import annotations
 

@@ -149,3 +149,21 @@ def test_slosh_comparison_is_of_the_current_default(figures):
         assert first[k.split("/")[-1]] == pytest.approx(r["modes"][0]["frequency_hz"], rel=1e-3)
     assert cmp["slosh"]["vehicle_mass_t"] == pytest.approx(wall["vehicle_mass_t"], rel=1e-9)
     assert cmp["free"]["vehicle_mass_t"] < wall["vehicle_mass_t"]
+
+
+def test_booster_grain_comparison_is_of_the_current_default(figures):
+    """benchmarks/booster_grain_compare.py's thickened-solid column is the default run (the
+    same model and step, without the h/2 error estimate): its twang, peak post compression,
+    modes and mass are the default figures'; each grain column keeps the default's step
+    rule and cuts the boosters below the default's 60 Hz."""
+    if not figures.BOOSTER_GRAIN_JSON.is_file():
+        pytest.skip("no booster-grain comparison checked in")
+    fig = json.loads(figures.DEFAULT_JSON.read_text())
+    bg = json.loads(figures.BOOSTER_GRAIN_JSON.read_text())
+    solid = bg["solid"]
+    assert solid["vehicle_modes"] == fig["vehicle"]["modes"] and solid["steps"] == fig["steps"]
+    assert not figures.differences({k: solid["twang"][k] for k in fig["twang"]["nominal"]}, fig["twang"]["nominal"])
+    assert not figures.differences([solid["peak_post_compression_n"], solid["vehicle_mass_t"]],
+                                   [fig["peak_post_compression_n"], fig["vehicle"]["mass_t"]])
+    for cut, col in bg["grain"].items():
+        assert col["booster_f_max_hz"] == float(cut) < 60.0 and col["booster_fe_dofs"] > solid["booster_fe_dofs"]
