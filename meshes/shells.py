@@ -120,7 +120,7 @@ def ring_patches(wall_faces: list[int], prefix: str, heights: dict[float, list[s
     return out
 
 
-def stringer_tools(p: TankParams, radius: float) -> list:
+def stringer_tools(p, radius: float) -> list:
     """One straight line (an OCC tool) per stringer along the whole cylindrical wall of
     radius ``radius``, at equal azimuths from ``p.stringer_azimuth``."""
     lay = tank_layout(p)
@@ -135,7 +135,7 @@ def stringer_tools(p: TankParams, radius: float) -> list:
     return out
 
 
-def stringer_edges(p: TankParams, wall_faces: list[int], radius: float) -> list[int]:
+def stringer_edges(p, wall_faces: list[int], radius: float) -> list[int]:
     """The wall's straight edges along the axis at the stringers' azimuths."""
     import gmsh
 
@@ -153,10 +153,11 @@ def stringer_edges(p: TankParams, wall_faces: list[int], radius: float) -> list[
     return out
 
 
-def wall_beams(p: TankParams, wall_faces: list[int], radius: float, wall_thickness: float,
-               wall_mass: float | None) -> tuple[dict, dict, float | None]:
-    """The tank's ring frames (``TankParams.frames``) and stringers (``stringers``) as beams
-    on the wall's inner face: the wall's ring edges at the frame heights become the curve
+def wall_beams(p, wall_faces: list[int], radius: float, wall_thickness: float,
+               wall_mass: float | None, owner: str) -> tuple[dict, dict, float | None]:
+    """A wall's ring frames (``p.frames``, ``p.frame_section``, ``p.frame_material``) and
+    stringers (``p.stringers`` etc., where ``p`` has them; a TankParams or an OrbiterParams
+    with its ``axis_xy``, ``name`` and ``material``) as beams on the wall's inner face: the wall's ring edges at the frame heights become the curve
     group ``<name>_frames``, its edges at the stringers' azimuths ``<name>_stringers``, each a
     BeamGroup of its section with the axis offset inward from the mid-surface by half the
     geometric ``wall_thickness`` and the section's base to centroid distance, local z
@@ -170,14 +171,14 @@ def wall_beams(p: TankParams, wall_faces: list[int], radius: float, wall_thickne
     for kind, edges, spec, mat, vref in (
             ("frames", lambda: [e for z in p.frames for e in ring_edges(wall_faces, float(z), p.axis_xy, radius)],
              p.frame_section, p.frame_material, (0.0, 0.0, 1.0)),
-            ("stringers", lambda: stringer_edges(p, wall_faces, radius), p.stringer_section, p.stringer_material,
-             "tangential")):
-        if not (p.frames if kind == "frames" else p.stringers):
+            ("stringers", lambda: stringer_edges(p, wall_faces, radius), getattr(p, "stringer_section", None),
+             getattr(p, "stringer_material", None), "tangential")):
+        if not (p.frames if kind == "frames" else getattr(p, "stringers", 0)):
             continue
         group = f"{p.name}_{kind}"
         _occ.add_physical(1, group, edges())
         length = _occ.physical_measures(1)[group]
-        section, base = standard_section(spec, f"TankParams({p.name}).{kind[:-1]}_section")
+        section, base = standard_section(spec, f"{owner}.{kind[:-1]}_section")
         mat = mat or p.material
         offset = -(0.5 * wall_thickness + base)
         beams[group] = BeamGroup(mat, section, vref=vref, radial_offset=offset, axis_point=axis)
@@ -186,8 +187,8 @@ def wall_beams(p: TankParams, wall_faces: list[int], radius: float, wall_thickne
     if wall_mass is None or not beams:
         return beams, lengths, wall_mass
     if members_mass >= wall_mass:
-        raise InputError(f"TankParams({p.name}): the frames and stringers weigh {members_mass:.0f} kg, not less than "
-                         f"the dry mass {wall_mass:.0f} kg they are part of")
+        raise InputError(f"{owner}: the frames and stringers weigh {members_mass:.0f} kg, not less than "
+                         f"the mass {wall_mass:.0f} kg they are part of")
     return beams, lengths, wall_mass - members_mass
 
 
@@ -260,7 +261,7 @@ def build_shell_tank(p: TankParams, out_dir: Path) -> Geometry:
         _occ.add_physical(2, wall, wall_faces)
         areas = _occ.physical_measures(2)
         volumes = {g: _occ.group_volume(v) for g, v in liquids.items()}
-        beams, lengths, wall_mass = wall_beams(p, wall_faces, rm, t, p.dry_mass)
+        beams, lengths, wall_mass = wall_beams(p, wall_faces, rm, t, p.dry_mass, f"TankParams({p.name})")
         mat, ts = shell_section(p.material, areas[wall], wall_mass, p.shell_thickness, t)
         n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size, shell_curvature_elements(rm, p.mesh_size))
     geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), {wall: mat}, patches, [], smeared, [],
@@ -415,6 +416,7 @@ def build_shell_orbiter(p, out_dir: Path) -> Geometry:
             tools += [_occ.shell_wall_patch("payload_station", axis, phi, p.payload_z, rm, 0.5, 0.5)
                       for phi in (0.0, math.pi)]
             tools += _wall_tools(att, rings, axis, rm, w)
+        tools += [_occ.plane_cut(float(z)) for z in p.frames if round(float(z), 6) not in rings]
         vols, faces = _occ.imprint_parts({wing_g: wings}, {skin: faces}, tools)
         patches = _patches_on(faces[skin], tools, refs, lambda n: min(p.mesh_size, 0.6 * w))
         patches += ring_patches(faces[skin], p.name, rings, refs, axis, rm, reach)
@@ -422,14 +424,15 @@ def build_shell_orbiter(p, out_dir: Path) -> Geometry:
         _occ.add_physical(3, wing_g, [tg for _, tg in vols[wing_g]])
         volume = _occ.group_volume(vols[wing_g])
         areas = _occ.physical_measures(2)
+        m_wing = p.structure_mass * volume / sum(orbiter_part_volumes(p))         # the solid variant's density
+        if m_wing >= p.structure_mass:
+            raise InputError(f"OrbiterParams: the wing slab ({volume:.1f} m^3) weighs the whole structure_mass")
+        beams, lengths, m_skin = wall_beams(p, faces[skin], rm, t, p.structure_mass - m_wing, "OrbiterParams")
         n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size, shell_curvature_elements(rm, p.mesh_size))
-    m_wing = p.structure_mass * volume / sum(orbiter_part_volumes(p))         # the solid variant's density
-    if m_wing >= p.structure_mass:
-        raise InputError(f"OrbiterParams: the wing slab ({volume:.1f} m^3) weighs the whole structure_mass")
-    skin_mat, ts = shell_section(AL2219, areas[skin], p.structure_mass - m_wing, p.skin_shell_thickness, t)
+    skin_mat, ts = shell_section(AL2219, areas[skin], m_skin, p.skin_shell_thickness, t)
     mats = {skin: skin_mat, wing_g: equivalent(AL2219, m_wing, volume, "Al2219-equivalent-wing")}
     geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), mats, patches, orbiter_point_masses(p), [], [],
                    {wing_g: volume}, n_nodes, areas, shells={skin: ts},
-                   shell_bending={skin: p.skin_shell_bending_ratio})
+                   shell_bending={skin: p.skin_shell_bending_ratio}, beams=beams, curve_lengths=lengths)
     geo.save(out_dir / f"{p.name}.json")
     return geo

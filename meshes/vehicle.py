@@ -337,6 +337,9 @@ class OrbiterParams:
     skin_shell_thickness: float | None = None   # shell skin: None = the Al 2219 thickness that weighs its mass share
     skin_shell_bending_ratio: float = 1.0       # shell skin: 12 I / t^3 (1 = bare skin)
     attach: str | None = None           # shell skin: attach points, engines, payload as rigid "patch"es or "ring"s (None: ring)
+    frames: tuple = ()                  # shell skin: heights z (m) of ring frames on the fuselage cylinder (beams)
+    frame_section: dict = field(default_factory=dict)   # their {shape, dims} (liftoff.core.beam.standard_section)
+    frame_material: Material | None = None  # (None: Al 2219)
 
     name = "orbiter"
 
@@ -366,6 +369,30 @@ class OrbiterParams:
                       ("layout.orbiter_aft_attach_z", self.layout.orbiter_aft_attach_z)):
             if not z0 + 1.0 < z < z0 + self.cyl_length - 1.0:
                 raise InputError(f"{o}.{nm} = {z} m is not on the fuselage cylinder")
+        if self.frames:
+            from liftoff.core.beam import standard_section
+
+            if self.walls != "shell":
+                raise InputError(f"{o}.frames: ring frames are beams on a shell skin; they need walls = 'shell' "
+                                 f"(got {self.walls!r})")
+            standard_section(self.frame_section, f"{o}.frame_section")
+            lo, hi = z0 + self.wall_thickness, z0 + self.cyl_length
+            for z in self.frames:
+                if isinstance(z, bool) or not isinstance(z, (int, float)) or not lo < z < hi:
+                    raise InputError(f"{o}.frames: height {z!r} m is not on the fuselage cylinder ({lo:.3f} to "
+                                     f"{hi:.3f} m)")
+            if len({round(float(z), 6) for z in self.frames}) != len(self.frames):
+                raise InputError(f"{o}.frames: heights repeat ({list(self.frames)})")
+
+    @property
+    def axis_xy(self) -> tuple:
+        """The fuselage axis (x, y), m (the frames' radial reference)."""
+        return (0.0, float(self.layout.orbiter_axis_y))
+
+    @property
+    def material(self) -> Material:
+        """The frames' default material: the skin's Al 2219."""
+        return AL2219
 
     @property
     def cyl_length(self) -> float:

@@ -446,3 +446,43 @@ def test_beams_beside_shells_are_written_and_drawn(tmp_path):
     assert [b.type for b in mesh.cells] == ["triangle6", "line"] and len(mesh.cells[1].data) == len(model.line_cells)
     assert [p.cell_type for p in mesh_parts(comp, np.zeros((len(comp.nodes), 3)))] == ["triangle6", "line"]
     assert snapshot_mode(tmp_path / "s.png", model, modes, 0).stat().st_size > 0
+
+
+def test_orbiter_skin_ring_frames(tmp_path):
+    """meshes.vehicle.OrbiterParams with a shell skin and ``frames``: Z frames (as T
+    sections) on the fuselage skin's inner face at the given heights; the structure mass
+    is kept (the frames' share comes off the skin's: the geometry's nominal mass equals
+    the frameless one's to round-off) and the beams' nodes lie on the skin's mid-surface
+    circles at those heights."""
+    from dataclasses import replace
+
+    from liftoff.meshes.layout import StackLayout
+    from liftoff.meshes.vehicle import OrbiterParams, build_orbiter
+
+    lay = StackLayout()
+    base = OrbiterParams(layout=lay, walls="shell", mesh_size=1.2)
+    z0 = lay.orbiter_bottom_z
+    z = (z0 + 6.0, z0 + 12.0, z0 + 20.0)
+    tee = {"shape": "t", "h": 0.2, "b": 0.08, "tw": 0.004, "tf": 0.006}
+    bare = build_orbiter(base, tmp_path / "bare")
+    framed = build_orbiter(replace(base, frames=z, frame_section=tee), tmp_path / "framed")
+    assert framed.nominal_mass() == pytest.approx(bare.nominal_mass(), rel=1e-12)
+    grp = framed.beams["orbiter_frames"]
+    assert grp.axis_point[:2] == (0.0, lay.orbiter_axis_y) and grp.radial_offset < 0
+    lines = _lines_of(framed)
+    r = np.hypot(lines[:, 0] - 0.0, lines[:, 1] - lay.orbiter_axis_y)
+    assert np.allclose(r, lay.orbiter_radius - 0.5 * base.wall_thickness, rtol=1e-9)
+    assert set(np.round(lines[:, 2], 6)) == set(np.round(z, 6))
+    with pytest.raises(InputError, match=r"OrbiterParams.frames: height .* is not on the fuselage cylinder"):
+        replace(base, frames=(z0 - 5.0,), frame_section=tee).check()
+    with pytest.raises(InputError, match=r"OrbiterParams.frames: ring frames are beams on a shell skin"):
+        replace(base, walls="solid", frames=z, frame_section=tee).check()
+
+
+def _lines_of(geo) -> np.ndarray:
+    """The nodes of a geometry's beam lines (m), read back from its mesh."""
+    from liftoff.fem.mesh import read_beam_lines
+    from mpi4py import MPI
+
+    b = read_beam_lines(geo.msh_path, tuple(geo.beams), MPI.COMM_SELF)
+    return b.x

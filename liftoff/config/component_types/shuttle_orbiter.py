@@ -1,9 +1,11 @@
 """``type = "shuttle_orbiter"``: the orbiter-like body of the Shuttle stack
 (meshes.vehicle.OrbiterParams: fuselage, wing, main-engine mount, payload station, attach
-points on the StackLayout). walls default to [model]'s."""
+points on the StackLayout). walls default to [model]'s; with shell walls, ``frames = [z, ...]``
+(m), ``frame_section`` and ``frame_material`` put ring frames (beams) on the fuselage skin."""
 from __future__ import annotations
 
-from ..params import builder, mesh_size_kw
+from ..params import beam_section, builder, mesh_size_kw
+from ..params import material as read_material
 from ..values import Where
 from . import ComponentType, Context
 
@@ -11,8 +13,15 @@ from . import ComponentType, Context
 def read(ctx: Context, where: Where, params: dict):
     from liftoff.meshes.vehicle import OrbiterParams
 
+    fixed = {"layout": ctx.layout}
+    if isinstance(params, dict) and "frame_section" in params:
+        fixed["frame_section"] = beam_section(where / "frame_section", params["frame_section"])
+    if isinstance(params, dict) and "frame_material" in params:
+        fixed["frame_material"] = read_material(where / "frame_material", "orbiter-frames", params["frame_material"])[0]
+    rest = {k: v for k, v in params.items() if k not in ("frame_section", "frame_material")} \
+        if isinstance(params, dict) else params
     size = mesh_size_kw(ctx.mesh_size)
-    return builder(where, OrbiterParams, params, {"layout": ctx.layout}, {**size, "walls": ctx.walls})
+    return builder(where, OrbiterParams, rest, fixed, {**size, "walls": ctx.walls})
 
 
 TYPE = ComponentType("shuttle_orbiter", read, "liftoff.meshes.vehicle:build_orbiter", "vehicle",
