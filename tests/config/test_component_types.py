@@ -145,3 +145,16 @@ def test_launch_table_girder_deck_from_toml():
     bad["model"]["pad"]["params"] = {"deck": "trusses"}
     with pytest.raises(InputError, match=r"deck must be 'solid' or 'girders'"):
         parse_scenario(bad, "s.toml")
+
+
+def test_orbiter_skin_frames_from_toml():
+    """The orbiter's ring frames from the scenario (shell skin): heights and a standard
+    section; a wrong shape named by its key."""
+    d = tomllib.loads(default_text())
+    d["model"]["component"]["orbiter"]["params"] = {
+        "frames": [14.0, 20.0], "frame_section": {"shape": "t", "h": 0.2, "b": 0.08, "tw": 0.004, "tf": 0.006}}
+    b = parse_scenario(d, "s.toml").cases[0].model.components["orbiter"].builder
+    assert b.frames == (14.0, 20.0) and b.frame_section["shape"] == "t" and b.walls == "shell"
+    d["model"]["component"]["orbiter"]["params"]["frame_section"] = {"shape": "q"}
+    with pytest.raises(InputError, match=r"model\.component\.orbiter\.params\.frame_section: .*unknown shape 'q'"):
+        parse_scenario(d, "s.toml")
