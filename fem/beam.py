@@ -33,8 +33,9 @@ import numpy as np
 import scipy.sparse as sp
 from mpi4py import MPI
 
-from liftoff.core.beam import beam_element
+from liftoff.core.beam import assemble_frame, beam_element
 from liftoff.core.errors import InputError
+from liftoff.core.rigid import skew
 
 from . import petsc_backend as pb
 from .mesh import BeamLines, read_beam_lines
@@ -48,7 +49,6 @@ class BeamPart(Part):
 
     elements: np.ndarray = None
     xyz: np.ndarray = None
-    element_group: np.ndarray = None
 
     def global_dofs(self, local: np.ndarray) -> np.ndarray:
         """Rank 0 owns every beam DOF: local = global there (other ranks have none)."""
@@ -82,49 +82,40 @@ def _radial(p: np.ndarray, grp, what: str) -> np.ndarray:
     return r / n[:, None]
 
 
-def _skew(e: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -e[2], e[1]], [e[2], 0.0, -e[0]], [-e[1], e[0], 0.0]])
-
-
 def beam_matrices(x: np.ndarray, elements: np.ndarray, element_group: np.ndarray, groups: list,
                   names: tuple) -> tuple[sp.csr_matrix, sp.csr_matrix]:
     """(K, M) (6 n x 6 n, CSR) of beam elements ``elements`` (m, 2) on nodes ``x`` (n, 3);
     element k has BeamGroup ``groups[element_group[k]]`` (module docstring: offsets,
     orientation)."""
-    n = x.shape[0]
-    rows, cols, kv, mv = [], [], [], []
-    for g, grp in enumerate(groups):
-        what = f"beam curve {names[g]!r}"
-        el = elements[element_group == g]
-        if el.size == 0:
-            continue
-        mat, sec = grp.material, grp.section
-        G = mat.E / (2 * (1 + mat.nu))
-        e = np.broadcast_to(np.asarray(grp.offset, float), (n, 3)).copy()
-        if grp.radial_offset != 0.0:
-            used = np.unique(el)
-            e[used] += grp.radial_offset * _radial(x[used], grp, what)
-        if isinstance(grp.vref, str):             # "radial" or "tangential", at each element's midpoint
-            vref = _radial(0.5 * (x[el[:, 0]] + x[el[:, 1]]), grp, what)
-            if grp.vref == "tangential":
-                vref = np.cross(np.asarray(grp.axis_direction, float), vref)
-        else:
-            vref = np.broadcast_to(np.asarray(grp.vref, float), (el.shape[0], 3))
-        for (a, b), v in zip(el, vref):
-            k, m = beam_element(x[a] + e[a], x[b] + e[b], mat.E, G, sec, mat.rho, v, grp.rotary, grp.nsm)
-            if e[a].any() or e[b].any():
-                B = np.eye(12)
-                B[0:3, 3:6], B[6:9, 9:12] = -_skew(e[a]), -_skew(e[b])
-                k, m = B.T @ k @ B, B.T @ m @ B
-            d = np.concatenate([6 * a + np.arange(6), 6 * b + np.arange(6)])
-            rows.append(np.repeat(d, 12))
-            cols.append(np.tile(d, 12))
-            kv.append(k.ravel())
-            mv.append(m.ravel())
-    r, c = np.concatenate(rows), np.concatenate(cols)
-    K = sp.csr_matrix((np.concatenate(kv), (r, c)), shape=(6 * n, 6 * n))
-    M = sp.csr_matrix((np.concatenate(mv), (r, c)), shape=(6 * n, 6 * n))
-    return K, M
+    return assemble_frame(x.shape[0], (el for g, grp in enumerate(groups)
+                                       for el in _group_elements(x, elements[element_group == g], grp, names[g])))
+
+
+def _group_elements(x: np.ndarray, el: np.ndarray, grp, name: str):
+    """(a, b, k, m) of the beam elements ``el`` (k, 2) of one BeamGroup, in global axes,
+    the axis offsets carried to the nodes (module docstring)."""
+    if el.size == 0:
+        return
+    what = f"beam curve {name!r}"
+    mat, sec = grp.material, grp.section
+    G = mat.E / (2 * (1 + mat.nu))
+    e = np.broadcast_to(np.asarray(grp.offset, float), x.shape).copy()
+    if grp.radial_offset != 0.0:
+        used = np.unique(el)
+        e[used] += grp.radial_offset * _radial(x[used], grp, what)
+    if isinstance(grp.vref, str):             # "radial" or "tangential", at each element's midpoint
+        vref = _radial(0.5 * (x[el[:, 0]] + x[el[:, 1]]), grp, what)
+        if grp.vref == "tangential":
+            vref = np.cross(np.asarray(grp.axis_direction, float), vref)
+    else:
+        vref = np.broadcast_to(np.asarray(grp.vref, float), (el.shape[0], 3))
+    for (a, b), v in zip(el, vref):
+        k, m = beam_element(x[a] + e[a], x[b] + e[b], mat.E, G, sec, mat.rho, v, grp.rotary, grp.nsm)
+        if e[a].any() or e[b].any():
+            B = np.eye(12)
+            B[0:3, 3:6], B[6:9, 9:12] = -skew(e[a]), -skew(e[b])
+            k, m = B.T @ k @ B, B.T @ m @ B
+        yield a, b, k, m
 
 
 def split_at_midpoints(x: np.ndarray, lines: np.ndarray, group: np.ndarray):
@@ -155,4 +146,4 @@ def beam_part(geometry, comm: MPI.Comm, midpoints: bool) -> BeamPart:
     comp = np.tile(np.arange(6), n) if own else np.zeros(0, np.int64)
     return BeamPart("beam", lines, None, groups, coords, comp, n_own,
                     pb.csr_matrix(comm, n_own, n_own, 6 * n, K), pb.csr_matrix(comm, n_own, n_own, 6 * n, M),
-                    elements=el, xyz=x, element_group=grp)
+                    elements=el, xyz=x)

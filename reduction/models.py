@@ -10,6 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from liftoff.core.beam import assemble_frame
 from liftoff.core.errors import InputError
 from liftoff.core.labels import COMPONENTS
 from liftoff.core.rigid import nodal_rb
@@ -25,23 +26,6 @@ def frame_element(x1, x2, E, G, A, Iy, Iz, J, rho, vref=(0.0, 0.0, 1.0)):
     from liftoff.core.beam import Section, beam_element
 
     return beam_element(x1, x2, E, G, Section(A, Iy, Iz, J), rho, vref, rotary=False)
-
-
-def assemble_frame(n_nodes: int, elements) -> tuple[sp.csr_matrix, sp.csr_matrix]:
-    """Sparse K, M (6 DOFs per node, node-major) from ``elements``: (node a, node b, 12 x 12
-    stiffness, 12 x 12 mass) each, in global axes (liftoff.core.beam.beam_element)."""
-    n = 6 * int(n_nodes)
-    rows, cols, kv, mv = [], [], [], []
-    for a, b, ke, me in elements:
-        dofs = np.r_[6 * a:6 * a + 6, 6 * b:6 * b + 6]
-        rows.append(np.repeat(dofs, 12))
-        cols.append(np.tile(dofs, 12))
-        kv.append(np.asarray(ke).ravel())
-        mv.append(np.asarray(me).ravel())
-    r, c = np.concatenate(rows), np.concatenate(cols)
-    K = sp.csr_matrix((np.concatenate(kv), (r, c)), shape=(n, n))
-    M = sp.csr_matrix((np.concatenate(mv), (r, c)), shape=(n, n))
-    return K, M
 
 
 def frame_matrices(nodes, elements, E, G, A, Iy, Iz, J, rho, vref=(0.0, 0.0, 1.0)):

@@ -128,6 +128,25 @@ def beam_element(x1, x2, E: float, G: float, section: Section, rho: float, vref=
     return T.T @ k @ T, T.T @ m @ T
 
 
+def assemble_frame(n_nodes: int, elements) -> tuple:
+    """Sparse K, M (6 DOFs per node, node-major; scipy CSR) from ``elements``: (node a, node
+    b, 12 x 12 stiffness, 12 x 12 mass) each, in global axes (:func:`beam_element`)."""
+    import scipy.sparse as sp
+
+    n = 6 * int(n_nodes)
+    rows, cols, kv, mv = [], [], [], []
+    for a, b, ke, me in elements:
+        dofs = np.r_[6 * a:6 * a + 6, 6 * b:6 * b + 6]
+        rows.append(np.repeat(dofs, 12))
+        cols.append(np.tile(dofs, 12))
+        kv.append(np.asarray(ke).ravel())
+        mv.append(np.asarray(me).ravel())
+    r, c = np.concatenate(rows), np.concatenate(cols)
+    K = sp.csr_matrix((np.concatenate(kv), (r, c)), shape=(n, n))
+    M = sp.csr_matrix((np.concatenate(mv), (r, c)), shape=(n, n))
+    return K, M
+
+
 # ---- sections of standard shapes ------------------------------------------------------------------
 def tube(r_out: float, t: float, nu: float = 0.3) -> Section:
     """Circular tube, outer radius ``r_out``, wall ``t`` (m): exact A, I, J (= 2 I); shear
@@ -265,5 +284,5 @@ def standard_section(spec: dict, where: str = "section") -> tuple[Section, float
     return (out[0] if isinstance(out, tuple) else out), float(base(dims, out))
 
 
-__all__ = ["Section", "SHAPES", "standard_section", "box_section", "beam_element", "bending_stiffness", "tube", "rectangle", "i_section", "t_section",
+__all__ = ["Section", "SHAPES", "standard_section", "box_section", "assemble_frame", "beam_element", "bending_stiffness", "tube", "rectangle", "i_section", "t_section",
            "hat_section"]
