@@ -73,11 +73,9 @@ def mesh_parts(mesh, displacement) -> list[Part]:
     """The picture parts of a mesh-bearing object (an FEModel or a reduction.Component:
     ``nodes``, ``cells``, ``cell_type`` and ``line_cells``, the beams beside its cells, or
     None) deformed by ``displacement`` (n_nodes, 3)."""
-    out = [Part(mesh.nodes, mesh.cells, mesh.cell_type, displacement)]
-    lines = getattr(mesh, "line_cells", None)
-    if lines is not None and len(lines):
-        out.append(Part(mesh.nodes, lines, "line", displacement))
-    return out
+    from .output import cell_blocks
+
+    return [Part(mesh.nodes, cells, kind, displacement) for kind, cells in cell_blocks(mesh)]
 
 
 def auto_scale(parts: list[Part], fraction: float = 0.1) -> float:

@@ -27,12 +27,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
-from liftoff.core.beam import Section, beam_element, tube
+from liftoff.core.beam import Section, assemble_frame, beam_element, tube
 from liftoff.core.errors import InputError, ResourceError
-from liftoff.core.labels import COMPONENTS
 
 from .component import Component
-from .models import assemble_frame
+from .models import line_component
 
 #: the link from the axis to an off-axis point: a stiff steel fitting (E Pa, section m^2/m^4,
 #: line density kg/m), also the Shuttle stick's skirts and attach fittings (workflows/stick.py)
@@ -173,14 +172,7 @@ def beam_stick_component(p: BeamStick, name: str | None = None) -> tuple[Compone
         lumped[6 * i:6 * i + 3] += m[0]
         lumped[6 * i + 3:6 * i + 6] += m[1:]
     M = M + sp.diags(lumped)
-    labels = [f"{nm}:{cmp}" for nm in names for cmp in COMPONENTS]
-    fmap = sp.csr_matrix((np.ones(3 * len(X)), (np.arange(3 * len(X)),
-                                                np.concatenate([6 * i + np.arange(3) for i in range(len(X))]))),
-                         shape=(3 * len(X), ndof))
-    cells = np.array([[a, b] for a, b, *_ in elems], dtype=np.int64)
-    comp = Component(name=name, K=K, M=M, dof_labels=labels, label_dofs=np.arange(ndof), points=tuple(names),
-                     point_coords=X, nodes=X, cells=cells, cell_type="line", field_map=fmap)
-    return comp, {}
+    return line_component(name, X, names, K, M, [[a, b] for a, b, *_ in elems]), {}
 
 
 __all__ = ["BeamStick", "LINK", "beam_stick_component"]

@@ -45,6 +45,19 @@ def frame_component(name, nodes, elements, point_names, E=70e9, nu=0.3, A=1e-3, 
                      points=tuple(point_names), point_coords=nodes)
 
 
+def line_component(name: str, X: np.ndarray, point_names, K, M, cells) -> Component:
+    """A model of beams as a Component: node i the labelled 6-DOF point ``point_names[i]``
+    at ``X[i]`` (m), drawn as the 2-node ``cells``, its field map the nodes' translations
+    (the beam stick, the strut)."""
+    X = np.asarray(X, float)
+    n = X.shape[0]
+    fmap = sp.csr_matrix((np.ones(3 * n), (np.arange(3 * n), (6 * np.arange(n)[:, None] + np.arange(3)).ravel())),
+                         shape=(3 * n, 6 * n))
+    return Component(name=name, K=K, M=M, dof_labels=[f"{p}:{c}" for p in point_names for c in COMPONENTS],
+                     label_dofs=np.arange(6 * n), points=tuple(point_names), point_coords=X, nodes=X,
+                     cells=np.asarray(cells, np.int64), cell_type="line", field_map=fmap)
+
+
 # ----------------------------------------------------------------------------- solid
 def hex8_element(hx, hy, hz, E, nu, rho):
     """24 x 24 stiffness and consistent mass of a trilinear brick hx x hy x hz (2x2x2 Gauss)."""

@@ -16,14 +16,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.sparse as sp
 
-from liftoff.core.beam import Section, beam_element, standard_section
+from liftoff.core.beam import Section, assemble_frame, beam_element, standard_section
 from liftoff.core.errors import InputError
-from liftoff.core.labels import COMPONENTS
 
 from .component import Component
-from .models import assemble_frame
+from .models import line_component
 
 
 @dataclass
@@ -81,14 +79,7 @@ def strut_component(p: Strut, name: str | None = None) -> tuple[Component, dict]
     sec, G = p.section_of(), p.E / (2 * (1 + p.nu))
     K, M = assemble_frame(n + 1, ((k, k + 1, *beam_element(X[k], X[k + 1], p.E, G, sec, p.rho, vref))
                                   for k in range(n)))
-    ndof = 6 * (n + 1)
-    fmap = sp.csr_matrix((np.ones(3 * (n + 1)), (np.arange(3 * (n + 1)),
-                                                 np.concatenate([6 * i + np.arange(3) for i in range(n + 1)]))),
-                         shape=(3 * (n + 1), ndof))
-    comp = Component(name=name, K=K, M=M, dof_labels=[f"{nm}:{c}" for nm in names for c in COMPONENTS],
-                     label_dofs=np.arange(ndof), points=tuple(names), point_coords=X, nodes=X,
-                     cells=np.column_stack([np.arange(n), np.arange(1, n + 1)]), cell_type="line", field_map=fmap)
-    return comp, {}
+    return line_component(name, X, names, K, M, np.column_stack([np.arange(n), np.arange(1, n + 1)])), {}
 
 
 __all__ = ["Strut", "strut_component"]
