@@ -91,8 +91,6 @@ def ring_edges(wall_faces: list[int], z: float, axis_xy, radius: float) -> list[
     ``_occ.plane_cut``, or a rim)."""
     import gmsh
 
-    edges = {abs(t) for _, t in gmsh.model.getBoundary([(2, f) for f in wall_faces], combined=False,
-                                                       oriented=False)}
     tol = 1e-5 * max(1.0, radius)          # heights are keyed rounded to 1e-6 m
 
     def on_ring(e: int) -> bool:
@@ -102,7 +100,15 @@ def ring_edges(wall_faces: list[int], z: float, axis_xy, radius: float) -> list[
         return (abs(b[2] - z) < tol and abs(b[5] - z) < tol
                 and abs(np.hypot(*(x[:2] - np.asarray(axis_xy, float))) - radius) < 1e-3 * radius)
 
-    return [e for e in sorted(edges) if on_ring(e)]
+    return [e for e in wall_edges(wall_faces) if on_ring(e)]
+
+
+def wall_edges(wall_faces: list[int]) -> list[int]:
+    """The edges of the wall's faces, sorted (each once)."""
+    import gmsh
+
+    return sorted({abs(t) for _, t in gmsh.model.getBoundary([(2, f) for f in wall_faces], combined=False,
+                                                             oriented=False)})
 
 
 def ring_patches(wall_faces: list[int], prefix: str, heights: dict[float, list[str]], refs: dict, axis_xy,
@@ -120,16 +126,24 @@ def ring_patches(wall_faces: list[int], prefix: str, heights: dict[float, list[s
     return out
 
 
-def stringer_tools(p, radius: float) -> list:
-    """One straight line (an OCC tool) per stringer along the whole cylindrical wall of
-    radius ``radius``, at equal azimuths from ``p.stringer_azimuth``."""
-    lay = tank_layout(p)
-    z0, z1 = lay[0].z_cyl_bottom, lay[-1].z_cyl_top
+def stringer_xy(p, radius: float) -> list[tuple[float, float]]:
+    """(x, y) of each stringer on the wall of radius ``radius``: equal azimuths from
+    ``p.stringer_azimuth`` (deg) about ``p.axis_xy``."""
     x0, y0 = p.axis_xy
     out = []
     for k in range(p.stringers):
         a = math.radians(p.stringer_azimuth) + 2 * math.pi * k / p.stringers
-        x, y = x0 + radius * math.cos(a), y0 + radius * math.sin(a)
+        out.append((x0 + radius * math.cos(a), y0 + radius * math.sin(a)))
+    return out
+
+
+def stringer_tools(p, radius: float) -> list:
+    """One straight line (an OCC tool) per stringer along the whole cylindrical wall of
+    radius ``radius`` (:func:`stringer_xy`)."""
+    lay = tank_layout(p)
+    z0, z1 = lay[0].z_cyl_bottom, lay[-1].z_cyl_top
+    out = []
+    for x, y in stringer_xy(p, radius):
         line = occ.addLine(occ.addPoint(x, y, z0), occ.addPoint(x, y, z1))
         out.append(_occ.Tool(None, (1, line), (x, y, z0, x, y, z1)))
     return out
@@ -139,13 +153,10 @@ def stringer_edges(p, wall_faces: list[int], radius: float) -> list[int]:
     """The wall's straight edges along the axis at the stringers' azimuths."""
     import gmsh
 
-    x0, y0 = p.axis_xy
-    a = math.radians(p.stringer_azimuth) + 2 * math.pi * np.arange(p.stringers) / p.stringers
-    xs, ys = x0 + radius * np.cos(a), y0 + radius * np.sin(a)
+    xs, ys = np.array(stringer_xy(p, radius)).T
     tol = 1e-5 * max(1.0, radius)
     out = []
-    for e in sorted({abs(t) for _, t in gmsh.model.getBoundary([(2, f) for f in wall_faces], combined=False,
-                                                                oriented=False)}):
+    for e in wall_edges(wall_faces):
         b = gmsh.model.getBoundingBox(1, e)
         if b[5] - b[2] > tol and b[3] - b[0] < tol and b[4] - b[1] < tol \
                 and np.min(np.hypot(xs - b[0], ys - b[1])) < tol:

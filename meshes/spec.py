@@ -84,6 +84,28 @@ def check_walls(owner: str, walls) -> None:
         raise InputError(f"{owner}.walls must be one of {', '.join(map(repr, WALLS))} (got {walls!r})")
 
 
+def check_ring_frames(owner: str, walls: str, frames, section, material, lo: float, hi: float,
+                      wall: str = "wall", surface: str = "the cylindrical wall") -> None:
+    """Ring frames (beams on a shell ``wall``): none, or shell walls, a standard section
+    (liftoff.core.beam.standard_section), heights strictly between ``lo`` and ``hi`` (m, on
+    ``surface``), none repeated, and a Material or None; InputError naming ``owner``."""
+    if not frames:
+        return
+    from liftoff.core.beam import standard_section
+
+    if walls != "shell":
+        raise InputError(f"{owner}.frames: ring frames are beams on a shell {wall}; they need walls = 'shell' "
+                         f"(got {walls!r})")
+    standard_section(section, f"{owner}.frame_section")
+    for z in frames:
+        if isinstance(z, bool) or not isinstance(z, (int, float)) or not lo < z < hi:
+            raise InputError(f"{owner}.frames: height {z!r} m is not on {surface} ({lo:.3f} to {hi:.3f} m)")
+    if len({round(float(z), 6) for z in frames}) != len(frames):
+        raise InputError(f"{owner}.frames: heights repeat ({list(frames)})")
+    if material is not None and not isinstance(material, Material):
+        raise InputError(f"{owner}.frame_material must be a Material (E, nu, rho)")
+
+
 #: how a shell wall carries its off-axis attach points: rigid patches or interpolation rings
 ATTACH = ("patch", "ring")
 

@@ -34,7 +34,8 @@ from liftoff.core.errors import InputError
 
 from . import _occ
 from ._occ import occ
-from .spec import Geometry, Liquid, Material, SmearedMass, check_attach, check_walls, equivalent, require_positive
+from .spec import (Geometry, Liquid, Material, SmearedMass, check_attach, check_ring_frames, check_walls, equivalent,
+                   require_positive)
 
 #: liquid models of a tank (TankParams.liquid)
 LIQUIDS = ("smeared", "hydroelastic")
@@ -167,21 +168,9 @@ class TankParams:
             standard_section(self.stringer_section, f"{o}.stringer_section")
             if self.stringer_material is not None and not isinstance(self.stringer_material, Material):
                 raise InputError(f"{o}.stringer_material must be a Material (E, nu, rho)")
-        if not self.frames:
-            return
-        if self.walls != "shell":
-            raise InputError(f"{o}.frames: ring frames are beams on a shell wall; they need walls = 'shell' "
-                             f"(got {self.walls!r})")
-        standard_section(self.frame_section, f"{o}.frame_section")
         lay = tank_layout(self)
-        lo, hi = lay[0].z_cyl_bottom, lay[-1].z_cyl_top
-        for z in self.frames:
-            if isinstance(z, bool) or not isinstance(z, (int, float)) or not lo < z < hi:
-                raise InputError(f"{o}.frames: height {z!r} m is not on the cylindrical wall ({lo:.3f} to {hi:.3f} m)")
-        if len({round(float(z), 6) for z in self.frames}) != len(self.frames):
-            raise InputError(f"{o}.frames: heights repeat ({list(self.frames)})")
-        if self.frame_material is not None and not isinstance(self.frame_material, Material):
-            raise InputError(f"{o}.frame_material must be a Material (E, nu, rho)")
+        check_ring_frames(o, self.walls, self.frames, self.frame_section, self.frame_material,
+                          lay[0].z_cyl_bottom, lay[-1].z_cyl_top)
 
 
 # ---- closed forms (inner cavity of one compartment; heights h from the inner bottom apex) ----

@@ -20,7 +20,8 @@ from liftoff.core.errors import InputError
 from . import _occ
 from ._occ import occ
 from .layout import StackLayout
-from .spec import Geometry, Material, PointMass, SmearedMass, check_attach, check_walls, equivalent, require_positive
+from .spec import (Geometry, Material, PointMass, SmearedMass, check_attach, check_ring_frames, check_walls, equivalent,
+                   require_positive)
 from .tank import AL2219, Compartment, TankParams, build_tank, tank_height
 
 #: D6AC steel (SRB case): E 205 GPa, nu 0.29, 7850 kg/m^3
@@ -369,20 +370,8 @@ class OrbiterParams:
                       ("layout.orbiter_aft_attach_z", self.layout.orbiter_aft_attach_z)):
             if not z0 + 1.0 < z < z0 + self.cyl_length - 1.0:
                 raise InputError(f"{o}.{nm} = {z} m is not on the fuselage cylinder")
-        if self.frames:
-            from liftoff.core.beam import standard_section
-
-            if self.walls != "shell":
-                raise InputError(f"{o}.frames: ring frames are beams on a shell skin; they need walls = 'shell' "
-                                 f"(got {self.walls!r})")
-            standard_section(self.frame_section, f"{o}.frame_section")
-            lo, hi = z0 + self.wall_thickness, z0 + self.cyl_length
-            for z in self.frames:
-                if isinstance(z, bool) or not isinstance(z, (int, float)) or not lo < z < hi:
-                    raise InputError(f"{o}.frames: height {z!r} m is not on the fuselage cylinder ({lo:.3f} to "
-                                     f"{hi:.3f} m)")
-            if len({round(float(z), 6) for z in self.frames}) != len(self.frames):
-                raise InputError(f"{o}.frames: heights repeat ({list(self.frames)})")
+        check_ring_frames(o, self.walls, self.frames, self.frame_section, self.frame_material,
+                          z0 + self.wall_thickness, z0 + self.cyl_length, "skin", "the fuselage cylinder")
 
     @property
     def axis_xy(self) -> tuple:

@@ -90,6 +90,19 @@ def beam_section(where: Where, spec: Any) -> dict:
     return dict(spec)
 
 
+def beam_members(where: Where, params: Any, name: str, kinds: tuple[str, ...]) -> dict:
+    """The beam members ``kinds`` (e.g. "frame", "stringer") of a builder's params table:
+    {``<kind>_section``: its checked table (:func:`beam_section`) or {}, ``<kind>_material``:
+    a Material named ``<name>-<kind>s`` or None}, errors worded at their keys."""
+    params = params if isinstance(params, dict) else {}
+    out = {}
+    for kind in kinds:
+        key, mat = f"{kind}_section", f"{kind}_material"
+        out[key] = beam_section(where / key, params[key]) if key in params else {}
+        out[mat] = material(where / mat, f"{name}-{kind}s", params[mat])[0] if mat in params else None
+    return out
+
+
 def mesh_size_kw(mesh_size: float | None) -> dict:
     """``{"mesh_size": mesh_size}``, or nothing when it is None (the builder's default)."""
     return {} if mesh_size is None else {"mesh_size": mesh_size}

@@ -4,8 +4,7 @@ points on the StackLayout). walls default to [model]'s; with shell walls, ``fram
 (m), ``frame_section`` and ``frame_material`` put ring frames (beams) on the fuselage skin."""
 from __future__ import annotations
 
-from ..params import beam_section, builder, mesh_size_kw
-from ..params import material as read_material
+from ..params import beam_members, builder, mesh_size_kw
 from ..values import Where
 from . import ComponentType, Context
 
@@ -13,11 +12,7 @@ from . import ComponentType, Context
 def read(ctx: Context, where: Where, params: dict):
     from liftoff.meshes.vehicle import OrbiterParams
 
-    fixed = {"layout": ctx.layout}
-    if isinstance(params, dict) and "frame_section" in params:
-        fixed["frame_section"] = beam_section(where / "frame_section", params["frame_section"])
-    if isinstance(params, dict) and "frame_material" in params:
-        fixed["frame_material"] = read_material(where / "frame_material", "orbiter-frames", params["frame_material"])[0]
+    fixed = {"layout": ctx.layout, **beam_members(where, params, "orbiter", ("frame",))}
     rest = {k: v for k, v in params.items() if k not in ("frame_section", "frame_material")} \
         if isinstance(params, dict) else params
     size = mesh_size_kw(ctx.mesh_size)

@@ -14,7 +14,7 @@ the cylindrical wall), ``frame_section = {shape = "t", h = ..., b = ..., tw = ..
 ``stringer_azimuth``, deg), ``stringer_section``, ``stringer_material`` likewise."""
 from __future__ import annotations
 
-from ..params import beam_section, builder, mesh_size_kw
+from ..params import beam_members, builder, mesh_size_kw
 from ..params import material as read_material
 from ..values import Where, array_of_tables, named, xyz
 from . import ComponentType, Context
@@ -39,12 +39,7 @@ def read(ctx: Context, where: Where, params: dict):
     patches = named(where / "patches", params.get("patches", {}), xyz)
     material = AL2219 if "material" not in params else \
         read_material(where / "material", f"{ctx.name}-wall", params["material"])[0]
-    members = {}
-    for kind in ("frame", "stringer"):
-        key = f"{kind}_section"
-        members[key] = beam_section(where / key, params[key]) if key in params else {}
-        members[f"{kind}_material"] = None if f"{kind}_material" not in params else \
-            read_material(where / f"{kind}_material", f"{ctx.name}-{kind}s", params[f"{kind}_material"])[0]
+    members = beam_members(where, params, ctx.name, ("frame", "stringer"))
     rest = {k: v for k, v in params.items() if k not in own}
     size = mesh_size_kw(ctx.mesh_size)
     fixed = {"name": ctx.name, "compartments": tuple(comps), "patches": patches, "material": material, **members}
