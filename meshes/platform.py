@@ -173,12 +173,11 @@ def girder_grid(p: PlatformParams) -> tuple[list, list]:
     segments through an exhaust hole; (girders along x, girders along y). InputError if a post or
     a pedestal is left without a girder."""
     pts = [(float(v[0]), float(v[1])) for v in p.posts.values()] + [(float(q[0]), float(q[1])) for q in p.pedestals]
-    lines_x = sorted({round(y, 9) for _, y in pts})          # girders along x, at these y
-    lines_y = sorted({round(x, 9) for x, _ in pts})          # girders along y, at these x
-    xs, ys = lines_y, lines_x                                # girders end on the outermost crossing lines
-    along_x = [((x0, y), (x1, y)) for y in lines_x for x0, x1 in zip(xs[:-1], xs[1:])
+    ys = sorted({round(y, 9) for _, y in pts})          # girders along x at these y, along y at these x:
+    xs = sorted({round(x, 9) for x, _ in pts})          # each ends on the outermost crossing girders
+    along_x = [((x0, y), (x1, y)) for y in ys for x0, x1 in zip(xs[:-1], xs[1:])
                if not _crosses_hole(p, np.array([x0, y]), np.array([x1, y]))]
-    along_y = [((x, y0), (x, y1)) for x in lines_y for y0, y1 in zip(ys[:-1], ys[1:])
+    along_y = [((x, y0), (x, y1)) for x in xs for y0, y1 in zip(ys[:-1], ys[1:])
                if not _crosses_hole(p, np.array([x, y0]), np.array([x, y1]))]
     ends = {e for seg in along_x + along_y for e in seg}
     for what, named in (("post", {n: (v[0], v[1]) for n, v in p.posts.items()}),
