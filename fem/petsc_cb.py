@@ -23,7 +23,11 @@ by ``reduction.craig_bampton`` (one CB method, the solver injected):
 
 Errors: K_ii singular or indefinite (the component floats once its boundary is fixed:
 MUMPS null or negative pivots) is an InputError; unconverged or missed eigenpairs a
-ConvergenceError. Both are raised on every process (no deadlock). Units SI.
+ConvergenceError. Both are raised on every process (no deadlock). A MUMPS workspace
+estimated too small (INFOG(1) = -8, -9, ...: in parallel its estimate can fall short of
+the delayed pivots) is not a singular matrix: the factor is redone with a larger
+workspace (ICNTL(14), ``MUMPS_WORKSPACE_TRIES``), and a ResourceError is raised if the
+last try still falls short. Units SI.
 """
 from __future__ import annotations
 
@@ -91,9 +95,8 @@ class PetscSolver:
                     from_count = f"{count} by the inertia of K_ii - (2 pi f_max)^2 M_ii"
                     raise InputError(_band_error(who, band_limit, f_max, from_count))
                 want = count
-            with _operator(Kii, Mii if B is None else B, want, self.tol, who, self.eigensolver) as (ksp, eps):
-                t0 = time.perf_counter()
-                _set_up(ksp, who, setup=None if eps is None else eps.setUp)
+            t0 = time.perf_counter()
+            with _factored_operator(Kii, Mii if B is None else B, want, self.tol, who, self.eigensolver) as (ksp, eps):
                 timings["factor_s"] = time.perf_counter() - t0
                 t0 = time.perf_counter()
                 if eps is None:
@@ -134,15 +137,33 @@ def petsc_solver(comm: MPI.Comm | None = None, tol: float = 1e-10, eigensolver: 
 
 
 @contextmanager
-def _operator(Kii: PETSc.Mat, B: PETSc.Mat, want: int, tol: float, who: str, eigensolver: str):
-    """(ksp, eps): the KSP holding the factor of K_ii and, for ``"slepc"``, the SLEPc
-    solver whose shift-invert operator it is (else None)."""
+def _operator(Kii: PETSc.Mat, B: PETSc.Mat, want: int, tol: float, who: str, eigensolver: str,
+              workspace: int | None = None):
+    """(ksp, eps): the KSP that will hold the factor of K_ii and, for ``"slepc"``, the SLEPc
+    solver whose shift-invert operator it is (else None); ``workspace``: MUMPS's ICNTL(14)."""
     if eigensolver == "slepc":
-        with _solver(Kii, B, max(want, 1), tol, 500, who) as eps:
+        with _solver(Kii, B, max(want, 1), tol, 500, who, workspace) as eps:
             yield eps.getST().getKSP(), eps
     else:
-        with _factor_kii(Kii, who) as ksp:
+        with _factor_kii(Kii, who, workspace) as ksp:
             yield ksp, None
+
+
+@contextmanager
+def _factored_operator(Kii: PETSc.Mat, B: PETSc.Mat, want: int, tol: float, who: str, eigensolver: str):
+    """:func:`_operator` with K_ii factored (:func:`_set_up`), the factor redone with a
+    larger MUMPS workspace while MUMPS reports its workspace too small."""
+    short = None
+    for workspace in MUMPS_WORKSPACE_TRIES:
+        with _operator(Kii, B, want, tol, who, eigensolver, workspace) as (ksp, eps):
+            try:
+                _set_up(ksp, who, setup=None if eps is None else eps.setUp)
+            except _WorkspaceShort as exc:
+                short = exc
+                continue
+            yield ksp, eps
+            return
+    raise _workspace_error(who, "K_ii", short)
 
 
 # ------------------------------------------------------------------ pieces
@@ -173,16 +194,46 @@ def interior_matrices(comm: MPI.Comm, K: sp.csr_matrix, M: sp.csr_matrix, interi
     return mats[0], mats[1], Kib_loc
 
 
+#: MUMPS INFOG(1) codes of a singular matrix (-6 structurally, -10 numerically)
+MUMPS_SINGULAR = (-6, -10)
+#: MUMPS INFOG(1) codes of a workspace it estimated too small (integer or real work
+#: arrays, solve and refinement arrays, send and receive buffers: its users' guide says
+#: "increase ICNTL(14)"); the other negative codes a failure of MUMPS itself (memory,
+#: integer overflow: -13, -19, ...)
+MUMPS_WORKSPACE_SHORT = (-8, -9, -11, -12, -14, -15, -17, -20)
+#: ICNTL(14) of the successive tries of one factor, the percent of workspace added to
+#: MUMPS's estimate: its own default first, then 100 % and 400 %
+MUMPS_WORKSPACE_TRIES = (None, 100, 400)
+
+
+class _WorkspaceShort(Exception):
+    """MUMPS reported its workspace too small (``info``: INFOG(1), INFOG(2)); try again."""
+
+    def __init__(self, info: tuple[int, int]):
+        super().__init__(info)
+        self.info = info
+
+
+def _workspace_error(who: str, what: str, short: _WorkspaceShort) -> ResourceError:
+    code, extra = short.info
+    return ResourceError(f"{who}: MUMPS failed to factor {what}: its workspace was too small (INFOG(1) = {code}, "
+                         f"INFOG(2) = {extra}) even with ICNTL(14) = {MUMPS_WORKSPACE_TRIES[-1]} % more than its "
+                         "estimate; run again with fewer ranks or more memory")
+
+
 @contextmanager
-def _mumps_options(comm: MPI.Comm, inertia: bool = True):
+def _mumps_options(comm: MPI.Comm, inertia: bool = True, workspace: int | None = None):
     """A fresh options prefix for one MUMPS factor. With ``inertia``: null-pivot detection
     (ICNTL(24)) and, in parallel, no ScaLAPACK at the root node (ICNTL(13)), which MUMPS
-    needs to report the inertia (MatGetInertia)."""
+    needs to report the inertia (MatGetInertia). ``workspace``: ICNTL(14), the percent of
+    working space added to MUMPS's estimate (None: MUMPS's default)."""
     prefix = f"liftoff_cb{next(_PREFIXES)}_"
     opts = PETSc.Options()
     values = {"mat_mumps_icntl_24": 1} if inertia else {}
     if inertia and comm.size > 1:
         values["mat_mumps_icntl_13"] = 1
+    if workspace is not None:
+        values["mat_mumps_icntl_14"] = workspace
     for k, v in values.items():
         opts.setValue(prefix + k, v)
     try:
@@ -215,18 +266,31 @@ def count_below(Kii: PETSc.Mat, Mii: PETSc.Mat, lam: float, who: str = "componen
 
 def nonpositive_pivots(A: PETSc.Mat, what: str, who: str) -> int:
     """The negative and null pivots of one MUMPS LDL^T factor of the symmetric ``A`` (its
-    inertia: the number of its eigenvalues <= 0); ``what`` names A in the errors."""
+    inertia: the number of its eigenvalues <= 0); ``what`` names A in the errors. A
+    workspace that MUMPS estimated too small is enlarged (``MUMPS_WORKSPACE_TRIES``)."""
+    short = None
+    for workspace in MUMPS_WORKSPACE_TRIES:
+        try:
+            return _pivots_once(A, what, who, workspace)
+        except _WorkspaceShort as exc:
+            short = exc
+    raise _workspace_error(who, what, short)
+
+
+def _pivots_once(A: PETSc.Mat, what: str, who: str, workspace: int | None) -> int:
     comm = A.getComm().tompi4py()
     ksp = PETSc.KSP().create(comm)
     try:
-        with _mumps_options(comm) as prefix:
+        with _mumps_options(comm, workspace=workspace) as prefix:
             ksp.setOptionsPrefix(prefix)
             ksp.setOperators(A)
             pb._mumps_cholesky(ksp)
             try:
                 ksp.setUp()
             except PETSc.Error as exc:
+                _raise_if_short(ksp)
                 raise InputError(f"{who}: factorisation of {what} failed (PETSc error {exc.ierr})") from None
+            _raise_if_short(ksp)
             F = ksp.getPC().getFactorMatrix()
             if F.getMumpsInfog(1) < 0:
                 raise InputError(f"{who}: MUMPS failed to factor {what} (INFOG(1) = {F.getMumpsInfog(1)})")
@@ -237,14 +301,16 @@ def nonpositive_pivots(A: PETSc.Mat, what: str, who: str) -> int:
 
 
 @contextmanager
-def _solver(Kii: PETSc.Mat, Mii: PETSc.Mat, nev: int, tol: float, max_it: int, who: str):
-    """SLEPc GHEP, Krylov-Schur, shift-invert at sigma = 0 with a MUMPS factor of K_ii."""
+def _solver(Kii: PETSc.Mat, Mii: PETSc.Mat, nev: int, tol: float, max_it: int, who: str,
+            workspace: int | None = None):
+    """SLEPc GHEP, Krylov-Schur, shift-invert at sigma = 0 with a MUMPS factor of K_ii
+    (``workspace``: its ICNTL(14))."""
     from slepc4py import SLEPc
 
     comm = Kii.getComm().tompi4py()
     n = Kii.getSize()[0]
     eps = SLEPc.EPS().create(comm)
-    with _mumps_options(comm) as prefix:
+    with _mumps_options(comm, workspace=workspace) as prefix:
         try:
             eps.setOperators(Kii, Mii)
             eps.setProblemType(SLEPc.EPS.ProblemType.GHEP)
@@ -268,11 +334,6 @@ def _solver(Kii: PETSc.Mat, Mii: PETSc.Mat, nev: int, tol: float, max_it: int, w
             eps.destroy()
 
 
-#: MUMPS INFOG(1) codes of a singular matrix (-6 structurally, -10 numerically); the others a
-#: failure of MUMPS itself (workspace, memory, integer overflow: -8, -9, -13, -19, ...)
-MUMPS_SINGULAR = (-6, -10)
-
-
 def _mumps_infog(ksp) -> tuple[int, int] | None:
     """(INFOG(1), INFOG(2)) of the factor of a failed KSPSetUp, None if there is none."""
     try:
@@ -282,13 +343,20 @@ def _mumps_infog(ksp) -> tuple[int, int] | None:
         return None
 
 
+def _raise_if_short(ksp) -> None:
+    """_WorkspaceShort if MUMPS reported its workspace too small for this KSP's factor."""
+    info = _mumps_infog(ksp)
+    if info is not None and info[0] in MUMPS_WORKSPACE_SHORT:
+        raise _WorkspaceShort(info)
+
+
 @contextmanager
-def _factor_kii(Kii: PETSc.Mat, who: str):
+def _factor_kii(Kii: PETSc.Mat, who: str, workspace: int | None = None):
     """A KSP that applies K_ii^-1 with one MUMPS Cholesky (LDL^T) factor, null-pivot
-    detection on (its inertia proves K_ii positive definite)."""
+    detection on (its inertia proves K_ii positive definite); ``workspace``: ICNTL(14)."""
     comm = Kii.getComm().tompi4py()
     ksp = PETSc.KSP().create(comm)
-    with _mumps_options(comm) as prefix:
+    with _mumps_options(comm, workspace=workspace) as prefix:
         try:
             ksp.setOptionsPrefix(prefix)
             ksp.setOperators(Kii)
@@ -302,10 +370,11 @@ def _set_up(ksp, who: str, setup=None) -> None:
     """Factor K_ii (``setup``: what factors it, default ``ksp.setUp``; SLEPc's EPSSetUp);
     a null or negative pivot means K_ii is singular. A failure of MUMPS that is not a
     singular matrix (INFOG(1) outside MUMPS_SINGULAR) is said as such, with its codes, not
-    as a floating component."""
+    as a floating component; a workspace too small raises _WorkspaceShort (try again)."""
     try:
         (setup or ksp.setUp)()
     except PETSc.Error as exc:
+        _raise_if_short(ksp)
         info = _mumps_infog(ksp)
         if info is not None and info[0] < 0 and info[0] not in MUMPS_SINGULAR:
             raise ResourceError(f"{who}: MUMPS failed to factor K_ii (PETSc error {exc.ierr}, INFOG(1) = {info[0]}, "
@@ -313,6 +382,7 @@ def _set_up(ksp, who: str, setup=None) -> None:
                                 "with fewer ranks or more memory") from None
         detail = f"PETSc error {exc.ierr}" + ("" if info is None else f", INFOG(1) = {info[0]}")
         raise _factor_error("factorisation of K_ii failed", who, detail) from None
+    _raise_if_short(ksp)
     F = ksp.getPC().getFactorMatrix()
     if F.getMumpsInfog(1) < 0:
         raise _factor_error("MUMPS failed to factor K_ii", who, f"INFOG(1) = {F.getMumpsInfog(1)}")

@@ -144,6 +144,42 @@ def test_floating_component_is_an_input_error():
         craig_bampton(both, six_labels("n0"), n_modes=4, solver=petsc_solver())
 
 
+@pytest.mark.parametrize("select", [dict(n_modes=12), dict(f_max=20000.0)])
+@pytest.mark.parametrize("eig", ["block-lanczos", "slepc"])
+def test_workspace_too_small_is_enlarged_not_called_singular(monkeypatch, select, eig):
+    """MUMPS can estimate its workspace too small (INFOG(1) = -9; the CI saw it once on the
+    pad's K_ii over two ranks, and the run said the pad floats). Forced here with ICNTL(14)
+    = -80 (80 % less than its estimate), measured to give INFOG(1) = -9 on this block:
+    the reduction retries with a larger workspace and gives the default's CB model to
+    round-off (same factor, same pivots: 1e-12); with every try short it is a
+    ResourceError that says so, never "floats"."""
+    import importlib
+
+    from liftoff.core.errors import ResourceError
+
+    mod = importlib.import_module("liftoff.fem.petsc_cb")
+    comp, bl = block()
+    ref = craig_bampton(comp, bl, solver=petsc_solver(eigensolver=eig), **select)
+    tries = []
+    real = mod._mumps_options
+
+    def spy(comm, inertia=True, workspace=None):
+        tries.append(workspace)
+        return real(comm, inertia, workspace)
+
+    monkeypatch.setattr(mod, "_mumps_options", spy)
+    monkeypatch.setattr(mod, "MUMPS_WORKSPACE_TRIES", (-80, None))
+    cb = craig_bampton(comp, bl, solver=petsc_solver(eigensolver=eig), **select)
+    assert tries.count(-80) == (2 if "f_max" in select else 1) and None in tries     # count and factor retried
+    df, dK, dM = compare(ref, cb, comp.M)
+    assert cb.n_modes == ref.n_modes and df < 1e-12 and dK < 1e-12 and dM < 1e-12
+    monkeypatch.setattr(mod, "MUMPS_WORKSPACE_TRIES", (-80, -80))
+    with pytest.raises(ResourceError, match=r"component 'block': MUMPS failed to factor .*workspace was too small "
+                                            r"\(INFOG\(1\) = -9") as e:
+        craig_bampton(comp, bl, solver=petsc_solver(eigensolver=eig), **select)
+    assert "floats" not in str(e.value) and "\n" not in str(e.value)
+
+
 # ------------------------------------------------------------------ FE component, MPI
 def _mpirun(n, path, f_max):
     mpirun = shutil.which("mpirun")
