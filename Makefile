@@ -34,8 +34,10 @@ $(STAMP): pyproject.toml constraints.txt
 	@$(PY) -c "import numpy, dolfinx, numba, h5py, pyvista, distributed, imageio; assert numpy.__version__.startswith('1.24'), numpy.__version__"
 	@touch $(STAMP)
 
+# two pytest-xdist workers (this machine's two cores), whole files per worker (their
+# module fixtures built once), the longest files first (tests/conftest.py)
 test: $(STAMP)
-	$(PY) -m pytest -q tests
+	$(PY) -m pytest -q tests -n 2 --dist loadfile --no-loadscope-reorder
 
 run: $(STAMP)
 	$(VENV)/bin/liftoff run --out $(OUT)

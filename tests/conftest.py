@@ -8,3 +8,29 @@ try:  # pyvista must be imported before dolfinx (FENICSX-NOTES.md: std::bad_allo
     pyvista.OFF_SCREEN = True
 except ImportError:  # pragma: no cover - pyvista is installed by `make test`
     pass
+
+
+# The longest test files first (seconds, serial, on this 2-core machine, 2026-11-27), so
+# that `make test`'s two pytest-xdist workers (--dist loadfile --no-loadscope-reorder)
+# start them at once and finish together: longest-processing-time-first scheduling. The
+# order changes no result (every file's tests stay in their order, on one worker); a file
+# missing here runs after these, in collection order.
+LONGEST_FILES = {
+    "workflows/test_default_figures.py": 245, "workflows/test_run.py": 125, "workflows/test_examples_liftoff.py": 115,
+    "workflows/test_mpi_run.py": 105, "cli/test_fuzz.py": 95, "workflows/test_campaign.py": 90,
+    "cli/test_attacks_round2.py": 80, "workflows/test_hydro_run.py": 72, "workflows/test_slosh_cli.py": 40,
+    "fem/test_slosh.py": 35, "fem/test_beam_model.py": 35, "workflows/test_atomic_outputs.py": 30,
+    "fem/test_default_components.py": 25, "workflows/test_beside.py": 22, "cli/test_kill.py": 22,
+    "fem/test_case_grain.py": 20, "workflows/test_truncation_run.py": 19, "fem/test_mpi.py": 18,
+}
+
+
+def pytest_collection_modifyitems(session, config, items):
+    tests = os.path.join(os.path.dirname(os.path.abspath(__file__)), "")
+
+    def weight(item):
+        path = str(item.path)
+        rel = path[len(tests):].replace(os.sep, "/") if path.startswith(tests) else path
+        return -LONGEST_FILES.get(rel, 0)
+
+    items.sort(key=weight)     # stable: the files' own order otherwise
