@@ -126,22 +126,26 @@ def ring_patches(wall_faces: list[int], prefix: str, heights: dict[float, list[s
     return out
 
 
+def first_stringer_azimuth(p) -> float:
+    """The first stringer's azimuth (deg): ``p.stringer_azimuth``, or half a pitch
+    (180 / p.stringers) where it is None."""
+    return float(p.stringer_azimuth) if p.stringer_azimuth is not None else 180.0 / max(p.stringers, 1)
+
+
 def stringer_xy(p, radius: float) -> list[tuple[float, float]]:
     """(x, y) of each stringer on the wall of radius ``radius``: equal azimuths from
-    ``p.stringer_azimuth`` (deg) about ``p.axis_xy``."""
+    :func:`first_stringer_azimuth` (deg) about ``p.axis_xy``."""
     x0, y0 = p.axis_xy
     out = []
     for k in range(p.stringers):
-        a = math.radians(p.stringer_azimuth) + 2 * math.pi * k / p.stringers
+        a = math.radians(first_stringer_azimuth(p)) + 2 * math.pi * k / p.stringers
         out.append((x0 + radius * math.cos(a), y0 + radius * math.sin(a)))
     return out
 
 
-def stringer_tools(p, radius: float) -> list:
-    """One straight line (an OCC tool) per stringer along the whole cylindrical wall of
-    radius ``radius`` (:func:`stringer_xy`)."""
-    lay = tank_layout(p)
-    z0, z1 = lay[0].z_cyl_bottom, lay[-1].z_cyl_top
+def stringer_tools(p, radius: float, z0: float, z1: float) -> list:
+    """One straight line (an OCC tool) per stringer along the cylindrical wall of radius
+    ``radius`` from z0 to z1 (:func:`stringer_xy`)."""
     out = []
     for x, y in stringer_xy(p, radius):
         line = occ.addLine(occ.addPoint(x, y, z0), occ.addPoint(x, y, z1))
@@ -167,8 +171,9 @@ def stringer_edges(p, wall_faces: list[int], radius: float) -> list[int]:
 def wall_beams(p, wall_faces: list[int], radius: float, wall_thickness: float,
                wall_mass: float | None, owner: str) -> tuple[dict, dict, float | None]:
     """A wall's ring frames (``p.frames``, ``p.frame_section``, ``p.frame_material``) and
-    stringers (``p.stringers`` etc., where ``p`` has them; a TankParams or an OrbiterParams
-    with its ``axis_xy``, ``name`` and ``material``) as beams on the wall's inner face: the wall's ring edges at the frame heights become the curve
+    stringers (``p.stringers``, ``p.stringer_azimuth``, ``p.stringer_section``,
+    ``p.stringer_material``) as beams on the wall's inner face (``p`` a TankParams or an
+    OrbiterParams, with ``axis_xy``, ``name`` and ``material``): the wall's ring edges at the frame heights become the curve
     group ``<name>_frames``, its edges at the stringers' azimuths ``<name>_stringers``, each a
     BeamGroup of its section with the axis offset inward from the mid-surface by half the
     geometric ``wall_thickness`` and the section's base to centroid distance, local z
@@ -182,9 +187,9 @@ def wall_beams(p, wall_faces: list[int], radius: float, wall_thickness: float,
     for kind, edges, spec, mat, vref in (
             ("frames", lambda: [e for z in p.frames for e in ring_edges(wall_faces, float(z), p.axis_xy, radius)],
              p.frame_section, p.frame_material, (0.0, 0.0, 1.0)),
-            ("stringers", lambda: stringer_edges(p, wall_faces, radius), getattr(p, "stringer_section", None),
-             getattr(p, "stringer_material", None), "tangential")):
-        if not (p.frames if kind == "frames" else getattr(p, "stringers", 0)):
+            ("stringers", lambda: stringer_edges(p, wall_faces, radius), p.stringer_section, p.stringer_material,
+             "tangential")):
+        if not (p.frames if kind == "frames" else p.stringers):
             continue
         group = f"{p.name}_{kind}"
         _occ.add_physical(1, group, edges())
@@ -260,7 +265,7 @@ def build_shell_tank(p: TankParams, out_dir: Path) -> Geometry:
         tools += [_occ.plane_cut(z) for z in fills]                                   # (one cut per height)
         cut = set(rings) | {round(z, 6) for z in fills}
         tools += [_occ.plane_cut(float(z)) for z in p.frames if round(float(z), 6) not in cut]
-        tools += stringer_tools(p, rm)
+        tools += stringer_tools(p, rm, *cyl[0])
         wall_faces = _occ.imprint_surfaces({wall: faces}, tools)[wall]
         liquids = liquid_solids(p, cavities)
         if liquids:
@@ -428,6 +433,7 @@ def build_shell_orbiter(p, out_dir: Path) -> Geometry:
                       for phi in (0.0, math.pi)]
             tools += _wall_tools(att, rings, axis, rm, w)
         tools += [_occ.plane_cut(float(z)) for z in p.frames if round(float(z), 6) not in rings]
+        tools += stringer_tools(p, rm, z0 + 0.5 * t, z0 + p.cyl_length)
         vols, faces = _occ.imprint_parts({wing_g: wings}, {skin: faces}, tools)
         patches = _patches_on(faces[skin], tools, refs, lambda n: min(p.mesh_size, 0.6 * w))
         patches += ring_patches(faces[skin], p.name, rings, refs, axis, rm, reach)

@@ -106,6 +106,24 @@ def check_ring_frames(owner: str, walls: str, frames, section, material, lo: flo
         raise InputError(f"{owner}.frame_material must be a Material (E, nu, rho)")
 
 
+def check_stringers(owner: str, walls: str, stringers, section, material) -> int:
+    """Stringers (beams along a shell wall): a whole number >= 0; if any, shell walls, a
+    standard section and a Material or None. Returns the number; InputError naming ``owner``."""
+    if isinstance(stringers, bool) or not isinstance(stringers, (int, float)) \
+            or stringers != int(stringers) or stringers < 0:
+        raise InputError(f"{owner}.stringers must be a whole number >= 0 (got {stringers!r})")
+    if stringers:
+        from liftoff.core.beam import standard_section
+
+        if walls != "shell":
+            raise InputError(f"{owner}.stringers: stringers are beams on a shell wall; they need walls = 'shell' "
+                             f"(got {walls!r})")
+        standard_section(section, f"{owner}.stringer_section")
+        if material is not None and not isinstance(material, Material):
+            raise InputError(f"{owner}.stringer_material must be a Material (E, nu, rho)")
+    return int(stringers)
+
+
 #: how a shell wall carries its off-axis attach points: rigid patches or interpolation rings
 ATTACH = ("patch", "ring")
 

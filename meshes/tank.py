@@ -34,8 +34,8 @@ from liftoff.core.errors import InputError
 
 from . import _occ
 from ._occ import occ
-from .spec import (Geometry, Liquid, Material, SmearedMass, check_attach, check_ring_frames, check_walls, equivalent,
-                   require_positive)
+from .spec import (Geometry, Liquid, Material, SmearedMass, check_attach, check_ring_frames, check_stringers, check_walls,
+                   equivalent, require_positive)
 
 #: liquid models of a tank (TankParams.liquid)
 LIQUIDS = ("smeared", "hydroelastic")
@@ -154,20 +154,8 @@ class TankParams:
     def check_frames(self) -> None:
         """Ring frames and stringers: shell walls, a section, frame heights strictly inside
         the cylindrical wall, a whole number of stringers."""
-        from liftoff.core.beam import standard_section
-
         o = f"TankParams({self.name})"
-        if isinstance(self.stringers, bool) or not isinstance(self.stringers, (int, float)) \
-                or self.stringers != int(self.stringers) or self.stringers < 0:
-            raise InputError(f"{o}.stringers must be a whole number >= 0 (got {self.stringers!r})")
-        self.stringers = int(self.stringers)
-        if self.stringers:
-            if self.walls != "shell":
-                raise InputError(f"{o}.stringers: stringers are beams on a shell wall; they need walls = 'shell' "
-                                 f"(got {self.walls!r})")
-            standard_section(self.stringer_section, f"{o}.stringer_section")
-            if self.stringer_material is not None and not isinstance(self.stringer_material, Material):
-                raise InputError(f"{o}.stringer_material must be a Material (E, nu, rho)")
+        self.stringers = check_stringers(o, self.walls, self.stringers, self.stringer_section, self.stringer_material)
         lay = tank_layout(self)
         check_ring_frames(o, self.walls, self.frames, self.frame_section, self.frame_material,
                           lay[0].z_cyl_bottom, lay[-1].z_cyl_top)

@@ -20,8 +20,9 @@ from liftoff.core.errors import InputError
 from . import _occ
 from ._occ import occ
 from .layout import StackLayout
-from .spec import (Geometry, Material, PointMass, SmearedMass, check_attach, check_ring_frames, check_walls, equivalent,
-                   require_positive)
+from .shells import first_stringer_azimuth
+from .spec import (Geometry, Material, PointMass, SmearedMass, check_attach, check_ring_frames, check_stringers,
+                   check_walls, equivalent, require_positive)
 from .tank import AL2219, Compartment, TankParams, build_tank, tank_height
 
 #: D6AC steel (SRB case): E 205 GPa, nu 0.29, 7850 kg/m^3
@@ -341,6 +342,11 @@ class OrbiterParams:
     frames: tuple = ()                  # shell skin: heights z (m) of ring frames on the fuselage cylinder (beams)
     frame_section: dict = field(default_factory=dict)   # their {shape, dims} (liftoff.core.beam.standard_section)
     frame_material: Material | None = None  # (None: Al 2219)
+    stringers: int = 0                  # shell skin: stringers (beams) along the fuselage cylinder, equally spaced
+    stringer_azimuth: float | None = None   # azimuth (deg, from +x about the fuselage axis) of the first;
+    #                                         None: half a pitch (180/stringers), clear of the wing roots at 0 and 180
+    stringer_section: dict = field(default_factory=dict)   # their {shape, dims}, web radial
+    stringer_material: Material | None = None  # (None: Al 2219)
 
     name = "orbiter"
 
@@ -372,6 +378,19 @@ class OrbiterParams:
                 raise InputError(f"{o}.{nm} = {z} m is not on the fuselage cylinder")
         check_ring_frames(o, self.walls, self.frames, self.frame_section, self.frame_material,
                           z0 + self.wall_thickness, z0 + self.cyl_length, "skin", "the fuselage cylinder")
+        self.stringers = check_stringers(o, self.walls, self.stringers, self.stringer_section, self.stringer_material)
+        a0 = self.stringer_azimuth
+        if a0 is not None and (isinstance(a0, bool) or not isinstance(a0, (int, float)) or not math.isfinite(a0)):
+            raise InputError(f"{o}.stringer_azimuth must be a finite number of degrees (got {a0!r})")
+        rm = R - 0.5 * self.wall_thickness
+        clear = 0.5 * self.wing_thickness + 0.05 * self.mesh_size     # outside the wing root, not a sliver
+        band = math.degrees(math.asin(min(1.0, clear / rm)))
+        for k in range(self.stringers):
+            a = first_stringer_azimuth(self) + 360.0 * k / self.stringers
+            if abs(rm * math.sin(math.radians(a))) < clear:
+                raise InputError(f"{o}.stringer_azimuth: stringer {k + 1} of {self.stringers}, at {a % 360:g} deg, runs "
+                                 f"through the wing root (the wing meets the skin within {band:.3g} deg of 0 and "
+                                 "180 deg); choose stringer_azimuth so that none lies there")
 
     @property
     def axis_xy(self) -> tuple:

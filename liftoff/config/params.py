@@ -86,7 +86,7 @@ def beam_section(where: Where, spec: Any) -> dict:
     try:
         standard_section(spec, "section")
     except InputError as exc:
-        raise where.wrap(exc) from None
+        raise where.error(" ".join(str(exc).removeprefix("section: ").split())) from None
     return dict(spec)
 
 

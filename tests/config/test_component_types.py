@@ -158,3 +158,22 @@ def test_orbiter_skin_frames_from_toml():
     d["model"]["component"]["orbiter"]["params"]["frame_section"] = {"shape": "q"}
     with pytest.raises(InputError, match=r"model\.component\.orbiter\.params\.frame_section: .*unknown shape 'q'"):
         parse_scenario(d, "s.toml")
+
+
+def test_orbiter_skin_stringers_from_toml():
+    """The orbiter's stringers from the scenario (shell skin): count, section, material;
+    a wrong section and a stringer through a wing root named by their keys."""
+    d = tomllib.loads(default_text())
+    d["model"]["component"]["orbiter"]["params"] = {
+        "stringers": 12, "stringer_section": {"shape": "hat", "h": 0.05, "b": 0.03, "c": 0.02, "t": 0.002},
+        "stringer_material": {"E": 70e9, "nu": 0.33, "rho": 2700.0}}
+    b = parse_scenario(d, "s.toml").cases[0].model.components["orbiter"].builder
+    assert b.stringers == 12 and b.stringer_section["shape"] == "hat" and b.stringer_material.rho == 2700.0
+    assert b.stringer_material.name == "orbiter-stringers" and b.stringer_azimuth is None
+    d["model"]["component"]["orbiter"]["params"]["stringer_section"] = {"shape": "hat", "h": 0.05}
+    with pytest.raises(InputError, match=r"model\.component\.orbiter\.params\.stringer_section: shape 'hat' takes"):
+        parse_scenario(d, "s.toml")
+    d["model"]["component"]["orbiter"]["params"]["stringer_section"] = {"shape": "rectangle", "h": 0.05, "b": 0.01}
+    d["model"]["component"]["orbiter"]["params"]["stringer_azimuth"] = 180.0
+    with pytest.raises(InputError, match=r"orbiter.*stringer_azimuth: stringer 1 of 12, at 180 deg, runs through"):
+        parse_scenario(d, "s.toml")

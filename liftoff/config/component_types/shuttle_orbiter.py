@@ -1,7 +1,10 @@
 """``type = "shuttle_orbiter"``: the orbiter-like body of the Shuttle stack
 (meshes.vehicle.OrbiterParams: fuselage, wing, main-engine mount, payload station, attach
 points on the StackLayout). walls default to [model]'s; with shell walls, ``frames = [z, ...]``
-(m), ``frame_section`` and ``frame_material`` put ring frames (beams) on the fuselage skin."""
+(m), ``frame_section`` and ``frame_material`` put ring frames (beams) on the fuselage skin,
+and ``stringers = N`` (equally spaced from ``stringer_azimuth``, deg; default half a pitch,
+clear of the wing roots at 0 and 180 deg), ``stringer_section`` and ``stringer_material``
+stringers along its cylinder."""
 from __future__ import annotations
 
 from ..params import beam_members, builder, mesh_size_kw
@@ -12,8 +15,8 @@ from . import ComponentType, Context
 def read(ctx: Context, where: Where, params: dict):
     from liftoff.meshes.vehicle import OrbiterParams
 
-    fixed = {"layout": ctx.layout, **beam_members(where, params, "orbiter", ("frame",))}
-    rest = {k: v for k, v in params.items() if k not in ("frame_section", "frame_material")} \
+    fixed = {"layout": ctx.layout, **beam_members(where, params, "orbiter", ("frame", "stringer"))}
+    rest = {k: v for k, v in params.items() if k not in fixed or k == "layout"} \
         if isinstance(params, dict) else params
     size = mesh_size_kw(ctx.mesh_size)
     return builder(where, OrbiterParams, rest, fixed, {**size, "walls": ctx.walls})
