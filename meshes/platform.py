@@ -158,11 +158,21 @@ def _crosses_hole(p: PlatformParams, a: np.ndarray, b: np.ndarray) -> bool:
         s = np.clip(np.dot(np.array([hx, hy]) - a, d) / np.dot(d, d), 0.0, 1.0)
         if np.hypot(*(a + s * d - np.array([hx, hy]))) < r:
             return True
-    for hx, hy, h in p.square_holes:
-        pts = a + np.linspace(0.0, 1.0, 65)[:, None] * d
-        if np.any((np.abs(pts[:, 0] - hx) < h) & (np.abs(pts[:, 1] - hy) < h)):
-            return True
-    return False
+    return any(_segment_enters_square(a, d, (hx, hy), h) for hx, hy, h in p.square_holes)
+
+
+def _segment_enters_square(a: np.ndarray, d: np.ndarray, centre, h: float) -> bool:
+    """Whether the segment a + s d (0 <= s <= 1) enters the open square |x - cx| < h,
+    |y - cy| < h: the intersection of its parameter intervals (Liang-Barsky clipping)."""
+    lo, hi = -math.inf, math.inf
+    for i in range(2):
+        if d[i] == 0.0:
+            if abs(a[i] - centre[i]) >= h:
+                return False
+            continue
+        s1, s2 = sorted(((centre[i] - h - a[i]) / d[i], (centre[i] + h - a[i]) / d[i]))
+        lo, hi = max(lo, s1), min(hi, s2)
+    return lo < hi and lo < 1.0 and hi > 0.0
 
 
 def girder_grid(p: PlatformParams) -> tuple[list, list]:

@@ -117,3 +117,34 @@ def test_the_launch_table_is_a_platform_placed_by_the_layout():
     deck = float(np.prod(hi - lo) - sum(math.pi * r ** 2 for *_, r in p.holes) * p.deck_thickness
                  - sum((2 * a) ** 2 for *_, a in p.square_holes) * p.deck_thickness)
     assert deck == pytest.approx(pad_closed_form_volumes(pad)["pad_deck"], rel=1e-12)
+
+
+def test_girder_segment_against_a_square_hole_exactly():
+    """meshes.platform._segment_enters_square (interval clipping) against dense sampling
+    (20,001 points per segment) on 1,000 random segments and squares (a third of them
+    axis-aligned, as the girders are), leaving out the grazes closer than the sampling's
+    spacing; and the grazes sampling misses: a segment 1e-6 inside an edge enters, one
+    along the edge or leaving from a corner does not (the hole is open)."""
+    from liftoff.meshes.platform import _segment_enters_square
+
+    rng = np.random.default_rng(7)
+    s = np.linspace(0.0, 1.0, 20_001)
+    checked = 0
+    for _ in range(1000):
+        a, b = rng.uniform(-2, 2, 2), rng.uniform(-2, 2, 2)
+        if rng.random() < 0.3:                         # axis-aligned, as the girders are
+            k = rng.integers(2)
+            b[k] = a[k]
+        c, h = rng.uniform(-1, 1, 2), rng.uniform(0.1, 1.0)
+        pts = a + s[:, None] * (b - a)
+        depth = np.minimum(h - np.abs(pts[:, 0] - c[0]), h - np.abs(pts[:, 1] - c[1]))   # > 0 inside
+        if abs(depth.max()) < 4e-4 * (1 + np.hypot(*(b - a))):
+            continue                                   # a graze finer than the sampling
+        assert _segment_enters_square(a, b - a, c, h) == (depth.max() > 0), (a, b, c, h)
+        checked += 1
+    assert checked > 950
+    d = np.array([2.0, 0.0])
+    assert _segment_enters_square(np.array([-1.0, 1.0 - 1e-6]), d, (0.0, 0.0), 1.0)      # corner strip, inside
+    assert not _segment_enters_square(np.array([-1.0, 1.0]), d, (0.0, 0.0), 1.0)          # along the edge
+    assert not _segment_enters_square(np.array([1.0, 1.0]), np.array([1.0, 1.0]), (0.0, 0.0), 1.0)  # from a corner out
+    assert _segment_enters_square(np.array([-5.0, 0.0]), np.array([10.0, 0.0]), (0.0, 0.0), 1.0)   # straight through
