@@ -36,7 +36,7 @@ $(STAMP): pyproject.toml constraints.txt
 
 # two pytest-xdist workers (this machine's two cores), whole files per worker (their
 # module fixtures built once), the longest files first (tests/conftest.py), BLAS on one
-# thread in each (two workers of two threads on two cores took 9 % longer)
+# thread in each (2026-11-27: 848 s; 929 s with two threads each, other work running then)
 test: $(STAMP)
 	OPENBLAS_NUM_THREADS=1 $(PY) -m pytest -q tests -n 2 --dist loadfile --no-loadscope-reorder
 
