@@ -306,7 +306,7 @@ def _post_step(coef, qf, vf, P1, Pf, Pg, anyf, anyg, zw2, w2, q, v, acc):
             acc[m] = P1[m] - zw2[m] * v[m] - w2[m] * q[m]
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)   # releases the GIL: two runs march together on two threads (accuracy.py)
 def march(i0, i1, steps, modal, contact, rows_out, state, cache, hist):
     """March steps i0 -> i1 (time t0 + i h). Returns (status, step, info1, info2).
 

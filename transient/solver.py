@@ -456,10 +456,12 @@ def solve(problem: TransientProblem) -> TransientResult:
         return _solve(problem)
 
 
-def _solve(problem: TransientProblem, step: StepChoice | None = None, runs: int = 1) -> TransientResult:
+def _solve(problem: TransientProblem, step: StepChoice | None = None, runs: int = 1,
+           stop=None) -> TransientResult:
     """Run the two-body transient (sections 2.3-2.7) in the steps ``step`` (None: the
     problem's, stepping.choose_step) and return its time histories; ``runs``: results held
-    in memory at once (for the memory estimate)."""
+    in memory at once (for the memory estimate); ``stop``: a threading.Event that ends the
+    run between chunks (Cancelled), for a run marched beside another (accuracy.py)."""
     started = _time.perf_counter()
     pa, pb, fo = problem.body_a, problem.body_b, problem.forcing
     rows = contact_rows(pa, pb, problem.contacts)
@@ -482,12 +484,16 @@ def _solve(problem: TransientProblem, step: StepChoice | None = None, runs: int 
     inputs = (steps, modal, contact, out_rows)
     guard = GrowthGuard(rows, modal, state, step.h, step.margin)
     guard.start(step.t0, step.t_end)
-    _drive(problem, step, inputs, state, cache, hist, lambda: _spectral_radius(W, rows, state.active), guard)
+    _drive(problem, step, inputs, state, cache, hist, lambda: _spectral_radius(W, rows, state.active), guard, stop)
     return _result(problem, rows, step, plans, hist, int(cache.used[0]), started, state)
 
 
+class Cancelled(Exception):
+    """A run ended by its ``stop`` event (the other run of its pair failed)."""
+
+
 def _drive(problem: TransientProblem, step: StepChoice, inputs, state: State, cache: Cache, hist: History,
-           radius, guard: GrowthGuard) -> None:
+           radius, guard: GrowthGuard, stop=None) -> None:
     """March every step in compiled chunks of CHUNK steps (a progress bar between chunks);
     a failed chunk raises (``radius()``: spectral radius of K_C W for the message), and so
     does a chunk whose energy or contact forces outgrow the bounds of ``guard``."""
@@ -499,6 +505,8 @@ def _drive(problem: TransientProblem, step: StepChoice, inputs, state: State, ca
     try:
         i = 0
         while i < step.n_steps:
+            if stop is not None and stop.is_set():
+                raise Cancelled(f"stopped at t = {step.t0 + i * step.h:.6g} s")
             i1 = min(i + CHUNK, step.n_steps)
             status, at, info1, info2 = march(i, i1, *inputs, state, cache, hist)
             if status != 0:

@@ -88,3 +88,62 @@ def test_memory_of_the_run_and_its_h2_check_is_counted_once_before_both():
     assert est.check.time.size == 2 * n + 1
     with pytest.raises(ResourceError, match="the transient needs about"):
         solve_estimated(replace(pr, memory_limit=2.5 * unit + rest))
+
+
+def test_the_pair_marched_together_is_the_pair_marched_in_turn(monkeypatch):
+    """The run at h and its h/2 check march together on two threads (the kernel releases
+    the GIL): the same results, bit for bit, as one after the other (two independent runs
+    of the same arithmetic), with and without the accuracy loop."""
+    from liftoff.transient import accuracy, kernel
+
+    assert kernel.march.targetoptions.get("nogil") is True
+    for accuracy_setting in (None, 0.01):
+        runs = {}
+        for together in (True, False):
+            monkeypatch.setattr(accuracy, "CONCURRENT_PAIR", together)
+            runs[together] = solve_estimated(_drop(accuracy=accuracy_setting, t_end=0.5))
+        a, b = runs[True], runs[False]
+        assert a.result.h == b.result.h and a.check.h == b.check.h
+        for x, y in ((a.result, b.result), (a.check, b.check)):
+            assert np.array_equal(x.contact_force, y.contact_force) and np.array_equal(x.time, y.time)
+        assert a.relative == b.relative
+
+
+def test_a_failure_of_either_run_of_the_pair_stops_the_other():
+    """A failed run of the pair stops the other at its next chunk (no run outlives the
+    call): the h/2 run's error reaches the caller although the h run was still marching,
+    and the h run's error stops the h/2 run (its Cancelled is not the error raised)."""
+    import threading
+
+    from liftoff.core.errors import InputError
+    from liftoff.transient.accuracy import _first_pair
+    from liftoff.transient.solver import Cancelled
+    from liftoff.transient.stepping import choose_step
+
+    pr = _drop()
+    step = choose_step(pr)
+    seen = {}
+
+    def marching(stop):                          # a run that marches until it is stopped
+        if not stop.wait(30.0):
+            raise AssertionError("never stopped")
+        seen[threading.current_thread().name] = True
+        raise Cancelled("stopped")
+
+    def fine_fails(problem, st, runs, stop=None):
+        if st.h < step.h:
+            raise InputError("the h/2 run's own error")
+        return marching(stop)
+
+    with pytest.raises(InputError, match="the h/2 run's own error"):
+        _first_pair(pr, pr, step, fine_fails)
+
+    def coarse_fails(problem, st, runs, stop=None):
+        if st.h == step.h:
+            raise InputError("the h run's own error")
+        return marching(stop)
+
+    with pytest.raises(InputError, match="the h run's own error"):
+        _first_pair(pr, pr, step, coarse_fails)
+    assert seen == {"MainThread": True, "liftoff-h/2": True}      # each run was stopped by the other's failure
+    assert not any(t.name == "liftoff-h/2" for t in threading.enumerate())
