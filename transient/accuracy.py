@@ -23,6 +23,7 @@ absolute contact force of its unit (N, N m) in the run.
 """
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -36,9 +37,10 @@ from .stepping import choose_step
 
 RICHARDSON = 4.0 / 3.0   # err(y_h) ~ RICHARDSON (y_{h/2} - y_h) for a second-order scheme
 MAX_HALVINGS = 12        # the accuracy loop stops (ConvergenceError) after this many halvings
-#: march the run at h and the first run at h/2 together on two threads (False: one after
-#: the other; the results are the same, bit for bit)
-CONCURRENT_PAIR = True
+#: march the run at h and the first run at h/2 together on two threads (False, or the
+#: environment's LIFTOFF_CONCURRENT_PAIR=0: one after the other, on one core; the results
+#: are the same, bit for bit)
+CONCURRENT_PAIR = os.environ.get("LIFTOFF_CONCURRENT_PAIR", "1") != "0"
 
 
 def peak_errors(y_h: np.ndarray, y_half: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
