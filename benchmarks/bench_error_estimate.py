@@ -39,8 +39,9 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=50_000)
     ap.add_argument("--repeat", type=int, default=3)
     args = ap.parse_args()
-    prob = _bench_transient().problem(args.steps)
-    solve_estimated(_bench_transient().problem(2_000))           # compile
+    bench = _bench_transient()
+    prob = bench.problem(args.steps)
+    solve_estimated(bench.problem(2_000))                         # compile
     times = {True: [], False: []}
     last = {}
     for _ in range(args.repeat):

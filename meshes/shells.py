@@ -126,21 +126,17 @@ def ring_patches(wall_faces: list[int], prefix: str, heights: dict[float, list[s
     return out
 
 
-def first_stringer_azimuth(p) -> float:
-    """The first stringer's azimuth (deg): ``p.stringer_azimuth``, or half a pitch
-    (180 / p.stringers) where it is None."""
-    return float(p.stringer_azimuth) if p.stringer_azimuth is not None else 180.0 / max(p.stringers, 1)
+def stringer_angles(p) -> list[float]:
+    """Each stringer's azimuth (rad) about ``p.axis_xy``: ``p.stringers`` equally spaced from
+    ``p.stringer_azimuth`` (deg), or from half a pitch (180 / p.stringers deg) where it is None."""
+    first = float(p.stringer_azimuth) if p.stringer_azimuth is not None else 180.0 / max(p.stringers, 1)
+    return [math.radians(first) + 2 * math.pi * k / p.stringers for k in range(p.stringers)]
 
 
 def stringer_xy(p, radius: float) -> list[tuple[float, float]]:
-    """(x, y) of each stringer on the wall of radius ``radius``: equal azimuths from
-    :func:`first_stringer_azimuth` (deg) about ``p.axis_xy``."""
+    """(x, y) of each stringer on the wall of radius ``radius`` (:func:`stringer_angles`)."""
     x0, y0 = p.axis_xy
-    out = []
-    for k in range(p.stringers):
-        a = math.radians(first_stringer_azimuth(p)) + 2 * math.pi * k / p.stringers
-        out.append((x0 + radius * math.cos(a), y0 + radius * math.sin(a)))
-    return out
+    return [(x0 + radius * math.cos(a), y0 + radius * math.sin(a)) for a in stringer_angles(p)]
 
 
 def stringer_tools(p, radius: float, z0: float, z1: float) -> list:

@@ -20,7 +20,7 @@ from liftoff.core.errors import InputError
 from . import _occ
 from ._occ import occ
 from .layout import StackLayout
-from .shells import first_stringer_azimuth
+from .shells import stringer_angles
 from .spec import (Geometry, Material, PointMass, SmearedMass, check_attach, check_ring_frames, check_stringers,
                    check_walls, equivalent, require_positive)
 from .tank import AL2219, Compartment, TankParams, build_tank, tank_height
@@ -385,10 +385,10 @@ class OrbiterParams:
         rm = R - 0.5 * self.wall_thickness
         clear = 0.5 * self.wing_thickness + 0.05 * self.mesh_size     # outside the wing root, not a sliver
         band = math.degrees(math.asin(min(1.0, clear / rm)))
-        for k in range(self.stringers):
-            a = first_stringer_azimuth(self) + 360.0 * k / self.stringers
-            if abs(rm * math.sin(math.radians(a))) < clear:
-                raise InputError(f"{o}.stringer_azimuth: stringer {k + 1} of {self.stringers}, at {a % 360:g} deg, runs "
+        for k, a in enumerate(stringer_angles(self)):
+            if abs(rm * math.sin(a)) < clear:
+                raise InputError(f"{o}.stringer_azimuth: stringer {k + 1} of {self.stringers}, at "
+                                 f"{math.degrees(a) % 360:g} deg, runs "
                                  f"through the wing root (the wing meets the skin within {band:.3g} deg of 0 and "
                                  "180 deg); choose stringer_azimuth so that none lies there")
 

@@ -1,5 +1,6 @@
 """Test-session set-up shared by all test directories."""
 import os
+from pathlib import Path
 
 os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
 try:  # pyvista must be imported before dolfinx (FENICSX-NOTES.md: std::bad_alloc otherwise)
@@ -26,11 +27,10 @@ LONGEST_FILES = {
 
 
 def pytest_collection_modifyitems(session, config, items):
-    tests = os.path.join(os.path.dirname(os.path.abspath(__file__)), "")
+    tests = Path(__file__).resolve().parent
 
     def weight(item):
-        path = str(item.path)
-        rel = path[len(tests):].replace(os.sep, "/") if path.startswith(tests) else path
-        return -LONGEST_FILES.get(rel, 0)
+        path = Path(item.path).resolve()
+        return -LONGEST_FILES.get(path.relative_to(tests).as_posix(), 0) if path.is_relative_to(tests) else 0
 
     items.sort(key=weight)     # stable: the files' own order otherwise

@@ -156,12 +156,11 @@ def _first_pair(problem: TransientProblem, check: TransientProblem, step, solve_
     worker.start()
     try:
         coarse = solve_at(replace(problem, progress=False), step, runs=3, stop=stop)
-    except Cancelled:                          # the h/2 run failed first: its error
-        worker.join()
-        raise box["error"] from None
-    except BaseException:
+    except BaseException as exc:
         stop.set()
         worker.join()
+        if isinstance(exc, Cancelled):         # the h/2 run failed first: its error
+            raise box["error"] from None
         raise
     worker.join()
     if "error" in box:

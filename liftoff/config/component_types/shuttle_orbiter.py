@@ -15,11 +15,10 @@ from . import ComponentType, Context
 def read(ctx: Context, where: Where, params: dict):
     from liftoff.meshes.vehicle import OrbiterParams
 
-    fixed = {"layout": ctx.layout, **beam_members(where, params, "orbiter", ("frame", "stringer"))}
-    rest = {k: v for k, v in params.items() if k not in fixed or k == "layout"} \
-        if isinstance(params, dict) else params
+    members = beam_members(where, params, "orbiter", ("frame", "stringer"))
+    rest = {k: v for k, v in params.items() if k not in members} if isinstance(params, dict) else params
     size = mesh_size_kw(ctx.mesh_size)
-    return builder(where, OrbiterParams, rest, fixed, {**size, "walls": ctx.walls})
+    return builder(where, OrbiterParams, rest, {"layout": ctx.layout, **members}, {**size, "walls": ctx.walls})
 
 
 TYPE = ComponentType("shuttle_orbiter", read, "liftoff.meshes.vehicle:build_orbiter", "vehicle",
