@@ -35,6 +35,8 @@ import numpy as np
 from numba import njit
 
 OK, NO_CONVERGENCE, CYCLING, SINGULAR, FRICTION_SINGULAR = 0, 1, 2, 3, 4
+#: steps whose outputs are recovered together, one matrix-matrix product per kind (march)
+OUT_BLOCK = 64
 BOLTED, CLOSED, OPEN = 0, 1, 2
 
 
@@ -152,23 +154,26 @@ class History(NamedTuple):
     Qb: np.ndarray      # (n_t or 0, nb) the same for body b
     Vb: np.ndarray
     Ab: np.ndarray
+    X_a: np.ndarray     # (3, OUT_BLOCK, na) q, v, acc of body a at the steps whose outputs are not yet recovered
+    X_b: np.ndarray     # (3, OUT_BLOCK, nb) the same for body b
+    kept: np.ndarray    # (1,) int64: how many steps X_a, X_b hold (the last ones marched)
 
 
 @njit(cache=True)
-def _feedback(q, v, U, V, since, until, ta, out):
+def _feedback(q, v, U, Vq, Vv, since, until, ta, s, out):
     """out = sum_k U[:, k] (V[k] . [q; v]) over the rank-one terms on at ta
-    (since[k] <= ta < until[k]) (eq. 26)."""
-    n = q.size
-    for m in range(n):
-        out[m] = 0.0
-    for k in range(V.shape[0]):
+    (since[k] <= ta < until[k]) (eq. 26); Vq, Vv the q and v halves of V, s (r,) work.
+    Three BLAS matrix-vector products: V's halves read once each, not one loop per term."""
+    r = since.size
+    if r == 0:
+        out[:] = 0.0
+        return
+    np.dot(Vq, q, s)
+    s += np.dot(Vv, v)
+    for k in range(r):
         if not (since[k] <= ta < until[k]):
-            continue
-        s = 0.0
-        for m in range(n):
-            s += V[k, m] * q[m] + V[k, n + m] * v[m]
-        for m in range(n):
-            out[m] += U[m, k] * s
+            s[k] = 0.0
+    np.dot(U, s, out)
 
 
 @njit(cache=True)
@@ -320,9 +325,10 @@ def march(i0, i1, steps, modal, contact, rows_out, state, cache, hist):
     L_a, kind_a, targ_a, L_b, kind_b, targ_b = rows_out
     q, v, f, active, Pc, Pext, ptr = state[:7]
     keys, invs, used = cache
-    Y_a, Y_b, Fc, states, iters, keep, Qa, Va, Aa, Qb, Vb, Ab = hist
+    Y_a, Y_b, Fc, states, iters, keep, Qa, Va, Aa, Qb, Vb, Ab, Xa, Xb, kept = hist
     n, nc = q.size, f.size
     P1 = np.empty(n); fb = np.zeros(n); qf = np.empty(n); vf = np.empty(n)
+    Vq = np.ascontiguousarray(V[:, :n]); Vv = np.ascontiguousarray(V[:, n:]); sfb = np.empty(V.shape[0])
     acc = np.empty(n); Pf = np.zeros(n); Pg = np.zeros(n)
     n2 = W.shape[0]  # nc, or 2 nc when there are rigid rows (unknowns [f1; g])
     u = np.zeros(n2); fn = np.empty(nc); g = np.zeros(nc)
@@ -334,12 +340,18 @@ def march(i0, i1, steps, modal, contact, rows_out, state, cache, hist):
     cand = np.empty(nc, dtype=np.bool_)
     free = np.empty(nc, dtype=np.bool_)
     bolted = np.empty(release.size, dtype=np.bool_)
+    # outputs: the states of OUT_BLOCK steps kept (in hist, across chunks: the blocks start at
+    # the same steps whatever the chunks, so the results do not depend on them), then
+    # recovered together (_outputs_block); the last block when the run's last step is marched
+    need_a = _kinds(kind_a); need_b = _kinds(kind_b)
+    nbuf = kept[0]
+    last = Y_a.shape[0] - 1
     for i in range(i0, i1):
         ta = t0 + i * h
         tb = t0 + (i + 1) * h
         # ---------------- free step of both bodies (contact force at t1 = 0)
         if V.shape[0] > 0:
-            _feedback(q, v, U, V, since, until, ta, fb)
+            _feedback(q, v, U, Vq, Vv, since, until, ta, sfb, fb)
         ptr[0] = _pre_step(coef, const, tk, Pk, ptr[0], tb, V.shape[0] > 0, fb, q, v, Pext, Pc, P1, qf, vf)
         # ---------------- candidate rows and free relative displacement
         e = np.dot(Phi_c, qf)  # one BLAS product
@@ -350,18 +362,7 @@ def march(i0, i1, steps, modal, contact, rows_out, state, cache, hist):
                                                       fn, g, rows2, cols2)
         else:
             ed = np.dot(Phi_c, vf) if any_rigid else e
-            for c in range(release.size):
-                bolted[c] = tb < release[c]
-            for j in range(nc):
-                cand[j] = bolted[dcontact[j]] or axial[j]
-                free[j] = cand[j] and not bolted[dcontact[j]]  # may open or close in this step
-                if not bolted[dcontact[j]] and not axial[j]:
-                    active[j] = False
-                elif bolted[dcontact[j]]:
-                    active[j] = True
-                u[j] = coff[j] + e[j] if cand[j] else 0.0
-                if any_rigid:
-                    u[nc + j] = ed[j] if (cand[j] and rigid[j]) else 0.0
+            _candidates(tb, release, dcontact, axial, coff, rigid, any_rigid, e, ed, bolted, cand, free, active, u)
             # ---------------- contact solve
             if method == 0:
                 st, it, info1, info2 = _solve_direct(W, C2, nsign, keys, invs, used, u, free, rigid, active,
@@ -369,6 +370,8 @@ def march(i0, i1, steps, modal, contact, rows_out, state, cache, hist):
             else:
                 st, it, info1, info2 = _solve_fixed_point(W, Cdiag, nsign, u, free, active, f, tol, max_iter, fn)
         if st != OK:
+            _flush(L_a, kind_a, targ_a, Xa, L_b, kind_b, targ_b, Xb, nbuf, Y_a, Y_b, i + 1 - nbuf)
+            kept[0] = 0
             return st, i + 1, info1, info2
         # ---------------- end-of-step state with the contact force
         anyf, anyg = _contact_load(Phi_c, rigid, any_rigid, fn, g, f, Pf, Pg, Pc)
@@ -378,12 +381,39 @@ def march(i0, i1, steps, modal, contact, rows_out, state, cache, hist):
         # ---------------- outputs at t1
         r = i + 1
         _record_contact(r, it, fn, bolted, active, opening, dcontact, axial, Fc, states, iters)
-        _outputs(L_a, kind_a, targ_a, q[:na], v[:na], acc[:na], Y_a, r)
-        if n > na:
-            _outputs(L_b, kind_b, targ_b, q[na:], v[na:], acc[na:], Y_b, r)
+        _keep_state(Xa, nbuf, need_a, q, v, acc, 0)
+        _keep_state(Xb, nbuf, need_b, q, v, acc, na)
+        nbuf += 1
+        if nbuf == OUT_BLOCK:
+            _flush(L_a, kind_a, targ_a, Xa, L_b, kind_b, targ_b, Xb, nbuf, Y_a, Y_b, r + 1 - nbuf)
+            nbuf = 0
         if keep:
             _record_modal(r, na, q, v, acc, Qa, Va, Aa, Qb, Vb, Ab)
+    if i1 >= last:
+        _flush(L_a, kind_a, targ_a, Xa, L_b, kind_b, targ_b, Xb, nbuf, Y_a, Y_b, i1 + 1 - nbuf)
+        nbuf = 0
+    kept[0] = nbuf
     return OK, i1, 0.0, 0.0
+
+
+@njit(cache=True)
+def _candidates(tb, release, dcontact, axial, coff, rigid, any_rigid, e, ed, bolted, cand, free, active, u):
+    """The reference's rows of a step ending at tb: bolted contacts (every row, coupled) and
+    the axial rows of released ones (``free``: may open or close in this step); released
+    lateral rows uncoupled; u = c + e_free on the candidate rows (and e'_free on rigid ones)."""
+    nc = e.size
+    for c in range(release.size):
+        bolted[c] = tb < release[c]
+    for j in range(nc):
+        cand[j] = bolted[dcontact[j]] or axial[j]
+        free[j] = cand[j] and not bolted[dcontact[j]]  # may open or close in this step
+        if not bolted[dcontact[j]] and not axial[j]:
+            active[j] = False
+        elif bolted[dcontact[j]]:
+            active[j] = True
+        u[j] = coff[j] + e[j] if cand[j] else 0.0
+        if any_rigid:
+            u[nc + j] = ed[j] if (cand[j] and rigid[j]) else 0.0
 
 
 @njit(cache=True)
@@ -560,13 +590,50 @@ def _record_modal(r, na, q, v, acc, Qa, Va, Aa, Qb, Vb, Ab):
 
 
 @njit(cache=True)
-def _outputs(L, kind, targ, q, v, acc, Y, r):
-    """Y[r, targ] = sum over rows of L_row . x_kind (x = q, v or acc); rows sorted by kind,
-    one BLAS product per kind."""
+def _kinds(kind):
+    """(3,) bool: which of q, qdot, qddot the output rows read."""
+    need = np.zeros(3, dtype=np.bool_)
+    for row in range(kind.size):
+        need[kind[row]] = True
+    return need
+
+
+@njit(cache=True)
+def _keep_state(X, t, need, q, v, acc, m0):
+    """Row t of the kept states X (3, OUT_BLOCK, nm): modes m0 .. m0 + nm of q, v, acc (the
+    kinds the outputs read)."""
+    nm = X.shape[2]
+    if need[0]:
+        for m in range(nm):
+            X[0, t, m] = q[m0 + m]
+    if need[1]:
+        for m in range(nm):
+            X[1, t, m] = v[m0 + m]
+    if need[2]:
+        for m in range(nm):
+            X[2, t, m] = acc[m0 + m]
+
+
+@njit(cache=True)
+def _flush(L_a, kind_a, targ_a, Xa, L_b, kind_b, targ_b, Xb, nt, Y_a, Y_b, r0):
+    """The outputs of both bodies at the nt kept steps, rows r0 .. r0 + nt of Y_a, Y_b."""
+    if nt == 0:
+        return
+    _outputs_block(L_a, kind_a, targ_a, Xa, nt, Y_a, r0)
+    if Xb.shape[2] > 0:
+        _outputs_block(L_b, kind_b, targ_b, Xb, nt, Y_b, r0)
+
+
+@njit(cache=True)
+def _outputs_block(L, kind, targ, X, nt, Y, r0):
+    """Y[r0 + t, targ] = sum over rows of L_row . x_kind(t) for the nt kept steps t (X: their
+    q, v, acc); rows sorted by kind, one matrix-matrix product per kind (BLAS-3: L is read
+    once for OUT_BLOCK steps, not once a step)."""
     if Y.shape[1] == 0:
         return
-    for k in range(Y.shape[1]):
-        Y[r, k] = 0.0
+    for t in range(nt):
+        for k in range(Y.shape[1]):
+            Y[r0 + t, k] = 0.0
     nrow = L.shape[0]
     s0 = 0
     while s0 < nrow:
@@ -574,10 +641,14 @@ def _outputs(L, kind, targ, q, v, acc, Y, r):
         s1 = s0
         while s1 < nrow and kind[s1] == kd:
             s1 += 1
-        x = q if kd == 0 else (v if kd == 1 else acc)
-        y = np.dot(L[s0:s1], x)
-        for row in range(s0, s1):
-            Y[r, targ[row]] += y[row - s0]
+        y = np.empty((nt, s1 - s0))
+        if nt == X.shape[1]:
+            np.dot(X[kd], L[s0:s1].T, y)
+        else:                                   # a partly filled block (a chunk's end)
+            np.dot(np.ascontiguousarray(X[kd, :nt]), L[s0:s1].T, y)
+        for t in range(nt):
+            for row in range(s0, s1):
+                Y[r0 + t, targ[row]] += y[t, row - s0]
         s0 = s1
 
 

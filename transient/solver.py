@@ -22,6 +22,7 @@ from .kernel import (
     NO_CONVERGENCE,
     OPEN,
     SINGULAR,
+    OUT_BLOCK,
     Cache,
     Contact,
     History,
@@ -400,7 +401,8 @@ def _histories(problem: TransientProblem, rows, n_t: int, plans) -> History:
     Vb, Ab = (np.zeros((n_t if full else 0, nb)) for _ in range(2))
     return History(np.zeros((n_t, plans[0].ntarg)), np.zeros((n_t, plans[1].ntarg)), np.zeros((n_t, rows.n)),
                    np.zeros((n_t, len(rows.names)), dtype=np.int8), np.zeros(n_t, dtype=np.int32), keep,
-                   Qa, Va, Aa, Qb, Vb, Ab)
+                   Qa, Va, Aa, Qb, Vb, Ab, np.zeros((3, OUT_BLOCK, na)), np.zeros((3, OUT_BLOCK, nb)),
+                   np.zeros(1, dtype=np.int64))
 
 
 def _start(problem: TransientProblem, rows, contact: Contact, init: InitialState, f0, active0, loads,
