@@ -500,6 +500,7 @@ def _drive(problem: TransientProblem, step: StepChoice, inputs, state: State, ca
     a failed chunk raises (``radius()``: spectral radius of K_C W for the message), and so
     does a chunk whose energy or contact forces outgrow the bounds of ``guard``."""
     bar = None
+    laws = True if inputs[2].laws else None      # the kernel's path (march: compiled without the laws if None)
     if problem.progress and step.n_steps > 4 * CHUNK:
         from tqdm import tqdm
 
@@ -510,7 +511,7 @@ def _drive(problem: TransientProblem, step: StepChoice, inputs, state: State, ca
             if stop is not None and stop.is_set():
                 raise Cancelled(f"stopped at t = {step.t0 + i * step.h:.6g} s")
             i1 = min(i + CHUNK, step.n_steps)
-            status, at, info1, info2 = march(i, i1, *inputs, state, cache, hist)
+            status, at, info1, info2 = march(i, i1, *inputs, state, cache, hist, laws)
             if status != 0:
                 _failure(status, step.t0 + at * step.h, info1, info2, radius)
             if not (np.all(np.isfinite(state.q)) and np.all(np.isfinite(state.v))):
