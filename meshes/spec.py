@@ -52,6 +52,7 @@ from pathlib import Path
 
 import numpy as np
 
+from liftoff.core.elastic import check_elastic
 from liftoff.core.errors import InputError
 from liftoff.core.records import write_text
 from liftoff.core.units import G0
@@ -166,17 +167,7 @@ class Material:
         """InputError naming the material (and ``where``, e.g. its volume) and the value if
         E, nu or rho is not physical: the one material check of the project."""
         who = f"material {self.name!r}" + (f" of {where}" if where else "")
-        try:
-            self.E, self.nu, self.rho = float(self.E), float(self.nu), float(self.rho)
-        except (TypeError, ValueError):
-            raise InputError(f"{who}: E, nu and rho must be numbers (got {self.E!r}, {self.nu!r}, "
-                             f"{self.rho!r})") from None
-        if not (math.isfinite(self.E) and self.E > 0):
-            raise InputError(f"{who}: Young's modulus E = {self.E!r} Pa must be > 0")
-        if not (math.isfinite(self.nu) and -1.0 < self.nu < 0.5):
-            raise InputError(f"{who}: Poisson's ratio nu = {self.nu!r} must be in (-1, 0.5)")
-        if not (math.isfinite(self.rho) and self.rho > 0):
-            raise InputError(f"{who}: density rho = {self.rho!r} kg/m^3 must be > 0")
+        self.E, self.nu, self.rho = check_elastic(who, self.E, self.nu, self.rho)
 
 
 def equivalent(base: Material, mass: float, volume: float, name: str | None = None) -> Material:

@@ -28,6 +28,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from liftoff.core.beam import Section, assemble_frame, beam_element, tube
+from liftoff.core.elastic import check_elastic
 from liftoff.core.errors import InputError, ResourceError
 
 from .component import Component
@@ -80,11 +81,9 @@ class BeamStick:
                 raise InputError(f"{o}.{key}: every value must be > 0")
         if np.any(self.per_segment("thickness") > self.per_segment("radius")):
             raise InputError(f"{o}.thickness: a wall thicker than its radius")
-        for key in ("E", "rho", "element_length"):
-            if not (math.isfinite(getattr(self, key)) and getattr(self, key) > 0):
-                raise InputError(f"{o}.{key} must be > 0")
-        if not -1.0 < self.nu < 0.5:
-            raise InputError(f"{o}.nu must be in (-1, 0.5), got {self.nu}")
+        self.E, self.nu, self.rho = check_elastic(o, self.E, self.nu, self.rho)
+        if not (math.isfinite(self.element_length) and self.element_length > 0):
+            raise InputError(f"{o}.element_length must be > 0 m (got {self.element_length!r})")
         if not self.points:
             raise InputError(f"{o}.points: none: a stick needs named points to join or hold it")
         for n, p in self.points.items():

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from liftoff.core.beam import Section, assemble_frame, beam_element, standard_section
+from liftoff.core.elastic import check_elastic
 from liftoff.core.errors import InputError
 
 from .component import Component
@@ -46,11 +47,7 @@ class Strut:
             raise InputError(f"{o}.ends: each end is [x, y, z] in m")
         if not np.linalg.norm(b - a) > 0:
             raise InputError(f"{o}.ends: its two ends coincide at {a.tolist()} m")
-        for k, v in (("E", self.E), ("rho", self.rho)):
-            if isinstance(v, bool) or not (np.isfinite(v) and v > 0):
-                raise InputError(f"{o}.{k} must be > 0 (got {v!r})")
-        if not -1.0 < self.nu < 0.5:
-            raise InputError(f"{o}.nu must be in (-1, 0.5) (got {self.nu!r})")
+        self.E, self.nu, self.rho = check_elastic(o, self.E, self.nu, self.rho)
         if isinstance(self.elements, bool) or int(self.elements) != self.elements or not self.elements >= 1:
             raise InputError(f"{o}.elements must be a whole number >= 1 (got {self.elements!r})")
         self.section_of()

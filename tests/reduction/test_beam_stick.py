@@ -86,7 +86,10 @@ def test_mass_of_segments_lumped_masses_and_links():
     (dict(points={"p": [1.0, 2.0]}), "points.p: a z (on the axis) or [x, y, z]"),
     (dict(masses={"q": (1.0, 0.0, 0.0, 0.0)}), "masses.q: not one of the points"),
     (dict(masses={"p": (0.0, 0.0, 0.0, 0.0)}), "masses.p: [kg > 0"),
-    (dict(nu=0.5), "nu must be in (-1, 0.5)"),
+    (dict(nu=0.5), "BeamStick(b): Poisson's ratio nu = 0.5 must be in (-1, 0.5)"),
+    (dict(E=0.0), "BeamStick(b): Young's modulus E = 0.0 Pa must be > 0"),
+    (dict(rho=True), "BeamStick(b): E, nu and rho must be numbers"),
+    (dict(element_length=-1.0), "BeamStick(b).element_length must be > 0 m"),
 ])
 def test_bad_sticks_fail_in_one_line(change, message):
     kw = dict(name="b", stations=(0.0, 10.0), radius=(1.0,), thickness=(0.01,), points={"p": 5.0})

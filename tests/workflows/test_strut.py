@@ -94,3 +94,19 @@ def test_strut_bad_input():
     del bad["model"]["component"]["strut_fwd"]["params"]["section"]
     with pytest.raises(InputError, match=r"strut_fwd\.params\.section: missing"):
         parse_scenario(bad, "s.toml", SCENARIO.parent)
+
+
+@pytest.mark.parametrize("key, value, message", [("E", -2e11, "Young's modulus E = -200000000000.0 Pa must be > 0"),
+                                                 ("nu", 0.5, "Poisson's ratio nu = 0.5 must be in (-1, 0.5)"),
+                                                 ("rho", 0.0, "density rho = 0.0 kg/m^3 must be > 0")])
+def test_strut_material_is_checked_as_every_material(key, value, message):
+    """The strut's E, nu and rho go through the project's one elastic-material check
+    (liftoff.core.elastic), as a meshed Material's: the same bounds and words."""
+    from liftoff.config import parse_scenario
+    from liftoff.core.errors import InputError
+
+    bad = _with_booster(tomllib.loads(SCENARIO.read_text()))
+    bad["model"]["component"]["strut_fwd"]["params"][key] = value
+    with pytest.raises(InputError) as exc:
+        parse_scenario(bad, "s.toml", SCENARIO.parent)
+    assert "strut_fwd" in str(exc.value) and message in str(exc.value) and "\n" not in str(exc.value)
