@@ -139,13 +139,18 @@ def given_model(comp: ComponentModel):
     return None if t is None else t.model_builder()
 
 
-def component_stage(model: ModelConfig, name: str, cache: StageCache, workdir: Path) -> tuple[Component, dict, str]:
-    comp = model.components[name]
+def component_key(model: ModelConfig, name: str) -> str:
+    """The cache key of the component stage of ``name``."""
     code = (("liftoff.workflows.stick", "liftoff.meshes", "liftoff.reduction", "liftoff.core") if model.source == "stick"
             else ("liftoff.meshes", "liftoff.fem", "liftoff.reduction.component", "liftoff.reduction.liquid",
                   "liftoff.reduction.beam_stick", "liftoff.workflows.fe_source",
                   "liftoff.core"))
-    key = stage_key("component", _component_key(model, comp), code)
+    return stage_key("component", _component_key(model, model.components[name]), code)
+
+
+def component_stage(model: ModelConfig, name: str, cache: StageCache, workdir: Path) -> tuple[Component, dict, str]:
+    comp = model.components[name]
+    key = component_key(model, name)
 
     def thermal_path(p: Path) -> Path:          # the unit thermal loads beside the component
         return p.with_name(p.name.replace(".npz", ".thermal.npz"))
@@ -316,6 +321,87 @@ def reduce_concurrently(model: ModelConfig, comps: dict[str, Component], comp_ke
     return logs
 
 
+#: under mpirun: "concurrent" (components shared out over the ranks, each reduced by one
+#: rank alone) or "distributed" (each component over all ranks, one after another)
+MPI_COMPONENTS_ENV = "LIFTOFF_MPI_COMPONENTS"
+
+
+def _claim(folder: Path, tag: str) -> bool:
+    """Whether this process is the first to claim ``tag`` (a file created exclusively)."""
+    try:
+        os.close(os.open(folder / tag, os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+        return True
+    except FileExistsError:
+        return False
+
+
+def _needs_stages(model: ModelConfig, name: str, cache: StageCache, workdir: Path) -> bool:
+    """Whether FE component ``name`` has a model stage not yet in the cache (its component
+    stage, or its CB stage, whose key needs the component itself: then it is loaded)."""
+    key = component_key(model, name)
+    if not cache.has(model.source, key, ".npz"):
+        return True
+    from .parallel import alone
+
+    with alone():                # a damaged entry is rebuilt here, by this rank alone
+        comp, _, _ = component_stage(model, name, StageCache(cache.root), workdir)
+    return not _cb_cached(model, name, comp, key, cache)
+
+
+def reduce_over_ranks(model: ModelConfig, names: list[str], cache: StageCache, workdir: Path, bar=None) -> dict:
+    """Under mpirun with a stage cache: the FE and CB stages of the components not yet in
+    it, shared out over the ranks. Each rank claims the next unclaimed component (a file in
+    the cache folder) and runs both its stages alone (workflows/parallel.py, ``alone``: FE
+    on MPI.COMM_SELF), writing the cache as a serial run does; the ranks then meet, and
+    the run loads every product from the cache. Only with at least as many such components
+    as ranks (else they are distributed over all ranks, one after another) and unless
+    $LIFTOFF_MPI_COMPONENTS is "distributed". A component that fails here is left to the
+    collective stages, which give its error on every rank. Returns {component: the cache
+    log of its two stages, "(rank r)" in the labels of other ranks than 0}."""
+    comm = cache.comm
+    mode = os.environ.get(MPI_COMPONENTS_ENV, "concurrent").strip() or "concurrent"
+    if mode not in ("concurrent", "distributed"):
+        from liftoff.core.errors import InputError
+
+        raise InputError(f"${MPI_COMPONENTS_ENV} = {mode!r}: give 'concurrent' or 'distributed'")
+    fe = [n for n in names if model.components[n].nastran is None and given_model(model.components[n]) is None]
+    if comm.size < 2 or cache.root is None or model.source != "fe" or mode == "distributed" or not fe:
+        return {}
+    todo = on_root(comm, lambda: [n for n in fe if _needs_stages(model, n, cache, workdir)])
+    if len(todo) < comm.size:
+        return {}
+    import uuid
+
+    from .parallel import alone
+
+    folder = Path(cache.root) / "claims"
+    run = comm.bcast(uuid.uuid4().hex if comm.rank == 0 else None)
+    on_root(comm, lambda: folder.mkdir(parents=True, exist_ok=True), share=False)
+    logs = {}
+    try:
+        for name in todo:
+            if not _claim(folder, f"{run}-{name}"):
+                continue
+            if bar is not None:
+                bar.set_postfix_str(f"fe + cb {name} (rank {comm.rank})")
+            own = StageCache(cache.root)
+            try:
+                with alone(), threadpool_limits(limits=1, user_api="blas"):
+                    comp, _, key = component_stage(model, name, own, workdir)
+                    cb_stage(model, name, comp, key, own)
+            except Exception:  # noqa: BLE001 - the collective stages redo it and say why it fails
+                continue
+            tag = "" if comm.rank == 0 else f" (rank {comm.rank})"
+            logs[name] = [(st, f"{lab}{tag}", how, t) for st, lab, how, t in own.log]
+    finally:
+        comm.barrier()
+        on_root(comm, lambda: [p.unlink() for p in folder.glob(f"{run}-*")], share=False)
+    merged = {}
+    for part in comm.allgather(logs):
+        merged.update(part)
+    return merged
+
+
 # ------------------------------------------------------------------ the stack
 def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, where: Where | None = None,
                 workers: int | None = None) -> StackModel:
@@ -332,12 +418,16 @@ def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, wh
     with tempfile.TemporaryDirectory(prefix=f"liftoff-geom{TEMP_TAG}{os.getpid()}-") as work:
         bar = tqdm(total=2 * len(names), desc="model stages", unit="stage", disable=not progress or cache.comm.rank != 0,
                    leave=False)
+        ranks = reduce_over_ranks(model, names, cache, Path(work), bar)     # under mpirun
         for name in names:
             if model.components[name].nastran is None and given_model(model.components[name]) is None:
                 bar.set_postfix_str(f"fe {name}")
                 comps[name], thermal[name], comp_keys[name] = component_stage(model, name, cache, Path(work))
+                if name in ranks and cache.log and cache.log[-1][2] == "hit":
+                    cache.log[-1:] = [e for e in ranks[name] if e[0] == model.source]   # the rank's build
             bar.update()
         logs = reduce_concurrently(model, comps, comp_keys, cache, model_workers(workers), bar)
+        logs.update({n: [e for e in log if e[0] == "cb"] for n, log in ranks.items()})
         for name in names:
             bar.set_postfix_str(f"cb {name}")
             given = given_model(model.components[name])

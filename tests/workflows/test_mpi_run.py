@@ -1,7 +1,9 @@
-"""`liftoff run --ranks 2` (mpirun) against the serial run: the FE stages distributed over
-two processes give the serial results within solver tolerance, only rank 0 writes, the
-stage cache works across runs (a CB-stage miss with a component-stage hit), and errors
-end every rank with one line and exit status 2, without hanging."""
+"""`liftoff run --ranks 2` (mpirun) against the serial run: the components shared out over
+two processes (each reduced by one rank alone), and distributed over both
+(LIFTOFF_MPI_COMPONENTS=distributed), give the serial results within solver tolerance,
+only rank 0 writes, the stage cache works across runs (a CB-stage miss with a
+component-stage hit), and errors end every rank with one line and exit status 2, without
+hanging."""
 import importlib.util
 import os
 import shutil
@@ -38,9 +40,9 @@ def _scenario(tmp_path, model, **kw):
     return _test_run()._scenario(tmp_path, model, **kw)
 
 
-def _liftoff(*args, mpirun=False, timeout=600):
+def _liftoff(*args, mpirun=False, timeout=600, **extra_env):
     env = dict(os.environ, PYTHONPATH=str(ROOT), PYVISTA_OFF_SCREEN="true", OMPI_ALLOW_RUN_AS_ROOT="1",
-               OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_rmaps_base_oversubscribe="1")
+               OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_rmaps_base_oversubscribe="1", **extra_env)
     cmd = [sys.executable, "-m", "liftoff.workflows.cli", *map(str, args)]
     if mpirun:
         cmd = [shutil.which("mpirun"), "--quiet", "-n", "2", *cmd]
@@ -56,6 +58,9 @@ def test_two_ranks_give_the_serial_run(tmp_path, capsys):
                    "--ranks", "2")
     assert res.returncode == 0, res.stderr[-3000:]
     assert res.stdout.count("wall time per stage") == 1          # rank 0 speaks, rank 1 is silent
+    # the five components shared out over the two ranks, each reduced by one rank alone
+    assert "(rank 1)" in res.stdout and "fe core (built" in res.stdout, res.stdout[-3000:]
+    assert not any((tmp_path / "c2" / "claims").iterdir())          # the claims are cleared
     a, b = load_result(tmp_path / "serial" / "results_nominal.h5"), load_result(tmp_path / "two" / "results_nominal.h5")
     # CB models from the same meshes on 1 and 2 processes: MUMPS/SLEPc round-off and the
     # eigensolver tolerance (relative residual 1e-10) only
@@ -70,13 +75,13 @@ def test_two_ranks_give_the_serial_run(tmp_path, capsys):
         assert all(name.endswith((".npz", ".entry.json")) for name in names), names
     assert (tmp_path / "two" / "snapshot_release_nominal.png").stat().st_size > 20_000
     # CB stage missing, component stage cached: the PETSc matrices are built from the
-    # cached components
+    # cached components, each distributed over both ranks (LIFTOFF_MPI_COMPONENTS)
     shutil.rmtree(tmp_path / "c2" / "cb")
     shutil.rmtree(tmp_path / "c2" / "system")
     res = _liftoff("run", p, "--out", tmp_path / "again", "--cache", tmp_path / "c2", "--no-progress",
-                   "--no-snapshots", mpirun=True)
+                   "--no-snapshots", mpirun=True, LIFTOFF_MPI_COMPONENTS="distributed")
     assert res.returncode == 0, res.stderr[-3000:]
-    assert "fe core (hit)" in res.stdout and "cb core (built)" in res.stdout
+    assert "fe core (hit)" in res.stdout and "cb core (built)" in res.stdout and "(rank 1)" not in res.stdout
     c = load_result(tmp_path / "again" / "results_nominal.h5")
     assert np.abs(c.contact_force - b.contact_force).max() < 1e-7 * np.abs(b.contact_force).max()
 
