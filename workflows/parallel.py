@@ -2,8 +2,8 @@
 
 Under mpirun every rank runs the same program. The model stages of the components not yet
 in the stage cache are shared out: each rank takes the next unclaimed component and runs
-its FE and Craig-Bampton stages by itself (:func:`alone`), so the components are reduced
-concurrently (workflows/pipeline.py, ``reduce_over_ranks``). With fewer such components
+its FE and Craig-Bampton stages in a serial worker process of its own, so the components
+are reduced concurrently (workflows/pipeline.py, ``reduce_over_ranks``). With fewer such components
 than ranks, or ``LIFTOFF_MPI_COMPONENTS=distributed``, they are distributed over all ranks
 by dolfinx/PETSc (mesh, assembly, MUMPS factorisation, SLEPc eigensolves), one component
 after another. Everything else is done by rank 0 alone, which writes every file (results,
@@ -18,7 +18,6 @@ from __future__ import annotations
 import os
 import sys
 import time
-from contextlib import contextmanager
 from typing import Any, Callable
 
 from liftoff.core.errors import ConvergenceError, InputError
@@ -53,29 +52,10 @@ def launched_size() -> int:
     return 1
 
 
-_ALONE = [False]
-
-
-@contextmanager
-def alone():
-    """Inside, :func:`world` is :data:`SERIAL`: this process runs model stages by itself (its
-    FE on MPI.COMM_SELF), beside the other ranks doing the same with other components
-    (workflows/pipeline.py, ``reduce_over_ranks``)."""
-    before = _ALONE[0]
-    _ALONE[0] = True
-    try:
-        yield
-    finally:
-        _ALONE[0] = before
-
-
 def world():
     """MPI.COMM_WORLD under mpirun with more than one process, else :data:`SERIAL`. Under
     ``mpiexec -n K python -m mpi4py.futures`` (a campaign's ``--mpi`` executor) the ranks
-    other than 0 serve the case pool and never run this program: the run is serial.
-    Inside :func:`alone`, SERIAL."""
-    if _ALONE[0]:
-        return SERIAL
+    other than 0 serve the case pool and never run this program: the run is serial."""
     if launched_size() > 1 and "mpi4py.futures.__main__" not in sys.modules:
         from liftoff.fem.parallel import world as mpi_world
 

@@ -335,26 +335,58 @@ def _claim(folder: Path, tag: str) -> bool:
         return False
 
 
-def _needs_stages(model: ModelConfig, name: str, cache: StageCache, workdir: Path) -> bool:
-    """Whether FE component ``name`` has a model stage not yet in the cache (its component
-    stage, or its CB stage, whose key needs the component itself: then it is loaded)."""
+def _needs_stages(model: ModelConfig, name: str, cache: StageCache) -> bool:
+    """Whether FE component ``name`` has a model stage not yet in the cache: its component
+    stage, or its CB stage (whose key needs the component: loaded, never rebuilt here; an
+    entry that does not load is left to the worker, which rebuilds it)."""
     key = component_key(model, name)
     if not cache.has(model.source, key, ".npz"):
         return True
-    from .parallel import alone
-
-    with alone():                # a damaged entry is rebuilt here, by this rank alone
-        comp, _, _ = component_stage(model, name, StageCache(cache.root), workdir)
+    try:
+        comp = load_component(cache.path(model.source, key, ".npz"))
+    except Exception:  # noqa: BLE001 - damaged: the worker's stage rebuilds it (with its warning)
+        return True
     return not _cb_cached(model, name, comp, key, cache)
 
 
-def reduce_over_ranks(model: ModelConfig, names: list[str], cache: StageCache, workdir: Path, bar=None) -> dict:
+#: the environment of an MPI rank's process that would make a child process join the job
+MPI_JOB_VARS = ("OMPI_", "PMIX_", "PMI_", "MPI_LOCALNRANKS", "MPI_LOCALRANKID")
+
+
+def _rank_worker_init() -> None:
+    """Initializer of a rank's worker process: a serial process, not a member of the MPI job
+    (the job's variables dropped before anything imports mpi4py), that dies with the rank."""
+    from .executors import die_with_parent
+
+    die_with_parent()
+    drop_job_vars(os.environ)
+
+
+def drop_job_vars(environ) -> None:
+    """Remove the MPI job's variables (:data:`MPI_JOB_VARS`) from ``environ`` in place."""
+    for k in [k for k in environ if k.startswith(MPI_JOB_VARS)]:
+        del environ[k]
+
+
+def _stages_worker(model: ModelConfig, name: str, cache_root: str) -> list:
+    """In a rank's worker process: the FE and CB stages of component ``name`` into the cache
+    at ``cache_root``, serially (BLAS on one thread); returns its cache log (plain tuples)."""
+    with threadpool_limits(limits=1, user_api="blas"), tempfile.TemporaryDirectory() as work:
+        cache = StageCache(Path(cache_root))
+        comp, _, key = component_stage(model, name, cache, Path(work))
+        cb_stage(model, name, comp, key, cache)
+        return [tuple(e) for e in cache.log]
+
+
+def reduce_over_ranks(model: ModelConfig, names: list[str], cache: StageCache, bar=None) -> dict:
     """Under mpirun with a stage cache: the FE and CB stages of the components not yet in
     it, shared out over the ranks. Each rank claims the next unclaimed component (a file in
-    the cache folder) and runs both its stages alone (workflows/parallel.py, ``alone``: FE
-    on MPI.COMM_SELF), writing the cache as a serial run does; the ranks then meet, and
-    the run loads every product from the cache. Only with at least as many such components
-    as ranks (else they are distributed over all ranks, one after another) and unless
+    the cache folder) and has a worker process of its own run both stages serially,
+    writing the cache as a serial run does; the ranks then meet, and the run loads every
+    product from the cache. The worker is a plain serial process, outside the MPI job, so
+    the ranks' own processes hold the same PETSc objects (none of these builds'), as their
+    collective finalisation needs. Only with at least as many such components as ranks
+    (else they are distributed over all ranks, one after another) and unless
     $LIFTOFF_MPI_COMPONENTS is "distributed". A component that fails here is left to the
     collective stages, which give its error on every rank. Returns {component: the cache
     log of its two stages, "(rank r)" in the labels of other ranks than 0}."""
@@ -367,32 +399,31 @@ def reduce_over_ranks(model: ModelConfig, names: list[str], cache: StageCache, w
     fe = [n for n in names if model.components[n].nastran is None and given_model(model.components[n]) is None]
     if comm.size < 2 or cache.root is None or model.source != "fe" or mode == "distributed" or not fe:
         return {}
-    todo = on_root(comm, lambda: [n for n in fe if _needs_stages(model, n, cache, workdir)])
+    todo = on_root(comm, lambda: [n for n in fe if _needs_stages(model, n, cache)])
     if len(todo) < comm.size:
         return {}
+    import multiprocessing
     import uuid
-
-    from .parallel import alone
+    from concurrent.futures import ProcessPoolExecutor
 
     folder = Path(cache.root) / "claims"
     run = comm.bcast(uuid.uuid4().hex if comm.rank == 0 else None)
     on_root(comm, lambda: folder.mkdir(parents=True, exist_ok=True), share=False)
     logs = {}
     try:
-        for name in todo:
-            if not _claim(folder, f"{run}-{name}"):
-                continue
-            if bar is not None:
-                bar.set_postfix_str(f"fe + cb {name} (rank {comm.rank})")
-            own = StageCache(cache.root)
-            try:
-                with alone(), threadpool_limits(limits=1, user_api="blas"):
-                    comp, _, key = component_stage(model, name, own, workdir)
-                    cb_stage(model, name, comp, key, own)
-            except Exception:  # noqa: BLE001 - the collective stages redo it and say why it fails
-                continue
-            tag = "" if comm.rank == 0 else f" (rank {comm.rank})"
-            logs[name] = [(st, f"{lab}{tag}", how, t) for st, lab, how, t in own.log]
+        with ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"),
+                                 initializer=_rank_worker_init) as pool:
+            for name in todo:
+                if not _claim(folder, f"{run}-{name}"):
+                    continue
+                if bar is not None:
+                    bar.set_postfix_str(f"fe + cb {name} (rank {comm.rank})")
+                try:
+                    log = pool.submit(_stages_worker, model, name, str(cache.root)).result()
+                except Exception:  # noqa: BLE001 - the collective stages redo it and say why it fails
+                    continue
+                tag = "" if comm.rank == 0 else f" (rank {comm.rank})"
+                logs[name] = [(st, f"{lab}{tag}", how, t) for st, lab, how, t in log]
     finally:
         comm.barrier()
         on_root(comm, lambda: [p.unlink() for p in folder.glob(f"{run}-*")], share=False)
@@ -418,7 +449,7 @@ def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, wh
     with tempfile.TemporaryDirectory(prefix=f"liftoff-geom{TEMP_TAG}{os.getpid()}-") as work:
         bar = tqdm(total=2 * len(names), desc="model stages", unit="stage", disable=not progress or cache.comm.rank != 0,
                    leave=False)
-        ranks = reduce_over_ranks(model, names, cache, Path(work), bar)     # under mpirun
+        ranks = reduce_over_ranks(model, names, cache, bar)     # under mpirun
         for name in names:
             if model.components[name].nastran is None and given_model(model.components[name]) is None:
                 bar.set_postfix_str(f"fe {name}")
