@@ -324,7 +324,7 @@ def march(i0, i1, steps, modal, contact, rows_out, state, cache, hist, laws=None
     (``contact.laws``). numba prunes the ``laws is not None`` branches before typing, so a
     run without the laws compiles the reference's path alone (24 s against 43 s for the
     whole the first time on this machine, 2026-11-27; a separate specialisation in numba's
-    cache; ``make setup`` compiles both: transient/warm.py).
+    cache; ``make setup`` compiles both: transient/warm.py)."""
     t0, h, method, tol, max_iter = steps
     na, coef, w2, zw2, const, tk, Pk, U, V, since, until = modal
     Phi_c, Cdiag, coff, dcontact, axial, nsign, release, W, C2 = contact[:9]  # the rest: _solve_laws
