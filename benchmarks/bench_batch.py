@@ -48,7 +48,7 @@ from liftoff.transient.assembly import contact_rows, modal_load  # noqa: E402
 from liftoff.transient.coefficients import step_coefficients  # noqa: E402
 from liftoff.transient.guard import GrowthGuard  # noqa: E402
 from liftoff.transient.kernel import (OK, History, OutputRows, Stepping, _candidates, _feedback,  # noqa: E402
-                                      _post_step, _pre_step, _record_contact, _solve_direct)
+                                      _outputs_block, _post_step, _pre_step, _record_contact, _solve_direct)
 from liftoff.transient.solver import (CHUNK, _contact_inputs, _failure, _modal_inputs, _new_cache,  # noqa: E402
                                       _result, _spectral_radius, _start, initial_contact_force, initial_state,
                                       output_plan)
@@ -96,27 +96,15 @@ class BatchHistory(NamedTuple):
 
 
 @njit(cache=False)
-def _outputs_batch(L, kind, targ, X0, X1, X2, Y, r):
-    """Y[:, r] of every case: X0, X1, X2 (K, n_body) the cases' q, v, acc; one matrix-matrix
-    product per kind (rows sorted by kind, each row adding to its own column of Y)."""
-    K = X0.shape[0]
-    for k in range(K):
+def _outputs_cases(L, kind, targ, X, Ytmp, Y, r):
+    """Y[:, r] of every case: liftoff's block recovery (``_outputs_block``) with the K cases'
+    q, v, acc as the block's rows (X (3, K, n_body)), one matrix-matrix product per kind."""
+    if Y.shape[2] == 0:
+        return
+    _outputs_block(L, kind, targ, X, X.shape[1], Ytmp, 0)
+    for k in range(X.shape[1]):
         for c in range(Y.shape[2]):
-            Y[k, r, c] = 0.0
-    nrow = L.shape[0]
-    s0 = 0
-    while s0 < nrow:
-        kd = kind[s0]
-        s1 = s0
-        while s1 < nrow and kind[s1] == kd:
-            s1 += 1
-        X = X0 if kd == 0 else (X1 if kd == 1 else X2)
-        y = np.empty((K, s1 - s0))
-        np.dot(X, L[s0:s1].T, y)
-        for k in range(K):
-            for row in range(s0, s1):
-                Y[k, r, targ[row]] += y[k, row - s0]
-        s0 = s1
+            Y[k, r, c] = Ytmp[k, c]
 
 
 @njit(cache=False)
@@ -150,6 +138,7 @@ def march_batch(i0, i1, steps, modal, cases, contact, rows_out, state, cache, hi
     acc = np.empty((K, n)); Gs = np.zeros((K, nc)); Fpen = np.zeros((K, nc))
     Pf = np.zeros((K, n)); Pg = np.zeros((K, n))
     Xa = np.empty((3, K, na)); Xb = np.empty((3, K, nb))
+    Ya_t = np.empty((K, Y_a.shape[2])); Yb_t = np.empty((K, Y_b.shape[2]))
     u = np.zeros(n2); fn = np.empty(nc); g = np.zeros(nc)
     rows2 = np.zeros(n2, dtype=np.bool_)
     cols2 = np.zeros(n2, dtype=np.bool_)
@@ -211,9 +200,9 @@ def march_batch(i0, i1, steps, modal, cases, contact, rows_out, state, cache, hi
                 Xa[0, k, m] = Q[k, m]; Xa[1, k, m] = Vel[k, m]; Xa[2, k, m] = acc[k, m]
             for m in range(nb):
                 Xb[0, k, m] = Q[k, na + m]; Xb[1, k, m] = Vel[k, na + m]; Xb[2, k, m] = acc[k, na + m]
-        _outputs_batch(L_a, kind_a, targ_a, Xa[0], Xa[1], Xa[2], Y_a, r)
+        _outputs_cases(L_a, kind_a, targ_a, Xa, Ya_t, Y_a, r)
         if nb > 0:
-            _outputs_batch(L_b, kind_b, targ_b, Xb[0], Xb[1], Xb[2], Y_b, r)
+            _outputs_cases(L_b, kind_b, targ_b, Xb, Yb_t, Y_b, r)
     return OK, i1, 0.0, 0.0, -1
 
 
