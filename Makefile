@@ -34,7 +34,7 @@ $(STAMP): pyproject.toml constraints.txt
 	@$(PY) -c "import numpy, dolfinx, numba, h5py, pyvista, distributed, imageio; assert numpy.__version__.startswith('1.24'), numpy.__version__"
 	@# the transient kernel into numba's cache, its two paths at once (2026-11-27: 24 s and 46 s),
 	@# so that the first run does not compile it (transient/warm.py)
-	@$(PY) -m liftoff.transient.warm reference & p=$$!; $(PY) -m liftoff.transient.warm laws && wait $$p
+	@$(PY) -m liftoff.transient.warm reference & p=$$!; $(PY) -m liftoff.transient.warm laws || { wait $$p; exit 1; }; wait $$p
 	@touch $(STAMP)
 
 # two pytest-xdist workers (this machine's two cores), whole files per worker (their

@@ -322,7 +322,7 @@ def march(i0, i1, steps, modal, contact, rows_out, state, cache, hist, laws=None
 
     ``laws``: None for the reference's contacts, True with the contact laws beyond them
     (``contact.laws``). numba prunes the ``laws is not None`` branches before typing, so a
-    run without the laws compiles the reference's path alone (24 s against 43 s for the
+    run without the laws compiles the reference's path alone (24 s against 43-46 s for the
     whole the first time on this machine, 2026-11-27; a separate specialisation in numba's
     cache; ``make setup`` compiles both: transient/warm.py)."""
     t0, h, method, tol, max_iter = steps

@@ -93,7 +93,9 @@ class StageCache:
 
     ``comm``: the processes of the run (workflows/parallel.py). Rank 0 checks the entry
     (holding the lock) and alone writes; every rank loads a hit, and a miss is built by
-    every rank (collectively for the distributed FE stages).
+    every rank (collectively for the distributed FE stages). Components shared out over
+    the ranks are built before, by serial worker processes with caches of their own on
+    the same folder (workflows/pipeline.reduce_over_ranks).
     """
 
     root: Path | None

@@ -77,6 +77,27 @@ def _raise(outcome: tuple[str, str]) -> None:
     raise (ConvergenceError if kind == "convergence" else InputError)(msg)
 
 
+def all_or_none(comm, exc: BaseException | None) -> None:
+    """After a stage each rank ran by itself: every rank raises the first failing rank's
+    error (a failing rank its own ``exc``), as one line; nothing when none failed. Collective."""
+    outcomes = comm.allgather(None if exc is None else _outcome(exc))
+    if exc is not None:
+        raise exc
+    for outcome in outcomes:
+        if outcome is not None:
+            _raise(outcome)
+
+
+def wait_for_all(comm, poll_s: float = 0.05) -> None:
+    """A barrier that sleeps (polling every ``poll_s``) instead of spinning in MPI, so that
+    a rank done with its share leaves its core to the others' work."""
+    if comm.size == 1:
+        return
+    req = comm.Ibarrier()
+    while not req.Test():
+        time.sleep(poll_s)
+
+
 def on_root(comm, fn: Callable[[], Any], share: bool = True) -> Any:
     """Run ``fn`` on rank 0 only (file writes, gmsh); its result (if ``share``) or its error
     reaches every rank, which raises the same one-line error."""

@@ -327,11 +327,12 @@ MPI_COMPONENTS_ENV = "LIFTOFF_MPI_COMPONENTS"
 
 
 def _claim(folder: Path, tag: str) -> bool:
-    """Whether this process is the first to claim ``tag`` (a file created exclusively)."""
+    """Whether this process is the first to claim ``tag`` (a file created exclusively); a
+    file that cannot be made (taken, or a full disk) is not claimed."""
     try:
         os.close(os.open(folder / tag, os.O_CREAT | os.O_EXCL | os.O_WRONLY))
         return True
-    except FileExistsError:
+    except OSError:
         return False
 
 
@@ -406,15 +407,23 @@ def reduce_over_ranks(model: ModelConfig, names: list[str], cache: StageCache, b
     import uuid
     from concurrent.futures import ProcessPoolExecutor
 
+    from .parallel import all_or_none, wait_for_all
+
     folder = Path(cache.root) / "claims"
     run = comm.bcast(uuid.uuid4().hex if comm.rank == 0 else None)
-    on_root(comm, lambda: folder.mkdir(parents=True, exist_ok=True), share=False)
-    logs = {}
+    probe = folder / f"{run}-probe"
+    made = on_root(comm, lambda: _claim_folder(folder, probe))
+    # every rank must see rank 0's probe in a folder it can write: one shared cache (else, or
+    # a cache that cannot be written, the components go over all ranks, distributed)
+    if not all(comm.allgather(made and probe.is_file() and os.access(folder, os.W_OK))):
+        on_root(comm, lambda: _remove_claims(folder, run), share=False)
+        return {}
+    logs, failed = {}, None
     try:
         with ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"),
                                  initializer=_rank_worker_init) as pool:
-            for name in todo:
-                if not _claim(folder, f"{run}-{name}"):
+            for i, name in enumerate(todo):
+                if not _claim(folder, f"{run}-{i}"):
                     continue
                 if bar is not None:
                     bar.set_postfix_str(f"fe + cb {name} (rank {comm.rank})")
@@ -424,13 +433,34 @@ def reduce_over_ranks(model: ModelConfig, names: list[str], cache: StageCache, b
                     continue
                 tag = "" if comm.rank == 0 else f" (rank {comm.rank})"
                 logs[name] = [(st, f"{lab}{tag}", how, t) for st, lab, how, t in log]
-    finally:
-        comm.barrier()
-        on_root(comm, lambda: [p.unlink() for p in folder.glob(f"{run}-*")], share=False)
+    except BaseException as exc:  # noqa: BLE001 - raised below on every rank, not on this one alone
+        failed = exc
+    wait_for_all(comm)                      # asleep, not spinning, while other ranks' workers build
+    parts = comm.allgather(logs)
+    on_root(comm, lambda: _remove_claims(folder, run), share=False)
+    all_or_none(comm, failed)
     merged = {}
-    for part in comm.allgather(logs):
+    for part in parts:
         merged.update(part)
     return merged
+
+
+def _claim_folder(folder: Path, probe: Path) -> bool:
+    """The claims folder with a probe file in it (False: it cannot be made)."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        return _claim(folder, probe.name)
+    except OSError:
+        return False
+
+
+def _remove_claims(folder: Path, run: str) -> None:
+    """The claim files of run ``run`` removed (what cannot be removed is left)."""
+    for p in folder.glob(f"{run}-*"):
+        try:
+            p.unlink()
+        except OSError:
+            pass
 
 
 # ------------------------------------------------------------------ the stack
@@ -439,7 +469,8 @@ def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, wh
     """All model stages of a checked ``[model]`` (liftoff.config.ModelConfig); ``where``
     names the scenario's ``model`` key in messages. The FE stages run one after another,
     the Craig-Bampton stages of a serial run with a cache on :func:`model_workers`
-    processes (``workers``; :func:`reduce_concurrently`)."""
+    processes (``workers``; :func:`reduce_concurrently`); under mpirun the components
+    are first shared out over the ranks (:func:`reduce_over_ranks`)."""
     from tqdm import tqdm
 
     t0 = time.perf_counter()

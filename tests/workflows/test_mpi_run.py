@@ -6,6 +6,7 @@ component-stage hit), and errors end every rank with one line and exit status 2,
 hanging."""
 import importlib.util
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -59,11 +60,13 @@ def test_two_ranks_give_the_serial_run(tmp_path, capsys):
     assert res.returncode == 0, res.stderr[-3000:]
     assert res.stdout.count("wall time per stage") == 1          # rank 0 speaks, rank 1 is silent
     # the five components shared out over the two ranks, each reduced by one rank alone
-    assert "(rank 1)" in res.stdout and "fe core (built" in res.stdout, res.stdout[-3000:]
+    # (either rank may claim the core first)
+    assert "(rank 1)" in res.stdout and re.search(r"fe core( \(rank 1\))? \(built", res.stdout), res.stdout[-3000:]
     assert not any((tmp_path / "c2" / "claims").iterdir())          # the claims are cleared
     a, b = load_result(tmp_path / "serial" / "results_nominal.h5"), load_result(tmp_path / "two" / "results_nominal.h5")
-    # CB models from the same meshes on 1 and 2 processes: MUMPS/SLEPc round-off and the
-    # eigensolver tolerance (relative residual 1e-10) only
+    # every component reduced serially by one worker, as in the serial run (its round-off
+    # may differ only through BLAS threads; the distributed path below: MUMPS/SLEPc
+    # round-off on 2 processes and the eigensolver tolerance, relative residual 1e-10)
     err = np.abs(a.contact_force - b.contact_force).max() / np.abs(a.contact_force).max()
     print(f"2 ranks vs serial: post forces {err:.1e} of the peak")
     assert a.contact_force.shape == b.contact_force.shape and err < 1e-7
