@@ -162,7 +162,12 @@ def _first_pair(problem: TransientProblem, check: TransientProblem, step, solve_
         if isinstance(exc, Cancelled):         # the h/2 run failed first: its error
             raise box["error"] from None
         raise
-    worker.join()
+    try:
+        worker.join()
+    except BaseException:                      # interrupted while waiting (SIGTERM, Ctrl-C): stop the h/2 run too
+        stop.set()
+        worker.join()
+        raise
     if "error" in box:
         raise box["error"]
     return coarse, box["result"]

@@ -147,3 +147,41 @@ def test_a_failure_of_either_run_of_the_pair_stops_the_other():
         _first_pair(pr, pr, step, coarse_fails)
     assert seen == {"MainThread": True, "liftoff-h/2": True}      # each run was stopped by the other's failure
     assert not any(t.name == "liftoff-h/2" for t in threading.enumerate())
+
+
+def test_an_interrupt_while_waiting_for_the_h2_run_stops_it(monkeypatch):
+    """SIGTERM or Ctrl-C in the calling thread while it waits for the h/2 run (the h run
+    done) stops the h/2 run too: the interrupt is raised and no run outlives the call."""
+    import threading
+
+    from liftoff.transient import accuracy
+    from liftoff.transient.solver import Cancelled
+    from liftoff.transient.stepping import choose_step
+
+    pr = _drop()
+    step = choose_step(pr)
+    stopped = []
+
+    def solve_at(problem, st, runs, stop=None):
+        if st.h == step.h:
+            return "coarse"                      # the h run ends at once
+        if not stop.wait(30.0):                  # the h/2 run marches until stopped
+            raise AssertionError("never stopped")
+        stopped.append(True)
+        raise Cancelled("stopped")
+
+    join = threading.Thread.join
+    calls = []
+
+    def interrupted_join(self, timeout=None):
+        calls.append(self.name)
+        if len(calls) == 1 and self.name == "liftoff-h/2":
+            raise KeyboardInterrupt               # as the SIGTERM handler's exception, raised in the wait
+        return join(self, timeout)
+
+    monkeypatch.setattr(threading.Thread, "join", interrupted_join)
+    with pytest.raises(KeyboardInterrupt):
+        accuracy._first_pair(pr, pr, step, solve_at)
+    monkeypatch.setattr(threading.Thread, "join", join)
+    assert stopped == [True]
+    assert not any(t.name == "liftoff-h/2" for t in threading.enumerate())
