@@ -156,17 +156,12 @@ def _first_pair(problem: TransientProblem, check: TransientProblem, step, solve_
     worker.start()
     try:
         coarse = solve_at(replace(problem, progress=False), step, runs=3, stop=stop)
-    except BaseException as exc:
+        worker.join()
+    except BaseException as exc:               # a failure, or an interrupt (SIGTERM, Ctrl-C) while waiting
         stop.set()
         worker.join()
         if isinstance(exc, Cancelled):         # the h/2 run failed first: its error
             raise box["error"] from None
-        raise
-    try:
-        worker.join()
-    except BaseException:                      # interrupted while waiting (SIGTERM, Ctrl-C): stop the h/2 run too
-        stop.set()
-        worker.join()
         raise
     if "error" in box:
         raise box["error"]

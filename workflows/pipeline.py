@@ -139,6 +139,13 @@ def given_model(comp: ComponentModel):
     return None if t is None else t.model_builder()
 
 
+def is_fe_component(model: ModelConfig, name: str) -> bool:
+    """Whether component ``name`` is built by the model's FE (or stick) stages: neither a
+    Nastran import nor a type whose CB model is given."""
+    comp = model.components[name]
+    return comp.nastran is None and given_model(comp) is None
+
+
 def component_key(model: ModelConfig, name: str) -> str:
     """The cache key of the component stage of ``name``."""
     code = (("liftoff.workflows.stick", "liftoff.meshes", "liftoff.reduction", "liftoff.core") if model.source == "stick"
@@ -273,15 +280,16 @@ def model_workers(requested: int | None = None) -> int:
     return max(1, int(requested))
 
 
-def _cb_worker(model: ModelConfig, name: str, cache_root: str) -> list:
-    """In a pool process: the component's CB stage into the cache at ``cache_root`` (its FE
-    stage is already there); returns the worker's cache log (plain tuples). BLAS on one
-    thread: the pool's processes share the cores."""
+def _stages_worker(model: ModelConfig, name: str, cache_root: str) -> list:
+    """In a worker process (a serial run's pool, or an MPI rank's own worker): the FE stage
+    (a hit when it is already in the cache) and the CB stage of component ``name`` into the
+    cache at ``cache_root``, serially; returns the worker's cache log (plain tuples). BLAS
+    on one thread: the workers share the cores."""
     with threadpool_limits(limits=1, user_api="blas"), tempfile.TemporaryDirectory() as work:
         cache = StageCache(Path(cache_root))
         comp, _, key = component_stage(model, name, cache, Path(work))
         cb_stage(model, name, comp, key, cache)
-        return [tuple(e) for e in cache.log if e[0] == "cb"]
+        return [tuple(e) for e in cache.log]
 
 
 def _cb_cached(model: ModelConfig, name: str, comp: Component, comp_key: str, cache: StageCache) -> bool:
@@ -309,11 +317,11 @@ def reduce_concurrently(model: ModelConfig, comps: dict[str, Component], comp_ke
     logs = {}
     with ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=multiprocessing.get_context("spawn"),
                              initializer=die_with_parent) as pool:
-        futures = {pool.submit(_cb_worker, model, n, str(cache.root)): n for n in todo}
+        futures = {pool.submit(_stages_worker, model, n, str(cache.root)): n for n in todo}
         for fut in as_completed(futures):
             name = futures[fut]
             try:
-                logs[name] = fut.result()
+                logs[name] = [e for e in fut.result() if e[0] == "cb"]
             except Exception:  # noqa: BLE001 - the sequential stage redoes it and says why it fails
                 continue
             if bar is not None:
@@ -369,16 +377,6 @@ def drop_job_vars(environ) -> None:
         del environ[k]
 
 
-def _stages_worker(model: ModelConfig, name: str, cache_root: str) -> list:
-    """In a rank's worker process: the FE and CB stages of component ``name`` into the cache
-    at ``cache_root``, serially (BLAS on one thread); returns its cache log (plain tuples)."""
-    with threadpool_limits(limits=1, user_api="blas"), tempfile.TemporaryDirectory() as work:
-        cache = StageCache(Path(cache_root))
-        comp, _, key = component_stage(model, name, cache, Path(work))
-        cb_stage(model, name, comp, key, cache)
-        return [tuple(e) for e in cache.log]
-
-
 def reduce_over_ranks(model: ModelConfig, names: list[str], cache: StageCache, bar=None) -> dict:
     """Under mpirun with a stage cache: the FE and CB stages of the components not yet in
     it, shared out over the ranks. Each rank claims the next unclaimed component (a file in
@@ -397,7 +395,7 @@ def reduce_over_ranks(model: ModelConfig, names: list[str], cache: StageCache, b
         from liftoff.core.errors import InputError
 
         raise InputError(f"${MPI_COMPONENTS_ENV} = {mode!r}: give 'concurrent' or 'distributed'")
-    fe = [n for n in names if model.components[n].nastran is None and given_model(model.components[n]) is None]
+    fe = [n for n in names if is_fe_component(model, n)]
     if comm.size < 2 or cache.root is None or model.source != "fe" or mode == "distributed" or not fe:
         return {}
     todo = on_root(comm, lambda: [n for n in fe if _needs_stages(model, n, cache)])
@@ -482,7 +480,7 @@ def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, wh
                    leave=False)
         ranks = reduce_over_ranks(model, names, cache, bar)     # under mpirun
         for name in names:
-            if model.components[name].nastran is None and given_model(model.components[name]) is None:
+            if is_fe_component(model, name):
                 bar.set_postfix_str(f"fe {name}")
                 comps[name], thermal[name], comp_keys[name] = component_stage(model, name, cache, Path(work))
                 if name in ranks and cache.log and cache.log[-1][2] == "hit":

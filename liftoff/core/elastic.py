@@ -10,9 +10,9 @@ from .errors import InputError
 def check_elastic(who: str, E, nu, rho) -> tuple[float, float, float]:
     """(E, nu, rho) as floats, or an InputError naming ``who`` and the value: E > 0 (Pa),
     -1 < nu < 0.5, rho > 0 (kg/m^3), all finite numbers (not booleans)."""
-    if any(isinstance(v, bool) for v in (E, nu, rho)):
-        raise InputError(f"{who}: E, nu and rho must be numbers (got {E!r}, {nu!r}, {rho!r})")
     try:
+        if any(isinstance(v, bool) for v in (E, nu, rho)):
+            raise TypeError("a boolean")
         E, nu, rho = float(E), float(nu), float(rho)
     except (TypeError, ValueError):
         raise InputError(f"{who}: E, nu and rho must be numbers (got {E!r}, {nu!r}, {rho!r})") from None
