@@ -44,6 +44,21 @@ class Serial:
 SERIAL = Serial()
 
 
+#: variables of an MPI singleton (a Python that initialised MPI without mpirun): passed on
+#: to an mpirun it starts, they make mpirun fail at once (exit 1, nothing said)
+SINGLETON_VARS = ("OMPI_COMM_WORLD", "OMPI_MCA_ess", "OMPI_MCA_orte_ess", "PMIX_", "PMI_")
+
+
+def mpirun_env(environ) -> dict:
+    """The environment for an mpirun started from a process with ``environ``: without an MPI
+    singleton's variables (:data:`SINGLETON_VARS`), and as root (containers) with Open MPI's
+    permission to run, which it refuses otherwise."""
+    env = {k: v for k, v in environ.items() if not k.startswith(SINGLETON_VARS)}
+    if hasattr(os, "geteuid") and os.geteuid() == 0:
+        env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+    return env
+
+
 def launched_size() -> int:
     """Number of processes mpirun started (1 when not under mpirun)."""
     for var in _SIZE_VARS:

@@ -675,13 +675,12 @@ def launch(ranks: int, argv: list[str]) -> int:
         raise InputError(f"--ranks {ranks}: more than {MAX_RANKS_PER_CPU} ranks per CPU ({cpus} CPUs here); the FE "
                          "stages would only wait on one another")
     cmd = [mpirun, "--quiet", "-n", str(ranks)] + (["--oversubscribe"] if ranks > cpus else [])
-    # not under mpirun (launch is only called then): the variables of an MPI singleton in the
-    # calling process (a Python that initialised MPI and started us) would make mpirun fail
-    env = {k: v for k, v in os.environ.items()
-           if not k.startswith(("OMPI_COMM_WORLD", "OMPI_MCA_ess", "OMPI_MCA_orte_ess", "PMIX_", "PMI_"))}
-    if hasattr(os, "geteuid") and os.geteuid() == 0:   # containers: Open MPI refuses root otherwise
-        env.update(OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+    # not under mpirun (launch is only called then): the calling process may be a Python
+    # that initialised MPI and started us
     from .executors import die_with_parent
+    from .parallel import mpirun_env
+
+    env = mpirun_env(os.environ)
 
     # mpirun (and through it every rank) is stopped when this process ends, however it ends:
     # SIGTERM here, or a kill of this process (issue 27: ranks survived and replaced the output)

@@ -9,6 +9,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from liftoff.workflows.parallel import mpirun_env
+
 from ..roundoff import sum_rtol
 
 pytestmark = [pytest.mark.fem, pytest.mark.slow]   # ~9 s idle, >20 s on a loaded machine
@@ -20,8 +22,8 @@ def _run(n, path, degree, script="mpi_modes_script.py", extra=()):
     mpirun = shutil.which("mpirun")
     if mpirun is None:
         pytest.skip("mpirun not installed (Debian package openmpi-bin comes with python3-dolfinx-real)")
-    env = dict(os.environ, PYTHONPATH=str(ROOT), OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               OMPI_MCA_rmaps_base_oversubscribe="1", PYVISTA_OFF_SCREEN="true")
+    env = dict(mpirun_env(os.environ), PYTHONPATH=str(ROOT), OMPI_MCA_rmaps_base_oversubscribe="1",
+               PYVISTA_OFF_SCREEN="true")      # this process may have initialised MPI (parallel.mpirun_env)
     cmd = [mpirun, "-n", str(n), sys.executable, str(HERE / script), path, *extra, str(degree)]
     res = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=300, cwd=ROOT)
     lines = [ln for ln in res.stdout.splitlines() if ln.startswith("RESULT ")]

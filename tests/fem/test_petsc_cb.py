@@ -25,6 +25,7 @@ from liftoff.core.errors import InputError  # noqa: E402
 from liftoff.fem import petsc_solver  # noqa: E402
 from liftoff.reduction import Component, assemble, craig_bampton, system_modes  # noqa: E402
 from liftoff.reduction.models import chain_component, hex_block, six_labels, spider_component  # noqa: E402
+from liftoff.workflows.parallel import mpirun_env  # noqa: E402
 
 pytestmark = pytest.mark.fem
 HERE = Path(__file__).resolve().parent
@@ -185,8 +186,8 @@ def _mpirun(n, path, f_max):
     mpirun = shutil.which("mpirun")
     if mpirun is None:
         pytest.skip("mpirun not installed (Debian package openmpi-bin comes with python3-dolfinx-real)")
-    env = dict(os.environ, PYTHONPATH=str(ROOT), OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               OMPI_MCA_rmaps_base_oversubscribe="1", PYVISTA_OFF_SCREEN="true")
+    env = dict(mpirun_env(os.environ), PYTHONPATH=str(ROOT), OMPI_MCA_rmaps_base_oversubscribe="1",
+               PYVISTA_OFF_SCREEN="true")      # this process may have initialised MPI (parallel.mpirun_env)
     cmd = [mpirun, "-n", str(n), sys.executable, str(HERE / "mpi_cb_script.py"), path,
            *(str(BOX[k]) for k in "LWH"), str(f_max)]
     res = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=300, cwd=ROOT)

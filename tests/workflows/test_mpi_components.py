@@ -12,6 +12,7 @@ import pytest
 from liftoff.core.errors import InputError
 from liftoff.workflows import pipeline
 from liftoff.workflows.cache import StageCache
+from liftoff.workflows.parallel import mpirun_env
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -66,8 +67,7 @@ def test_an_error_of_one_rank_reaches_every_rank(tmp_path):
     alone is raised on rank 0 too, with the same line, and nobody waits forever."""
     script = tmp_path / "ranks.py"
     script.write_text(RANKS_SCRIPT)
-    env = dict(os.environ, PYTHONPATH=str(ROOT), OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               OMPI_MCA_rmaps_base_oversubscribe="1")
+    env = dict(mpirun_env(os.environ), PYTHONPATH=str(ROOT), OMPI_MCA_rmaps_base_oversubscribe="1")
     res = subprocess.run([shutil.which("mpirun"), "--quiet", "-n", "2", sys.executable, str(script)],
                          capture_output=True, text=True, env=env, timeout=120)
     assert res.returncode == 0, res.stderr[-2000:]

@@ -17,6 +17,7 @@ import pytest
 
 from liftoff.transient import load_result
 from liftoff.workflows.cli import main
+from liftoff.workflows.parallel import mpirun_env
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
@@ -42,8 +43,9 @@ def _scenario(tmp_path, model, **kw):
 
 
 def _liftoff(*args, mpirun=False, timeout=600, **extra_env):
-    env = dict(os.environ, PYTHONPATH=str(ROOT), PYVISTA_OFF_SCREEN="true", OMPI_ALLOW_RUN_AS_ROOT="1",
-               OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1", OMPI_MCA_rmaps_base_oversubscribe="1", **extra_env)
+    # mpirun_env: this pytest worker may have initialised MPI (an FE test before this one)
+    env = dict(mpirun_env(os.environ), PYTHONPATH=str(ROOT), PYVISTA_OFF_SCREEN="true",
+               OMPI_MCA_rmaps_base_oversubscribe="1", **extra_env)
     cmd = [sys.executable, "-m", "liftoff.workflows.cli", *map(str, args)]
     if mpirun:
         cmd = [shutil.which("mpirun"), "--quiet", "-n", "2", *cmd]
