@@ -13,7 +13,9 @@ Three stages, each output a function of that stage's objects returning the paths
 
 Outputs run in registration order within a stage; liftoff's workbook is the last of its own
 "run" outputs, so it reads their tables (an output registered later runs after it and is not
-in the workbook). From Python, before ``liftoff.workflows.run.run``::
+in the workbook). An output registered with ``beside=True`` writes only files nothing of the
+run reads again (pictures, ParaView and OP4 files): a serial run writes it in a forked child
+beside the run (workflows/beside.py), as one job per stage. From Python, before ``liftoff.workflows.run.run``::
 
     from liftoff.workflows.outputs import register_output
 
@@ -26,7 +28,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable
 
 from liftoff.core.errors import InputError
 
@@ -39,6 +41,7 @@ class Output:
     stage: str
     fn: Callable
     description: str = ""
+    beside: bool = False
 
 
 @dataclass
@@ -47,7 +50,9 @@ class RunContext:
     of the named cases and the governing generated case, the staging folder ``out``,
     ``plots`` (pictures wanted), the scenario ``title`` and ``partial`` (non-empty when the
     cases' histories do not cover a campaign's generated cases: a note for the tables) and
-    ``units``, the report unit system of the workbook ([postprocess] units, analysis.units)."""
+    ``units``, the report unit system of the workbook ([postprocess] units, analysis.units);
+    ``beside``: where an output may hand work that writes files nothing reads again
+    (:class:`workflows.beside.Beside`; None: inline)."""
 
     results: dict
     out: Path
@@ -55,29 +60,41 @@ class RunContext:
     title: str
     partial: str = ""
     units: str = "SI"
+    beside: Any = None
 
 
 OUTPUTS: dict[str, Output] = {}
 
 
-def register_output(name: str, stage: str, description: str = ""):
-    """Decorator: register ``fn`` as output ``name`` of ``stage`` (replacing one of that name)."""
+def register_output(name: str, stage: str, description: str = "", beside: bool = False):
+    """Decorator: register ``fn`` as output ``name`` of ``stage`` (replacing one of that name);
+    ``beside``: its files are read by nothing later in the run (module docstring)."""
     if stage not in STAGES:
         raise InputError(f"output {name!r}: stage must be one of {', '.join(STAGES)}, got {stage!r}")
 
     def deco(fn):
         OUTPUTS.pop(name, None)
-        OUTPUTS[name] = Output(name, stage, fn, description)
+        OUTPUTS[name] = Output(name, stage, fn, description, beside)
         return fn
     return deco
 
 
-def write(stage: str, *args) -> list[Path]:
-    """Every registered output of ``stage`` (in registration order); the paths they wrote."""
+def write(stage: str, *args, beside=None) -> list[Path]:
+    """Every registered output of ``stage`` (in registration order); the paths they wrote.
+    With ``beside`` (:class:`workflows.beside.Beside`), the outputs registered ``beside=True``
+    go to it as one job, their files returned by its ``wait``."""
     files: list[Path] = []
+    later = []
     for o in list(OUTPUTS.values()):
-        if o.stage == stage:
+        if o.stage != stage:
+            continue
+        if o.beside and beside is not None:
+            later.append(o)
+        else:
             files += list(o.fn(*args) or [])
+    if later:
+        beside.submit(", ".join(o.name for o in later),
+                      lambda: [p for o in later for p in list(o.fn(*args) or [])])
     return files
 
 
@@ -87,16 +104,17 @@ def _register_builtin() -> None:
 
     register_output("modal_tables", "model", "modes_vehicle.csv/.h5, modal_mass_vehicle_held.csv, "
                     "modal_mass_pad.csv")(report.write_modal_tables)
-    register_output("recovery_op4", "model", "recovery_vehicle.op4 and its index")(report.write_recovery_op4)
+    register_output("recovery_op4", "model", "recovery_vehicle.op4 and its index", beside=True)(
+        report.write_recovery_op4)
     register_output("cb_checks", "model", "cb_checks.txt/.json")(report.write_cb_checks)
-    register_output("mode_shapes_vtu", "model", "modes_vehicle.vtu")(fields.write_mode_shapes_vtu)
+    register_output("mode_shapes_vtu", "model", "modes_vehicle.vtu", beside=True)(fields.write_mode_shapes_vtu)
     register_output("interface_loads", "case", "interface_loads_<case>.csv")(
         lambda res, cp, out, case: report.write_interface_loads({case: (res, cp)}, out, case))
     register_output("interface_loads_envelope", "run", "interface_loads_envelope.csv")(
         lambda ctx: report.write_interface_loads(ctx.results, ctx.out, "envelope", ctx.partial))
     register_output("correlated_loads", "run", "correlated_loads.csv/.png")(
-        lambda ctx: report.write_correlated(ctx.results, ctx.out, ctx.plots, ctx.partial))
-    register_output("spectra_plots", "run", "srs.png, psd_<case>.png")(report.plot_spectra)
+        lambda ctx: report.write_correlated(ctx.results, ctx.out, ctx.plots, ctx.partial, ctx.beside))
+    register_output("spectra_plots", "run", "srs.png, psd_<case>.png", beside=True)(report.plot_spectra)
     register_output("workbook", "run", "loads.xlsx")(lambda ctx: report.write_workbook(ctx.out, ctx.title, ctx.units))
 
 

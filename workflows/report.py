@@ -213,11 +213,12 @@ def write_modal_tables(stack, cp, out: Path) -> list[Path]:
 CORRELATED_TOLERANCE = 1e-3
 
 
-def write_correlated(results: dict, out: Path, plots: bool = True, note: str = "") -> list[Path]:
+def write_correlated(results: dict, out: Path, plots: bool = True, note: str = "", beside=None) -> list[Path]:
     """``correlated_loads.csv`` (and ``correlated_loads.png``): per attach point the correlated
     envelopes of axial force with bending moment and of shear with torque over the cases in
     ``results`` (analysis/correlated.py: the convex hull of the pair's samples over time and
-    cases, each vertex a sample with its time and case); nothing without attach points."""
+    cases, each vertex a sample with its time and case); nothing without attach points.
+    ``beside`` (workflows/beside.py): draws the picture beside the run."""
     from liftoff.analysis import correlated as cl
     from liftoff.analysis.aggregate import write_rows_csv
 
@@ -235,7 +236,9 @@ def write_correlated(results: dict, out: Path, plots: bool = True, note: str = "
             f"dropped vertex within {CORRELATED_TOLERANCE:g} of its axis's range outside the polygon (at most "
             f"{worst:.2g})\n")
     files = [write_rows_csv(rows, list(rows[0]), head, out / "correlated_loads.csv")]
-    if plots:
+    if plots and beside is not None:
+        beside.submit("correlated_loads.png", lambda: [_plot_correlated(hulls, per_case, out)])
+    elif plots:
         files.append(_plot_correlated(hulls, per_case, out))
     return files
 

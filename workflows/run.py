@@ -340,7 +340,7 @@ def _write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, 
         cp, mkey = prep.problems[case.name]
         stack = prep.stacks[mkey]
         if tab1 is None:
-            tab1, f1 = _table1(stack, cp, case, out, echo, stage_times)
+            tab1, f1 = _table1(stack, cp, case, out, echo, stage_times, beside)
             files += f1
         res, f2 = _full_case(sc, stack, cp, case.name, out, plots and case.output.plots,
                              want_pics and case.output.snapshots, stage_times, agg, generated=False,
@@ -369,7 +369,8 @@ def _write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, 
     partial = ("the generated cases other than the governing one are not in this table (their histories are not "
                "kept; see envelope_histories.h5)") if camp_run is not None else ""
     t0 = time.perf_counter()
-    files += outputs.write("run", outputs.RunContext(results, out, plots, sc.title, partial, sc.post.units))
+    files += outputs.write("run", outputs.RunContext(results, out, plots, sc.title, partial, sc.post.units, beside),
+                           beside=beside)
     stage_times.append(("interface, correlated loads, workbook", time.perf_counter() - t0))
     files += _fields(sc, prep, results, agg, out, camp, stage_times, beside)
     t0 = time.perf_counter()
@@ -388,14 +389,14 @@ def _write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, 
     return RunOutput(out, sc, prep.stacks, results, tab1, env, stage_times, files, text, camp_run, agg)
 
 
-def _table1(stack, cp, case, out: Path, echo, stage_times: list):
+def _table1(stack, cp, case, out: Path, echo, stage_times: list, beside=None):
     from .loads import table1
 
     t0 = time.perf_counter()
     tab1 = table1(stack, cp, case)
     files = [write_text(out / "table1.txt", tab1.table() + "\n"),
              write_text(out / "table1.csv", "# c.g. motion under static loads; m and rad\n" + tab1.csv())]
-    files += outputs.write("model", stack, cp, out)
+    files += outputs.write("model", stack, cp, out, beside=beside)
     echo(tab1.table())
     stage_times.append(("Table 1, modal tables", time.perf_counter() - t0))
     return tab1, files

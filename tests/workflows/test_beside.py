@@ -85,3 +85,29 @@ def test_a_run_writes_the_same_files_forked_and_inline(tmp_path, monkeypatch):
                 np.testing.assert_array_equal(fa["contact/force"][()], fb["contact/force"][()])
         elif n.endswith((".csv", ".txt")) and n != "summary.txt":
             assert a.read_bytes() == b.read_bytes(), n
+
+
+def test_outputs_registered_beside_are_written_by_a_child(tmp_path, monkeypatch):
+    """outputs.write: an output registered beside=True runs in a forked child (one job for the
+    stage), its files returned by wait(); the others inline, in order, before write returns."""
+    from liftoff.workflows import outputs
+
+    monkeypatch.setattr(outputs, "OUTPUTS", {})
+
+    def mark(name):
+        def fn(out):
+            return _write(out / f"{name}.txt", str(os.getpid()))
+        return fn
+
+    outputs.register_output("table", "run")(mark("table"))
+    outputs.register_output("picture", "run", beside=True)(mark("picture"))
+    outputs.register_output("series", "run", beside=True)(mark("series"))
+    b = Beside(True)
+    assert outputs.write("run", tmp_path, beside=b) == [tmp_path / "table.txt"]
+    assert (tmp_path / "table.txt").read_text() == str(os.getpid())
+    assert b.wait() == [tmp_path / "picture.txt", tmp_path / "series.txt"]
+    assert list(b.seconds) == ["picture, series"]
+    child = (tmp_path / "picture.txt").read_text()
+    assert child != str(os.getpid()) and (tmp_path / "series.txt").read_text() == child
+    # without a Beside (an MPI run, LIFTOFF_BESIDE=0): everything inline, in registration order
+    assert outputs.write("run", tmp_path) == [tmp_path / f"{n}.txt" for n in ("table", "picture", "series")]
