@@ -166,3 +166,130 @@ def _first_pair(problem: TransientProblem, check: TransientProblem, step, solve_
     if "error" in box:
         raise box["error"]
     return coarse, box["result"]
+
+
+class EstimatesInOrder:
+    """:func:`solve_estimated` of several problems, taken in order with :meth:`get`, their
+    runs at h/2 marched one after another on a second thread that runs one problem ahead:
+    while the caller works on problem k's estimate (its reports), problem k+1's h/2 run
+    marches, and the caller's run at h of problem k+1 then overlaps the rest of it. For a
+    run of several cases this keeps both cores busy where :func:`solve_estimated` per case
+    leaves one idle while the h/2 run finishes (the h/2 run takes twice the h run) and
+    while the caller reports.
+
+    ``problems``: one per index; None where the caller solves that index itself (a problem
+    with ``accuracy``, whose halvings depend on each estimate, or one without an estimate).
+    Each run is the same computation as in :func:`solve_estimated` (one BLAS thread, held
+    over the object's life), so the estimates are the same, bit for bit. Used as a context
+    manager: leaving it (an error, an interrupt) stops the second thread's run at its next
+    chunk and waits for it, so no run outlives the block. Without ``CONCURRENT_PAIR``, each
+    :meth:`get` is :func:`solve_estimated`."""
+
+    def __init__(self, problems: list):
+        import threading
+
+        self.problems = list(problems)
+        self.concurrent = CONCURRENT_PAIR and sum(p is not None for p in self.problems) > 1
+        self._cond = threading.Condition()
+        self._stop = threading.Event()
+        self._asked = -1                     # the highest index asked for (the thread runs one problem ahead)
+        self._done: dict[int, tuple] = {}    # index -> ("result", TransientResult) | ("error", exception)
+        self._steps: dict[int, object] = {}
+        self._thread = None
+        self._limits = None
+        self._gate = threading.Lock()        # held by the second thread while it marches a chunk
+
+    def __enter__(self) -> "EstimatesInOrder":
+        if not self.concurrent:
+            return self
+        import threading
+
+        from threadpoolctl import threadpool_limits
+
+        self._limits = threadpool_limits(limits=1, user_api="blas")   # as solve_estimated, steps included
+        try:
+            for k, p in enumerate(self.problems):
+                if p is not None:
+                    if p.accuracy is not None:
+                        raise ValueError(f"problem {k} has an accuracy: solve it with solve_estimated")
+                    self._steps[k] = choose_step(p, contact_rows(p.body_a, p.body_b, p.contacts))
+        except BaseException:
+            self.__exit__()
+            raise
+        self._thread = threading.Thread(target=self._fine_runs, name="liftoff-h/2-ahead", daemon=True)
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._stop.set()
+        with self._cond:
+            self._cond.notify_all()
+        if self._thread is not None:
+            self._thread.join()
+            self._thread = None
+        if self._limits is not None:
+            self._limits.restore_original_limits()
+            self._limits = None
+
+    def _fine_runs(self) -> None:
+        from .solver import _solve
+
+        before = -1                          # the problem this thread ran before k
+        for k, p in enumerate(self.problems):
+            if p is None:
+                continue
+            with self._cond:                 # one problem ahead: the one before has been asked for
+                self._cond.wait_for(lambda: self._stop.is_set() or before <= self._asked)
+            before = k
+            if self._stop.is_set():
+                return
+            try:
+                # held at once: this run (1.5 runs at h) and the caller's pair of the problem before (3)
+                box = ("result", _solve(replace(p, keep_modal=False, progress=p.progress and k == 0),
+                                        self._steps[k].halved(), runs=4.5, stop=self._stop, gate=self._gate))
+            except BaseException as exc:     # noqa: BLE001 - handed to the caller
+                box = ("error", exc)
+                self._stop.set()
+            with self._cond:
+                self._done[k] = box
+                self._cond.notify_all()
+            if box[0] == "error":
+                return
+
+    def paused(self):
+        """A context in which the second thread is between chunks (waiting for the gate):
+        outside compiled code and BLAS, so that this process may fork (workflows/beside.py)."""
+        return self._gate
+
+    def get(self, k: int) -> Estimated:
+        """The estimate of problem ``k`` (its run at h marched here, its h/2 run taken from the
+        second thread); the first failure of either run is raised."""
+        p = self.problems[k]
+        if p is None:
+            raise ValueError(f"problem {k} is solved by the caller")
+        if not self.concurrent:
+            return solve_estimated(p)
+        from .solver import Cancelled, _solve
+
+        with self._cond:
+            self._asked = max(self._asked, k)
+            self._cond.notify_all()
+        try:
+            coarse = _solve(replace(p, progress=p.progress and k > 0), self._steps[k], runs=3, stop=self._stop)
+        except Cancelled:                    # the second thread failed first: its error, below
+            coarse = None
+        with self._cond:
+            self._cond.wait_for(lambda: k in self._done or self._first_error() is not None
+                                or not self._thread.is_alive())
+            box = self._done.get(k) or self._first_error()
+        if box is not None and box[0] == "error":
+            raise box[1]
+        if box is None or coarse is None:
+            raise RuntimeError(f"the run at h/2 of problem {k} was stopped")
+        est = _estimate(coarse, box[1])
+        coarse.metadata["accuracy"] = None
+        coarse.metadata["halvings"] = 0
+        return est
+
+    def _first_error(self):
+        return next((b for b in self._done.values() if b[0] == "error"), None)

@@ -459,11 +459,13 @@ def solve(problem: TransientProblem) -> TransientResult:
 
 
 def _solve(problem: TransientProblem, step: StepChoice | None = None, runs: int = 1,
-           stop=None) -> TransientResult:
+           stop=None, gate=None) -> TransientResult:
     """Run the two-body transient (sections 2.3-2.7) in the steps ``step`` (None: the
     problem's, stepping.choose_step) and return its time histories; ``runs``: results held
     in memory at once (for the memory estimate); ``stop``: a threading.Event that ends the
-    run between chunks (Cancelled), for a run marched beside another (accuracy.py)."""
+    run between chunks (Cancelled), for a run marched beside another (accuracy.py);
+    ``gate``: a lock held while each chunk marches, so that another thread holding it knows
+    this run is between chunks (outside compiled code and BLAS: safe to fork)."""
     started = _time.perf_counter()
     pa, pb, fo = problem.body_a, problem.body_b, problem.forcing
     rows = contact_rows(pa, pb, problem.contacts)
@@ -486,7 +488,8 @@ def _solve(problem: TransientProblem, step: StepChoice | None = None, runs: int 
     inputs = (steps, modal, contact, out_rows)
     guard = GrowthGuard(rows, modal, state, step.h, step.margin)
     guard.start(step.t0, step.t_end)
-    _drive(problem, step, inputs, state, cache, hist, lambda: _spectral_radius(W, rows, state.active), guard, stop)
+    _drive(problem, step, inputs, state, cache, hist, lambda: _spectral_radius(W, rows, state.active), guard, stop,
+           gate)
     return _result(problem, rows, step, plans, hist, int(cache.used[0]), started, state)
 
 
@@ -495,10 +498,13 @@ class Cancelled(Exception):
 
 
 def _drive(problem: TransientProblem, step: StepChoice, inputs, state: State, cache: Cache, hist: History,
-           radius, guard: GrowthGuard, stop=None) -> None:
+           radius, guard: GrowthGuard, stop=None, gate=None) -> None:
     """March every step in compiled chunks of CHUNK steps (a progress bar between chunks);
     a failed chunk raises (``radius()``: spectral radius of K_C W for the message), and so
-    does a chunk whose energy or contact forces outgrow the bounds of ``guard``."""
+    does a chunk whose energy or contact forces outgrow the bounds of ``guard``; ``gate``
+    (a lock) is held while a chunk marches."""
+    from contextlib import nullcontext
+
     bar = None
     laws = True if inputs[2].laws else None      # the kernel's path (march: compiled without the laws if None)
     if problem.progress and step.n_steps > 4 * CHUNK:
@@ -511,7 +517,8 @@ def _drive(problem: TransientProblem, step: StepChoice, inputs, state: State, ca
             if stop is not None and stop.is_set():
                 raise Cancelled(f"stopped at t = {step.t0 + i * step.h:.6g} s")
             i1 = min(i + CHUNK, step.n_steps)
-            status, at, info1, info2 = march(i, i1, *inputs, state, cache, hist, laws)
+            with gate if gate is not None else nullcontext():
+                status, at, info1, info2 = march(i, i1, *inputs, state, cache, hist, laws)
             if status != 0:
                 _failure(status, step.t0 + at * step.h, info1, info2, radius)
             if not (np.all(np.isfinite(state.q)) and np.all(np.isfinite(state.v))):

@@ -21,6 +21,7 @@ import os
 import signal
 import sys
 import time
+from contextlib import nullcontext
 from pathlib import Path
 from typing import Callable
 
@@ -57,6 +58,9 @@ class Beside:
         self._jobs: list[tuple[str, int, int, float]] = []     # (name, pid, read fd, start)
         self._inline: list[Path] = []
         self.seconds: dict[str, float] = {}
+        #: a context held while forking: another thread of this process that may be in compiled
+        #: code or a library's lock (transient.accuracy.EstimatesInOrder.paused) waits outside it
+        self.quiet = nullcontext
 
     def submit(self, name: str, work: Callable[[], list]) -> None:
         if not self.forked:
@@ -68,7 +72,8 @@ class Beside:
         sys.stderr.flush()
         r, w = os.pipe()
         t0 = time.perf_counter()
-        pid = os.fork()
+        with self.quiet():
+            pid = os.fork()
         if pid == 0:                                # the child: draw, report, leave without cleanup
             status = 1
             try:

@@ -11,8 +11,8 @@ from __future__ import annotations
 import argparse
 import tempfile
 import time
-from contextlib import contextmanager
-from dataclasses import asdict, dataclass, field
+from contextlib import contextmanager, nullcontext
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 from liftoff.core.errors import InputError
@@ -333,20 +333,27 @@ def _write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, 
                    camp, error_estimate: bool, beside) -> RunOutput:
     from liftoff.analysis.aggregate import Aggregate
 
+    from liftoff.transient.accuracy import EstimatesInOrder
+
     stage_times = list(prep.stage_times)
     results, files, tab1 = {}, [], None
     agg = Aggregate(sc.n_generated)
-    for case in sc.cases:
-        cp, mkey = prep.problems[case.name]
-        stack = prep.stacks[mkey]
-        if tab1 is None:
-            tab1, f1 = _table1(stack, cp, case, out, echo, stage_times, beside)
-            files += f1
-        res, f2 = _full_case(sc, stack, cp, case.name, out, plots and case.output.plots,
-                             want_pics and case.output.snapshots, stage_times, agg, generated=False,
-                             error_estimate=error_estimate, beside=beside)
-        files += f2
-        results[case.name] = (res, cp)
+    # the named cases' runs at h/2 march one case ahead on a second thread (transient/accuracy.py)
+    pairs = [replace(prep.problems[c.name][0].problem, keep_modal="q")
+             if error_estimate and prep.problems[c.name][0].problem.accuracy is None else None for c in sc.cases]
+    with EstimatesInOrder(pairs) as ahead, _forks_wait_for(beside, ahead):
+        for k, case in enumerate(sc.cases):
+            cp, mkey = prep.problems[case.name]
+            stack = prep.stacks[mkey]
+            if tab1 is None:
+                tab1, f1 = _table1(stack, cp, case, out, echo, stage_times, beside)
+                files += f1
+            res, f2 = _full_case(sc, stack, cp, case.name, out, plots and case.output.plots,
+                                 want_pics and case.output.snapshots, stage_times, agg, generated=False,
+                                 error_estimate=error_estimate, beside=beside,
+                                 estimate=(lambda k=k: ahead.get(k)) if pairs[k] is not None else None)
+            files += f2
+            results[case.name] = (res, cp)
     camp_run = camp.run if camp else None
     if camp_run is not None:
         from .campaign import feed_records
@@ -389,6 +396,16 @@ def _write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, 
     return RunOutput(out, sc, prep.stacks, results, tab1, env, stage_times, files, text, camp_run, agg)
 
 
+@contextmanager
+def _forks_wait_for(beside, ahead):
+    """``beside`` forks only while ``ahead``'s second thread is between chunks."""
+    beside.quiet = ahead.paused
+    try:
+        yield
+    finally:
+        beside.quiet = nullcontext
+
+
 def _table1(stack, cp, case, out: Path, echo, stage_times: list, beside=None):
     from .loads import table1
 
@@ -403,14 +420,15 @@ def _table1(stack, cp, case, out: Path, echo, stage_times: list, beside=None):
 
 
 def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, stage_times: list, agg,
-               generated: bool, solved=None, error_estimate: bool = False, beside=None):
+               generated: bool, solved=None, error_estimate: bool = False, beside=None, estimate=None):
     """A case with full outputs: the transient (modal displacements kept; with
     ``error_estimate`` or an ``accuracy`` setting also at h/2, so that each max/min carries
     an estimated error), its results file, max/min table, plots, snapshots and spectra;
     its summary fed to ``agg`` (named cases; a generated case's summary comes from its record).
     ``beside`` (workflows/beside.py): writes the results file and draws the plots and
-    snapshots beside the run, its files returned by its ``wait``; None: inline."""
-    from dataclasses import replace
+    snapshots beside the run, its files returned by its ``wait``; None: inline. ``estimate``:
+    returns the case's estimate pair (:class:`transient.accuracy.EstimatesInOrder`), instead
+    of solving it here."""
 
     from liftoff.transient import solve, solve_estimated
 
@@ -420,6 +438,9 @@ def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, sta
     half, problem = None, replace(cp.problem, keep_modal="q")
     if solved is not None:
         res, secs = solved
+    elif estimate is not None:
+        est, secs = estimate(), None
+        res, half = est.result, est.check
     elif error_estimate or problem.accuracy is not None:
         est, secs = solve_estimated(problem), None
         res, half = est.result, est.check

@@ -185,3 +185,151 @@ def test_an_interrupt_while_waiting_for_the_h2_run_stops_it(monkeypatch):
     monkeypatch.setattr(threading.Thread, "join", join)
     assert stopped == [True]
     assert not any(t.name == "liftoff-h/2" for t in threading.enumerate())
+
+
+# ------------------------------------------------------------------ several cases in order
+def _cases():
+    return [_drop(t_end=0.3), None, _drop(t_end=0.4), _drop(t_end=0.5)]
+
+
+def _no_ahead_thread():
+    import threading
+
+    return not any(t.name == "liftoff-h/2-ahead" for t in threading.enumerate())
+
+
+def test_estimates_in_order_are_the_estimates_one_by_one():
+    """EstimatesInOrder (the h/2 runs one case ahead on a second thread) gives each case
+    the estimate solve_estimated gives it, bit for bit (the same runs of the same
+    arithmetic); an index left to the caller (None) is refused; no thread outlives it."""
+    from liftoff.transient.accuracy import EstimatesInOrder
+
+    probs = _cases()
+    with EstimatesInOrder(probs) as ahead:
+        assert ahead.concurrent
+        got = {k: ahead.get(k) for k in (0, 2, 3)}
+        with pytest.raises(ValueError, match="solved by the caller"):
+            ahead.get(1)
+    assert _no_ahead_thread()
+    for k, est in got.items():
+        ref = solve_estimated(probs[k])
+        for x, y in ((est.result, ref.result), (est.check, ref.check)):
+            assert x.h == y.h and np.array_equal(x.time, y.time) and np.array_equal(x.contact_force, y.contact_force)
+        assert est.relative == ref.relative
+        for key in ("error_estimate", "accuracy", "halvings"):
+            assert est.result.metadata[key] == ref.result.metadata[key]
+    with pytest.raises(ValueError, match="has an accuracy"):
+        with EstimatesInOrder([_drop(accuracy=0.01), _drop()]):
+            pass
+
+
+MARCHES_UNTIL_STOPPED = 400.0     # _logged: the h/2 run of this t_end marches until it is stopped
+
+
+def _logged(monkeypatch, log, fail_fine_of=None):
+    """solver._solve, logging (t_end, 'h' or 'h/2', event) and failing the h/2 run of the
+    problem whose t_end is ``fail_fine_of``."""
+    from liftoff.core.errors import InputError
+    from liftoff.transient import solver
+    from liftoff.transient.stepping import choose_step
+
+    real = solver._solve
+
+    def logged(problem, step=None, runs=1, stop=None, gate=None):
+        kind = "h/2" if step.h < choose_step(problem).h else "h"
+        log.append((problem.t_end, kind, "start"))
+        if kind == "h/2" and problem.t_end == fail_fine_of:
+            raise InputError(f"the h/2 run of t_end {problem.t_end} fails")
+        if kind == "h/2" and problem.t_end == MARCHES_UNTIL_STOPPED:
+            if not stop.wait(30.0):
+                raise AssertionError("never stopped")
+            log.append((problem.t_end, kind, "cancelled"))
+            raise solver.Cancelled("stopped")
+        try:
+            return real(problem, step, runs, stop, gate)
+        except solver.Cancelled:
+            log.append((problem.t_end, kind, "cancelled"))
+            raise
+
+    monkeypatch.setattr(solver, "_solve", logged)
+
+
+def test_the_second_thread_runs_at_most_one_case_ahead(monkeypatch):
+    import time
+
+    from liftoff.transient.accuracy import EstimatesInOrder
+
+    log: list = []
+    _logged(monkeypatch, log)
+    probs = _cases()
+    with EstimatesInOrder(probs) as ahead:
+        time.sleep(0.5)                  # case 0's h/2 run is done; case 2's waits for get(0)
+        log.append("get 0")
+        ahead.get(0)
+        time.sleep(0.5)                  # case 2's h/2 run marches while the caller works on case 0
+        log.append("get 2")
+        ahead.get(2)
+        log.append("get 3")
+        ahead.get(3)
+    fine = [e for e in log if isinstance(e, tuple) and e[1] == "h/2"]
+    assert [e[0] for e in fine] == [0.3, 0.4, 0.5]
+    assert log.index((0.3, "h/2", "start")) < log.index("get 0")
+    assert log.index("get 0") < log.index((0.4, "h/2", "start")) < log.index("get 2")
+    assert log.index("get 2") < log.index((0.5, "h/2", "start"))
+
+
+def test_a_failed_h2_run_is_raised_for_its_case_and_stops_everything(monkeypatch):
+    """The h/2 run of case 2 fails: case 0 is still delivered, get(2) raises that error, and
+    the thread ends (no case 3 run); leaving the block early stops a run still marching."""
+    from liftoff.core.errors import InputError
+    from liftoff.transient.accuracy import EstimatesInOrder
+
+    log: list = []
+    _logged(monkeypatch, log, fail_fine_of=0.4)
+    with EstimatesInOrder(_cases()) as ahead:
+        ahead.get(0)
+        with pytest.raises(InputError, match="the h/2 run of t_end 0.4 fails"):
+            ahead.get(2)
+    assert _no_ahead_thread() and (0.5, "h/2", "start") not in log
+
+    log.clear()
+    long = [_drop(t_end=0.3), _drop(t_end=MARCHES_UNTIL_STOPPED)]
+    with pytest.raises(RuntimeError, match="the caller's own failure"):
+        with EstimatesInOrder(long) as ahead:
+            ahead.get(0)
+            while (400.0, "h/2", "start") not in log:
+                pass
+            raise RuntimeError("the caller's own failure")
+    assert _no_ahead_thread() and (400.0, "h/2", "cancelled") in log
+
+
+def test_paused_holds_the_second_thread_between_chunks(monkeypatch):
+    """While paused() is held (a fork in workflows/beside.py) the second thread marches no
+    chunk; it marches each chunk holding the gate."""
+    import threading
+    import time
+
+    from liftoff.transient import solver
+    from liftoff.transient.accuracy import EstimatesInOrder
+
+    calls: list = []
+    real = solver.march
+
+    def march(*args):
+        if threading.current_thread().name == "liftoff-h/2-ahead":
+            calls.append(ahead._gate.locked())
+            time.sleep(0.02)             # 51 chunks: a run of about a second
+        return real(*args)
+
+    monkeypatch.setattr(solver, "march", march)
+    with EstimatesInOrder([_drop(t_end=2000.0), _drop(t_end=0.3)]) as ahead:
+        while len(calls) < 2:
+            time.sleep(0.001)
+        with ahead.paused():
+            n = len(calls)
+            time.sleep(0.3)
+            assert len(calls) == n
+        while len(calls) < n + 2:
+            time.sleep(0.001)
+        assert len(calls) < 40           # still marching: stopped by the block's end
+    assert all(calls) and _no_ahead_thread()
