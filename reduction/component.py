@@ -168,11 +168,13 @@ def save_component(c: Component, path) -> Path:
     return write_record(path, FORMAT, VERSION, data, units="SI", attrs={"name": c.name}, suffixes=(".npz",))
 
 
-def load_component(path) -> Component:
+def load_component(path, mmap: bool = False) -> Component:
+    """A component file (:meth:`Component.save`); ``mmap``: its large arrays mapped read-only
+    (liftoff.core.records.read_record), for files checked otherwise (the stage cache)."""
     from .liquid import LiquidMass
     from .slosh import SloshDOFs
 
-    rec = read_record(path, FORMAT, (VERSION,), what="component file")
+    rec = read_record(path, FORMAT, (VERSION,), what="component file", mmap=mmap)
     z = rec.data
     try:
         return Component(

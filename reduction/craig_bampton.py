@@ -470,8 +470,10 @@ def save_cb(cb: CBModel, path, recovery: bool = True) -> Path:
                         attrs={"name": cb.name, "source_units": cb.source_units})
 
 
-def load_cb(path) -> CBModel:
-    rec = read_record(path, FORMAT, (1, VERSION), what="CB model file")
+def load_cb(path, mmap: bool = False) -> CBModel:
+    """A CB model file (:meth:`CBModel.save`); ``mmap``: its large arrays mapped read-only
+    (liftoff.core.records.read_record), for files checked otherwise (the stage cache)."""
+    rec = read_record(path, FORMAT, (1, VERSION), what="CB model file", mmap=mmap)
     z = rec.data
     try:
         items = tuple(CBRecovery(name=str(nm), labels=tuple(z["recovery"][nm]["labels"]),

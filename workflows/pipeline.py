@@ -167,7 +167,7 @@ def component_stage(model: ModelConfig, name: str, cache: StageCache, workdir: P
         save_arrays({f"vol_{k}": v for k, v in out[1].items()}, thermal_path(p))
 
     def load(p):
-        return load_component(p), {k[4:]: v for k, v in load_arrays(thermal_path(p)).items()}
+        return load_component(p, mmap=True), {k[4:]: v for k, v in load_arrays(thermal_path(p)).items()}
 
     out, thermal = cache.get_or_build(model.source, key, ".npz", lambda: build_component(model, comp, workdir),
                                       save, load, label=name)
@@ -204,6 +204,11 @@ def _cb_key(model: ModelConfig, name: str, comp: Component, comp_key: str) -> tu
     return stage_key("cb", params, ("liftoff.reduction", "liftoff.core", *solver_code), (comp_key,)), params
 
 
+def _load_cached_cb(path) -> CBModel:
+    """A cached CB product, its large arrays mapped (the entry's checksums were checked)."""
+    return load_cb(path, mmap=True)
+
+
 def cb_stage(model: ModelConfig, name: str, comp: Component, comp_key: str, cache: StageCache) -> tuple[CBModel, str]:
     """The CB model of a component (from the cache, or reduced with :func:`cb_solver`: a
     cached Component is enough, the PETSc matrices are built from it)."""
@@ -212,7 +217,7 @@ def cb_stage(model: ModelConfig, name: str, comp: Component, comp_key: str, cach
     cb = cache.get_or_build("cb", key, ".npz",
                             lambda: craig_bampton(comp, params["boundary"], params["n_modes"], params["f_max"],
                                                   solver=solver),
-                            lambda out, p: out.save(p, recovery=True), load_cb, label=name)
+                            lambda out, p: out.save(p, recovery=True), _load_cached_cb, label=name)
     return cb, key
 
 
@@ -233,7 +238,7 @@ def nastran_stage(model: ModelConfig, name: str, cache: StageCache) -> tuple[CBM
                             **({"recovery": recovery} if recovery else {}))
         return cb.select_modes(sel.n_modes, sel.f_max)
 
-    cb = cache.get_or_build("nastran", key, ".npz", build, lambda out, p: out.save(p, recovery=True), load_cb,
+    cb = cache.get_or_build("nastran", key, ".npz", build, lambda out, p: out.save(p, recovery=True), _load_cached_cb,
                             label=name)
     return cb, key
 
@@ -352,7 +357,7 @@ def _needs_stages(model: ModelConfig, name: str, cache: StageCache) -> bool:
     if not cache.has(model.source, key, ".npz"):
         return True
     try:
-        comp = load_component(cache.path(model.source, key, ".npz"))
+        comp = load_component(cache.path(model.source, key, ".npz"), mmap=True)
     except Exception:  # noqa: BLE001 - damaged: the worker's stage rebuilds it (with its warning)
         return True
     return not _cb_cached(model, name, comp, key, cache)

@@ -1,0 +1,85 @@
+"""Records read with their large arrays memory-mapped (liftoff.core.records.read_record with
+mmap=True, used for the stage cache's FE and CB products, whose bytes the cache's checksums
+check): the same arrays as read, read-only, the small and compressed members read as
+before, a file replaced (atomic write) leaves a mapped array as it was, and a member that
+is not a plain array or is cut short is an error, never a wrong array."""
+from __future__ import annotations
+
+import os
+import zipfile
+
+import numpy as np
+import pytest
+
+from liftoff.core.errors import InputError
+from liftoff.core.records import MMAP_MIN_BYTES, read_record, write_record
+
+
+def _arrays():
+    rng = np.random.default_rng(1)
+    return {"big": rng.standard_normal((600, 400)),                       # 1.9 MB: mapped
+            "fortran": np.asfortranarray(rng.standard_normal((400, 500))),  # mapped, column-major
+            "ints": np.arange(300_000, dtype=np.int32),                  # 1.2 MB: mapped
+            "small": rng.standard_normal(10),                            # read
+            "group": {"inner": rng.standard_normal((700, 300))},
+            "text": np.array(["a", "bc"], dtype="U")}
+
+
+def test_mapped_arrays_equal_the_read_ones_and_are_read_only(tmp_path):
+    path = write_record(tmp_path / "r.npz", "test-kind", 1, _arrays(), units="SI")
+    read = read_record(path, "test-kind").data
+    mapped = read_record(path, "test-kind", mmap=True).data
+    for name in ("big", "fortran", "ints", "small"):
+        assert type(mapped[name]) is np.ndarray and mapped[name].dtype == read[name].dtype
+        assert np.array_equal(mapped[name], read[name]), name
+    assert np.array_equal(mapped["group"]["inner"], read["group"]["inner"])
+    assert list(mapped["text"]) == ["a", "bc"]
+    assert mapped["fortran"].flags.f_contiguous
+    for name in ("big", "ints"):
+        assert mapped[name].nbytes >= MMAP_MIN_BYTES and not mapped[name].flags.writeable
+        with pytest.raises(ValueError, match="read-only"):
+            mapped[name][0] = 1
+    assert mapped["small"].flags.writeable                      # read, not mapped
+
+
+def test_a_replaced_file_leaves_a_mapped_array_as_it_was(tmp_path):
+    arrays = _arrays()
+    path = write_record(tmp_path / "r.npz", "test-kind", 1, arrays, units="SI")
+    mapped = read_record(path, "test-kind", mmap=True).data
+    other = dict(arrays, big=np.zeros_like(arrays["big"]))
+    write_record(path, "test-kind", 1, other, units="SI")          # atomic: a new file under the name
+    assert np.array_equal(mapped["big"], arrays["big"])
+    assert not read_record(path, "test-kind", mmap=True).data["big"].any()
+
+
+def test_compressed_members_are_read(tmp_path):
+    path = tmp_path / "c.npz"
+    big = np.arange(400_000, dtype=float)
+    np.savez_compressed(path, format=np.array("test-kind"), version=np.array(1), big=big)
+    data = read_record(path, "test-kind", mmap=True).data
+    assert np.array_equal(data["big"], big) and data["big"].flags.writeable
+
+
+def test_a_cut_member_or_an_object_member_is_an_error(tmp_path):
+    path = write_record(tmp_path / "r.npz", "test-kind", 1, _arrays(), units="SI")
+    with zipfile.ZipFile(path) as zf:
+        info = zf.getinfo("big.npy")
+    cut = tmp_path / "cut.npz"
+    data = bytearray(path.read_bytes())
+    # the member's header claims 600 rows but the zip entry says it holds fewer bytes
+    start = info.header_offset + 30 + len(info.filename)
+    at = data.index(b"(600, 400)", start)
+    data[at:at + 10] = b"(900, 400)"
+    cut.write_bytes(bytes(data))
+    with pytest.raises(InputError, match="cannot be read.*shorter than its array"):
+        read_record(cut, "test-kind", mmap=True)
+
+    obj = tmp_path / "obj.npz"
+    with zipfile.ZipFile(obj, "w", zipfile.ZIP_STORED) as zf:
+        with zf.open("format.npy", "w") as fh:
+            np.lib.format.write_array(fh, np.array("test-kind"))
+        with zf.open("things.npy", "w") as fh:
+            np.lib.format.write_array(fh, np.array([f"item {i:06d}" for i in range(100_000)], dtype=object), allow_pickle=True)
+    with pytest.raises(InputError, match="cannot be read.*holds Python objects"):
+        read_record(obj, "test-kind", mmap=True)
+    assert os.path.getsize(obj) > MMAP_MIN_BYTES
