@@ -118,9 +118,12 @@ def summarize(result, cp, name: str, index: int, post, wall: float = 0.0, check=
     band = post.acceleration_band_hz
     its = report.items(result, cp.attach, report.liquid_heads(cp), band)
     t = result.time
-    V = np.column_stack([it.values for it in its])
-    imax, imin = np.argmax(V, axis=0), np.argmin(V, axis=0)
-    cols = np.arange(V.shape[1])
+    # per item on its own history (first occurrence, as argmax over a stacked array), without
+    # stacking them: 1 s a default case for the copy and the strided search
+    imax = np.array([int(np.argmax(it.values)) for it in its], dtype=np.int64)
+    imin = np.array([int(np.argmin(it.values)) for it in its], dtype=np.int64)
+    vmax = np.array([it.values[i] for it, i in zip(its, imax)], dtype=float)
+    vmin = np.array([it.values[i] for it, i in zip(its, imin)], dtype=float)
     srs_items, srs_arr = (), None
     if post.srs is not None:
         from liftoff.analysis.spectra import srs, srs_frequencies
@@ -136,7 +139,7 @@ def summarize(result, cp, name: str, index: int, post, wall: float = 0.0, check=
     support_items, support = case_support(report.interface_histories(result, cp.attach))
     return CaseSummary(
         name, index, tuple(it.name for it in its), tuple(it.unit for it in its), tuple(it.category for it in its),
-        V[imax, cols].copy(), t[imax].copy(), V[imin, cols].copy(), t[imin].copy(), srs_items, srs_arr,
+        vmax, t[imax].copy(), vmin, t[imin].copy(), srs_items, srs_arr,
         tuple(c["name"] for c in cs), np.array([np.nan if c["separation_time"] is None else c["separation_time"]
                                                  for c in cs]),
         np.array([c["recontacts"] for c in cs], dtype=np.int64), np.array([c["peak_compression"] for c in cs]),
