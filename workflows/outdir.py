@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Iterator
 
 from liftoff.core.errors import InputError
-from liftoff.core.records import TEMP_TAG, file_sha256, fsync_dir, sweep_stale, write_text
+from liftoff.core.records import TEMP_TAG, files_sha256, fsync_dir, sweep_stale, write_text
 
 MANIFEST = "MANIFEST.json"
 FORMAT = "liftoff-run-manifest"
@@ -91,10 +91,9 @@ def check_target(out: Path) -> None:
 def _manifest(stage: Path, command: str) -> dict:
     from liftoff import __version__
 
-    files = []
-    for f in sorted(p for p in stage.rglob("*") if p.is_file()):
-        files.append({"name": str(f.relative_to(stage)), "bytes": f.stat().st_size,
-                      "sha256": file_sha256(f)})
+    paths = sorted(p for p in stage.rglob("*") if p.is_file())
+    files = [{"name": str(f.relative_to(stage)), "bytes": f.stat().st_size, "sha256": digest}
+             for f, digest in zip(paths, files_sha256(paths))]
     return {"format": FORMAT, "version": 1, "liftoff": __version__, "command": command,
             "written": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "units": "SI (m, kg, s, N, rad) unless a file says",
             "files": files}
@@ -158,12 +157,13 @@ def verify(out) -> list[str]:
                                               and isinstance(f.get("sha256"), str) for f in files):
         return [f"{MANIFEST} lists no files in liftoff's format"]
     problems, listed = [], set()
+    present = [f for f in files if (out / f["name"]).is_file()]
+    digests = dict(zip((f["name"] for f in present), files_sha256(out / f["name"] for f in present)))
     for f in files:
-        p = out / f["name"]
         listed.add(f["name"])
-        if not p.is_file():
+        if f["name"] not in digests:
             problems.append(f"missing {f['name']}")
-        elif file_sha256(p) != f["sha256"]:
+        elif digests[f["name"]] != f["sha256"]:
             problems.append(f"changed {f['name']}")
     listed_dirs = {str(parent) for name in listed for parent in Path(name).parents}
     extra = [str(p.relative_to(out)) for p in sorted(out.rglob("*"))

@@ -188,3 +188,22 @@ def test_compare_table_is_read_before_the_first_stage(tmp_path, monkeypatch):
         with pytest.raises(InputError, match=match):
             read_maxmin(tmp_path / name)
     assert not (tmp_path / "out").exists()
+
+
+def test_files_sha256_on_threads_is_each_files_sha256_in_order(tmp_path):
+    """The manifest's digests (records.files_sha256, a few threads) against hashlib on each
+    file's bytes: empty, small, several MiB (many 1 MiB blocks), in the order given."""
+    import hashlib
+
+    import numpy as np
+
+    from liftoff.core.records import files_sha256
+
+    rng = np.random.default_rng(3)
+    paths = []
+    for k, size in enumerate((0, 10, (5 << 20) + 7, 3 << 20, 1)):
+        p = tmp_path / f"f{k}.bin"
+        p.write_bytes(rng.bytes(size))
+        paths.append(p)
+    assert files_sha256(paths) == [hashlib.sha256(p.read_bytes()).hexdigest() for p in paths]
+    assert files_sha256(paths[:1]) == [hashlib.sha256(b"").hexdigest()] and files_sha256([]) == []
