@@ -156,10 +156,9 @@ def _save_figure(plt, fig, path: Path, legend_from=None, top: float = 0.97, dpi:
     """Lay out (:func:`_fixed_layout`, below the title in the top ``1 - top`` of the figure),
     save and close a figure; with ``legend_from`` (an axes), that axes' legend right of the
     panels (which then end at ``right``), outside the data."""
-    _fixed_layout(fig, top)
     handles, labs = legend_from.get_legend_handles_labels() if legend_from is not None else ([], [])
+    _fixed_layout(fig, top, right if handles else None)
     if handles:
-        fig.subplots_adjust(right=right)
         fig.legend(handles, labs, fontsize=7, loc="center left", bbox_to_anchor=(right + 0.015, 0.5), frameon=False)
     fig.savefig(path, dpi=dpi)
     plt.close(fig)
@@ -170,12 +169,14 @@ _PT = 1.0 / 72.0         # inch
 _TICK_LABEL_WIDTH = 0.55  # inch: a y tick label of up to 7 characters at 10 pt ("-0.0025", "10^-5")
 
 
-def _fixed_layout(fig, top: float) -> None:
+def _fixed_layout(fig, top: float, right: float | None = None) -> None:
     """Margins and gaps in inches from what the panels show (labels, their lines and font
     sizes, tick labels, titles), on a regular grid of panels: the layout matplotlib's
     ``tight_layout`` finds, without its measuring pass over every tick label. That pass
     drew each figure once more before saving it: 7.3 s for the four log-log and grid
-    figures of a warm default run (2026-11-27)."""
+    figures of a warm default run (2026-11-27). ``right``: the panels end there (a fraction
+    of the width; a legend goes right of them), else 0.2 inch from the edge. Panels off a
+    regular grid (a twin or colour-bar axes) are not measured."""
     from matplotlib import rcParams
 
     axes = [ax for ax in fig.axes if ax.get_visible() and ax.get_subplotspec() is not None]
@@ -202,15 +203,17 @@ def _fixed_layout(fig, top: float) -> None:
         return ax.get_subplotspec().colspan
 
     title = [max((text_h(ax.title) for ax in axes if rows(ax).start == r), default=0.0) for r in range(nrows)]
-    left = 0.12 + max(y_band(ax) for ax in axes if cols(ax).start == 0)
-    bottom = 0.1 + max(x_band(ax) for ax in axes if rows(ax).stop == nrows)
+    left = 0.12 + max((y_band(ax) for ax in axes if cols(ax).start == 0), default=0.0)
+    bottom = 0.1 + max((x_band(ax) for ax in axes if rows(ax).stop == nrows), default=0.0)
     top_in = max((1.0 - top) * H, 0.5 if fig._suptitle is not None else 0.1) + title[0]
     h_gap = 0.2 + max((x_band(ax) for ax in axes if rows(ax).stop < nrows), default=0.0) + max(title[1:], default=0.0)
     w_gap = 0.2 + max((y_band(ax) for ax in axes if cols(ax).start > 0), default=0.0)
-    right_in = 0.2
+    right_in = 0.2 if right is None else (1.0 - right) * W
     ax_h = (H - top_in - bottom - (nrows - 1) * h_gap) / nrows
     ax_w = (W - left - right_in - (ncols - 1) * w_gap) / ncols
     if ax_h <= 0.2 or ax_w <= 0.2:      # too small a figure for its labels: matplotlib's defaults
+        if right is not None:
+            fig.subplots_adjust(right=right)
         return
     fig.subplots_adjust(left=left / W, right=1.0 - right_in / W, bottom=bottom / H, top=1.0 - top_in / H,
                         hspace=h_gap / ax_h, wspace=w_gap / ax_w)

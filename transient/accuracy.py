@@ -24,6 +24,7 @@ absolute contact force of its unit (N, N m) in the run.
 from __future__ import annotations
 
 import os
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -168,6 +169,64 @@ def _first_pair(problem: TransientProblem, check: TransientProblem, step, solve_
     return coarse, box["result"]
 
 
+class PauseGate:
+    """Lets one thread pause another at a safe point. The marching thread holds the gate
+    over a whole run (:meth:`running`) and offers it at each chunk boundary
+    (:meth:`checkpoint`, called by the solver between compiled chunks); :meth:`paused` (a
+    context) waits until that thread is at a boundary or between runs and holds it there.
+    So the pausing thread (which forks, workflows/beside.py) never acts while the other is
+    in compiled code, BLAS/LAPACK or the run's set-up."""
+
+    def __init__(self):
+        import threading
+
+        self._cond = threading.Condition()
+        self._busy = False
+        self._requests = 0
+
+    @contextmanager
+    def running(self):
+        with self._cond:
+            self._cond.wait_for(lambda: self._requests == 0)
+            self._busy = True
+        try:
+            yield
+        finally:
+            with self._cond:
+                self._busy = False
+                self._cond.notify_all()
+
+    def checkpoint(self) -> None:
+        with self._cond:
+            if self._requests:
+                self._busy = False
+                self._cond.notify_all()
+                self._cond.wait_for(lambda: self._requests == 0)
+                self._busy = True
+
+    @contextmanager
+    def paused(self):
+        with self._cond:
+            self._requests += 1
+            self._cond.wait_for(lambda: not self._busy)
+        try:
+            yield
+        finally:
+            with self._cond:
+                self._requests -= 1
+                self._cond.notify_all()
+
+
+class _Either:
+    """Set when either event is (the ``stop`` a run of :func:`solver._solve` polls)."""
+
+    def __init__(self, a, b):
+        self.a, self.b = a, b
+
+    def is_set(self) -> bool:
+        return self.a.is_set() or self.b.is_set()
+
+
 class EstimatesInOrder:
     """:func:`solve_estimated` of several problems, taken in order with :meth:`get`, their
     runs at h/2 marched one after another on a second thread that runs one problem ahead:
@@ -180,10 +239,13 @@ class EstimatesInOrder:
     ``problems``: one per index; None where the caller solves that index itself (a problem
     with ``accuracy``, whose halvings depend on each estimate, or one without an estimate).
     Each run is the same computation as in :func:`solve_estimated` (one BLAS thread, held
-    over the object's life), so the estimates are the same, bit for bit. Used as a context
-    manager: leaving it (an error, an interrupt) stops the second thread's run at its next
-    chunk and waits for it, so no run outlives the block. Without ``CONCURRENT_PAIR``, each
-    :meth:`get` is :func:`solve_estimated`."""
+    over the object's life), so the estimates are the same, bit for bit. A failed h/2 run
+    is raised by :meth:`get` of its own problem (and stops that problem's run at h, and the
+    thread); the problems before it are delivered. Used as a context manager: leaving it
+    (an error, an interrupt) stops the second thread's run at its next chunk and waits for
+    it, so no run outlives the block. Each problem is taken once, and its h/2 result is
+    dropped when taken. Without ``CONCURRENT_PAIR``, each :meth:`get` is
+    :func:`solve_estimated`."""
 
     def __init__(self, problems: list):
         import threading
@@ -191,13 +253,16 @@ class EstimatesInOrder:
         self.problems = list(problems)
         self.concurrent = CONCURRENT_PAIR and sum(p is not None for p in self.problems) > 1
         self._cond = threading.Condition()
-        self._stop = threading.Event()
+        self._stop = threading.Event()       # the block is left: every run stops
+        self._failed = {k: threading.Event() for k, p in enumerate(self.problems) if p is not None}
         self._asked = -1                     # the highest index asked for (the thread runs one problem ahead)
-        self._done: dict[int, tuple] = {}    # index -> ("result", TransientResult) | ("error", exception)
+        self._done: dict[int, object] = {}   # index -> its h/2 TransientResult, until taken
+        self._taken: set[int] = set()
+        self._error: tuple[int, BaseException] | None = None
         self._steps: dict[int, object] = {}
         self._thread = None
         self._limits = None
-        self._gate = threading.Lock()        # held by the second thread while it marches a chunk
+        self.gate = PauseGate()
 
     def __enter__(self) -> "EstimatesInOrder":
         if not self.concurrent:
@@ -213,23 +278,25 @@ class EstimatesInOrder:
                     if p.accuracy is not None:
                         raise ValueError(f"problem {k} has an accuracy: solve it with solve_estimated")
                     self._steps[k] = choose_step(p, contact_rows(p.body_a, p.body_b, p.contacts))
+            self._thread = threading.Thread(target=self._fine_runs, name="liftoff-h/2-ahead", daemon=True)
+            self._thread.start()
         except BaseException:
             self.__exit__()
             raise
-        self._thread = threading.Thread(target=self._fine_runs, name="liftoff-h/2-ahead", daemon=True)
-        self._thread.start()
         return self
 
     def __exit__(self, *exc) -> None:
         self._stop.set()
-        with self._cond:
-            self._cond.notify_all()
-        if self._thread is not None:
-            self._thread.join()
-            self._thread = None
-        if self._limits is not None:
-            self._limits.restore_original_limits()
-            self._limits = None
+        try:
+            with self._cond:
+                self._cond.notify_all()
+            if self._thread is not None:
+                self._thread.join()
+                self._thread = None
+        finally:
+            if self._limits is not None:
+                self._limits.restore_original_limits()
+                self._limits = None
 
     def _fine_runs(self) -> None:
         from .solver import _solve
@@ -244,29 +311,36 @@ class EstimatesInOrder:
             if self._stop.is_set():
                 return
             try:
-                # held at once: this run (1.5 runs at h) and the caller's pair of the problem before (3)
-                box = ("result", _solve(replace(p, keep_modal=False, progress=p.progress and k == 0),
-                                        self._steps[k].halved(), runs=4.5, stop=self._stop, gate=self._gate))
-            except BaseException as exc:     # noqa: BLE001 - handed to the caller
-                box = ("error", exc)
-                self._stop.set()
-            with self._cond:
-                self._done[k] = box
-                self._cond.notify_all()
-            if box[0] == "error":
+                with self.gate.running():
+                    # as solve_estimated's h/2 run (runs=1.5: it and its pair's run at h held at
+                    # once), plus the problem before's pair, still held by the caller (1.5 more)
+                    fine = _solve(replace(p, keep_modal=False, progress=p.progress and k == 0),
+                                  self._steps[k].halved(), runs=3, stop=self._stop, gate=self.gate)
+            except BaseException as exc:     # noqa: BLE001 - handed to the caller, at get(k)
+                with self._cond:
+                    self._error = (k, exc)
+                    self._failed[k].set()
+                    self._cond.notify_all()
                 return
+            with self._cond:
+                self._done[k] = fine
+                self._cond.notify_all()
 
     def paused(self):
-        """A context in which the second thread is between chunks (waiting for the gate):
-        outside compiled code and BLAS, so that this process may fork (workflows/beside.py)."""
-        return self._gate
+        """A context in which the second thread is at a chunk boundary or between runs:
+        outside compiled code, BLAS and a run's set-up, so that this process may fork
+        (workflows/beside.py)."""
+        return self.gate.paused()
 
     def get(self, k: int) -> Estimated:
         """The estimate of problem ``k`` (its run at h marched here, its h/2 run taken from the
-        second thread); the first failure of either run is raised."""
+        second thread); a failure of either run is raised."""
         p = self.problems[k]
         if p is None:
             raise ValueError(f"problem {k} is solved by the caller")
+        if k in self._taken:
+            raise ValueError(f"problem {k} was taken already")
+        self._taken.add(k)
         if not self.concurrent:
             return solve_estimated(p)
         from .solver import Cancelled, _solve
@@ -275,21 +349,20 @@ class EstimatesInOrder:
             self._asked = max(self._asked, k)
             self._cond.notify_all()
         try:
-            coarse = _solve(replace(p, progress=p.progress and k > 0), self._steps[k], runs=3, stop=self._stop)
-        except Cancelled:                    # the second thread failed first: its error, below
+            coarse = _solve(replace(p, progress=p.progress and k > 0), self._steps[k], runs=3,
+                            stop=_Either(self._stop, self._failed[k]))
+        except Cancelled:                    # this problem's h/2 run failed first: its error, below
             coarse = None
         with self._cond:
-            self._cond.wait_for(lambda: k in self._done or self._first_error() is not None
-                                or not self._thread.is_alive())
-            box = self._done.get(k) or self._first_error()
-        if box is not None and box[0] == "error":
-            raise box[1]
-        if box is None or coarse is None:
+            self._cond.wait_for(lambda: k in self._done or self._error is not None or not self._thread.is_alive())
+            fine = self._done.pop(k, None)
+        if fine is None:
+            if self._error is not None:      # this problem's h/2 run, or (asked out of order) an earlier one
+                raise self._error[1]
             raise RuntimeError(f"the run at h/2 of problem {k} was stopped")
-        est = _estimate(coarse, box[1])
+        if coarse is None:
+            raise RuntimeError(f"the run at h of problem {k} was stopped")
+        est = _estimate(coarse, fine)
         coarse.metadata["accuracy"] = None
         coarse.metadata["halvings"] = 0
         return est
-
-    def _first_error(self):
-        return next((b for b in self._done.values() if b[0] == "error"), None)

@@ -464,8 +464,8 @@ def _solve(problem: TransientProblem, step: StepChoice | None = None, runs: int 
     problem's, stepping.choose_step) and return its time histories; ``runs``: results held
     in memory at once (for the memory estimate); ``stop``: a threading.Event that ends the
     run between chunks (Cancelled), for a run marched beside another (accuracy.py);
-    ``gate``: a lock held while each chunk marches, so that another thread holding it knows
-    this run is between chunks (outside compiled code and BLAS: safe to fork)."""
+    ``gate``: offered at each chunk boundary (``gate.checkpoint()``, accuracy.PauseGate), where
+    another thread may hold this run while it forks."""
     started = _time.perf_counter()
     pa, pb, fo = problem.body_a, problem.body_b, problem.forcing
     rows = contact_rows(pa, pb, problem.contacts)
@@ -501,9 +501,8 @@ def _drive(problem: TransientProblem, step: StepChoice, inputs, state: State, ca
            radius, guard: GrowthGuard, stop=None, gate=None) -> None:
     """March every step in compiled chunks of CHUNK steps (a progress bar between chunks);
     a failed chunk raises (``radius()``: spectral radius of K_C W for the message), and so
-    does a chunk whose energy or contact forces outgrow the bounds of ``guard``; ``gate``
-    (a lock) is held while a chunk marches."""
-    from contextlib import nullcontext
+    does a chunk whose energy or contact forces outgrow the bounds of ``guard``; ``gate``:
+    its ``checkpoint()`` is called before each chunk (accuracy.PauseGate)."""
 
     bar = None
     laws = True if inputs[2].laws else None      # the kernel's path (march: compiled without the laws if None)
@@ -514,11 +513,12 @@ def _drive(problem: TransientProblem, step: StepChoice, inputs, state: State, ca
     try:
         i = 0
         while i < step.n_steps:
+            if gate is not None:
+                gate.checkpoint()
             if stop is not None and stop.is_set():
                 raise Cancelled(f"stopped at t = {step.t0 + i * step.h:.6g} s")
             i1 = min(i + CHUNK, step.n_steps)
-            with gate if gate is not None else nullcontext():
-                status, at, info1, info2 = march(i, i1, *inputs, state, cache, hist, laws)
+            status, at, info1, info2 = march(i, i1, *inputs, state, cache, hist, laws)
             if status != 0:
                 _failure(status, step.t0 + at * step.h, info1, info2, radius)
             if not (np.all(np.isfinite(state.q)) and np.all(np.isfinite(state.v))):

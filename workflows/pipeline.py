@@ -357,7 +357,7 @@ def _needs_stages(model: ModelConfig, name: str, cache: StageCache) -> bool:
     if not cache.has(model.source, key, ".npz"):
         return True
     try:
-        comp = load_component(cache.path(model.source, key, ".npz"), mmap=True)
+        comp = load_component(cache.path(model.source, key, ".npz"))
     except Exception:  # noqa: BLE001 - damaged: the worker's stage rebuilds it (with its warning)
         return True
     return not _cb_cached(model, name, comp, key, cache)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 import tempfile
 import time
-from contextlib import contextmanager, nullcontext
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
@@ -399,11 +399,11 @@ def _write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, 
 @contextmanager
 def _forks_wait_for(beside, ahead):
     """``beside`` forks only while ``ahead``'s second thread is between chunks."""
-    beside.quiet = ahead.paused
+    before, beside.quiet = beside.quiet, ahead.paused
     try:
         yield
     finally:
-        beside.quiet = nullcontext
+        beside.quiet = before
 
 
 def _table1(stack, cp, case, out: Path, echo, stage_times: list, beside=None):

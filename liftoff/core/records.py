@@ -194,7 +194,7 @@ def write_record(path: str | os.PathLike, kind: str, version: int, data: Mapping
             flat = {k: np.array(v) for k, v in header.items()}
             flat.update(_flatten(data))
             with open(tmp, "wb") as fh:
-                np.savez(fh, **flat)
+                _savez_aligned(fh, flat)
         else:
             import h5py
 
@@ -286,6 +286,31 @@ def declared_shapes(path: Path) -> dict[str, tuple[tuple[int, ...], int]]:
 
 #: arrays of at least this size are memory-mapped by read_record(..., mmap=True)
 MMAP_MIN_BYTES = 1 << 20
+#: write_record's .npz members start their data at a multiple of this many bytes of the file
+NPZ_ALIGN = 64
+_ALIGN_EXTRA_ID = 0xD935      # a zip extra field of padding (the id Android's zipalign uses)
+
+
+def _savez_aligned(fh, arrays: Mapping) -> None:
+    """``np.savez`` (uncompressed .npy members, zip64, no pickle) with each member's data at a
+    multiple of NPZ_ALIGN bytes of the file, by a padding extra field in its local header:
+    a memory map of it (:func:`_read_npz`) is then aligned, as numpy's BLAS paths and numba
+    want; any zip reader (np.load) reads it as before."""
+    import struct
+    import zipfile
+
+    with zipfile.ZipFile(fh, "w", zipfile.ZIP_STORED, allowZip64=True) as zf:
+        for name, value in arrays.items():
+            arr = np.asanyarray(value)
+            info = zipfile.ZipInfo(f"{name}.npy", date_time=(1980, 1, 1, 0, 0, 0))
+            info.compress_type = zipfile.ZIP_STORED
+            # the local header: 30 bytes, the name, this extra field (4 + pad) and zip64's (20);
+            # then the .npy header, whose length numpy pads to a multiple of 64
+            base = fh.tell() + 30 + len(info.filename.encode("utf-8")) + 4 + 20
+            pad = (-base) % NPZ_ALIGN
+            info.extra = struct.pack("<HH", _ALIGN_EXTRA_ID, pad) + b"\0" * pad
+            with zf.open(info, "w", force_zip64=True) as out:
+                np.lib.format.write_array(out, arr, allow_pickle=False)
 
 
 def _read_npz(path: Path, mmap: bool) -> dict:

@@ -74,3 +74,20 @@ def test_too_small_a_figure_keeps_matplotlibs_defaults():
     _fixed_layout(fig, 0.97)
     assert (fig.subplotpars.top, fig.subplotpars.hspace) == pytest.approx(before)
     plt.close(fig)
+
+
+def test_a_grid_with_a_legend_right_of_it():
+    """correlated_loads.png's layout: labelled panels ending at ``right``, the legend beside
+    them (analysis/plots._save_figure): the gaps are measured with the panels' final width."""
+    plt = _pyplot()
+    fig, axs = plt.subplots(4, 2, figsize=(10, 2.6 * 4 + 1), squeeze=False)
+    for ax in axs.flat:
+        ax.plot([-18.2, 11.5], [0.0, 150.0], label="nominal")
+        ax.set_xlabel("Tz (MN)", fontsize=8)
+        ax.set_ylabel("Mb (MN m)", fontsize=8)
+        ax.set_title("att_srb_left_fwd", fontsize=8)
+    fig.suptitle("Correlated loads")
+    _fixed_layout(fig, 0.98, 0.84)
+    assert fig.subplotpars.right == pytest.approx(0.84)
+    _check(fig)
+    plt.close(fig)

@@ -40,6 +40,16 @@ def test_mapped_arrays_equal_the_read_ones_and_are_read_only(tmp_path):
         with pytest.raises(ValueError, match="read-only"):
             mapped[name][0] = 1
     assert mapped["small"].flags.writeable                      # read, not mapped
+    # write_record pads each member's local header so that its data starts at a multiple of
+    # NPZ_ALIGN bytes: the maps are aligned (BLAS paths, numba); any zip reader still reads it
+    from liftoff.core.records import NPZ_ALIGN
+
+    for name in ("big", "fortran", "ints"):
+        assert mapped[name].ctypes.data % NPZ_ALIGN == 0, name
+    with zipfile.ZipFile(path) as zf:
+        assert zf.testzip() is None
+    with np.load(path) as z:
+        assert np.array_equal(z["big"], read["big"]) and np.array_equal(z["group/inner"], read["group"]["inner"])
 
 
 def test_a_replaced_file_leaves_a_mapped_array_as_it_was(tmp_path):

@@ -210,6 +210,9 @@ def test_estimates_in_order_are_the_estimates_one_by_one():
         got = {k: ahead.get(k) for k in (0, 2, 3)}
         with pytest.raises(ValueError, match="solved by the caller"):
             ahead.get(1)
+        with pytest.raises(ValueError, match="taken already"):
+            ahead.get(2)
+        assert ahead._done == {}         # each h/2 result dropped when taken
     assert _no_ahead_thread()
     for k, est in got.items():
         ref = solve_estimated(probs[k])
@@ -226,9 +229,12 @@ def test_estimates_in_order_are_the_estimates_one_by_one():
 MARCHES_UNTIL_STOPPED = 400.0     # _logged: the h/2 run of this t_end marches until it is stopped
 
 
-def _logged(monkeypatch, log, fail_fine_of=None):
+def _logged(monkeypatch, log, fail_fine_of=None, coarse_waits_for=None):
     """solver._solve, logging (t_end, 'h' or 'h/2', event) and failing the h/2 run of the
-    problem whose t_end is ``fail_fine_of``."""
+    problem whose t_end is ``fail_fine_of``; the run at h of the problem whose t_end is
+    ``coarse_waits_for[0]`` starts once ``coarse_waits_for[1]`` is in the log."""
+    import time
+
     from liftoff.core.errors import InputError
     from liftoff.transient import solver
     from liftoff.transient.stepping import choose_step
@@ -239,7 +245,13 @@ def _logged(monkeypatch, log, fail_fine_of=None):
         kind = "h/2" if step.h < choose_step(problem).h else "h"
         log.append((problem.t_end, kind, "start"))
         if kind == "h/2" and problem.t_end == fail_fine_of:
+            log.append((problem.t_end, kind, "failed"))
             raise InputError(f"the h/2 run of t_end {problem.t_end} fails")
+        if coarse_waits_for and kind == "h" and problem.t_end == coarse_waits_for[0]:
+            for _ in range(3000):
+                if coarse_waits_for[1] in log:
+                    break
+                time.sleep(0.01)
         if kind == "h/2" and problem.t_end == MARCHES_UNTIL_STOPPED:
             if not stop.wait(30.0):
                 raise AssertionError("never stopped")
@@ -292,7 +304,32 @@ def test_a_failed_h2_run_is_raised_for_its_case_and_stops_everything(monkeypatch
             ahead.get(2)
     assert _no_ahead_thread() and (0.5, "h/2", "start") not in log
 
-    log.clear()
+
+def test_a_failed_h2_run_does_not_fail_the_case_before_it(monkeypatch):
+    """Case 2's h/2 run fails while the caller's run at h of case 0 still marches: case 0 is
+    delivered, the same as solve_estimated gives it, and get(2) raises case 2's own error."""
+    from liftoff.core.errors import InputError
+    from liftoff.transient.accuracy import EstimatesInOrder
+
+    log: list = []
+    probs = _cases()
+    ref = solve_estimated(probs[0])
+    _logged(monkeypatch, log, fail_fine_of=0.4, coarse_waits_for=(0.3, (0.4, "h/2", "failed")))
+    with EstimatesInOrder(probs) as ahead:
+        est = ahead.get(0)
+        assert (0.4, "h/2", "failed") in log
+        with pytest.raises(InputError, match="the h/2 run of t_end 0.4 fails"):
+            ahead.get(2)
+    assert np.array_equal(est.result.contact_force, ref.result.contact_force)
+    assert np.array_equal(est.check.contact_force, ref.check.contact_force)
+    assert _no_ahead_thread()
+
+
+def test_leaving_the_block_stops_a_run_still_marching(monkeypatch):
+    from liftoff.transient.accuracy import EstimatesInOrder
+
+    log: list = []
+    _logged(monkeypatch, log)
     long = [_drop(t_end=0.3), _drop(t_end=MARCHES_UNTIL_STOPPED)]
     with pytest.raises(RuntimeError, match="the caller's own failure"):
         with EstimatesInOrder(long) as ahead:
@@ -305,7 +342,8 @@ def test_a_failed_h2_run_is_raised_for_its_case_and_stops_everything(monkeypatch
 
 def test_paused_holds_the_second_thread_between_chunks(monkeypatch):
     """While paused() is held (a fork in workflows/beside.py) the second thread marches no
-    chunk; it marches each chunk holding the gate."""
+    chunk; it marches each chunk (and runs its set-up) marked busy, so paused() waits for
+    the next chunk boundary."""
     import threading
     import time
 
@@ -317,19 +355,25 @@ def test_paused_holds_the_second_thread_between_chunks(monkeypatch):
 
     def march(*args):
         if threading.current_thread().name == "liftoff-h/2-ahead":
-            calls.append(ahead._gate.locked())
+            calls.append(ahead.gate._busy)
             time.sleep(0.02)             # 51 chunks: a run of about a second
         return real(*args)
 
     monkeypatch.setattr(solver, "march", march)
-    with EstimatesInOrder([_drop(t_end=2000.0), _drop(t_end=0.3)]) as ahead:
-        while len(calls) < 2:
+    ahead = EstimatesInOrder([_drop(t_end=2000.0), _drop(t_end=0.3)])   # bound before its thread starts
+    with ahead:
+        for _ in range(5000):
+            if len(calls) >= 2 or ahead._error is not None:
+                break
             time.sleep(0.001)
+        assert ahead._error is None and len(calls) >= 2
         with ahead.paused():
             n = len(calls)
             time.sleep(0.3)
             assert len(calls) == n
-        while len(calls) < n + 2:
+        for _ in range(5000):
+            if len(calls) >= n + 2:
+                break
             time.sleep(0.001)
-        assert len(calls) < 40           # still marching: stopped by the block's end
+        assert n + 2 <= len(calls) < 40  # marching again, and still marching: stopped by the block's end
     assert all(calls) and _no_ahead_thread()
