@@ -258,7 +258,7 @@ class EstimatesInOrder:
         self._asked = -1                     # the highest index asked for (the thread runs one problem ahead)
         self._done: dict[int, object] = {}   # index -> its h/2 TransientResult, until taken
         self._taken: set[int] = set()
-        self._error: tuple[int, BaseException] | None = None
+        self._error: BaseException | None = None     # the h/2 run that failed (the thread then ends)
         self._steps: dict[int, object] = {}
         self._thread = None
         self._limits = None
@@ -318,7 +318,7 @@ class EstimatesInOrder:
                                   self._steps[k].halved(), runs=3, stop=self._stop, gate=self.gate)
             except BaseException as exc:     # noqa: BLE001 - handed to the caller, at get(k)
                 with self._cond:
-                    self._error = (k, exc)
+                    self._error = exc
                     self._failed[k].set()
                     self._cond.notify_all()
                 return
@@ -358,7 +358,7 @@ class EstimatesInOrder:
             fine = self._done.pop(k, None)
         if fine is None:
             if self._error is not None:      # this problem's h/2 run, or (asked out of order) an earlier one
-                raise self._error[1]
+                raise self._error
             raise RuntimeError(f"the run at h/2 of problem {k} was stopped")
         if coarse is None:
             raise RuntimeError(f"the run at h of problem {k} was stopped")

@@ -252,6 +252,14 @@ _HEADER_KEYS = ("format", "version", "units", "name", "metadata", "source_units"
 RECORD_MEMORY_FRACTION = 0.5
 
 
+def _npy_header(fh):
+    """(shape, fortran_order, dtype) from an .npy header at ``fh``'s position (left just
+    after it), or None for a format version numpy's readers here do not know."""
+    fmt = np.lib.format
+    read = {(1, 0): fmt.read_array_header_1_0, (2, 0): fmt.read_array_header_2_0}.get(fmt.read_magic(fh))
+    return None if read is None else read(fh)
+
+
 def declared_shapes(path: Path) -> dict[str, tuple[tuple[int, ...], int]]:
     """(shape, bytes per item) of each array of an .npz or HDF5 file, from the file's own
     headers, without reading the data: a few-kB file may declare gigabytes (a compressed
@@ -265,12 +273,10 @@ def declared_shapes(path: Path) -> dict[str, tuple[tuple[int, ...], int]]:
                 if not info.filename.endswith(".npy"):
                     continue
                 with zf.open(info) as fh:
-                    version = np.lib.format.read_magic(fh)
-                    read = {(1, 0): np.lib.format.read_array_header_1_0,
-                            (2, 0): np.lib.format.read_array_header_2_0}.get(version)
-                    if read is None:
-                        continue
-                    shape, _, dtype = read(fh)
+                    header = _npy_header(fh)
+                if header is None:
+                    continue
+                shape, _, dtype = header
                 out[info.filename[:-4]] = (tuple(int(n) for n in shape), int(dtype.itemsize))
     else:
         import h5py
@@ -342,11 +348,10 @@ def _read_npz(path: Path, mmap: bool) -> dict:
             n_name, n_extra = struct.unpack("<HH", local[26:30])
             start = info.header_offset + 30 + n_name + n_extra
             raw.seek(start)
-            version = fmt.read_magic(raw)
-            header = {(1, 0): fmt.read_array_header_1_0, (2, 0): fmt.read_array_header_2_0}.get(version)
+            header = _npy_header(raw)
             if header is None:
-                raise ValueError(f"member {info.filename!r}: .npy version {version} is not read")
-            shape, fortran, dtype = header(raw)
+                raise ValueError(f"member {info.filename!r}: its .npy version is not read")
+            shape, fortran, dtype = header
             if dtype.hasobject:
                 raise ValueError(f"member {info.filename!r} holds Python objects (not read: no pickle)")
             offset = raw.tell()
