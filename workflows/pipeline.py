@@ -302,15 +302,15 @@ def _cb_cached(model: ModelConfig, name: str, comp: Component, comp_key: str, ca
     return cache.has("cb", _cb_key(model, name, comp, comp_key)[0], ".npz")
 
 
-def reduce_concurrently(model: ModelConfig, comps: dict[str, Component], comp_keys: dict[str, str],
-                        cache: StageCache, workers: int, bar=None) -> dict[str, list]:
-    """The CB stages of the FE components not yet in the cache, on a pool of ``workers``
-    processes (spawned: they import PETSc and the reduction, never dolfinx), written to the
-    cache, from which :func:`cb_stage` then loads them. The components with a liquid (the
-    wet eigenproblem, the most modes) and then the largest are started first. Serial runs
-    with a cache only; a worker that fails leaves its component to the sequential stage,
-    which gives its error. Returns {component: the worker's cache log}."""
-    todo = [n for n in comps if not _cb_cached(model, n, comps[n], comp_keys[n], cache)]
+def reduce_concurrently(model: ModelConfig, todo: list[str], cache: StageCache, workers: int,
+                        bar=None) -> dict[str, list]:
+    """The FE and CB stages of the FE components ``todo`` (each with a stage not yet in the
+    cache) on a pool of ``workers`` processes (spawned; each runs a component's two stages
+    serially, :func:`_stages_worker`), written to the cache, from which :func:`component_stage`
+    and :func:`cb_stage` then load them. The components with a hydroelastic liquid (the wet
+    eigenproblem, the most modes) are started first. Serial runs with a cache only; a worker
+    that fails leaves its component to the sequential stages, which give its error. Returns
+    {component: the worker's cache log}."""
     if workers < 2 or len(todo) < 2 or cache.root is None or cache.comm.size > 1 or model.source != "fe":
         return {}
     import multiprocessing
@@ -318,7 +318,7 @@ def reduce_concurrently(model: ModelConfig, comps: dict[str, Component], comp_ke
 
     from .executors import die_with_parent
 
-    todo.sort(key=lambda n: (comps[n].liquid is None, -comps[n].n_dof))
+    todo.sort(key=lambda n: getattr(model.components[n].builder, "liquid", "") != "hydroelastic")
     logs = {}
     with ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=multiprocessing.get_context("spawn"),
                              initializer=die_with_parent) as pool:
@@ -326,12 +326,17 @@ def reduce_concurrently(model: ModelConfig, comps: dict[str, Component], comp_ke
         for fut in as_completed(futures):
             name = futures[fut]
             try:
-                logs[name] = [e for e in fut.result() if e[0] == "cb"]
-            except Exception:  # noqa: BLE001 - the sequential stage redoes it and says why it fails
+                logs[name] = fut.result()
+            except Exception:  # noqa: BLE001 - the sequential stages redo it and say why it fails
                 continue
             if bar is not None:
-                bar.set_postfix_str(f"cb {name}")
+                bar.set_postfix_str(f"fe + cb {name}")
     return logs
+
+
+def _built_entries(log: list, stage: str) -> list:
+    """The entries of a worker's cache ``log`` where it built ``stage`` (its time, not the load's)."""
+    return [e for e in log if e[0] == stage and e[2] != "hit"]
 
 
 #: under mpirun: "concurrent" (components shared out over the ranks, each reduced by one
@@ -470,10 +475,11 @@ def _remove_claims(folder: Path, run: str) -> None:
 def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, where: Where | None = None,
                 workers: int | None = None) -> StackModel:
     """All model stages of a checked ``[model]`` (liftoff.config.ModelConfig); ``where``
-    names the scenario's ``model`` key in messages. The FE stages run one after another,
-    the Craig-Bampton stages of a serial run with a cache on :func:`model_workers`
-    processes (``workers``; :func:`reduce_concurrently`); under mpirun the components
-    are first shared out over the ranks (:func:`reduce_over_ranks`)."""
+    names the scenario's ``model`` key in messages. The FE and Craig-Bampton stages not in
+    the cache of a serial run run on :func:`model_workers` processes (``workers``; each
+    component's two stages on one: :func:`reduce_concurrently`); under mpirun the
+    components are shared out over the ranks (:func:`reduce_over_ranks`). The products are
+    then loaded from the cache (mapped)."""
     from tqdm import tqdm
 
     t0 = time.perf_counter()
@@ -483,16 +489,30 @@ def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, wh
     with tempfile.TemporaryDirectory(prefix=f"liftoff-geom{TEMP_TAG}{os.getpid()}-") as work:
         bar = tqdm(total=2 * len(names), desc="model stages", unit="stage", disable=not progress or cache.comm.rank != 0,
                    leave=False)
-        ranks = reduce_over_ranks(model, names, cache, bar)     # under mpirun
-        for name in names:
-            if is_fe_component(model, name):
-                bar.set_postfix_str(f"fe {name}")
-                comps[name], thermal[name], comp_keys[name] = component_stage(model, name, cache, Path(work))
-                if name in ranks and cache.log and cache.log[-1][2] == "hit":
-                    cache.log[-1:] = [e for e in ranks[name] if e[0] == model.source]   # the rank's build
+        fe = [n for n in names if is_fe_component(model, n)]
+
+        def fe_stage(name: str) -> None:
+            bar.set_postfix_str(f"fe {name}")
+            comps[name], thermal[name], comp_keys[name] = component_stage(model, name, cache, Path(work))
+            built = _built_entries(logs.get(name, []), model.source)
+            if built and cache.log and cache.log[-1][2] == "hit":
+                cache.log[-1:] = built              # the time its worker took, not the load
             bar.update()
-        logs = reduce_concurrently(model, comps, comp_keys, cache, model_workers(workers), bar)
-        logs.update({n: [e for e in log if e[0] == "cb"] for n, log in ranks.items()})
+
+        # the stages not in the cache: shared out over the ranks (under mpirun), else on a
+        # process pool: the components whose FE stage is missing, or (FE stage loaded) its CB stage
+        logs = reduce_over_ranks(model, names, cache, bar)
+        if cache.comm.size == 1:
+            for name in fe:
+                if cache.has(model.source, component_key(model, name), ".npz"):
+                    fe_stage(name)
+            todo = [n for n in fe if n not in comps or not _cb_cached(model, n, comps[n], comp_keys[n], cache)]
+            logs = reduce_concurrently(model, todo, cache, model_workers(workers), bar)
+        for name in names:
+            if name in fe and name not in comps:
+                fe_stage(name)
+            elif name not in fe:
+                bar.update()
         for name in names:
             bar.set_postfix_str(f"cb {name}")
             given = given_model(model.components[name])
@@ -507,8 +527,9 @@ def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, wh
                 thermal[name] = {}
             else:
                 cbs[name], ckeys[name] = cb_stage(model, name, comps[name], comp_keys[name], cache)
-                if name in logs and cache.log and cache.log[-1][2] == "hit":
-                    cache.log[-1:] = logs[name]      # the time its worker took, not the load
+                built = _built_entries(logs.get(name, []), "cb")
+                if built and cache.log and cache.log[-1][2] == "hit":
+                    cache.log[-1:] = built          # the time its worker took, not the load
             bar.update()
         bar.close()
     t1 = time.perf_counter()

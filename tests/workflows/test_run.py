@@ -305,30 +305,46 @@ def test_cli_bad_liquid_one_line(tmp_path, capsys):
 @pytest.mark.fem
 @pytest.mark.skipif(not HAVE_FE, reason="needs dolfinx and gmsh")
 def test_cb_stages_on_a_pool_give_the_sequential_stack(tmp_path):
-    """The Craig-Bampton stages reduced by a pool of two processes (pipeline.reduce_concurrently)
-    give the stack of the sequential run: the same fixed-interface and system frequencies
-    (the same block Lanczos, BLAS on one thread instead of two: round-off, far below the
-    1e-9 required) and, once in the cache, a second build is all hits."""
+    """The FE and Craig-Bampton stages run by a pool of two processes, each component's two
+    stages on one (pipeline.reduce_concurrently), give the stack of the sequential run: the
+    same FE matrices, the same fixed-interface and system frequencies (the same block
+    Lanczos, BLAS on one thread instead of two: round-off, far below the 1e-9 required);
+    the run's cache log gives the workers' builds, and once in the cache a second build is
+    all hits. A component whose FE stage is cached and CB stage is not goes to the pool for
+    its CB stage alone."""
     import shutil
 
     from liftoff.config import load_scenario
     from liftoff.workflows.cache import StageCache
-    from liftoff.workflows.pipeline import build_stack, component_stage, reduce_concurrently
+    from liftoff.workflows.pipeline import build_stack, component_stage, is_fe_component, reduce_concurrently
 
     model = load_scenario(_scenario(tmp_path, COARSE_FE, cases=[{"name": "nominal"}])).cases[0].model
     seq = build_stack(model, StageCache(tmp_path / "a"), progress=False, workers=1)
-    shutil.copytree(tmp_path / "a" / "fe", tmp_path / "b" / "fe")          # the same FE models
+    fe = [n for n in seq.cbs if is_fe_component(model, n)]
+    assert len(fe) >= 2
     cache = StageCache(tmp_path / "b")
-    comps, keys = {}, {}
-    for name in seq.cbs:
-        comps[name], _, keys[name] = component_stage(model, name, cache, tmp_path)
-    logs = reduce_concurrently(model, comps, keys, cache, 2)
-    assert set(logs) == set(seq.cbs) and all(e[2] == "built" for log in logs.values() for e in log)
+    logs = reduce_concurrently(model, fe, cache, 2)
+    assert set(logs) == set(fe)
+    assert all([(e[0], e[2]) for e in logs[n]] == [("fe", "built"), ("cb", "built")] for n in fe), logs
+    for name in fe:
+        comp, _, _ = component_stage(model, name, cache, tmp_path)
+        assert (comp.K != seq.components[name].K).nnz == 0 and (comp.M != seq.components[name].M).nnz == 0, name
     cache.log.clear()
     con = build_stack(model, cache, progress=False, workers=2)
     assert all(how == "hit" for stage, _, how, _ in cache.log if stage in ("fe", "cb"))
     for name, cb in seq.cbs.items():
         assert np.allclose(con.cbs[name].fixed_omega, cb.fixed_omega, rtol=1e-9, atol=0), name
+    # a cold build through the pool: its log has each worker's two builds, in place of the loads
+    cold = StageCache(tmp_path / "c")
+    build_stack(model, cold, progress=False, workers=2)
+    assert sorted((e[0], e[1]) for e in cold.log if e[0] in ("fe", "cb") and e[2] == "built") == sorted(
+        (st, n) for n in fe for st in ("fe", "cb"))
+    # the FE stages cached, the CB stages not: the pool runs the CB stages (FE hits in the workers)
+    shutil.copytree(tmp_path / "a" / "fe", tmp_path / "d" / "fe")
+    part = StageCache(tmp_path / "d")
+    build_stack(model, part, progress=False, workers=2)
+    built = [(e[0], e[1]) for e in part.log if e[0] in ("fe", "cb") and e[2] == "built"]
+    assert sorted(built) == sorted(("cb", n) for n in fe)
     f_seq, f_con = seq.vehicle_modes.freq_hz[6:], con.vehicle_modes.freq_hz[6:]
     assert np.allclose(f_con, f_seq, rtol=1e-9), np.max(np.abs(f_con / f_seq - 1))
 
