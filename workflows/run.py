@@ -339,8 +339,8 @@ def _write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, 
     results, files, tab1 = {}, [], None
     agg = Aggregate(sc.n_generated)
     # the named cases' runs at h/2 march one case ahead on a second thread (transient/accuracy.py)
-    pairs = [replace(prep.problems[c.name][0].problem, keep_modal="q")
-             if error_estimate and prep.problems[c.name][0].problem.accuracy is None else None for c in sc.cases]
+    pairs = [_full_problem(prep.problems[c.name][0]) if _estimated_ahead(prep.problems[c.name][0], error_estimate)
+             else None for c in sc.cases]
     with EstimatesInOrder(pairs) as ahead, _forks_wait_for(beside, ahead):
         for k, case in enumerate(sc.cases):
             cp, mkey = prep.problems[case.name]
@@ -419,6 +419,17 @@ def _table1(stack, cp, case, out: Path, echo, stage_times: list, beside=None):
     return tab1, files
 
 
+def _full_problem(cp):
+    """A case's transient with full outputs: its modal displacements kept (fields, snapshots)."""
+    return replace(cp.problem, keep_modal="q")
+
+
+def _estimated_ahead(cp, error_estimate: bool) -> bool:
+    """Whether a named case's h/2 run marches ahead of it (EstimatesInOrder): an estimate
+    asked for, with no accuracy setting (whose halvings depend on each estimate)."""
+    return error_estimate and cp.problem.accuracy is None
+
+
 def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, stage_times: list, agg,
                generated: bool, solved=None, error_estimate: bool = False, beside=None, estimate=None):
     """A case with full outputs: the transient (modal displacements kept; with
@@ -435,7 +446,7 @@ def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, sta
     from .campaign import summarize
 
     t0 = time.perf_counter()
-    half, problem = None, replace(cp.problem, keep_modal="q")
+    half, problem = None, _full_problem(cp)
     if solved is not None:
         res, secs = solved
     elif estimate is not None:

@@ -576,3 +576,23 @@ def test_a_platform_mass_out_of_range_is_named(tmp_path, capsys, mass):
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "mlp_mass" in err and "outside [1000, 1e+09] kg" in err, err
     assert not (tmp_path / "o").exists() or not list((tmp_path / "o").iterdir())
+
+
+def test_fe_stage_builds_on_one_blas_thread(monkeypatch, tmp_path):
+    """The FE stage builds with BLAS on one thread whatever the calling process's limit, so
+    a component built by the run's process, a pool worker or an MPI rank's worker is the
+    same, bit for bit (the default core's stiffness differed in round-off between one
+    thread and two)."""
+    from threadpoolctl import threadpool_info, threadpool_limits
+
+    from liftoff.config import load_scenario
+    from liftoff.workflows import fe_source, pipeline
+
+    model = load_scenario(_scenario(tmp_path, COARSE_FE, cases=[{"name": "nominal"}])).cases[0].model
+    seen = []
+    monkeypatch.setattr(fe_source, "build_component",
+                        lambda comp, model, work: seen.append(
+                            {p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"}) or ("c", {}))
+    with threadpool_limits(limits=2, user_api="blas"):
+        assert pipeline.build_component(model, model.components["core"], tmp_path) == ("c", {})
+    assert seen == [{1}]
