@@ -9,8 +9,13 @@ a factor of 4.1e7 entries) one solve takes 74 ms, one of 16 or more vectors 13 m
 (BLAS-3). Here the operator A = K^-1 B is applied to blocks:
 
 * the basis V is B-orthonormal (V^T B V = I): each new block W = A V_j is orthogonalised
-  against all of V twice (classical Gram-Schmidt, twice: full reorthogonalisation), then
-  within itself by a Cholesky QR in the B inner product, twice;
+  against the last two blocks of V (the block three-term recurrence), then against all of
+  V once (classical Gram-Schmidt: full reorthogonalisation), and against all of V again
+  where a column lost more than 3/4 of its squared B-norm in that pass (the DGKS
+  criterion, Daniel, Gragg, Kaufman & Stewart 1976: "twice is enough"); then within itself
+  by a Cholesky QR in the B inner product, twice. Two full passes for every block (the
+  solver before 2026-11-27) cost twice the basis products, the larger part of the solve
+  on the default core;
 * the coefficients make the block Arnoldi relation A V = V H + Q E e_k^T, H symmetric
   (block tridiagonal in exact arithmetic; full reorthogonalisation keeps it symmetric to
   round-off, and its symmetric part is used);
@@ -48,6 +53,31 @@ def block_size(want: int) -> int:
 def _dot(comm: MPI.Comm, A: np.ndarray, B: np.ndarray) -> np.ndarray:
     """A^T B over the distributed rows."""
     local = A.T @ B
+    return comm.allreduce(local, op=MPI.SUM) if comm.size > 1 else local
+
+
+def _second_pass(after: np.ndarray, C: np.ndarray) -> bool:
+    """The DGKS criterion: whether a column of a block lost more than 3/4 of its squared
+    B-norm in a Gram-Schmidt pass with coefficients ``C`` (its squared norms ``after`` the
+    pass; before it: after + ||C column||^2, V being B-orthonormal), so that round-off in
+    what is left may not be B-orthogonal to V and the pass must be repeated."""
+    return bool(np.any(after < 0.25 * (after + np.einsum("ij,ij->j", C, C))))
+
+
+def _pass_again(comm: MPI.Comm, V: np.ndarray, BV: np.ndarray, W: np.ndarray, BW: np.ndarray,
+                work: np.ndarray) -> np.ndarray:
+    """One more Gram-Schmidt pass of the block W against the B-orthonormal V, in place, and
+    of its B-image BW with it (BW - BV C = B (W - V C): no mass application); returns the
+    coefficients C = (BV)^T W."""
+    C = _dot(comm, BV, W)
+    W -= np.matmul(V, C, out=work)
+    BW -= BV @ C
+    return C
+
+
+def _colsum(comm: MPI.Comm, A: np.ndarray) -> np.ndarray:
+    """The column sums of A over the distributed rows."""
+    local = A.sum(axis=0)
     return comm.allreduce(local, op=MPI.SUM) if comm.size > 1 else local
 
 
@@ -112,7 +142,7 @@ def block_lanczos(solve: Block, mass: Block, n_local: int, n_global: int, row0: 
                   ) -> tuple[np.ndarray, np.ndarray, dict]:
     """The ``want`` lowest eigenvalues of K x = lambda B x (K, B symmetric positive definite)
     and this process's rows (``row0`` .. ``row0 + n_local``) of their B-normalised vectors;
-    returns (lambda ascending, X, info {'dimension', 'blocks'}). ``solve``/``mass`` apply
+    returns (lambda ascending, X, info {'dimension', 'blocks', 'second_passes'}). ``solve``/``mass`` apply
     K^-1 and B to this process's rows of a block. Needs ``n_global`` > ``want`` + 4 blocks
     (a smaller problem is a dense one); ConvergenceError if ``want`` pairs have not
     converged at ``max_dim`` basis vectors (default 6 want + 10 blocks; the default components
@@ -136,17 +166,22 @@ def block_lanczos(solve: Block, mass: Block, n_local: int, n_global: int, row0: 
     W = solve(mass(rng_block(p)))            # one application damps the start's high modes
     Q, BQ, _ = _b_orthonormalise(comm, W, mass(W), none, none, mass, rng_block)
     V[:, :p], BV[:, :p] = Q, BQ
-    m, blocks, next_check = p, 0, 0
+    m, blocks, next_check, again = p, 0, 0, 0
     while True:
         j0 = m - p                           # A V = V H + W e_last^T, W B-orthogonal to V
+        l0 = max(0, j0 - p)                  # the blocks j - 1, j: H's block tridiagonal rows
         W = np.asfortranarray(solve(BV[:, j0:m]))
-        C = _dot(comm, BV[:, :m], W)
-        W -= np.matmul(V[:, :m], C, out=work)
-        C2 = _dot(comm, BV[:, :m], W)
+        C = _dot(comm, BV[:, l0:m], W)
+        W -= np.matmul(V[:, l0:m], C, out=work)
+        C2 = _dot(comm, BV[:, :m], W)        # full reorthogonalisation
         W -= np.matmul(V[:, :m], C2, out=work)
-        H[:m, j0:m] = C + C2
+        H[:m, j0:m] = C2
+        H[l0:m, j0:m] += C
         blocks += 1
         BW = mass(W)
+        if _second_pass(_colsum(comm, W * BW), C2):
+            H[:m, j0:m] += _pass_again(comm, V[:, :m], BV[:, :m], W, BW, work)
+            again += 1
         if m >= want and (blocks >= next_check or m + p > cap_dim):     # a last check when the basis is full
             theta, Y = _ritz(H, m, p, want)
             G = _dot(comm, W, BW)            # ||W y_last||_B: the exact residual of each pair
@@ -156,7 +191,8 @@ def block_lanczos(solve: Block, mass: Block, n_local: int, n_global: int, row0: 
             if bad == 0 and np.all(theta > 0):
                 # V is B-orthonormal and Y orthonormal: X = V Y is B-normalised (to round-off)
                 order = np.argsort(1.0 / theta, kind="stable")
-                return (1.0 / theta)[order], V[:, :m] @ Y[:, order], {"dimension": m, "blocks": blocks}
+                return (1.0 / theta)[order], V[:, :m] @ Y[:, order], {"dimension": m, "blocks": blocks,
+                                                                       "second_passes": again}
             # a block converges about p / 3 pairs: the next check when about half the rest may have
             next_check = blocks + max(1, (3 * bad) // (2 * p))
             if m + p > cap_dim:
