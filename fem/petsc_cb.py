@@ -67,6 +67,8 @@ class PetscSolver:
     def __call__(self, K: sp.csr_matrix, M: sp.csr_matrix, interior: np.ndarray, boundary: np.ndarray, *,
                  n_modes: int | None, f_max: float | None, band_limit: int, who: str, dof_name=str,
                  added_mass=None):
+        from .liquid import count_below_wet
+
         timings = {}
         t0 = time.perf_counter()
         Kii, Mii, Kib_loc = interior_matrices(self.comm, K, M, interior, boundary)
@@ -86,8 +88,6 @@ class PetscSolver:
                 if B is None:
                     count = count_below(Kii, Mii, lam_max, who)
                 else:
-                    from .liquid import count_below_wet
-
                     count = count_below_wet(self.comm, K[interior][:, interior], M[interior][:, interior], Gi,
                                             added_mass.H, lam_max, who)
                 timings["count_s"] = time.perf_counter() - t0
@@ -107,6 +107,12 @@ class PetscSolver:
                 else:
                     lam, phi_loc = np.zeros(0), np.zeros((Kib_loc.shape[0], 0))
                 timings["eigensolve_s"] = time.perf_counter() - t0
+                if n_modes is not None and 0 < want < n_i and timings.get("eigen_blocks", 1) and lam[-1] > 0:
+                    t0 = time.perf_counter()
+                    _check_none_missed(lam, lambda mu: count_below(Kii, Mii, mu, who) if B is None else
+                                       count_below_wet(self.comm, K[interior][:, interior], M[interior][:, interior],
+                                                       Gi, added_mass.H, mu, who), who)
+                    timings["missed_check_s"] = time.perf_counter() - t0
                 t0 = time.perf_counter()
                 psi_loc = -_factor_solve(ksp, Kib_loc, n_i)
                 timings["constraint_solve_s"] = time.perf_counter() - t0
@@ -124,6 +130,23 @@ class PetscSolver:
         phi, psi = gather_rows(self.comm, phi_loc), gather_rows(self.comm, psi_loc)
         timings["gather_s"] = time.perf_counter() - t0
         return lam, phi, psi, timings
+
+
+def _check_none_missed(lam: np.ndarray, count_below_mu, who: str) -> None:
+    """``n_modes`` asked for (no band to count first): the pairs found must be the lowest.
+    A Krylov solver can miss an eigenvalue (a cluster with more copies than its block; a
+    spectrum of few distinct values, whose Krylov space is exhausted, so that exact pairs
+    that are not the lowest converge); Sylvester's law of inertia counts the eigenvalues below the
+    last one found (less 1e-8 of it, so that a pair split by the cut is not an error), and
+    a count above the pairs found there is a ConvergenceError, not a model with a hole."""
+    edge = float(lam[-1]) * (1 - 1e-8)
+    found = int(np.sum(lam < edge))
+    count = count_below_mu(edge)
+    if count > found:
+        raise ConvergenceError(f"{who}: the eigensolver missed {count - found} fixed-interface mode(s) below "
+                               f"{np.sqrt(edge) / (2 * np.pi):.6g} Hz ({count} lie below it by the inertia, "
+                               f"{found} were found): a cluster of more equal eigenvalues than the solver's "
+                               "block of vectors, or a Krylov space exhausted by a spectrum of few distinct values")
 
 
 #: the fixed-interface eigensolvers of :class:`PetscSolver`
