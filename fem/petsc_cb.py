@@ -107,16 +107,17 @@ class PetscSolver:
                 else:
                     lam, phi_loc = np.zeros(0), np.zeros((Kib_loc.shape[0], 0))
                 timings["eigensolve_s"] = time.perf_counter() - t0
-                if n_modes is not None and 0 < want < n_i and timings.get("eigen_blocks", 1) and lam[-1] > 0:
-                    t0 = time.perf_counter()
-                    _check_none_missed(lam, lambda mu: count_below(Kii, Mii, mu, who) if B is None else
-                                       count_below_wet(self.comm, K[interior][:, interior], M[interior][:, interior],
-                                                       Gi, added_mass.H, mu, who), who)
-                    timings["missed_check_s"] = time.perf_counter() - t0
                 t0 = time.perf_counter()
                 psi_loc = -_factor_solve(ksp, Kib_loc, n_i)
                 timings["constraint_solve_s"] = time.perf_counter() - t0
                 _check_finite(self.comm, psi_loc, who)
+            # n_modes: after the factor is freed (never two factors at once, as the band's count)
+            if n_modes is not None and 0 < want < n_i and timings.get("eigen_blocks", 1) and lam[-1] > 0:
+                t0 = time.perf_counter()
+                _check_none_missed(lam, lambda mu: count_below(Kii, Mii, mu, who) if B is None else
+                                   count_below_wet(self.comm, K[interior][:, interior], M[interior][:, interior],
+                                                   Gi, added_mass.H, mu, who), who)
+                timings["missed_check_s"] = time.perf_counter() - t0
         finally:
             if B is not None:
                 B.destroy()
