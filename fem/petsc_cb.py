@@ -67,8 +67,6 @@ class PetscSolver:
     def __call__(self, K: sp.csr_matrix, M: sp.csr_matrix, interior: np.ndarray, boundary: np.ndarray, *,
                  n_modes: int | None, f_max: float | None, band_limit: int, who: str, dof_name=str,
                  added_mass=None):
-        from .liquid import count_below_wet
-
         timings = {}
         t0 = time.perf_counter()
         Kii, Mii, Kib_loc = interior_matrices(self.comm, K, M, interior, boundary)
@@ -81,20 +79,25 @@ class PetscSolver:
         timings["partition_s"] = time.perf_counter() - t0
         n_i = Kii.getSize()[0]
         want = n_i if n_modes is None else min(n_modes, n_i)
+
+        def count(mu: float) -> int:        # eigenvalues <= mu of the (wet) pencil, by the inertia
+            if B is None:
+                return count_below(Kii, Mii, mu, who)
+            from .liquid import count_below_wet
+
+            return count_below_wet(self.comm, K[interior][:, interior], M[interior][:, interior], Gi, added_mass.H,
+                                   mu, who)
+
         try:
             if n_modes is None and want:
                 t0 = time.perf_counter()
                 lam_max = (2 * np.pi * f_max) ** 2
-                if B is None:
-                    count = count_below(Kii, Mii, lam_max, who)
-                else:
-                    count = count_below_wet(self.comm, K[interior][:, interior], M[interior][:, interior], Gi,
-                                            added_mass.H, lam_max, who)
+                count_max = count(lam_max)
                 timings["count_s"] = time.perf_counter() - t0
-                if count > band_limit:
-                    from_count = f"{count} by the inertia of K_ii - (2 pi f_max)^2 M_ii"
+                if count_max > band_limit:
+                    from_count = f"{count_max} by the inertia of K_ii - (2 pi f_max)^2 M_ii"
                     raise InputError(_band_error(who, band_limit, f_max, from_count))
-                want = count
+                want = count_max
             t0 = time.perf_counter()
             with _factored_operator(Kii, Mii if B is None else B, want, self.tol, who, self.eigensolver) as (ksp, eps):
                 timings["factor_s"] = time.perf_counter() - t0
@@ -114,9 +117,7 @@ class PetscSolver:
             # n_modes: after the factor is freed (never two factors at once, as the band's count)
             if n_modes is not None and 0 < want < n_i and timings.get("eigen_blocks", 1) and lam[-1] > 0:
                 t0 = time.perf_counter()
-                _check_none_missed(lam, lambda mu: count_below(Kii, Mii, mu, who) if B is None else
-                                   count_below_wet(self.comm, K[interior][:, interior], M[interior][:, interior],
-                                                   Gi, added_mass.H, mu, who), who)
+                _check_none_missed(lam, count, who)
                 timings["missed_check_s"] = time.perf_counter() - t0
         finally:
             if B is not None:
