@@ -2,25 +2,28 @@
 peak memory of the whole process tree (the command, its workers, a Dask scheduler).
 
     .venv/bin/python benchmarks/bench_campaign.py [--cases 1000] [--workers 2] [--dask] [--scaling 200]
-                                                  [--flat 250] [--cache DIR]
+                                                  [--flat 250] [--cache DIR] [--json FILE]
 
 Each measurement is one `liftoff run --cases N` process (the default scenario: its two named
 cases with plots and snapshots, then the N generated cases, envelopes, statistics, SRS,
 envelope histories and the governing case's reports) with a fresh campaign folder, so no
 case is reused. The stage cache is warmed first by one run without generated cases.
-Memory: the sum of the resident sets of the command and all its descendants, sampled every
-0.2 s (psutil); the peak of that sum is reported (it counts pages shared between
-processes, such as the numpy and numba libraries, once per process: an upper bound);
+Memory: the sum of the proportional set sizes (PSS: shared pages divided among the processes
+that map them) of the command and all its descendants, sampled every 0.2 s (psutil); the
+peak of that sum is reported, with the peak resident set of the command itself;
 CPU: user + system seconds of the same processes (its ratio to the wall time shows how
 many cores the run actually got on a shared machine).
 --dask repeats the N cases on a local Dask cluster of --workers processes; --scaling M runs
 M cases on 1 and on --workers workers; --flat M runs M cases to compare the peak memory
 with N's. The machine's load average is printed before and after each run: the machine is
 shared, so repeat on a quiet machine for figures to quote.
+--json writes every measurement (docs/figures/bench_campaign.json), which
+benchmarks/default_figures.py renders into README.md: its figures are never typed.
 """
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import platform
 import subprocess
@@ -37,7 +40,11 @@ LIFTOFF = Path(sys.executable).with_name("liftoff")
 
 
 def tree_rss(proc: psutil.Process) -> tuple[int, int]:
-    """(sum of RSS over the process and its descendants, RSS of the process) in bytes."""
+    """(sum of the proportional set sizes (PSS) of the process and its descendants, RSS of
+    the process) in bytes. PSS divides each shared page among the processes that map it, so
+    the sum is the memory the tree uses: the forked picture processes share the command's
+    pages (copy-on-write) and the workers share the libraries, which a sum of resident
+    sets would count once per process."""
     try:
         procs = [proc] + proc.children(recursive=True)
     except psutil.NoSuchProcess:
@@ -45,8 +52,8 @@ def tree_rss(proc: psutil.Process) -> tuple[int, int]:
     total = 0
     for p in procs:
         try:
-            total += p.memory_info().rss
-        except psutil.NoSuchProcess:
+            total += p.memory_full_info().pss
+        except (psutil.NoSuchProcess, psutil.AccessDenied):
             pass
     try:
         own = proc.memory_info().rss
@@ -88,14 +95,26 @@ def measure(args: list[str], tag: str) -> dict:
     if proc.returncode != 0:
         sys.exit(f"bench_campaign: {tag} failed ({proc.returncode}):\n{out[-3000:]}")
     stage = next((ln.strip() for ln in out.splitlines() if "generated cases (" in ln and " run, " in ln), "")
-    return {"tag": tag, "wall": wall, "peak_total": peak["total"] / 2 ** 30, "peak_main": peak["main"] / 2 ** 30,
+    steps = next((ln.split("steps of")[0].split(":")[-1].strip() for ln in out.splitlines()
+                  if "case 'nominal':" in ln and "steps of" in ln), "")
+    return {"tag": tag, "wall": wall, "generated_s": _generated_seconds(stage), "steps": int(steps) if steps else None,
+            "peak_total": peak["total"] / 2 ** 30, "peak_main": peak["main"] / 2 ** 30,
             "load": (load0, os.getloadavg()), "stage": stage, "samples": peak["samples"],
             "cpu": sum(peak["cpu"].values())}
 
 
+def _generated_seconds(stage: str) -> float | None:
+    """The run's own wall time of its generated cases, from its stage line
+    ("generated cases (N run, 0 reused)   51.19 s"); None if it printed none."""
+    try:
+        return float(stage.split()[-2])
+    except (IndexError, ValueError):
+        return None
+
+
 def report(r: dict) -> None:
     (a0, _, _), (a1, _, _) = r["load"]
-    print(f"  {r['tag']:<44} wall {r['wall']:7.1f} s   peak memory {r['peak_total']:.2f} GB (main process "
+    print(f"  {r['tag']:<44} wall {r['wall']:7.1f} s   peak memory (PSS) {r['peak_total']:.2f} GB (main process RSS "
           f"{r['peak_main']:.2f} GB)   CPU {r['cpu']:.0f} s (x{r['cpu'] / r['wall']:.2f} of wall)   "
           f"load average {a0:.1f} -> {a1:.1f}   [{r['stage']}]", flush=True)
 
@@ -112,7 +131,11 @@ def main() -> None:
     ap.add_argument("--scaling-workers", default="", metavar="1,2,4",
                     help="worker counts for --scaling (default: 1 and --workers)")
     ap.add_argument("--no-snapshots", action="store_true", help="pass --no-snapshots (no pyvista)")
+    ap.add_argument("--json", type=Path, help="write the measurements (docs/figures/bench_campaign.json)")
     args = ap.parse_args()
+    if args.json is not None and not args.json.parent.is_dir():
+        sys.exit(f"bench_campaign: --json {str(args.json)!r}: no folder {str(args.json.parent)!r}")
+    rows: list[dict] = []
     print(f"bench_campaign: {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, "
           f"{psutil.virtual_memory().total / 2 ** 30:.0f} GB, Python {platform.python_version()}; cache {args.cache}")
     with tempfile.TemporaryDirectory(prefix="liftoff-bench-campaign-") as tmp:
@@ -121,16 +144,19 @@ def main() -> None:
                   *(["--no-snapshots"] if args.no_snapshots else [])]
         report(measure(["--out", str(tmp / "warm"), *common], "warm-up (named cases only)"))
 
-        def one(n, workers, extra=(), tag=""):
+        def one(n, workers, extra=(), tag="", kind="pool"):
             out = tmp / f"o_{tag}"
-            return measure(["--out", str(out), "--campaign", str(tmp / f"c_{tag}"), "--cases", str(n),
-                            "--workers", str(workers), *extra, *common], tag)
+            r = measure(["--out", str(out), "--campaign", str(tmp / f"c_{tag}"), "--cases", str(n),
+                         "--workers", str(workers), *extra, *common], tag)
+            rows.append({"cases": n, "workers": workers, "executor": kind,
+                         **{k: v for k, v in r.items() if k != "samples"}})
+            return r
 
         runs = [one(args.cases, args.workers, tag=f"{args.cases} cases, process pool of {args.workers}")]
         report(runs[-1])
         if args.dask:
             runs.append(one(args.cases, args.workers, ("--dask", "local"),
-                            tag=f"{args.cases} cases, Dask local cluster of {args.workers}"))
+                            tag=f"{args.cases} cases, Dask local cluster of {args.workers}", kind="dask"))
             report(runs[-1])
             print(f"  Dask / process pool: {runs[-1]['wall'] / runs[0]['wall']:.2f}")
         if args.flat:
@@ -148,6 +174,15 @@ def main() -> None:
             for w, r, g in zip(counts[1:], rs[1:], gen[1:]):
                 print(f"  scaling 1 -> {w} workers: {rs[0]['wall'] / r['wall']:.2f}x on the whole command, "
                       f"{gen[0] / g:.2f}x on the generated cases")
+    if args.json is not None:
+        from liftoff.core.records import write_text
+
+        write_text(args.json, json.dumps({
+            "date": time.strftime("%Y-%m-%d"), "cpus": os.cpu_count(),
+            "memory_gb": psutil.virtual_memory().total / 2 ** 30,
+            "command": "benchmarks/bench_campaign.py " + " ".join(sys.argv[1:]),
+            "snapshots": not args.no_snapshots, "runs": rows}, indent=1) + "\n")
+        print(f"bench_campaign: wrote {args.json}")
 
 
 if __name__ == "__main__":

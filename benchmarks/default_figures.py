@@ -33,6 +33,7 @@ CB_BENCH_JSON = FIGURES / "bench_cb_default.json"  # benchmarks/bench_cb_default
 SLOSH_JSON = FIGURES / "slosh_default.json"        # benchmarks/slosh_default.py
 SLOSH_COMPARE_JSON = FIGURES / "slosh_compare.json"  # benchmarks/slosh_compare.py
 BOOSTER_GRAIN_JSON = FIGURES / "booster_grain.json"  # benchmarks/booster_grain_compare.py
+CAMPAIGN_BENCH_JSON = FIGURES / "bench_campaign.json"  # benchmarks/bench_campaign.py --json (machine-dependent)
 EXAMPLE_JSONS = {n: FIGURES / f"{n}.json" for n in ("single_stick", "saturn_v")}   # benchmarks/example_figures.py
 DOCS = (ROOT / "README.md", ROOT / "docs" / "workflow.md")
 #: figures agree when within this relative difference (of the larger of the two or, inside a
@@ -211,7 +212,7 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
                   mesh: dict | None = None, bench: dict | None = None,
                   examples: dict | None = None, cb_bench: dict | None = None,
                   slosh: dict | None = None, slosh_compare: dict | None = None,
-                  booster_grain: dict | None = None) -> dict[str, str]:
+                  booster_grain: dict | None = None, campaign_bench: dict | None = None) -> dict[str, str]:
     """{block name: markdown} from the figures (and the convergence, twang and mesh studies,
     the workflow benchmark and the launcher examples' figures {name: figures}, if any)."""
     tw, twn = fig["twang"]["nominal"], fig["twang"]
@@ -285,6 +286,8 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
         blocks["slosh-default"] = render_slosh(slosh)
     if slosh_compare:
         blocks["slosh-compare"] = render_slosh_compare(slosh_compare)
+    if campaign_bench:
+        blocks["bench-campaign"] = render_campaign_bench(campaign_bench)
     if booster_grain and booster_grain.get("solid") and booster_grain.get("grain"):
         blocks["booster-grain"] = render_booster_grain(booster_grain)
     if examples:
@@ -330,6 +333,67 @@ def render_cb_bench(b: dict) -> str:
                     f"{min(sl):.1f} / {statistics.median(sl):.1f} | {min(sl) / min(bl):.2f} | "
                     f"{r['max_rel_eig_diff']:.0e} |")
     return "\n".join(rows) + "\n"
+
+
+#: issue 28's campaign targets: 1,000 dispersed cases on 2 workers within this wall time (s),
+#: the process tree's peak memory within this (GB), a Dask LocalCluster within this ratio
+CAMPAIGN_TARGET_CASES, CAMPAIGN_TARGET_S, CAMPAIGN_TARGET_GB, CAMPAIGN_TARGET_DASK = 1000, 300.0, 2.0, 1.2
+
+
+def render_campaign_bench(b: dict) -> str:
+    """The load-campaign benchmark (benchmarks/bench_campaign.py --json): each measured
+    command, then the issue-28 targets against it. 1,000 cases are extrapolated (said as
+    such) from the largest process-pool run when none was measured: its fixed cost (the
+    command less its generated cases) plus 1,000 times its wall time per generated case."""
+    runs = b["runs"]
+    words = b["command"].split()          # less the machine's own paths (--cache DIR, --json FILE)
+    command = " ".join(w for k, w in enumerate(words) if w not in ("--cache", "--json")
+                       and (k == 0 or words[k - 1] not in ("--cache", "--json")))
+    rows = [f"On this {b['cpus']}-core machine ({b['date']}, `{command}`; "
+            f"{'named cases with' if b.get('snapshots', True) else 'named cases without'} snapshots; "
+            "each row one `liftoff run --cases N` process, warm stage cache, fresh campaign folder):", "",
+            "| run | default steps per case | wall (s) | generated cases (s) | per generated case (s) | peak memory, "
+            "PSS of the process tree (GB) | peak RSS of the command (GB) | CPU (s), cores got | load average |",
+            "|---|---|---|---|---|---|---|---|---|"]
+    for r in runs:
+        gen = r.get("generated_s")
+        (a0, *_), (a1, *_) = r["load"]
+        gen_s, per_s = ("-", "-") if gen is None else (f"{gen:.1f}", f"{gen / r['cases']:.2f}")
+        executor = "Dask LocalCluster" if r["executor"] == "dask" else "process pool"
+        rows.append(f"| {r['cases']:,} cases, {executor} of {r['workers']} | {r.get('steps') or '-'} | "
+                    f"{r['wall']:.1f} | {gen_s} | {per_s} | {r['peak_total']:.2f} | {r['peak_main']:.2f} | "
+                    f"{r['cpu']:.0f}, {r['cpu'] / r['wall']:.2f} | {a0:.1f} -> {a1:.1f} |")
+    pool = [r for r in runs if r["executor"] == "pool" and r.get("generated_s")]
+    lines = ["", "Against issue 28's targets:", ""]
+    if pool:
+        big = max(pool, key=lambda r: r["cases"])
+        n = CAMPAIGN_TARGET_CASES
+        exact = next((r for r in pool if r["cases"] == n), None)
+        if exact is not None:
+            t, how = exact["wall"], "measured"
+        else:
+            per = big["generated_s"] / big["cases"]
+            t = big["wall"] - big["generated_s"] + n * per
+            how = (f"extrapolated from the {big['cases']:,}-case run: its {big['wall'] - big['generated_s']:.0f} s "
+                   f"besides the generated cases plus {n:,} x {per:.2f} s")
+        met = "met" if t <= CAMPAIGN_TARGET_S else "**not met**"
+        lines.append(f"* {n:,} cases on {big['workers']} workers within {CAMPAIGN_TARGET_S / 60:.0f} min: {met}, "
+                     f"{t / 60:.1f} min ({how}).")
+        peak = max(r["peak_total"] for r in runs)
+        met = "met" if peak <= CAMPAIGN_TARGET_GB else "**not met**"
+        by_n = sorted(pool, key=lambda r: r["cases"])
+        flat = (f"; {by_n[0]['cases']:,} -> {by_n[-1]['cases']:,} cases: {by_n[0]['peak_total']:.2f} -> "
+                f"{by_n[-1]['peak_total']:.2f} GB" if len(by_n) > 1 else "")
+        lines.append(f"* peak memory within {CAMPAIGN_TARGET_GB:g} GB: {met}, {peak:.2f} GB at most{flat}.")
+        dask = [r for r in runs if r["executor"] == "dask"]
+        for d in dask:
+            same = next((r for r in pool if r["cases"] == d["cases"] and r["workers"] == d["workers"]), None)
+            if same is not None:
+                ratio = d["wall"] / same["wall"]
+                met = "met" if ratio <= CAMPAIGN_TARGET_DASK else "**not met**"
+                lines.append(f"* Dask LocalCluster within {CAMPAIGN_TARGET_DASK:g}x of the process pool "
+                             f"({d['cases']:,} cases): {met}, {ratio:.2f}x.")
+    return "\n".join(rows + lines) + "\n"
 
 
 def render_slosh(fig: dict) -> str:
@@ -494,7 +558,8 @@ def studies() -> tuple[dict | None, ...]:
                   json.loads(CB_BENCH_JSON.read_text()) if CB_BENCH_JSON.is_file() else None,
                   json.loads(SLOSH_JSON.read_text()) if SLOSH_JSON.is_file() else None,
                   json.loads(SLOSH_COMPARE_JSON.read_text()) if SLOSH_COMPARE_JSON.is_file() else None,
-                  json.loads(BOOSTER_GRAIN_JSON.read_text()) if BOOSTER_GRAIN_JSON.is_file() else None)
+                  json.loads(BOOSTER_GRAIN_JSON.read_text()) if BOOSTER_GRAIN_JSON.is_file() else None,
+                  json.loads(CAMPAIGN_BENCH_JSON.read_text()) if CAMPAIGN_BENCH_JSON.is_file() else None)
 
 
 # ------------------------------------------------------------------ comparing
