@@ -299,6 +299,10 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
     return blocks
 
 
+#: issue 28's targets for a default `make run`: warm (cached model stages) and cold, wall seconds
+WORKFLOW_TARGET_WARM_S, WORKFLOW_TARGET_COLD_S = 4.0, 20.0
+
+
 def render_bench(b: dict) -> dict[str, str]:
     """The workflow benchmark (benchmarks/bench_workflow.py --json): a one-line summary and
     the per-stage table (the run's own stage times, cold cache and warm)."""
@@ -307,7 +311,10 @@ def render_bench(b: dict) -> dict[str, str]:
           if {"steps", "vehicle_modes", "pad_modes"} <= set(m) else "")
     line = (f"On this {b['cpus']}-core machine ({b['date']}, `benchmarks/bench_workflow.py`, load average "
             f"{b['load_average_end']:.1f} at the end): {b['cold_wall_s']:.0f} s cold (empty stage cache: meshing, FE, "
-            f"Craig-Bampton, system modes), {b['warm_wall_s']:.0f} s warm (cache hit){'; ' + on if on else ''}.\n")
+            f"Craig-Bampton, system modes), {b['warm_wall_s']:.0f} s warm (cache hit){'; ' + on if on else ''}. "
+            f"Issue 28's targets: warm <= {WORKFLOW_TARGET_WARM_S:g} s "
+            f"{'met' if b['warm_wall_s'] <= WORKFLOW_TARGET_WARM_S else '**not met**'}, cold <= "
+            f"{WORKFLOW_TARGET_COLD_S:g} s {'met' if b['cold_wall_s'] <= WORKFLOW_TARGET_COLD_S else '**not met**'}.\n")
     rows = ["| stage | cold (s) | warm (s) |", "|---|---|---|"]
     for name, cold in b["cold_s"].items():
         warm = b["warm_s"].get(name, b["warm_s"].get(name.replace("(built)", "(hit)")))

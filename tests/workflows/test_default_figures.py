@@ -136,6 +136,9 @@ def test_bench_blocks_show_the_benchmark_file(figures):
     b = figures.render_bench(bench)
     assert "123 s cold" in b["bench-summary"] and "46 s warm" in b["bench-summary"] and "1000 steps" in b["bench-summary"]
     assert "| fe core (built) | 3.2 | 0.1 |" in b["bench-workflow"] and "**123.4**" in b["bench-workflow"]
+    assert "warm <= 4 s **not met**, cold <= 20 s **not met**" in b["bench-summary"]
+    bench.update(cold_wall_s=19.0, warm_wall_s=3.5)
+    assert "warm <= 4 s met, cold <= 20 s met" in figures.render_bench(bench)["bench-summary"]
 
 
 @pytest.mark.fem
