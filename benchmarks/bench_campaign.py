@@ -39,7 +39,7 @@ ROOT = Path(__file__).resolve().parent.parent
 LIFTOFF = Path(sys.executable).with_name("liftoff")
 
 
-def tree_rss(proc: psutil.Process) -> tuple[int, int]:
+def tree_pss(proc: psutil.Process) -> tuple[int, int]:
     """(sum of the proportional set sizes (PSS) of the process and its descendants, RSS of
     the process) in bytes. PSS divides each shared page among the processes that map it, so
     the sum is the memory the tree uses: the forked picture processes share the command's
@@ -72,7 +72,7 @@ def measure(args: list[str], tag: str) -> dict:
 
     def sample():
         while proc.poll() is None:
-            tot, own = tree_rss(ps)
+            tot, own = tree_pss(ps)
             peak["total"], peak["main"] = max(peak["total"], tot), max(peak["main"], own)
             peak["samples"].append((time.perf_counter() - t0, tot))
             try:
@@ -170,7 +170,7 @@ def main() -> None:
             for w in counts:
                 rs.append(one(args.scaling, w, tag=f"{args.scaling} cases, {w} worker{'s' if w > 1 else ''}"))
                 report(rs[-1])
-            gen = [float(r["stage"].split()[-2]) if r["stage"] else float("nan") for r in rs]
+            gen = [float("nan") if r["generated_s"] is None else r["generated_s"] for r in rs]
             for w, r, g in zip(counts[1:], rs[1:], gen[1:]):
                 print(f"  scaling 1 -> {w} workers: {rs[0]['wall'] / r['wall']:.2f}x on the whole command, "
                       f"{gen[0] / g:.2f}x on the generated cases")
