@@ -2,7 +2,7 @@
 peak memory of the whole process tree (the command, its workers, a Dask scheduler).
 
     .venv/bin/python benchmarks/bench_campaign.py [--cases 1000] [--workers 2] [--dask] [--scaling 200]
-                                                  [--flat 250] [--cache DIR] [--json FILE]
+                                                  [--flat 250] [--cache DIR] [--json FILE [--append]]
 
 Each measurement is one `liftoff run --cases N` process (the default scenario: its two named
 cases with plots and snapshots, then the N generated cases, envelopes, statistics, SRS,
@@ -18,7 +18,9 @@ M cases on 1 and on --workers workers; --flat M runs M cases to compare the peak
 with N's. The machine's load average is printed before and after each run: the machine is
 shared, so repeat on a quiet machine for figures to quote.
 --json writes every measurement (docs/figures/bench_campaign.json), which
-benchmarks/default_figures.py renders into README.md: its figures are never typed.
+benchmarks/default_figures.py renders into README.md: its figures are never typed; with
+--append the runs are added to those the file already holds (its commands listed), so a
+long measurement (1,000 cases) can be made on its own.
 """
 from __future__ import annotations
 
@@ -132,9 +134,16 @@ def main() -> None:
                     help="worker counts for --scaling (default: 1 and --workers)")
     ap.add_argument("--no-snapshots", action="store_true", help="pass --no-snapshots (no pyvista)")
     ap.add_argument("--json", type=Path, help="write the measurements (docs/figures/bench_campaign.json)")
+    ap.add_argument("--append", action="store_true", help="add the runs to those --json already holds")
     args = ap.parse_args()
     if args.json is not None and not args.json.parent.is_dir():
         sys.exit(f"bench_campaign: --json {str(args.json)!r}: no folder {str(args.json.parent)!r}")
+    before = {"commands": [], "runs": []}
+    if args.append:
+        if args.json is None or not args.json.is_file():
+            sys.exit("bench_campaign: --append needs an existing --json file")
+        old = json.loads(args.json.read_text())
+        before = {"commands": old.get("commands") or [old["command"]], "runs": old["runs"]}
     rows: list[dict] = []
     print(f"bench_campaign: {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, "
           f"{psutil.virtual_memory().total / 2 ** 30:.0f} GB, Python {platform.python_version()}; cache {args.cache}")
@@ -177,11 +186,12 @@ def main() -> None:
     if args.json is not None:
         from liftoff.core.records import write_text
 
+        command = "benchmarks/bench_campaign.py " + " ".join(sys.argv[1:])
         write_text(args.json, json.dumps({
             "date": time.strftime("%Y-%m-%d"), "cpus": os.cpu_count(),
             "memory_gb": psutil.virtual_memory().total / 2 ** 30,
-            "command": "benchmarks/bench_campaign.py " + " ".join(sys.argv[1:]),
-            "snapshots": not args.no_snapshots, "runs": rows}, indent=1) + "\n")
+            "commands": before["commands"] + [command],
+            "snapshots": not args.no_snapshots, "runs": before["runs"] + rows}, indent=1) + "\n")
         print(f"bench_campaign: wrote {args.json}")
 
 

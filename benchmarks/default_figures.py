@@ -354,10 +354,14 @@ def render_campaign_bench(b: dict) -> str:
     command less its generated cases) plus 1,000 times its wall time per generated case: a
     lower bound, since the envelope-setting cases run again at the end grow with the cases."""
     runs = b["runs"]
-    words = b["command"].split()          # less the machine's own paths (--cache DIR, --json FILE)
-    command = " ".join(w for k, w in enumerate(words) if w not in ("--cache", "--json")
-                       and (k == 0 or words[k - 1] not in ("--cache", "--json")))
-    rows = [f"On this {b['cpus']}-core machine ({b['date']}, `{command}`; "
+
+    def shown(command: str) -> str:      # less the machine's own paths (--cache DIR, --json FILE)
+        words = command.split()
+        return " ".join(w for k, w in enumerate(words) if w not in ("--cache", "--json")
+                        and (k == 0 or words[k - 1] not in ("--cache", "--json")))
+
+    commands = " and ".join(f"`{shown(c)}`" for c in b.get("commands") or [b["command"]])
+    rows = [f"On this {b['cpus']}-core machine ({b['date']}, {commands}; "
             f"{'named cases with' if b.get('snapshots', True) else 'named cases without'} snapshots; "
             "each row one `liftoff run --cases N` process, warm stage cache, fresh campaign folder):", "",
             "| run | default steps per case | wall (s) | generated cases (s) | per generated case (s) | peak memory, "

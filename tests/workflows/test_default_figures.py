@@ -122,8 +122,10 @@ def test_campaign_bench_block_shows_the_benchmark_file(figures):
     assert "within 5 min: **not met**, 5.7 min (extrapolated from the 200-case run" in text
     assert "within 2 GB: met, 1.60 GB at most; 50 -> 200 cases: 1.40 -> 1.50 GB" in text
     assert "(200 cases): met, 1.10x" in text
-    b["runs"] = [run(1000, "pool", 290.0, 250.0, 2.5)]
+    b = {**b, "commands": [b.pop("command"), "benchmarks/bench_campaign.py --cases 1000 --json /x.json --append"],
+         "runs": [run(1000, "pool", 290.0, 250.0, 2.5)]}
     text = figures.render_campaign_bench(b)
+    assert "`benchmarks/bench_campaign.py --cases 200 --dask` and `benchmarks/bench_campaign.py --cases 1000 --append`" in text
     assert "within 5 min: met, 4.8 min (measured)" in text and "within 2 GB: **not met**, 2.50 GB" in text
 
 
