@@ -143,7 +143,7 @@ def main() -> None:
         if args.json is None or not args.json.is_file():
             sys.exit("bench_campaign: --append needs an existing --json file")
         old = json.loads(args.json.read_text())
-        before = {"commands": old.get("commands") or [old["command"]], "runs": old["runs"]}
+        before = {"commands": old["commands"], "runs": old["runs"]}
     rows: list[dict] = []
     print(f"bench_campaign: {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, "
           f"{psutil.virtual_memory().total / 2 ** 30:.0f} GB, Python {platform.python_version()}; cache {args.cache}")

@@ -360,7 +360,7 @@ def render_campaign_bench(b: dict) -> str:
         return " ".join(w for k, w in enumerate(words) if w not in ("--cache", "--json")
                         and (k == 0 or words[k - 1] not in ("--cache", "--json")))
 
-    commands = " and ".join(f"`{shown(c)}`" for c in b.get("commands") or [b["command"]])
+    commands = " and ".join(f"`{shown(c)}`" for c in b["commands"])
     rows = [f"On this {b['cpus']}-core machine ({b['date']}, {commands}; "
             f"{'named cases with' if b.get('snapshots', True) else 'named cases without'} snapshots; "
             "each row one `liftoff run --cases N` process, warm stage cache, fresh campaign folder):", "",

@@ -113,7 +113,7 @@ def test_campaign_bench_block_shows_the_benchmark_file(figures):
                 "steps": 1000, "peak_total": pss, "peak_main": 1.0, "cpu": 1.5 * wall, "load": [[1, 1, 1], [2, 2, 2]]}
 
     b = {"date": "2026-01-01", "cpus": 2, "snapshots": True,
-         "command": "benchmarks/bench_campaign.py --cases 200 --cache /home/me/c --json /tmp/x.json --dask",
+         "commands": ["benchmarks/bench_campaign.py --cases 200 --cache /home/me/c --json /tmp/x.json --dask"],
          "runs": [run(200, "pool", 100.0, 60.0, 1.5), run(200, "dask", 110.0, 70.0, 1.6), run(50, "pool", 55.0, 15.0, 1.4)]}
     text = figures.render_campaign_bench(b)
     assert "`benchmarks/bench_campaign.py --cases 200 --dask`" in text and "/home/me" not in text
@@ -122,7 +122,7 @@ def test_campaign_bench_block_shows_the_benchmark_file(figures):
     assert "within 5 min: **not met**, 5.7 min (extrapolated from the 200-case run" in text
     assert "within 2 GB: met, 1.60 GB at most; 50 -> 200 cases: 1.40 -> 1.50 GB" in text
     assert "(200 cases): met, 1.10x" in text
-    b = {**b, "commands": [b.pop("command"), "benchmarks/bench_campaign.py --cases 1000 --json /x.json --append"],
+    b = {**b, "commands": b["commands"] + ["benchmarks/bench_campaign.py --cases 1000 --json /x.json --append"],
          "runs": [run(1000, "pool", 290.0, 250.0, 2.5)]}
     text = figures.render_campaign_bench(b)
     assert "`benchmarks/bench_campaign.py --cases 200 --dask` and `benchmarks/bench_campaign.py --cases 1000 --append`" in text
