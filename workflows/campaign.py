@@ -6,8 +6,10 @@ the scenario and its index (:meth:`liftoff.config.Scenario.generated_case`), loa
 reduced model from the stage cache by path (every model stage is a cache hit: the main
 process built them first), solves the transient without any modal history and sends
 back a :class:`CaseSummary` (max/min with times of every item, SRS of the selected
-items, post events: a few kB), never the histories. Workers keep the last scenario and
-model they loaded, so each is read once per worker.
+items, post events: a few kB) with the histories of only the items where the case
+reaches the running envelope it was sent (:class:`Captured`: many for the first cases,
+rarely any later; at most every item's, 0.1 GB for the default, per task in flight).
+Workers keep the last scenario and model they loaded, so each is read once per worker.
 
 The main process writes each summary to the campaign folder as one record
 (``cases/<name>-<key>.npz``, the key a hash of the case's scenario mapping, model and
@@ -68,13 +70,19 @@ class ScenarioRef:
 @dataclass(frozen=True)
 class CaseTask:
     """One generated case for a worker; ``columns``: item names whose histories to send
-    back (the envelope-setting cases), else a summary."""
+    back (the envelope-setting cases), else a summary. With ``capture`` the summary also
+    carries the histories of the items whose max reaches ``above`` or whose min reaches
+    ``below`` (per item, in the summaries' item order; None: every item): the campaign's
+    running envelope when the task was sent (:class:`Captured`)."""
 
     scenario: ScenarioRef
     index: int
     cache: str
     model_key: str
     columns: tuple[str, ...] = ()
+    capture: bool = False
+    above: np.ndarray | None = None
+    below: np.ndarray | None = None
 
 
 @dataclass
@@ -105,18 +113,21 @@ class CaseSummary:
     err_mn: np.ndarray | None = None
     support_items: tuple[str, ...] = ()   # "<interface>|<pair>" of the correlated loads (analysis.correlated)
     support: np.ndarray | None = None      # (n_support_items, N_DIRECTIONS) their support functions
+    time: np.ndarray | None = None         # with histories: the case's time points (s); neither is recorded
+    histories: dict | None = None          # {item: history} captured for the envelope (CaseTask.capture)
 
 
 # ------------------------------------------------------------------ one case
-def summarize(result, cp, name: str, index: int, post, wall: float = 0.0, check=None) -> CaseSummary:
+def summarize(result, cp, name: str, index: int, post, wall: float = 0.0, check=None, its=None) -> CaseSummary:
     """The compact summary of a solved case (the same for named and generated cases); with
-    ``check`` (the same case at h/2) each max/min carries its estimated error."""
+    ``check`` (the same case at h/2) each max/min carries its estimated error; ``its``: the
+    case's report.items when already made."""
     from liftoff.transient.accuracy import error_estimate
 
     from . import report
 
     band = post.acceleration_band_hz
-    its = report.items(result, cp.attach, report.liquid_heads(cp), band)
+    its = report.items(result, cp.attach, report.liquid_heads(cp), band) if its is None else its
     t = result.time
     # per item on its own history (first occurrence, as argmax over a stacked array), without
     # stacking them: 1 s a default case for the copy and the strided search
@@ -198,18 +209,24 @@ def solve_generated(task: CaseTask, keep_modal: bool | str = False):
 
 
 def run_case(task: CaseTask):
-    """Worker entry point: the summary of one generated case, or (time, {item: history})
+    """Worker entry point: the summary of one generated case (with ``task.capture`` the
+    histories of the items reaching the envelope it was sent), or (time, {item: history})
     of the items in ``task.columns``."""
-    res, cp, case, wall = solve_generated(task)
-    if task.columns:
-        from . import report
+    from . import report
 
-        sc = _MEMO["scenario"]
-        its = {it.name: it.values for it in report.items(res, cp.attach, report.liquid_heads(cp),
-                                                         sc.post.acceleration_band_hz)}
-        return task.index, res.time, {c: its[c] for c in task.columns}
+    res, cp, case, wall = solve_generated(task)
     sc = _MEMO["scenario"]
-    return summarize(res, cp, case.name, task.index, sc.post, wall)
+    its = report.items(res, cp.attach, report.liquid_heads(cp), sc.post.acceleration_band_hz)
+    if task.columns:
+        by_name = {it.name: it.values for it in its}
+        return task.index, res.time, {c: by_name[c] for c in task.columns}
+    s = summarize(res, cp, case.name, task.index, sc.post, wall, its=its)
+    if task.capture:
+        reach = np.ones(len(its), dtype=bool) if task.above is None or task.below is None \
+            or np.shape(task.above) != (len(its),) else (s.mx >= task.above) | (s.mn <= task.below)
+        s.time = res.time
+        s.histories = {its[j].name: np.ascontiguousarray(its[j].values) for j in np.flatnonzero(reach)}
+    return s
 
 
 def check_case_memory(source: str, n_cases: int, limit: float | None = None) -> None:
@@ -323,15 +340,108 @@ def run_tasks(executor, tasks: Iterable[CaseTask], on_result: Callable, window: 
             fut.cancel()
 
 
+HISTORY_FORMAT = "liftoff-campaign-histories"
+HISTORY_VERSION = 1
+
+
+class Captured:
+    """The envelope histories captured while a campaign runs, so that the cases setting an
+    envelope value need not run again at the end (:func:`write_envelope_histories`).
+
+    Each task is sent with the running envelope of the cases arrived so far (its items'
+    largest max and smallest min, :meth:`thresholds`); the worker sends back the histories
+    of the items where its case reaches it. A case that sets a final envelope value reaches
+    the running envelope it was sent with (that envelope holds only cases it equals or beats),
+    so its histories always come back. On arrival only the items where the case holds the
+    running envelope (equal or better) are written, one file per case
+    (``histories/<name>-<key>.npz``, beside its record); a file is deleted when every item it
+    holds is beaten. A missing or unreadable file costs a re-run, as before, never a wrong
+    history."""
+
+    def __init__(self, folder: Path, records: dict):
+        self.folder, self.records = Path(folder) / "histories", records
+        self.items: tuple[str, ...] | None = None
+        self.mx = self.mn = None
+        self.holders: dict = {}          # (item row, 'max' | 'min') -> case indices at the running envelope
+        self.held: dict = {}             # case index -> {(item row, side)} it holds
+
+    def path(self, index: int) -> Path:
+        return self.folder / self.records[index].name
+
+    def thresholds(self) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """(above, below) for the next task: the running envelope (None before any case)."""
+        return (None, None) if self.mx is None else (self.mx.copy(), self.mn.copy())
+
+    def arrive(self, s: CaseSummary, key: str) -> None:
+        """Take a case's summary: update the running envelope, write the histories it holds
+        and delete the files of cases that no longer hold any."""
+        hist, t = s.histories, s.time
+        s.histories = s.time = None
+        if self.items is None:
+            self.items = s.items
+            self.mx, self.mn = np.full(len(s.items), -np.inf), np.full(len(s.items), np.inf)
+        if s.items != self.items:       # (Aggregate says so at the end); nothing captured
+            return
+        lost = set()
+        for side, run, val, better in (("max", self.mx, s.mx, np.greater), ("min", self.mn, s.mn, np.less)):
+            for j in np.flatnonzero(better(val, run) | (val == run)):
+                slot = (int(j), side)
+                if better(val[j], run[j]):
+                    for i in self.holders.get(slot, ()):
+                        self.held[i].discard(slot)
+                        lost.add(i)
+                    self.holders[slot] = set()
+                    run[j] = val[j]
+                self.holders[slot].add(s.index)
+                self.held.setdefault(s.index, set()).add(slot)
+        rows = sorted({j for j, _ in self.held.get(s.index, ())})
+        if rows and hist is not None and all(self.items[j] in hist for j in rows):
+            write_record(self.path(s.index), HISTORY_FORMAT, HISTORY_VERSION,
+                         {"time": np.asarray(t), "items": np.array([self.items[j] for j in rows], dtype=str),
+                          "value": np.stack([hist[self.items[j]] for j in rows])},
+                         units="time s; value (items x time): SI, each row in its item's unit",
+                         attrs={"name": s.name, "metadata": json.dumps({"key": key})}, suffixes=(".npz",))
+        for i in lost:
+            if not self.held[i]:
+                del self.held[i]
+                self.path(i).unlink(missing_ok=True)
+
+    def load(self, index: int, items: Iterable[str]) -> tuple[np.ndarray, dict] | None:
+        """(time, {item: history}) of case ``index`` captured for ``items``; None when its
+        file is missing, unreadable, another case's or lacks one of them."""
+        p = self.path(index)
+        if not p.is_file():
+            return None
+        try:
+            rec = read_record(p, HISTORY_FORMAT, (HISTORY_VERSION,), what="campaign histories")
+            meta = json.loads(rec.attrs.get("metadata", "{}"))
+            t, names, value = rec.data["time"], [str(x) for x in np.atleast_1d(rec.data["items"])], rec.data["value"]
+        except (InputError, ValueError, TypeError, KeyError):
+            return None
+        if meta.get("key") != self.records[index].stem.rsplit("-", 1)[1] or np.shape(value) != (len(names), t.size):
+            return None
+        col = {n: value[k] for k, n in enumerate(names)}
+        return (t, {n: col[n] for n in items}) if all(n in col for n in items) else None
+
+    def prune(self, keep: Iterable[int]) -> None:
+        """Delete the captured files of every case not in ``keep``."""
+        keep_names = {self.path(i).name for i in keep}
+        for f in self.folder.glob("*.npz") if self.folder.is_dir() else ():
+            if f.name not in keep_names:
+                f.unlink(missing_ok=True)
+
+
 @dataclass
 class CampaignRun:
-    """What :func:`run_campaign` did: records by index, how many ran and were reused."""
+    """What :func:`run_campaign` did: records by index, how many ran and were reused, and
+    the envelope histories captured on the way."""
 
     folder: Path
     records: dict            # index -> record path
     ran: int
     reused: int
     wall: float
+    captured: Captured | None = None
 
 
 def run_campaign(sc, ref: ScenarioRef, cache_root: Path, model_key: str, executor, folder: Path,
@@ -363,18 +473,23 @@ def run_campaign(sc, ref: ScenarioRef, cache_root: Path, model_key: str, executo
 
         bar = tqdm(total=len(todo), unit="case", desc="cases", leave=False)
 
+    captured = Captured(folder, records)
+
     def store(s: CaseSummary) -> None:
-        save_summary(s, records[s.index], records[s.index].stem.rsplit("-", 1)[1])
+        key = records[s.index].stem.rsplit("-", 1)[1]
+        captured.arrive(s, key)
+        save_summary(s, records[s.index], key)
         if bar is not None:
             bar.update(1)
 
-    tasks = (CaseTask(ref, i, str(cache_root), model_key) for i in todo)
+    # (a generator: each task takes the running envelope when it is sent)
+    tasks = (CaseTask(ref, i, str(cache_root), model_key, (), True, *captured.thresholds()) for i in todo)
     try:
         run_tasks(executor, tasks, store, window or 4 * max(1, getattr(executor, "_max_workers", 2) or 2))
     finally:
         if bar is not None:
             bar.close()
-    return CampaignRun(folder, records, len(todo), reused, time.perf_counter() - t0)
+    return CampaignRun(folder, records, len(todo), reused, time.perf_counter() - t0, captured)
 
 
 # ------------------------------------------------------------------ after the cases
@@ -458,9 +573,10 @@ def case_name_of(i: int) -> str:
 
 
 def write_envelope_histories(env: list[dict], setters: dict, ref: ScenarioRef, cache_root: str, model_key: str,
-                             executor, path: Path) -> Path:
+                             executor, path: Path, captured: Captured | None = None) -> Path:
     """envelope_histories.h5: for each envelope value a generated case sets, that case's
-    history of the item (the cases re-run on ``executor``, only those columns sent back).
+    history of the item (captured while the campaign ran, ``captured``; else the case re-run
+    on ``executor``, only those columns sent back); the other captured files are deleted.
     Layout (netCDF/xarray, every axis a dimension scale): root ``items`` (the envelope rows)
     with ``units``; per setting case a group ``cases/<case>`` with ``time`` (s), ``row`` (the
     values it sets: index into ``items``), ``side`` (max or min), ``item``, ``unit``,
@@ -485,9 +601,17 @@ def write_envelope_histories(env: list[dict], setters: dict, ref: ScenarioRef, c
             "value": Dataset(np.column_stack([cols[env[j]["item"]] for j, _ in rows]), "SI: the row's unit",
                              dims=("time", "row"))}
 
-    tasks = (CaseTask(ref, i, cache_root, model_key, tuple(env[j]["item"] for j, _ in setters[i]))
-             for i in sorted(setters))
-    run_tasks(executor, tasks, store, 4 * max(1, getattr(executor, "_max_workers", 2) or 2))
+    rerun = []
+    for i in sorted(setters):
+        cols = tuple(env[j]["item"] for j, _ in setters[i])
+        got = captured.load(i, cols) if captured is not None else None
+        if got is None:
+            rerun.append(CaseTask(ref, i, cache_root, model_key, cols))
+        else:
+            store((i, *got))
+    if captured is not None:
+        captured.prune(setters)
+    run_tasks(executor, rerun, store, 4 * max(1, getattr(executor, "_max_workers", 2) or 2))
     return write_record(path, "liftoff-envelope-histories", 2, data, units="SI per row (unit); s",
                         attrs={"layout": "cases/<case>/value (time x row): the history of envelope row "
                                          "items[row] in the case that sets its max or min (side), on that case's "

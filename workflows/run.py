@@ -487,7 +487,8 @@ def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, sta
 def _generated_outputs(sc, prep: Prepared, camp: _Campaign, agg, out: Path, stage_times: list, results: dict,
                        plots: bool, pics: bool) -> list:
     """cases.csv, envelope_histories.h5 (the history of each envelope value set by a
-    generated case, re-run on the executor), and the governing generated case in full:
+    generated case, captured while the campaign ran or re-run on the executor), and the
+    governing generated case in full:
     results, max/min, plots, snapshots, spectra (with --keep-histories every
     envelope-setting generated case's results file)."""
     from . import campaign
@@ -497,7 +498,7 @@ def _generated_outputs(sc, prep: Prepared, camp: _Campaign, agg, out: Path, stag
     setters = campaign.envelope_setters(sc, env)
     ref = campaign.ScenarioRef.of(sc)
     files.append(campaign.write_envelope_histories(env, setters, ref, str(camp.cache.root), prep.gen_model,
-                                                   camp.executor, out / "envelope_histories.h5"))
+                                                   camp.executor, out / "envelope_histories.h5", camp.run.captured))
     gov = campaign.governing_case(sc, env)
     if gov is None:
         return files

@@ -332,3 +332,115 @@ def test_every_hdf5_file_of_a_campaign_opens_in_xarray(campaign4):
             except Exception as e:                      # noqa: BLE001
                 bad.append(f"{f.name} as a tree: {type(e).__name__}: {e}")
     assert not bad, "\n".join(bad)
+
+
+class _Recording(InlineExecutor):
+    """Runs each task at once and keeps the tasks it was given."""
+
+    def __init__(self):
+        self.tasks = []
+
+    def submit(self, fn, /, *args, **kwargs):
+        self.tasks.append(args[0])
+        return super().submit(fn, *args, **kwargs)
+
+
+class _Refusing(InlineExecutor):
+    def submit(self, fn, /, *args, **kwargs):
+        raise AssertionError(f"a case ran again: {args[0].index}")
+
+
+def _h5_tree(path) -> dict:
+    import h5py
+
+    out = {}
+    with h5py.File(path, "r") as f:
+        f.visititems(lambda name, obj: out.__setitem__(name, obj[()]) if isinstance(obj, h5py.Dataset) else None)
+    return out
+
+
+def test_envelope_histories_captured_while_running_equal_a_rerun(tmp_path, campaign4):
+    """The histories the cases send back as they reach the running envelope (campaign.Captured)
+    stand for the re-run of the envelope-setting cases: envelope_histories.h5 equal to the
+    bit without any case run again; only the setters' files are kept; a missing or foreign
+    captured file falls back to the re-run."""
+    import shutil
+    from dataclasses import asdict
+
+    from liftoff.analysis.aggregate import Aggregate
+    from liftoff.workflows import campaign
+    from liftoff.workflows.cache import stage_key
+
+    tmp, _, out = campaign4
+    sc = out.scenario
+    mkey = stage_key("model", asdict(sc.generated_case(0).model))
+    ref = campaign.ScenarioRef.of(sc)
+    ex = _Recording()                   # one case at a time: each is sent the envelope of those before it
+    camp = campaign.run_campaign(sc, ref, tmp / "cache", mkey, ex, tmp_path / "c", progress=False, window=1,
+                                 echo=lambda *a: None)
+    assert ex.tasks[0].above is None and all(t.capture for t in ex.tasks)
+    assert all(np.all(np.isfinite(t.above)) and t.above.shape == t.below.shape for t in ex.tasks[1:])
+    agg = Aggregate(sc.n_generated)
+    for i in range(sc.n_generated):
+        agg.add(campaign.load_summary(camp.records[i]), generated=True)
+    env = agg.envelope_rows()
+    setters = campaign.envelope_setters(sc, env)
+    assert len(setters) >= 3
+    kept = {f.name for f in (tmp_path / "c" / "histories").glob("*.npz")}
+    assert {camp.records[i].name for i in setters} <= kept        # every setter's histories came back
+    rerun = campaign.write_envelope_histories(env, setters, ref, str(tmp / "cache"), mkey, InlineExecutor(),
+                                              tmp_path / "rerun.h5")
+    saved = tmp_path / "saved"
+    shutil.copytree(tmp_path / "c" / "histories", saved)
+    got = campaign.write_envelope_histories(env, setters, ref, str(tmp / "cache"), mkey, _Refusing(),
+                                            tmp_path / "captured.h5", camp.captured)
+    a, b = _h5_tree(rerun), _h5_tree(got)
+    assert a.keys() == b.keys() and any(k.endswith("/value") for k in a)
+    for k in a:
+        assert np.array_equal(a[k], b[k]), k
+    assert {f.name for f in (tmp_path / "c" / "histories").glob("*.npz")} == {camp.records[i].name for i in setters}
+    # a setter's file missing, another's replaced by a third case's: those two run again
+    first, second = sorted(setters)[:2]
+    camp.captured.path(first).unlink()
+    shutil.copyfile(saved / camp.records[sorted(setters)[-1]].name, camp.captured.path(second))
+    ex = _Recording()
+    again = campaign.write_envelope_histories(env, setters, ref, str(tmp / "cache"), mkey, ex,
+                                              tmp_path / "again.h5", camp.captured)
+    assert sorted(t.index for t in ex.tasks) == [first, second]
+    c = _h5_tree(again)
+    assert c.keys() == a.keys() and all(np.array_equal(a[k], c[k]) for k in a)
+
+
+def test_captured_keeps_only_the_cases_at_the_running_envelope(tmp_path):
+    """campaign.Captured's bookkeeping: a case's file holds the items where it equals or
+    beats the running envelope on arrival; it is deleted once all of them are beaten (a tie
+    keeps it); a case that holds none writes nothing; load gives the histories exactly."""
+    from liftoff.workflows.campaign import CaseSummary, Captured
+
+    recs = {i: tmp_path / "cases" / f"d{i:04d}-k{i}.npz" for i in range(4)}
+    cap = Captured(tmp_path, recs)
+    t = np.linspace(0.0, 1.0, 5)
+
+    def case(i, mx, mn):
+        h = {"a": t * (i + 1), "b": t - i}
+        return CaseSummary(f"d{i:04d}", i, ("a", "b"), ("N", "m"), ("x", "y"), np.array(mx, float), t[:2],
+                           np.array(mn, float), t[:2], time=t, histories=h)
+
+    files = lambda: sorted(f.name for f in cap.folder.glob("*.npz"))  # noqa: E731
+    assert cap.thresholds() == (None, None)
+    cap.arrive(case(0, [1, 1], [0, 0]), "k0")
+    assert files() == ["d0000-k0.npz"]
+    cap.arrive(case(1, [2, 1], [0, -1]), "k1")           # beats a max and b min, ties b max and a min
+    assert files() == ["d0000-k0.npz", "d0001-k1.npz"]
+    tm, h = cap.load(0, ["a", "b"])
+    assert np.array_equal(tm, t) and np.array_equal(h["a"], t) and np.array_equal(h["b"], t)
+    cap.arrive(case(2, [3, 5], [-1, -2]), "k2")          # beats everything: the others' files go
+    assert files() == ["d0002-k2.npz"]
+    above, below = cap.thresholds()
+    assert list(above) == [3, 5] and list(below) == [-1, -2]
+    cap.arrive(case(3, [0, 0], [0, 0]), "k3")            # holds nothing: nothing written
+    assert files() == ["d0002-k2.npz"]
+    tm, h = cap.load(2, ["b"])
+    assert np.array_equal(h["b"], t - 2) and cap.load(2, ["zz"]) is None and cap.load(3, ["a"]) is None
+    (cap.folder / "d0002-k2.npz").rename(cap.folder / "d0001-k1.npz")   # another case's file under case 1's name
+    assert cap.load(1, ["a"]) is None
