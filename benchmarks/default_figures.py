@@ -351,8 +351,8 @@ def render_campaign_bench(b: dict) -> str:
     """The load-campaign benchmark (benchmarks/bench_campaign.py --json): each measured
     command, then the issue-28 targets against it. 1,000 cases are extrapolated (said as
     such) from the largest process-pool run when none was measured: its fixed cost (the
-    command less its generated cases) plus 1,000 times its wall time per generated case: a
-    lower bound, since the envelope-setting cases run again at the end grow with the cases."""
+    command less its generated cases) plus 1,000 times its wall time per generated case: an
+    estimate, as reading the cases' records back at the end also grows with the cases."""
     runs = b["runs"]
 
     def shown(command: str) -> str:      # less the machine's own paths (--cache DIR, --json FILE)
@@ -387,8 +387,8 @@ def render_campaign_bench(b: dict) -> str:
             per = big["generated_s"] / big["cases"]
             t = big["wall"] - big["generated_s"] + n * per
             how = (f"extrapolated from the {big['cases']:,}-case run: its {big['wall'] - big['generated_s']:.0f} s "
-                   f"besides the generated cases plus {n:,} x {per:.2f} s; a lower bound, as the cases that set an "
-                   "envelope value, run again for envelope_histories.h5, grow in number with the cases")
+                   f"besides the generated cases plus {n:,} x {per:.2f} s; an estimate: reading the cases' records "
+                   "back at the end also grows with the cases, a few ms each")
         met = "met" if t <= CAMPAIGN_TARGET_S else "**not met**"
         lines.append(f"* {n:,} cases on {big['workers']} workers within {CAMPAIGN_TARGET_S / 60:.0f} min: {met}, "
                      f"{t / 60:.1f} min ({how}).")

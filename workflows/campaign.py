@@ -68,12 +68,29 @@ class ScenarioRef:
 
 
 @dataclass(frozen=True)
+class RunningEnvelope:
+    """The envelope of the cases arrived so far, per item (in the summaries' order): its max
+    and min, and the index of the case holding each (the first in case order on a tie, as
+    analysis.aggregate.Aggregate)."""
+
+    mx: np.ndarray
+    mx_case: np.ndarray
+    mn: np.ndarray
+    mn_case: np.ndarray
+
+    def reached(self, s: CaseSummary) -> np.ndarray:
+        """Per item, whether case ``s`` would take its max or its min from this envelope:
+        beyond it, or equal and earlier in case order."""
+        return ((s.mx > self.mx) | ((s.mx == self.mx) & (s.index < self.mx_case))
+                | (s.mn < self.mn) | ((s.mn == self.mn) & (s.index < self.mn_case)))
+
+
+@dataclass(frozen=True)
 class CaseTask:
     """One generated case for a worker; ``columns``: item names whose histories to send
     back (the envelope-setting cases), else a summary. With ``capture`` the summary also
-    carries the histories of the items whose max reaches ``above`` or whose min reaches
-    ``below`` (per item, in the summaries' item order; None: every item): the campaign's
-    running envelope when the task was sent (:class:`Captured`)."""
+    carries the histories of the items where the case reaches ``envelope`` (the campaign's
+    running envelope when the task was sent; None: every item's, :class:`Captured`)."""
 
     scenario: ScenarioRef
     index: int
@@ -81,8 +98,7 @@ class CaseTask:
     model_key: str
     columns: tuple[str, ...] = ()
     capture: bool = False
-    above: np.ndarray | None = None
-    below: np.ndarray | None = None
+    envelope: RunningEnvelope | None = None
 
 
 @dataclass
@@ -222,8 +238,8 @@ def run_case(task: CaseTask):
         return task.index, res.time, {c: by_name[c] for c in task.columns}
     s = summarize(res, cp, case.name, task.index, sc.post, wall, its=its)
     if task.capture:
-        reach = np.ones(len(its), dtype=bool) if task.above is None or task.below is None \
-            or np.shape(task.above) != (len(its),) else (s.mx >= task.above) | (s.mn <= task.below)
+        env = task.envelope
+        reach = env.reached(s) if env is not None and np.shape(env.mx) == (len(its),) else np.ones(len(its), bool)
         s.time = res.time
         s.histories = {its[j].name: np.ascontiguousarray(its[j].values) for j in np.flatnonzero(reach)}
     return s
@@ -348,29 +364,29 @@ class Captured:
     """The envelope histories captured while a campaign runs, so that the cases setting an
     envelope value need not run again at the end (:func:`write_envelope_histories`).
 
-    Each task is sent with the running envelope of the cases arrived so far (its items'
-    largest max and smallest min, :meth:`thresholds`); the worker sends back the histories
-    of the items where its case reaches it. A case that sets a final envelope value reaches
-    the running envelope it was sent with (that envelope holds only cases it equals or beats),
-    so its histories always come back. On arrival only the items where the case holds the
-    running envelope (equal or better) are written, one file per case
-    (``histories/<name>-<key>.npz``, beside its record); a file is deleted when every item it
-    holds is beaten. A missing or unreadable file costs a re-run, as before, never a wrong
-    history."""
+    Each task is sent the running envelope of the cases arrived so far
+    (:meth:`running`); the worker sends back the histories of the items where its case
+    reaches it (:meth:`RunningEnvelope.reached`). A case that sets a final envelope value
+    reaches every running envelope it can have been sent (those hold only cases it beats, or
+    equals later in case order), so its histories always come back. On arrival only the items
+    where the case now holds the running envelope are written, one file per case
+    (``histories/<name>-<key>.npz``, items x time, beside its record); a file is deleted once
+    every item it holds is taken by another case. A missing or unreadable file costs a
+    re-run, as before, never a wrong history."""
 
     def __init__(self, folder: Path, records: dict):
         self.folder, self.records = Path(folder) / "histories", records
         self.items: tuple[str, ...] | None = None
-        self.mx = self.mn = None
-        self.holders: dict = {}          # (item row, 'max' | 'min') -> case indices at the running envelope
-        self.held: dict = {}             # case index -> {(item row, side)} it holds
+        self.env: RunningEnvelope | None = None
+        self.held: dict = {}             # case index -> {(item row, 'max' | 'min')} it holds
 
     def path(self, index: int) -> Path:
         return self.folder / self.records[index].name
 
-    def thresholds(self) -> tuple[np.ndarray | None, np.ndarray | None]:
-        """(above, below) for the next task: the running envelope (None before any case)."""
-        return (None, None) if self.mx is None else (self.mx.copy(), self.mn.copy())
+    def running(self) -> RunningEnvelope | None:
+        """A copy of the running envelope for the next task (None before any case)."""
+        e = self.env
+        return None if e is None else RunningEnvelope(e.mx.copy(), e.mx_case.copy(), e.mn.copy(), e.mn_case.copy())
 
     def arrive(self, s: CaseSummary, key: str) -> None:
         """Take a case's summary: update the running envelope, write the histories it holds
@@ -378,22 +394,21 @@ class Captured:
         hist, t = s.histories, s.time
         s.histories = s.time = None
         if self.items is None:
+            n, last = len(s.items), np.iinfo(np.int64).max
             self.items = s.items
-            self.mx, self.mn = np.full(len(s.items), -np.inf), np.full(len(s.items), np.inf)
+            self.env = RunningEnvelope(np.full(n, -np.inf), np.full(n, last), np.full(n, np.inf), np.full(n, last))
         if s.items != self.items:       # (Aggregate says so at the end); nothing captured
             return
-        lost = set()
-        for side, run, val, better in (("max", self.mx, s.mx, np.greater), ("min", self.mn, s.mn, np.less)):
-            for j in np.flatnonzero(better(val, run) | (val == run)):
-                slot = (int(j), side)
-                if better(val[j], run[j]):
-                    for i in self.holders.get(slot, ()):
-                        self.held[i].discard(slot)
-                        lost.add(i)
-                    self.holders[slot] = set()
-                    run[j] = val[j]
-                self.holders[slot].add(s.index)
-                self.held.setdefault(s.index, set()).add(slot)
+        e, lost = self.env, set()
+        for side, run, case, val, beyond in (("max", e.mx, e.mx_case, s.mx, np.greater),
+                                             ("min", e.mn, e.mn_case, s.mn, np.less)):
+            for j in np.flatnonzero(beyond(val, run) | ((val == run) & (s.index < case))):
+                before = int(case[j])
+                if before in self.held:
+                    self.held[before].discard((int(j), side))
+                    lost.add(before)
+                run[j], case[j] = val[j], s.index
+                self.held.setdefault(s.index, set()).add((int(j), side))
         rows = sorted({j for j, _ in self.held.get(s.index, ())})
         if rows and hist is not None and all(self.items[j] in hist for j in rows):
             write_record(self.path(s.index), HISTORY_FORMAT, HISTORY_VERSION,
@@ -483,7 +498,7 @@ def run_campaign(sc, ref: ScenarioRef, cache_root: Path, model_key: str, executo
             bar.update(1)
 
     # (a generator: each task takes the running envelope when it is sent)
-    tasks = (CaseTask(ref, i, str(cache_root), model_key, (), True, *captured.thresholds()) for i in todo)
+    tasks = (CaseTask(ref, i, str(cache_root), model_key, (), True, captured.running()) for i in todo)
     try:
         run_tasks(executor, tasks, store, window or 4 * max(1, getattr(executor, "_max_workers", 2) or 2))
     finally:

@@ -378,8 +378,8 @@ def test_envelope_histories_captured_while_running_equal_a_rerun(tmp_path, campa
     ex = _Recording()                   # one case at a time: each is sent the envelope of those before it
     camp = campaign.run_campaign(sc, ref, tmp / "cache", mkey, ex, tmp_path / "c", progress=False, window=1,
                                  echo=lambda *a: None)
-    assert ex.tasks[0].above is None and all(t.capture for t in ex.tasks)
-    assert all(np.all(np.isfinite(t.above)) and t.above.shape == t.below.shape for t in ex.tasks[1:])
+    assert ex.tasks[0].envelope is None and all(t.capture for t in ex.tasks)
+    assert all(np.all(np.isfinite(t.envelope.mx)) and np.all(t.envelope.mx_case < t.index) for t in ex.tasks[1:])
     agg = Aggregate(sc.n_generated)
     for i in range(sc.n_generated):
         agg.add(campaign.load_summary(camp.records[i]), generated=True)
@@ -411,13 +411,15 @@ def test_envelope_histories_captured_while_running_equal_a_rerun(tmp_path, campa
     assert c.keys() == a.keys() and all(np.array_equal(a[k], c[k]) for k in a)
 
 
-def test_captured_keeps_only_the_cases_at_the_running_envelope(tmp_path):
-    """campaign.Captured's bookkeeping: a case's file holds the items where it equals or
-    beats the running envelope on arrival; it is deleted once all of them are beaten (a tie
-    keeps it); a case that holds none writes nothing; load gives the histories exactly."""
+def test_captured_keeps_only_the_cases_holding_the_running_envelope(tmp_path):
+    """campaign.Captured's bookkeeping: a case's file holds the items where it holds the
+    running envelope on arrival (beyond it, or equal and earlier in case order, as the
+    Aggregate's envelope); it is deleted once another case takes all of them; a case that
+    holds none writes nothing; a task's RunningEnvelope asks for the same items; load gives
+    the histories exactly and refuses another case's file."""
     from liftoff.workflows.campaign import CaseSummary, Captured
 
-    recs = {i: tmp_path / "cases" / f"d{i:04d}-k{i}.npz" for i in range(4)}
+    recs = {i: tmp_path / "cases" / f"d{i:04d}-k{i}.npz" for i in range(5)}
     cap = Captured(tmp_path, recs)
     t = np.linspace(0.0, 1.0, 5)
 
@@ -427,20 +429,24 @@ def test_captured_keeps_only_the_cases_at_the_running_envelope(tmp_path):
                            np.array(mn, float), t[:2], time=t, histories=h)
 
     files = lambda: sorted(f.name for f in cap.folder.glob("*.npz"))  # noqa: E731
-    assert cap.thresholds() == (None, None)
+    assert cap.running() is None
     cap.arrive(case(0, [1, 1], [0, 0]), "k0")
     assert files() == ["d0000-k0.npz"]
-    cap.arrive(case(1, [2, 1], [0, -1]), "k1")           # beats a max and b min, ties b max and a min
-    assert files() == ["d0000-k0.npz", "d0001-k1.npz"]
-    tm, h = cap.load(0, ["a", "b"])
-    assert np.array_equal(tm, t) and np.array_equal(h["a"], t) and np.array_equal(h["b"], t)
-    cap.arrive(case(2, [3, 5], [-1, -2]), "k2")          # beats everything: the others' files go
-    assert files() == ["d0002-k2.npz"]
-    above, below = cap.thresholds()
-    assert list(above) == [3, 5] and list(below) == [-1, -2]
-    cap.arrive(case(3, [0, 0], [0, 0]), "k3")            # holds nothing: nothing written
-    assert files() == ["d0002-k2.npz"]
-    tm, h = cap.load(2, ["b"])
-    assert np.array_equal(h["b"], t - 2) and cap.load(2, ["zz"]) is None and cap.load(3, ["a"]) is None
-    (cap.folder / "d0002-k2.npz").rename(cap.folder / "d0001-k1.npz")   # another case's file under case 1's name
+    cap.arrive(case(2, [2, 1], [0, -1]), "k2")   # a max and b min beyond; b max and a min equal, case 0 keeps them
+    e = cap.running()
+    assert list(e.mx) == [2, 1] and list(e.mx_case) == [2, 0] and list(e.mn) == [0, -1] and list(e.mn_case) == [0, 2]
+    assert files() == ["d0000-k0.npz", "d0002-k2.npz"]
+    assert list(e.reached(case(1, [2, 0], [5, 5]))) == [True, False]     # equal and earlier: reached
+    assert list(e.reached(case(3, [2, 1], [0, -1]))) == [False, False]   # equal and later: not
+    cap.arrive(case(1, [2, 0], [5, 5]), "k1")    # takes a max from case 2, which keeps b min
+    assert files() == ["d0000-k0.npz", "d0001-k1.npz", "d0002-k2.npz"]
+    tm, h = cap.load(1, ["a"])
+    assert np.array_equal(tm, t) and np.array_equal(h["a"], 2 * t) and cap.load(1, ["b"]) is None
+    cap.arrive(case(3, [3, 5], [-1, -2]), "k3")  # beyond everything: the others' files go
+    assert files() == ["d0003-k3.npz"]
+    cap.arrive(case(4, [0, 0], [0, 0]), "k4")    # holds nothing: nothing written
+    assert files() == ["d0003-k3.npz"]
+    tm, h = cap.load(3, ["a", "b"])
+    assert np.array_equal(h["a"], 4 * t) and np.array_equal(h["b"], t - 3) and cap.load(4, ["a"]) is None
+    (cap.folder / "d0003-k3.npz").rename(cap.folder / "d0001-k1.npz")   # another case's file under case 1's name
     assert cap.load(1, ["a"]) is None
