@@ -240,8 +240,9 @@ def run_case(task: CaseTask):
     if task.capture:
         env = task.envelope
         reach = env.reached(s) if env is not None and np.shape(env.mx) == (len(its),) else np.ones(len(its), bool)
-        s.time = res.time
-        s.histories = {its[j].name: np.ascontiguousarray(its[j].values) for j in np.flatnonzero(reach)}
+        if reach.any():                  # (most later cases reach nothing: no time points sent either)
+            s.time = res.time
+            s.histories = {its[j].name: np.ascontiguousarray(its[j].values) for j in np.flatnonzero(reach)}
     return s
 
 
@@ -274,6 +275,11 @@ def case_key(sc, index: int, model_key: str) -> str:
 
 def record_path(folder: Path, name: str, key: str) -> Path:
     return Path(folder) / "cases" / f"{name}-{key}.npz"
+
+
+def record_key(path: Path) -> str:
+    """The case key in a record's name (:func:`record_path`)."""
+    return Path(path).stem.rsplit("-", 1)[1]
 
 
 def save_summary(s: CaseSummary, path: Path, key: str) -> Path:
@@ -388,7 +394,7 @@ class Captured:
         e = self.env
         return None if e is None else RunningEnvelope(e.mx.copy(), e.mx_case.copy(), e.mn.copy(), e.mn_case.copy())
 
-    def arrive(self, s: CaseSummary, key: str) -> None:
+    def arrive(self, s: CaseSummary) -> None:
         """Take a case's summary: update the running envelope, write the histories it holds
         and delete the files of cases that no longer hold any."""
         hist, t = s.histories, s.time
@@ -415,7 +421,8 @@ class Captured:
                          {"time": np.asarray(t), "items": np.array([self.items[j] for j in rows], dtype=str),
                           "value": np.stack([hist[self.items[j]] for j in rows])},
                          units="time s; value (items x time): SI, each row in its item's unit",
-                         attrs={"name": s.name, "metadata": json.dumps({"key": key})}, suffixes=(".npz",))
+                         attrs={"name": s.name, "metadata": json.dumps({"key": record_key(self.records[s.index])})},
+                         suffixes=(".npz",))
         for i in lost:
             if not self.held[i]:
                 del self.held[i]
@@ -433,7 +440,7 @@ class Captured:
             t, names, value = rec.data["time"], [str(x) for x in np.atleast_1d(rec.data["items"])], rec.data["value"]
         except (InputError, ValueError, TypeError, KeyError):
             return None
-        if meta.get("key") != self.records[index].stem.rsplit("-", 1)[1] or np.shape(value) != (len(names), t.size):
+        if meta.get("key") != record_key(self.records[index]) or np.shape(value) != (len(names), t.size):
             return None
         col = {n: value[k] for k, n in enumerate(names)}
         return (t, {n: col[n] for n in items}) if all(n in col for n in items) else None
@@ -491,9 +498,8 @@ def run_campaign(sc, ref: ScenarioRef, cache_root: Path, model_key: str, executo
     captured = Captured(folder, records)
 
     def store(s: CaseSummary) -> None:
-        key = records[s.index].stem.rsplit("-", 1)[1]
-        captured.arrive(s, key)
-        save_summary(s, records[s.index], key)
+        captured.arrive(s)
+        save_summary(s, records[s.index], record_key(records[s.index]))
         if bar is not None:
             bar.update(1)
 

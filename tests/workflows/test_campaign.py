@@ -430,21 +430,21 @@ def test_captured_keeps_only_the_cases_holding_the_running_envelope(tmp_path):
 
     files = lambda: sorted(f.name for f in cap.folder.glob("*.npz"))  # noqa: E731
     assert cap.running() is None
-    cap.arrive(case(0, [1, 1], [0, 0]), "k0")
+    cap.arrive(case(0, [1, 1], [0, 0]))
     assert files() == ["d0000-k0.npz"]
-    cap.arrive(case(2, [2, 1], [0, -1]), "k2")   # a max and b min beyond; b max and a min equal, case 0 keeps them
+    cap.arrive(case(2, [2, 1], [0, -1]))   # a max and b min beyond; b max and a min equal, case 0 keeps them
     e = cap.running()
     assert list(e.mx) == [2, 1] and list(e.mx_case) == [2, 0] and list(e.mn) == [0, -1] and list(e.mn_case) == [0, 2]
     assert files() == ["d0000-k0.npz", "d0002-k2.npz"]
     assert list(e.reached(case(1, [2, 0], [5, 5]))) == [True, False]     # equal and earlier: reached
     assert list(e.reached(case(3, [2, 1], [0, -1]))) == [False, False]   # equal and later: not
-    cap.arrive(case(1, [2, 0], [5, 5]), "k1")    # takes a max from case 2, which keeps b min
+    cap.arrive(case(1, [2, 0], [5, 5]))    # takes a max from case 2, which keeps b min
     assert files() == ["d0000-k0.npz", "d0001-k1.npz", "d0002-k2.npz"]
     tm, h = cap.load(1, ["a"])
     assert np.array_equal(tm, t) and np.array_equal(h["a"], 2 * t) and cap.load(1, ["b"]) is None
-    cap.arrive(case(3, [3, 5], [-1, -2]), "k3")  # beyond everything: the others' files go
+    cap.arrive(case(3, [3, 5], [-1, -2]))  # beyond everything: the others' files go
     assert files() == ["d0003-k3.npz"]
-    cap.arrive(case(4, [0, 0], [0, 0]), "k4")    # holds nothing: nothing written
+    cap.arrive(case(4, [0, 0], [0, 0]))    # holds nothing: nothing written
     assert files() == ["d0003-k3.npz"]
     tm, h = cap.load(3, ["a", "b"])
     assert np.array_equal(h["a"], 4 * t) and np.array_equal(h["b"], t - 3) and cap.load(4, ["a"]) is None
