@@ -17,8 +17,8 @@ from __future__ import annotations
 import multiprocessing
 import re
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
-from contextlib import contextmanager
-from typing import Iterator
+from contextlib import ExitStack, contextmanager
+from typing import Callable, ContextManager, Iterator
 
 from liftoff.core.errors import InputError
 
@@ -55,6 +55,34 @@ class InlineExecutor(Executor):
             fut.set_exception(exc)
         return fut
 
+
+
+class OnDemand(Executor):
+    """The executor of ``opener()`` (a context manager yielding (executor, description), such
+    as :func:`make_executor`), opened at the first submit and closed by ``shutdown``: a pool
+    for work that is seldom needed, which costs nothing (no worker processes, no memory)
+    when none comes. A campaign's end re-runs a case only when its captured histories are
+    missing (workflows/campaign.py, write_envelope_histories)."""
+
+    def __init__(self, opener: Callable[[], ContextManager], max_workers: int):
+        self._opener, self._scope, self._inner = opener, None, None
+        self._max_workers = max(1, max_workers)
+
+    @property
+    def opened(self) -> bool:
+        return self._inner is not None
+
+    def submit(self, fn, /, *args, **kwargs) -> Future:
+        if self._inner is None:
+            scope = ExitStack()
+            self._inner, _ = scope.enter_context(self._opener())
+            self._scope = scope
+        return self._inner.submit(fn, *args, **kwargs)
+
+    def shutdown(self, wait: bool = True, *, cancel_futures: bool = False) -> None:
+        scope, self._scope, self._inner = self._scope, None, None
+        if scope is not None:
+            scope.close()
 
 @contextmanager
 def make_executor(workers: int = 2, dask: str | None = None, mpi: bool = False) -> Iterator[tuple[Executor, str]]:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import argparse
 import tempfile
 import time
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
@@ -134,8 +134,16 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
 def _cases_and_files(sc, prep: Prepared, cache: StageCache, opt: Options, out: Path, plots: bool,
                      want_pics: bool, progress: bool, echo, t_start: float, error_estimate: bool) -> RunOutput:
     """Rank 0: the generated cases on their executor, then every output, staged into ``out``."""
-    with _executor(opt, sc.n_generated) as (executor, how):
+    from .executors import OnDemand
+
+    with ExitStack() as pool:
+        executor, how = pool.enter_context(_executor(opt, sc.n_generated))
         camp = _run_generated(sc, prep, cache, executor, how, out, opt, progress, echo)
+        if _own_local_pool(opt, sc.n_generated):
+            # its workers each hold the model (0.9 GB of the default's PSS) and would idle through the
+            # named cases and the reports: closed now, opened again only if the end re-runs a case
+            pool.close()
+            executor = pool.enter_context(OnDemand(lambda: _executor(opt, sc.n_generated), opt.workers))
         with staged_output(out, command=f"liftoff run {sc.path}") as stage:
             output = write_results(sc, prep, stage, plots, want_pics, echo, t_start,
                                    _Campaign(camp, executor, cache, opt), error_estimate)
@@ -159,6 +167,14 @@ def _run_cache(cache_dir, out: Path, n_generated: int, comm):
             yield StageCache(Path(comm.bcast(tmp if comm.rank == 0 else None)), comm=comm)
         return
     yield StageCache(root, comm=comm)
+
+
+def _own_local_pool(opt: Options, n_generated: int) -> bool:
+    """Whether the case pool is the run's own worker processes on this machine (a process
+    pool or a Dask LocalCluster): not a caller's executor, not MPI's ranks, not a remote
+    scheduler's workers."""
+    return bool(n_generated) and opt.executor is None and not opt.mpi and (
+        opt.dask == "local" or (not opt.dask and opt.workers > 0))
 
 
 @contextmanager

@@ -84,3 +84,25 @@ def test_bad_files(tmp_path):
         cb.save(tmp_path / "cb.h5")
     with pytest.raises(InputError, match="rows"):
         cb.boundary_load(np.zeros(5))
+
+
+def test_a_component_file_with_nan_values(tmp_path):
+    """A component file read as a user's file is scanned for NaN/inf in K and M; read as a
+    stage-cache file (``mmap``: validated when built, its bytes checksummed since, the scan
+    skipped so that a process that never uses K and M never reads them) they are not."""
+    from liftoff.reduction.component import load_component, save_component
+
+    comp = beam()
+    path = save_component(comp, tmp_path / "beam.npz")
+    # the same file with one stiffness value replaced by NaN (the reader's own layout, no pickle)
+    bad = Component(comp.name, comp.K.copy(), comp.M, comp.dof_labels, comp.label_dofs, comp.points,
+                    comp.point_coords, values_checked=True)
+    bad.K.data[3] = np.nan
+    bad_path = save_component(bad, tmp_path / "bad.npz")
+    with pytest.raises(InputError, match="component 'beam': K contains NaN or inf") as e:
+        load_component(bad_path)
+    one_line(e)
+    mapped = load_component(bad_path, mmap=True)
+    assert np.isnan(mapped.K.data[3]) and mapped.values_checked
+    good = load_component(path, mmap=True)
+    np.testing.assert_array_equal(good.K.toarray(), comp.K.toarray())

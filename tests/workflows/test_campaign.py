@@ -450,3 +450,57 @@ def test_captured_keeps_only_the_cases_holding_the_running_envelope(tmp_path):
     assert np.array_equal(h["a"], 4 * t) and np.array_equal(h["b"], t - 3) and cap.load(4, ["a"]) is None
     (cap.folder / "d0003-k3.npz").rename(cap.folder / "d0001-k1.npz")   # another case's file under case 1's name
     assert cap.load(1, ["a"]) is None
+
+
+def test_on_demand_executor_opens_its_pool_only_when_a_task_comes():
+    """executors.OnDemand: no task, no pool; the first task opens it, later ones reuse it;
+    shutdown closes it (and a task after that opens a new one)."""
+    from contextlib import contextmanager
+
+    from liftoff.workflows.executors import OnDemand
+
+    events = []
+
+    @contextmanager
+    def opener():
+        events.append("open")
+        yield InlineExecutor(), "inline"
+        events.append("close")
+
+    with OnDemand(opener, 2) as idle:
+        assert not idle.opened and idle._max_workers == 2
+    assert events == []
+    ex = OnDemand(opener, 0)
+    assert [ex.submit(pow, 2, k).result() for k in (3, 4)] == [8, 16] and ex.opened
+    assert events == ["open"]
+    ex.shutdown()
+    assert events == ["open", "close"] and not ex.opened
+    assert ex.submit(pow, 3, 2).result() == 9 and events == ["open", "close", "open"]
+    ex.shutdown()
+    assert events == ["open", "close", "open", "close"]
+
+
+def test_the_runs_own_pool_is_closed_before_its_outputs(tmp_path, monkeypatch):
+    """A run's own worker processes (each holding the model: 0.9 GB of the default) are shut
+    down once the generated cases are done, not kept idle through the named cases and the
+    reports; a caller's executor is left open."""
+    import multiprocessing
+
+    from liftoff.workflows import run as run_mod
+
+    seen = []
+    real = run_mod.write_results
+
+    def spy(*args, **kwargs):
+        seen.append(len(multiprocessing.active_children()))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(run_mod, "write_results", spy)
+    p = _scenario(tmp_path, STICK, t_end=7.2)
+    out = run(p, tmp_path / "out", cache_dir=tmp_path / "cache", n_cases=2, options=Options(workers=1), **QUIET)
+    assert out.campaign.ran == 2 and seen == [0]
+    mine = _Recording()
+    again = run(p, tmp_path / "again", cache_dir=tmp_path / "cache", n_cases=3,
+                options=Options(executor=mine, campaign=tmp_path / "out.campaign"), **QUIET)
+    assert (again.campaign.ran, again.campaign.reused) == (1, 2) and [t.index for t in mine.tasks] == [2]
+    assert mine.submit(pow, 2, 5).result() == 32          # still open
