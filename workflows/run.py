@@ -64,6 +64,10 @@ class Options:
     fields: bool | None = None          # ParaView .pvd/.vtu + GIF of the governing case (None: [postprocess.fields])
     compare: Path | None = None         # an earlier run's folder or max/min CSV
     contributions: Path | None = None   # the earlier run's scenario: the compared peaks split (workflows/contributions.py)
+    #: RunOutput.results keep each case's modal displacements (``modal["q_a"]``, ``["q_b"]``; 0.9 GB a
+    #: default case). False (the command line): dropped once the case's results file and snapshots are
+    #: handed off (they are in results_<case>.h5), unless the fields (--fields) need them
+    modal_results: bool = True
 
 
 def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None | bool = None,
@@ -354,6 +358,8 @@ def _write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, 
     stage_times = list(prep.stage_times)
     results, files, tab1 = {}, [], None
     agg = Aggregate(sc.n_generated)
+    opt = camp.options if camp else Options()
+    keep_q = opt.modal_results or _fields_wanted(sc, opt)      # the fields' case is known only at the end
     # the named cases' runs at h/2 march one case ahead on a second thread (transient/accuracy.py)
     pairs = [_full_problem(prep.problems[c.name][0]) if _estimated_ahead(prep.problems[c.name][0], error_estimate)
              else None for c in sc.cases]
@@ -367,7 +373,8 @@ def _write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, 
             res, f2 = _full_case(sc, stack, cp, case.name, out, plots and case.output.plots,
                                  want_pics and case.output.snapshots, stage_times, agg, generated=False,
                                  error_estimate=error_estimate, beside=beside,
-                                 estimate=(lambda k=k: ahead.get(k)) if pairs[k] is not None else None)
+                                 estimate=(lambda k=k: ahead.get(k)) if pairs[k] is not None else None,
+                                 keep_modal=keep_q)
             files += f2
             results[case.name] = (res, cp)
     camp_run = camp.run if camp else None
@@ -376,7 +383,7 @@ def _write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, 
 
         t0 = time.perf_counter()
         files.append(feed_records(sc, camp_run, agg, out / "cases.csv"))
-        files += _generated_outputs(sc, prep, camp, agg, out, stage_times, results, plots, want_pics)
+        files += _generated_outputs(sc, prep, camp, agg, out, stage_times, results, plots, want_pics, keep_q)
         stage_times.append(("campaign tables and histories", time.perf_counter() - t0))
     files += _loads_tables(sc, agg, out, echo, camp, plots)
     if camp is not None and camp.options.contributions is not None:
@@ -447,7 +454,8 @@ def _estimated_ahead(cp, error_estimate: bool) -> bool:
 
 
 def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, stage_times: list, agg,
-               generated: bool, solved=None, error_estimate: bool = False, beside=None, estimate=None):
+               generated: bool, solved=None, error_estimate: bool = False, beside=None, estimate=None,
+               keep_modal: bool = True):
     """A case with full outputs: the transient (modal displacements kept; with
     ``error_estimate`` or an ``accuracy`` setting also at h/2, so that each max/min carries
     an estimated error), its results file, max/min table, plots, snapshots and spectra;
@@ -455,7 +463,8 @@ def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, sta
     ``beside`` (workflows/beside.py): writes the results file and draws the plots and
     snapshots beside the run, its files returned by its ``wait``; None: inline. ``estimate``:
     returns the case's estimate pair (:class:`transient.accuracy.EstimatesInOrder`), instead
-    of solving it here."""
+    of solving it here. ``keep_modal`` False: the returned result's modal displacements are
+    dropped once the results file and snapshots have them (Options.modal_results)."""
 
     from liftoff.transient import solve, solve_estimated
 
@@ -495,13 +504,15 @@ def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, sta
         beside.submit(f"results file, plots, snapshots [{name}]", results_and_pictures)
     else:
         files += results_and_pictures()
+    if not keep_modal:      # (a forked child keeps its own copy until it has written them)
+        res.modal = {}
     files += report.spectra(res, cp, sc.post, out, name)
     stage_times.append((f"reports [{name}]", time.perf_counter() - t0))
     return res, files
 
 
 def _generated_outputs(sc, prep: Prepared, camp: _Campaign, agg, out: Path, stage_times: list, results: dict,
-                       plots: bool, pics: bool) -> list:
+                       plots: bool, pics: bool, keep_modal: bool = True) -> list:
     """cases.csv, envelope_histories.h5 (the history of each envelope value set by a
     generated case, captured while the campaign ran or re-run on the executor), and the
     governing generated case in full:
@@ -524,7 +535,8 @@ def _generated_outputs(sc, prep: Prepared, camp: _Campaign, agg, out: Path, stag
         task = campaign.CaseTask(ref, idx, str(camp.cache.root), prep.gen_model)
         res, cp, case, secs = campaign.solve_generated(task, keep_modal="q")
         if idx == gov:
-            _, f = _full_case(sc, stack, cp, case.name, out, plots, pics, stage_times, agg, True, solved=(res, secs))
+            _, f = _full_case(sc, stack, cp, case.name, out, plots, pics, stage_times, agg, True, solved=(res, secs),
+                              keep_modal=keep_modal)
             files += f
             results[case.name] = (res, cp)
         else:
@@ -687,7 +699,7 @@ def _cli(args: argparse.Namespace) -> int:
             return launch(args.ranks, _child_args(args))
     opt = Options(workers=args.workers, dask=args.dask, mpi=args.mpi, campaign=args.campaign,
                   keep_histories=args.keep_histories, fields=args.fields, compare=args.compare,
-                  contributions=args.contributions)
+                  contributions=args.contributions, modal_results=False)
     if args.cases is not None and args.cases < 0:
         raise InputError(f"--cases {args.cases}: must be 0 or more")
     run(args.scenario, args.out, n_cases=args.cases, options=opt, error_estimate=not args.no_error_estimate,

@@ -210,14 +210,39 @@ def test_damaged_or_foreign_records_run_again(tmp_path, campaign4):
     assert "it is the record of case 'd0000'" in said and "NaN" in said and "missing 'scalars'" in said
 
 
+def test_modal_results_dropped_once_written(tmp_path, campaign4):
+    """Options.modal_results = False (the command line): the results in memory lose their modal
+    displacements once written; the results files and snapshots have them, the same values as
+    a run that keeps them."""
+    from liftoff.transient.result import load_result
+
+    tmp, p, _ = campaign4
+    kept = run(p, tmp_path / "kept", cache_dir=tmp / "cache", n_cases=0, **{**QUIET, "snapshots": True})
+    out = run(p, tmp_path / "dropped", cache_dir=tmp / "cache", n_cases=0,
+              options=Options(modal_results=False), **{**QUIET, "snapshots": True})
+    assert out.results.keys() == kept.results.keys() and len(out.results) == 2
+    for name, (res, _) in out.results.items():
+        assert res.modal == {}
+        q = kept.results[name][0].modal["q_a"]
+        assert q.shape[0] == res.time.size and q.shape[1] > 6
+        back = load_result(tmp_path / "dropped" / f"results_{name}.h5")
+        np.testing.assert_array_equal(back.modal["q_a"], q)
+        np.testing.assert_array_equal(back.recovered["cg_motion"], res.recovered["cg_motion"])
+        for kind in ("snapshot",):
+            a = sorted(f.name for f in (tmp_path / "kept").glob(f"{kind}*{name}*"))
+            assert a and a == sorted(f.name for f in (tmp_path / "dropped").glob(f"{kind}*{name}*"))
+
+
 def test_fields_and_compare(tmp_path, campaign4):
     """ParaView series (.pvd + .vtu frames with total and elastic displacement) and the
-    GIF of the governing case; a comparison against the campaign's envelope."""
+    GIF of the governing case (its modal displacements kept for them although the command
+    line's modal_results=False drops the others'); a comparison against the campaign's envelope."""
     import meshio
 
     tmp, p, first = campaign4
     out = run(p, tmp_path / "f", cache_dir=tmp / "cache", n_cases=0,
-              options=Options(fields=True, compare=tmp / "out"), **QUIET)
+              options=Options(fields=True, compare=tmp / "out", modal_results=False), **QUIET)
+    assert all(res.modal["q_a"].shape[0] == res.time.size for res, _ in out.results.values())
     gov = out.results[next(iter(out.results))][1].case.name
     pvd = (tmp_path / "f" / f"fields_{gov}.pvd").read_text()
     frames = sorted((tmp_path / "f").glob(f"fields_{gov}_*.vtu"))
