@@ -358,17 +358,19 @@ def _claim(folder: Path, tag: str) -> bool:
         return False
 
 
-def _needs_stages(model: ModelConfig, name: str, cache: StageCache) -> bool:
+def _needs_stages(model: ModelConfig, name: str, cache: StageCache, comp: Component | None = None) -> bool:
     """Whether FE component ``name`` has a model stage not yet in the cache: its component
-    stage, or its CB stage (whose key needs the component: loaded, never rebuilt here; an
-    entry that does not load is left to the worker, which rebuilds it)."""
+    stage, or its CB stage (whose key needs the component: ``comp`` when the caller has loaded
+    it, else loaded here, never rebuilt; an entry that does not load is left to the worker,
+    which rebuilds it)."""
     key = component_key(model, name)
-    if not cache.has(model.source, key, ".npz"):
-        return True
-    try:
-        comp = load_component(cache.path(model.source, key, ".npz"))
-    except Exception:  # noqa: BLE001 - damaged: the worker's stage rebuilds it (with its warning)
-        return True
+    if comp is None:
+        if not cache.has(model.source, key, ".npz"):
+            return True
+        try:
+            comp = load_component(cache.path(model.source, key, ".npz"))
+        except Exception:  # noqa: BLE001 - damaged: the worker's stage rebuilds it (with its warning)
+            return True
     return not _cb_cached(model, name, comp, key, cache)
 
 
@@ -510,7 +512,7 @@ def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, wh
             for name in fe:
                 if cache.has(model.source, component_key(model, name), ".npz"):
                     fe_stage(name)
-            todo = [n for n in fe if n not in comps or not _cb_cached(model, n, comps[n], comp_keys[n], cache)]
+            todo = [n for n in fe if _needs_stages(model, n, cache, comps.get(n))]
             logs = reduce_concurrently(model, todo, cache, model_workers(workers), bar)
         for name in names:
             if name in fe and name not in comps:
