@@ -56,7 +56,6 @@ class InlineExecutor(Executor):
         return fut
 
 
-
 class OnDemand(Executor):
     """The executor of ``opener()`` (a context manager yielding (executor, description), such
     as :func:`make_executor`), opened at the first submit and closed by ``shutdown``: a pool
@@ -83,6 +82,7 @@ class OnDemand(Executor):
         scope, self._scope, self._inner = self._scope, None, None
         if scope is not None:
             scope.close()
+
 
 @contextmanager
 def make_executor(workers: int = 2, dask: str | None = None, mpi: bool = False) -> Iterator[tuple[Executor, str]]:

@@ -144,7 +144,7 @@ def _cases_and_files(sc, prep: Prepared, cache: StageCache, opt: Options, out: P
         executor, how = pool.enter_context(_executor(opt, sc.n_generated))
         camp = _run_generated(sc, prep, cache, executor, how, out, opt, progress, echo)
         if _own_local_pool(opt, sc.n_generated):
-            # its workers each hold the model (0.9 GB of the default's PSS) and would idle through the
+            # its workers each hold the model (0.65 GB of PSS each in the default) and would idle through the
             # named cases and the reports: closed now, opened again only if the end re-runs a case
             pool.close()
             executor = pool.enter_context(OnDemand(lambda: _executor(opt, sc.n_generated), opt.workers))
