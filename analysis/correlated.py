@@ -180,6 +180,9 @@ def rows(hulls: list[CorrelatedHull]) -> list[dict]:
 #: closely the polygon follows a round contour, never whether it holds the loads
 N_DIRECTIONS = 72
 MOMENT_ARM = 1.0
+#: samples per block in :func:`support`: a default case's 106,383 samples x 72 directions at
+#: once (61 MB) took 27-38 ms a pair, in blocks of 4,096 9 ms (the same values), 14 pairs a case
+SUPPORT_ROWS = 4096
 
 
 def directions(n: int = N_DIRECTIONS) -> np.ndarray:
@@ -198,7 +201,12 @@ def support(x: np.ndarray, y: np.ndarray, n: int = N_DIRECTIONS) -> np.ndarray:
     pts = np.column_stack([np.asarray(x, float), np.asarray(y, float) / MOMENT_ARM])
     if not np.isfinite(pts).all():
         raise InputError("correlated loads: a history holds NaN or inf")
-    return (pts @ d.T).max(axis=0)
+    if not pts.shape[0]:
+        raise InputError("correlated loads: a history holds no samples")
+    h = np.full(n, -np.inf)
+    for i in range(0, pts.shape[0], SUPPORT_ROWS):       # blocks of samples x directions that stay in cache
+        np.maximum(h, (pts[i:i + SUPPORT_ROWS] @ d.T).max(axis=0), out=h)
+    return h
 
 
 def case_support(interfaces: Iterable, n: int = N_DIRECTIONS) -> tuple[tuple[str, ...], np.ndarray]:

@@ -162,3 +162,24 @@ def test_campaign_contours_of_scaled_cases_are_the_scaled_support():
     rows = contour_rows(agg)
     assert {(r_["pair"], r_["contour"]) for r_ in rows} == {(p, c) for p, _, _ in cl.PAIRS
                                                              for c in ("envelope", "normal", "order")}
+
+
+def test_support_in_blocks_equals_every_sample_at_once():
+    """support() takes the samples in blocks of SUPPORT_ROWS (so that samples x directions stays
+    in cache): over several blocks and a partial last one it equals the maximum over all the
+    samples at once (to a few units of round-off: each value is a two-term dot product, x c + y s,
+    whose BLAS kernel may or may not fuse its multiply-add in a partial block), and is attained
+    by a sample; no samples is a one-line error."""
+    rng = np.random.default_rng(3)
+    n_s = 3 * cl.SUPPORT_ROWS + 17
+    x, y = np.cumsum(rng.standard_normal(n_s)), 1e3 * np.cumsum(rng.standard_normal(n_s))
+    x[cl.SUPPORT_ROWS] = 1e6                   # the largest x at the first sample of the second block
+    y[-1] = 1e9                                # the largest y at the last sample of the partial block
+    d = cl.directions()
+    every = (np.column_stack([x, y / cl.MOMENT_ARM]) @ d.T).max(axis=0)
+    h = cl.support(x, y)
+    np.testing.assert_allclose(h, every, rtol=0, atol=4 * np.finfo(float).eps * np.abs(np.c_[x, y]).sum(axis=1).max())
+    q = d.shape[0] // 4
+    assert h[0] == 1e6 and h[q] == 1e9 / cl.MOMENT_ARM
+    with pytest.raises(InputError, match="no samples"):
+        cl.support(np.zeros(0), np.zeros(0))
