@@ -78,11 +78,16 @@ class RunningEnvelope:
     mn: np.ndarray
     mn_case: np.ndarray
 
+    def taken(self, s: CaseSummary) -> tuple[np.ndarray, np.ndarray]:
+        """Per item, whether case ``s`` takes the max, and whether it takes the min, from this
+        envelope: beyond it, or equal and earlier in case order."""
+        return ((s.mx > self.mx) | ((s.mx == self.mx) & (s.index < self.mx_case)),
+                (s.mn < self.mn) | ((s.mn == self.mn) & (s.index < self.mn_case)))
+
     def reached(self, s: CaseSummary) -> np.ndarray:
-        """Per item, whether case ``s`` would take its max or its min from this envelope:
-        beyond it, or equal and earlier in case order."""
-        return ((s.mx > self.mx) | ((s.mx == self.mx) & (s.index < self.mx_case))
-                | (s.mn < self.mn) | ((s.mn == self.mn) & (s.index < self.mn_case)))
+        """Per item, whether case ``s`` would take its max or its min from this envelope."""
+        mx, mn = self.taken(s)
+        return mx | mn
 
 
 @dataclass(frozen=True)
@@ -406,9 +411,10 @@ class Captured:
         if s.items != self.items:       # (Aggregate says so at the end); nothing captured
             return
         e, lost = self.env, set()
-        for side, run, case, val, beyond in (("max", e.mx, e.mx_case, s.mx, np.greater),
-                                             ("min", e.mn, e.mn_case, s.mn, np.less)):
-            for j in np.flatnonzero(beyond(val, run) | ((val == run) & (s.index < case))):
+        take_mx, take_mn = e.taken(s)
+        for side, run, case, val, take in (("max", e.mx, e.mx_case, s.mx, take_mx),
+                                           ("min", e.mn, e.mn_case, s.mn, take_mn)):
+            for j in np.flatnonzero(take):
                 before = int(case[j])
                 if before in self.held:
                     self.held[before].discard((int(j), side))
