@@ -228,9 +228,8 @@ def test_modal_results_dropped_once_written(tmp_path, campaign4):
         back = load_result(tmp_path / "dropped" / f"results_{name}.h5")
         np.testing.assert_array_equal(back.modal["q_a"], q)
         np.testing.assert_array_equal(back.recovered["cg_motion"], res.recovered["cg_motion"])
-        for kind in ("snapshot",):
-            a = sorted(f.name for f in (tmp_path / "kept").glob(f"{kind}*{name}*"))
-            assert a and a == sorted(f.name for f in (tmp_path / "dropped").glob(f"{kind}*{name}*"))
+        shots = sorted(f.name for f in (tmp_path / "kept").glob(f"snapshot*{name}*"))
+        assert shots and shots == sorted(f.name for f in (tmp_path / "dropped").glob(f"snapshot*{name}*"))
 
 
 def test_fields_and_compare(tmp_path, campaign4):
@@ -506,7 +505,7 @@ def test_on_demand_executor_opens_its_pool_only_when_a_task_comes():
 
 
 def test_the_runs_own_pool_is_closed_before_its_outputs(tmp_path, monkeypatch):
-    """A run's own worker processes (each holding the model: 0.9 GB of the default) are shut
+    """A run's own worker processes (each holding the model: 0.65 GB of PSS in the default) are shut
     down once the generated cases are done, not kept idle through the named cases and the
     reports; a caller's executor is left open."""
     import multiprocessing
