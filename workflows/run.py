@@ -402,7 +402,7 @@ def _write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, 
     files += outputs.write("run", outputs.RunContext(results, out, plots, sc.title, partial, sc.post.units, beside),
                            beside=beside)
     stage_times.append(("interface, correlated loads, workbook", time.perf_counter() - t0))
-    files += _fields(sc, prep, results, agg, out, camp, stage_times, beside)
+    files += _fields(sc, prep, results, agg, out, opt, stage_times, beside)
     t0 = time.perf_counter()
     files += beside.wait()
     for name, secs in beside.seconds.items():
@@ -583,11 +583,11 @@ def _loads_tables(sc, agg, out: Path, echo, camp, plots: bool = False) -> list:
     return files
 
 
-def _fields(sc, prep: Prepared, results: dict, agg, out: Path, camp, stage_times: list, beside=None) -> list:
+def _fields(sc, prep: Prepared, results: dict, agg, out: Path, opt: Options, stage_times: list,
+            beside=None) -> list:
     """ParaView series and GIF of the governing case (the case setting the most force
     envelope values), when asked; the GIF drawn beside the series (``beside``,
     workflows/beside.py; None: after it)."""
-    opt = camp.options if camp else Options()
     if not _fields_wanted(sc, opt) or not results:
         return []
     from . import fields
