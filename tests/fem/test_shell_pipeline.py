@@ -35,7 +35,9 @@ def test_shell_component_round_trip(tube, tmp_path):
 def test_cb_of_shell_against_slepc_modes_and_mass(tube):
     model, comp = tube
     bl = six_labels("root") + six_labels("tip")
-    ref = eigenmodes(model, n_modes=16)
+    # SLEPc asked for four modes more than compared: the tube's modes come in pairs, and the
+    # last one asked for may be either of a pair, or be missed (a missed partner: 1.5 %)
+    ref = eigenmodes(model, n_modes=20)
     cb = craig_bampton(comp, bl, n_modes=comp.n_dof - len(bl))      # all modes: a change of basis
     sysm = system_modes(assemble([cb], "tube"))
     rel = sysm.freq_hz[6:16] / ref.freq_hz[6:16] - 1

@@ -45,7 +45,9 @@ def test_free_free_uniform_stick_against_closed_forms():
     bend = [bl ** 2 / (2 * np.pi * L ** 2) * np.sqrt(E * s.Iy / (RHO * s.A)) for bl in BETA_L]
     axial = np.sqrt(E / RHO) / (2 * L)
     torsion = np.sqrt(E / (2 * (1 + NU)) / RHO) / (2 * L)
-    assert np.all(np.abs(f[:6]) < 1e-3)                                      # six rigid-body modes
+    # six rigid-body modes: zero to round-off, sqrt(eps lambda_max) / 2 pi = 2.0e-3 Hz here (measured
+    # 3e-4 to 1.1e-3 Hz; the first elastic mode is at 7.8 Hz)
+    assert np.all(np.abs(f[:6]) < 10 * np.sqrt(np.finfo(float).eps) * f[-1])
     for ref, tol in ((bend[0], 1e-6), (bend[1], 1e-6), (bend[2], 1e-6), (axial, 1e-4), (torsion, 1e-4)):
         k = int(np.argmin(np.abs(f - ref)))
         assert f[k] == pytest.approx(ref, rel=tol), ref

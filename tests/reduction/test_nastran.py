@@ -197,10 +197,11 @@ def test_system_modes_of_a_component_with_a_massless_direction(parts):
     w = sla.eigvals(cb.K, cb.M)
     w = np.sort(np.abs(np.real(w[np.isfinite(w)])))
     assert sysm.n_modes == 31 == w.size
-    # QZ and the condensation agree to 4.5e-11 except the highest mode, which lives on the
-    # smallest non-zero mass eigenvalue (3.5e-10 of the largest: lambda known to eps/3.5e-10
-    # = 6e-7 by either method); measured 8.5e-9
-    assert np.allclose(sysm.omega[6:-1] ** 2, w[6:-1], rtol=1e-10)
+    # QZ and the condensation agree to 4.5e-11 (1.0e-10 on another machine's BLAS, the
+    # second-highest mode) except the highest mode, which lives on the smallest non-zero mass
+    # eigenvalue (3.5e-10 of the largest: lambda known to eps/3.5e-10 = 6e-7 by either
+    # method); measured 8.5e-9. The others are asked to 1e-8, within that bound.
+    assert np.allclose(sysm.omega[6:-1] ** 2, w[6:-1], rtol=1e-8)
     assert sysm.omega[-1] ** 2 == pytest.approx(w[-1], rel=1e-6)
     G = sysm.phi.T @ sysm.assembly.M @ sysm.phi - np.eye(31)
     assert np.abs(G[:30, :30]).max() < 1e-9 and np.abs(G).max() < 1e-7        # measured 6e-11, 9e-9 (last)
