@@ -2,6 +2,11 @@
 
 Same label = same DOF. The system coordinate vector is the modal coordinates of each
 component in turn, then the physical boundary DOFs in ``boundary_labels`` order.
+
+A released DOF (``released``: (component, label) pairs) is not overlaid: that component
+keeps it as a DOF of its own, labelled ``point@component:C`` at the same place, so no force
+passes between the components in that direction (a pin flag, Nastran's CBAR PA/PB or a
+joint's unconnected component).
 """
 from __future__ import annotations
 
@@ -10,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from liftoff.core.errors import InputError
+from liftoff.core.labels import COMPONENTS, split_label
 
 from .craig_bampton import CBModel, validate_cb
 
@@ -29,6 +35,11 @@ class Assembly:
     boundary_index: dict
     points: tuple[str, ...]
     point_coords: np.ndarray
+    released: frozenset = frozenset()     # (component, label) pairs kept apart (module docstring)
+
+    def system_label(self, component: str, label: str) -> str:
+        """The system label of ``component``'s boundary DOF ``label`` (its own where released)."""
+        return _system_label(self.released, component, label)
 
     @property
     def n_dof(self) -> int:
@@ -75,12 +86,30 @@ class Assembly:
         return out
 
 
-def assemble(cb_models, name: str) -> Assembly:
-    """Overlay the CB models' boundary DOFs by label. Shared points must have the same
-    coordinates (InputError otherwise: mismatched units or wrong geometry)."""
+def released_label(label: str, component: str) -> str:
+    """The system label of ``component``'s own DOF ``label`` where it is released:
+    ``'att:Tz'`` of ``'srb_left'`` -> ``'att@srb_left:Tz'``."""
+    point, k = split_label(label)
+    return f"{point}@{component}:{COMPONENTS[k]}"
+
+
+def _system_label(released, component: str, label: str) -> str:
+    return released_label(label, component) if (component, label) in released else label
+
+
+def assemble(cb_models, name: str, released=()) -> Assembly:
+    """Overlay the CB models' boundary DOFs by label, except the ``released`` (component,
+    label) pairs, each its component's own DOF (module docstring). Shared points must have
+    the same coordinates (InputError otherwise: mismatched units or wrong geometry)."""
     cbs = tuple(cb_models)
     if not cbs:
         raise InputError(f"assembly {name!r}: no components")
+    released = set(released)
+    for comp, lab in sorted(released):
+        cb = next((c for c in cbs if c.name == comp), None)
+        if cb is None or lab not in cb.boundary_labels:
+            raise InputError(f"assembly {name!r}: cannot release {lab!r} of {comp!r}: "
+                             + ("no such component" if cb is None else "not one of its boundary DOFs"))
     names = [cb.name for cb in cbs]
     for nm in names:
         if names.count(nm) > 1:
@@ -102,12 +131,16 @@ def assemble(cb_models, name: str) -> Assembly:
                         "(mismatched units or geometry?)")
             else:
                 coords[p], owner[p] = np.asarray(x, float), cb.name
-    # boundary labels: union in order of first appearance; a label may not be interior elsewhere
+    # boundary labels: union in order of first appearance (a released one under its own name);
+    # a label may not be interior elsewhere
     boundary: list[str] = []
     for cb in cbs:
         for lab in cb.boundary_labels:
+            lab = _system_label(released, cb.name, lab)
             if lab not in boundary:
                 boundary.append(lab)
+    for comp, lab in sorted(released):
+        coords[split_label(released_label(lab, comp))[0]] = coords[split_label(lab)[0]]
     bset = set(boundary)
     for cb in cbs:
         interior = set(cb.dof_labels) - set(cb.boundary_labels)
@@ -124,7 +157,7 @@ def assemble(cb_models, name: str) -> Assembly:
     start = 0
     for cb in cbs:
         modal_slices[cb.name] = slice(start, start + cb.n_modes)
-        bidx = np.array([pos[lab] for lab in cb.boundary_labels], dtype=np.int64)
+        bidx = np.array([pos[_system_label(released, cb.name, lab)] for lab in cb.boundary_labels], dtype=np.int64)
         boundary_index[cb.name] = bidx
         idx = np.concatenate([np.arange(start, start + cb.n_modes), n_modal + bidx])
         M[np.ix_(idx, idx)] += cb.M
@@ -133,7 +166,7 @@ def assemble(cb_models, name: str) -> Assembly:
     points = tuple(coords)
     return Assembly(name=name, components=cbs, boundary_labels=tuple(boundary), M=M, K=K,
                     modal_slices=modal_slices, boundary_index=boundary_index, points=points,
-                    point_coords=np.array([coords[p] for p in points]).reshape(-1, 3))
+                    point_coords=np.array([coords[p] for p in points]).reshape(-1, 3), released=frozenset(released))
 
 
 def label_transform(assembly: Assembly, labels) -> np.ndarray:

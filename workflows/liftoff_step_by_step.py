@@ -43,7 +43,7 @@ def main(argv=None) -> None:
     from liftoff.transient.effects import center_of_gravity, cg_static_report
     from liftoff.workflows.loads import applied_forces, attitude_feedback, contacts, control_table
     from liftoff.workflows.loads import recoveries, softening
-    from liftoff.workflows.pipeline import StackModel, boundary_points, build_component, cb_solver
+    from liftoff.workflows.pipeline import StackModel, boundary_points, build_component, cb_solver, vehicle_assembly
     from liftoff.workflows.pipeline import cryo_loads
 
     from liftoff.core.labels import points_labels
@@ -76,7 +76,7 @@ def main(argv=None) -> None:
     #    Every system mode is kept (section 3.0) unless [model.system] cuts them; then residual
     #    vectors keep the static flexibility at the boundary DOFs exact (reduction/truncation.py).
     sysp = model.system
-    vasm = assemble([cbs[n] for n in model.vehicle], "vehicle")
+    vasm = vehicle_assembly(model, cbs)           # a joint's released DOFs kept apart
     vall = system_modes(vasm, n_rigid=6)
     vmodes = keep_modes(vall, sysp.f_max, sysp.n_modes, sysp.residual_vectors)
     _, cg = center_of_gravity(vmodes.to_body(name="vehicle"))

@@ -247,9 +247,18 @@ def nastran_stage(model: ModelConfig, name: str, cache: StageCache) -> tuple[CBM
     return cb, key
 
 
-def modes_stage(asm: Assembly, n_rigid: int, keys: list[str], cache: StageCache, label: str) -> SystemModes:
-    """Every system mode of an assembly (cached); the cut, if any, is :func:`keep_modes`'."""
-    key = stage_key("system", {"n_rigid": n_rigid}, ("liftoff.reduction.system", "liftoff.reduction.assembly",
+def vehicle_assembly(model: ModelConfig, cbs: dict) -> Assembly:
+    """The vehicle's CB components overlaid on their joints, in the model's order, the
+    joints' released DOFs kept apart (reduction.assembly)."""
+    return assemble([cbs[n] for n in model.vehicle], "vehicle", [r for j in model.joints for r in j.released()])
+
+
+def modes_stage(asm: Assembly, n_rigid: int, keys: list[str], cache: StageCache, label: str,
+                assembly_params: dict | None = None) -> SystemModes:
+    """Every system mode of an assembly (cached); the cut, if any, is :func:`keep_modes`'.
+    ``assembly_params``: what, besides the components' keys, made the assembly (a
+    joint's released DOFs)."""
+    key = stage_key("system", {"n_rigid": n_rigid, **(assembly_params or {})}, ("liftoff.reduction.system", "liftoff.reduction.assembly",
                                                      "liftoff.core"), tuple(keys))
 
     def build():
@@ -554,8 +563,10 @@ def _bodies(model: ModelConfig, cbs: dict, ckeys: dict, thermal: dict, cache: St
     each component's boundary."""
     names = list(model.vehicle) + [PAD]
     sysp = model.system
-    vasm = assemble([cbs[n] for n in model.vehicle], "vehicle")
-    vall = modes_stage(vasm, 6, [ckeys[n] for n in model.vehicle], cache, "vehicle")
+    vasm = vehicle_assembly(model, cbs)
+    released = sorted(r for j in model.joints for r in j.released())
+    vall = modes_stage(vasm, 6, [ckeys[n] for n in model.vehicle], cache, "vehicle",
+                       {"released": released} if released else {})
     vmodes = keep_modes(vall, sysp.f_max, sysp.n_modes, sysp.residual_vectors)
     body0 = vmodes.to_body(zeta=model.zeta, name="vehicle")
     _, cg = center_of_gravity(body0)
@@ -628,5 +639,6 @@ def cryo_loads(stack: StackModel, cryo: Cryo, where: Where | None = None) -> dic
         if vol not in avail:
             raise (where / "volumes").error(f"{vol!r} is not a volume of component {name!r} "
                                             f"(has: {', '.join(sorted(avail)) or 'none'})")
-        parts.append((stack.cbs[name].boundary_labels, cryo.alpha * cryo.delta_T * avail[vol]))
+        labels = [stack.vehicle_asm.system_label(name, lab) for lab in stack.cbs[name].boundary_labels]
+        parts.append((labels, cryo.alpha * cryo.delta_T * avail[vol]))
     return cryo_point_loads(parts)

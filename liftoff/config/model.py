@@ -12,7 +12,11 @@ types, the joints between them, and how to reduce them; checked when the file is
   (``launch_table``, ``geometry`` or ``nastran``).
 * ``[[model.joint]]``: a named point shared by two or more vehicle components (the
   components overlay it, as the attach points of the Shuttle stack); every point that two
-  components share must be a joint, and the joints must connect the vehicle.
+  components share must be a joint, and the joints must connect the vehicle. ``release``
+  (DOF names, global axes: ``["Tz"]``, ``["Rx", "Ry", "Rz"]``): the directions the joint
+  does not connect; the first component keeps the point's DOF there, each other one its own
+  (``point@component:Tz``; reduction.assembly), so no force passes that way (a ball joint,
+  a strut's line of action, a slip joint).
 * ``[model.vehicle.params]``: :class:`meshes.layout.StackLayout`, the positions the Shuttle
   types (and the stick source) share;
 * source ``"stick"``: the Shuttle's four components and pad as beams from one
@@ -30,6 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from liftoff.core.errors import InputError
+from liftoff.core.labels import COMPONENTS
 from liftoff.core.units import G0
 from liftoff.meshes.layout import StackLayout
 from liftoff.meshes.pad import PadParams
@@ -63,7 +68,7 @@ CONVECTIVE = ("wall", "free", "slosh")    # [model] convective: a hydroelastic l
 SLOSH_GRAVITY_RANGE = (0.1 * G0, 10.0 * G0)
 _VEHICLE = {"mesh_size", "params"}
 _COMP = {"type", "mesh_size", "n_modes", "f_max", "params", "nastran"}
-_JOINT = {"name", "components"}
+_JOINT = {"name", "components", "release"}
 _NASTRAN = {"file", "units", "grids", "asm", "pch", "op4", "bulk", "stiffness", "mass", "se", "recovery"}
 _NASTRAN_FILES = ("file", "asm", "pch", "op4", "bulk")
 _NASTRAN_RECOVERY = {"name", "disp", "vel", "acc", "rows", "quantity"}
@@ -110,10 +115,17 @@ class ComponentModel:
 
 @dataclass(frozen=True)
 class Joint:
-    """A point (label prefix ``name``) that the vehicle ``components`` share and overlay."""
+    """A point (label prefix ``name``) that the vehicle ``components`` share and overlay,
+    except in the ``release`` directions (DOF names, global axes), where each component
+    after the first keeps a DOF of its own (reduction.assembly)."""
 
     name: str
     components: tuple[str, ...]
+    release: tuple[str, ...] = ()
+
+    def released(self) -> set[tuple[str, str]]:
+        """(component, label) pairs that reduction.assembly.assemble does not overlay."""
+        return {(c, f"{self.name}:{d}") for c in self.components[1:] for d in self.release}
 
 
 @dataclass(frozen=True)
@@ -270,10 +282,19 @@ def _stick_builders(where: Where, layout: StackLayout, sel: dict[str, dict], spe
     return {name: stick for name in STICK_VEHICLE + (PAD,)}
 
 
+#: the Shuttle's booster attach joints, statically determinate (the default scenario's): a
+#: spherical bearing forward (forces only) and three struts aft in a plane across the axis (Tx, Ty
+#: and the couple Rz), so the thrust and the tank's weight pass forward and its cryo shrinkage
+#: strains no attach
+SRB_ATTACH_RELEASE = {"fwd": ("Rx", "Ry", "Rz"), "aft": ("Tz", "Rx", "Ry")}
+
+
 def shuttle_joints(layout: StackLayout) -> tuple[Joint, ...]:
-    """The Shuttle stack's joints on ``layout``: each booster's and the orbiter's attach
-    points with the core (those of the stick source; the default scenario lists the same)."""
-    out = [Joint(p, ("core", f"srb_{side}")) for side in ("left", "right") for p in layout.srb_attach_points(side)]
+    """The Shuttle stack's joints on ``layout``: each booster's attach points with the core,
+    released as :data:`SRB_ATTACH_RELEASE`, and the orbiter's (those of the stick source;
+    the default scenario lists the same)."""
+    out = [Joint(p, ("core", f"srb_{side}"), SRB_ATTACH_RELEASE[p.rsplit("_", 1)[-1]])
+           for side in ("left", "right") for p in layout.srb_attach_points(side)]
     return tuple(out + [Joint(p, ("core", "orbiter")) for p in layout.orbiter_attach_points()])
 
 
@@ -312,7 +333,7 @@ def _joints(where: Where, spec: Any, vehicle: tuple[str, ...]) -> tuple[Joint, .
                 raise (w / "components").error(f"{c!r} is not a vehicle component ({', '.join(vehicle)})")
         if len(set(comps)) < 2:
             raise (w / "components").error("a joint joins two or more different components")
-        out.append(Joint(name, tuple(comps)))
+        out.append(Joint(name, tuple(comps), _release(w / "release", j.get("release", []))))
     if len(vehicle) > 1:
         reached, todo = {vehicle[0]}, [vehicle[0]]
         while todo:
@@ -328,6 +349,20 @@ def _joints(where: Where, spec: Any, vehicle: tuple[str, ...]) -> tuple[Joint, .
             raise where.error(f"component {lone[0]!r} is joined to none of {vehicle[0]!r}'s: give a "
                               f"[[model.joint]] with components = [..., {lone[0]!r}] (the vehicle must hang together)")
     return tuple(out)
+
+
+def _release(where: Where, spec: Any) -> tuple[str, ...]:
+    """A joint's ``release``: distinct DOF names (Tx Ty Tz Rx Ry Rz), not all six."""
+    dofs = strings(where, spec)
+    for d in dofs:
+        if d not in COMPONENTS:
+            raise where.error(f"{d!r} is not a DOF name ({', '.join(COMPONENTS)}: global axes)")
+    if len(set(dofs)) < len(dofs):
+        raise where.error("a DOF is named twice")
+    if len(dofs) == len(COMPONENTS):
+        raise where.error("all six DOFs released: the joint would connect nothing (remove it, or the point "
+                          "from one component)")
+    return tuple(d for d in COMPONENTS if d in dofs)
 
 
 # keys of the stick model's [model.vehicle.params] (workflows.stick.StackParams) before the
