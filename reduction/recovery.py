@@ -37,8 +37,12 @@ def acceleration_recovery(sysm: SystemModes, labels) -> np.ndarray:
 
 def interface_force_recovery(assembly: Assembly, sysm: SystemModes, component_name: str,
                              labels=None) -> tuple[np.ndarray, np.ndarray]:
-    """(D, A) with F_b = D q + A qddot (N, N m): the force the rest of the structure applies
-    to ``component_name`` at its boundary DOFs ``labels`` (default all of them)."""
+    """(D, A): D q + A qddot (N, N m) is the component's boundary rows ``labels`` (default all
+    of them) of M xddot + K x in its CB coordinates. The force the rest of the structure
+    applies to ``component_name`` there is that less the loads applied to the component
+    itself at those rows: Craig-Bampton lumps part of its distributed loads on its boundary
+    DOFs, under gravity g its weight share A Phi^T M RB g (eq. 14), which the caller takes
+    out (workflows.loads.recoveries: ``Recovery.const``)."""
     cb = assembly.component(component_name)
     labels = cb.boundary_labels if labels is None else tuple(labels)
     rows = []

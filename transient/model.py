@@ -376,7 +376,9 @@ class Forcing:
 
 @dataclass
 class Recovery:
-    """Linear output y = disp @ q + vel @ qdot + acc @ qddot of one body (k rows each).
+    """Linear output y = disp @ q + vel @ qdot + acc @ qddot + const of one body (k rows
+    each; ``const``: a fixed offset per row, in the row's unit, e.g. the applied-load term
+    of an interface force, reduction.recovery).
 
     ``labels``: one per row (column of the history). ``units``: one string for every
     column, or one per column. ``category`` says what the item is, so that reports select
@@ -393,6 +395,7 @@ class Recovery:
     units: str | Sequence[str] = "SI"
     category: str = "user"
     description: str = ""
+    const: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         who = f"recovery {self.name!r}"
@@ -416,6 +419,10 @@ class Recovery:
                 if m.ndim != 2 or m.shape[0] != k:
                     raise InputError(f"{who}: {key} has shape {m.shape}, expected ({k}, n_modes)")
                 setattr(self, key, m)
+        if self.const is not None:
+            self.const = _finite(f"{who}: const", self.const)
+            if self.const.shape != (k,):
+                raise InputError(f"{who}: const has shape {self.const.shape}, expected ({k},)")
 
 
 @dataclass

@@ -252,6 +252,7 @@ class OutputPlan:
     rb: tuple[int, int] | None      # columns of the rigid-body motion (Tx..Rz), None if not defined
     rb_sel: np.ndarray | None       # rigid-body components the body's rigid-body mass determines
     rec: dict                       # recovery name -> (first, last + 1) columns
+    const: dict                     # recovery name -> its const (added to its history by split), if any
 
     def first_row(self, q, v, acc, Y) -> None:
         """Y[0] from the state at t0 (the kernel fills the rows after)."""
@@ -267,7 +268,8 @@ class OutputPlan:
         if self.rb is not None:
             rb = Y[:, self.rb[0]:self.rb[1]].copy()
             rb[:, np.setdiff1d(np.arange(6), self.rb_sel)] = np.nan
-        rec = {name: Y[:, s0:s1].copy() for name, (s0, s1) in self.rec.items()}
+        rec = {name: Y[:, s0:s1] + self.const[name] if name in self.const else Y[:, s0:s1].copy()
+               for name, (s0, s1) in self.rec.items()}
         return d.copy(), v.copy(), a.copy(), rb, rec
 
 
@@ -307,7 +309,7 @@ def output_plan(problem: TransientProblem, key: str) -> OutputPlan:
         for d in range(6):
             L.append(np.zeros(n) if d not in rb_sel else R[d]); kind.append(0); targ.append(ntarg + d)
         ntarg += 6
-    rec = {}
+    rec, const = {}, {}
     for r in problem.recoveries:
         if r.body != key:
             continue
@@ -318,11 +320,13 @@ def output_plan(problem: TransientProblem, key: str) -> OutputPlan:
             for i in range(m):
                 L.append(mat[i]); kind.append(kd); targ.append(ntarg + i)
         rec[r.name] = (ntarg, ntarg + m)
+        if r.const is not None:
+            const[r.name] = r.const
         ntarg += m
     L = np.array(L).reshape(len(kind), n) if kind else np.zeros((0, n))
     order = np.argsort(np.array(kind, dtype=np.int64), kind="stable")  # the kernel wants rows grouped by kind
     return OutputPlan(np.ascontiguousarray(L[order]), np.array(kind, dtype=np.int64)[order],
-                      np.array(targ, dtype=np.int64)[order], ntarg, k, rb, rb_sel, rec)
+                      np.array(targ, dtype=np.int64)[order], ntarg, k, rb, rb_sel, rec, const)
 
 
 # ------------------------------------------------------------- kernel inputs

@@ -160,22 +160,36 @@ def _attach_component(stack: StackModel, joints, point: str, where: Where) -> st
     return owners[0]
 
 
-def recoveries(case: Case, stack: StackModel) -> tuple[list[Recovery], dict, dict]:
+def recoveries(case: Case, stack: StackModel, cryo: dict | None = None) -> tuple[list[Recovery], dict, dict]:
     """Interface forces at attach points, c.g. motion (eq. 23), top/payload/stations motion.
     (The modal coordinates the full-field pictures need are kept by the transient's
-    ``keep_modal = "q"`` storage, O(n) per step, not by identity-matrix recoveries.)"""
+    ``keep_modal = "q"`` storage, O(n) per step, not by identity-matrix recoveries.)
+    ``cryo``: the case's cryo preload {vehicle label: N} (None: :func:`cryo_loads`').
+
+    An interface force is the component's boundary rows of M xddot + K x less the loads
+    applied to the component itself there (Craig-Bampton lumps part of its distributed
+    loads on its boundary DOFs): its weight, A Phi^T M RB (-g) (eq. 14: the acceleration
+    recovery of a uniform field -g, exact for the rigid-body part, which is all a uniform
+    field has), and, on the cryo component, its cryo preload at those rows (section 4.3).
+    Point forces applied at the recovery's own point (a joint's shared DOF belongs to no
+    one component) and the gravity-softening feedback stay in it."""
     from liftoff.reduction import cg_acceleration_recovery, interface_force_recovery
 
     body = stack.vehicle
+    cryo = cryo_loads(stack, case.cryo, case.at("cryo")) if cryo is None else cryo
+    g = np.asarray(case.gravity, dtype=float)
     out, attach = [], {}
     for spec in case.recovery.attach:
         point, _, comp = spec.partition("@")
         comp = comp or _attach_component(stack, case.model.joints, point, case.at("recovery.attach"))
         labels = [f"{point}:{c}" for c in COMPONENTS]
         D, A = interface_force_recovery(stack.vehicle_asm, stack.vehicle_modes, comp, labels)
+        const = A @ body.modal_gravity(-g)                    # less the component's weight lumped here
+        if case.cryo.enabled and comp == case.cryo.component:   # and its cryo preload
+            const -= [cryo.get(stack.vehicle_asm.system_label(comp, lab), 0.0) for lab in labels]
         name = f"attach_{point}"
         out.append(Recovery(name, "a", COMPONENTS, disp=D, acc=A, units=("N",) * 3 + ("N m",) * 3,
-                            category="interface_force",
+                            category="interface_force", const=const,
                             description=f"force of the rest of the vehicle on {comp} at {point}"))
         attach[name] = (point, comp)
     out.append(Recovery("cg_motion", "a", COMPONENTS, disp=cg_motion_matrix(body), units=("m",) * 3 + ("rad",) * 3,
@@ -279,7 +293,7 @@ def build_problem(case: Case, stack: StackModel, progress: bool = True, keep_mod
     if case.control.enabled and case.control.law == "attitude-hold":
         feedback.append(attitude_feedback(case, stack))
     forcing = Forcing(constant=constant, tables=tables, feedback=feedback, gravity=case.gravity)
-    recs, attach, outputs = recoveries(case, stack)
+    recs, attach, outputs = recoveries(case, stack, cryo)
     problem = case.time.problem(body, stack.pad, cps, forcing, initial="static", outputs=outputs, recoveries=recs,
                                 keep_modal=keep_modal, progress=progress and case.output.progress)
     checks = stack.truncation([lab for c in cps for lab in c.labels_a], [lab for c in cps for lab in c.labels_b],

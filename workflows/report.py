@@ -119,8 +119,9 @@ def format_mode_changes(pairs: list, limit: int = 10) -> str:
 
 def write_recovery_op4(stack, cp, out: Path) -> list[Path]:
     """``recovery_vehicle.op4`` and its index ``recovery_vehicle_op4.csv``: the vehicle's
-    recovery matrices in its system modal coordinates (y = D q + V qdot + A qddot: DTM, the
-    velocity matrix, ATM; interface forces are LTMs in D and A), with the modal model they act
+    recovery matrices in its system modal coordinates (y = D q + V qdot + A qddot + C: DTM,
+    the velocity matrix, ATM, and a constant column; interface forces are LTMs in D and A,
+    less the component's own weight share in C), with the modal model they act
     on (FREQ, Hz; ZETA; unit modal masses) for another team's tools (Nastran OUTPUT4, binary,
     double; pyyeti.nastran.op4 reads it). Needs pyyeti (the ``nastran`` extra): without it
     nothing is written and the summary says so."""
@@ -129,19 +130,22 @@ def write_recovery_op4(stack, cp, out: Path) -> list[Path]:
     body = stack.vehicle
     mats = {"FREQ": stack.vehicle_modes.freq_hz[:, None], "ZETA": np.asarray(body.zeta, float)[:, None]}
     index = ["# liftoff recovery matrices of the vehicle in recovery_vehicle.op4 (binary OUTPUT4, double); "
-             "y = D q + V qdot + A qddot over the vehicle's system modes (unit modal mass; FREQ Hz, ZETA); "
+             "y = D q + V qdot + A qddot + C over the vehicle's system modes (unit modal mass; FREQ Hz, ZETA; "
+             "C a constant column, where an item has one); "
              "row_labels, row_units: one per row, ';'-separated; SI", "matrix,item,kind,rows,category,row_labels,row_units"]
     k = 0
     for r in cp.problem.recoveries:
         if r.body != "a":
             continue
         k += 1
-        for kind, m in (("D", r.disp), ("V", r.vel), ("A", r.acc)):
+        const = None if r.const is None else r.const[:, None]
+        for kind, m in (("D", r.disp), ("V", r.vel), ("A", r.acc), ("C", const)):
             if m is None:
                 continue
             name = f"R{k:04d}{kind}"
             mats[name] = m
-            index.append(f"{name},{r.name},{ {'D': 'disp', 'V': 'vel', 'A': 'acc'}[kind]},{m.shape[0]},{r.category},"
+            index.append(f"{name},{r.name},{ {'D': 'disp', 'V': 'vel', 'A': 'acc', 'C': 'const'}[kind]},{m.shape[0]},"
+                         f"{r.category},"
                          f"{';'.join(r.labels)},{';'.join(r.units)}")
     try:
         files = [write_op4(out / "recovery_vehicle.op4", mats)]

@@ -66,3 +66,20 @@ def test_vehicle_mass_and_the_posts_carry_its_weight(run):
     tz = [j for j, d in enumerate(res.contact_directions) if d.component == "Tz"]
     assert len(tz) == 4 and res.contact_force[0, tz].sum() == pytest.approx(m * g, rel=1e-9)
     assert {c["name"]: c["separation_time"] for c in res.contact_summary()}["clamp_1"] == pytest.approx(1.5, abs=1e-3)
+
+
+def test_interface_forces_at_t0_carry_the_weight_above(run):
+    """The attach recoveries are the forces the rest of the vehicle applies to a component
+    at a joint. At t0 (the static state on the clamps) statics gives them in closed form:
+    at ``is_1`` the stage below holds up stage 2 and the payload, (12 m x 8000 kg/m +
+    5000 kg) g; at ``payload_if`` stage 2 holds up the payload, 5000 kg g; the lateral
+    forces and the moments vanish (the stack is axisymmetric under an axial field).
+    Without the applied-load term (the component's own weight, which Craig-Bampton lumps
+    partly on its boundary DOFs) stage 2's force would be short by its share at is_1,
+    about half its weight. Tolerance: two static solves of cond ~1e8, 1e-9 of the weight."""
+    res, _ = run.results["nominal"]
+    g = -float(np.asarray(res.metadata["gravity"])[2])
+    for point, mass in (("is_1", 12 * 8000.0 + 5000.0), ("payload_if", 5000.0)):
+        f = res.recovered[f"attach_{point}"][0]
+        assert f[2] == pytest.approx(mass * g, rel=1e-9), point
+        assert np.all(np.abs(f[:2]) <= 1e-9 * mass * g) and np.all(np.abs(f[3:]) <= 1e-9 * mass * g * 52.0), point

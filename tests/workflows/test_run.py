@@ -387,7 +387,10 @@ def test_fe_scenario_end_to_end_coarse(tmp_path, capsys, monolithic):
     system modes -> transient -> reports, in one go (under a minute on 2 cores). Then,
     on the same (cached) FE models, the bolted phase (SSME build-up, 0-3 s) against the
     monolithic coupled model (vehicle + pad + K_C, scipy DOP853 rtol 1e-10): error below
-    1e-5 of the peak post force at h0/2 and second order (ratio > 3 per halving)."""
+    1e-5 of the peak post force at h0/4 and second order (ratio > 3 from h0/4 to h0/8).
+    Measured with the default's released booster attach joints: 5.8e-6, 2.2e-6, 7.0e-7 at
+    h0/2, h0/4, h0/8 (ratios 2.6, 3.2: second order from h0/4 on); welded, 2.5e-6, 7.3e-7
+    at h0/2, h0/4 (3.4)."""
     p = _scenario(tmp_path, COARSE_FE, cases=[{"name": "nominal"}])
     assert main(["run", str(p), "--out", str(tmp_path / "fe"), "--cache", str(tmp_path / "cache"),
                  "--no-progress"]) == 0
@@ -409,8 +412,8 @@ def test_fe_scenario_end_to_end_coarse(tmp_path, capsys, monolithic):
     _check_modal_deliverables(tmp_path / "fe", stack)
     case = replace(case, time=replace(case.time, t_end=3.0), control=replace(case.control, enabled=False),
                    softening=replace(case.softening, enabled=False))
-    errs = monolithic.errors(build_problem(case, stack, progress=False).problem, (2, 4))
-    print(f"FE bolted phase vs monolithic: max error / peak post force at h0/2, h0/4: {errs}")
+    errs = monolithic.errors(build_problem(case, stack, progress=False).problem, (4, 8))
+    print(f"FE bolted phase vs monolithic: max error / peak post force at h0/4, h0/8: {errs}")
     assert errs[0] < 1e-5 and errs[0] / errs[1] > 3.0
 
 
@@ -527,6 +530,14 @@ def _check_op4(out, res):
     q = res.modal["q_a"]
     y = res.recovered["cg_motion"]
     np.testing.assert_allclose(q @ D.T, y, rtol=0, atol=1e-12 * np.abs(y).max())
+    # an interface force is an LTM plus a constant (less the component's weight share): at t0,
+    # the static state (no acceleration), D q + C gives the history's first row
+    const = {r["item"]: r for r in index if r["kind"] == "const"}
+    name = next(k for k in const if k.startswith("attach_"))
+    D, C = (mats[m[name]["matrix"].lower()] for m in (disp, const))
+    y = res.recovered[name]
+    assert C.shape == (6, 1) and np.abs(C).max() > 1e-3 * np.abs(y[0]).max()
+    np.testing.assert_allclose(D @ q[0] + C[:, 0], y[0], rtol=0, atol=1e-9 * np.abs(y[0]).max())
 
 
 def test_a_registered_output_is_written_with_the_run(tmp_path):
