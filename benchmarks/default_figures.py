@@ -33,6 +33,7 @@ CB_BENCH_JSON = FIGURES / "bench_cb_default.json"  # benchmarks/bench_cb_default
 SLOSH_JSON = FIGURES / "slosh_default.json"        # benchmarks/slosh_default.py
 SLOSH_COMPARE_JSON = FIGURES / "slosh_compare.json"  # benchmarks/slosh_compare.py
 BOOSTER_GRAIN_JSON = FIGURES / "booster_grain.json"  # benchmarks/booster_grain_compare.py
+ATTACH_RELEASE_JSON = FIGURES / "attach_release.json"  # benchmarks/attach_release_compare.py
 CAMPAIGN_BENCH_JSON = FIGURES / "bench_campaign.json"  # benchmarks/bench_campaign.py --json (machine-dependent)
 EXAMPLE_JSONS = {n: FIGURES / f"{n}.json" for n in ("single_stick", "saturn_v")}   # benchmarks/example_figures.py
 DOCS = (ROOT / "README.md", ROOT / "docs" / "workflow.md")
@@ -67,6 +68,32 @@ def timed_variant(edit, cache: Path | None):
     with tempfile.TemporaryDirectory() as tmp:
         out = run_default_like(edit, Path(tmp) / "run", cache, error_estimate=False)
     return out, time.perf_counter() - t0
+
+
+def variant_summary(out, wall_s: float, component: str) -> dict:
+    """The figures a comparison of default-like runs tabulates (booster_grain_compare.py,
+    attach_release_compare.py): ``component``'s FE DOFs, CB modes and stage times, the
+    vehicle's modes and mass, the nominal twang, the peak post compression, every attach
+    load's peak, the steps and the wall time ``wall_s`` (s)."""
+    stack = next(iter(out.stacks.values()))
+    v = stack.vehicle
+    m, _ = _mass_cg(v)
+    rows = out.envelope
+    attach = [r for r in rows if r["category"] == "interface_force" and r["unit"] == "N"]
+    times = {label.split(" (")[0]: s for label, s in out.stage_times if " (built)" in label}
+    return {
+        "wall_s": wall_s,
+        "booster_fe_dofs": _fe_dofs(stack.components.get(component)),
+        "booster_cb_modes": stack.cbs[component].n_modes,
+        "booster_fe_s": times.get(f"fe {component}"), "booster_cb_s": times.get(f"cb {component}"),
+        "vehicle_modes": v.n_modes, "vehicle_mass_t": m / 1e3,
+        "first_elastic_hz": [float(w / (2 * np.pi)) for w in v.omega[6:10]],
+        "steps": int(out.results["nominal"][0].time.size - 1),
+        "twang": twang_figures(out, "nominal"),
+        "peak_post_compression_n": max(r["max"] for r in post_tz_rows(rows)),
+        "attach_n": {r["item"]: _peak(r)[0] for r in attach},
+        "truncation": [c.as_dict() for c in out.results["nominal"][1].truncation],
+    }
 
 
 def post_tz_rows(rows: list) -> list:
@@ -212,7 +239,8 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
                   mesh: dict | None = None, bench: dict | None = None,
                   examples: dict | None = None, cb_bench: dict | None = None,
                   slosh: dict | None = None, slosh_compare: dict | None = None,
-                  booster_grain: dict | None = None, campaign_bench: dict | None = None) -> dict[str, str]:
+                  booster_grain: dict | None = None, campaign_bench: dict | None = None,
+                  attach_release: dict | None = None) -> dict[str, str]:
     """{block name: markdown} from the figures (and the convergence, twang and mesh studies,
     the workflow benchmark and the launcher examples' figures {name: figures}, if any)."""
     tw, twn = fig["twang"]["nominal"], fig["twang"]
@@ -290,6 +318,8 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
         blocks["bench-campaign"] = render_campaign_bench(campaign_bench)
     if booster_grain and booster_grain.get("solid") and booster_grain.get("grain"):
         blocks["booster-grain"] = render_booster_grain(booster_grain)
+    if attach_release and "welded" in attach_release:
+        blocks["attach-release"] = render_attach_release(attach_release)
     if examples:
         import runpy
 
@@ -452,33 +482,53 @@ def render_slosh_compare(fig: dict) -> str:
     return "\n".join(rows) + "\n"
 
 
+def _variant_table(head: str, cols: list, lead: list, attach_items) -> str:
+    """A comparison of default-like runs (columns ``cols``: (title, variant_summary)): the
+    ``lead`` rows (label, function of a column), then the first modes, the twang, the peak
+    post compression, the ``attach_items``' peaks, the steps and the wall time."""
+    rows = [f"| {head} | " + " | ".join(c for c, _ in cols) + " |", "|---" * (len(cols) + 1) + "|"]
+    common = [
+        ("first four elastic vehicle modes (Hz)", lambda v: ", ".join(f"{f:.3f}" for f in v["first_elastic_hz"])),
+        ("twang, pad frame: peak (m) at t (s); relative to the c.g. (m)",
+         lambda v: f"{v['twang']['peak_m']:.3f} at {v['twang']['t_peak_s']:.2f}; {v['twang']['rel_cg_peak_m']:.3f}"),
+        ("twang at hold-down release (m)", lambda v: f"{v['twang']['at_ignition_m']:.3f}"),
+        ("peak post compression (MN)", lambda v: f"{v['peak_post_compression_n'] / 1e6:.2f}"),
+    ] + [(f"{item} (MN)", lambda v, item=item: f"{v['attach_n'][item] / 1e6:.2f}" if item in v["attach_n"] else "-")
+         for item in attach_items] + [("steps; run wall time (s)", lambda v: f"{v['steps']}; {v['wall_s']:.0f}")]
+    for label, fn in lead + common:
+        rows.append(f"| {label} | " + " | ".join(fn(v) for _, v in cols) + " |")
+    return "\n".join(rows) + "\n"
+
+
 def render_booster_grain(fig: dict) -> str:
     """The default run with thickened solid boosters against case + grain boosters at each
     Craig-Bampton cut (benchmarks/booster_grain_compare.py)."""
     cols = [("thickened solid (default)", fig["solid"])] + [
         (f"case + grain, CB to {k} Hz", v) for k, v in fig["grain"].items()]
-    rows = ["| boosters | " + " | ".join(c for c, _ in cols) + " |", "|---" * (len(cols) + 1) + "|"]
-
-    def row(label, fn):
-        rows.append(f"| {label} | " + " | ".join(fn(v) for _, v in cols) + " |")
 
     def sec(x):
         return "-" if x is None else f"{x:.0f}"
 
-    row("booster FE DOFs; fixed-interface modes (below f_max Hz)",
-        lambda v: f"{v['booster_fe_dofs']}; {v['booster_cb_modes']} ({v['booster_f_max_hz']:g})")
-    row("booster FE, CB stage times, cold (s, this machine)", lambda v: f"{sec(v['booster_fe_s'])}, {sec(v['booster_cb_s'])}")
-    row("vehicle system modes; mass (t)", lambda v: f"{v['vehicle_modes']}; {v['vehicle_mass_t']:.1f}")
-    row("first four elastic vehicle modes (Hz)", lambda v: ", ".join(f"{f:.3f}" for f in v["first_elastic_hz"]))
-    row("twang, pad frame: peak (m) at t (s); relative to the c.g. (m)",
-        lambda v: f"{v['twang']['peak_m']:.3f} at {v['twang']['t_peak_s']:.2f}; {v['twang']['rel_cg_peak_m']:.3f}")
-    row("twang at hold-down release (m)", lambda v: f"{v['twang']['at_ignition_m']:.3f}")
-    row("peak post compression (MN)", lambda v: f"{v['peak_post_compression_n'] / 1e6:.2f}")
+    lead = [("booster FE DOFs; fixed-interface modes (below f_max Hz)",
+             lambda v: f"{v['booster_fe_dofs']}; {v['booster_cb_modes']} ({v['booster_f_max_hz']:g})"),
+            ("booster FE, CB stage times, cold (s, this machine)",
+             lambda v: f"{sec(v['booster_fe_s'])}, {sec(v['booster_cb_s'])}"),
+            ("vehicle system modes; mass (t)", lambda v: f"{v['vehicle_modes']}; {v['vehicle_mass_t']:.1f}")]
     base = fig["solid"]["attach_n"]
-    for item in sorted(base, key=lambda k: -abs(base[k]))[:5]:
-        row(f"{item} (MN)", lambda v, item=item: f"{v['attach_n'][item] / 1e6:.2f}" if item in v["attach_n"] else "-")
-    row("steps; run wall time (s)", lambda v: f"{v['steps']}; {v['wall_s']:.0f}")
-    return "\n".join(rows) + "\n"
+    return _variant_table("boosters", cols, lead, sorted(base, key=lambda k: -abs(base[k]))[:5])
+
+
+#: attach_release_compare.py's variants, as the table heads them
+RELEASE_TITLES = {"welded": "all six DOFs joined (before)", "aft_axial": "aft attach: Tz released",
+                  "determinate": "forward ball (Rx Ry Rz), aft Tz Rx Ry released (default)"}
+
+
+def render_attach_release(fig: dict) -> str:
+    """The default run with the booster attach joints welded and released
+    (benchmarks/attach_release_compare.py)."""
+    base = fig["welded"]["attach_n"]
+    items = [k for k in sorted(base, key=lambda k: (k.split(" on ")[0], k)) if k.endswith(("Tz", "Tx"))]
+    return _variant_table("booster attach joints", [(RELEASE_TITLES[k], v) for k, v in fig.items()], [], items)
 
 
 def render_mesh(study: dict) -> str:
@@ -572,7 +622,8 @@ def studies() -> tuple[dict | None, ...]:
                   json.loads(SLOSH_JSON.read_text()) if SLOSH_JSON.is_file() else None,
                   json.loads(SLOSH_COMPARE_JSON.read_text()) if SLOSH_COMPARE_JSON.is_file() else None,
                   json.loads(BOOSTER_GRAIN_JSON.read_text()) if BOOSTER_GRAIN_JSON.is_file() else None,
-                  json.loads(CAMPAIGN_BENCH_JSON.read_text()) if CAMPAIGN_BENCH_JSON.is_file() else None)
+                  json.loads(CAMPAIGN_BENCH_JSON.read_text()) if CAMPAIGN_BENCH_JSON.is_file() else None,
+                  json.loads(ATTACH_RELEASE_JSON.read_text()) if ATTACH_RELEASE_JSON.is_file() else None)
 
 
 # ------------------------------------------------------------------ comparing
