@@ -564,7 +564,7 @@ def _bodies(model: ModelConfig, cbs: dict, ckeys: dict, thermal: dict, cache: St
     names = list(model.vehicle) + [PAD]
     sysp = model.system
     vasm = vehicle_assembly(model, cbs)
-    released = sorted(r for j in model.joints for r in j.released())
+    released = sorted(vasm.released)
     vall = modes_stage(vasm, 6, [ckeys[n] for n in model.vehicle], cache, "vehicle",
                        {"released": released} if released else {})
     vmodes = keep_modes(vall, sysp.f_max, sysp.n_modes, sysp.residual_vectors)
