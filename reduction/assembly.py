@@ -41,6 +41,16 @@ class Assembly:
         """The system label of ``component``'s boundary DOF ``label`` (its own where released)."""
         return _system_label(self.released, component, label)
 
+    def released_apart(self, component: str, label: str) -> bool:
+        """Whether a release leaves ``component``'s boundary DOF ``label`` joined to no other
+        component (no force passes there between components; False where the label was never
+        shared or is still shared)."""
+        if not any(lab == label for _, lab in self.released):
+            return False
+        own = self.system_label(component, label)
+        return not any(cb.name != component and label in cb.boundary_labels
+                       and self.system_label(cb.name, label) == own for cb in self.components)
+
     @property
     def n_dof(self) -> int:
         return self.M.shape[0]

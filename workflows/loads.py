@@ -151,7 +151,8 @@ def _attach_component(stack: StackModel, joints, point: str, where: Where) -> st
     """The component whose interface force an attach recovery gives (``point@component``
     names it): at a joint, the last of the joint's components (the Shuttle's joints list the
     core first: the force on the booster or the orbiter), else the one component there."""
-    owners = [n for n, cb in stack.cbs.items() if n != "pad" and f"{point}:Tx" in cb.boundary_labels]
+    owners = [n for n, cb in stack.cbs.items()
+              if n != "pad" and any(f"{point}:{c}" in cb.boundary_labels for c in COMPONENTS)]
     if not owners:
         raise where.error(f"point {point!r} is not a boundary point of any vehicle component")
     for j in joints:
@@ -172,7 +173,9 @@ def recoveries(case: Case, stack: StackModel, cryo: dict | None = None) -> tuple
     recovery of a uniform field -g, exact for the rigid-body part, which is all a uniform
     field has), and, on the cryo component, its cryo preload at those rows (section 4.3).
     Point forces applied at the recovery's own point (a joint's shared DOF belongs to no
-    one component) and the gravity-softening feedback stay in it."""
+    one component) and the gravity-softening feedback stay in it. A direction the joint
+    releases (``[[model.joint]] release``) passes no force: its rows are zero (the boundary
+    rows there would hold only the modal damping's and the feedback's residual)."""
     from liftoff.reduction import cg_acceleration_recovery, interface_force_recovery
 
     body = stack.vehicle
@@ -183,10 +186,14 @@ def recoveries(case: Case, stack: StackModel, cryo: dict | None = None) -> tuple
         point, _, comp = spec.partition("@")
         comp = comp or _attach_component(stack, case.model.joints, point, case.at("recovery.attach"))
         labels = [f"{point}:{c}" for c in COMPONENTS]
-        D, A = interface_force_recovery(stack.vehicle_asm, stack.vehicle_modes, comp, labels)
+        held = np.array([not stack.vehicle_asm.released_apart(comp, lab) for lab in labels])
+        D, A = (np.zeros((len(labels), body.n_modes)) for _ in range(2))   # a released direction: no force
+        D[held], A[held] = interface_force_recovery(stack.vehicle_asm, stack.vehicle_modes, comp,
+                                                    [lab for lab, h in zip(labels, held) if h])
         const = A @ body.modal_gravity(-g)                    # less the component's weight lumped here
         if case.cryo.enabled and comp == case.cryo.component:   # and its cryo preload
-            const -= [cryo.get(stack.vehicle_asm.system_label(comp, lab), 0.0) for lab in labels]
+            const[held] -= [cryo.get(stack.vehicle_asm.system_label(comp, lab), 0.0)
+                            for lab, h in zip(labels, held) if h]
         name = f"attach_{point}"
         out.append(Recovery(name, "a", COMPONENTS, disp=D, acc=A, units=("N",) * 3 + ("N m",) * 3,
                             category="interface_force", const=const,

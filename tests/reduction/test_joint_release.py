@@ -85,6 +85,10 @@ def test_released_dof_is_the_component_s_own(halves):
     lower, upper = (asm.boundary_labels[i] for i in (asm.boundary_index["lower"][3], asm.boundary_index["upper"][3]))
     assert (lower, upper) == ("hinge:Rx", "hinge@upper:Rx")
     assert asm.n_dof == assemble(halves, "pair").n_dof + 2
+    for comp in ("lower", "upper"):                                      # a released direction joins no one
+        assert asm.released_apart(comp, "hinge:Rx") and asm.released_apart(comp, "hinge:Ry")
+        assert not asm.released_apart(comp, "hinge:Tx") and not asm.released_apart(comp, "hinge:Rz")
+        assert not assemble(halves, "pair").released_apart(comp, "hinge:Rx")
 
 
 def test_a_mechanism_is_refused_by_the_system_modes(halves):

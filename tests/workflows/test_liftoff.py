@@ -125,6 +125,46 @@ def test_cryo_preload_is_self_equilibrated(stack, monkeypatch):
     assert post["welded"] > 1e4 and post["determinate"] < 1e-2 * post["welded"]
 
 
+def test_released_attach_directions_carry_no_force():
+    """A booster attach joint's released directions (config.model.SRB_ATTACH_RELEASE) pass no
+    force between core and booster: their attach recovery rows are zero for the whole run
+    (the booster's own boundary rows there would hold only residuals: the modal damping's,
+    the softening's, the truncation's). Statics at t0 (on the posts, with the cryo preload,
+    every system mode kept: the stick's 184): a booster's posts and attach forces hold up its
+    weight, sum of Tz = m g. The axial attach force is the forward joint's alone (the aft one
+    releases Tz); the gravity softening is off, its feedback forces being loads on the
+    booster too (1.7 kN here). Tolerance 1e-9: static solves of cond ~1e8 (measured 4e-11)."""
+    from liftoff.config.model import SRB_ATTACH_RELEASE
+    from liftoff.core.labels import COMPONENTS
+    from liftoff.reduction import cg_acceleration_recovery
+
+    every_mode = {**STICK, "system": {**STICK["system"], "residual_vectors": True}}
+    base = scenario(model=every_mode, softening={"enabled": False})
+    stack = build_stack(base.model, StageCache(None), progress=False)
+    assert stack.vehicle.omega.size == stack.vehicle_asm.n_dof
+    case = replace(base, time=replace(base.time, t_end=base.time.t0 + 0.05))
+    assert case.cryo.enabled
+    cp = build_problem(case, stack, progress=False)
+    res = solve(cp.problem)
+    g = -case.gravity[2]
+    checked = 0
+    for name, (point, comp) in cp.attach.items():
+        if not comp.startswith("srb"):
+            continue
+        free = SRB_ATTACH_RELEASE[point.rsplit("_", 1)[-1]]
+        hist = res.recovered[name]
+        for k, c in enumerate(COMPONENTS):
+            assert np.all(hist[:, k] == 0.0) if c in free else np.any(hist[:, k] != 0.0), (name, c)
+            checked += c in free
+    assert checked == 12
+    for side in ("left", "right"):
+        _, mass = cg_acceleration_recovery(stack.vehicle_asm, stack.vehicle_modes, f"srb_{side}")
+        tz = sum(res.recovered[f"attach_att_srb_{side}_{p}"][0, 2] for p in ("fwd", "aft"))
+        posts = sum(res.contact_force[0, j] for j, d in enumerate(res.contact_directions)
+                    if d.component == "Tz" and d.contact.startswith(side))
+        assert tz + posts == pytest.approx(mass[2] * g, rel=1e-9), side
+
+
 def test_control_system_holds_attitude_in_flight(stack):
     """After release, with the reference's control law on (eq. 15-21, law = "moment"), the
     applied forces have no moment about the c.g., so once the posts have separated the
