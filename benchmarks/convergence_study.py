@@ -1,7 +1,8 @@
 """Is the default run converged in the modes it keeps? The default scenario against a
 reference with every component mode below 180 Hz (pad 300 Hz: 3 x the default's 60 Hz and
-100 Hz cuts, 1.5 x its boosters' 120 Hz; no n_modes caps) and every system mode, and the system-mode cuts a user may choose, with and without residual
-vectors (issue 22; reduction/truncation.py).
+100 Hz cuts, 1.5 x its boosters' 120 Hz; no n_modes caps) and every system mode, and the
+system-mode cuts a user may choose, with and without residual vectors (issue 22;
+reduction/truncation.py).
 
     python benchmarks/convergence_study.py [--cache DIR] [--only NAME ...] [--json PATH]
 

@@ -186,14 +186,13 @@ def recoveries(case: Case, stack: StackModel, cryo: dict | None = None) -> tuple
         point, _, comp = spec.partition("@")
         comp = comp or _attach_component(stack, case.model.joints, point, case.at("recovery.attach"))
         labels = [f"{point}:{c}" for c in COMPONENTS]
-        held = np.array([not stack.vehicle_asm.released_apart(comp, lab) for lab in labels])
+        held = [lab for lab in labels if not stack.vehicle_asm.released_apart(comp, lab)]
+        rows = [labels.index(lab) for lab in held]
         D, A = (np.zeros((len(labels), body.n_modes)) for _ in range(2))   # a released direction: no force
-        D[held], A[held] = interface_force_recovery(stack.vehicle_asm, stack.vehicle_modes, comp,
-                                                    [lab for lab, h in zip(labels, held) if h])
+        D[rows], A[rows] = interface_force_recovery(stack.vehicle_asm, stack.vehicle_modes, comp, held)
         const = A @ body.modal_gravity(-g)                    # less the component's weight lumped here
         if case.cryo.enabled and comp == case.cryo.component:   # and its cryo preload
-            const[held] -= [cryo.get(stack.vehicle_asm.system_label(comp, lab), 0.0)
-                            for lab, h in zip(labels, held) if h]
+            const[rows] -= [cryo.get(stack.vehicle_asm.system_label(comp, lab), 0.0) for lab in held]
         name = f"attach_{point}"
         out.append(Recovery(name, "a", COMPONENTS, disp=D, acc=A, units=("N",) * 3 + ("N m",) * 3,
                             category="interface_force", const=const,
