@@ -446,12 +446,16 @@ class InitialState:
 
 
 METHODS = ("direct", "fixed-point")
+#: the fewest automatic steps a period of the bodies' highest mode: the Nyquist rate
+MIN_MODE_SAMPLES = 2.0
 
 
 @dataclass
 class TransientProblem:
     """Everything :func:`transient.solve` needs. ``h=None``: the automatic step (0.25/f_h,
-    eq. 12, bounded by the bodies' highest frequency and the run; transient/stepping.py).
+    eq. 12, bounded by ``mode_samples`` steps a period of the bodies' highest mode and by
+    the run; transient/stepping.py). ``mode_samples``: at least 2 (the Nyquist rate: fewer
+    and the highest mode aliases in the recovered histories); 4 by default.
     ``accuracy``: the step is halved until the estimated error of every peak contact force
     is below this fraction of the largest one (transient/accuracy.py; None: off).
     ``memory_limit``: bytes the run may use (None: 80 % of the memory available)."""
@@ -473,6 +477,7 @@ class TransientProblem:
     progress: bool = True
     accuracy: float | None = None
     memory_limit: float | None = None
+    mode_samples: float = 4.0
 
     def __post_init__(self) -> None:
         self.contacts = list(self.contacts)
@@ -490,6 +495,9 @@ class TransientProblem:
             raise InputError(f"tol = {self.tol!r} N must be positive")
         if self.accuracy is not None and not (0 < self.accuracy < 1):
             raise InputError(f"accuracy = {self.accuracy!r} must be a fraction of the peak force in (0, 1)")
+        if not (math.isfinite(self.mode_samples) and self.mode_samples >= MIN_MODE_SAMPLES):
+            raise InputError(f"mode_samples = {self.mode_samples!r} steps a period of the highest mode must be at "
+                             f"least {MIN_MODE_SAMPLES:g} (the Nyquist rate: fewer and that mode aliases)")
         if self.memory_limit is not None and not self.memory_limit > 0:
             raise InputError(f"memory_limit = {self.memory_limit!r} bytes must be positive")
         if int(self.max_iter) < 1:

@@ -2,8 +2,12 @@
 
 Rules (documented in docs/transient.md, "Step size"):
 
-* automatic step: h_max = min(0.25/f_h (eq. 12), 0.25/f_s, t_end - t0), f_h the contact
-  frequency (:func:`estimate_step`), f_s the highest natural frequency of the two bodies;
+* automatic step: h_max = min(0.25/f_h (eq. 12), 1/(m f_s), t_end - t0), f_h the contact
+  frequency (:func:`estimate_step`), f_s the highest natural frequency of the two bodies,
+  m the problem's ``mode_samples`` (steps a period of that mode: 4 by default, at least 2,
+  the Nyquist rate; the modal step is exact at any omega h, eq. 9-10, so m only sets how
+  the highest mode is sampled in the histories, and the guard against a soft contact's
+  huge f_h-step);
   the run then takes n = ceil((t_end - t0)/h_max) equal steps of h = (t_end - t0)/n, so
   that the last step ends exactly at t_end;
 * a given h is a largest step: when it does not divide t_end - t0 the run takes the same
@@ -164,7 +168,8 @@ class StepChoice:
 
     f_h: the contact frequency (Hz) and h_default = 0.25/f_h (eq. 12); f_s: the highest
     natural frequency of the bodies (Hz); h_requested: the step given (None: automatic);
-    margin: :func:`coupling_margin` at h (> -1: stable)."""
+    margin: :func:`coupling_margin` at h (> -1: stable); mode_samples: the automatic step's
+    steps a period of the f_s mode (TransientProblem.mode_samples)."""
 
     h: float
     f_h: float
@@ -175,6 +180,7 @@ class StepChoice:
     f_s: float = 0.0
     h_requested: float | None = None
     margin: float = math.inf
+    mode_samples: float = 4.0
 
     @property
     def time(self) -> np.ndarray:
@@ -186,7 +192,7 @@ class StepChoice:
     def halved(self) -> "StepChoice":
         """The same run in steps of h/2 (twice as many)."""
         return StepChoice(0.5 * self.h, self.f_h, self.h_default, 2 * self.n_steps, self.t0, self.t_end, self.f_s,
-                          self.h_requested, self.margin)
+                          self.h_requested, self.margin, self.mode_samples)
 
 
 def _modes(problem: TransientProblem) -> tuple[np.ndarray, np.ndarray]:
@@ -243,7 +249,7 @@ def choose_step(problem: TransientProblem, rows=None) -> StepChoice:
     if problem.h is None:
         if not math.isfinite(h_default):
             raise InputError("cannot choose the step: no contacts and no elastic modes; give h explicitly")
-        h_max = min(h_default, 0.25 / f_s if f_s > 0 else math.inf, span)
+        h_max = min(h_default, 1.0 / (problem.mode_samples * f_s) if f_s > 0 else math.inf, span)
         n = _steps(span, h_max)
         margin = coupling_margin(rows, omega, zeta, span / n)
         for _ in range(60):  # the automatic step is halved until the coupling is stable
@@ -252,7 +258,7 @@ def choose_step(problem: TransientProblem, rows=None) -> StepChoice:
             n *= 2
             margin = coupling_margin(rows, omega, zeta, span / n)
         _check_resolution(t0, t_end, span / n, f_h, f_s)
-        return StepChoice(span / n, f_h, h_default, n, t0, t_end, f_s, None, margin)
+        return StepChoice(span / n, f_h, h_default, n, t0, t_end, f_s, None, margin, problem.mode_samples)
     h_req = float(problem.h)
     n = _steps(span, h_req)
     h = span / n
@@ -270,7 +276,7 @@ def choose_step(problem: TransientProblem, rows=None) -> StepChoice:
     if abs(h - h_req) > 1e-9 * h_req:
         warnings.warn(f"time step h = {h_req:.6g} s does not divide the run ({span:.6g} s): using {n} equal steps "
                       f"of {h:.6g} s so that the last one ends at t_end = {t_end:.6g} s", stacklevel=4)
-    return StepChoice(h, f_h, h_default, n, t0, t_end, f_s, h_req, margin)
+    return StepChoice(h, f_h, h_default, n, t0, t_end, f_s, h_req, margin, problem.mode_samples)
 
 
 def _stable_below(rows, omega, zeta, h_try: float, h_bad: float) -> float:

@@ -19,12 +19,12 @@ import numpy as np
 from liftoff.core.errors import InputError
 from liftoff.core.units import G0
 from liftoff.transient.effects import softening_factors
-from liftoff.transient.model import METHODS, ContactPoint, ModalFeedback, PointForce, TabulatedForce, TransientProblem
+from liftoff.transient.model import METHODS, MIN_MODE_SAMPLES, ContactPoint, ModalFeedback, PointForce, TabulatedForce, TransientProblem
 
 from .files import file_path, read_csv_table
 from .values import Where, boolean, choice, integer, label, labels, number, string, strings, table, vector
 
-TIME_KEYS = {"t0", "t_end", "h", "method", "tol", "max_iter", "accuracy"}
+TIME_KEYS = {"t0", "t_end", "h", "method", "tol", "max_iter", "accuracy", "mode_samples"}
 #: the smallest [time] accuracy taken: 100 x the round-off of a peak after 1e6 steps (1e6 x 1.1e-16, ~1e-10 at most)
 MIN_ACCURACY = 1e-8
 MAX_STEPS = 1e9             # steps a run may take ([time] h): 1e9 steps of one output are 8 GB of history
@@ -55,7 +55,8 @@ class TimeSpan:
     0.25/f_h of eq. 12 bounded by the bodies' highest frequency and the run); contact solve
     ``method``; fixed-point tolerance ``tol`` (N) and ``max_iter``; ``accuracy``: halve the
     step until the estimated error of every peak contact force is below this fraction of
-    the largest (None: the step as given; transient/accuracy.py)."""
+    the largest (None: the step as given; transient/accuracy.py); ``mode_samples``: the
+    automatic step's steps a period of the bodies' highest mode (>= 2, the Nyquist rate)."""
 
     t_end: float
     t0: float = 0.0
@@ -64,6 +65,7 @@ class TimeSpan:
     tol: float = 1.0
     max_iter: int = 100
     accuracy: float | None = None
+    mode_samples: float = 4.0
 
     def problem(self, body_a, body_b, contacts: list, forcing, **rest) -> TransientProblem:
         """The one translation of a scenario into a :class:`TransientProblem` (lift-off
@@ -72,7 +74,7 @@ class TimeSpan:
         ``keep_modal``, ``progress``) by keyword."""
         return TransientProblem(body_a, body_b, contacts, forcing, t_end=self.t_end, h=self.h, t0=self.t0,
                                 method=self.method, tol=self.tol, max_iter=self.max_iter, accuracy=self.accuracy,
-                                **rest)
+                                mode_samples=self.mode_samples, **rest)
 
 
 def time_span(where: Where, spec: Any, *, method: str | None = None) -> TimeSpan:
@@ -104,8 +106,13 @@ def time_span(where: Where, spec: Any, *, method: str | None = None) -> TimeSpan
             raise (where / "accuracy").error(
                 f"{accuracy:g} is below what the arithmetic resolves: a peak force after 1e5-1e6 steps carries "
                 f"round-off of ~1e-11 of itself, so halving the step cannot reach it; at least {MIN_ACCURACY:g}")
+    samples = number(where / "mode_samples", t.get("mode_samples", 4.0), positive=True)
+    if samples < MIN_MODE_SAMPLES:
+        raise (where / "mode_samples").error(
+            f"steps a period of the bodies' highest mode: at least {MIN_MODE_SAMPLES:g} (the Nyquist rate: fewer "
+            f"and that mode aliases in the histories), got {samples:g}")
     return TimeSpan(t_end, t0, h, meth, number(where / "tol", t.get("tol", 1.0), positive=True),
-                    integer(where / "max_iter", t.get("max_iter", 100), 1), accuracy)
+                    integer(where / "max_iter", t.get("max_iter", 100), 1), accuracy, samples)
 
 
 # ---------------------------------------------------------------- tables and forces

@@ -54,6 +54,21 @@ def test_a_soft_contact_does_not_give_an_absurd_step():
     assert solve(p).time[-1] == 1.2
 
 
+def test_mode_samples_set_the_steps_a_period_of_the_highest_mode():
+    """The same soft contact with the highest mode sampled 2 and 8 times a period: n =
+    ceil(span f_s m), integer arithmetic; the run records m; below the Nyquist rate (2) the
+    problem is refused at construction, naming the key."""
+    f_s = math.sqrt(50.0) / (2 * math.pi)
+    for m in (2.0, 8.0):
+        step = choose_step(_block(t_end=1.2, k=1e-6, mode_samples=m))
+        assert step.n_steps == math.ceil(1.2 * f_s * m) and step.mode_samples == m
+    assert solve(_block(t_end=1.2, k=1e-6, mode_samples=2.0)).metadata["mode_samples"] == 2.0
+    # a stiff contact: eq. 12 (0.25/f_h, f_h = 35.6 Hz) governs whatever m, the block's 1.1 Hz mode being slower
+    assert choose_step(_block(mode_samples=2.0)).n_steps == choose_step(_block()).n_steps
+    with pytest.raises(InputError, match=r"mode_samples = 1.5 steps a period of the highest mode must be at least 2"):
+        _block(mode_samples=1.5)
+
+
 def test_a_given_step_that_does_not_divide_the_run_is_rounded_down():
     with pytest.warns(UserWarning, match=r"does not divide the run .* 34 equal steps of 0.00294118 s"):
         step = choose_step(_block(t_end=0.1, h=0.003))
