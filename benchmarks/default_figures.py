@@ -34,6 +34,7 @@ SLOSH_JSON = FIGURES / "slosh_default.json"        # benchmarks/slosh_default.py
 SLOSH_COMPARE_JSON = FIGURES / "slosh_compare.json"  # benchmarks/slosh_compare.py
 BOOSTER_GRAIN_JSON = FIGURES / "booster_grain.json"  # benchmarks/booster_grain_compare.py
 ATTACH_RELEASE_JSON = FIGURES / "attach_release.json"  # benchmarks/attach_release_compare.py
+STEP_JSON = FIGURES / "step_study.json"            # benchmarks/step_study.py
 CAMPAIGN_BENCH_JSON = FIGURES / "bench_campaign.json"  # benchmarks/bench_campaign.py --json (machine-dependent)
 EXAMPLE_JSONS = {n: FIGURES / f"{n}.json" for n in ("single_stick", "saturn_v")}   # benchmarks/example_figures.py
 DOCS = (ROOT / "README.md", ROOT / "docs" / "workflow.md")
@@ -194,6 +195,7 @@ def default_figures(cache: Path | None, plots_to: Path | None = None) -> dict:
                        for n, cb in stack.cbs.items()},
         "truncation": checks,
         "steps": int(res.time.size - 1), "h_s": float(res.h),
+        "step_rule": {k: float(res.metadata[k]) for k in ("f_h", "h_default", "f_s", "mode_samples")},
         "error_estimate": {c: out.results[c][0].metadata.get("error_estimate", {}).get("worst_relative")
                            for c in out.results},
         "twang": {c: twang_figures(out, c) for c in out.results},
@@ -210,6 +212,17 @@ def default_figures(cache: Path | None, plots_to: Path | None = None) -> dict:
                              else v) for k, v in b.items()} for b in bulge_modes(stack.cbs)],
         "table1": {"rows": list(out.table1.rows), "cg_motion_m": [[float(x) for x in r[:3]] for r in out.table1.motion]},
     }
+
+
+def _step_rule(fig: dict) -> str:
+    """Which rule set the default's step (transient/stepping.py): eq. 12's 0.25/f_h or the
+    highest mode's sampling 1/(m f_s)."""
+    r = fig["step_rule"]
+    by_mode = 1.0 / (r["mode_samples"] * r["f_s"])
+    if by_mode < r["h_default"]:
+        return (f"{r['mode_samples']:g} steps a period of the highest mode, {r['f_s']:.0f} Hz; eq. 12 alone: "
+                f"0.25/f_h = {r['h_default'] * 1e6:.0f} us, f_h = {r['f_h']:.0f} Hz")
+    return f"eq. 12: 0.25/f_h, f_h = {r['f_h']:.0f} Hz"
 
 
 def _slosh_dofs(comp) -> int:
@@ -240,7 +253,7 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
                   examples: dict | None = None, cb_bench: dict | None = None,
                   slosh: dict | None = None, slosh_compare: dict | None = None,
                   booster_grain: dict | None = None, campaign_bench: dict | None = None,
-                  attach_release: dict | None = None) -> dict[str, str]:
+                  attach_release: dict | None = None, step: dict | None = None) -> dict[str, str]:
     """{block name: markdown} from the figures (and the convergence, twang and mesh studies,
     the workflow benchmark and the launcher examples' figures {name: figures}, if any)."""
     tw, twn = fig["twang"]["nominal"], fig["twang"]
@@ -258,7 +271,7 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
         "| FE DOFs; fixed-interface modes kept | " + "; ".join(
             f"{n} {c['fe_dofs']} DOFs" + (f" + {c['slosh_dofs']} slosh pendulums" if c.get("slosh_dofs") else "")
             + f", {c['cb_modes']} modes" for n, c in fig["components"].items()) + " |",
-        f"| step | {fig['steps']} steps of h = {fig['h_s'] * 1e6:.1f} us (0.25 / the highest mode) |",
+        f"| step | {fig['steps']} steps of h = {fig['h_s'] * 1e6:.1f} us ({_step_rule(fig)}) |",
     ]
     for c in fig["truncation"]:
         mass = "/".join("-" if x is None else f"{100 * x:.1f}" for x in c["effective_mass_kept_xyz"])
@@ -320,6 +333,8 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
         blocks["booster-grain"] = render_booster_grain(booster_grain)
     if attach_release and "welded" in attach_release:
         blocks["attach-release"] = render_attach_release(attach_release)
+    if step:
+        blocks["step-study"] = render_step(step)
     if examples:
         import runpy
 
@@ -558,6 +573,31 @@ def render_twang(study: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def render_step(study: dict) -> str:
+    """The step study (benchmarks/step_study.py): each run's step, twang and the largest
+    change of an envelope peak from the finest run's, and the default's largest rows."""
+    pct = lambda d: f"{100 * d:.3f} %"  # noqa: E731
+    ref = study["reference_mode_samples"]
+    lines = [f"| steps a period of the highest mode | steps | h (us) | twang peak (m) at (s); at ignition (m) | "
+             f"largest change of a peak from {ref:g} steps a period: any row; posts; attaches | wall (s) |",
+             "|---|---|---|---|---|---|"]
+    for r in study["variants"]:
+        tw = r["twang"]
+        name = f"{r['mode_samples']:g}" + (" (the default)" if r["mode_samples"] == study["default_mode_samples"] else "")
+        lines.append(f"| {name} | {r['steps']} | {r['h_s'] * 1e6:.1f} | {tw['peak_m']:.4f} at {tw['t_peak_s']:.2f}; "
+                     f"{tw['at_ignition_m']:.4f} | {pct(r['all']['deviation'])} ({r['all']['item']}); "
+                     f"{pct(r['posts']['deviation'])}; {pct(r['attach']['deviation'])} ({r['attach']['item']}) | "
+                     f"{r['wall_s']:.0f} |")
+    default = next(r for r in study["variants"] if r["mode_samples"] == study["default_mode_samples"])
+    lines.append("")
+    lines.append(f"The default's largest changes from {ref:g} steps a period (against the row's own peak; against "
+                 f"the largest peak of the point's vector): " + "; ".join(
+                     f"{x['item']} {pct(x['deviation'])}, {pct(x['point_deviation'])}" for x in default["largest_rows"])
+                 + f". The highest mode: {default['f_s_hz']:.0f} Hz; the contact frequency of eq. 12: "
+                 f"{default['f_h_hz']:.0f} Hz (0.25/f_h = {0.25e6 / default['f_h_hz']:.0f} us).")
+    return "\n".join(lines) + "\n"
+
+
 def render_convergence(conv: dict) -> str:
     """The convergence study: each variant's twang and the largest change of an envelope
     peak from the reference (and, for the cuts, from the default)."""
@@ -623,7 +663,8 @@ def studies() -> tuple[dict | None, ...]:
                   json.loads(SLOSH_COMPARE_JSON.read_text()) if SLOSH_COMPARE_JSON.is_file() else None,
                   json.loads(BOOSTER_GRAIN_JSON.read_text()) if BOOSTER_GRAIN_JSON.is_file() else None,
                   json.loads(CAMPAIGN_BENCH_JSON.read_text()) if CAMPAIGN_BENCH_JSON.is_file() else None,
-                  json.loads(ATTACH_RELEASE_JSON.read_text()) if ATTACH_RELEASE_JSON.is_file() else None)
+                  json.loads(ATTACH_RELEASE_JSON.read_text()) if ATTACH_RELEASE_JSON.is_file() else None,
+                  json.loads(STEP_JSON.read_text()) if STEP_JSON.is_file() else None)
 
 
 # ------------------------------------------------------------------ comparing

@@ -60,6 +60,14 @@ def test_attitude_hold_bandwidth_beyond_a_control_design():
         parse_scenario(merge(DEFAULT, {"control": {"law": "attitude-hold", "bandwidth_hz": 1e4}}), "s")
 
 
+def test_mode_samples_below_the_nyquist_rate():
+    """[time] mode_samples < 2 would alias the highest mode: refused at the key; the default
+    scenario samples it twice a period (docs/workflow.md, "Convergence in the step")."""
+    with pytest.raises(InputError, match=r"time\.mode_samples: steps a period of the bodies' highest mode: at least 2"):
+        parse_scenario(merge(DEFAULT, {"time": {"mode_samples": 1.9}}), "s")
+    assert {c.time.mode_samples for c in parse_scenario(DEFAULT, "s").cases} == {2.0}
+
+
 def test_accuracy_below_round_off():
     """accuracy = 1e-15 (issue 27: 8.5 GB of halved runs before exit 4) is refused at the key."""
     with pytest.raises(InputError, match=r"time\.accuracy: 1e-15 is below what the arithmetic resolves"):

@@ -235,3 +235,24 @@ def test_attach_release_comparison_is_of_the_current_default(figures):
             for side in ("left", "right"):
                 item = f"attach att_srb_{side}_aft on srb_{side} Tz"
                 assert col["attach_n"][item] == 0.0 and abs(welded["attach_n"][item]) > 1e6, (name, item)
+
+
+def test_step_study_is_of_the_current_default(figures):
+    """docs/workflow.md's "Convergence in the step" (benchmarks/step_study.py, rerun by its
+    script): its run at the default scenario's mode_samples is the default run (the same
+    steps and twang as the checked-in figures, which the figures test keeps current), and
+    its reference samples the highest mode more finely than the default does."""
+    if not figures.STEP_JSON.is_file():
+        pytest.skip("no step study checked in")
+    fig = json.loads(figures.DEFAULT_JSON.read_text())
+    study = json.loads(figures.STEP_JSON.read_text())
+    from liftoff.config import default_text, parse_toml
+
+    m = parse_toml(default_text(), "default_scenario.toml")["time"].get("mode_samples", 4.0)
+    assert study["default_mode_samples"] == m == fig["step_rule"]["mode_samples"]
+    assert study["reference_mode_samples"] > m
+    row = next(r for r in study["variants"] if r["mode_samples"] == m)
+    assert row["steps"] == fig["steps"]
+    assert not figures.differences({k: row["twang"][k] for k in fig["twang"]["nominal"]}, fig["twang"]["nominal"])
+    finest = next(r for r in study["variants"] if r["mode_samples"] == study["reference_mode_samples"])
+    assert finest["steps"] > row["steps"] and finest["all"]["deviation"] == 0.0
