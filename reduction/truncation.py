@@ -239,7 +239,8 @@ def truncation_check(full: SystemModes, kept: SystemModes, labels, contact_label
     ok = g > 1e-14 * max(float(g.max(initial=0.0)), 1e-300)
     short = np.where(ok, (g - gk) / np.where(ok, g, 1.0), 0.0)
     j = int(np.argmax(np.abs(short))) if short.size else 0
-    whole, part = effective_mass(full, contact_labels), effective_mass(kept, contact_labels)
+    whole = effective_mass(full, contact_labels)
+    part = whole if kept is full else effective_mass(kept, contact_labels)     # every mode kept: the same
     held = whole > 1e-9 * max(float(whole.max(initial=0.0)), 1e-300)
     mass = tuple(float(p / w) if h else np.nan for p, w, h in zip(part, whole, held))
     cut = kept.n_modes - kept.n_residual < full.n_modes

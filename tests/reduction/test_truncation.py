@@ -232,3 +232,21 @@ def test_n_modes_beyond_the_memory_is_refused_before_any_solve(monkeypatch):
     monkeypatch.setattr(cbm, "available_memory", lambda: 1000.0)
     with pytest.raises(ResourceError, match=r"component 'bar': 11 fixed-interface modes of 12 DOFs need about"):
         craig_bampton(comp, ["p0:Tx"], n_modes=10 ** 9)
+
+
+def test_held_solve_takes_least_squares_where_the_held_dofs_leave_a_motion_free():
+    """The held stiffness A is solved by Cholesky when positive definite (the same solution as
+    the least-squares one, to round-off of cond(A) ~ 1e8), and by least squares (the
+    minimum-norm solution, the free motion left unstrained) when a motion is left free:
+    exactly (a zero pivot) or at round-off (1e-9 against 3e8, a pivot below HELD_PIVOT),
+    where Cholesky would return a solution scaled by 1e9."""
+    from liftoff.reduction.modal_mass import _solve_held
+
+    rng = np.random.default_rng(7)
+    V = np.linalg.qr(rng.standard_normal((5, 5)))[0]
+    b = rng.standard_normal((5, 3))
+    for lam in ([3e8, 4e3, 50.0, 5.0, 2.0], [3e8, 4e3, 50.0, 5.0, 0.0], [3e8, 4e3, 50.0, 5.0, 1e-9]):
+        A = (V * np.array(lam)) @ V.T
+        A = 0.5 * (A + A.T)
+        ref = np.linalg.lstsq(A, b, rcond=None)[0]
+        np.testing.assert_allclose(_solve_held(A, b), ref, rtol=1e-6, atol=1e-9 * np.abs(ref).max())
