@@ -69,6 +69,8 @@ def main(argv=None) -> None:
         s = summarize(devs)
         s["largest_rows"] = [{"item": x["item"], "deviation": x["deviation"], "point_deviation": x["point_deviation"]}
                              for x in sorted(devs, key=lambda x: -x["deviation"])[:5]]
+        # every row's peak (max, min): what ties the study to the current default's figures
+        s["peaks"] = {x["item"]: [x["max"], x["min"]] for x in r["rows"]}
         table.append({**{k: v for k, v in r.items() if k != "rows"}, **s})
     args.json.parent.mkdir(parents=True, exist_ok=True)
     tmp_json = args.json.with_suffix(".json.tmp")

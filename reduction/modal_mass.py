@@ -54,20 +54,23 @@ def _solve_held(A: np.ndarray, b: np.ndarray) -> np.ndarray:
     """A^-1 b for the held stiffness A (symmetric): by Cholesky when A is positive definite
     (the held DOFs restrain every rigid-body motion: the vehicle on its posts; 30x faster than
     the SVD at 1,400 modes), else the least-squares (minimum-norm) solution, which leaves a
-    motion the held DOFs do not restrain unstrained. A pivot below ``HELD_PIVOT`` of its
-    diagonal entry is such a motion left at round-off, and takes the least-squares path too."""
+    motion the held DOFs do not restrain unstrained. A pivot below ``HELD_PIVOT`` of A's
+    largest diagonal entry is such a motion left at round-off (coupled or not to the rest),
+    and takes the least-squares path too."""
     try:
         c = sla.cho_factor(A, lower=True, check_finite=False)
-        if np.all(np.diag(c[0]) ** 2 > HELD_PIVOT * np.diag(A)):
+        if np.diag(c[0]).min(initial=np.inf) ** 2 > HELD_PIVOT * np.abs(np.diag(A)).max(initial=0.0):
             return sla.cho_solve(c, b, check_finite=False)
     except sla.LinAlgError:
         pass
     return sla.lstsq(A, b)[0]
 
 
-#: a Cholesky pivot of the held stiffness below this fraction of its diagonal entry is a
-#: motion the held DOFs do not restrain (its eigenvalue at round-off of the largest, ~1e-16)
-HELD_PIVOT = 1e-10
+#: a Cholesky pivot of the held stiffness (omega^2, rad^2/s^2) below this fraction of its
+#: largest diagonal entry is a motion the held DOFs do not restrain: its eigenvalue is then at
+#: round-off of the stiffest (lstsq's own cut-off is eps ~ 2e-16 of it), while a held mode
+#: this soft would be 1e-6 of the highest frequency (3 mHz against the default's 2.8 kHz)
+HELD_PIVOT = 1e-12
 
 
 def held_effective_mass(omega: np.ndarray, rows: np.ndarray, u: np.ndarray) -> np.ndarray:

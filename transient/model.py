@@ -448,6 +448,9 @@ class InitialState:
 METHODS = ("direct", "fixed-point")
 #: the fewest automatic steps a period of the bodies' highest mode: the Nyquist rate
 MIN_MODE_SAMPLES = 2.0
+#: the most: beyond it a finer step is asked for with h or [time] accuracy, not by sampling a
+#: kHz mode that finely (64 samples a period of the default's 2.8 kHz mode: 1.7 million steps)
+MAX_MODE_SAMPLES = 64.0
 
 
 @dataclass
@@ -495,9 +498,10 @@ class TransientProblem:
             raise InputError(f"tol = {self.tol!r} N must be positive")
         if self.accuracy is not None and not (0 < self.accuracy < 1):
             raise InputError(f"accuracy = {self.accuracy!r} must be a fraction of the peak force in (0, 1)")
-        if not (math.isfinite(self.mode_samples) and self.mode_samples >= MIN_MODE_SAMPLES):
-            raise InputError(f"mode_samples = {self.mode_samples!r} steps a period of the highest mode must be at "
-                             f"least {MIN_MODE_SAMPLES:g} (the Nyquist rate: fewer and that mode aliases)")
+        if not (math.isfinite(self.mode_samples) and MIN_MODE_SAMPLES <= self.mode_samples <= MAX_MODE_SAMPLES):
+            raise InputError(f"mode_samples = {self.mode_samples!r} steps a period of the highest mode must be from "
+                             f"{MIN_MODE_SAMPLES:g} (the Nyquist rate: fewer and that mode aliases) to "
+                             f"{MAX_MODE_SAMPLES:g} (a finer step: give h or accuracy)")
         if self.memory_limit is not None and not self.memory_limit > 0:
             raise InputError(f"memory_limit = {self.memory_limit!r} bytes must be positive")
         if int(self.max_iter) < 1:

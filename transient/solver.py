@@ -611,7 +611,8 @@ def _result(problem: TransientProblem, rows, step: StepChoice, plans, hist: Hist
         modal = {k: v for k, v in modal.items() if v.shape[0]}
     meta = {"h": step.h, "method": problem.method, "tol": problem.tol, "max_iter": problem.max_iter,
             "f_h": step.f_h, "h_default": step.h_default, "f_s": step.f_s, "h_requested": step.h_requested,
-            "mode_samples": step.mode_samples, "stability_margin": step.margin, "n_steps": step.n_steps, "t0": problem.t0,
+            "mode_samples": step.mode_samples if step.h_requested is None else None,   # a given h: no effect
+            "stability_margin": step.margin, "n_steps": step.n_steps, "t0": problem.t0,
             "t_end": problem.t_end, "body_a": problem.body_a.name, "body_b": problem.body_b.name,
             "wall_time_s": _time.perf_counter() - started, "active_set_patterns": n_patterns,
             "gravity": [float(g) for g in problem.forcing.gravity]}     # m/s^2, the uniform field applied (eq. 14)

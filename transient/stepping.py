@@ -4,10 +4,11 @@ Rules (documented in docs/transient.md, "Step size"):
 
 * automatic step: h_max = min(0.25/f_h (eq. 12), 1/(m f_s), t_end - t0), f_h the contact
   frequency (:func:`estimate_step`), f_s the highest natural frequency of the two bodies,
-  m the problem's ``mode_samples`` (steps a period of that mode: 4 by default, at least 2,
-  the Nyquist rate; the modal step is exact at any omega h, eq. 9-10, so m only sets how
-  the highest mode is sampled in the histories, and the guard against a soft contact's
-  huge f_h-step);
+  m the problem's ``mode_samples`` (steps a period of that mode: 4 by default, 2 to 64; 2
+  is the Nyquist rate, at which that mode's own peaks are not resolved). The modal step
+  integrates every mode exactly for forces linear over the step (eq. 9-10), so m does not
+  limit the modes' integration: it sets how the highest mode is sampled in the histories
+  and guards against a soft contact's huge f_h-step;
   the run then takes n = ceil((t_end - t0)/h_max) equal steps of h = (t_end - t0)/n, so
   that the last step ends exactly at t_end;
 * a given h is a largest step: when it does not divide t_end - t0 the run takes the same

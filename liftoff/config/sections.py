@@ -19,7 +19,7 @@ import numpy as np
 from liftoff.core.errors import InputError
 from liftoff.core.units import G0
 from liftoff.transient.effects import softening_factors
-from liftoff.transient.model import METHODS, MIN_MODE_SAMPLES, ContactPoint, ModalFeedback, PointForce, TabulatedForce, TransientProblem
+from liftoff.transient.model import MAX_MODE_SAMPLES, METHODS, MIN_MODE_SAMPLES, ContactPoint, ModalFeedback, PointForce, TabulatedForce, TransientProblem
 
 from .files import file_path, read_csv_table
 from .values import Where, boolean, choice, integer, label, labels, number, string, strings, table, vector
@@ -107,10 +107,11 @@ def time_span(where: Where, spec: Any, *, method: str | None = None) -> TimeSpan
                 f"{accuracy:g} is below what the arithmetic resolves: a peak force after 1e5-1e6 steps carries "
                 f"round-off of ~1e-11 of itself, so halving the step cannot reach it; at least {MIN_ACCURACY:g}")
     samples = number(where / "mode_samples", t.get("mode_samples", 4.0), positive=True)
-    if samples < MIN_MODE_SAMPLES:
+    if not MIN_MODE_SAMPLES <= samples <= MAX_MODE_SAMPLES:
         raise (where / "mode_samples").error(
             f"steps a period of the bodies' highest mode: at least {MIN_MODE_SAMPLES:g} (the Nyquist rate: fewer "
-            f"and that mode aliases in the histories), got {samples:g}")
+            f"and that mode aliases in the histories) and at most {MAX_MODE_SAMPLES:g} (a finer step: give h or "
+            f"accuracy), got {samples:g}")
     return TimeSpan(t_end, t0, h, meth, number(where / "tol", t.get("tol", 1.0), positive=True),
                     integer(where / "max_iter", t.get("max_iter", 100), 1), accuracy, samples)
 

@@ -65,6 +65,8 @@ def test_mode_samples_below_the_nyquist_rate():
     scenario samples it twice a period (docs/workflow.md, "Convergence in the step")."""
     with pytest.raises(InputError, match=r"time\.mode_samples: steps a period of the bodies' highest mode: at least 2"):
         parse_scenario(merge(DEFAULT, {"time": {"mode_samples": 1.9}}), "s")
+    with pytest.raises(InputError, match=r"time\.mode_samples: .* at most 64 \(a finer step: give h or accuracy\), got 65"):
+        parse_scenario(merge(DEFAULT, {"time": {"mode_samples": 65}}), "s")
     assert {c.time.mode_samples for c in parse_scenario(DEFAULT, "s").cases} == {2.0}
 
 

@@ -250,3 +250,9 @@ def test_held_solve_takes_least_squares_where_the_held_dofs_leave_a_motion_free(
         A = 0.5 * (A + A.T)
         ref = np.linalg.lstsq(A, b, rcond=None)[0]
         np.testing.assert_allclose(_solve_held(A, b), ref, rtol=1e-6, atol=1e-9 * np.abs(ref).max())
+    # a free motion uncoupled from the rest (its pivot equals its own diagonal entry, 1e-20):
+    # judged against the largest diagonal entry, not its own; Cholesky would give 3e12 there
+    A = np.diag([3e8, 4e3, 1e-20])
+    ref = np.linalg.lstsq(A, np.array([1.0, 1.0, 3e-8]), rcond=None)[0]
+    assert ref[2] == 0.0
+    np.testing.assert_allclose(_solve_held(A, np.array([1.0, 1.0, 3e-8])), ref, rtol=1e-12, atol=0)

@@ -65,8 +65,18 @@ def test_mode_samples_set_the_steps_a_period_of_the_highest_mode():
     assert solve(_block(t_end=1.2, k=1e-6, mode_samples=2.0)).metadata["mode_samples"] == 2.0
     # a stiff contact: eq. 12 (0.25/f_h, f_h = 35.6 Hz) governs whatever m, the block's 1.1 Hz mode being slower
     assert choose_step(_block(mode_samples=2.0)).n_steps == choose_step(_block()).n_steps
-    with pytest.raises(InputError, match=r"mode_samples = 1.5 steps a period of the highest mode must be at least 2"):
+    with pytest.raises(InputError, match=r"mode_samples = 1.5 steps a period of the highest mode must be from 2 "):
         _block(mode_samples=1.5)
+    with pytest.raises(InputError, match=r"mode_samples = 100.0 .* to 64 \(a finer step: give h or accuracy\)"):
+        _block(mode_samples=100.0)
+    # a given h: m has no effect, and the run does not record one
+    assert solve(_block(t_end=0.1, h=1e-3, mode_samples=2.0)).metadata["mode_samples"] is None
+    # the scenario's [time] reaches the problem through its one translation (TimeSpan.problem)
+    from liftoff.config.sections import TimeSpan
+
+    blk = _block()
+    assert TimeSpan(t_end=1.2, mode_samples=2.0).problem(blk.body_a, blk.body_b, blk.contacts, Forcing(),
+                                                         progress=False).mode_samples == 2.0
 
 
 def test_a_given_step_that_does_not_divide_the_run_is_rounded_down():

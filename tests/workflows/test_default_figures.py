@@ -140,6 +140,8 @@ def test_bench_blocks_show_the_benchmark_file(figures):
     assert "123 s cold" in b["bench-summary"] and "46 s warm" in b["bench-summary"] and "1000 steps" in b["bench-summary"]
     assert "| fe core (built) | 3.2 | 0.1 |" in b["bench-workflow"] and "**123.4**" in b["bench-workflow"]
     assert "warm <= 4 s **not met**, cold <= 20 s **not met**" in b["bench-summary"]
+    bench["warm_walls_s"] = [47.1, 45.6, 52.0]        # --warm-repeat 3: the fastest is the one reported
+    assert "46 s warm (cache hit; the fastest of 3: 47, 46, 52 s)" in figures.render_bench(bench)["bench-summary"]
     bench.update(cold_wall_s=19.0, warm_wall_s=3.5)
     assert "warm <= 4 s met, cold <= 20 s met" in figures.render_bench(bench)["bench-summary"]
 
@@ -254,5 +256,8 @@ def test_step_study_is_of_the_current_default(figures):
     row = next(r for r in study["variants"] if r["mode_samples"] == m)
     assert row["steps"] == fig["steps"]
     assert not figures.differences({k: row["twang"][k] for k in fig["twang"]["nominal"]}, fig["twang"]["nominal"])
+    for load in fig["largest_loads"]:          # the default row's envelope is the default run's
+        hi, lo = row["peaks"][load["item"]]
+        assert not figures.differences([hi if abs(hi) >= abs(lo) else lo], [load["value"]]), load["item"]
     finest = next(r for r in study["variants"] if r["mode_samples"] == study["reference_mode_samples"])
-    assert finest["steps"] > row["steps"] and finest["all"]["deviation"] == 0.0
+    assert finest["steps"] > row["steps"]
