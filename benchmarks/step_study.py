@@ -53,9 +53,9 @@ def main(argv=None) -> None:
     import pyvista  # noqa: F401  (before dolfinx, FENICSX-NOTES.md)
     import tempfile
 
-    from liftoff.config import default_text, parse_toml
+    from liftoff.config import default_text, parse_scenario, parse_toml
 
-    default_m = float(parse_toml(default_text(), "default_scenario.toml")["time"].get("mode_samples", 4.0))
+    default_m = parse_scenario(parse_toml(default_text(), "d"), "d").cases[0].time.mode_samples
     runs = []
     with tempfile.TemporaryDirectory() as tmp:
         for m in SAMPLES:

@@ -446,6 +446,8 @@ class InitialState:
 
 
 METHODS = ("direct", "fixed-point")
+#: the automatic step's steps a period of the bodies' highest mode unless a problem gives its own
+DEFAULT_MODE_SAMPLES = 4.0
 #: the fewest automatic steps a period of the bodies' highest mode: the Nyquist rate
 MIN_MODE_SAMPLES = 2.0
 #: the most: beyond it a finer step is asked for with h or [time] accuracy, not by sampling a
@@ -480,7 +482,7 @@ class TransientProblem:
     progress: bool = True
     accuracy: float | None = None
     memory_limit: float | None = None
-    mode_samples: float = 4.0
+    mode_samples: float = DEFAULT_MODE_SAMPLES
 
     def __post_init__(self) -> None:
         self.contacts = list(self.contacts)

@@ -36,7 +36,7 @@ from liftoff.core.memory import MEMORY_FRACTION, available_memory  # noqa: F401 
 from .assembly import contact_rows
 from .body import ModalBody
 from .coefficients import step_coefficients
-from .model import TransientProblem
+from .model import DEFAULT_MODE_SAMPLES, TransientProblem
 
 STABILITY = math.sqrt(3) / math.pi  # rigid bodies: 2 pi f_h h < 2 sqrt(3) (0.551/f_h), the linear-acceleration limit
 TIME_RESOLUTION = 1e-6              # the float spacing of the time axis must stay below this fraction of h
@@ -181,7 +181,7 @@ class StepChoice:
     f_s: float = 0.0
     h_requested: float | None = None
     margin: float = math.inf
-    mode_samples: float = 4.0
+    mode_samples: float = DEFAULT_MODE_SAMPLES
 
     @property
     def time(self) -> np.ndarray:

@@ -19,7 +19,8 @@ import numpy as np
 from liftoff.core.errors import InputError
 from liftoff.core.units import G0
 from liftoff.transient.effects import softening_factors
-from liftoff.transient.model import MAX_MODE_SAMPLES, METHODS, MIN_MODE_SAMPLES, ContactPoint, ModalFeedback, PointForce, TabulatedForce, TransientProblem
+from liftoff.transient.model import (DEFAULT_MODE_SAMPLES, MAX_MODE_SAMPLES, METHODS, MIN_MODE_SAMPLES, ContactPoint,
+                                     ModalFeedback, PointForce, TabulatedForce, TransientProblem)
 
 from .files import file_path, read_csv_table
 from .values import Where, boolean, choice, integer, label, labels, number, string, strings, table, vector
@@ -65,7 +66,7 @@ class TimeSpan:
     tol: float = 1.0
     max_iter: int = 100
     accuracy: float | None = None
-    mode_samples: float = 4.0
+    mode_samples: float = DEFAULT_MODE_SAMPLES
 
     def problem(self, body_a, body_b, contacts: list, forcing, **rest) -> TransientProblem:
         """The one translation of a scenario into a :class:`TransientProblem` (lift-off
@@ -106,7 +107,7 @@ def time_span(where: Where, spec: Any, *, method: str | None = None) -> TimeSpan
             raise (where / "accuracy").error(
                 f"{accuracy:g} is below what the arithmetic resolves: a peak force after 1e5-1e6 steps carries "
                 f"round-off of ~1e-11 of itself, so halving the step cannot reach it; at least {MIN_ACCURACY:g}")
-    samples = number(where / "mode_samples", t.get("mode_samples", 4.0), positive=True)
+    samples = number(where / "mode_samples", t.get("mode_samples", DEFAULT_MODE_SAMPLES), positive=True)
     if not MIN_MODE_SAMPLES <= samples <= MAX_MODE_SAMPLES:
         raise (where / "mode_samples").error(
             f"steps a period of the bodies' highest mode: at least {MIN_MODE_SAMPLES:g} (the Nyquist rate: fewer "

@@ -248,9 +248,9 @@ def test_step_study_is_of_the_current_default(figures):
         pytest.skip("no step study checked in")
     fig = json.loads(figures.DEFAULT_JSON.read_text())
     study = json.loads(figures.STEP_JSON.read_text())
-    from liftoff.config import default_text, parse_toml
+    from liftoff.config import default_text, parse_scenario, parse_toml
 
-    m = parse_toml(default_text(), "default_scenario.toml")["time"].get("mode_samples", 4.0)
+    m = parse_scenario(parse_toml(default_text(), "d"), "d").cases[0].time.mode_samples
     assert study["default_mode_samples"] == m == fig["step_rule"]["mode_samples"]
     assert study["reference_mode_samples"] > m
     row = next(r for r in study["variants"] if r["mode_samples"] == m)
