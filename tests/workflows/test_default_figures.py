@@ -75,7 +75,7 @@ def test_mesh_study_has_the_current_default_as_a_level(figures):
         assert level["attach"][point][2] == pytest.approx(tz, rel=1e-6), point
 
 
-@pytest.mark.figures        # `make check-figures` (~9 min), not `make test`; .ci/run runs both
+@pytest.mark.figures        # `make check-figures` (4-5 min), not `make test`; .ci/run runs both
 @pytest.mark.skipif(not HAVE_FE, reason="needs dolfinx and gmsh")
 def test_checked_in_figures_are_the_current_codes(figures, tmp_path):
     fresh = json.loads(json.dumps(figures.default_figures(tmp_path / "cache")))
