@@ -36,6 +36,7 @@ from pathlib import Path
 from types import SimpleNamespace
 from typing import NamedTuple
 
+import liftoff  # noqa: F401 - before numpy: it picks the OpenBLAS kernels (liftoff/core/openblas.py)
 import numpy as np
 from numba import njit
 

@@ -23,6 +23,7 @@ import sys
 import time
 from pathlib import Path
 
+import liftoff  # noqa: F401 - before numpy: it picks the OpenBLAS kernels (liftoff/core/openblas.py)
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -20,6 +20,7 @@ import statistics
 import time
 from pathlib import Path
 
+import liftoff  # noqa: F401 - before numpy: it picks the OpenBLAS kernels (liftoff/core/openblas.py)
 import numpy as np
 
 from liftoff.transient import accuracy, solve_estimated

@@ -32,6 +32,7 @@ import sys
 import time
 from pathlib import Path
 
+import liftoff  # noqa: F401 - before numpy: it picks the OpenBLAS kernels (liftoff/core/openblas.py)
 import numpy as np
 from numba import njit
 

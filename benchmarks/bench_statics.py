@@ -24,6 +24,7 @@ import time
 import warnings
 from dataclasses import replace
 
+import liftoff  # noqa: F401 - before numpy: it picks the OpenBLAS kernels (liftoff/core/openblas.py)
 import numpy as np
 
 import bench_transient as bt

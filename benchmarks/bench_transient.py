@@ -27,6 +27,7 @@ import os
 import platform
 import time
 
+import liftoff  # noqa: F401 - before numpy: it picks the OpenBLAS kernels (liftoff/core/openblas.py)
 import numpy as np
 
 from liftoff.transient import (ContactPoint, Forcing, InitialState, ModalBody, PointForce, TabulatedForce,

@@ -13,6 +13,7 @@ import runpy
 import sys
 from pathlib import Path
 
+import liftoff  # noqa: F401 - before numpy: it picks the OpenBLAS kernels (liftoff/core/openblas.py)
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent

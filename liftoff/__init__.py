@@ -1,7 +1,8 @@
 """liftoff: gmsh geometry -> dolfinx FE -> Craig-Bampton -> two-body modal contact transient.
 
 One import namespace over the repository's top-level folders (pyproject.toml maps
-``liftoff.meshes`` to ``meshes/`` and so on). Nothing is imported here: each layer is
+``liftoff.meshes`` to ``meshes/`` and so on). Nothing is imported here (but the
+standard-library choice of OpenBLAS kernels, liftoff/core/openblas.py): each layer is
 imported on demand, so the numpy-only layers never pull in gmsh, dolfinx or PETSc.
 """
 __version__ = "0.2.0"
@@ -29,4 +30,19 @@ def _source_tree() -> None:
         __path__.append(root)
 
 
+def _blas_kernels() -> None:
+    """OPENBLAS_CORETYPE before anything loads OpenBLAS (liftoff/core/openblas.py: the
+    installed OpenBLAS falls back to generic kernels on CPUs it does not recognise). That
+    file is run alone, standard library only: importing liftoff.core would load numpy first."""
+    import importlib.util
+    import os
+
+    spec = importlib.util.spec_from_file_location("liftoff_core_openblas",
+                                                  os.path.join(os.path.dirname(__file__), "core", "openblas.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    module.choose_coretype()
+
+
 _source_tree()
+_blas_kernels()

@@ -2,6 +2,8 @@
 import os
 from pathlib import Path
 
+import liftoff  # noqa: F401 - before numpy (pyvista loads it): it picks the OpenBLAS kernels (liftoff/core/openblas.py)
+
 os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
 try:  # pyvista must be imported before dolfinx (FENICSX-NOTES.md: std::bad_alloc otherwise)
     import pyvista

@@ -90,13 +90,14 @@ def check_target(out: Path) -> None:
 
 def _manifest(stage: Path, command: str) -> dict:
     from liftoff import __version__
+    from liftoff.core.openblas import describe
 
     paths = sorted(p for p in stage.rglob("*") if p.is_file())
     files = [{"name": str(f.relative_to(stage)), "bytes": f.stat().st_size, "sha256": digest}
              for f, digest in zip(paths, files_sha256(paths))]
     return {"format": FORMAT, "version": 1, "liftoff": __version__, "command": command,
             "written": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "units": "SI (m, kg, s, N, rad) unless a file says",
-            "files": files}
+            "blas": describe(), "files": files}
 
 
 def _exchange(a: Path, b: Path) -> bool:
