@@ -36,6 +36,7 @@ SLOSH_COMPARE_JSON = FIGURES / "slosh_compare.json"  # benchmarks/slosh_compare.
 BOOSTER_GRAIN_JSON = FIGURES / "booster_grain.json"  # benchmarks/booster_grain_compare.py
 ATTACH_RELEASE_JSON = FIGURES / "attach_release.json"  # benchmarks/attach_release_compare.py
 STEP_JSON = FIGURES / "step_study.json"            # benchmarks/step_study.py
+KERNEL_FLOOR_JSON = FIGURES / "bench_kernel_floor.json"  # benchmarks/bench_kernel_floor.py --json (machine-dependent)
 CAMPAIGN_BENCH_JSON = FIGURES / "bench_campaign.json"  # benchmarks/bench_campaign.py --json (machine-dependent)
 EXAMPLE_JSONS = {n: FIGURES / f"{n}.json" for n in ("single_stick", "saturn_v")}   # benchmarks/example_figures.py
 DOCS = (ROOT / "README.md", ROOT / "docs" / "workflow.md")
@@ -258,7 +259,8 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
                   examples: dict | None = None, cb_bench: dict | None = None,
                   slosh: dict | None = None, slosh_compare: dict | None = None,
                   booster_grain: dict | None = None, campaign_bench: dict | None = None,
-                  attach_release: dict | None = None, step: dict | None = None) -> dict[str, str]:
+                  attach_release: dict | None = None, step: dict | None = None,
+                  kernel_floor: dict | None = None) -> dict[str, str]:
     """{block name: markdown} from the figures (and the convergence, twang and mesh studies,
     the workflow benchmark and the launcher examples' figures {name: figures}, if any)."""
     tw, twn = fig["twang"]["nominal"], fig["twang"]
@@ -340,6 +342,8 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
         blocks["attach-release"] = render_attach_release(attach_release)
     if step:
         blocks["step-study"] = render_step(step)
+    if kernel_floor:
+        blocks["bench-kernel-floor"] = render_kernel_floor(kernel_floor)
     if examples:
         import runpy
 
@@ -391,6 +395,28 @@ def render_cb_bench(b: dict) -> str:
                     f"{min(bl):.1f} / {statistics.median(bl):.1f} | {r['block_dimension']} | "
                     f"{min(sl):.1f} / {statistics.median(sl):.1f} | {min(sl) / min(bl):.2f} | "
                     f"{r['max_rel_eig_diff']:.0e} |")
+    return "\n".join(rows) + "\n"
+
+
+#: issue 28's target for the transient kernel: its time a step within this ratio of the floor's
+KERNEL_TARGET_RATIO = 1.2
+
+
+def render_kernel_floor(b: dict) -> str:
+    """The transient kernel against a hand-written loop of the same per-step arithmetic
+    (benchmarks/bench_kernel_floor.py --json), judged against issue 28's target."""
+    ratios = [r["liftoff_us"] / r["floor_us"] for r in b["rows"]]
+    rows = [f"On this {b['cpus']}-core machine ({b['date']}, `benchmarks/bench_kernel_floor.py --repeat {b['repeat']}`, "
+            f"OpenBLAS kernels {b.get('blas_kernels') or 'unknown'}, load average {b['load_average_end']:.1f} at the "
+            "end; each time the best of the repeats, liftoff's and the floor's taken in turns):", "",
+            "| modes (vehicle + pad) | contact rows | output rows | liftoff (us a step) | floor (us a step) | ratio |",
+            "|---|---|---|---|---|---|"]
+    for r, q in zip(b["rows"], ratios):
+        rows.append(f"| {r['vehicle_modes']:,} + {r['pad_modes']} | {r['contact_rows']} | {r['outputs']} | "
+                    f"{r['liftoff_us']:.1f} | {r['floor_us']:.1f} | {q:.2f} |")
+    met = all(q <= KERNEL_TARGET_RATIO for q in ratios)
+    rows += ["", f"Issue 28's target, liftoff within {KERNEL_TARGET_RATIO}x of the floor: "
+             + ("met" if met else "**not met**") + f" (largest ratio {max(ratios):.2f})."]
     return "\n".join(rows) + "\n"
 
 
@@ -670,7 +696,8 @@ def studies() -> tuple[dict | None, ...]:
                   json.loads(BOOSTER_GRAIN_JSON.read_text()) if BOOSTER_GRAIN_JSON.is_file() else None,
                   json.loads(CAMPAIGN_BENCH_JSON.read_text()) if CAMPAIGN_BENCH_JSON.is_file() else None,
                   json.loads(ATTACH_RELEASE_JSON.read_text()) if ATTACH_RELEASE_JSON.is_file() else None,
-                  json.loads(STEP_JSON.read_text()) if STEP_JSON.is_file() else None)
+                  json.loads(STEP_JSON.read_text()) if STEP_JSON.is_file() else None,
+                  json.loads(KERNEL_FLOOR_JSON.read_text()) if KERNEL_FLOOR_JSON.is_file() else None)
 
 
 # ------------------------------------------------------------------ comparing

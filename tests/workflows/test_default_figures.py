@@ -261,3 +261,16 @@ def test_step_study_is_of_the_current_default(figures):
         assert not figures.differences([hi if abs(hi) >= abs(lo) else lo], [load["value"]]), load["item"]
     finest = next(r for r in study["variants"] if r["mode_samples"] == study["reference_mode_samples"])
     assert finest["steps"] > row["steps"]
+
+
+def test_kernel_floor_block_shows_the_benchmark_file(figures):
+    """The kernel-floor benchmark (benchmarks/bench_kernel_floor.py --json) is rendered, not
+    typed, and judged against issue 28's 1.2x from the file's own rows."""
+    row = {"vehicle_modes": 3000, "pad_modes": 100, "contact_rows": 24, "outputs": 15, "liftoff_us": 90.0,
+           "floor_us": 80.0}
+    b = {"date": "2026-01-01", "cpus": 2, "load_average_end": 0.5, "repeat": 5, "blas_kernels": "Haswell",
+         "rows": [row]}
+    text = figures.render_kernel_floor(b)
+    assert "| 3,000 + 100 | 24 | 15 | 90.0 | 80.0 | 1.12 |" in text and "Haswell" in text and ": met" in text
+    b["rows"] = [dict(row, liftoff_us=100.0)]
+    assert "**not met** (largest ratio 1.25)" in figures.render_kernel_floor(b)
