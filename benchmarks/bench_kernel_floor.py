@@ -21,7 +21,8 @@ its products by BLAS (dgemv through numba's np.dot) on one thread, as liftoff's 
 
 liftoff's per-step time is the slope of ``solve`` over two run lengths (4,000 and 12,000
 steps), so set-up, static solve and compilation drop out; both are the best of
-``--repeat`` measurements in this process, taken in turns (liftoff, floor, liftoff, ...). The issue's target: liftoff within 1.2x of the floor.
+``--repeat`` measurements in this process, taken in turns (liftoff, floor, liftoff, ...).
+The issue's target: liftoff within 1.2x of the floor.
 """
 from __future__ import annotations
 
@@ -87,11 +88,11 @@ def output_rows(res) -> tuple[int, int]:
     return a, b
 
 
-def _liftoff_problems(n_veh: int):
+def _liftoff_problems(n_veh: int) -> dict:
     return {steps: problem(steps, n_veh=n_veh, release=None) for steps in (4_000, 12_000)}
 
 
-def liftoff_times(probs) -> tuple[dict, object]:
+def liftoff_times(probs: dict) -> tuple[dict, object]:
     """One measurement: the wall time of ``solve`` at each run length."""
     times, res = {}, None
     for steps, prob in probs.items():
@@ -101,7 +102,7 @@ def liftoff_times(probs) -> tuple[dict, object]:
     return times, res
 
 
-def floor_inputs(n_veh: int, res, steps: int = 8_000):
+def floor_inputs(n_veh: int, res, steps: int = 8_000) -> tuple:
     rng = np.random.default_rng(3)
     n, nc = n_veh + N_PAD, 24
     ka, kb = (3 * ((k + 2) // 3) for k in output_rows(res))    # whole q, v, acc triples
@@ -174,7 +175,7 @@ def main() -> None:
 
         blas = describe()
         write_text(args.json, json.dumps({"date": datetime.date.today().isoformat(), "cpus": os.cpu_count(),
-                                          "load_average_end": os.getloadavg()[0], "repeat": args.repeat,
+                                          "load_average_end": os.getloadavg()[0] if hasattr(os, "getloadavg") else None, "repeat": args.repeat,
                                           "blas_kernels": blas["kernels"], "rows": rows}, indent=1) + "\n")
         print(f"  wrote {args.json}")
 

@@ -407,7 +407,7 @@ def render_kernel_floor(b: dict) -> str:
     (benchmarks/bench_kernel_floor.py --json), judged against issue 28's target."""
     ratios = [r["liftoff_us"] / r["floor_us"] for r in b["rows"]]
     rows = [f"On this {b['cpus']}-core machine ({b['date']}, `benchmarks/bench_kernel_floor.py --repeat {b['repeat']}`, "
-            f"OpenBLAS kernels {b.get('blas_kernels') or 'unknown'}, load average {b['load_average_end']:.1f} at the "
+            f"BLAS kernels {b.get('blas_kernels') or 'unknown'}, load average {b['load_average_end'] or float('nan'):.1f} at the "
             "end; each time the best of the repeats, liftoff's and the floor's taken in turns):", "",
             "| modes (vehicle + pad) | contact rows | output rows | liftoff (us a step) | floor (us a step) | ratio |",
             "|---|---|---|---|---|---|"]

@@ -39,8 +39,13 @@ def _blas_kernels() -> None:
 
     spec = importlib.util.spec_from_file_location("liftoff_core_openblas",
                                                   os.path.join(os.path.dirname(__file__), "core", "openblas.py"))
+    if spec is None or spec.loader is None:     # not a plain file (a zip): OpenBLAS picks its own kernels
+        return
     module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    try:
+        spec.loader.exec_module(module)
+    except OSError:
+        return
     module.choose_coretype()
 
 

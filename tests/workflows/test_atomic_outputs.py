@@ -46,6 +46,8 @@ def test_staged_output_publishes_all_or_nothing(tmp_path):
         (stage / "summary.txt").write_text("first")
     man = json.loads((out / MANIFEST).read_text())
     assert {f["name"] for f in man["files"]} == {"results_a.h5", "summary.txt"} and verify(out) == []
+    from liftoff.core.openblas import describe                # the BLAS the run ran on (docs/workflow.md)
+    assert man["blas"] == json.loads(json.dumps(describe())) and man["blas"]["library"]
     with pytest.raises(RuntimeError):                      # a run that fails half-way
         with staged_output(out, "test") as stage:
             (stage / "results_a.h5").write_bytes(b"half")
