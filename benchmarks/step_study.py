@@ -54,6 +54,7 @@ def main(argv=None) -> None:
     import tempfile
 
     from liftoff.config import default_text, parse_scenario, parse_toml
+    from liftoff.core import write_text
 
     default_m = parse_scenario(parse_toml(default_text(), "d"), "d").cases[0].time.mode_samples
     runs = []
@@ -72,11 +73,8 @@ def main(argv=None) -> None:
         # every row's peak (max, min): what ties the study to the current default's figures
         s["peaks"] = {x["item"]: [x["max"], x["min"]] for x in r["rows"]}
         table.append({**{k: v for k, v in r.items() if k != "rows"}, **s})
-    args.json.parent.mkdir(parents=True, exist_ok=True)
-    tmp_json = args.json.with_suffix(".json.tmp")
-    tmp_json.write_text(json.dumps({"default_mode_samples": default_m, "reference_mode_samples": SAMPLES[-1],
-                                    "variants": table}, indent=1) + "\n")
-    tmp_json.replace(args.json)
+    write_text(args.json, json.dumps({"default_mode_samples": default_m, "reference_mode_samples": SAMPLES[-1],
+                                      "variants": table}, indent=1) + "\n")
     print(f"wrote {args.json}")
 
 
