@@ -37,9 +37,10 @@ BOOSTER_GRAIN_JSON = FIGURES / "booster_grain.json"  # benchmarks/booster_grain_
 ATTACH_RELEASE_JSON = FIGURES / "attach_release.json"  # benchmarks/attach_release_compare.py
 STEP_JSON = FIGURES / "step_study.json"            # benchmarks/step_study.py
 KERNEL_FLOOR_JSON = FIGURES / "bench_kernel_floor.json"  # benchmarks/bench_kernel_floor.py --json (machine-dependent)
+STATIC_MODES_JSON = FIGURES / "static_modes_study.json"  # benchmarks/static_modes_study.py
 CAMPAIGN_BENCH_JSON = FIGURES / "bench_campaign.json"  # benchmarks/bench_campaign.py --json (machine-dependent)
 EXAMPLE_JSONS = {n: FIGURES / f"{n}.json" for n in ("single_stick", "saturn_v")}   # benchmarks/example_figures.py
-DOCS = (ROOT / "README.md", ROOT / "docs" / "workflow.md")
+DOCS = (ROOT / "README.md", ROOT / "docs" / "workflow.md", ROOT / "docs" / "transient.md")
 #: figures agree when within this relative difference (of the larger of the two or, inside a
 #: list, of the list's largest magnitude): the same code on another machine differs by
 #: round-off amplified through the contact events (separations and recontacts), far below
@@ -260,7 +261,7 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
                   slosh: dict | None = None, slosh_compare: dict | None = None,
                   booster_grain: dict | None = None, campaign_bench: dict | None = None,
                   attach_release: dict | None = None, step: dict | None = None,
-                  kernel_floor: dict | None = None) -> dict[str, str]:
+                  kernel_floor: dict | None = None, static_modes: dict | None = None) -> dict[str, str]:
     """{block name: markdown} from the figures (and the convergence, twang and mesh studies,
     the workflow benchmark and the launcher examples' figures {name: figures}, if any)."""
     tw, twn = fig["twang"]["nominal"], fig["twang"]
@@ -344,6 +345,8 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
         blocks["step-study"] = render_step(step)
     if kernel_floor:
         blocks["bench-kernel-floor"] = render_kernel_floor(kernel_floor)
+    if static_modes:
+        blocks["static-modes-study"] = render_static_modes(static_modes)
     if examples:
         import runpy
 
@@ -630,6 +633,28 @@ def render_step(study: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def render_static_modes(study: dict) -> str:
+    """The residual-flexibility study (benchmarks/static_modes_study.py): per cut, the
+    static modes, the step, the transients' time and the largest change of an envelope
+    peak from the all-dynamic default (against the row's own peak and the point's vector)."""
+    pct = lambda d: f"{100 * d:.3g} %"  # noqa: E731
+    lines = ["| `[time] static_above_hz` | static modes, vehicle / pad | steps | h (us) | transients, both cases (s) | "
+             "twang peak (m) | largest change of a peak from the all-dynamic default: any row (of its point's vector); "
+             "posts; attaches (the row) | rows over 1 % (of the point's vector) |",
+             "|---|---|---|---|---|---|---|---|"]
+    for r in study["variants"]:
+        cut = "none (the default)" if r["static_above_hz"] is None else (
+            f"{r['static_above_hz']:g} Hz" + (", the default's step" if r["same_step"] else ""))
+        worst = max(r["largest_rows"], key=lambda x: x["deviation"])
+        att = r["attach"]
+        lines.append(f"| {cut} | {r['static_modes'][0]} / {r['static_modes'][1]} | {r['steps']} | "
+                     f"{r['h_s'] * 1e6:.1f} | {r['transients_s']:.1f} | {r['twang']['peak_m']:.4f} | "
+                     f"{pct(worst['deviation'])} ({pct(worst['point_deviation'])}, {worst['item']}); "
+                     f"{pct(r['posts']['deviation'])}; {pct(att['deviation'])} ({att['item']}) | "
+                     f"{r['over_1pct']} ({r['over_1pct_of_point']}) of {r['n_rows']} |")
+    return "\n".join(lines) + "\n"
+
+
 def render_convergence(conv: dict) -> str:
     """The convergence study: each variant's twang and the largest change of an envelope
     peak from the reference (and, for the cuts, from the default)."""
@@ -697,7 +722,8 @@ def studies() -> tuple[dict | None, ...]:
                   json.loads(CAMPAIGN_BENCH_JSON.read_text()) if CAMPAIGN_BENCH_JSON.is_file() else None,
                   json.loads(ATTACH_RELEASE_JSON.read_text()) if ATTACH_RELEASE_JSON.is_file() else None,
                   json.loads(STEP_JSON.read_text()) if STEP_JSON.is_file() else None,
-                  json.loads(KERNEL_FLOOR_JSON.read_text()) if KERNEL_FLOOR_JSON.is_file() else None)
+                  json.loads(KERNEL_FLOOR_JSON.read_text()) if KERNEL_FLOOR_JSON.is_file() else None,
+                  json.loads(STATIC_MODES_JSON.read_text()) if STATIC_MODES_JSON.is_file() else None)
 
 
 # ------------------------------------------------------------------ comparing

@@ -22,6 +22,13 @@ Evaluation, chosen per mode so that no formula cancels or overflows:
   exp of non-positive arguments only (no overflow for any omega h);
 * strongly overdamped with a slow root (|r1| h < 1 while x > 1): the two real roots
   separately through expm1(z)/z and (e^z (z - 1) + 1)/z^2 (no 1 - F cancellation).
+
+Residual-flexibility ("static") modes: a mode far above the forcing and the contact
+frequencies responds quasi-statically, q = P/omega^2 at each step end, with no velocity or
+acceleration (pyyeti's ``SolveUnc`` ``rf`` modes): Bc = 1/omega^2 and every other
+coefficient 0, so that its static flexibility stays in W (section 2.3) while its period no
+longer limits the step (:func:`step_coefficients` ``static``; TransientProblem.static_above_hz).
+The kernel's acceleration P - 2 zeta omega v - omega^2 q is then 0 to round-off of P.
 """
 from __future__ import annotations
 
@@ -170,16 +177,29 @@ def mode_integrals(omega: float, zeta: float, h: float):
     return _closed(w, z, h)
 
 
-def step_coefficients(omega, zeta, h: float) -> StepCoefficients:
-    """Exact coefficients (eq. 7-10) for every mode for the fixed step h (s)."""
+def step_coefficients(omega, zeta, h: float, static=None) -> StepCoefficients:
+    """Exact coefficients (eq. 7-10) for every mode for the fixed step h (s); the modes
+    where the boolean mask ``static`` is True (elastic ones only) get the residual-flexibility
+    coefficients of the module docstring (Bc = 1/omega^2, the others 0)."""
     omega = np.asarray(omega, dtype=float).reshape(-1)
     zeta = np.broadcast_to(np.asarray(zeta, dtype=float), omega.shape)
     if not (np.isfinite(h) and h > 0):
         raise InputError(f"time step h = {h!r} s must be positive and finite")
     n = omega.size
+    static = np.zeros(n, dtype=bool) if static is None else np.asarray(static, dtype=bool).reshape(-1)
+    if static.shape != (n,):
+        raise InputError(f"static: {static.size} flags for {n} modes")
+    if np.any(static & ~(omega > 0)):
+        raise InputError("static: a rigid-body mode (omega = 0) has no static flexibility; only elastic modes may be "
+                         "residual-flexibility modes")
     out = {k: np.empty(n) for k in ("F", "G", "Ac", "Bc", "Fd", "Gd", "Acd", "Bcd")}
     for i in range(n):
         w, z = omega[i], zeta[i]
+        if static[i]:
+            for k in out:
+                out[k][i] = 0.0
+            out["Bc"][i] = 1.0 / (w * w)
+            continue
         g, dg, I0, I1 = mode_integrals(w, z, h)
         out["G"][i] = g
         out["Gd"][i] = dg

@@ -463,7 +463,11 @@ class TransientProblem:
     and the highest mode aliases in the recovered histories); 4 by default.
     ``accuracy``: the step is halved until the estimated error of every peak contact force
     is below this fraction of the largest one (transient/accuracy.py; None: off).
-    ``memory_limit``: bytes the run may use (None: 80 % of the memory available)."""
+    ``memory_limit``: bytes the run may use (None: 80 % of the memory available).
+    ``static_above_hz``: the elastic modes above it are residual-flexibility modes, solved
+    quasi-statically (q = P/omega^2, no velocity or acceleration; pyyeti's ``rfcut``): their
+    static flexibility is kept, their periods no longer set the step (None: every mode
+    dynamic; transient/coefficients.py, docs/transient.md "Residual-flexibility modes")."""
 
     body_a: ModalBody
     body_b: ModalBody
@@ -483,6 +487,7 @@ class TransientProblem:
     accuracy: float | None = None
     memory_limit: float | None = None
     mode_samples: float = DEFAULT_MODE_SAMPLES
+    static_above_hz: float | None = None
 
     def __post_init__(self) -> None:
         self.contacts = list(self.contacts)
@@ -504,6 +509,9 @@ class TransientProblem:
             raise InputError(f"mode_samples = {self.mode_samples!r} steps a period of the highest mode must be from "
                              f"{MIN_MODE_SAMPLES:g} (the Nyquist rate: fewer and that mode aliases) to "
                              f"{MAX_MODE_SAMPLES:g} (a finer step: give h or accuracy)")
+        if self.static_above_hz is not None and not (math.isfinite(self.static_above_hz) and self.static_above_hz > 0):
+            raise InputError(f"static_above_hz = {self.static_above_hz!r} Hz must be positive and finite (or None: "
+                             "every mode dynamic)")
         if self.memory_limit is not None and not self.memory_limit > 0:
             raise InputError(f"memory_limit = {self.memory_limit!r} bytes must be positive")
         if int(self.max_iter) < 1:
@@ -567,3 +575,18 @@ class TransientProblem:
 
     def body(self, key: str) -> ModalBody:
         return self.body_a if key == "a" else self.body_b
+
+    def static_modes(self, key: str) -> np.ndarray:
+        """Boolean mask of body ``key``'s residual-flexibility modes: the elastic modes above
+        ``static_above_hz`` (none when it is None), solved quasi-statically
+        (transient/coefficients.py)."""
+        return static_mask(self.body(key).omega, self.static_above_hz)
+
+
+def static_mask(omega: np.ndarray, static_above_hz: float | None) -> np.ndarray:
+    """Boolean mask of the residual-flexibility modes among ``omega`` (rad/s): those above
+    ``static_above_hz`` (Hz; None: none)."""
+    omega = np.asarray(omega, dtype=float)
+    if static_above_hz is None:
+        return np.zeros(omega.size, dtype=bool)
+    return omega > 2.0 * math.pi * static_above_hz

@@ -478,7 +478,8 @@ def _solve(problem: TransientProblem, step: StepChoice | None = None, runs: int 
                                               f"contact frequency f_h = {step.f_h:.4g} Hz")
     init = initial_state(problem)
     f0, active0 = initial_contact_force(pa, pb, rows, fo, init, problem.t0)
-    coefs = (step_coefficients(pa.omega, pa.zeta, step.h), step_coefficients(pb.omega, pb.zeta, step.h))
+    coefs = (step_coefficients(pa.omega, pa.zeta, step.h, problem.static_modes("a")),
+             step_coefficients(pb.omega, pb.zeta, step.h, problem.static_modes("b")))
     loads = (modal_load(pa, "a", fo), modal_load(pb, "b", fo))
     plans = (output_plan(problem, "a"), output_plan(problem, "b"))
     contact, W = _contact_inputs(rows, coefs)
@@ -613,6 +614,8 @@ def _result(problem: TransientProblem, rows, step: StepChoice, plans, hist: Hist
             "f_h": step.f_h, "h_default": step.h_default, "f_s": step.f_s, "h_requested": step.h_requested,
             "mode_samples": step.mode_samples if step.h_requested is None else None,   # a given h: no effect
             "stability_margin": step.margin, "n_steps": step.n_steps, "t0": problem.t0,
+            "static_above_hz": problem.static_above_hz,     # residual-flexibility modes above it (None: none)
+            "static_modes": [int(problem.static_modes("a").sum()), int(problem.static_modes("b").sum())],
             "t_end": problem.t_end, "body_a": problem.body_a.name, "body_b": problem.body_b.name,
             "wall_time_s": _time.perf_counter() - started, "active_set_patterns": n_patterns,
             "gravity": [float(g) for g in problem.forcing.gravity]}     # m/s^2, the uniform field applied (eq. 14)

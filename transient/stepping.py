@@ -3,7 +3,9 @@
 Rules (documented in docs/transient.md, "Step size"):
 
 * automatic step: h_max = min(0.25/f_h (eq. 12), 1/(m f_s), t_end - t0), f_h the contact
-  frequency (:func:`estimate_step`), f_s the highest natural frequency of the two bodies,
+  frequency (:func:`estimate_step`), f_s the highest natural frequency of the two bodies
+  (of their dynamic modes: residual-flexibility modes, TransientProblem.static_above_hz, are
+  solved quasi-statically and neither set f_s nor carry interface mass in f_h),
   m the problem's ``mode_samples`` (steps a period of that mode: 4 by default, 2 to 64; 2
   is the Nyquist rate, at which that mode's own peaks are not resolved). The modal step
   integrates every mode exactly for forces linear over the step (eq. 9-10), so m does not
@@ -36,7 +38,7 @@ from liftoff.core.memory import MEMORY_FRACTION, available_memory  # noqa: F401 
 from .assembly import contact_rows
 from .body import ModalBody
 from .coefficients import step_coefficients
-from .model import DEFAULT_MODE_SAMPLES, TransientProblem
+from .model import DEFAULT_MODE_SAMPLES, TransientProblem, static_mask
 
 STABILITY = math.sqrt(3) / math.pi  # rigid bodies: 2 pi f_h h < 2 sqrt(3) (0.551/f_h), the linear-acceleration limit
 TIME_RESOLUTION = 1e-6              # the float spacing of the time axis must stay below this fraction of h
@@ -44,28 +46,46 @@ DIVIDES = 1e-6                      # a step that overshoots t_end by less than 
 
 
 # ----------------------------------------------------------------- frequencies
-def estimate_step(body_a: ModalBody, body_b: ModalBody, contacts) -> tuple[float, float]:
+def estimate_step(body_a: ModalBody, body_b: ModalBody, contacts,
+                  static_above_hz: float | None = None) -> tuple[float, float]:
     """(f_h in Hz, h = 0.25/f_h in s) from the bodies reduced to the contact DOFs (eq. 12);
-    without contacts (a plain modal transient) f_h is the highest modal frequency.
+    without contacts (a plain modal transient) f_h is the highest dynamic modal frequency.
 
     Penalty directions: the interface masses (Phi_c Phi_c^T)^-1 of both bodies coupled by
     K_C, i.e. omega_h^2 = lambda_max(K_C^1/2 (Phi_ca Phi_ca^T + Phi_cb Phi_cb^T) K_C^1/2)
     (body stiffness negligible against K_C). Rigid directions: the highest frequency of the
-    coupled modal system with those directions constrained (conservative)."""
+    coupled modal system with those directions constrained (conservative).
+
+    ``static_above_hz``: the residual-flexibility modes above it (TransientProblem) carry no
+    interface mass; their static flexibility Phi_s Omega_s^-2 Phi_s^T is in series with the
+    contact springs: omega_h^2 = lambda_max of W0_dyn x = lambda (K_C^-1 + that) x. The
+    rigid directions' estimate keeps the dynamic modes only (static modes taken as rigid:
+    stiffer, so conservative)."""
     rows = contact_rows(body_a, body_b, contacts)
+    sa, sb = static_mask(body_a.omega, static_above_hz), static_mask(body_b.omega, static_above_hz)
     if rows.n == 0:       # a plain modal transient: resolve the highest mode instead
-        f_h = highest_frequency(body_a, body_b)
+        f_h = highest_frequency(body_a, body_b, static_above_hz)
         return f_h, (0.25 / f_h if f_h > 0 else math.inf)     # rigid bodies only: any h is exact
-    W0 = rows.Phi_a @ rows.Phi_a.T + rows.Phi_b @ rows.Phi_b.T
+    da, db = ~sa, ~sb
+    W0 = rows.Phi_a[:, da] @ rows.Phi_a[:, da].T + rows.Phi_b[:, db] @ rows.Phi_b[:, db].T
     pen = rows.compliance > 0
     w2 = 0.0
     with np.errstate(all="ignore"):
         if pen.any():
             k = np.sqrt(1.0 / rows.compliance[pen])
-            w2 = max(w2, float(np.linalg.eigvalsh(k[:, None] * W0[np.ix_(pen, pen)] * k[None, :]).max()))
+            Wk = k[:, None] * W0[np.ix_(pen, pen)] * k[None, :]
+            if sa.any() or sb.any():      # K_C^1/2 (K_C^-1 + C_s) K_C^1/2 = I + K_C^1/2 C_s K_C^1/2 (SPD)
+                Cs = ((rows.Phi_a[:, sa] / body_a.omega[sa] ** 2) @ rows.Phi_a[:, sa].T
+                      + (rows.Phi_b[:, sb] / body_b.omega[sb] ** 2) @ rows.Phi_b[:, sb].T)[np.ix_(pen, pen)]
+                from scipy.linalg import eigh
+
+                S = np.eye(k.size) + k[:, None] * Cs * k[None, :]
+                w2 = max(w2, float(eigh(0.5 * (Wk + Wk.T), 0.5 * (S + S.T), eigvals_only=True).max()))
+            else:
+                w2 = max(w2, float(np.linalg.eigvalsh(Wk).max()))
         if (~pen).any():
-            D = np.hstack([rows.Phi_a, -rows.Phi_b])
-            Om2 = np.concatenate([body_a.omega ** 2, body_b.omega ** 2])
+            D = np.hstack([rows.Phi_a[:, da], -rows.Phi_b[:, db]])
+            Om2 = np.concatenate([body_a.omega[da] ** 2, body_b.omega[db] ** 2])
             w2 = max(w2, _constrained_max_eig(Om2, D[pen], 1.0 / rows.compliance[pen], D[~pen]))
     if not math.isfinite(w2):
         raise InputError("cannot estimate the step size: the contact frequency overflows (stiffness "
@@ -110,13 +130,15 @@ def _constrained_max_eig(Om2: np.ndarray, Dp: np.ndarray, kp: np.ndarray, Dr: np
     return float(eigsh(op, k=1, which="LA", tol=1e-10, v0=v0, return_eigenvectors=False)[0])
 
 
-def highest_frequency(body_a: ModalBody, body_b: ModalBody) -> float:
-    """f_s (Hz): the highest natural frequency of the two bodies (0 if all modes are rigid)."""
-    w = np.concatenate([body_a.omega, body_b.omega])
+def highest_frequency(body_a: ModalBody, body_b: ModalBody, static_above_hz: float | None = None) -> float:
+    """f_s (Hz): the highest natural frequency of the two bodies' dynamic modes (those not
+    above ``static_above_hz``; 0 if all modes are rigid)."""
+    w = np.concatenate([body_a.omega[~static_mask(body_a.omega, static_above_hz)],
+                        body_b.omega[~static_mask(body_b.omega, static_above_hz)]])
     return float(w.max()) / (2 * math.pi) if w.size else 0.0
 
 
-def coupling_margin(rows, omega: np.ndarray, zeta: np.ndarray, h: float) -> float:
+def coupling_margin(rows, omega: np.ndarray, zeta: np.ndarray, h: float, static=None) -> float:
     """lambda_min(K^1/2 Phi_c diag(r(h)) Phi_c^T K^1/2) over the penalty rows, all coupled.
 
     A step alternating in sign, x_k = (-1)^k x, solves the step recursion of a mode
@@ -128,11 +150,12 @@ def coupling_margin(rows, omega: np.ndarray, zeta: np.ndarray, h: float) -> floa
     limit omega h < 2 sqrt(3)). Coupling fewer rows (released or open) gives a principal
     submatrix, whose smallest eigenvalue is not smaller (Cauchy interlacing): the
     all-coupled set is the worst one. Rigid rows are left out. Returns +inf when there is
-    no penalty row."""
+    no penalty row. ``static``: the residual-flexibility modes (mask over ``omega``): r = 1/omega^2
+    (their coefficients, transient/coefficients.py), which only adds to the margin."""
     pen = rows.compliance > 0
     if not pen.any():
         return math.inf
-    c = step_coefficients(omega, zeta, h)
+    c = step_coefficients(omega, zeta, h, static)
     bad = ~np.all(np.isfinite(c.packed()), axis=0)
     if bad.any():
         m = int(np.argmax(bad))
@@ -149,13 +172,13 @@ def coupling_margin(rows, omega: np.ndarray, zeta: np.ndarray, h: float) -> floa
         return float(np.linalg.eigvalsh(0.5 * (H + H.T)).min())
 
 
-def stability_limit(rows, omega, zeta, h_stable: float, h_unstable: float) -> float:
+def stability_limit(rows, omega, zeta, h_stable: float, h_unstable: float, static=None) -> float:
     """A step between h_stable (margin > -1) and h_unstable (margin <= -1) at the edge of
     stability, by bisection (30 halvings: 1e-9 of the bracket)."""
     lo, hi = h_stable, h_unstable
     for _ in range(30):
         mid = 0.5 * (lo + hi)
-        if coupling_margin(rows, omega, zeta, mid) > -1.0:
+        if coupling_margin(rows, omega, zeta, mid, static) > -1.0:
             lo = mid
         else:
             hi = mid
@@ -196,9 +219,11 @@ class StepChoice:
                           self.h_requested, self.margin, self.mode_samples)
 
 
-def _modes(problem: TransientProblem) -> tuple[np.ndarray, np.ndarray]:
+def _modes(problem: TransientProblem) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """omega, zeta and the residual-flexibility mask of both bodies' modes, a's first."""
     pa, pb = problem.body_a, problem.body_b
-    return np.concatenate([pa.omega, pb.omega]), np.concatenate([pa.zeta, pb.zeta])
+    return (np.concatenate([pa.omega, pb.omega]), np.concatenate([pa.zeta, pb.zeta]),
+            np.concatenate([problem.static_modes("a"), problem.static_modes("b")]))
 
 
 def _steps(span: float, h_max: float) -> int:
@@ -240,33 +265,33 @@ def choose_step(problem: TransientProblem, rows=None) -> StepChoice:
     larger than 0.25/f_h (eq. 12) or does not divide the run; InputError when it exceeds
     the stability limit of the penalty coupling or the resolution of the time axis."""
     rows = rows if rows is not None else contact_rows(problem.body_a, problem.body_b, problem.contacts)
-    f_h, h_default = estimate_step(problem.body_a, problem.body_b, problem.contacts)
-    f_s = highest_frequency(problem.body_a, problem.body_b)
+    f_h, h_default = estimate_step(problem.body_a, problem.body_b, problem.contacts, problem.static_above_hz)
+    f_s = highest_frequency(problem.body_a, problem.body_b, problem.static_above_hz)
     t0, t_end = float(problem.t0), float(problem.t_end)
     span = t_end - t0
     if not math.isfinite(span):
         raise InputError(f"the run from t0 = {t0:g} s to t_end = {t_end:g} s is too long for floats")
-    omega, zeta = _modes(problem)
+    omega, zeta, static = _modes(problem)
     if problem.h is None:
         if not math.isfinite(h_default):
             raise InputError("cannot choose the step: no contacts and no elastic modes; give h explicitly")
         h_max = min(h_default, 1.0 / (problem.mode_samples * f_s) if f_s > 0 else math.inf, span)
         n = _steps(span, h_max)
-        margin = coupling_margin(rows, omega, zeta, span / n)
+        margin = coupling_margin(rows, omega, zeta, span / n, static)
         for _ in range(60):  # the automatic step is halved until the coupling is stable
             if margin > -1.0:
                 break
             n *= 2
-            margin = coupling_margin(rows, omega, zeta, span / n)
+            margin = coupling_margin(rows, omega, zeta, span / n, static)
         _check_resolution(t0, t_end, span / n, f_h, f_s)
         return StepChoice(span / n, f_h, h_default, n, t0, t_end, f_s, None, margin, problem.mode_samples)
     h_req = float(problem.h)
     n = _steps(span, h_req)
     h = span / n
     _check_resolution(t0, t_end, h, f_h, f_s)
-    margin = coupling_margin(rows, omega, zeta, h)
+    margin = coupling_margin(rows, omega, zeta, h, static)
     if not margin > -1.0:
-        h_ok = _stable_below(rows, omega, zeta, min(h_default, h), h)
+        h_ok = _stable_below(rows, omega, zeta, min(h_default, h), h, static)
         raise InputError(f"time step h = {h:.4g} s exceeds the stability limit of the penalty contact coupling, "
                          f"about {h_ok:.4g} s for these bodies and contact stiffnesses ({STABILITY:.3f}/f_h = "
                          f"{STABILITY / f_h:.4g} s for rigid bodies, f_h = {f_h:.4g} Hz): the run would diverge; "
@@ -280,21 +305,21 @@ def choose_step(problem: TransientProblem, rows=None) -> StepChoice:
     return StepChoice(h, f_h, h_default, n, t0, t_end, f_s, h_req, margin, problem.mode_samples)
 
 
-def _stable_below(rows, omega, zeta, h_try: float, h_bad: float) -> float:
+def _stable_below(rows, omega, zeta, h_try: float, h_bad: float, static=None) -> float:
     """The first edge of stability above a stable step below h_bad: from h_try (halved
     until stable) up in steps of 5 % to the first unstable step, then bisection (the
     margin need not be monotone in h; this is the edge nearest the stable step)."""
     lo = min(h_try, 0.5 * h_bad)
     for _ in range(60):
-        if coupling_margin(rows, omega, zeta, lo) > -1.0:
+        if coupling_margin(rows, omega, zeta, lo, static) > -1.0:
             break
         lo *= 0.5
     hi = lo
     while hi < h_bad:
         hi = min(1.05 * hi, h_bad)
-        if not coupling_margin(rows, omega, zeta, hi) > -1.0:
-            return stability_limit(rows, omega, zeta, hi / 1.05, hi)
-    return stability_limit(rows, omega, zeta, lo, h_bad)
+        if not coupling_margin(rows, omega, zeta, hi, static) > -1.0:
+            return stability_limit(rows, omega, zeta, hi / 1.05, hi, static)
+    return stability_limit(rows, omega, zeta, lo, h_bad, static)
 
 
 # ----------------------------------------------------------------- run size

@@ -473,6 +473,12 @@ def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[di
     for case, (res, cp) in results.items():
         lines.append(f"  case {case!r}: {res.time.size - 1} steps of h = {res.h:.3g} s "
                      f"({res.time[0]:g} .. {res.time[-1]:g} s)")
+        cut = res.metadata.get("static_above_hz")
+        if cut is not None:
+            n_a, n_b = res.metadata["static_modes"]
+            lines.append(f"    residual-flexibility modes: {n_a} of the vehicle's and {n_b} of the pad's, above {cut:g} "
+                         "Hz, solved quasi-statically (their static flexibility kept; [time] static_above_hz; what "
+                         "it changes on the default: docs/transient.md, Residual-flexibility modes)")
         est = res.metadata.get("error_estimate")
         if est:
             lines.append(f"    peak post forces: estimated error (Richardson, second run at h/2) at most "

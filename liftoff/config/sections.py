@@ -25,7 +25,7 @@ from liftoff.transient.model import (DEFAULT_MODE_SAMPLES, MAX_MODE_SAMPLES, MET
 from .files import file_path, read_csv_table
 from .values import Where, boolean, choice, integer, label, labels, number, string, strings, table, vector
 
-TIME_KEYS = {"t0", "t_end", "h", "method", "tol", "max_iter", "accuracy", "mode_samples"}
+TIME_KEYS = {"t0", "t_end", "h", "method", "tol", "max_iter", "accuracy", "mode_samples", "static_above_hz"}
 #: the smallest [time] accuracy taken: 100 x the round-off of a peak after 1e6 steps (1e6 x 1.1e-16, ~1e-10 at most)
 MIN_ACCURACY = 1e-8
 MAX_STEPS = 1e9             # steps a run may take ([time] h): 1e9 steps of one output are 8 GB of history
@@ -57,7 +57,9 @@ class TimeSpan:
     ``method``; fixed-point tolerance ``tol`` (N) and ``max_iter``; ``accuracy``: halve the
     step until the estimated error of every peak contact force is below this fraction of
     the largest (None: the step as given; transient/accuracy.py); ``mode_samples``: the
-    automatic step's steps a period of the bodies' highest mode (>= 2, the Nyquist rate)."""
+    automatic step's steps a period of the bodies' highest mode (>= 2, the Nyquist rate);
+    ``static_above_hz``: the elastic modes above it (Hz) are residual-flexibility modes, solved
+    quasi-statically (None: every mode dynamic; TransientProblem.static_above_hz)."""
 
     t_end: float
     t0: float = 0.0
@@ -67,6 +69,7 @@ class TimeSpan:
     max_iter: int = 100
     accuracy: float | None = None
     mode_samples: float = DEFAULT_MODE_SAMPLES
+    static_above_hz: float | None = None
 
     def problem(self, body_a, body_b, contacts: list, forcing, **rest) -> TransientProblem:
         """The one translation of a scenario into a :class:`TransientProblem` (lift-off
@@ -75,7 +78,7 @@ class TimeSpan:
         ``keep_modal``, ``progress``) by keyword."""
         return TransientProblem(body_a, body_b, contacts, forcing, t_end=self.t_end, h=self.h, t0=self.t0,
                                 method=self.method, tol=self.tol, max_iter=self.max_iter, accuracy=self.accuracy,
-                                mode_samples=self.mode_samples, **rest)
+                                mode_samples=self.mode_samples, static_above_hz=self.static_above_hz, **rest)
 
 
 def time_span(where: Where, spec: Any, *, method: str | None = None) -> TimeSpan:
@@ -113,8 +116,11 @@ def time_span(where: Where, spec: Any, *, method: str | None = None) -> TimeSpan
             f"steps a period of the bodies' highest mode: at least {MIN_MODE_SAMPLES:g} (the Nyquist rate: fewer "
             f"and that mode aliases in the histories) and at most {MAX_MODE_SAMPLES:g} (a finer step: give h or "
             f"accuracy), got {samples:g}")
+    static = None
+    if "static_above_hz" in t:
+        static = number(where / "static_above_hz", t["static_above_hz"], positive=True)
     return TimeSpan(t_end, t0, h, meth, number(where / "tol", t.get("tol", 1.0), positive=True),
-                    integer(where / "max_iter", t.get("max_iter", 100), 1), accuracy, samples)
+                    integer(where / "max_iter", t.get("max_iter", 100), 1), accuracy, samples, static)
 
 
 # ---------------------------------------------------------------- tables and forces

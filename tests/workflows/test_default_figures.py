@@ -274,3 +274,31 @@ def test_kernel_floor_block_shows_the_benchmark_file(figures):
     assert "| 3,000 + 100 | 24 | 15 | 90.0 | 80.0 | 1.12 |" in text and "Haswell" in text and ": met" in text
     b["rows"] = [dict(row, liftoff_us=100.0)]
     assert "**not met** (largest ratio 1.25)" in figures.render_kernel_floor(b)
+
+
+def test_static_modes_study_is_of_the_current_default(figures):
+    """docs/transient.md's "Residual-flexibility modes" (benchmarks/static_modes_study.py,
+    rerun by its script): its run without a cut is the default run (the same steps, twang
+    and largest loads as the checked-in figures, which the figures test keeps current); each
+    cut makes some modes static and, at its own step, takes fewer steps; the runs at the
+    default's step take the default's steps."""
+    if not figures.STATIC_MODES_JSON.is_file():
+        pytest.skip("no residual-flexibility study checked in")
+    from liftoff.config import default_text, parse_scenario, parse_toml
+
+    assert parse_scenario(parse_toml(default_text(), "d"), "d").cases[0].time.static_above_hz is None
+    fig = json.loads(figures.DEFAULT_JSON.read_text())
+    study = json.loads(figures.STATIC_MODES_JSON.read_text())
+    ref = next(r for r in study["variants"] if r["static_above_hz"] is None)
+    assert ref["steps"] == fig["steps"] and ref["static_modes"] == [0, 0]
+    assert not figures.differences({k: ref["twang"][k] for k in fig["twang"]["nominal"]}, fig["twang"]["nominal"])
+    for load in fig["largest_loads"]:
+        hi, lo = ref["peaks"][load["item"]]
+        assert not figures.differences([hi if abs(hi) >= abs(lo) else lo], [load["value"]]), load["item"]
+    for r in study["variants"]:
+        if r["static_above_hz"] is None:
+            continue
+        assert sum(r["static_modes"]) > 0
+        assert (r["steps"] == ref["steps"]) if r["same_step"] else (r["steps"] < ref["steps"])
+    text = figures.render_static_modes(study)
+    assert text.count("\n") == len(study["variants"]) + 2 and "none (the default)" in text
