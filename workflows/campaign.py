@@ -234,7 +234,9 @@ def run_case(task: CaseTask):
     histories of the items reaching the envelope it was sent), or (time, {item: history})
     of the items in ``task.columns``."""
     from . import report
+    from .beside import trim_heap
 
+    trim_heap()                          # the previous case's freed arrays back to the system
     res, cp, case, wall = solve_generated(task)
     sc = _MEMO["scenario"]
     its = report.items(res, cp.attach, report.liquid_heads(cp), sc.post.acceleration_band_hz)

@@ -384,15 +384,23 @@ def snapshot_times(result, cp) -> dict[str, int]:
 def deformed_fields(stack, result, i: int) -> list:
     """fem.snapshot.Parts of each component at step i (its cells; its beams as lines), elastic part of the vehicle only (its
     rigid-body motion removed, so the picture stays on the pad)."""
+    return deformed_fields_at(stack, result, [i])[0]
+
+
+def deformed_fields_at(stack, result, steps) -> list[list]:
+    """:func:`deformed_fields` at each of ``steps``, the component fields of all steps in one
+    product per component (its modes read once, not once per step)."""
     from liftoff.fem.snapshot import mesh_parts
     from liftoff.reduction import field_displacement
 
-    out = []
     if "q_a" not in result.modal:
         raise ValueError("deformed_fields needs the modal displacements: solve with keep_modal = 'q'")
-    qa = result.modal["q_a"][i].copy()
-    qa[: np.sum(stack.vehicle.omega == 0)] = 0.0            # elastic deformation only
-    qb = result.modal["q_b"][i] if "q_b" in result.modal else np.zeros(0)
+    steps = list(steps)
+    qa = np.array([result.modal["q_a"][i] for i in steps]).T          # (n_modes, k)
+    qa[: np.sum(stack.vehicle.omega == 0)] = 0.0                        # elastic deformation only
+    qb = (np.array([result.modal["q_b"][i] for i in steps]).T if "q_b" in result.modal
+          else np.zeros((0, len(steps))))
+    out = [[] for _ in steps]
     for name, comp in stack.components.items():
         if comp.field_map is None or comp.nodes is None:
             continue
@@ -400,7 +408,8 @@ def deformed_fields(stack, result, i: int) -> list:
             u = field_displacement(stack.pad_asm, stack.pad_modes, name, comp, qb)
         else:
             u = field_displacement(stack.vehicle_asm, stack.vehicle_modes, name, comp, qa)
-        out += mesh_parts(comp, u.reshape(-1, 3))
+        for k in range(len(steps)):
+            out[k] += mesh_parts(comp, u[:, k].reshape(-1, 3))
     return out
 
 
@@ -412,8 +421,8 @@ def snapshots(stack, result, cp, out: Path, case: str) -> list[Path]:
     from liftoff.fem.snapshot import snapshot_png
 
     paths = []
-    for what, i in snapshot_times(result, cp).items():
-        parts = deformed_fields(stack, result, i)
+    times = snapshot_times(result, cp)
+    for (what, i), parts in zip(times.items(), deformed_fields_at(stack, result, times.values())):
         if not parts:
             break
         # looking along -x: the orbiter (+y) and the twang plane in view
