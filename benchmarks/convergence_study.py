@@ -211,6 +211,22 @@ def summarize(devs: list[dict]) -> dict:
     return out
 
 
+def against(runs: list[dict], ref: list[dict]) -> list[dict]:
+    """Each run (a dict with its envelope ``rows``) with its rows' deviations from ``ref``
+    summarized (:func:`summarize`), its five largest rows and every row's peak (max, min),
+    in place of its rows: the table a study script writes (step_study.py, static_modes_study.py)."""
+    table = []
+    for r in runs:
+        devs = deviations(r["rows"], ref)
+        s = summarize(devs)
+        s["largest_rows"] = [{"item": x["item"], "deviation": x["deviation"], "point_deviation": x["point_deviation"]}
+                             for x in sorted(devs, key=lambda x: -x["deviation"])[:5]]
+        # every row's peak (max, min): what ties the study to the current default's figures
+        s["peaks"] = {x["item"]: [x["max"], x["min"]] for x in r["rows"]}
+        table.append({**{k: v for k, v in r.items() if k != "rows"}, **s})
+    return table
+
+
 def run_variant(name: str, cache: Path, tmp: Path) -> dict:
     """One variant's run: what it is, its envelope rows (item, category, unit, max, min), mode
     counts, steps, twang and wall time."""

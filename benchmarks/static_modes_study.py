@@ -28,7 +28,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import liftoff  # noqa: E402,F401  (before numpy: OpenBLAS's kernels, liftoff/core/openblas.py)
-from convergence_study import deviations, summarize  # noqa: E402
+from convergence_study import against  # noqa: E402
 from default_figures import ROOT, run_default_like, twang_figures  # noqa: E402
 
 CUTS = (None, 600.0, 300.0, 150.0)      # Hz; None: every mode dynamic (the default), the reference
@@ -78,14 +78,7 @@ def main(argv=None) -> None:
                       f"{r['h_s'] * 1e6:.1f} us, transients {r['transients_s']:.1f} s, run {r['wall_s']:.0f} s",
                       flush=True)
     ref = runs[0]["rows"]
-    table = []
-    for r in runs:
-        devs = deviations(r["rows"], ref)
-        s = summarize(devs)
-        s["largest_rows"] = [{"item": x["item"], "deviation": x["deviation"], "point_deviation": x["point_deviation"]}
-                             for x in sorted(devs, key=lambda x: -x["deviation"])[:5]]
-        s["peaks"] = {x["item"]: [x["max"], x["min"]] for x in r["rows"]}
-        table.append({**{k: v for k, v in r.items() if k != "rows"}, **s})
+    table = against(runs, ref)
     write_text(args.json, json.dumps({"date": time.strftime("%Y-%m-%d"), "variants": table}, indent=1) + "\n")
     print(f"wrote {args.json}")
 

@@ -23,7 +23,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from convergence_study import deviations, summarize  # noqa: E402
+from convergence_study import against  # noqa: E402
 from default_figures import ROOT, run_default_like, twang_figures  # noqa: E402
 
 SAMPLES = (2.0, 4.0, 8.0)       # steps a period of the highest mode; the last is the reference
@@ -64,15 +64,7 @@ def main(argv=None) -> None:
             print(f"mode_samples {m:g}: {runs[-1]['steps']} steps of {runs[-1]['h_s'] * 1e6:.1f} us, "
                   f"{runs[-1]['wall_s']:.0f} s", flush=True)
     ref = runs[-1]["rows"]
-    table = []
-    for r in runs:
-        devs = deviations(r["rows"], ref)
-        s = summarize(devs)
-        s["largest_rows"] = [{"item": x["item"], "deviation": x["deviation"], "point_deviation": x["point_deviation"]}
-                             for x in sorted(devs, key=lambda x: -x["deviation"])[:5]]
-        # every row's peak (max, min): what ties the study to the current default's figures
-        s["peaks"] = {x["item"]: [x["max"], x["min"]] for x in r["rows"]}
-        table.append({**{k: v for k, v in r.items() if k != "rows"}, **s})
+    table = against(runs, ref)
     write_text(args.json, json.dumps({"default_mode_samples": default_m, "reference_mode_samples": SAMPLES[-1],
                                       "variants": table}, indent=1) + "\n")
     print(f"wrote {args.json}")
