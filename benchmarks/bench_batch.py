@@ -245,7 +245,8 @@ def _solve_batch(problems: list[TransientProblem], chunk: int) -> list[Transient
     rows = rows_k[0]
     step = choose_step(p0, rows)
     n, nc, n_t = pa.n_modes + pb.n_modes, rows.n, step.n_steps + 1
-    coefs = (step_coefficients(pa.omega, pa.zeta, step.h), step_coefficients(pb.omega, pb.zeta, step.h))
+    coefs = (step_coefficients(pa.omega, pa.zeta, step.h, p0.static_modes("a")),
+             step_coefficients(pb.omega, pb.zeta, step.h, p0.static_modes("b")))
     plans = (output_plan(p0, "a"), output_plan(p0, "b"))
     contact, W = _contact_inputs(rows, coefs)
     hist = BatchHistory(np.zeros((K, n_t, plans[0].ntarg)), np.zeros((K, n_t, plans[1].ntarg)),

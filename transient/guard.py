@@ -20,6 +20,12 @@ state and every penalty force of the chunk against these bounds times a safety f
 distortion near the stability limit, 1/(1 + margin) (stepping.coupling_margin): a
 stable run stays orders of magnitude inside, a diverging one grows geometrically and is
 stopped within a few steps of crossing them.
+
+Residual-flexibility modes (TransientProblem.static_above_hz) carry strain energy
+P^2/(2 omega^2) with no velocity, which the power bound above does not count; it is tiny
+against the bound (omega above the cut, the bound growing with int |P| from the first
+step), so a stable run with them stays inside it, but the bound is then no longer a
+proof for their share.
 """
 from __future__ import annotations
 

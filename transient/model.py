@@ -551,6 +551,14 @@ class TransientProblem:
             if self.method == "fixed-point" and c.has_laws:
                 raise InputError(f"contact {c.name!r}: friction, damping, latches and soft release need method "
                                  "'direct' (the fixed-point iteration is the reference's contact law only)")
+        if self.static_above_hz is not None and (self.static_modes("a").any() or self.static_modes("b").any()):
+            for c in self.contacts:
+                if c.rigid or c.friction > 0 or np.any(np.asarray(c.damping) > 0):
+                    what = "is rigid" if c.rigid else "has friction" if c.friction > 0 else "has a dashpot"
+                    raise InputError(f"contact {c.name!r} {what}: its rows work on relative velocities, in which "
+                                     f"the residual-flexibility modes (static_above_hz = {self.static_above_hz:g} Hz) "
+                                     "have no part (their deformation rate is not modelled); make it a penalty "
+                                     "contact without friction or damping, or keep every mode dynamic")
         f = self.forcing
         for p in f.constant + f.tables:
             self.body(p.body).dof_index(p.label)

@@ -171,14 +171,19 @@ def static_equilibrium(body_a: ModalBody, body_b: ModalBody, contacts, forcing: 
 
 
 # ------------------------------------------------------------- initial force
-def _acceleration(body: ModalBody, key: str, forcing: Forcing, load, t: float, q, v, Pc) -> np.ndarray:
+def _acceleration(body: ModalBody, key: str, forcing: Forcing, load, t: float, q, v, Pc,
+                  static: np.ndarray | None = None) -> np.ndarray:
     """Modal acceleration at time t from the equation of motion: applied load (``load``, the
-    body's ModalLoad) + feedback + contact force Pc, less damping and stiffness."""
+    body's ModalLoad) + feedback + contact force Pc, less damping and stiffness; 0 for the
+    residual-flexibility modes ``static`` (a mask; they have no acceleration)."""
     if body.n_modes == 0:
         return np.zeros(0)
     U, V = feedback_at(body.n_modes, key, forcing, t)
     P = load.at(t) + U @ (V @ np.concatenate([q, v])) + Pc
-    return P - 2 * body.zeta * body.omega * v - body.omega ** 2 * q
+    acc = P - 2 * body.zeta * body.omega * v - body.omega ** 2 * q
+    if static is not None:
+        acc[static] = 0.0
+    return acc
 
 
 def initial_contact_force(body_a, body_b, rows, forcing, state: InitialState, t0: float):
@@ -414,8 +419,10 @@ def _start(problem: TransientProblem, rows, contact: Contact, init: InitialState
     """Row 0 of the histories and the kernel state at t0 (contact force f0, active set active0)."""
     pa, pb, fo, t0 = problem.body_a, problem.body_b, problem.forcing, problem.t0
     q_a, v_a, q_b, v_b = (np.array(x, dtype=float) for x in (init.q_a, init.v_a, init.q_b, init.v_b))
-    a_a0 = _acceleration(pa, "a", fo, loads[0], t0, q_a, v_a, rows.Phi_a.T @ f0)
-    a_b0 = _acceleration(pb, "b", fo, loads[1], t0, q_b, v_b, -(rows.Phi_b.T @ f0))
+    sa, sb = problem.static_modes("a"), problem.static_modes("b")
+    v_a[sa], v_b[sb] = 0.0, 0.0              # residual-flexibility modes: no velocity, no acceleration
+    a_a0 = _acceleration(pa, "a", fo, loads[0], t0, q_a, v_a, rows.Phi_a.T @ f0, sa)
+    a_b0 = _acceleration(pb, "b", fo, loads[1], t0, q_b, v_b, -(rows.Phi_b.T @ f0), sb)
     plans[0].first_row(q_a, v_a, a_a0, hist.Y_a)
     plans[1].first_row(q_b, v_b, a_b0, hist.Y_b)
     hist.Fc[0] = f0

@@ -91,6 +91,9 @@ def estimate_step(body_a: ModalBody, body_b: ModalBody, contacts,
         raise InputError("cannot estimate the step size: the contact frequency overflows (stiffness "
                          f"{np.max(1.0 / rows.compliance[pen]) if pen.any() else 0:.3g} N/m against mode-shape "
                          f"entries up to {np.abs(W0).max() ** 0.5:.3g})")
+    if not w2 > 0 and (sa.any() or sb.any()):     # the contact rows see static modes only: quasi-static
+        f_h = highest_frequency(body_a, body_b, static_above_hz)
+        return f_h, (0.25 / f_h if f_h > 0 else math.inf)
     if not w2 > 0:
         raise InputError("cannot estimate the step size: the contact model has no frequency; give h explicitly")
     f_h = math.sqrt(w2) / (2 * math.pi)
@@ -274,7 +277,8 @@ def choose_step(problem: TransientProblem, rows=None) -> StepChoice:
     omega, zeta, static = _modes(problem)
     if problem.h is None:
         if not math.isfinite(h_default):
-            raise InputError("cannot choose the step: no contacts and no elastic modes; give h explicitly")
+            raise InputError("cannot choose the step: no contacts and no dynamic elastic modes (any above "
+                             "static_above_hz are solved quasi-statically); give h explicitly")
         h_max = min(h_default, 1.0 / (problem.mode_samples * f_s) if f_s > 0 else math.inf, span)
         n = _steps(span, h_max)
         margin = coupling_margin(rows, omega, zeta, span / n, static)

@@ -138,6 +138,10 @@ def summary(scenario, result, path: Path, wall: float, est=None) -> str:
              f"h = {result.h:.4g} s, method {p.method}, {wall:.2f} s wall",
              "  modes    as the body files give them: no truncation check here (a body file carries modes, not the "
              "stiffness they came from; `liftoff run` checks its bodies against their CB models)"]
+    if result.metadata.get("static_above_hz") is not None:
+        n_a, n_b = result.metadata["static_modes"]
+        lines.append(f"  static   {n_a} modes of a and {n_b} of b above {result.metadata['static_above_hz']:g} Hz solved "
+                     "quasi-statically ([time] static_above_hz; docs/transient.md)")
     lines.append(f"  {'contact':<16}{'release (s)':>12}{'separation (s)':>16}{'recontacts':>12}"
                  f"{'peak compression (N)':>22}{'est. error':>12}{'peak tension (N)':>18}{'est. error':>12}")
     fine = est.check.contact_summary() if est is not None else None

@@ -93,7 +93,7 @@ def main(argv=None) -> None:
     # 5. Hold-down posts: penalty contacts, bolted until release, then compression-only on
     #    their axial direction (2.7). The step from the contact model (eq. 12).
     posts = contacts(case, stack)
-    f_h, h = estimate_step(vehicle, pad, posts)
+    f_h, h = estimate_step(vehicle, pad, posts, case.time.static_above_hz)
     print(f"step: f_h = {f_h:.1f} Hz, h = 0.25/f_h = {h * 1e3:.3f} ms (eq. 12)")
 
     # 6. Loads (section 4): cryo preload at boundary DOFs only (4.3), thrust tables and forces,
