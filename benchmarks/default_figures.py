@@ -198,7 +198,8 @@ def default_figures(cache: Path | None, plots_to: Path | None = None) -> dict:
                        for n, cb in stack.cbs.items()},
         "truncation": checks,
         "steps": int(res.time.size - 1), "h_s": float(res.h),
-        "step_rule": {k: float(res.metadata[k]) for k in ("f_h", "h_default", "f_s", "mode_samples")},
+        "step_rule": {**{k: float(res.metadata[k]) for k in ("f_h", "h_default", "f_s", "mode_samples")},
+                      **{k: res.metadata[k] for k in ("step_governed_by", "stability_halvings")}},
         "error_estimate": {c: out.results[c][0].metadata.get("error_estimate", {}).get("worst_relative")
                            for c in out.results},
         "twang": {c: twang_figures(out, c) for c in out.results},
@@ -218,17 +219,14 @@ def default_figures(cache: Path | None, plots_to: Path | None = None) -> dict:
 
 
 def _step_rule(fig: dict) -> str:
-    """Which rule set the default's step (transient/stepping.py): eq. 12's 0.25/f_h or the
-    highest mode's sampling 1/(m f_s)."""
+    """The rule that set the default's step, as the run recorded it (transient/stepping.py:
+    the results' step_governed_by and stability_halvings)."""
     r = fig["step_rule"]
-    by_mode = 1.0 / (r["mode_samples"] * r["f_s"])
-    if by_mode < r["h_default"]:
-        rule = (f"{r['mode_samples']:g} steps a period of the highest mode, {r['f_s']:.0f} Hz; eq. 12 alone: "
-                f"0.25/f_h = {r['h_default'] * 1e6:.0f} us, f_h = {r['f_h']:.0f} Hz")
-    else:
-        rule = f"eq. 12: 0.25/f_h, f_h = {r['f_h']:.0f} Hz"
-    if fig["h_s"] < 0.75 * min(by_mode, r["h_default"]):      # rounded to divide the run: at most a step less
-        rule += "; halved for the stability of the penalty coupling"
+    rule = {"mode samples": f"{r['mode_samples']:g} steps a period of the highest mode, {r['f_s']:.0f} Hz; eq. 12 "
+                            f"alone: 0.25/f_h = {r['h_default'] * 1e6:.0f} us, f_h = {r['f_h']:.0f} Hz",
+            "eq. 12": f"eq. 12: 0.25/f_h, f_h = {r['f_h']:.0f} Hz"}.get(r["step_governed_by"], r["step_governed_by"])
+    if r["stability_halvings"]:
+        rule += f"; halved {r['stability_halvings']} x for the stability of the penalty coupling"
     return rule
 
 

@@ -621,6 +621,7 @@ def _result(problem: TransientProblem, rows, step: StepChoice, plans, hist: Hist
             "f_h": step.f_h, "h_default": step.h_default, "f_s": step.f_s, "h_requested": step.h_requested,
             "mode_samples": step.mode_samples if step.h_requested is None else None,   # a given h: no effect
             "stability_margin": step.margin, "n_steps": step.n_steps, "t0": problem.t0,
+            "step_governed_by": step.governed_by, "stability_halvings": step.stability_halvings,
             "static_above_hz": problem.static_above_hz,     # residual-flexibility modes above it (None: none)
             "static_modes": [int(problem.static_modes("a").sum()), int(problem.static_modes("b").sum())],
             "t_end": problem.t_end, "body_a": problem.body_a.name, "body_b": problem.body_b.name,

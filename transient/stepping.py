@@ -196,7 +196,10 @@ class StepChoice:
     f_h: the contact frequency (Hz) and h_default = 0.25/f_h (eq. 12); f_s: the highest
     natural frequency of the bodies (Hz); h_requested: the step given (None: automatic);
     margin: :func:`coupling_margin` at h (> -1: stable); mode_samples: the automatic step's
-    steps a period of the f_s mode (TransientProblem.mode_samples)."""
+    steps a period of the f_s mode (TransientProblem.mode_samples); governed_by: the rule
+    that set h ("eq. 12": 0.25/f_h, "mode samples": 1/(m f_s), "run": the run's length,
+    "given": the problem's h); stability_halvings: how often the automatic step was halved
+    for the stability of the penalty coupling."""
 
     h: float
     f_h: float
@@ -208,6 +211,8 @@ class StepChoice:
     h_requested: float | None = None
     margin: float = math.inf
     mode_samples: float = DEFAULT_MODE_SAMPLES
+    governed_by: str = "given"
+    stability_halvings: int = 0
 
     @property
     def time(self) -> np.ndarray:
@@ -219,7 +224,7 @@ class StepChoice:
     def halved(self) -> "StepChoice":
         """The same run in steps of h/2 (twice as many)."""
         return StepChoice(0.5 * self.h, self.f_h, self.h_default, 2 * self.n_steps, self.t0, self.t_end, self.f_s,
-                          self.h_requested, self.margin, self.mode_samples)
+                          self.h_requested, self.margin, self.mode_samples, self.governed_by, self.stability_halvings)
 
 
 def _modes(problem: TransientProblem) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -279,16 +284,21 @@ def choose_step(problem: TransientProblem, rows=None) -> StepChoice:
         if not math.isfinite(h_default):
             raise InputError("cannot choose the step: no contacts and no dynamic elastic modes (any above "
                              "static_above_hz are solved quasi-statically); give h explicitly")
-        h_max = min(h_default, 1.0 / (problem.mode_samples * f_s) if f_s > 0 else math.inf, span)
-        n = _steps(span, h_max)
+        limits = {"eq. 12": h_default, "mode samples": 1.0 / (problem.mode_samples * f_s) if f_s > 0 else math.inf,
+                  "run": span}
+        governed_by = min(limits, key=limits.get)
+        n = _steps(span, limits[governed_by])
         margin = coupling_margin(rows, omega, zeta, span / n, static)
+        halvings = 0
         for _ in range(60):  # the automatic step is halved until the coupling is stable
             if margin > -1.0:
                 break
             n *= 2
+            halvings += 1
             margin = coupling_margin(rows, omega, zeta, span / n, static)
         _check_resolution(t0, t_end, span / n, f_h, f_s)
-        return StepChoice(span / n, f_h, h_default, n, t0, t_end, f_s, None, margin, problem.mode_samples)
+        return StepChoice(span / n, f_h, h_default, n, t0, t_end, f_s, None, margin, problem.mode_samples,
+                          governed_by, halvings)
     h_req = float(problem.h)
     n = _steps(span, h_req)
     h = span / n

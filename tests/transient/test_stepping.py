@@ -169,3 +169,23 @@ def test_keep_modal_q_is_one_column_a_mode_and_the_error_check_keeps_none():
     e = solve_estimated(p)
     assert e.result.modal and not e.check.modal
     np.testing.assert_array_equal(e.result.contact_force, r.contact_force)
+
+
+def test_the_step_records_the_rule_that_set_it(monkeypatch):
+    """StepChoice.governed_by and the results' metadata name the rule that set h: eq. 12 for
+    the stiff contact (35.6 Hz against the block's 1.1 Hz mode), the highest mode's sampling
+    for the soft one, the run's length for a run shorter than both, "given" for a given h;
+    stability_halvings counts the automatic step's halvings (here forced by a margin that
+    is unstable twice)."""
+    assert choose_step(_block(t_end=1.2)).governed_by == "eq. 12"
+    assert choose_step(_block(t_end=1.2, k=1e-6)).governed_by == "mode samples"
+    assert choose_step(_block(t_end=1e-3)).governed_by == "run"
+    r = solve(_block(t_end=0.1, h=1e-3))
+    assert r.metadata["step_governed_by"] == "given" and r.metadata["stability_halvings"] == 0
+    from liftoff.transient import stepping
+
+    n_stable = choose_step(_block(t_end=1.2)).n_steps
+    margins = iter([-2.0, -1.5, 0.0])
+    monkeypatch.setattr(stepping, "coupling_margin", lambda *args: next(margins))
+    step = choose_step(_block(t_end=1.2))
+    assert step.stability_halvings == 2 and step.governed_by == "eq. 12" and step.n_steps == 4 * n_stable
