@@ -138,6 +138,67 @@ def snapshot_png(path, parts: Part | list[Part], title: str = "", scale: float |
     return path
 
 
+def snapshot_pngs(shots: list[tuple], *, fraction: float = 0.1, note: str = "", window_size=(1024, 768),
+                  view: str = "iso", azimuth: float = 0.0, elevation: float = 0.0) -> list[Path]:
+    """Several pictures of the same meshes deformed differently, ``shots`` = [(path, parts,
+    title)], each as :func:`snapshot_png` draws it (its own displacement scale, ``fraction``
+    of the model size, and colour range), from one scene: the meshes, their outlines, the
+    scalar bar and the camera (set for the first picture) are made once, the deformed
+    points, colours and texts updated per picture (the three snapshots of a case: one
+    outline extraction and scene instead of three). Parts that differ in their meshes
+    between shots are drawn one by one."""
+    shots = [(Path(p), [parts] if isinstance(parts, Part) else list(parts), title) for p, parts, title in shots]
+    for path, _, _ in shots:
+        if path.suffix.lower() != ".png":
+            raise InputError(f"snapshot: {str(path)!r} must end in .png")
+    if view not in ("iso", "xy", "xz", "yz"):
+        raise InputError(f"snapshot: view {view!r} must be iso, xy, xz or yz")
+    same = all(len(parts) == len(shots[0][1]) and all(
+        p.cell_type == q.cell_type and p.nodes is q.nodes or (p.nodes.shape == q.nodes.shape and p.cells.shape ==
+                                                              q.cells.shape and np.array_equal(p.cells, q.cells))
+        for p, q in zip(parts, shots[0][1])) for _, parts, _ in shots)
+    one = dict(fraction=fraction, note=note, window_size=window_size, view=view, azimuth=azimuth, elevation=elevation)
+    if len(shots) < 2 or not same or not _RENDER_IN_PROCESS:
+        return [snapshot_png(path, parts, title, **one) for path, parts, title in shots]
+    pl = pyvista.Plotter(off_screen=True, window_size=list(window_size))
+    pl.set_background("white")
+    bar = {"title": "|u| (m)", "color": "black"}
+    meshes, actors = [], []
+    for part in shots[0][1]:
+        base = part.grid()
+        line = part.cell_type == "line"
+        pl.add_mesh(base if line else base.extract_feature_edges(), color="lightgrey", line_width=2 if line else 1)
+        deformed = base.copy()
+        deformed.points = part.nodes + auto_scale(shots[0][1], fraction) * part.displacement
+        deformed.point_data["|u| (m)"] = np.linalg.norm(part.displacement, axis=1)
+        actors.append(pl.add_mesh(deformed, scalars="|u| (m)", cmap="viridis", clim=[0, 1], scalar_bar_args=bar,
+                                  **({"line_width": 6} if line else {})))
+        meshes.append(deformed)
+    label = pl.add_text("", position="upper_left", font_size=11, color="black")
+    footer = pl.add_text("", position="lower_left", font_size=9, color="black")
+    getattr(pl, "view_isometric" if view == "iso" else f"view_{view}")()
+    pl.camera.azimuth += azimuth
+    pl.camera.elevation += elevation
+    paths = []
+    try:
+        for path, parts, title in shots:
+            scale = auto_scale(parts, fraction)
+            here = max(float(np.linalg.norm(p.displacement, axis=1).max()) for p in parts)
+            for mesh, actor, part in zip(meshes, actors, parts):
+                mesh.points = part.nodes + scale * part.displacement
+                mesh.point_data["|u| (m)"] = np.linalg.norm(part.displacement, axis=1)
+                actor.mapper.scalar_range = (0.0, here or 1.0)
+            label.SetText(2, title)
+            footer.SetText(0, f"displacement scale x {scale:.3g}, max |u| = {here:.3g} m" + (f" ({note})" if note else ""))
+            pl.render()                     # the updated scene (screenshot alone may return the last frame)
+            with atomic_path(path, suffix=".png") as tmp:
+                pl.screenshot(str(tmp))
+            paths.append(path)
+    finally:
+        pl.close()
+    return paths
+
+
 def animation_gif(path, frames: list[list[Part]], titles: list[str], scale: float | None = None, *,
                   fraction: float = 0.1, note: str = "", fps: int = 8, window_size=(640, 800), view: str = "yz",
                   azimuth: float = 0.0, elevation: float = 0.0) -> Path:

@@ -418,19 +418,18 @@ TITLES = {"max_twang": "maximum twang", "release": "hold-down release",
 
 
 def snapshots(stack, result, cp, out: Path, case: str) -> list[Path]:
-    from liftoff.fem.snapshot import snapshot_png
+    """snapshot_<what>_<case>.png at the steps of :func:`snapshot_times`, from one scene
+    (fem.snapshot.snapshot_pngs)."""
+    from liftoff.fem.snapshot import snapshot_pngs
 
-    paths = []
     times = snapshot_times(result, cp)
-    for (what, i), parts in zip(times.items(), deformed_fields_at(stack, result, times.values())):
-        if not parts:
-            break
-        # looking along -x: the orbiter (+y) and the twang plane in view
-        paths.append(snapshot_png(out / f"snapshot_{what}_{case}.png", parts,
-                                  f"{case}: {TITLES.get(what, what)} at t = {result.time[i]:.3f} s",
-                                  fraction=0.03, note="elastic part", window_size=(900, 1100), view="yz",
-                                  azimuth=35, elevation=12))
-    return paths
+    shots = [(out / f"snapshot_{what}_{case}.png", parts, f"{case}: {TITLES.get(what, what)} at t = {result.time[i]:.3f} s")
+             for (what, i), parts in zip(times.items(), deformed_fields_at(stack, result, times.values()))]
+    if not shots or not shots[0][1]:
+        return []
+    # looking along -x: the orbiter (+y) and the twang plane in view
+    return snapshot_pngs(shots, fraction=0.03, note="elastic part", window_size=(900, 1100), view="yz", azimuth=35,
+                         elevation=12)
 
 
 # ------------------------------------------------------------------ summary

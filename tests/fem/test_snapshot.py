@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from liftoff.fem.snapshot import Part, snapshot_mode, snapshot_png  # pyvista first (before dolfinx)
+from liftoff.fem.snapshot import Part, snapshot_mode, snapshot_png, snapshot_pngs  # pyvista first (before dolfinx)
 from liftoff.fem import build_model, eigenmodes
 from liftoff.meshes.spec import Geometry, Material
 from liftoff.core.errors import InputError
@@ -27,6 +27,60 @@ def test_mode_snapshot_png_is_not_blank(msh, tmp_path):
     print(f"snapshot {shape}, pixel std {std:.3f}, non-white fraction {non_white:.3f}, {n_colours} colours")
     assert shape[:2] == (768, 1024)
     assert std > 0.05 and non_white > 0.02 and n_colours > 50     # drawn, coloured by |u|
+
+
+_ONE_SCENE = """
+import sys
+import numpy as np
+from liftoff.fem.snapshot import Part, snapshot_png, snapshot_pngs, _RENDER_IN_PROCESS
+import matplotlib.image as mpimg
+from pathlib import Path
+assert _RENDER_IN_PROCESS
+t = Path(sys.argv[1])
+nodes = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]])
+cells = np.array([[0, 1, 2, 3]])
+def parts(k):
+    u = np.zeros((4, 3))
+    u[3, k % 3] = 0.1 * (k + 1)
+    u[1, 2] = 0.05 * k
+    return [Part(nodes, cells, "tetra", u), Part(nodes[:2], np.array([[0, 1]]), "line", u[:2])]
+shots = [(t / f"scene_{k}.png", parts(k), f"shot {k}") for k in range(3)]
+alone = [snapshot_png(t / f"alone_{k}.png", p, title, fraction=0.03) for k, (_, p, title) in enumerate(shots)]
+together = snapshot_pngs(shots, fraction=0.03)
+img = [[mpimg.imread(str(p))[..., :3] for p in ps] for ps in (alone, together)]
+strip = slice(0, img[0][0].shape[0] // 20)
+print("title strips equal:", [bool(np.array_equal(a[strip], b[strip])) for a, b in zip(*img)])
+print("pixels changed:", [float(np.mean(np.any(np.abs(a - b) > 0.1, axis=2))) for a, b in zip(*img)])
+print("strips of shots 0, 1 differ:", not np.array_equal(img[1][0][strip], img[1][1][strip]))
+"""
+
+
+def test_pictures_from_one_scene_are_each_shots_own(tmp_path):
+    """snapshot_pngs (one scene for several pictures of the same meshes, a solid and a beam)
+    draws each shot as snapshot_png draws it alone: its own field, scale, colour range and
+    title. In a fresh interpreter (pyvista before dolfinx: in process; this test process has
+    dolfinx, where pictures render one by one in subprocesses). The title strip (viewport
+    text, whatever the camera) is pixel-identical to the lone picture's and differs between
+    shots; the scene keeps the first picture's camera, so elsewhere the pictures may differ
+    by the few pixels the framing moves (measured 0, 0 and 1 %; allowed 3 %). A stale frame
+    (the previous shot's picture, which a screenshot without a render gave: 6 and 8 % of the
+    pixels and the previous title) fails both."""
+    import ast
+    import subprocess
+    import sys
+
+    res = subprocess.run([sys.executable, "-c", _ONE_SCENE, str(tmp_path)], capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr[-2000:]
+    out = {line.split(":")[0]: ast.literal_eval(line.split(":", 1)[1].strip()) for line in res.stdout.splitlines()
+           if ":" in line}
+    print(out)
+    assert out["title strips equal"] == [True, True, True]
+    assert max(out["pixels changed"]) < 0.03
+    assert out["strips of shots 0, 1 differ"] is True
+    with pytest.raises(InputError, match="must end in .png"):
+        n = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]])
+        p = Part(n, np.array([[0, 1, 2, 3]]), "tetra", 0.01 * n)
+        snapshot_pngs([(tmp_path / "x.jpg", p, "x"), (tmp_path / "y.png", p, "y")])
 
 
 def test_snapshot_from_plain_arrays_and_bad_input(tmp_path):
