@@ -153,10 +153,11 @@ def snapshot_pngs(shots: list[tuple], *, fraction: float = 0.1, note: str = "", 
             raise InputError(f"snapshot: {str(path)!r} must end in .png")
     if view not in ("iso", "xy", "xz", "yz"):
         raise InputError(f"snapshot: view {view!r} must be iso, xy, xz or yz")
-    same = all(len(parts) == len(shots[0][1]) and all(
-        p.cell_type == q.cell_type and p.nodes is q.nodes or (p.nodes.shape == q.nodes.shape and p.cells.shape ==
-                                                              q.cells.shape and np.array_equal(p.cells, q.cells))
-        for p, q in zip(parts, shots[0][1])) for _, parts, _ in shots)
+    def same_mesh(p: Part, q: Part) -> bool:
+        return p.cell_type == q.cell_type and np.array_equal(p.nodes, q.nodes) and np.array_equal(p.cells, q.cells)
+
+    same = all(len(parts) == len(shots[0][1]) and all(same_mesh(p, q) for p, q in zip(parts, shots[0][1]))
+               for _, parts, _ in shots)
     one = dict(fraction=fraction, note=note, window_size=window_size, view=view, azimuth=azimuth, elevation=elevation)
     if len(shots) < 2 or not same or not _RENDER_IN_PROCESS:
         return [snapshot_png(path, parts, title, **one) for path, parts, title in shots]

@@ -52,6 +52,11 @@ strip = slice(0, img[0][0].shape[0] // 20)
 print("title strips equal:", [bool(np.array_equal(a[strip], b[strip])) for a, b in zip(*img)])
 print("pixels changed:", [float(np.mean(np.any(np.abs(a - b) > 0.1, axis=2))) for a, b in zip(*img)])
 print("strips of shots 0, 1 differ:", not np.array_equal(img[1][0][strip], img[1][1][strip]))
+other = [Part(2.0 * nodes, cells, "tetra", parts(1)[0].displacement)]          # another mesh: drawn alone
+mixed = snapshot_pngs([(t / "mixed_0.png", parts(0), "shot 0"), (t / "mixed_1.png", other, "other")], fraction=0.03)
+lone = snapshot_png(t / "lone_other.png", other, "other", fraction=0.03)
+print("another mesh drawn alone:", [bool(np.array_equal(mpimg.imread(str(a)), mpimg.imread(str(b))))
+                                    for a, b in ((mixed[0], alone[0]), (mixed[1], lone))])
 """
 
 
@@ -64,7 +69,8 @@ def test_pictures_from_one_scene_are_each_shots_own(tmp_path):
     shots; the scene keeps the first picture's camera, so elsewhere the pictures may differ
     by the few pixels the framing moves (measured 0, 0 and 1 %; allowed 3 %). A stale frame
     (the previous shot's picture, which a screenshot without a render gave: 6 and 8 % of the
-    pixels and the previous title) fails both."""
+    pixels and the previous title) fails both. Shots of different meshes are drawn one by
+    one, exactly as snapshot_png draws them."""
     import ast
     import subprocess
     import sys
@@ -77,6 +83,7 @@ def test_pictures_from_one_scene_are_each_shots_own(tmp_path):
     assert out["title strips equal"] == [True, True, True]
     assert max(out["pixels changed"]) < 0.03
     assert out["strips of shots 0, 1 differ"] is True
+    assert out["another mesh drawn alone"] == [True, True]      # shots of different meshes: one by one
     with pytest.raises(InputError, match="must end in .png"):
         n = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]])
         p = Part(n, np.array([[0, 1, 2, 3]]), "tetra", 0.01 * n)
