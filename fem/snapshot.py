@@ -138,6 +138,33 @@ def snapshot_png(path, parts: Part | list[Part], title: str = "", scale: float |
     return path
 
 
+def _deformable_scene(parts: list[Part], scale: float, window_size, view: str, azimuth: float, elevation: float,
+                      clim: float):
+    """(plotter, deformed meshes, their actors): a white off-screen scene of ``parts``, each
+    as its grey outline (feature edges, or its lines) and its mesh deformed by ``scale`` x
+    its displacement, coloured by |u| on [0, clim] with one scalar bar, the camera set to
+    ``view`` turned by ``azimuth`` and ``elevation`` (degrees); the caller updates the
+    deformed meshes' points and ``|u| (m)`` for each picture or frame."""
+    pl = pyvista.Plotter(off_screen=True, window_size=list(window_size))
+    pl.set_background("white")
+    bar = {"title": "|u| (m)", "color": "black"}
+    meshes, actors = [], []
+    for part in parts:
+        base = part.grid()
+        line = part.cell_type == "line"
+        pl.add_mesh(base if line else base.extract_feature_edges(), color="lightgrey", line_width=2 if line else 1)
+        deformed = base.copy()
+        deformed.points = part.nodes + scale * part.displacement
+        deformed.point_data["|u| (m)"] = np.linalg.norm(part.displacement, axis=1)
+        actors.append(pl.add_mesh(deformed, scalars="|u| (m)", cmap="viridis", clim=[0, clim], scalar_bar_args=bar,
+                                  **({"line_width": 6} if line else {})))
+        meshes.append(deformed)
+    getattr(pl, "view_isometric" if view == "iso" else f"view_{view}")()
+    pl.camera.azimuth += azimuth
+    pl.camera.elevation += elevation
+    return pl, meshes, actors
+
+
 def snapshot_pngs(shots: list[tuple], *, fraction: float = 0.1, note: str = "", window_size=(1024, 768),
                   view: str = "iso", azimuth: float = 0.0, elevation: float = 0.0) -> list[Path]:
     """Several pictures of the same meshes deformed differently, ``shots`` = [(path, parts,
@@ -161,25 +188,10 @@ def snapshot_pngs(shots: list[tuple], *, fraction: float = 0.1, note: str = "", 
     one = dict(fraction=fraction, note=note, window_size=window_size, view=view, azimuth=azimuth, elevation=elevation)
     if len(shots) < 2 or not same or not _RENDER_IN_PROCESS:
         return [snapshot_png(path, parts, title, **one) for path, parts, title in shots]
-    pl = pyvista.Plotter(off_screen=True, window_size=list(window_size))
-    pl.set_background("white")
-    bar = {"title": "|u| (m)", "color": "black"}
-    meshes, actors = [], []
-    for part in shots[0][1]:
-        base = part.grid()
-        line = part.cell_type == "line"
-        pl.add_mesh(base if line else base.extract_feature_edges(), color="lightgrey", line_width=2 if line else 1)
-        deformed = base.copy()
-        deformed.points = part.nodes + auto_scale(shots[0][1], fraction) * part.displacement
-        deformed.point_data["|u| (m)"] = np.linalg.norm(part.displacement, axis=1)
-        actors.append(pl.add_mesh(deformed, scalars="|u| (m)", cmap="viridis", clim=[0, 1], scalar_bar_args=bar,
-                                  **({"line_width": 6} if line else {})))
-        meshes.append(deformed)
+    pl, meshes, actors = _deformable_scene(shots[0][1], auto_scale(shots[0][1], fraction), window_size, view, azimuth,
+                                           elevation, 1.0)
     label = pl.add_text("", position="upper_left", font_size=11, color="black")
     footer = pl.add_text("", position="lower_left", font_size=9, color="black")
-    getattr(pl, "view_isometric" if view == "iso" else f"view_{view}")()
-    pl.camera.azimuth += azimuth
-    pl.camera.elevation += elevation
     paths = []
     try:
         for path, parts, title in shots:
@@ -221,21 +233,7 @@ def animation_gif(path, frames: list[list[Part]], titles: list[str], scale: floa
                                           fps=fps, window_size=window_size, view=view, azimuth=azimuth,
                                           elevation=elevation))
     umax = max(float(np.linalg.norm(p.displacement, axis=1).max()) for f in frames for p in f) or 1.0
-    pl = pyvista.Plotter(off_screen=True, window_size=list(window_size))
-    pl.set_background("white")
-    meshes = []
-    for part in frames[0]:
-        base = part.grid()
-        line = part.cell_type == "line"
-        pl.add_mesh(base if line else base.extract_feature_edges(), color="lightgrey", line_width=2 if line else 1)
-        deformed = base.copy()
-        deformed.point_data["|u| (m)"] = np.zeros(part.nodes.shape[0])
-        pl.add_mesh(deformed, scalars="|u| (m)", cmap="viridis", clim=[0, umax],
-                    scalar_bar_args={"title": "|u| (m)", "color": "black"}, **({"line_width": 6} if line else {}))
-        meshes.append(deformed)
-    getattr(pl, "view_isometric" if view == "iso" else f"view_{view}")()
-    pl.camera.azimuth += azimuth
-    pl.camera.elevation += elevation
+    pl, meshes, _ = _deformable_scene(frames[0], 0.0, window_size, view, azimuth, elevation, umax)
     pl.add_text(f"displacement scale x {scale:.3g}" + (f" ({note})" if note else ""), position="lower_left",
                 font_size=9, color="black")
     label = pl.add_text("", position="upper_left", font_size=11, color="black")

@@ -381,20 +381,16 @@ def snapshot_times(result, cp) -> dict[str, int]:
     return out
 
 
-def deformed_fields(stack, result, i: int) -> list:
-    """fem.snapshot.Parts of each component at step i (its cells; its beams as lines), elastic part of the vehicle only (its
-    rigid-body motion removed, so the picture stays on the pad)."""
-    return deformed_fields_at(stack, result, [i])[0]
-
-
 def deformed_fields_at(stack, result, steps) -> list[list]:
-    """:func:`deformed_fields` at each of ``steps``, the component fields of all steps in one
-    product per component (its modes read once, not once per step)."""
+    """Per step of ``steps``, the fem.snapshot.Parts of each component (its cells; its beams
+    as lines), the elastic part of the vehicle only (its rigid-body motion removed, so the
+    picture stays on the pad); the fields of all steps in one product per component (its
+    modes read once, not once per step)."""
     from liftoff.fem.snapshot import mesh_parts
     from liftoff.reduction import field_displacement
 
     if "q_a" not in result.modal:
-        raise ValueError("deformed_fields needs the modal displacements: solve with keep_modal = 'q'")
+        raise ValueError("deformed_fields_at needs the modal displacements: solve with keep_modal = 'q'")
     steps = list(steps)
     qa = np.array([result.modal["q_a"][i] for i in steps]).T          # (n_modes, k)
     qa[: np.sum(stack.vehicle.omega == 0)] = 0.0                        # elastic deformation only
