@@ -174,26 +174,28 @@ class StageCache:
             except Exception as exc:  # noqa: BLE001 - an unreadable product is rebuilt
                 problem = f"cannot be read ({' '.join(str(exc).split())})"
         warnings.warn(f"stage cache entry {what} ({key}) {problem}: rebuilding it", stacklevel=4)
-        for f in _entry_files(p.parent, key) + [record]:
+        for f in entry_files(p.parent, key) + [record]:
             f.unlink(missing_ok=True)
         return None
 
     def _save(self, out, p: Path, key: str, stage: str, save: Callable[[Any, Path], Any]) -> None:
         try:
             save(out, p)
-            files = {f.name: file_sha256(f) for f in _entry_files(p.parent, key)}
+            files = {f.name: file_sha256(f) for f in entry_files(p.parent, key)}
             write_text(p.with_name(f"{key}.entry.json"),
                        json.dumps({"format": ENTRY_FORMAT, "version": 1, "stage": stage, "key": key,
                                    "files": files, "libraries": library_versions()}, indent=1))
         except OSError as exc:  # a full or read-only disk: keep the result, drop the entry
-            for f in _entry_files(p.parent, key):
+            for f in entry_files(p.parent, key):
                 f.unlink(missing_ok=True)
             warnings.warn(f"stage cache {str(self.root)!r}: {exc.strerror or exc}; running without the cache",
                           stacklevel=4)
             self.root = None
 
 
-def _entry_files(folder: Path, key: str) -> list[Path]:
+def entry_files(folder: Path, key: str) -> list[Path]:
+    """The product files of the entry ``key`` in a stage's ``folder`` (``<key>.*``, less its
+    record, its lock and files being written)."""
     return sorted(f for f in folder.glob(f"{key}.*")
                   if f.is_file() and not f.name.endswith((".entry.json", ".lock")) and TEMP_TAG not in f.name)
 
@@ -206,7 +208,7 @@ def _entry_problem(folder: Path, key: str, record: Path) -> str | None:
         return "has no readable record"
     if rec.get("format") != ENTRY_FORMAT or rec.get("key") != key:
         return f"is recorded under key {rec.get('key')!r}"
-    files = {f.name: f for f in _entry_files(folder, key)}
+    files = {f.name: f for f in entry_files(folder, key)}
     if set(files) != set(rec.get("files", {})):
         return "has missing or extra files"
     for name, digest in rec["files"].items():

@@ -15,7 +15,12 @@ Outputs run in registration order within a stage; liftoff's workbook is the last
 "run" outputs, so it reads their tables (an output registered later runs after it and is not
 in the workbook). An output registered with ``beside=True`` writes only files nothing of the
 run reads again (pictures, ParaView and OP4 files): a serial run writes it in a forked child
-beside the run (workflows/beside.py), as one job per stage. From Python, before ``liftoff.workflows.run.run``::
+beside the run (workflows/beside.py), as one job per stage. A ``"model"`` output registered
+with ``cache_on`` (a function of ``(stack, cp)`` giving what, besides the stack model, its
+files depend on) keeps its files in the stage cache, keyed by that, the stack's key and the
+source of its module and ``code``: a run on a cached model copies them instead of writing
+them again (the mode shapes' VTU and the recovery OP4 take seconds). From Python, before
+``liftoff.workflows.run.run``::
 
     from liftoff.workflows.outputs import register_output
 
@@ -26,11 +31,14 @@ beside the run (workflows/beside.py), as one job per stage. From Python, before 
 """
 from __future__ import annotations
 
+import shutil
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
 from liftoff.core.errors import InputError
+
+from .cache import entry_files
 
 STAGES = ("model", "case", "run")
 
@@ -42,6 +50,8 @@ class Output:
     fn: Callable
     description: str = ""
     beside: bool = False
+    cache_on: Callable | None = None     # "model" outputs: (stack, cp) -> dict, what else the files depend on
+    code: tuple[str, ...] = ()           # modules besides fn's own whose source the files depend on
 
 
 @dataclass
@@ -66,36 +76,79 @@ class RunContext:
 OUTPUTS: dict[str, Output] = {}
 
 
-def register_output(name: str, stage: str, description: str = "", beside: bool = False):
+def register_output(name: str, stage: str, description: str = "", beside: bool = False,
+                    cache_on: Callable | None = None, code: tuple[str, ...] = ()):
     """Decorator: register ``fn`` as output ``name`` of ``stage`` (replacing one of that name);
-    ``beside``: its files are read by nothing later in the run (module docstring)."""
+    ``beside``: its files are read by nothing later in the run; ``cache_on`` and ``code``
+    (``"model"`` outputs only): its files kept in the stage cache (module docstring)."""
     if stage not in STAGES:
         raise InputError(f"output {name!r}: stage must be one of {', '.join(STAGES)}, got {stage!r}")
+    if cache_on is not None and stage != "model":
+        raise InputError(f"output {name!r}: only \"model\" outputs can be cached (cache_on), not {stage!r} ones")
 
     def deco(fn):
         OUTPUTS.pop(name, None)
-        OUTPUTS[name] = Output(name, stage, fn, description, beside)
+        OUTPUTS[name] = Output(name, stage, fn, description, beside, cache_on, tuple(code))
         return fn
     return deco
 
 
-def write(stage: str, *args, beside=None) -> list[Path]:
+def write(stage: str, *args, beside=None, cache=None) -> list[Path]:
     """Every registered output of ``stage`` (in registration order); the paths they wrote.
     With ``beside`` (:class:`workflows.beside.Beside`), the outputs registered ``beside=True``
-    go to it as one job, their files returned by its ``wait``."""
+    go to it as one job, their files returned by its ``wait``; with ``cache``
+    (:class:`workflows.cache.StageCache`), cached ``"model"`` outputs are copied from it when
+    there (then in this process, being copies) and stored in it when not."""
     files: list[Path] = []
     later = []
     for o in list(OUTPUTS.values()):
         if o.stage != stage:
             continue
-        if o.beside and beside is not None:
-            later.append(o)
+        fn, hit = o.fn, False
+        if o.cache_on is not None:
+            fn, hit = _through_cache(o, cache, *args)
+        if o.beside and beside is not None and not hit:
+            later.append((o.name, fn))
         else:
-            files += list(o.fn(*args) or [])
+            files += list(fn(*args) or [])
     if later:
-        beside.submit(", ".join(o.name for o in later),
-                      lambda: [p for o in later for p in list(o.fn(*args) or [])])
+        beside.submit(", ".join(name for name, _ in later),
+                      lambda: [p for _, fn in later for p in list(fn(*args) or [])])
     return files
+
+
+CACHE_STAGE = "outputs"
+
+
+def _through_cache(o: Output, cache, stack, cp, out: Path) -> tuple[Callable, bool]:
+    """(the function that writes ``o``'s files through the stage cache, whether they are
+    cached); ``o.fn`` itself where there is no cache or the stack has no key."""
+    from .cache import StageCache, stage_key
+
+    if cache is None or cache.root is None or not getattr(stack, "key", ""):
+        return o.fn, False
+    serial = StageCache(cache.root)     # written by one process (rank 0, or the child beside the run)
+    key = stage_key(f"output {o.name}", o.cache_on(stack, cp), (o.fn.__module__, *o.code), (stack.key,))
+
+    def write_through(stack, cp, out: Path) -> list[Path]:
+        def save(paths, p: Path) -> None:
+            for f in paths:
+                if Path(f).parent != Path(out):
+                    raise InputError(f"output {o.name!r}: a cached output writes into the run's folder itself, "
+                                     f"not {f}")
+                shutil.copyfile(f, p.with_name(f"{key}.{Path(f).name}"))
+
+        def load(p: Path) -> list[Path]:
+            got = []
+            for f in entry_files(p.parent, key):
+                got.append(Path(out) / f.name[len(key) + 1:])
+                shutil.copyfile(f, got[-1])
+            return got
+
+        return serial.get_or_build(CACHE_STAGE, key, "", lambda: list(o.fn(stack, cp, out) or []), save, load,
+                                   label=o.name)
+
+    return write_through, serial.has(CACHE_STAGE, key, "")
 
 
 # ------------------------------------------------------------------ liftoff's own deliverables
@@ -104,10 +157,12 @@ def _register_builtin() -> None:
 
     register_output("modal_tables", "model", "modes_vehicle.csv/.h5, modal_mass_vehicle_held.csv, "
                     "modal_mass_pad.csv")(report.write_modal_tables)
-    register_output("recovery_op4", "model", "recovery_vehicle.op4 and its index", beside=True)(
-        report.write_recovery_op4)
+    register_output("recovery_op4", "model", "recovery_vehicle.op4 and its index", beside=True,
+                    cache_on=report.recovery_op4_inputs, code=("liftoff.reduction",))(report.write_recovery_op4)
     register_output("cb_checks", "model", "cb_checks.txt/.json")(report.write_cb_checks)
-    register_output("mode_shapes_vtu", "model", "modes_vehicle.vtu", beside=True)(fields.write_mode_shapes_vtu)
+    register_output("mode_shapes_vtu", "model", "modes_vehicle.vtu", beside=True,
+                    cache_on=lambda stack, cp: {"n_modes": fields.MODE_SHAPE_FIELDS},
+                    code=("liftoff.fem.output", "liftoff.reduction"))(fields.write_mode_shapes_vtu)
     register_output("interface_loads", "case", "interface_loads_<case>.csv")(
         lambda res, cp, out, case: report.write_interface_loads({case: (res, cp)}, out, case))
     register_output("interface_loads_envelope", "run", "interface_loads_envelope.csv")(

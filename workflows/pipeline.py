@@ -63,6 +63,7 @@ class StackModel:
     vehicle_all: SystemModes | None = None         # every system mode (None: the kept ones are all)
     pad_all: SystemModes | None = None
     timings: dict = field(default_factory=dict)
+    key: str = ""         # what made it (its stages' keys, the modes kept, zeta); "": unknown
     _checks: dict = field(default_factory=dict, repr=False)
 
     def truncation(self, contact_a, contact_b, attach) -> tuple[TruncationCheck, TruncationCheck]:
@@ -253,13 +254,18 @@ def vehicle_assembly(model: ModelConfig, cbs: dict) -> Assembly:
     return assemble([cbs[n] for n in model.vehicle], "vehicle", [r for j in model.joints for r in j.released()])
 
 
+def system_key(n_rigid: int, keys: list[str], assembly_params: dict | None = None) -> str:
+    """The cache key of :func:`modes_stage` (its arguments' meaning there)."""
+    return stage_key("system", {"n_rigid": n_rigid, **(assembly_params or {})},
+                     ("liftoff.reduction.system", "liftoff.reduction.assembly", "liftoff.core"), tuple(keys))
+
+
 def modes_stage(asm: Assembly, n_rigid: int, keys: list[str], cache: StageCache, label: str,
                 assembly_params: dict | None = None) -> SystemModes:
     """Every system mode of an assembly (cached); the cut, if any, is :func:`keep_modes`'.
     ``assembly_params``: what, besides the components' keys, made the assembly (a
     joint's released DOFs)."""
-    key = stage_key("system", {"n_rigid": n_rigid, **(assembly_params or {})}, ("liftoff.reduction.system", "liftoff.reduction.assembly",
-                                                     "liftoff.core"), tuple(keys))
+    key = system_key(n_rigid, keys, assembly_params)
 
     def build():
         return system_modes(asm, n_rigid=n_rigid)
@@ -553,7 +559,20 @@ def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, wh
     vasm, vmodes, vehicle, pasm, pmodes, pad, unit, vall, pall = _bodies(model, cbs, ckeys, thermal, cache)
     t2 = time.perf_counter()
     return StackModel(comps, cbs, vasm, vmodes, vehicle, pasm, pmodes, pad, unit, vall, pall,
-                      timings={"components+CB (s)": t1 - t0, "system modes (s)": t2 - t1})
+                      timings={"components+CB (s)": t1 - t0, "system modes (s)": t2 - t1},
+                      key=stack_key(model, vasm, ckeys))
+
+
+def stack_key(model: ModelConfig, vasm: Assembly, ckeys: dict) -> str:
+    """The key of what :func:`build_stack` makes of ``model``: the two bodies' system-mode
+    keys (the components' stage keys, the joints' releases), the modes kept, the damping and
+    the code that turns system modes into bodies (keys the stack's cached outputs,
+    workflows/outputs.py)."""
+    released = sorted(vasm.released)
+    vkey = system_key(6, [ckeys[n] for n in model.vehicle], {"released": released} if released else {})
+    return stage_key("stack", {"system": asdict(model.system), "zeta": model.zeta},
+                     ("liftoff.workflows.pipeline", "liftoff.reduction", "liftoff.transient.effects"),
+                     (vkey, system_key(0, [ckeys[PAD]])))
 
 
 @threadpool_limits.wrap(limits=1, user_api="blas")   # the same arithmetic in any process (campaign workers)

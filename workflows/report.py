@@ -117,6 +117,32 @@ def format_mode_changes(pairs: list, limit: int = 10) -> str:
     return "\n".join(lines)
 
 
+def recovery_op4_inputs(stack, cp) -> dict:
+    """What :func:`write_recovery_op4`'s files depend on besides the stack model (its cache
+    key, workflows/outputs.py): a SHA-256 of the vehicle's recoveries (names, labels, units
+    and matrices) and pyyeti's version (its OP4 writer)."""
+    import hashlib
+    from importlib import metadata
+
+    h = hashlib.sha256()
+    for r in cp.problem.recoveries:
+        if r.body != "a":
+            continue
+        h.update(repr((r.name, r.category, list(r.labels), list(r.units))).encode())
+        for m in (r.disp, r.vel, r.acc, r.const):
+            if m is None:
+                h.update(b"none")
+            else:
+                a = np.ascontiguousarray(m, dtype=float)
+                h.update(repr(a.shape).encode())
+                h.update(a.tobytes())
+    try:
+        pyyeti = metadata.version("pyyeti")
+    except metadata.PackageNotFoundError:
+        pyyeti = "absent"
+    return {"recoveries": h.hexdigest(), "pyyeti": pyyeti}
+
+
 def write_recovery_op4(stack, cp, out: Path) -> list[Path]:
     """``recovery_vehicle.op4`` and its index ``recovery_vehicle_op4.csv``: the vehicle's
     recovery matrices in its system modal coordinates (y = D q + V qdot + A qddot + C: DTM,

@@ -368,7 +368,7 @@ def _write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, 
             cp, mkey = prep.problems[case.name]
             stack = prep.stacks[mkey]
             if tab1 is None:
-                tab1, f1 = _table1(stack, cp, case, out, echo, stage_times, beside)
+                tab1, f1 = _table1(stack, cp, case, out, echo, stage_times, beside, camp.cache if camp else None)
                 files += f1
             res, f2 = _full_case(sc, stack, cp, case.name, out, plots and case.output.plots,
                                  want_pics and case.output.snapshots, stage_times, agg, generated=False,
@@ -429,14 +429,14 @@ def _forks_wait_for(beside, ahead):
         beside.quiet = before
 
 
-def _table1(stack, cp, case, out: Path, echo, stage_times: list, beside=None):
+def _table1(stack, cp, case, out: Path, echo, stage_times: list, beside=None, cache=None):
     from .loads import table1
 
     t0 = time.perf_counter()
     tab1 = table1(stack, cp, case)
     files = [write_text(out / "table1.txt", tab1.table() + "\n"),
              write_text(out / "table1.csv", "# c.g. motion under static loads; m and rad\n" + tab1.csv())]
-    files += outputs.write("model", stack, cp, out, beside=beside)
+    files += outputs.write("model", stack, cp, out, beside=beside, cache=cache)
     echo(tab1.table())
     stage_times.append(("Table 1, modal tables", time.perf_counter() - t0))
     return tab1, files
