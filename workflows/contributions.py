@@ -56,7 +56,7 @@ def with_damping(stack, old_zeta: float, new_zeta: float):
         z = z * (old_zeta / new_zeta) if new_zeta > 0 else np.where(np.asarray(b.omega) > 0, old_zeta, 0.0)
         return dataclasses.replace(b, zeta=z)
 
-    return dataclasses.replace(stack, vehicle=body(stack.vehicle), pad=body(stack.pad))
+    return dataclasses.replace(stack, vehicle=body(stack.vehicle), pad=body(stack.pad), key="")   # not the keyed model
 
 
 def _peaks(cp, name: str, band: float) -> list[dict]:

@@ -78,6 +78,22 @@ def merged_mesh(comps) -> tuple[np.ndarray, list, list]:
 MODE_SHAPE_FIELDS = 12
 
 
+def mode_shapes_inputs(stack, cp, n_modes: int = MODE_SHAPE_FIELDS) -> dict:
+    """What :func:`write_mode_shapes_vtu`'s file depends on besides the stack's key (its
+    cache key, workflows/outputs.py): the number of modes and a SHA-256 of the vehicle's
+    system modes (frequencies and shapes in the components' CB coordinates: a system
+    stage rebuilt under the same key may flip a mode's sign or turn a degenerate pair)."""
+    import hashlib
+
+    vm = stack.vehicle_modes
+    h = hashlib.sha256()
+    for a in (vm.omega, vm.phi):
+        a = np.ascontiguousarray(a, dtype=float)
+        h.update(repr(a.shape).encode())
+        h.update(a.tobytes())
+    return {"n_modes": n_modes, "modes": h.hexdigest()}
+
+
 def write_mode_shapes_vtu(stack, cp, out: Path, n_modes: int = MODE_SHAPE_FIELDS) -> list[Path]:
     """``modes_vehicle.vtu``: the vehicle's first ``n_modes`` elastic system modes as nodal
     vector fields ``mode_<k>_<f>Hz`` (m per unit modal coordinate, unit modal mass) over

@@ -31,7 +31,11 @@ them again (the mode shapes' VTU and the recovery OP4 take seconds). From Python
 """
 from __future__ import annotations
 
+import hashlib
+import importlib.util
+import inspect
 import shutil
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
@@ -127,28 +131,59 @@ def _through_cache(o: Output, cache, stack, cp, out: Path) -> tuple[Callable, bo
 
     if cache is None or cache.root is None or not getattr(stack, "key", ""):
         return o.fn, False
+    code = _code_of(o)
+    if code is None:
+        warnings.warn(f"output {o.name!r}: neither its module nor its source can be read: written, not cached",
+                      stacklevel=3)
+        return o.fn, False
+    modules, source = code
     serial = StageCache(cache.root)     # written by one process (rank 0, or the child beside the run)
-    key = stage_key(f"output {o.name}", o.cache_on(stack, cp), (o.fn.__module__, *o.code), (stack.key,))
+    key = stage_key(f"output {o.name}", {"inputs": o.cache_on(stack, cp), "source": source}, modules, (stack.key,))
 
     def write_through(stack, cp, out: Path) -> list[Path]:
-        def save(paths, p: Path) -> None:
+        def build() -> tuple[str, list[Path]]:
+            paths = [Path(f) for f in list(o.fn(stack, cp, out) or [])]
             for f in paths:
-                if Path(f).parent != Path(out):
+                if f.parent != Path(out):
                     raise InputError(f"output {o.name!r}: a cached output writes into the run's folder itself, "
                                      f"not {f}")
-                shutil.copyfile(f, p.with_name(f"{key}.{Path(f).name}"))
+            return "built", paths
 
-        def load(p: Path) -> list[Path]:
-            got = []
-            for f in entry_files(p.parent, key):
-                got.append(Path(out) / f.name[len(key) + 1:])
-                shutil.copyfile(f, got[-1])
-            return got
+        def save(got, p: Path) -> None:
+            for f in entry_files(p.parent, key):     # a killed writer's leftovers are not this entry's
+                f.unlink(missing_ok=True)
+            for f in got[1]:
+                shutil.copyfile(f, p.with_name(f"{key}.{f.name}"))
 
-        return serial.get_or_build(CACHE_STAGE, key, "", lambda: list(o.fn(stack, cp, out) or []), save, load,
-                                   label=o.name)
+        def load(p: Path) -> tuple[str, list[Path]]:
+            return "cached", entry_files(p.parent, key)
+
+        how, paths = serial.get_or_build(CACHE_STAGE, key, "", build, save, load, label=o.name)
+        if how == "built":
+            return paths
+        got = [Path(out) / f.name[len(key) + 1:] for f in paths]      # copied here: an error on the run's disk
+        for src, dst in zip(paths, got):                                # is the run's, not the entry's
+            shutil.copyfile(src, dst)
+        return got
 
     return write_through, serial.has(CACHE_STAGE, key, "")
+
+
+def _code_of(o: Output) -> tuple[tuple[str, ...], str] | None:
+    """(modules whose source keys ``o``'s cached files, a SHA-256 of its function's own source
+    where its module is not importable: a script's or a notebook's), or None when neither can
+    be read."""
+    modules = tuple(o.code)
+    try:
+        if importlib.util.find_spec(o.fn.__module__) is not None:
+            return modules + (o.fn.__module__,), ""
+    except (ValueError, ImportError):      # __main__ (no spec), or a module gone since
+        pass
+    try:
+        source = inspect.getsource(o.fn)
+    except (OSError, TypeError):
+        return None
+    return modules, hashlib.sha256(source.encode()).hexdigest()
 
 
 # ------------------------------------------------------------------ liftoff's own deliverables
@@ -161,7 +196,7 @@ def _register_builtin() -> None:
                     cache_on=report.recovery_op4_inputs, code=("liftoff.reduction",))(report.write_recovery_op4)
     register_output("cb_checks", "model", "cb_checks.txt/.json")(report.write_cb_checks)
     register_output("mode_shapes_vtu", "model", "modes_vehicle.vtu", beside=True,
-                    cache_on=lambda stack, cp: {"n_modes": fields.MODE_SHAPE_FIELDS},
+                    cache_on=fields.mode_shapes_inputs,
                     code=("liftoff.fem.output", "liftoff.reduction"))(fields.write_mode_shapes_vtu)
     register_output("interface_loads", "case", "interface_loads_<case>.csv")(
         lambda res, cp, out, case: report.write_interface_loads({case: (res, cp)}, out, case))

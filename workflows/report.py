@@ -120,7 +120,9 @@ def format_mode_changes(pairs: list, limit: int = 10) -> str:
 def recovery_op4_inputs(stack, cp) -> dict:
     """What :func:`write_recovery_op4`'s files depend on besides the stack model (its cache
     key, workflows/outputs.py): a SHA-256 of the vehicle's recoveries (names, labels, units
-    and matrices) and pyyeti's version (its OP4 writer)."""
+    and matrices) and the versions of pyyeti (its OP4 writer) and pandas (which
+    pyyeti.nastran imports): without either the OP4 is not written, and installing it
+    changes the key."""
     import hashlib
     from importlib import metadata
 
@@ -136,11 +138,13 @@ def recovery_op4_inputs(stack, cp) -> dict:
                 a = np.ascontiguousarray(m, dtype=float)
                 h.update(repr(a.shape).encode())
                 h.update(a.tobytes())
-    try:
-        pyyeti = metadata.version("pyyeti")
-    except metadata.PackageNotFoundError:
-        pyyeti = "absent"
-    return {"recoveries": h.hexdigest(), "pyyeti": pyyeti}
+    versions = {}
+    for dist in ("pyyeti", "pandas"):
+        try:
+            versions[dist] = metadata.version(dist)
+        except metadata.PackageNotFoundError:
+            versions[dist] = "absent"
+    return {"recoveries": h.hexdigest(), **versions}
 
 
 def write_recovery_op4(stack, cp, out: Path) -> list[Path]:

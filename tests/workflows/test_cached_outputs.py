@@ -126,3 +126,116 @@ def test_only_model_outputs_in_their_folder_are_cached(tmp_path, monkeypatch):
     outputs.register_output("nested", "model", cache_on=lambda stack, cp: {})(nested)
     with pytest.raises(InputError, match="output 'nested': a cached output writes into the run's folder itself"):
         outputs.write("model", SimpleNamespace(key="k"), None, tmp_path / "a", cache=StageCache(tmp_path / "cache"))
+
+
+SCRIPT = "liftoff_test_a_script_not_a_module"
+
+
+def test_an_output_of_a_script_is_keyed_by_its_source(tmp_path, monkeypatch):
+    """An output defined in a script (module ``__main__`` of ``python script.py``, which has no
+    spec; here a module name no finder knows) is keyed by its function's source; one whose
+    source cannot be read is written each time, with a warning."""
+    monkeypatch.setattr(outputs, "OUTPUTS", {})
+    calls = Calls(tmp_path / "calls.txt")
+
+    def table(stack, cp, out):
+        calls()
+        return [Path(out / "t.txt")] if (out / "t.txt").write_text("t") else []
+
+    table.__module__ = SCRIPT
+    outputs.register_output("table", "model", cache_on=lambda stack, cp: {})(table)
+    cache, stack = StageCache(tmp_path / "cache"), SimpleNamespace(key="k")
+    for name in ("a", "b"):
+        _write(tmp_path, name, stack, None, cache)
+    assert len(calls) == 1 and (tmp_path / "b" / "t.txt").read_text() == "t"
+    ns: dict = {}
+    exec("def hidden(stack, cp, out):\n    return []\n", ns)          # no source file behind it
+    ns["hidden"].__module__ = SCRIPT
+    outputs.register_output("hidden", "model", cache_on=lambda stack, cp: {})(ns["hidden"])
+    with pytest.warns(UserWarning, match="output 'hidden': neither its module nor its source can be read"):
+        _write(tmp_path, "c", stack, None, cache)
+
+
+def test_a_killed_writers_leftovers_are_not_recorded(tmp_path, registry):
+    """Files of an entry whose writer died before its record are not part of the entry that
+    is then written (nor copied on later hits)."""
+    cache = StageCache(tmp_path / "cache")
+    stack = SimpleNamespace(key="stack-1")
+    _write(tmp_path, "a", stack, {"n": 3}, cache)
+    folder = tmp_path / "cache" / outputs.CACHE_STAGE
+    record = next(folder.glob("*.entry.json"))
+    key = record.name.split(".")[0]
+    record.unlink()
+    (folder / f"{key}.stale.txt").write_text("from a killed run")
+    _write(tmp_path, "b", stack, {"n": 3}, cache)
+    _, files = _write(tmp_path, "c", stack, {"n": 3}, cache)
+    assert len(registry) == 2 and sorted(p.name for p in files) == ["shapes.vtu", "shapes_index.csv"]
+    assert not (folder / f"{key}.stale.txt").exists() and not (tmp_path / "c" / "stale.txt").exists()
+
+
+def test_a_failing_copy_into_the_run_keeps_the_entry(tmp_path, registry, monkeypatch):
+    """An error writing into the run's folder (a full disk) is the run's error, not a damaged
+    entry: the entry stays for the next run."""
+    import shutil
+
+    cache = StageCache(tmp_path / "cache")
+    stack = SimpleNamespace(key="stack-1")
+    _write(tmp_path, "a", stack, {"n": 3}, cache)
+    real = shutil.copyfile
+
+    def full(src, dst, **kw):
+        if Path(dst).parent.name == "b":
+            raise OSError(28, "No space left on device")
+        return real(src, dst, **kw)
+
+    monkeypatch.setattr(shutil, "copyfile", full)
+    with pytest.raises(OSError, match="No space left"):
+        _write(tmp_path, "b", stack, {"n": 3}, cache)
+    monkeypatch.setattr(shutil, "copyfile", real)
+    _write(tmp_path, "c", stack, {"n": 3}, cache)
+    assert len(registry) == 1
+
+
+def test_the_keys_see_what_the_files_depend_on():
+    """The stack's key changes with the damping, the modes kept and a joint's releases; the
+    recovery OP4's with any recovery matrix of the vehicle (not the pad's); the mode shapes'
+    with a mode's sign."""
+    import dataclasses
+
+    import numpy as np
+
+    from liftoff.config import load_scenario
+    from liftoff.workflows.fields import mode_shapes_inputs
+    from liftoff.workflows.pipeline import stack_key
+    from liftoff.workflows.report import recovery_op4_inputs
+
+    model = load_scenario(None).cases[0].model
+    ckeys = {n: f"key-{n}" for n in list(model.vehicle) + ["pad"]}
+    free = SimpleNamespace(released=[])
+    base = stack_key(model, free, ckeys)
+    assert stack_key(model, free, dict(ckeys)) == base
+    others = [stack_key(dataclasses.replace(model, zeta=model.zeta * 2), free, ckeys),
+              stack_key(dataclasses.replace(model, system=dataclasses.replace(model.system, f_max=50.0)), free, ckeys),
+              stack_key(model, SimpleNamespace(released=[("att", "srb_left", 2)]), ckeys),
+              stack_key(model, free, {**ckeys, "pad": "other"})]
+    assert len({base, *others}) == 5
+
+    rng = np.random.default_rng(1)
+
+    def rec(body):
+        return SimpleNamespace(body=body, name="r", category="attach", labels=["a", "b"], units=["N", "N"],
+                               disp=rng.standard_normal((2, 5)), vel=None, acc=rng.standard_normal((2, 5)), const=None)
+
+    recs = [rec("a"), rec("b")]
+    cp = SimpleNamespace(problem=SimpleNamespace(recoveries=recs))
+    k0 = recovery_op4_inputs(None, cp)
+    recs[1].disp[0, 0] += 1.0                                  # the pad's: not in the OP4
+    assert recovery_op4_inputs(None, cp) == k0
+    recs[0].acc[1, 4] = np.nextafter(recs[0].acc[1, 4], np.inf)
+    assert recovery_op4_inputs(None, cp) != k0
+
+    phi = rng.standard_normal((8, 4))
+    stack = SimpleNamespace(vehicle_modes=SimpleNamespace(omega=np.arange(4.0), phi=phi))
+    m0 = mode_shapes_inputs(stack, None)
+    phi[:, 2] *= -1.0
+    assert mode_shapes_inputs(stack, None) != m0
