@@ -15,8 +15,10 @@
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 
 from liftoff.core.errors import InputError
+from liftoff.core.records import take_rows
 from liftoff.core.rigid import rb_rows
 
 from .assembly import Assembly, label_transform
@@ -87,11 +89,21 @@ def _field_rows(assembly: Assembly, sysm: SystemModes, component_name: str, comp
     return cb, sysm.phi[assembly.cb_index(cb.name)]
 
 
-def _nodal(component: Component, cb, X: np.ndarray) -> np.ndarray:
+def _nodal(component: Component, cb, X: np.ndarray, nodes: np.ndarray | None = None) -> np.ndarray:
     """Nodal displacements of CB coordinates X = [q_cb; x_b] (a vector or columns): the
-    fixed-interface and constraint modes (eq. 13) through the component's field_map."""
-    physical = cb.fixed_interface_modes @ X[: cb.n_modes] + cb.constraint_modes @ X[cb.n_modes:]
-    return np.asarray(component.field_map @ physical)
+    fixed-interface and constraint modes (eq. 13) through the component's field_map; with
+    ``nodes``, of those nodes only, from the rows of the modes they need (the modes' other
+    rows, most of a large component's mapped model, are not read)."""
+    if nodes is None:
+        physical = cb.fixed_interface_modes @ X[: cb.n_modes] + cb.constraint_modes @ X[cb.n_modes:]
+        return np.asarray(component.field_map @ physical)
+    rows = (3 * np.asarray(nodes, np.int64)[:, None] + np.arange(3)).ravel()
+    F = component.field_map[rows]
+    dofs = np.unique(F.indices)
+    F = sp.csr_matrix((F.data, np.searchsorted(dofs, F.indices), F.indptr), shape=(rows.size, dofs.size))
+    physical = (take_rows(cb.fixed_interface_modes, dofs) @ X[: cb.n_modes]
+                + take_rows(cb.constraint_modes, dofs) @ X[cb.n_modes:])
+    return np.asarray(F @ physical)
 
 
 def field_recovery(assembly: Assembly, sysm: SystemModes, component_name: str,
@@ -104,12 +116,13 @@ def field_recovery(assembly: Assembly, sysm: SystemModes, component_name: str,
 
 
 def field_displacement(assembly: Assembly, sysm: SystemModes, component_name: str, component: Component,
-                       q: np.ndarray) -> np.ndarray:
+                       q: np.ndarray, nodes: np.ndarray | None = None) -> np.ndarray:
     """Nodal displacement (m, 3 n_nodes; or 3 n_nodes x k for k columns of ``q``) of
     ``component`` for the system modal coordinates ``q``: field_recovery(...) @ q, with T q
-    formed first, so that the component's modes multiply a vector, not the system's modes."""
+    formed first, so that the component's modes multiply a vector, not the system's modes.
+    ``nodes``: those nodes' displacements only (3 len(nodes) rows, in their order)."""
     cb, T = _field_rows(assembly, sysm, component_name, component)
-    return _nodal(component, cb, T @ np.asarray(q, float))
+    return _nodal(component, cb, T @ np.asarray(q, float), nodes)
 
 
 def component_recovery(assembly: Assembly, sysm: SystemModes, component_name: str, names=None) -> list:

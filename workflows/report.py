@@ -412,11 +412,12 @@ def snapshot_times(result, cp) -> dict[str, int]:
 
 
 def deformed_fields_at(stack, result, steps) -> list[list]:
-    """Per step of ``steps``, the fem.snapshot.Parts of each component (its cells; its beams
-    as lines), the elastic part of the vehicle only (its rigid-body motion removed, so the
-    picture stays on the pad); the fields of all steps in one product per component (its
-    modes read once, not once per step)."""
-    from liftoff.fem.snapshot import mesh_parts
+    """Per step of ``steps``, the fem.snapshot.Parts of each component (its cells by their
+    corners, fem.snapshot.picture_mesh; its beams as lines), the elastic part of the vehicle
+    only (its rigid-body motion removed, so the picture stays on the pad); the fields of all
+    steps in one product per component (its modes read once, not once per step, and only
+    their rows of the corner nodes)."""
+    from liftoff.fem.snapshot import Part, picture_mesh
     from liftoff.reduction import field_displacement
 
     if "q_a" not in result.modal:
@@ -430,12 +431,13 @@ def deformed_fields_at(stack, result, steps) -> list[list]:
     for name, comp in stack.components.items():
         if comp.field_map is None or comp.nodes is None:
             continue
+        nodes, blocks = picture_mesh(comp)
         if name == "pad":
-            u = field_displacement(stack.pad_asm, stack.pad_modes, name, comp, qb)
+            u = field_displacement(stack.pad_asm, stack.pad_modes, name, comp, qb, nodes)
         else:
-            u = field_displacement(stack.vehicle_asm, stack.vehicle_modes, name, comp, qa)
+            u = field_displacement(stack.vehicle_asm, stack.vehicle_modes, name, comp, qa, nodes)
         for k in range(len(steps)):
-            out[k] += mesh_parts(comp, u[:, k].reshape(-1, 3))
+            out[k] += [Part(comp.nodes[nodes], cells, kind, u[:, k].reshape(-1, 3)) for kind, cells in blocks]
     return out
 
 

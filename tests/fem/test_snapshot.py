@@ -125,3 +125,30 @@ def test_snapshot_after_dolfinx_import_renders_in_subprocess(tmp_path):
     assert _image_stats(tmp_path / "late.png")[1] > 0.02
     # headless: VTK's "bad X server connection" warning is not printed (issue 27)
     assert "X server" not in res.stderr and "WARN" not in res.stderr, res.stderr[-1500:]
+
+
+def test_a_picture_draws_quadratic_cells_by_their_corners():
+    """picture_mesh: tetra10 -> tetra and triangle6 -> triangle over the corner nodes only
+    (meshio's order: corners first), beams' lines kept, the nodes renumbered so that each
+    cell is at the same points as before; a picture of a P2 mesh needs its field at these."""
+    from types import SimpleNamespace
+
+    from liftoff.fem.snapshot import picture_mesh
+
+    rng = np.random.default_rng(0)
+    nodes = rng.standard_normal((30, 3))
+    tets = np.array([[3, 7, 11, 15, 20, 21, 22, 23, 24, 25], [7, 11, 15, 2, 26, 27, 28, 29, 0, 1]])
+    beams = np.array([[3, 5], [5, 9]])
+    used, blocks = picture_mesh(SimpleNamespace(nodes=nodes, cells=tets, cell_type="tetra10", line_cells=beams))
+    assert used.tolist() == [2, 3, 5, 7, 9, 11, 15]
+    assert [k for k, _ in blocks] == ["tetra", "line"]
+    assert np.array_equal(nodes[used][blocks[0][1]], nodes[tets[:, :4]])
+    assert np.array_equal(nodes[used][blocks[1][1]], nodes[beams])
+    shell = np.array([[0, 1, 2, 10, 11, 12], [2, 1, 4, 11, 13, 14]])
+    used, blocks = picture_mesh(SimpleNamespace(nodes=nodes, cells=shell, cell_type="triangle6", line_cells=None))
+    assert used.tolist() == [0, 1, 2, 4] and blocks[0][0] == "triangle"
+    assert np.array_equal(nodes[used][blocks[0][1]], nodes[shell[:, :3]])
+    hexes = np.arange(8)[None, :]                                   # a linear cell as it is
+    used, blocks = picture_mesh(SimpleNamespace(nodes=nodes, cells=hexes, cell_type="hexahedron"))
+    assert used.tolist() == list(range(8)) and blocks == [("hexahedron", blocks[0][1])]
+    assert np.array_equal(blocks[0][1], hexes)

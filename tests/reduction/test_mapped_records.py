@@ -93,3 +93,40 @@ def test_a_cut_member_or_an_object_member_is_an_error(tmp_path):
     with pytest.raises(InputError, match="cannot be read.*holds Python objects"):
         read_record(obj, "test-kind", mmap=True)
     assert os.path.getsize(obj) > MMAP_MIN_BYTES
+
+
+def test_rows_of_a_mapped_array_are_read_not_mapped(tmp_path):
+    """take_rows: a[rows] (ascending) of a mapped array read from its file, run by run of
+    consecutive rows, also of a row-offset view; the array's pages are not faulted in (the
+    process's resident memory of the map does not grow: read-around would map all of it);
+    any other array or index (column-major, unsorted, out of range) as numpy indexes it."""
+    from liftoff.core.records import take_rows
+
+    rng = np.random.default_rng(2)
+    big = rng.standard_normal((6000, 40))                     # 1.9 MB: mapped
+    path = write_record(tmp_path / "r.npz", "test-kind", 1, {"big": big, "fortran": np.asfortranarray(big)},
+                        units="SI")
+    mapped = read_record(path, "test-kind", mmap=True).data
+    rows = np.unique(np.r_[0, 1, 2, rng.integers(0, 6000, 300), 5998, 5999])
+    got = take_rows(mapped["big"], rows)
+    assert got.flags.writeable and np.array_equal(got, big[rows])
+    assert np.array_equal(take_rows(mapped["big"][100:], rows[rows < 5900]), big[100:][rows[rows < 5900]])
+    assert np.array_equal(take_rows(mapped["fortran"], rows), big[rows])
+    assert np.array_equal(take_rows(big, rows), big[rows])
+    assert np.array_equal(take_rows(mapped["big"], rows[::-1]), big[rows[::-1]])
+    with pytest.raises(IndexError):
+        take_rows(mapped["big"], np.array([5, 6000]))
+
+    def resident_kb() -> int:                                 # this file's mapped pages in the process
+        total, on = 0, False
+        for line in open("/proc/self/smaps"):
+            if line[0] in "0123456789abcdef" and "-" in line.split()[0]:
+                on = line.rstrip().endswith(str(path))
+            elif on and line.startswith("Rss:"):
+                total += int(line.split()[1])
+        return total
+
+    fresh = read_record(path, "test-kind", mmap=True).data["big"]
+    before = resident_kb()
+    take_rows(fresh, rows)
+    assert resident_kb() == before
