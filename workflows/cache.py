@@ -101,6 +101,7 @@ class StageCache:
     root: Path | None
     log: list = field(default_factory=list)
     comm: Any = field(default=SERIAL, repr=False)
+    temporary: bool = False     # a run's own folder, gone with it (--no-cache with generated cases)
 
     def path(self, stage: str, key: str, suffix: str) -> Path | None:
         if self.root is None:

@@ -126,10 +126,11 @@ CACHE_STAGE = "outputs"
 
 def _through_cache(o: Output, cache, stack, cp, out: Path) -> tuple[Callable, bool]:
     """(the function that writes ``o``'s files through the stage cache, whether they are
-    cached); ``o.fn`` itself where there is no cache or the stack has no key."""
+    cached); ``o.fn`` itself where there is no cache (or only the run's temporary one) or the
+    stack has no key."""
     from .cache import StageCache, stage_key
 
-    if cache is None or cache.root is None or not getattr(stack, "key", ""):
+    if cache is None or cache.root is None or cache.temporary or not getattr(stack, "key", ""):
         return o.fn, False
     code = _code_of(o)
     if code is None:

@@ -168,7 +168,7 @@ def _run_cache(cache_dir, out: Path, n_generated: int, comm):
     root = None if cache_dir is False else Path(cache_dir) if cache_dir else default_cache_dir(out)
     if root is None and n_generated:
         with tempfile.TemporaryDirectory(prefix="liftoff-cache-") as tmp:
-            yield StageCache(Path(comm.bcast(tmp if comm.rank == 0 else None)), comm=comm)
+            yield StageCache(Path(comm.bcast(tmp if comm.rank == 0 else None)), comm=comm, temporary=True)
         return
     yield StageCache(root, comm=comm)
 

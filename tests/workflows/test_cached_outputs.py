@@ -90,13 +90,15 @@ def test_beside_the_run_only_when_not_cached(tmp_path, monkeypatch, registry):
 
 
 def test_without_cache_or_key_every_run_writes(tmp_path, registry):
-    """No cache (``--no-cache``) or a stack without a key (built by hand): written each time."""
+    """No cache (``--no-cache``; with generated cases only the run's temporary one, gone with
+    it) or a stack without a key (built by hand): written each time."""
     cache = StageCache(tmp_path / "cache")
     _write(tmp_path, "a", SimpleNamespace(key="s"), {"n": 1}, None)
     _write(tmp_path, "b", SimpleNamespace(key="s"), {"n": 1}, StageCache(None))
     _write(tmp_path, "c", SimpleNamespace(key=""), {"n": 1}, cache)
     _write(tmp_path, "d", SimpleNamespace(), {"n": 1}, cache)
-    assert len(registry) == 4 and not (tmp_path / "cache").exists()
+    _write(tmp_path, "e", SimpleNamespace(key="s"), {"n": 1}, StageCache(tmp_path / "tmp", temporary=True))
+    assert len(registry) == 5 and not (tmp_path / "cache").exists() and not (tmp_path / "tmp").exists()
 
 
 def test_a_damaged_cached_file_is_written_again(tmp_path, registry):
