@@ -358,38 +358,57 @@ def _read_npz(path: Path, mmap: bool) -> dict:
             nbytes = int(np.prod(shape, dtype=np.int64)) * dtype.itemsize
             if offset + nbytes > start + info.file_size:
                 raise ValueError(f"member {info.filename!r} is shorter than its array")
-            out[name] = np.memmap(path, dtype=dtype, mode="r", shape=tuple(shape), order="F" if fortran else "C",
-                                  offset=offset).view(np.ndarray)
+            mm = np.memmap(path, dtype=dtype, mode="r", shape=tuple(shape), order="F" if fortran else "C",
+                           offset=offset)
+            st = os.fstat(raw.fileno())
+            mm.liftoff_file_id = (st.st_dev, st.st_ino)      # the file mapped (take_rows reads it by path)
+            out[name] = mm.view(np.ndarray)
     return out
 
 
 def take_rows(a: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """``a[rows]`` of a 2-D array, ``rows`` ascending. For a C-ordered array over a memory map
-    (:func:`read_record` with ``mmap``) the rows are read from the file (``os.preadv``, one
-    call per run of consecutive rows) instead of faulted in: a page fault maps its whole
-    read-around window (128 KiB), so rows a few pages apart map all of the array into the
-    process (a picture's corner nodes of a mapped Craig-Bampton model did: 1.1 GB of the
-    default's models for 0.1 GB of rows)."""
-    rows = np.asarray(rows, np.int64)
+    """``a[rows]`` of a 2-D array, ``rows`` ascending integers. For a C-ordered array over a
+    memory map (:func:`read_record` with ``mmap``) the rows are read from the mapped file
+    (``os.preadv``, one call per run of consecutive rows) instead of faulted in: a page fault
+    maps its whole read-around window (128 KiB), so rows a few pages apart map all of the
+    array into the process (a picture's corner nodes of a mapped Craig-Bampton model did:
+    1.1 GB of the default's models for 0.07 GB of rows). Where the file at the map's path is
+    no longer the mapped one (replaced or deleted since: the stage cache writes by rename),
+    or cannot be read, the map is indexed as numpy does."""
+    rows = np.asarray(rows)
     mm = a
     while mm is not None and not isinstance(mm, np.memmap):
-        mm = mm.base
-    if (mm is None or a.ndim != 2 or not a.flags.c_contiguous or not rows.size
-            or np.any(np.diff(rows) <= 0) or rows[0] < 0 or rows[-1] >= a.shape[0]):
+        mm = getattr(mm, "base", None)
+    if (mm is None or getattr(mm, "liftoff_file_id", None) is None or a.ndim != 2 or not a.flags.c_contiguous
+            or rows.ndim != 1 or rows.dtype.kind not in "iu" or not rows.size or np.any(np.diff(rows) <= 0)
+            or rows[0] < 0 or rows[-1] >= a.shape[0]):
         return a[rows]
+    try:
+        return _pread_rows(a, mm, rows.astype(np.int64))
+    except OSError:
+        return a[rows]
+
+
+def _pread_rows(a: np.ndarray, mm: np.memmap, rows: np.ndarray) -> np.ndarray:
+    """:func:`take_rows`' reads; OSError where the file is not the mapped one."""
     out = np.empty((rows.size, a.shape[1]), a.dtype)
     row_bytes = a.shape[1] * a.dtype.itemsize
     start = int(mm.offset) + (a.ctypes.data - mm.ctypes.data)      # a[0, 0]'s byte in the file
     breaks = np.flatnonzero(np.diff(rows) != 1) + 1
-    firsts, lasts = np.r_[0, breaks], np.r_[breaks, rows.size]
     view = memoryview(out.reshape(-1).view(np.uint8))
     fd = os.open(mm.filename, os.O_RDONLY)
     try:
-        for i, j in zip(firsts.tolist(), lasts.tolist()):
-            want = (j - i) * row_bytes
-            got = os.preadv(fd, [view[i * row_bytes: j * row_bytes]], start + int(rows[i]) * row_bytes)
-            if got != want:
-                raise OSError(f"{mm.filename}: short read ({got} of {want} bytes)")
+        st = os.fstat(fd)
+        if (st.st_dev, st.st_ino) != mm.liftoff_file_id:
+            raise OSError(f"{mm.filename}: not the mapped file any more")
+        for i, j in zip(np.r_[0, breaks].tolist(), np.r_[breaks, rows.size].tolist()):
+            done, want = i * row_bytes, j * row_bytes
+            pos = start + int(rows[i]) * row_bytes
+            while done < want:              # one read returns at most 2 GiB - 4 KiB on Linux
+                got = os.preadv(fd, [view[done:want]], pos)
+                if got <= 0:
+                    raise OSError(f"{mm.filename}: ends before its array")
+                done, pos = done + got, pos + got
     finally:
         os.close(fd)
     return out

@@ -130,3 +130,15 @@ def test_rows_of_a_mapped_array_are_read_not_mapped(tmp_path):
     before = resident_kb()
     take_rows(fresh, rows)
     assert resident_kb() == before
+    # the file replaced (an atomic rewrite) or deleted since it was mapped: the mapped rows,
+    # as numpy indexes them, never the new file's
+    write_record(path, "test-kind", 1, {"big": big + 1.0, "fortran": np.asfortranarray(big)}, units="SI")
+    assert np.array_equal(take_rows(fresh, rows), big[rows])
+    os.remove(path)
+    assert np.array_equal(take_rows(fresh, rows), big[rows])
+    # not a map, or not rows: numpy's indexing (a buffer's array, a boolean mask)
+    plain = np.frombuffer(big.tobytes(), dtype=big.dtype).reshape(big.shape)
+    assert np.array_equal(take_rows(plain, rows), big[rows])
+    mask = np.zeros(6000, bool)
+    mask[rows] = True
+    assert np.array_equal(take_rows(mapped["big"], mask), big[mask])
