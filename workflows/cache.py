@@ -77,6 +77,22 @@ def stage_key(stage: str, params: dict, code: tuple[str, ...] = (), inputs: tupl
     return hashlib.sha256(payload.encode()).hexdigest()[:24]
 
 
+def content_sha256(parts) -> str:
+    """SHA-256 of a sequence of arrays (each by its shape and float64 bytes), strings and
+    None: what a key holds of inputs too large for its parameters (an output's matrices)."""
+    h = hashlib.sha256()
+    for x in parts:
+        if x is None:
+            h.update(b"none")
+        elif isinstance(x, str):
+            h.update(x.encode())
+        else:
+            a = np.ascontiguousarray(x, dtype=float)
+            h.update(repr(a.shape).encode())
+            h.update(a.tobytes())
+    return h.hexdigest()
+
+
 ENTRY_FORMAT = "liftoff-cache-entry"
 
 

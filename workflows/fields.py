@@ -83,15 +83,9 @@ def mode_shapes_inputs(stack, cp, n_modes: int = MODE_SHAPE_FIELDS) -> dict:
     cache key, workflows/outputs.py): the number of modes and a SHA-256 of the vehicle's
     system modes (frequencies and shapes in the components' CB coordinates: a system
     stage rebuilt under the same key may flip a mode's sign or turn a degenerate pair)."""
-    import hashlib
+    from .cache import content_sha256
 
-    vm = stack.vehicle_modes
-    h = hashlib.sha256()
-    for a in (vm.omega, vm.phi):
-        a = np.ascontiguousarray(a, dtype=float)
-        h.update(repr(a.shape).encode())
-        h.update(a.tobytes())
-    return {"n_modes": n_modes, "modes": h.hexdigest()}
+    return {"n_modes": n_modes, "modes": content_sha256((stack.vehicle_modes.omega, stack.vehicle_modes.phi))}
 
 
 def write_mode_shapes_vtu(stack, cp, out: Path, n_modes: int = MODE_SHAPE_FIELDS) -> list[Path]:

@@ -123,28 +123,20 @@ def recovery_op4_inputs(stack, cp) -> dict:
     and matrices) and the versions of pyyeti (its OP4 writer) and pandas (which
     pyyeti.nastran imports): without either the OP4 is not written, and installing it
     changes the key."""
-    import hashlib
     from importlib import metadata
 
-    h = hashlib.sha256()
-    for r in cp.problem.recoveries:
-        if r.body != "a":
-            continue
-        h.update(repr((r.name, r.category, list(r.labels), list(r.units))).encode())
-        for m in (r.disp, r.vel, r.acc, r.const):
-            if m is None:
-                h.update(b"none")
-            else:
-                a = np.ascontiguousarray(m, dtype=float)
-                h.update(repr(a.shape).encode())
-                h.update(a.tobytes())
+    from .cache import content_sha256
+
+    digest = content_sha256(x for r in cp.problem.recoveries if r.body == "a"
+                            for x in (repr((r.name, r.category, list(r.labels), list(r.units))),
+                                      r.disp, r.vel, r.acc, r.const))
     versions = {}
     for dist in ("pyyeti", "pandas"):
         try:
             versions[dist] = metadata.version(dist)
         except metadata.PackageNotFoundError:
             versions[dist] = "absent"
-    return {"recoveries": h.hexdigest(), **versions}
+    return {"recoveries": digest, **versions}
 
 
 def write_recovery_op4(stack, cp, out: Path) -> list[Path]:
