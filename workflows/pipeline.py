@@ -569,11 +569,18 @@ def stack_key(model: ModelConfig, vasm: Assembly, ckeys: dict) -> str:
     keys (the components' stage keys, the joints' releases), the modes kept, the damping and
     the code that turns system modes into bodies (keys the stack's cached outputs,
     workflows/outputs.py)."""
-    released = sorted(vasm.released)
-    vkey = system_key(6, [ckeys[n] for n in model.vehicle], {"released": released} if released else {})
+    args = _system_args(model, vasm, ckeys)
     return stage_key("stack", {"system": asdict(model.system), "zeta": model.zeta},
                      ("liftoff.workflows.pipeline", "liftoff.reduction", "liftoff.transient.effects"),
-                     (vkey, system_key(0, [ckeys[PAD]])))
+                     (system_key(*args["vehicle"]), system_key(*args["pad"])))
+
+
+def _system_args(model: ModelConfig, vasm: Assembly, ckeys: dict) -> dict[str, tuple[int, list[str], dict]]:
+    """(rigid-body modes, component keys, assembly parameters) of the vehicle's and the pad's
+    system-mode stages (:func:`modes_stage`, :func:`system_key`)."""
+    released = sorted(vasm.released)
+    return {"vehicle": (6, [ckeys[n] for n in model.vehicle], {"released": released} if released else {}),
+            "pad": (0, [ckeys[PAD]], {})}
 
 
 @threadpool_limits.wrap(limits=1, user_api="blas")   # the same arithmetic in any process (campaign workers)
@@ -584,15 +591,16 @@ def _bodies(model: ModelConfig, cbs: dict, ckeys: dict, thermal: dict, cache: St
     names = list(model.vehicle) + [PAD]
     sysp = model.system
     vasm = vehicle_assembly(model, cbs)
-    released = sorted(vasm.released)
-    vall = modes_stage(vasm, 6, [ckeys[n] for n in model.vehicle], cache, "vehicle",
-                       {"released": released} if released else {})
+    args = _system_args(model, vasm, ckeys)
+    n_rigid, keys, params = args["vehicle"]
+    vall = modes_stage(vasm, n_rigid, keys, cache, "vehicle", params)
     vmodes = keep_modes(vall, sysp.f_max, sysp.n_modes, sysp.residual_vectors)
     body0 = vmodes.to_body(zeta=model.zeta, name="vehicle")
     _, cg = center_of_gravity(body0)
     vehicle = vmodes.to_body(ref_point=cg, zeta=model.zeta, name="vehicle")
     pasm = assemble([cbs[PAD]], "pad")
-    pall = modes_stage(pasm, 0, [ckeys[PAD]], cache, "pad")
+    n_rigid, keys, params = args["pad"]
+    pall = modes_stage(pasm, n_rigid, keys, cache, "pad", params)
     pmodes = keep_modes(pall, sysp.pad_f_max, sysp.pad_n_modes, sysp.residual_vectors)
     pad = pmodes.to_body(zeta=model.zeta, name="pad")
     unit = {}
