@@ -27,6 +27,8 @@ from typing import Callable
 
 from liftoff.core.errors import InputError
 
+from .executors import die_with_parent
+
 #: environment variable: "0" draws every picture inline (one process), as before issue 28
 ENV = "LIFTOFF_BESIDE"
 
@@ -61,15 +63,6 @@ def trim_heap() -> None:
         pass
 
 
-def _die_with_parent() -> None:
-    try:
-        import ctypes
-
-        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGTERM)   # PR_SET_PDEATHSIG
-    except (OSError, AttributeError):
-        pass
-
-
 class Beside:
     """Runs ``work() -> list[Path]`` jobs in forked children (or inline when ``forked`` is
     False); :meth:`wait` returns their files, in submission order."""
@@ -100,7 +93,7 @@ class Beside:
             status = 1
             try:
                 os.close(r)
-                _die_with_parent()
+                die_with_parent()
                 msg = {"files": [str(p) for p in work()]}
                 status = 0
             except BaseException as exc:            # noqa: BLE001 - everything goes back to the parent

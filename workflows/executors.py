@@ -24,7 +24,8 @@ from liftoff.core.errors import InputError
 
 
 def die_with_parent() -> None:
-    """Pool worker initializer, and ``preexec_fn`` of the mpirun that ``--ranks`` starts
+    """Pool worker initializer, the first call of a child forked beside the run
+    (workflows/beside.py), and ``preexec_fn`` of the mpirun that ``--ranks`` starts
     (workflows/run.launch) (Linux): the kernel sends this process SIGTERM when the process
     that started it dies, however it dies (SIGKILL included), so nothing outlives a killed
     run (issue 27). Elsewhere a no-op; a process whose parent is already gone exits."""

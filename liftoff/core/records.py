@@ -335,6 +335,8 @@ def _read_npz(path: Path, mmap: bool) -> dict:
     fmt = np.lib.format
     out = {}
     with open(path, "rb") as raw, zipfile.ZipFile(raw) as zf:
+        st = os.fstat(raw.fileno())
+        file_id = (st.st_dev, st.st_ino)                      # the file mapped (take_rows reads it by path)
         for info in zf.infolist():
             name = info.filename[:-4] if info.filename.endswith(".npy") else info.filename
             if info.compress_type != zipfile.ZIP_STORED or info.file_size < MMAP_MIN_BYTES:
@@ -360,8 +362,7 @@ def _read_npz(path: Path, mmap: bool) -> dict:
                 raise ValueError(f"member {info.filename!r} is shorter than its array")
             mm = np.memmap(path, dtype=dtype, mode="r", shape=tuple(shape), order="F" if fortran else "C",
                            offset=offset)
-            st = os.fstat(raw.fileno())
-            mm.liftoff_file_id = (st.st_dev, st.st_ino)      # the file mapped (take_rows reads it by path)
+            mm.liftoff_file_id = file_id
             out[name] = mm.view(np.ndarray)
     return out
 
