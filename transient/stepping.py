@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -223,8 +223,7 @@ class StepChoice:
 
     def halved(self) -> "StepChoice":
         """The same run in steps of h/2 (twice as many)."""
-        return StepChoice(0.5 * self.h, self.f_h, self.h_default, 2 * self.n_steps, self.t0, self.t_end, self.f_s,
-                          self.h_requested, self.margin, self.mode_samples, self.governed_by, self.stability_halvings)
+        return replace(self, h=0.5 * self.h, n_steps=2 * self.n_steps)
 
 
 def _modes(problem: TransientProblem) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
