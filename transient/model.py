@@ -6,6 +6,7 @@ one-line message naming the culprit. Units are SI (N, N m, m, rad, s).
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 from typing import Sequence
 
@@ -467,7 +468,11 @@ class TransientProblem:
     ``static_above_hz``: the elastic modes above it are residual-flexibility modes, solved
     quasi-statically (q = P/omega^2, no velocity or acceleration; pyyeti's ``rfcut``): their
     static flexibility is kept, their periods no longer set the step (None: every mode
-    dynamic; transient/coefficients.py, docs/transient.md "Residual-flexibility modes")."""
+    dynamic; transient/coefficients.py, docs/transient.md "Residual-flexibility modes").
+    ``modal_scratch``: a folder (on disk) in which the histories of ``keep_modal`` are kept
+    as they are marched, instead of memory: an unlinked file mapped into the result's arrays,
+    the rows of each chunk handed to the page cache once written (liftoff/core/scratch.py),
+    so that a long run's 0.6 GB of modal displacements do not stay resident (None: memory)."""
 
     body_a: ModalBody
     body_b: ModalBody
@@ -488,6 +493,7 @@ class TransientProblem:
     memory_limit: float | None = None
     mode_samples: float = DEFAULT_MODE_SAMPLES
     static_above_hz: float | None = None
+    modal_scratch: str | None = None
 
     def __post_init__(self) -> None:
         self.contacts = list(self.contacts)
@@ -519,6 +525,9 @@ class TransientProblem:
         self.max_iter = int(self.max_iter)
         if self.keep_modal not in (True, False, "q"):
             raise InputError(f"keep_modal must be true, false or 'q' (modal displacements only), got {self.keep_modal!r}")
+        if self.modal_scratch is not None and not os.path.isdir(self.modal_scratch):
+            raise InputError(f"modal_scratch = {str(self.modal_scratch)!r}: not a folder (the modal histories' scratch "
+                             "files go there)")
         if isinstance(self.initial, str):
             if self.initial not in ("static", "zero"):
                 raise InputError(f"initial must be 'static', 'zero' or an InitialState, got {self.initial!r}")

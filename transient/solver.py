@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from liftoff.core.errors import ConvergenceError, InputError
+from liftoff.core.scratch import release_rows, scratch_array
 
 from .assembly import contact_rows, feedback_at, feedback_factors, modal_load
 from .body import ModalBody
@@ -405,9 +406,11 @@ def _histories(problem: TransientProblem, rows, n_t: int, plans) -> History:
     keep = bool(problem.keep_modal)
     full = problem.keep_modal is True
     na, nb = problem.body_a.n_modes, problem.body_b.n_modes
-    Qa, Qb = np.zeros((n_t if keep else 0, na)), np.zeros((n_t if keep else 0, nb))
-    Va, Aa = (np.zeros((n_t if full else 0, na)) for _ in range(2))
-    Vb, Ab = (np.zeros((n_t if full else 0, nb)) for _ in range(2))
+    folder = problem.modal_scratch
+    zeros = np.zeros if folder is None else (lambda shape: scratch_array(shape, folder))  # on disk: core/scratch.py
+    Qa, Qb = zeros((n_t if keep else 0, na)), zeros((n_t if keep else 0, nb))
+    Va, Aa = (zeros((n_t if full else 0, na)) for _ in range(2))
+    Vb, Ab = (zeros((n_t if full else 0, nb)) for _ in range(2))
     return History(np.zeros((n_t, plans[0].ntarg)), np.zeros((n_t, plans[1].ntarg)), np.zeros((n_t, rows.n)),
                    np.zeros((n_t, len(rows.names)), dtype=np.int8), np.zeros(n_t, dtype=np.int32), keep,
                    Qa, Va, Aa, Qb, Vb, Ab, np.zeros((3, OUT_BLOCK, na)), np.zeros((3, OUT_BLOCK, nb)),
@@ -539,6 +542,9 @@ def _drive(problem: TransientProblem, step: StepChoice, inputs, state: State, ca
                 raise ConvergenceError(f"the solution diverged (non-finite values) at t = {t_bad:.6g} s with "
                                        f"h = {step.h:.4g} s; reduce h")
             guard.check(step.t0 + step.h * i1, state, hist.Fc[i + 1:i1 + 1], step.t0 + step.h * np.arange(i + 1, i1 + 1))
+            if problem.modal_scratch is not None:   # the chunk's modal rows to the page cache (core/scratch.py)
+                for a in (hist.Qa, hist.Va, hist.Aa, hist.Qb, hist.Vb, hist.Ab):
+                    release_rows(a, i, i1 + 1)
             if bar is not None:
                 bar.update(i1 - i)
             i = i1

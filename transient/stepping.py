@@ -340,7 +340,8 @@ def memory_estimate(problem: TransientProblem, n_steps: int, runs: int = 1) -> d
     """Bytes the transient needs, by item: time histories (n_t x columns, 8 bytes each;
     ``runs`` of them held at once, e.g. 3 for a run with its h/2 error-estimate run), the
     modal histories of ``keep_modal`` (q, v and acc per mode, or q alone for ``"q"``; one
-    run's: an error estimate's h/2 run keeps none, accuracy.solve_estimated), the
+    run's: an error estimate's h/2 run keeps none, accuracy.solve_estimated; none in memory
+    with ``modal_scratch``), the
     active-set cache of the step matrix (64 patterns) and the dense static solve (about
     five (n + n_rigid)^2 arrays)."""
     pa, pb = problem.body_a, problem.body_b
@@ -355,7 +356,7 @@ def memory_estimate(problem: TransientProblem, n_steps: int, runs: int = 1) -> d
     n2 = 2 * nc if nrig else nc
     return {"histories": 8.0 * n_t * cols * runs,
             "modal histories (keep_modal)": 8.0 * n_t * (3 if problem.keep_modal is True else 1) * n
-            if problem.keep_modal else 0.0,
+            if problem.keep_modal and problem.modal_scratch is None else 0.0,      # else on disk (modal_scratch)
             "active-set cache": 8.0 * 64 * n2 * n2,
             "dense statics": 8.0 * 5 * (n + nrig) ** 2}
 

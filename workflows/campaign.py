@@ -24,7 +24,7 @@ import itertools
 import json
 import time
 from concurrent.futures import FIRST_COMPLETED, wait
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable, Iterable
 
@@ -207,8 +207,9 @@ def _worker_state(task: CaseTask):
     return _MEMO["scenario"], _MEMO["stack"]
 
 
-def solve_generated(task: CaseTask, keep_modal: bool | str = False):
-    """(result, CaseProblem, Case, wall s) of generated case ``task.index``."""
+def solve_generated(task: CaseTask, keep_modal: bool | str = False, modal_scratch: Path | None = None):
+    """(result, CaseProblem, Case, wall s) of generated case ``task.index``; ``modal_scratch``:
+    the folder of the kept modal histories' scratch file (TransientProblem.modal_scratch)."""
     from dataclasses import asdict
 
     from liftoff.transient import solve
@@ -223,7 +224,8 @@ def solve_generated(task: CaseTask, keep_modal: bool | str = False):
     t0 = time.perf_counter()
     try:
         cp = build_problem(case, stack, progress=False, keep_modal=keep_modal)
-        return solve(cp.problem), cp, case, time.perf_counter() - t0
+        problem = cp.problem if modal_scratch is None else replace(cp.problem, modal_scratch=str(modal_scratch))
+        return solve(problem), cp, case, time.perf_counter() - t0
     except (InputError, ConvergenceError) as exc:
         msg = str(exc) if case.name in str(exc) else f"{sc.path}: case {case.name}: {exc}"
         raise type(exc)(msg) from None

@@ -361,8 +361,9 @@ def _write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, 
     opt = camp.options if camp else Options()
     keep_q = opt.modal_results or _fields_wanted(sc, opt)      # the fields' case is known only at the end
     # the named cases' runs at h/2 march one case ahead on a second thread (transient/accuracy.py)
-    pairs = [_full_problem(prep.problems[c.name][0]) if _estimated_ahead(prep.problems[c.name][0], error_estimate)
-             else None for c in sc.cases]
+    scratch = None if keep_q else out       # modal displacements dropped once written: kept on disk meanwhile
+    pairs = [_full_problem(prep.problems[c.name][0], scratch)
+             if _estimated_ahead(prep.problems[c.name][0], error_estimate) else None for c in sc.cases]
     with EstimatesInOrder(pairs) as ahead, _forks_wait_for(beside, ahead):
         for k, case in enumerate(sc.cases):
             cp, mkey = prep.problems[case.name]
@@ -442,9 +443,10 @@ def _table1(stack, cp, case, out: Path, echo, stage_times: list, beside=None, ca
     return tab1, files
 
 
-def _full_problem(cp):
-    """A case's transient with full outputs: its modal displacements kept (fields, snapshots)."""
-    return replace(cp.problem, keep_modal="q")
+def _full_problem(cp, scratch: Path | None = None):
+    """A case's transient with full outputs: its modal displacements kept (fields, snapshots),
+    in a scratch file in folder ``scratch`` instead of memory if given (TransientProblem.modal_scratch)."""
+    return replace(cp.problem, keep_modal="q", modal_scratch=None if scratch is None else str(scratch))
 
 
 def _estimated_ahead(cp, error_estimate: bool) -> bool:
@@ -464,14 +466,15 @@ def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, sta
     snapshots beside the run, its files returned by its ``wait``; None: inline. ``estimate``:
     returns the case's estimate pair (:class:`transient.accuracy.EstimatesInOrder`), instead
     of solving it here. ``keep_modal`` False: the returned result's modal displacements are
-    dropped once the results file and snapshots have them (Options.modal_results)."""
+    dropped once the results file and snapshots have them (Options.modal_results), and kept
+    meanwhile in a scratch file in ``out`` (TransientProblem.modal_scratch), not in memory."""
 
     from liftoff.transient import solve, solve_estimated
 
     from .campaign import summarize
 
     t0 = time.perf_counter()
-    half, problem = None, _full_problem(cp)
+    half, problem = None, _full_problem(cp, None if keep_modal else out)
     if solved is not None:
         res, secs = solved
     elif estimate is not None:
@@ -533,7 +536,7 @@ def _generated_outputs(sc, prep: Prepared, camp: _Campaign, agg, out: Path, stag
     stack = prep.stacks[prep.gen_model]
     for idx in keep:
         task = campaign.CaseTask(ref, idx, str(camp.cache.root), prep.gen_model)
-        res, cp, case, secs = campaign.solve_generated(task, keep_modal="q")
+        res, cp, case, secs = campaign.solve_generated(task, keep_modal="q", modal_scratch=None if keep_modal else out)
         if idx == gov:
             _, f = _full_case(sc, stack, cp, case.name, out, plots, pics, stage_times, agg, True, solved=(res, secs),
                               keep_modal=keep_modal)

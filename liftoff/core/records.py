@@ -17,6 +17,7 @@ from typing import Iterator
 import numpy as np
 
 from .errors import InputError
+from .scratch import copy_rows, row_blocks, scratch_map
 
 TEMP_TAG = ".liftoff-tmp-"          # temporary names carry the writer's pid: .<name>.liftoff-tmp-<pid>-<random>
 
@@ -316,7 +317,12 @@ def _savez_aligned(fh, arrays: Mapping) -> None:
             pad = (-base) % NPZ_ALIGN
             info.extra = struct.pack("<HH", _ALIGN_EXTRA_ID, pad) + b"\0" * pad
             with zf.open(info, "w", force_zip64=True) as out:
-                np.lib.format.write_array(out, arr, allow_pickle=False)
+                if scratch_map(arr) is None:
+                    np.lib.format.write_array(out, arr, allow_pickle=False)
+                    continue
+                np.lib.format.write_array_header_1_0(out, np.lib.format.header_data_from_array_1_0(arr))
+                for i, j in row_blocks(arr):        # a scratch array a block at a time (core/scratch.py)
+                    out.write(copy_rows(arr, i, j).tobytes())
 
 
 def _read_npz(path: Path, mmap: bool) -> dict:
@@ -471,8 +477,12 @@ def _write_group(group, data: Mapping, scaled: list) -> None:
         arr = ds.data
         if arr.dtype.kind in "UO":
             d = group.create_dataset(k, data=arr.astype(object), dtype=h5py.string_dtype())
-        else:
+        elif scratch_map(arr) is None:
             d = group.create_dataset(k, data=arr)
+        else:                                   # a scratch array a block at a time (core/scratch.py)
+            d = group.create_dataset(k, shape=arr.shape, dtype=arr.dtype)
+            for i, j in row_blocks(arr):
+                d[i:j] = copy_rows(arr, i, j)
         for a, val in ds.attrs.items():
             if isinstance(val, (list, tuple)) and all(isinstance(x, str) for x in val):
                 val = np.array(val, dtype=h5py.string_dtype())  # a list of strings: a text array
