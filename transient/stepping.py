@@ -356,9 +356,16 @@ def memory_estimate(problem: TransientProblem, n_steps: int, runs: int = 1) -> d
     n2 = 2 * nc if nrig else nc
     return {"histories": 8.0 * n_t * cols * runs,
             "modal histories (keep_modal)": 8.0 * n_t * (3 if problem.keep_modal is True else 1) * n
-            if problem.keep_modal and problem.modal_scratch is None else 0.0,      # else on disk (modal_scratch)
+            if problem.keep_modal and not _modal_on_disk(problem) else 0.0,
             "active-set cache": 8.0 * 64 * n2 * n2,
             "dense statics": 8.0 * 5 * (n + nrig) ** 2}
+
+
+def _modal_on_disk(problem: TransientProblem) -> bool:
+    """Whether the modal histories live in a scratch file out of memory (modal_scratch on disk)."""
+    from liftoff.core.scratch import on_disk
+
+    return problem.modal_scratch is not None and on_disk(problem.modal_scratch)
 
 
 def check_memory(problem: TransientProblem, n_steps: int, runs: int = 1, step: str = "") -> float:

@@ -17,7 +17,7 @@ from typing import Iterator
 import numpy as np
 
 from .errors import InputError
-from .scratch import copy_rows, row_blocks, scratch_map
+from .scratch import blockwise, copy_rows, row_blocks
 
 TEMP_TAG = ".liftoff-tmp-"          # temporary names carry the writer's pid: .<name>.liftoff-tmp-<pid>-<random>
 
@@ -317,7 +317,7 @@ def _savez_aligned(fh, arrays: Mapping) -> None:
             pad = (-base) % NPZ_ALIGN
             info.extra = struct.pack("<HH", _ALIGN_EXTRA_ID, pad) + b"\0" * pad
             with zf.open(info, "w", force_zip64=True) as out:
-                if scratch_map(arr) is None:
+                if not blockwise(arr):
                     np.lib.format.write_array(out, arr, allow_pickle=False)
                     continue
                 np.lib.format.write_array_header_1_0(out, np.lib.format.header_data_from_array_1_0(arr))
@@ -477,7 +477,7 @@ def _write_group(group, data: Mapping, scaled: list) -> None:
         arr = ds.data
         if arr.dtype.kind in "UO":
             d = group.create_dataset(k, data=arr.astype(object), dtype=h5py.string_dtype())
-        elif scratch_map(arr) is None:
+        elif not blockwise(arr):
             d = group.create_dataset(k, data=arr)
         else:                                   # a scratch array a block at a time (core/scratch.py)
             d = group.create_dataset(k, shape=arr.shape, dtype=arr.dtype)

@@ -10,9 +10,16 @@ error before the run, not a SIGBUS in the middle). :func:`release_rows` hands ro
 written back to the page cache (``madvise(MADV_DONTNEED)``: a shared file map keeps their
 bytes in the file), so the array's resident share stays that of the rows being written;
 :func:`copy_rows` reads rows back the same way, for a writer that goes through it in blocks.
+Where the folder's file system is memory itself (tmpfs, ramfs) or the platform lacks
+``posix_fallocate`` or ``madvise``, a scratch file would save nothing: :func:`on_disk` says
+so and :func:`scratch_array` returns an ordinary array in memory.
+
+The map is never closed by hand: numpy holds no export of it, so closing it under a live
+array would free memory the array still points at; it is unmapped when its last array goes.
 """
 from __future__ import annotations
 
+import errno
 import mmap
 import os
 import tempfile
@@ -24,13 +31,49 @@ from .errors import ResourceError
 #: rows :func:`copy_rows`' callers take at a time: about 32 MB of a 1,372-mode history
 BLOCK_BYTES = 32 * 2 ** 20
 
+#: file systems whose pages are memory (a scratch file there saves none)
+MEMORY_FILE_SYSTEMS = frozenset({"tmpfs", "ramfs", "devtmpfs", "hugetlbfs"})
+
+
+class _ScratchMap(mmap.mmap):
+    """The map under a :func:`scratch_array` (told apart from any other memory map)."""
+
+
+def file_system(folder: str | os.PathLike) -> str | None:
+    """The type of the file system holding ``folder`` (/proc/self/mounts: its longest mount
+    point above the folder's real path), None where it cannot be told."""
+    path = os.path.realpath(folder)
+    best, kind = -1, None
+    try:
+        with open("/proc/self/mounts", encoding="utf-8", errors="replace") as fh:
+            for line in fh:
+                parts = line.split()
+                if len(parts) < 3:
+                    continue
+                point = parts[1].replace("\\040", " ")
+                inside = path == point or path.startswith(point.rstrip("/") + "/")
+                if inside and len(point) > best:
+                    best, kind = len(point), parts[2]
+    except OSError:
+        return None
+    return kind
+
+
+def on_disk(folder: str | os.PathLike) -> bool:
+    """Whether a scratch file in ``folder`` keeps its array out of memory: the platform has
+    ``posix_fallocate`` and ``madvise``, and the folder's file system is not memory."""
+    if not (hasattr(os, "posix_fallocate") and hasattr(mmap, "MADV_DONTNEED") and hasattr(mmap.mmap, "madvise")):
+        return False
+    return file_system(folder) not in MEMORY_FILE_SYSTEMS
+
 
 def scratch_array(shape: tuple[int, ...], folder: str | os.PathLike, dtype=np.float64) -> np.ndarray:
-    """A zeroed C-ordered array of ``shape`` over an unlinked file in ``folder`` (shared map).
-    ResourceError (one line, naming the folder) when the folder cannot hold it."""
+    """A zeroed C-ordered array of ``shape`` over an unlinked file in ``folder`` (shared
+    map); in memory where :func:`on_disk` is false. ResourceError (one line, naming the
+    folder) when the folder cannot hold it."""
     dtype = np.dtype(dtype)
     nbytes = int(np.prod(shape, dtype=np.int64)) * dtype.itemsize
-    if nbytes == 0:
+    if nbytes == 0 or not on_disk(folder):
         return np.zeros(shape, dtype)
     try:
         fd, path = tempfile.mkstemp(prefix=".liftoff-scratch-", dir=folder)
@@ -41,29 +84,42 @@ def scratch_array(shape: tuple[int, ...], folder: str | os.PathLike, dtype=np.fl
         try:
             os.posix_fallocate(fd, 0, nbytes)
         except OSError as exc:
-            raise ResourceError(f"scratch folder {str(folder)!r}: no room for {nbytes / 1e9:.3g} GB of modal histories "
+            why = ("no room for" if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
+                   else "cannot reserve")
+            raise ResourceError(f"scratch folder {str(folder)!r}: {why} {nbytes / 1e9:.3g} GB of modal histories "
                                 f"({exc.strerror}); free disk space there or keep fewer histories") from None
-        buf = mmap.mmap(fd, nbytes, flags=mmap.MAP_SHARED, prot=mmap.PROT_READ | mmap.PROT_WRITE)
+        try:
+            buf = _ScratchMap(fd, nbytes, flags=mmap.MAP_SHARED, prot=mmap.PROT_READ | mmap.PROT_WRITE)
+        except OSError as exc:
+            raise ResourceError(f"scratch folder {str(folder)!r}: cannot map {nbytes / 1e9:.3g} GB of modal "
+                                f"histories there ({exc.strerror})") from None
     finally:
         os.close(fd)
     return np.ndarray(shape, dtype, buffer=buf)
 
 
 def scratch_map(a: np.ndarray) -> mmap.mmap | None:
-    """The shared map under a :func:`scratch_array` (or a view of one); None for any other array."""
+    """The map under a :func:`scratch_array` on disk (or a view of one); None for any
+    other array, other memory maps (np.memmap, np.load's) included."""
     base = a
     while isinstance(base, np.ndarray):
         base = base.base
-    return base if isinstance(base, mmap.mmap) else None
+    return base if isinstance(base, _ScratchMap) else None
+
+
+def blockwise(a: np.ndarray) -> bool:
+    """Whether a writer should go through ``a`` a block of rows at a time (a C-ordered
+    array, of at least one dimension, over a scratch map)."""
+    return a.ndim >= 1 and a.flags.c_contiguous and scratch_map(a) is not None
 
 
 def release_rows(a: np.ndarray, start: int, stop: int) -> None:
     """Drop the resident pages of rows ``start:stop`` of a C-ordered :func:`scratch_array`
     (their bytes stay in the file: the next access reads them back); nothing for any other
     array. Pages shared with the rows beside are dropped too, which costs them a re-read only."""
-    buf = scratch_map(a)
-    if buf is None or stop <= start or not a.flags.c_contiguous:
+    if stop <= start or not blockwise(a):
         return
+    buf = scratch_map(a)
     row = a.strides[0]
     origin = np.frombuffer(buf, np.uint8).ctypes.data
     first = a.ctypes.data - origin + start * row
