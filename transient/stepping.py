@@ -34,6 +34,7 @@ import numpy as np
 
 from liftoff.core.errors import InputError, ResourceError
 from liftoff.core.memory import MEMORY_FRACTION, available_memory  # noqa: F401  (also imported from here)
+from liftoff.core.scratch import on_disk
 
 from .assembly import contact_rows
 from .body import ModalBody
@@ -341,7 +342,7 @@ def memory_estimate(problem: TransientProblem, n_steps: int, runs: int = 1) -> d
     ``runs`` of them held at once, e.g. 3 for a run with its h/2 error-estimate run), the
     modal histories of ``keep_modal`` (q, v and acc per mode, or q alone for ``"q"``; one
     run's: an error estimate's h/2 run keeps none, accuracy.solve_estimated; none in memory
-    with ``modal_scratch``), the
+    with ``modal_scratch`` on disk: liftoff.core.scratch.on_disk), the
     active-set cache of the step matrix (64 patterns) and the dense static solve (about
     five (n + n_rigid)^2 arrays)."""
     pa, pb = problem.body_a, problem.body_b
@@ -363,8 +364,6 @@ def memory_estimate(problem: TransientProblem, n_steps: int, runs: int = 1) -> d
 
 def _modal_on_disk(problem: TransientProblem) -> bool:
     """Whether the modal histories live in a scratch file out of memory (modal_scratch on disk)."""
-    from liftoff.core.scratch import on_disk
-
     return problem.modal_scratch is not None and on_disk(problem.modal_scratch)
 
 
