@@ -428,8 +428,10 @@ def deformed_fields_at(stack, result, steps) -> list[list]:
             u = field_displacement(stack.pad_asm, stack.pad_modes, name, comp, qb, nodes)
         else:
             u = field_displacement(stack.vehicle_asm, stack.vehicle_modes, name, comp, qa, nodes)
+        xyz = comp.nodes[nodes]                     # one copy of the drawn nodes, shared by every part
         for k in range(len(steps)):
-            out[k] += [Part(comp.nodes[nodes], cells, kind, u[:, k].reshape(-1, 3)) for kind, cells in blocks]
+            uk = u[:, k].reshape(-1, 3)
+            out[k] += [Part(xyz, cells, kind, uk) for kind, cells in blocks]
     return out
 
 
