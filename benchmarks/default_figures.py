@@ -568,16 +568,17 @@ def render_booster_grain(fig: dict) -> str:
 
 
 #: attach_release_compare.py's variants, as the table heads them
-RELEASE_TITLES = {"welded": "all six DOFs joined (before)", "aft_axial": "aft attach: Tz released",
-                  "determinate": "forward ball (Rx Ry Rz), aft Tz Rx Ry released (default)"}
+RELEASE_TITLES = {"welded": "all six DOFs joined (before)", "aft_axial": "booster aft attach: Tz released",
+                  "boosters": "boosters: forward ball (Rx Ry Rz), aft Tz Rx Ry released; orbiter welded",
+                  "bipods": "boosters as before; orbiter bipods: forward Tz Rx Ry Rz, aft Tx Rx Ry Rz released (default)"}
 
 
 def render_attach_release(fig: dict) -> str:
-    """The default run with the booster attach joints welded and released
+    """The default run with the attach joints welded and released
     (benchmarks/attach_release_compare.py)."""
     base = fig["welded"]["attach_n"]
-    items = [k for k in sorted(base, key=lambda k: (k.split(" on ")[0], k)) if k.endswith(("Tz", "Tx"))]
-    return _variant_table("booster attach joints", [(RELEASE_TITLES[k], v) for k, v in fig.items()], [], items)
+    items = [k for k in sorted(base, key=lambda k: (k.split(" on ")[0], k)) if k.endswith(("Tx", "Ty", "Tz"))]
+    return _variant_table("attach joints", [(RELEASE_TITLES[k], v) for k, v in fig.items()], [], items)
 
 
 def render_mesh(study: dict) -> str:

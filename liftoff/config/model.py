@@ -287,15 +287,22 @@ def _stick_builders(where: Where, layout: StackLayout, sel: dict[str, dict], spe
 #: and the couple Rz), so the thrust and the tank's weight pass forward and its cryo shrinkage
 #: strains no attach
 SRB_ATTACH_RELEASE = {"fwd": ("Rx", "Ry", "Rz"), "aft": ("Tz", "Rx", "Ry")}
+#: the orbiter's attach joints, one forward and two aft bipods (two pin-ended struts meeting at
+#: a spherical fitting: forces in the struts' plane only), statically determinate (the default
+#: scenario's): the forward struts splay across the vehicle (Tx, Ty), each aft pair lies in the
+#: plane of the axis and the orbiter's offset (Ty, Tz), so the main engines' thrust passes aft
+ORBITER_ATTACH_RELEASE = {"fwd": ("Tz", "Rx", "Ry", "Rz"), "aft": ("Tx", "Rx", "Ry", "Rz")}
 
 
 def shuttle_joints(layout: StackLayout) -> tuple[Joint, ...]:
     """The Shuttle stack's joints on ``layout``: each booster's attach points with the core,
-    released as :data:`SRB_ATTACH_RELEASE`, and the orbiter's (those of the stick source;
-    the default scenario lists the same)."""
+    released as :data:`SRB_ATTACH_RELEASE`, and the orbiter's, released as
+    :data:`ORBITER_ATTACH_RELEASE` (those of the stick source; the default scenario lists the
+    same)."""
     out = [Joint(p, ("core", f"srb_{side}"), SRB_ATTACH_RELEASE[p.rsplit("_", 1)[-1]])
            for side in ("left", "right") for p in layout.srb_attach_points(side)]
-    return tuple(out + [Joint(p, ("core", "orbiter")) for p in layout.orbiter_attach_points()])
+    return tuple(out + [Joint(p, ("core", "orbiter"), ORBITER_ATTACH_RELEASE[p.split("_")[2]])
+                        for p in layout.orbiter_attach_points()])
 
 
 def _vehicle_names(where: Where, comps: dict, source: str) -> tuple[str, ...]:

@@ -126,15 +126,19 @@ def test_cryo_preload_is_self_equilibrated(stack, monkeypatch):
 
 
 def test_released_attach_directions_carry_no_force():
-    """A booster attach joint's released directions (config.model.SRB_ATTACH_RELEASE) pass no
-    force between core and booster: their attach recovery rows are zero for the whole run
-    (the booster's own boundary rows there would hold only residuals: the modal damping's,
-    the softening's, the truncation's). Statics at t0 (on the posts, with the cryo preload,
-    every system mode kept: the stick's 184): a booster's posts and attach forces hold up its
-    weight, sum of Tz = m g. The axial attach force is the forward joint's alone (the aft one
-    releases Tz); the gravity softening is off, its feedback forces being loads on the
-    booster too (1.7 kN here). Tolerance 1e-9: static solves of cond ~1e8 (measured 4e-11)."""
-    from liftoff.config.model import SRB_ATTACH_RELEASE
+    """An attach joint's released directions (config.model.SRB_ATTACH_RELEASE for a booster,
+    ORBITER_ATTACH_RELEASE for the orbiter's bipods) pass no force between the core and the
+    component: their attach recovery rows are zero for the whole run (the component's own
+    boundary rows there would hold only residuals: the modal damping's, the softening's, the
+    truncation's). Statics at t0 (on the posts, with the cryo preload, every system mode kept:
+    the stick's 196): a booster's posts and attach forces hold up its weight, sum of Tz = m g
+    (the axial attach force is the forward joint's alone: the aft one releases Tz); the
+    orbiter's three bipods hold up its weight, Tz at the aft ones alone, and pass no net
+    lateral force, and the tank's cryo shrinkage changes none of their forces (a determinate
+    mount; welded, the shrinkage between the fittings loads them); the
+    gravity softening is off, its feedback forces being loads on the component too (1.7 kN
+    here). Tolerance 1e-9: static solves of cond ~1e8 (measured 4e-11)."""
+    from liftoff.config.model import ORBITER_ATTACH_RELEASE, SRB_ATTACH_RELEASE
     from liftoff.core.labels import COMPONENTS
     from liftoff.reduction import cg_acceleration_recovery
 
@@ -149,20 +153,29 @@ def test_released_attach_directions_carry_no_force():
     g = -case.gravity[2]
     checked = 0
     for name, (point, comp) in cp.attach.items():
-        if not comp.startswith("srb"):
-            continue
-        free = SRB_ATTACH_RELEASE[point.rsplit("_", 1)[-1]]
+        free = (SRB_ATTACH_RELEASE[point.rsplit("_", 1)[-1]] if comp.startswith("srb") else
+                ORBITER_ATTACH_RELEASE[point.split("_")[2]])
         hist = res.recovered[name]
         for k, c in enumerate(COMPONENTS):
             assert np.all(hist[:, k] == 0.0) if c in free else np.any(hist[:, k] != 0.0), (name, c)
             checked += c in free
-    assert checked == 12
+    assert checked == 12 + 12
     for side in ("left", "right"):
         _, mass = cg_acceleration_recovery(stack.vehicle_asm, stack.vehicle_modes, f"srb_{side}")
         tz = sum(res.recovered[f"attach_att_srb_{side}_{p}"][0, 2] for p in ("fwd", "aft"))
         posts = sum(res.contact_force[0, j] for j, d in enumerate(res.contact_directions)
                     if d.component == "Tz" and d.contact.startswith(side))
         assert tz + posts == pytest.approx(mass[2] * g, rel=1e-9), side
+    _, mass = cg_acceleration_recovery(stack.vehicle_asm, stack.vehicle_modes, "orbiter")
+    bipods = sum(res.recovered[f"attach_att_orb_{p}"][0, :3] for p in ("fwd", "aft_left", "aft_right"))
+    assert bipods[2] == pytest.approx(mass[2] * g, rel=1e-9)
+    assert np.abs(bipods[:2]).max() < 1e-9 * mass[2] * g
+    dry = build_problem(replace(case, cryo=replace(case.cryo, enabled=False)), stack, progress=False)
+    res_dry = solve(dry.problem)
+    for p in ("fwd", "aft_left", "aft_right"):           # the tank's shrinkage reaches no bipod
+        cryo = res.recovered[f"attach_att_orb_{p}"][0, :3] - res_dry.recovered[f"attach_att_orb_{p}"][0, :3]
+        print(p, cryo)
+        assert np.abs(cryo).max() < 1e-9 * mass[2] * g, p
 
 
 def test_control_system_holds_attitude_in_flight(stack):

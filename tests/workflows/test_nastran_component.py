@@ -2,7 +2,13 @@
 written as a DMIG punch in inch-pound-second units (reduction.nastran.write_dmig), read
 back through the scenario's [model.component.orbiter.nastran], gives the same vehicle
 and the same loads as the orbiter reduced in liftoff. Tolerance: the punch keeps 10
-significant digits (large-field DMIG), so frequencies and post forces agree to ~1e-8."""
+significant digits (large-field DMIG: each entry within eps = 5e-10 of itself), so a
+system frequency moves by at most its first-order perturbation bound, 0.5 eps (|t|^T |K|
+|t| + lambda |t|^T |M| |t|) / lambda over the orbiter's rows t of the mode (1e-9 added
+for the eigensolver): ~1e-9 for most modes, but 2.8e-6 for the stick's first (0.81 Hz),
+in which the orbiter swings almost rigidly on its statically determinate bipods, so its
+strain energy is a small difference of large entries (measured 4.4e-7; 1.5e-9 the next
+largest). Post forces agree to 1e-7."""
 import tomllib
 
 import numpy as np
@@ -43,7 +49,13 @@ def test_orbiter_from_a_dmig_punch_in_inch_pound(tmp_path):
     stack2 = build_stack(case2.model, cache, progress=False, where=Where("s.toml", "model"))
     assert stack2.cbs["orbiter"].source_units.startswith("in-lbf-s") and "orbiter" not in stack2.components
     f1, f2 = stack.vehicle.omega[6:], stack2.vehicle.omega[6:]
-    assert f1.size == f2.size and np.abs(f2 / f1 - 1).max() < 1e-8
+    asm, sysm, lam = stack.vehicle_asm, stack.vehicle_modes, stack.vehicle.omega[6:] ** 2
+    cb = asm.component("orbiter")
+    t = np.abs(sysm.phi[asm.cb_index("orbiter")][:, 6:])
+    K, M = (np.abs(np.asarray(A.todense() if hasattr(A, "todense") else A)) for A in (cb.K, cb.M))
+    bound = 0.5 * 5e-10 * (np.einsum("ik,ij,jk->k", t, K, t) + lam * np.einsum("ik,ij,jk->k", t, M, t)) / lam
+    assert f1.size == f2.size and np.all(np.abs(f2 / f1 - 1) <= bound + 1e-9)
+    assert np.median(bound) < 1e-8            # the bound is loose only where the energy cancels
     assert abs(stack2.vehicle.mass / stack.vehicle.mass - 1) < 1e-9
     r1, r2 = (solve(build_problem(c, s, progress=False).problem) for c, s in ((case, stack), (case2, stack2)))
     peak = np.abs(r1.contact_force).max()
