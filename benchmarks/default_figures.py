@@ -290,8 +290,8 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
         f"c.g. {tw['rel_cg_peak_m']:.3f} m |",
         f"| twang at booster ignition ({tw['t_ignition_s']:.1f} s) | {tw['at_ignition_m']:.3f} m = "
         f"{100 * tw['at_ignition_ratio']:.0f} % of the peak |",
-        f"| static preload at t0 (Tz): aft SRB attach (left) / orbiter forward attach | "
-        f"{_mn(pre['att_srb_left_aft'])} / {_mn(pre['att_orb_fwd'])} MN |",
+        f"| static load at t0 (Tz; weight and cryo preload): SRB forward attach (left) / orbiter aft bipod (left) | "
+        f"{_mn(pre['att_srb_left_fwd'])} / {_mn(pre['att_orb_aft_left'])} MN |",
         f"| peak post compression (envelope) | {_mn(fig['peak_post_compression_n'])} MN |",
     ]
     for r in fig["largest_loads"]:

@@ -301,7 +301,7 @@ def shuttle_joints(layout: StackLayout) -> tuple[Joint, ...]:
     same)."""
     out = [Joint(p, ("core", f"srb_{side}"), SRB_ATTACH_RELEASE[p.rsplit("_", 1)[-1]])
            for side in ("left", "right") for p in layout.srb_attach_points(side)]
-    return tuple(out + [Joint(p, ("core", "orbiter"), ORBITER_ATTACH_RELEASE[p.split("_")[2]])
+    return tuple(out + [Joint(p, ("core", "orbiter"), ORBITER_ATTACH_RELEASE["fwd" if p.endswith("fwd") else "aft"])
                         for p in layout.orbiter_attach_points()])
 
 

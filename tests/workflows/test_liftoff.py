@@ -43,7 +43,8 @@ def test_bolted_phase_matches_monolithic_model(stack, monolithic):
     The two-body step treats the contact force as linear over a step (eq. 8), a
     second-order approximation: the error must fall ~4x when h halves (> 3 asserted; the
     reference's own error, ~1e-8, limits the finest level), and at h0/2 (h0 = 0.25/f_h,
-    eq. 12) be below 1e-5 of the peak post force (measured ~6e-7)."""
+    eq. 12) be below 1e-5 of the peak post force (measured 3.0e-7, then 8.5e-8 and 2.4e-8:
+    ratios 3.5, 3.6, with every attach joint released)."""
     case = scenario(time={"t_end": 3.0}, control={"enabled": False}, softening={"enabled": False})
     cp = build_problem(case, stack, progress=False)
     errs = monolithic.errors(cp.problem, (2, 4, 8))
@@ -174,7 +175,6 @@ def test_released_attach_directions_carry_no_force():
     res_dry = solve(dry.problem)
     for p in ("fwd", "aft_left", "aft_right"):           # the tank's shrinkage reaches no bipod
         cryo = res.recovered[f"attach_att_orb_{p}"][0, :3] - res_dry.recovered[f"attach_att_orb_{p}"][0, :3]
-        print(p, cryo)
         assert np.abs(cryo).max() < 1e-9 * mass[2] * g, p
 
 
