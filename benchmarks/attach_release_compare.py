@@ -38,15 +38,19 @@ import runpy
 import sys
 from pathlib import Path
 
+from liftoff.config.model import ORBITER_ATTACH_RELEASE, SRB_ATTACH_RELEASE
+
 ROOT = Path(__file__).resolve().parent.parent
 JSON = ROOT / "docs" / "figures" / "attach_release.json"
-BOOSTERS = {"att_srb_fwd": ["Rx", "Ry", "Rz"], "att_srb_aft": ["Tz", "Rx", "Ry"]}
+#: the Shuttle's releases by joint kind (config.model's, which the default scenario lists)
+BOOSTERS = {f"att_srb_{end}": list(dofs) for end, dofs in SRB_ATTACH_RELEASE.items()}
+BIPODS = {f"att_orb_{end}": list(dofs) for end, dofs in ORBITER_ATTACH_RELEASE.items()}
 #: variant -> {joint kind: released DOFs}
 VARIANTS = {
     "welded": {},
     "aft_axial": {"att_srb_aft": ["Tz"]},
     "boosters": BOOSTERS,
-    "bipods": {**BOOSTERS, "att_orb_fwd": ["Tz", "Rx", "Ry", "Rz"], "att_orb_aft": ["Tx", "Rx", "Ry", "Rz"]},
+    "bipods": {**BOOSTERS, **BIPODS},
 }
 
 
