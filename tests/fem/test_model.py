@@ -135,3 +135,29 @@ def test_vtu_output_roundtrip(box_model, tmp_path):
     assert mesh.points.shape == box_model.nodes.shape and len(mesh.point_data) == 8
     key = sorted(mesh.point_data)[7]
     assert np.allclose(mesh.point_data[key], box_model.nodal_displacement(modes.shapes[:, 7]))
+
+
+def test_rigid_quotients_within_roundoff_and_a_ground_spring_refused(box_model):
+    """The geometric rigid modes' Rayleigh quotients are round-off of K's entries (within the
+    floor eps |phi|^T |K| |phi|, fem.modes._rigid_modes), so their count does not depend on
+    the machine; a spring to ground restraining a rigid motion (1 Hz on the 78 kg box) is far
+    above that floor and refused as "not clean"."""
+    import types
+
+    import scipy.sparse as sp
+
+    from liftoff.core.errors import InputError
+    from liftoff.fem.modes import _check_singular, _rigid_modes
+
+    lam, _, floor = _rigid_modes(box_model)
+    assert np.all(np.abs(lam) <= floor) and floor < (2 * np.pi * 0.01) ** 2
+    K, M = box_model.matrices()
+    k = (2 * np.pi * 1.0) ** 2 * M.sum() / 3          # M.sum(): three times the mass (x, y, z rows)
+    K2 = K + sp.csr_matrix(([k], ([0], [0])), shape=K.shape)
+    sprung = types.SimpleNamespace(name="sprung", grounded=False, matrices=lambda: (K2, M),
+                                   rigid_body_shape=box_model.rigid_body_shape, dof_coords=box_model.dof_coords)
+    lam2, _, floor2 = _rigid_modes(sprung)
+    assert np.abs(lam2).max() > 1e3 * floor2
+    flexible = eigenmodes(box_model, n_modes=8).eigenvalues[6:]
+    with pytest.raises(InputError, match="not clean"):
+        _check_singular(sprung, np.sort(np.r_[lam2, flexible]), 0.01, floor2)
