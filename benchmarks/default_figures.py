@@ -39,6 +39,8 @@ STEP_JSON = FIGURES / "step_study.json"            # benchmarks/step_study.py
 KERNEL_FLOOR_JSON = FIGURES / "bench_kernel_floor.json"  # benchmarks/bench_kernel_floor.py --json (machine-dependent)
 STATIC_MODES_JSON = FIGURES / "static_modes_study.json"  # benchmarks/static_modes_study.py
 CAMPAIGN_BENCH_JSON = FIGURES / "bench_campaign.json"  # benchmarks/bench_campaign.py --json (machine-dependent)
+BATCH_BENCH_JSON = FIGURES / "bench_batch.json"    # benchmarks/bench_batch.py --json (machine-dependent)
+MPI_BENCH_JSON = FIGURES / "bench_mpi_components.json"  # benchmarks/bench_mpi_components.py --json (machine-dependent)
 EXAMPLE_JSONS = {n: FIGURES / f"{n}.json" for n in ("single_stick", "saturn_v")}   # benchmarks/example_figures.py
 DOCS = (ROOT / "README.md", ROOT / "docs" / "workflow.md", ROOT / "docs" / "transient.md")
 #: figures agree when within this relative difference (of the larger of the two or, inside a
@@ -259,7 +261,8 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
                   slosh: dict | None = None, slosh_compare: dict | None = None,
                   booster_grain: dict | None = None, campaign_bench: dict | None = None,
                   attach_release: dict | None = None, step: dict | None = None,
-                  kernel_floor: dict | None = None, static_modes: dict | None = None) -> dict[str, str]:
+                  kernel_floor: dict | None = None, static_modes: dict | None = None,
+                  batch_bench: dict | None = None, mpi_bench: dict | None = None) -> dict[str, str]:
     """{block name: markdown} from the figures (and the convergence, twang and mesh studies,
     the workflow benchmark and the launcher examples' figures {name: figures}, if any)."""
     tw, twn = fig["twang"]["nominal"], fig["twang"]
@@ -345,6 +348,10 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
         blocks["bench-kernel-floor"] = render_kernel_floor(kernel_floor)
     if static_modes:
         blocks["static-modes-study"] = render_static_modes(static_modes)
+    if batch_bench:
+        blocks["bench-batch"] = render_batch_bench(batch_bench)
+    if mpi_bench:
+        blocks["bench-mpi"] = render_mpi_bench(mpi_bench)
     if examples:
         import runpy
 
@@ -418,6 +425,59 @@ def render_kernel_floor(b: dict) -> str:
     met = all(q <= KERNEL_TARGET_RATIO for q in ratios)
     rows += ["", f"Issue 28's target, liftoff within {KERNEL_TARGET_RATIO}x of the floor: "
              + ("met" if met else "**not met**") + f" (largest ratio {max(ratios):.2f})."]
+    return "\n".join(rows) + "\n"
+
+
+#: issue 28's target for cases marched together: case-steps per second against one-by-one solves
+BATCH_TARGET = 3.0
+
+
+def render_batch_bench(b: dict) -> str:
+    """Cases marched together against one-by-one solves (benchmarks/bench_batch.py --json),
+    judged against issue 28's target."""
+    ratio = b["one_by_one_us"] / b["batched_us"]
+    return "\n".join([
+        f"On this {b['cpus']}-core machine ({b['date']}, `benchmarks/bench_batch.py --repeat {b['repeat']}`, load "
+        f"average {b['load_average_end']:.1f} at the end; each time the least of the repeats, the slope of the wall "
+        "time over 500 and 2,500 steps):", "",
+        "| modes (vehicle + pad) | contact rows | cases (group) | batched (us a case-step) | one by one (us a step) "
+        "| speed-up | contact forces, batched vs one by one; one by one, modes reordered (of the peak) |",
+        "|---|---|---|---|---|---|---|",
+        f"| {b['vehicle_modes']:,} + {b['pad_modes']} | {b['contact_rows']} | {b['cases']} ({b['group']}) | "
+        f"{b['batched_us']:.1f} | {b['one_by_one_us']:.1f} | {ratio:.2f} | {b['contact_force_diff']:.1e}; "
+        f"{b['reordered_contact_force_diff']:.1e} |", "",
+        f"Issue 28's target, {BATCH_TARGET:g}x the case-steps per second of one-by-one solves: "
+        + ("met" if ratio >= BATCH_TARGET else "**not met**") + f" ({ratio:.2f}x)."]) + "\n"
+
+
+#: issue 28's target for concurrent components under mpirun: cold model stages against the
+#: serial ones (its "serial": one after another)
+MPI_TARGET = 1.6
+
+
+def render_mpi_bench(b: dict) -> str:
+    """Cold model stages four ways (benchmarks/bench_mpi_components.py --json)."""
+    runs = b["runs"]
+    what = {"one-by-one": "serial, one component after another (`LIFTOFF_MODEL_WORKERS=1`)",
+            "serial": "serial, the components on a pool of processes (the default)",
+            "concurrent": f"`--ranks {b['ranks']}`, the components shared out over the ranks",
+            "distributed": f"`--ranks {b['ranks']}`, each component over all ranks, one after another"}
+    rep = b.get("repeat", 1)
+    rows = [f"On this {b['cpus']}-core machine ({b['date']}, `benchmarks/bench_mpi_components.py --repeat {rep}`, "
+            + ("one cold run each" if rep == 1 else f"the least of {rep} cold runs each, taken in turns")
+            + f", each with an empty stage cache, load average {b['load_average_end']:.1f} at the end):", "",
+            "| cold run | model stages (s) | process (s) | one by one / this |", "|---|---|---|---|"]
+    base = runs.get("one-by-one", {}).get("model_stages_s")
+    for mode, r in runs.items():
+        ratio = f"{base / r['model_stages_s']:.2f}" if base else "-"
+        rows.append(f"| {what.get(mode, mode)} | {r['model_stages_s']:.1f} | {r['wall_s']:.1f} | {ratio} |")
+    if base and "concurrent" in runs:
+        c = base / runs["concurrent"]["model_stages_s"]
+        rows += ["", f"Issue 28's target, concurrent components under mpirun {MPI_TARGET:g}x the serial model stages "
+                 "one after another: " + ("met" if c >= MPI_TARGET else "**not met**") + f" ({c:.2f}x); against the "
+                 "serial run's own pool of processes, which reduces components concurrently too: "
+                 f"{runs['serial']['model_stages_s'] / runs['concurrent']['model_stages_s']:.2f}x."
+                 if "serial" in runs else ""]
     return "\n".join(rows) + "\n"
 
 
@@ -722,7 +782,9 @@ def studies() -> tuple[dict | None, ...]:
                   json.loads(ATTACH_RELEASE_JSON.read_text()) if ATTACH_RELEASE_JSON.is_file() else None,
                   json.loads(STEP_JSON.read_text()) if STEP_JSON.is_file() else None,
                   json.loads(KERNEL_FLOOR_JSON.read_text()) if KERNEL_FLOOR_JSON.is_file() else None,
-                  json.loads(STATIC_MODES_JSON.read_text()) if STATIC_MODES_JSON.is_file() else None)
+                  json.loads(STATIC_MODES_JSON.read_text()) if STATIC_MODES_JSON.is_file() else None,
+                  json.loads(BATCH_BENCH_JSON.read_text()) if BATCH_BENCH_JSON.is_file() else None,
+                  json.loads(MPI_BENCH_JSON.read_text()) if MPI_BENCH_JSON.is_file() else None)
 
 
 # ------------------------------------------------------------------ comparing

@@ -30,6 +30,7 @@ _EXPORTS = {
     "peak_errors": ".accuracy",
     "ResourceError": "liftoff.core.errors",
     "solve": ".solver",
+    "solve_batch": ".batch",
     "static_equilibrium": ".solver",
     "static_solution": ".solver",
 }

@@ -1,0 +1,649 @@
+"""Cases marched together: K problems that share both bodies, their contact rows, step and
+outputs, and differ in their forcing, feedback, release times and initial state (a
+campaign's dispersed cases), solved by one time loop (issue 28).
+
+Per step the one-by-one kernel (kernel.py) streams every mode's eight step coefficients,
+the contact rows Phi (n_c x n) twice, and a case's own load table, free state and
+contact load; the arithmetic per mode is a few multiply-adds. Here a group of cases
+(:data:`GROUP`, states as n x K_s arrays, the cases contiguous) reads each shared array
+once for all of them and keeps as per-case data only what must be (3 n a case):
+
+* the free state X = (q_free, v_free) of the last step and the contact load Pc = Phi^T f
+  at its end. The state is q = X_q + Bc Pc, v = X_v + Bcd Pc (kernel.py's end-of-step
+  update, eq. 9-10), so the next free state is one pass over the modes (the "sweep"):
+
+      X_q <- F X_q + G X_v + (F Bc + G Bcd + Ac) Pc + L_q,   X_v likewise,
+
+  with L_q = Ac (P_ext(ta) + fb) + Bc (P_ext(tb) + fb) the applied loads and feedback;
+* the applied loads in a basis shared by the group: every case's constant and tabulated
+  modal loads (transient/assembly.py ModalLoad) lie in the span of a few modal vectors (the
+  loaded DOFs' mode-shape rows, gravity), found by one SVD of them all (singular values
+  below 1e-14 of the largest dropped, as feedback_factors does); a case carries their
+  coefficients (its own time grid kept). The feedback terms (eq. 26) likewise: U and V of
+  every case in shared bases (a dispersed gain changes the coefficients, not the bases);
+* the outputs at the step end from X, the contact force, the load coefficients and the
+  feedback coordinates through matrices formed once (acceleration = P1 + Pc - 2 zeta omega
+  v - omega^2 q substituted).
+
+The products over all modes are then matrix-matrix products over the group (BLAS-3):
+e_free = Phi X_q, Pc = Phi^T F, the load and output products; the contact solve stays per
+case: kernel.py's candidate rows and active-set solve (``_candidates``, ``_solve_direct``),
+the pattern inverses shared (one W) with each case's last pattern tried first. Before the
+group's first release every row of every case is bolted: one pattern, no iteration, and the
+group's forces are one product with its inverse.
+
+Measured (benchmarks/bench_batch.py, README "Benchmarks"): 2.1-2.6 x the case-steps per
+second of one-by-one solves at 3,000 + 300 modes, 24 rows, 64 cases; the sweep, e_free and
+Pc take about equal shares of a case-step, each bound by the cache's bandwidth.
+
+Scope: the reference's contact law with penalty rows and the direct solve (no rigid rows,
+friction, dashpots, latches or soft release: solve those one by one); one step for all
+(``accuracy`` None: the h/2 estimate is a second batch); no modal histories. A problem
+outside it is refused with the field that differs.
+
+Results are the one-by-one solve's to round-off, not bit for bit: the sums run in another
+order (BLAS-3 and the substituted state). How far apart two orders of the same sums may land
+is a property of the problem, not of this module: a bolted stack's contact forces are K_C
+times small differences of large modal displacements (tests/transient/test_batch.py
+measures it against a one-by-one solve of the same case with its modes reordered).
+"""
+from __future__ import annotations
+
+import time as _time
+from dataclasses import dataclass
+from typing import NamedTuple, Sequence
+
+import numpy as np
+from numba import njit
+
+from liftoff.core.errors import ConvergenceError, InputError
+
+from .assembly import contact_rows, modal_load
+from .coefficients import step_coefficients
+from .guard import GrowthGuard
+from .kernel import BOLTED, OK, SINGULAR, History, _candidates, _pattern_inverse, _record_contact, _solve_direct
+from .model import TransientProblem
+from .result import TransientResult
+from .solver import (CHUNK, _contact_inputs, _failure, _histories, _modal_inputs, _new_cache, _result,
+                     _spectral_radius, _start, initial_contact_force, initial_state, output_plan)
+from .stepping import check_memory, choose_step
+
+#: cases marched together in one compiled loop: their states (X_q, X_v, Pc: 3 x n x 8
+#: doubles, 0.6 MB at 3,300 modes) and the shared arrays (coefficients, Phi) stay in a
+#: core's L2 cache; more gain nothing per case-step (benchmarks/bench_batch.py)
+GROUP = 8
+#: singular values below this fraction of the largest are dropped from the shared load and
+#: feedback bases (round-off of the stacked tables: feedback_factors' threshold)
+BASIS_RTOL = 1e-14
+
+
+# ------------------------------------------------------------------ kernel inputs
+class Shared(NamedTuple):
+    """What every case of a batch shares (n modes of both bodies, n_c contact rows)."""
+
+    S: np.ndarray        # (6, n) sweep coefficients F G Dq Fd Gd Dv, Dq = F Bc + G Bcd + Ac (Dv alike)
+    Mq: np.ndarray       # (n, m) X_q's load columns: [Ac B^T | Bc B^T | (Ac + Bc) Ub]
+    Mv: np.ndarray       # (n, m) X_v's: [Acd B^T | Bcd B^T | (Acd + Bcd) Ub]
+    Phi: np.ndarray      # (n_c, n) contact rows [Phi_a, -Phi_b]
+    PhiT: np.ndarray     # (n, n_c)
+    Vq: np.ndarray       # (r_v, n) feedback basis on q
+    Vv: np.ndarray       # (r_v, n) on v
+    Vf: np.ndarray       # (r_v, n_c) on the contact force (the state's Bc Pc, Bcd Pc parts)
+    W: np.ndarray        # (n_c, n_c) step flexibility
+    C2: np.ndarray       # (n_c,) compliance 1/K_C
+    offset: np.ndarray   # (n_c,) c
+    dcontact: np.ndarray  # (n_c,) contact point of each row
+    axial: np.ndarray    # (n_c,) bool
+    nsign: np.ndarray    # (n_c,) normal sign
+    na: int              # modes of body a (then body b's)
+    Aq_a: np.ndarray     # (k_q, na) body a's outputs from X_q, its rows that are not zero ...
+    iq_a: np.ndarray     # (k_q,) int64 ... and the targets they add to
+    Av_a: np.ndarray     # (k_v, na) from X_v
+    iv_a: np.ndarray     # (k_v,) int64
+    Ax_a: np.ndarray     # (ntarg_a, n_c + n_b + r_u) from [f; g(tb); z]
+    Aq_b: np.ndarray     # the same for body b
+    iq_b: np.ndarray
+    Av_b: np.ndarray
+    iv_b: np.ndarray
+    Ax_b: np.ndarray
+
+
+class Cases(NamedTuple):
+    """Per case (index k first) of a group: load coefficients, feedback, release times."""
+
+    c: np.ndarray        # (K, n_b) constant load's coefficients in the basis
+    tk: np.ndarray       # (K, n_k) load breakpoints (padded with +inf past a case's own n_tk)
+    n_tk: np.ndarray     # (K,) int64: breakpoints of each case
+    gk: np.ndarray       # (K, n_k, n_b) tabulated load's coefficients at its breakpoints
+    Cv: np.ndarray       # (K, r, r_v) feedback term rows in the V basis (zero rows: no term)
+    Du: np.ndarray       # (K, r_u, r) feedback columns in the U basis
+    since: np.ndarray    # (K, r) s
+    until: np.ndarray    # (K, r) s
+    release: np.ndarray  # (K, n_contacts) s
+
+
+class GroupState(NamedTuple):
+    """The group's state between chunks (mutated), cases contiguous in the last axis."""
+
+    Xq: np.ndarray       # (n, K) free modal displacement of the last step
+    Xv: np.ndarray       # (n, K)
+    Pc: np.ndarray       # (n, K) modal contact load at its end, Phi^T f
+    F: np.ndarray        # (n_c, K) contact force on A at its end
+    active: np.ndarray   # (K, n_c) bool
+    g: np.ndarray        # (K, n_b) load coefficients at its end
+    ptr: np.ndarray      # (K,) int64 position in each case's breakpoints
+    last: np.ndarray     # (K,) int64 pattern slot each case used last
+
+
+class GroupHistory(NamedTuple):
+    """Histories of the group (case k first; row r = step r; mutated)."""
+
+    Y_a: np.ndarray      # (K, n_t, ntarg_a)
+    Y_b: np.ndarray      # (K, n_t, ntarg_b)
+    Fc: np.ndarray       # (K, n_t, n_c)
+    state: np.ndarray    # (K, n_t, n_contacts) int8
+    iters: np.ndarray    # (K, n_t) int32
+
+
+# ------------------------------------------------------------------ kernel
+@njit(cache=True, fastmath=False)
+def _sweep(S, Xq, Xv, Pc, Lq, Lv):
+    """X <- the next free state (module docstring), one pass over the modes, the cases of a
+    mode contiguous."""
+    n, K = Xq.shape
+    for m in range(n):
+        F = S[0, m]; G = S[1, m]; Dq = S[2, m]; Fd = S[3, m]; Gd = S[4, m]; Dv = S[5, m]
+        xq = Xq[m]; xv = Xv[m]; p = Pc[m]; lq = Lq[m]; lv = Lv[m]
+        for k in range(K):
+            q = xq[k]; v = xv[k]; pc = p[k]
+            xq[k] = F * q + G * v + Dq * pc + lq[k]
+            xv[k] = Fd * q + Gd * v + Dv * pc + lv[k]
+
+
+@njit(cache=True)
+def _load_at(c, tk, n_tk, gk, ptr, tb, out):
+    """out = the case's load coefficients at tb (constant + table interpolated from position
+    ``ptr``, as kernel._pre_step walks it); returns the new position."""
+    nb = c.size
+    nk = n_tk
+    for j in range(nb):
+        out[j] = c[j]
+    if nk == 0:
+        return ptr
+    if tb <= tk[0]:
+        for j in range(nb):
+            out[j] += gk[0, j]
+        return 0
+    if tb >= tk[nk - 1]:
+        for j in range(nb):
+            out[j] += gk[nk - 1, j]
+        return nk - 1
+    while ptr + 1 < nk and tk[ptr + 1] <= tb:
+        ptr += 1
+    while ptr > 0 and tk[ptr] > tb:
+        ptr -= 1
+    w = (tb - tk[ptr]) / (tk[ptr + 1] - tk[ptr])
+    a = 1.0 - w
+    for j in range(nb):
+        out[j] += a * gk[ptr, j] + w * gk[ptr + 1, j]
+    return ptr
+
+
+@njit(cache=True)
+def _outputs(Aq, iq, Av, iv, Ax, Xq, Xv, Xo, y, Y, row):
+    """Row ``row`` of every case's output history Y (K, n_t, ntarg): Ax [f; g; z] plus the
+    rows of Aq X_q and Av X_v that are not zero (module docstring)."""
+    np.dot(Ax, Xo, y)
+    K = y.shape[1]
+    if iq.size:
+        t = np.dot(Aq, Xq)
+        for i in range(iq.size):
+            for k in range(K):
+                y[iq[i], k] += t[i, k]
+    if iv.size:
+        t = np.dot(Av, Xv)
+        for i in range(iv.size):
+            for k in range(K):
+                y[iv[i], k] += t[i, k]
+    for k in range(K):
+        for j in range(y.shape[0]):
+            Y[k, row, j] = y[j, k]
+
+
+@njit(cache=True)
+def _load_columns(ta, tb, cs, g, ptr, Sfb, has_fb, Y):
+    """Y (m, K): per case the load coefficients at ta (``g`` on entry) and at tb (``g`` on
+    exit, from its table, position ``ptr``), then the feedback coordinates z = Du (on-mask
+    * Cv Sfb) held over the step (eq. 26)."""
+    c, tk, n_tk, gk, Cv, Du, since, until = cs[:8]
+    K, nb = g.shape
+    r, ru = since.shape[1], Du.shape[1]
+    s = np.empty(r)
+    g1 = np.empty(nb)
+    for k in range(K):
+        for j in range(2 * nb, Y.shape[0]):
+            Y[j, k] = 0.0
+        for j in range(nb):
+            Y[j, k] = g[k, j]
+        ptr[k] = _load_at(c[k], tk[k], n_tk[k], gk[k], ptr[k], tb, g1)
+        for j in range(nb):
+            Y[nb + j, k] = g1[j]
+            g[k, j] = g1[j]
+        if has_fb:
+            for a in range(r):
+                acc = 0.0
+                if since[k, a] <= ta < until[k, a]:
+                    for b in range(Cv.shape[2]):
+                        acc += Cv[k, a, b] * Sfb[b, k]
+                s[a] = acc
+            for j in range(ru):
+                acc = 0.0
+                for a in range(r):
+                    acc += Du[k, j, a] * s[a]
+                Y[2 * nb + j, k] = acc
+
+
+@njit(cache=True)
+def _solve_bolted(row, sh, E, keys, invs, used, last, F, active, Fc, states, iters):
+    """Every row of every case bolted: kernel.py's solve on the full active set (one pattern,
+    no iteration), the group's forces F = -(C + W)^-1 (c + e_free) in one product. Returns
+    False when the pattern is singular."""
+    nc, K = E.shape
+    all_rows = np.ones(nc, dtype=np.bool_)
+    slot, used[0], ok = _pattern_inverse(all_rows, all_rows, sh.C2, sh.W, keys, invs, used[0], last[0])
+    if not ok:
+        return False
+    for k in range(K):
+        last[k] = slot
+        for j in range(nc):
+            E[j, k] += sh.offset[j]
+    np.dot(invs[slot], E, F)
+    for k in range(K):
+        for j in range(nc):
+            F[j, k] = -F[j, k]
+            Fc[k, row, j] = F[j, k]
+            active[k, j] = True
+        for ci in range(states.shape[2]):
+            states[k, row, ci] = BOLTED
+        iters[k, row] = 1
+    return True
+
+
+@njit(cache=True)
+def _solve_cases(row, tb, max_iter, sh, release, E, keys, invs, used, last, F, active, Fc, states, iters):
+    """kernel.py's candidate rows and active-set solve, case by case (the pattern cache shared,
+    each case's last pattern tried first). Returns (status, info1, info2, case)."""
+    nc, K = E.shape
+    e = np.empty(nc); u = np.zeros(nc); fn = np.empty(nc); gg = np.zeros(nc)
+    rows2 = np.zeros(nc, dtype=np.bool_); cols2 = np.zeros(nc, dtype=np.bool_)
+    opening = np.zeros(nc, dtype=np.bool_); rigid = np.zeros(nc, dtype=np.bool_)
+    cand = np.empty(nc, dtype=np.bool_); free = np.empty(nc, dtype=np.bool_)
+    bolted = np.empty(release.shape[1], dtype=np.bool_)
+    u2 = np.zeros(2, dtype=np.int64)
+    for k in range(K):
+        for j in range(nc):
+            e[j] = E[j, k]
+        act = active[k]
+        _candidates(tb, release[k], sh.dcontact, sh.axial, sh.offset, rigid, False, e, e, bolted, cand, free, act, u)
+        u2[0] = used[0]
+        u2[1] = last[k]
+        st, it, info1, info2 = _solve_direct(sh.W, sh.C2, sh.nsign, keys, invs, u2, u, free, rigid, act, opening,
+                                             max_iter, fn, gg, rows2, cols2)
+        used[0] = u2[0]
+        last[k] = u2[1]
+        if st != OK:
+            return st, info1, info2, k
+        for j in range(nc):
+            F[j, k] = fn[j]
+        _record_contact(row, it, fn, bolted, act, opening, sh.dcontact, sh.axial, Fc[k], states[k], iters[k])
+    return OK, 0.0, 0.0, -1
+
+
+@njit(cache=True, nogil=True)
+def march_group(i0, i1, t0, h, max_iter, sh, cs, st, keys, invs, used, hist):
+    """March the group's cases through steps i0 -> i1 (time t0 + i h). Returns (status,
+    step, info1, info2, case): the first case that failed, else -1. ``keys``, ``invs``,
+    ``used``: the shared pattern cache (kernel.Cache's arrays)."""
+    na = sh.na
+    release = cs.release
+    Xq, Xv, Pc, F, active, g, ptr, last = st
+    Y_a, Y_b, Fc, states, iters = hist
+    n, K = Xq.shape
+    nc, nb, ru, m = sh.Phi.shape[0], g.shape[1], cs.Du.shape[1], sh.Mq.shape[1]
+    Lq = np.zeros((n, K)); Lv = np.zeros((n, K))
+    Y = np.zeros((m, K))               # [g(ta); g(tb); z] per case: the load columns' coefficients
+    Xo = np.zeros((nc + nb + ru, K))   # [f; g(tb); z]: the outputs' small columns
+    E = np.empty((nc, K))
+    Sfb = np.zeros((sh.Vq.shape[0], K))
+    ya = np.empty((sh.Ax_a.shape[0], K)); yb = np.empty((sh.Ax_b.shape[0], K))
+    first_release = np.inf
+    for k in range(K):
+        for ci in range(release.shape[1]):
+            first_release = min(first_release, release[k, ci])
+    has_fb = cs.since.shape[1] > 0 and sh.Vq.shape[0] > 0 and ru > 0
+    for i in range(i0, i1):
+        ta = t0 + i * h
+        tb = t0 + (i + 1) * h
+        row = i + 1
+        # ---------------- feedback from the state at ta (eq. 26), loads; the free step: one sweep
+        if has_fb:
+            np.dot(sh.Vq, Xq, Sfb)
+            Sfb += np.dot(sh.Vv, Xv)
+            Sfb += np.dot(sh.Vf, F)
+        _load_columns(ta, tb, cs, g, ptr, Sfb, has_fb, Y)
+        if m > 0:
+            np.dot(sh.Mq, Y, Lq)
+            np.dot(sh.Mv, Y, Lv)
+        _sweep(sh.S, Xq, Xv, Pc, Lq, Lv)
+        np.dot(sh.Phi, Xq, E)
+        # ---------------- the contact solve
+        if tb < first_release:
+            if not _solve_bolted(row, sh, E, keys, invs, used, last, F, active, Fc, states, iters):
+                return SINGULAR, i + 1, 0.0, 0.0, 0
+        else:
+            status, info1, info2, k = _solve_cases(row, tb, max_iter, sh, release, E, keys, invs, used, last, F,
+                                                   active, Fc, states, iters)
+            if status != OK:
+                return status, i + 1, info1, info2, k
+        # ---------------- the contact loads (BLAS-3) and the outputs at tb
+        np.dot(sh.PhiT, F, Pc)
+        for k in range(K):
+            for j in range(nc):
+                Xo[j, k] = F[j, k]
+            for j in range(nb + ru):
+                Xo[nc + j, k] = Y[nb + j, k]
+        if ya.shape[0] > 0:
+            _outputs(sh.Aq_a, sh.iq_a, sh.Av_a, sh.iv_a, sh.Ax_a, Xq[:na], Xv[:na], Xo, ya, Y_a, row)
+        if yb.shape[0] > 0 and n > na:
+            _outputs(sh.Aq_b, sh.iq_b, sh.Av_b, sh.iv_b, sh.Ax_b, Xq[na:], Xv[na:], Xo, yb, Y_b, row)
+    return OK, i1, 0.0, 0.0, -1
+
+
+# ------------------------------------------------------------------ set-up
+def _basis(blocks: list[np.ndarray], what: str) -> np.ndarray:
+    """An orthonormal basis (r, n) of the row space of the stacked ``blocks`` (each (k_i, n)),
+    singular values below BASIS_RTOL of the largest dropped."""
+    n = blocks[0].shape[1]
+    A = np.vstack([b for b in blocks if b.size] or [np.zeros((0, n))])
+    if not A.size:
+        return np.zeros((0, n))
+    _, sv, Vt = np.linalg.svd(A, full_matrices=False)
+    keep = sv > BASIS_RTOL * sv[0] if sv.size and sv[0] > 0 else np.zeros(0, bool)
+    if keep.sum() > min(n, 256):
+        import warnings
+
+        warnings.warn(f"batch: the cases' {what} span {int(keep.sum())} modal vectors; the batch marches them all "
+                      "each step (a full-rank table is slower batched than one by one)", stacklevel=3)
+    return np.ascontiguousarray(Vt[keep])
+
+
+def _same(a, b) -> bool:
+    if a is b:
+        return True
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return np.shape(a) == np.shape(b) and np.array_equal(np.asarray(a), np.asarray(b))
+    return a == b
+
+
+def _check_shared(problems: Sequence[TransientProblem], rows_k) -> None:
+    """InputError naming the first problem and field that a batch cannot share."""
+    p0, r0 = problems[0], rows_k[0]
+    if r0.laws:
+        raise InputError("batch: friction, dashpots, latches and soft release are not marched batched; solve these "
+                         "problems one by one (liftoff.transient.solve)")
+    if np.any(r0.compliance == 0):
+        raise InputError("batch: rigid contact rows are not marched batched (penalty contacts only); solve these "
+                         "problems one by one (liftoff.transient.solve)")
+    for k, (p, rows) in enumerate(zip(problems, rows_k)):
+        who = f"batch problem {k}"
+        if p.method != "direct":
+            raise InputError(f"{who}: method {p.method!r}; a batch uses the direct active-set solve")
+        if p.accuracy is not None:
+            raise InputError(f"{who}: accuracy = {p.accuracy!r}; a batch marches one step (solve the h/2 run as "
+                             "a second batch)")
+        if p.keep_modal:
+            raise InputError(f"{who}: keep_modal; a batch keeps no modal histories")
+        for key in ("body_a", "body_b"):
+            a, b = getattr(p0, key), getattr(p, key)
+            if a is not b and not (a.dof_labels == b.dof_labels and all(
+                    _same(getattr(a, f), getattr(b, f)) for f in ("omega", "zeta", "phi"))):
+                raise InputError(f"{who}: its {key} differs from problem 0's; a batch shares both bodies")
+        for f in ("t0", "t_end", "h", "mode_samples", "static_above_hz", "max_iter"):
+            if not _same(getattr(p, f), getattr(p0, f)):
+                raise InputError(f"{who}: {f} = {getattr(p, f)!r}, problem 0 has {getattr(p0, f)!r}; a batch "
+                                 "marches one step")
+        for f in ("names", "Phi_a", "Phi_b", "compliance", "offset", "contact", "axial", "sign"):
+            if not _same(getattr(rows, f), getattr(r0, f)):
+                raise InputError(f"{who}: its contacts differ from problem 0's ({f}); a batch shares the contact rows "
+                                 "(only the release times may differ)")
+        if p.outputs != p0.outputs:
+            raise InputError(f"{who}: its outputs differ from problem 0's")
+        if len(p.recoveries) != len(p0.recoveries) or any(
+                ra is not rb and not (ra.name == rb.name and ra.body == rb.body and ra.labels == rb.labels
+                                      and all(_same(getattr(ra, f), getattr(rb, f)) for f in ("disp", "vel", "acc",
+                                                                                           "const")))
+                for ra, rb in zip(p.recoveries, p0.recoveries)):
+            raise InputError(f"{who}: its recoveries differ from problem 0's")
+
+
+@dataclass
+class _Case:
+    """One case's own set-up: its kernel modal bundle, start state and histories (views of
+    its group's)."""
+
+    problem: TransientProblem
+    rows: object
+    modal: object
+    state: object
+    hist: History
+    guard: GrowthGuard
+
+
+def _output_matrices(plan, coef, w2, zw2, Phi_body, B_body, Ub_body, nc) -> tuple[np.ndarray, ...]:
+    """(Aq, iq, Av, iv, Ax) of one body: its output targets from X_q, X_v (the rows that are
+    not zero, and the targets they add to) and from [f; g(tb); z] (module docstring); ``coef`` (8, n_body), ``Phi_body`` (n_c, n_body): the body's part of
+    [Phi_a, -Phi_b]; ``B_body`` (n_b, n_body), ``Ub_body`` (n_body, r_u) its part of the bases."""
+    nbody = coef.shape[1]
+    nb, ru = B_body.shape[0], Ub_body.shape[1]
+    Aq, Av = np.zeros((plan.ntarg, nbody)), np.zeros((plan.ntarg, nbody))
+    Ax = np.zeros((plan.ntarg, nc + nb + ru))
+    Bc, Bcd = coef[3], coef[7]
+    for L, kind, t in zip(plan.L, plan.kind, plan.targ):
+        if kind == 0:           # q = X_q + Bc Phi^T f
+            Aq[t] += L
+            Ax[t, :nc] += Phi_body @ (L * Bc)
+        elif kind == 1:         # v = X_v + Bcd Phi^T f
+            Av[t] += L
+            Ax[t, :nc] += Phi_body @ (L * Bcd)
+        else:                   # acc = P1 + Phi^T f - zw2 v - w2 q, P1 = B^T g(tb) + Ub z
+            Lw, Lz = L * w2, L * zw2
+            Aq[t] -= Lw
+            Av[t] -= Lz
+            Ax[t, :nc] += Phi_body @ (L - Lw * Bc - Lz * Bcd)
+            Ax[t, nc:nc + nb] += B_body @ L
+            Ax[t, nc + nb:] += L @ Ub_body
+    iq, iv = np.flatnonzero(np.any(Aq != 0, axis=1)), np.flatnonzero(np.any(Av != 0, axis=1))
+    C = np.ascontiguousarray
+    return C(Aq[iq]), iq.astype(np.int64), C(Av[iv]), iv.astype(np.int64), C(Ax)
+
+
+def _case(k: int, p: TransientProblem, rows_p, step, coefs, plans, contact, hist: History) -> _Case:
+    """Case k's start (static solve, initial contact force, row 0 of its histories ``hist``,
+    views of its group's), kernel modal bundle and growth guard."""
+    pa, pb = p.body_a, p.body_b
+    try:
+        init = initial_state(p)
+        f0, active0 = initial_contact_force(pa, pb, rows_p, p.forcing, init, p.t0)
+    except (InputError, ConvergenceError) as exc:
+        raise type(exc)(f"batch problem {k}: {exc}") from None
+    loads = (modal_load(pa, "a", p.forcing), modal_load(pb, "b", p.forcing))
+    state = _start(p, rows_p, contact, init, f0, active0, loads, plans, hist)
+    modal = _modal_inputs(p, coefs, loads)
+    guard = GrowthGuard(rows_p, modal, state, step.h, step.margin)
+    guard.start(step.t0, step.t_end)
+    return _Case(p, rows_p, modal, state, hist, guard)
+
+
+def _group_history(K: int, n_t: int, plans, rows) -> GroupHistory:
+    return GroupHistory(np.zeros((K, n_t, plans[0].ntarg)), np.zeros((K, n_t, plans[1].ntarg)),
+                        np.zeros((K, n_t, rows.n)), np.zeros((K, n_t, len(rows.names)), dtype=np.int8),
+                        np.zeros((K, n_t), dtype=np.int32))
+
+
+def _case_history(hist: GroupHistory, k: int, na: int, nb: int) -> History:
+    """Case k's History: views of its group's arrays (no modal histories, no output block)."""
+    e = np.zeros((0, 0))
+    return History(hist.Y_a[k], hist.Y_b[k], hist.Fc[k], hist.state[k], hist.iters[k], False, e, e, e, e, e, e,
+                   np.zeros((3, 0, na)), np.zeros((3, 0, nb)), np.zeros(1, dtype=np.int64))
+
+
+def _shared(cases: list[_Case], plans, contact) -> tuple[Shared, np.ndarray, np.ndarray, np.ndarray]:
+    """A group's Shared bundle and its bases: (shared, B (n_b, n) loads, Vb (r_v, 2n)
+    feedback rows, Ub (n, r_u) feedback columns)."""
+    m0 = cases[0].modal
+    na, n = m0.na, m0.w2.size
+    coef = m0.coef
+    F, G, Ac, Bc, Fd, Gd, Acd, Bcd = coef
+    B = _basis([np.vstack([c.modal.const[None, :], c.modal.Pk]) for c in cases], "applied loads")
+    Vb = _basis([c.modal.V for c in cases], "feedback rows")
+    Ub = _basis([c.modal.U.T for c in cases], "feedback columns").T
+    nb, ru = B.shape[0], Ub.shape[1]
+    Phi = contact.Phi
+    Mq = np.hstack([(Ac[:, None] * B.T), (Bc[:, None] * B.T), ((Ac + Bc)[:, None] * Ub)])
+    Mv = np.hstack([(Acd[:, None] * B.T), (Bcd[:, None] * B.T), ((Acd + Bcd)[:, None] * Ub)])
+    S = np.vstack([F, G, F * Bc + G * Bcd + Ac, Fd, Gd, Fd * Bc + Gd * Bcd + Acd])
+    Vq, Vv = Vb[:, :n], Vb[:, n:]
+    Vf = (Vq * Bc + Vv * Bcd) @ Phi.T
+    nc = Phi.shape[0]
+    outs = []
+    for plan, sl in ((plans[0], slice(0, na)), (plans[1], slice(na, n))):   # Phi's b part is -Phi_b: as the force acts
+        outs += _output_matrices(plan, coef[:, sl], m0.w2[sl], m0.zw2[sl], Phi[:, sl], B[:, sl], Ub[sl], nc)
+    C = np.ascontiguousarray
+    sh = Shared(C(S), C(Mq), C(Mv), C(Phi), C(Phi.T), C(Vq), C(Vv), C(Vf), C(contact.W), C(contact.C2),
+                C(contact.offset), C(contact.contact), C(contact.axial), C(contact.sign), int(na), *outs)
+    return sh, B, Vb, Ub
+
+
+def _group_inputs(group: list[_Case], B, Vb, Ub, sh: Shared) -> tuple[Cases, GroupState]:
+    """The group's per-case bundle and its state at t0 (each case's own start state, _start)."""
+    K = len(group)
+    n = B.shape[1]
+    nb, rv, ru = B.shape[0], Vb.shape[0], Ub.shape[1]
+    nk = max(c.modal.tk.size for c in group)
+    r = max(c.modal.V.shape[0] for c in group)
+    cc, gk = np.zeros((K, nb)), np.zeros((K, nk, nb))
+    tk, n_tk = np.full((K, nk), np.inf), np.zeros(K, dtype=np.int64)
+    Cv, Du = np.zeros((K, r, rv)), np.zeros((K, ru, r))
+    since, until = np.zeros((K, r)), np.zeros((K, r))       # since = until: a padded term, never on
+    release = np.zeros((K, group[0].rows.release.size))
+    Xq, Xv, Pc = np.zeros((n, K)), np.zeros((n, K)), np.zeros((n, K))
+    F = np.zeros((sh.Phi.shape[0], K))
+    active = np.zeros((K, sh.Phi.shape[0]), dtype=np.bool_)
+    g = np.zeros((K, nb))
+    Bc, Bcd = group[0].modal.coef[3], group[0].modal.coef[7]
+    for k, case in enumerate(group):
+        md, stt = case.modal, case.state
+        cc[k] = B @ md.const
+        if md.tk.size:
+            tk[k, :md.tk.size], n_tk[k] = md.tk, md.tk.size
+            gk[k, :md.tk.size] = md.Pk @ B.T
+        rk = md.V.shape[0]
+        if rk:
+            Cv[k, :rk] = md.V @ Vb.T
+            Du[k, :, :rk] = Ub.T @ md.U
+            since[k, :rk], until[k, :rk] = md.since, md.until
+        release[k] = case.rows.release
+        Pc[:, k] = stt.Pc
+        Xq[:, k] = stt.q - Bc * stt.Pc          # q = X_q + Bc Pc (module docstring)
+        Xv[:, k] = stt.v - Bcd * stt.Pc
+        F[:, k] = stt.f
+        active[k] = stt.active
+        g[k] = B @ stt.Pext
+    cs = Cases(cc, tk, n_tk, gk, Cv, Du, since, until, release)
+    st = GroupState(Xq, Xv, Pc, F, active, g, np.zeros(K, dtype=np.int64), np.zeros(K, dtype=np.int64))
+    return cs, st
+
+
+def solve_batch(problems: Sequence[TransientProblem], group: int = GROUP) -> list[TransientResult]:
+    """Solve problems that share both bodies, their contact rows, step and outputs (module
+    docstring) by marching them together, ``group`` cases at a time; the results in order,
+    each as :func:`transient.solve` gives it (to round-off). One BLAS thread."""
+    from threadpoolctl import threadpool_limits
+
+    problems = list(problems)
+    if not problems:
+        return []
+    if int(group) < 1:
+        raise InputError(f"batch: group = {group!r} must be at least 1")
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _solve_batch(problems, int(group))
+
+
+def _solve_batch(problems: list[TransientProblem], group: int) -> list[TransientResult]:
+    started = _time.perf_counter()
+    p0 = problems[0]
+    pa, pb = p0.body_a, p0.body_b
+    rows_k = [contact_rows(pa, pb, p.contacts) for p in problems]
+    _check_shared(problems, rows_k)
+    rows = rows_k[0]
+    step = choose_step(p0, rows)
+    check_memory(p0, step.n_steps, len(problems), f" for {len(problems)} cases marched together")
+    coefs = (step_coefficients(pa.omega, pa.zeta, step.h, p0.static_modes("a")),
+             step_coefficients(pb.omega, pb.zeta, step.h, p0.static_modes("b")))
+    plans = (output_plan(p0, "a"), output_plan(p0, "b"))
+    contact, W = _contact_inputs(rows, coefs)
+    cache = _new_cache(contact.W.shape[0], cap=256)
+    bar = None
+    if any(p.progress for p in problems) and step.n_steps > 4 * CHUNK:
+        from tqdm import tqdm
+
+        bar = tqdm(total=step.n_steps * len(problems), unit="case-step", desc=f"transient, {len(problems)} cases",
+                   leave=False)
+    cases = []
+    try:
+        for g0 in range(0, len(problems), group):
+            ks = range(g0, min(g0 + group, len(problems)))
+            hist = _group_history(len(ks), step.n_steps + 1, plans, rows)
+            members = [_case(k, problems[k], rows_k[k], step, coefs, plans, contact,
+                             _case_history(hist, k - g0, pa.n_modes, pb.n_modes)) for k in ks]
+            sh, B, Vb, Ub = _shared(members, plans, contact)
+            cs, st = _group_inputs(members, B, Vb, Ub, sh)
+            _march(members, g0, step, sh, cs, st, cache, hist, W, bar)
+            cases += members
+    finally:
+        if bar is not None:
+            bar.close()
+    return [_result(c.problem, c.rows, step, plans, c.hist, int(cache.used[0]), started, c.state) for c in cases]
+
+
+def _march(members: list[_Case], g0: int, step, sh: Shared, cs: Cases, st: GroupState, cache, hist: GroupHistory,
+           W, bar) -> None:
+    """Every step of one group in compiled chunks; each case's finiteness and growth guard
+    checked after each chunk (solver._drive's checks)."""
+    Bc, Bcd = members[0].modal.coef[3], members[0].modal.coef[7]
+    i = 0
+    while i < step.n_steps:
+        i1 = min(i + CHUNK, step.n_steps)
+        status, at, info1, info2, k = march_group(i, i1, float(step.t0), float(step.h), int(members[0].problem.max_iter),
+                                                  sh, cs, st, cache.keys, cache.invs, cache.used, hist)
+        if status != OK:
+            try:
+                _failure(status, step.t0 + at * step.h, info1, info2,
+                         lambda: _spectral_radius(W, members[k].rows, st.active[k]))
+            except (InputError, ConvergenceError) as exc:
+                raise type(exc)(f"batch problem {g0 + k}: {exc}") from None
+        times = step.t0 + step.h * np.arange(i + 1, i1 + 1)
+        for k, c in enumerate(members):
+            q = st.Xq[:, k] + Bc * st.Pc[:, k]
+            v = st.Xv[:, k] + Bcd * st.Pc[:, k]
+            if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+                raise ConvergenceError(f"batch problem {g0 + k}: the solution diverged (non-finite values) by "
+                                       f"t = {step.t0 + step.h * i1:.6g} s with h = {step.h:.4g} s; reduce h")
+            view = c.state._replace(q=q, v=v, active=st.active[k], f=np.ascontiguousarray(st.F[:, k]))
+            try:
+                c.guard.check(step.t0 + step.h * i1, view, hist.Fc[k, i + 1:i1 + 1], times)
+            except ConvergenceError as exc:
+                raise ConvergenceError(f"batch problem {g0 + k}: {exc}") from None
+        if bar is not None:
+            bar.update((i1 - i) * len(members))
+        i = i1
