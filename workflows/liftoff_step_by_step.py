@@ -24,7 +24,7 @@ def _scenario(stick: bool):
     data = parse_toml(default_text(), "default_scenario.toml")
     if stick:
         m = data["model"]
-        no_size = lambda t: {k: v for k, v in t.items() if k not in ("mesh_size", "params", "type")}  # noqa: E731
+        no_size = lambda t: {k: v for k, v in t.items() if k not in ("mesh_size", "params", "type", "mirror")}  # noqa: E731
         data["model"] = {"source": "stick", "mesh_size": 4.0, "zeta": m["zeta"], "system": m.get("system", {}),
                          "pad": no_size(m["pad"]), "component": {n: no_size(c) for n, c in m["component"].items()}}
     return parse_scenario(data, "default_scenario.toml").cases[0]

@@ -69,6 +69,21 @@ def _check_labels(body, labels, where: Where) -> None:
             raise (where / j).wrap(exc) from None
 
 
+def _check_post_place(stack: StackModel, post, where: Where) -> None:
+    """A post joins one place of both bodies: its vehicle point and its pad point must be
+    where each other is (within reduction.assembly's tolerance for shared points); apart,
+    the contact would couple two places as if they were one (a mirrored booster numbered
+    otherwise than the pad's posts, a pad built on another layout)."""
+    from liftoff.reduction.assembly import COORD_TOL
+
+    a, b = stack.vehicle.point_coord(post.vehicle), stack.pad.point_coord(post.pad)
+    size = max(1.0, float(np.ptp(stack.vehicle.point_coords, axis=0).max(initial=0.0)))
+    if np.linalg.norm(a - b) > COORD_TOL * size:
+        raise where.error(f"its vehicle point {post.vehicle!r} at {np.round(a, 4).tolist()} m and pad point "
+                          f"{post.pad!r} at {np.round(b, 4).tolist()} m are {np.linalg.norm(a - b):.4g} m apart: a post "
+                          "joins one place of both bodies")
+
+
 def contacts(case: Case, stack: StackModel) -> list[ContactPoint]:
     """The hold-down posts (section 2.7) as contact points, vehicle = body a, pad = body b."""
     out = []
@@ -76,6 +91,7 @@ def contacts(case: Case, stack: StackModel) -> list[ContactPoint]:
         w = (case.at("post") / i).named(p.name)
         _check_point(stack.vehicle, p.vehicle, w / "vehicle")
         _check_point(stack.pad, p.pad, w / "pad")
+        _check_post_place(stack, p, w)
         c = p.contact()
         if stack.pad.is_ground:             # rigid ground (type = "rigid_ground"): the post holds to a fixed point
             c = dataclasses.replace(c, labels_b=(None,) * len(c.labels_b))

@@ -99,7 +99,10 @@ def component_materials(model: ModelConfig, name: str) -> dict:
 def _component_key(model: ModelConfig, comp: ComponentModel) -> dict:
     """Everything a component stage depends on (its cache key's parameters); of the materials,
     those that may apply to it (:func:`component_materials`), so that changing one component's
-    material rebuilds that component only."""
+    material rebuilds that component only; a mirror's: its plane and its source's."""
+    if comp.mirror is not None:
+        return {"name": comp.name, "mirror": asdict(comp.mirror),
+                "source": _component_key(model, model.components[comp.mirror.of])}
     liquid = {}                         # what a hydroelastic liquid's model depends on
     if getattr(comp.builder, "liquid", "") == "hydroelastic":
         liquid = {"convective": model.convective,
@@ -146,9 +149,9 @@ def given_model(comp: ComponentModel):
 
 def is_fe_component(model: ModelConfig, name: str) -> bool:
     """Whether component ``name`` is built by the model's FE (or stick) stages: neither a
-    Nastran import nor a type whose CB model is given."""
+    Nastran import, a type whose CB model is given, nor a mirror (its source's reflected)."""
     comp = model.components[name]
-    return comp.nastran is None and given_model(comp) is None
+    return comp.mirror is None and comp.nastran is None and given_model(comp) is None
 
 
 def component_key(model: ModelConfig, name: str) -> str:
@@ -160,22 +163,55 @@ def component_key(model: ModelConfig, name: str) -> str:
     return stage_key("component", _component_key(model, model.components[name]), code)
 
 
-def component_stage(model: ModelConfig, name: str, cache: StageCache, workdir: Path) -> tuple[Component, dict, str]:
+def _thermal_path(p: Path) -> Path:
+    """The unit thermal loads' file beside a component stage's product."""
+    return p.with_name(p.name.replace(".npz", ".thermal.npz"))
+
+
+def _save_component_stage(out, p: Path) -> None:
+    save_component(out[0], p)
+    save_arrays({f"vol_{k}": v for k, v in out[1].items()}, _thermal_path(p))
+
+
+def _load_component_stage(p: Path):
+    return load_component(p, mmap=True), {k[4:]: v for k, v in load_arrays(_thermal_path(p)).items()}
+
+
+def component_stage(model: ModelConfig, name: str, cache: StageCache, workdir: Path,
+                    source: tuple | None = None) -> tuple[Component, dict, str]:
+    """(Component, {volume: unit thermal load}, key) of component ``name``: built (or from
+    the cache); a mirror's from its source's (``source``: that stage's product when the
+    caller has it, else this function's own for the source)."""
     comp = model.components[name]
+    if comp.mirror is not None:
+        return _mirror_component_stage(model, name, cache, workdir, source)
     key = component_key(model, name)
-
-    def thermal_path(p: Path) -> Path:          # the unit thermal loads beside the component
-        return p.with_name(p.name.replace(".npz", ".thermal.npz"))
-
-    def save(out, p):
-        save_component(out[0], p)
-        save_arrays({f"vol_{k}": v for k, v in out[1].items()}, thermal_path(p))
-
-    def load(p):
-        return load_component(p, mmap=True), {k[4:]: v for k, v in load_arrays(thermal_path(p)).items()}
-
     out, thermal = cache.get_or_build(model.source, key, ".npz", lambda: build_component(model, comp, workdir),
-                                      save, load, label=name)
+                                      _save_component_stage, _load_component_stage, label=name)
+    return out, thermal, key
+
+
+_MIRROR_CODE = ("liftoff.reduction.mirror", "liftoff.reduction.component", "liftoff.reduction.craig_bampton",
+                "liftoff.core")
+
+
+def _mirror_component_stage(model: ModelConfig, name: str, cache: StageCache, workdir: Path,
+                            source: tuple | None) -> tuple[Component, dict, str]:
+    """A mirror's Component: its source's reflected (liftoff.reduction.mirror), cached so that a
+    process that never uses its matrices never reads them, as a built one's."""
+    from liftoff.reduction.mirror import mirror_component, mirror_load, renamer
+
+    mir = model.components[name].mirror
+    src, src_thermal, src_key = source or component_stage(model, mir.of, cache, workdir)
+    key = stage_key("mirror", {"name": name, "of": mir.of, "normal": mir.normal}, _MIRROR_CODE, (src_key,))
+    rename = renamer(mir.of, name)
+
+    def build():
+        return (mirror_component(src, name, mir.normal, rename),
+                {rename(vol): mirror_load(src, f, mir.normal) for vol, f in src_thermal.items()})
+
+    out, thermal = cache.get_or_build(model.source, key, ".npz", build, _save_component_stage, _load_component_stage,
+                                      label=name)
     return out, thermal, key
 
 
@@ -214,14 +250,38 @@ def _load_cached_cb(path) -> CBModel:
     return load_cb(path, mmap=True)
 
 
-def cb_stage(model: ModelConfig, name: str, comp: Component, comp_key: str, cache: StageCache) -> tuple[CBModel, str]:
+def cb_stage(model: ModelConfig, name: str, comp: Component, comp_key: str, cache: StageCache,
+             source: tuple | None = None) -> tuple[CBModel, str]:
     """The CB model of a component (from the cache, or reduced with :func:`cb_solver`: a
-    cached Component is enough, the PETSc matrices are built from it)."""
+    cached Component is enough, the PETSc matrices are built from it); a mirror's is its
+    source's reflected, no eigensolve (``source``: the source's (Component, component key,
+    CBModel, CB key) when the caller has them)."""
+    if model.components[name].mirror is not None:
+        return _mirror_cb_stage(model, name, comp_key, cache, source)
     key, params = _cb_key(model, name, comp, comp_key)
     solver = cb_solver(model)[0]
     cb = cache.get_or_build("cb", key, ".npz",
                             lambda: craig_bampton(comp, params["boundary"], params["n_modes"], params["f_max"],
                                                   solver=solver),
+                            lambda out, p: out.save(p, recovery=True), _load_cached_cb, label=name)
+    return cb, key
+
+
+def _mirror_cb_stage(model: ModelConfig, name: str, comp_key: str, cache: StageCache,
+                     source: tuple | None) -> tuple[CBModel, str]:
+    from liftoff.reduction.mirror import mirror_cb, renamer
+
+    mir = model.components[name].mirror
+    if source is None:
+        with tempfile.TemporaryDirectory() as work:
+            src_comp, _, src_key = component_stage(model, mir.of, cache, Path(work))
+        src_cb, src_ckey = cb_stage(model, mir.of, src_comp, src_key, cache)
+    else:
+        src_comp, src_key, src_cb, src_ckey = source
+    key = stage_key("cb-mirror", {"name": name, "of": mir.of, "normal": mir.normal}, _MIRROR_CODE,
+                    (src_ckey, comp_key))
+    cb = cache.get_or_build("cb", key, ".npz",
+                            lambda: mirror_cb(src_cb, name, mir.normal, renamer(mir.of, name), source_component=src_comp),
                             lambda out, p: out.save(p, recovery=True), _load_cached_cb, label=name)
     return cb, key
 
@@ -529,15 +589,26 @@ def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, wh
                     fe_stage(name)
             todo = [n for n in fe if _needs_stages(model, n, cache, comps.get(n))]
             logs = reduce_concurrently(model, todo, cache, model_workers(workers), bar)
+        mirrors = [n for n in names if model.components[n].mirror is not None]
         for name in names:
             if name in fe and name not in comps:
                 fe_stage(name)
-            elif name not in fe:
+            elif name not in fe and name not in mirrors:
                 bar.update()
-        for name in names:
+        for name in mirrors:                 # their sources' products reflected (liftoff.reduction.mirror)
+            bar.set_postfix_str(f"mirror {name}")
+            of = model.components[name].mirror.of
+            comps[name], thermal[name], comp_keys[name] = component_stage(
+                model, name, cache, Path(work), source=(comps[of], thermal[of], comp_keys[of]))
+            bar.update()
+        for name in [n for n in names if n not in mirrors] + mirrors:
             bar.set_postfix_str(f"cb {name}")
             given = given_model(model.components[name])
-            if model.components[name].nastran is not None:
+            of = model.components[name].mirror.of if name in mirrors else None
+            if of is not None:
+                cbs[name], ckeys[name] = cb_stage(model, name, comps[name], comp_keys[name], cache,
+                                                  source=(comps[of], comp_keys[of], cbs[of], ckeys[of]))
+            elif model.components[name].nastran is not None:
                 cbs[name], ckeys[name] = nastran_stage(model, name, cache)
                 thermal[name] = {}
             elif given is not None:          # a type whose CB model is given (rigid_mass): no stage to cache

@@ -57,8 +57,8 @@ def tank_slosh(scenario, g_eff: float, n_modes: int, progress=print) -> dict:
     out = {}
     with tempfile.TemporaryDirectory(prefix="liftoff-slosh-") as work:
         for name, comp in model.components.items():
-            if comp.nastran is not None or given_model(comp) is not None:
-                continue                                   # imported or given, not meshed: no liquid mesh
+            if comp.nastran is not None or given_model(comp) is not None or comp.mirror is not None:
+                continue                   # imported, given or a mirror (no liquids), not meshed: no liquid mesh
             progress(f"liftoff slosh: meshing {name} ...")
             geo = geometry(comp, Path(work) / name)
             if not geo.liquids:

@@ -67,7 +67,8 @@ CONVECTIVE = ("wall", "free", "slosh")    # [model] convective: a hydroelastic l
 #: to 10 g), beyond which the rigid-tank slosh frequencies sqrt(g_eff) mean nothing here
 SLOSH_GRAVITY_RANGE = (0.1 * G0, 10.0 * G0)
 _VEHICLE = {"mesh_size", "params"}
-_COMP = {"type", "mesh_size", "n_modes", "f_max", "params", "nastran"}
+_COMP = {"type", "mesh_size", "n_modes", "f_max", "params", "nastran", "mirror"}
+_MIRROR = {"of", "normal"}
 _JOINT = {"name", "components", "release"}
 _NASTRAN = {"file", "units", "grids", "asm", "pch", "op4", "bulk", "stiffness", "mass", "se", "recovery"}
 _NASTRAN_FILES = ("file", "asm", "pch", "op4", "bulk")
@@ -97,6 +98,17 @@ class NastranSource:
 
 
 @dataclass(frozen=True)
+class Mirror:
+    """A component that is the mirror image of vehicle component ``of`` in the plane through
+    the origin normal to axis ``normal`` ("x", "y" or "z"): its FE and Craig-Bampton models
+    are the source's reflected (liftoff.reduction.mirror), its points and volumes named by
+    replacing the source's name with its own."""
+
+    of: str
+    normal: str
+
+
+@dataclass(frozen=True)
 class ComponentModel:
     """One component's model: its ``type`` (liftoff.config.component_types; "nastran";
     "stick"), its builder's parameters (the type's dataclass; None for a Nastran model),
@@ -111,6 +123,7 @@ class ComponentModel:
     f_max: float | None = None
     nastran: NastranSource | None = None
     type: str = ""
+    mirror: Mirror | None = None       # the source's model reflected, not built (then builder is None)
 
 
 @dataclass(frozen=True)
@@ -222,6 +235,18 @@ def _sizes(where: Where, spec: dict, keys: set[str], base: Path = Path(".")) -> 
     [model.vehicle] table, and a Nastran source if it has one."""
     c = table(where, spec, keys)
     out = {"params": c.get("params", {})}
+    if "mirror" in c:
+        others = sorted(set(c) - {"mirror"})
+        if others:
+            raise (where / others[0]).error("a mirror takes its source's model: no type, params, mesh_size, modes or "
+                                            "nastran of its own")
+        mt = table(where / "mirror", c["mirror"], _MIRROR, required=("of", "normal"))
+        normal = string(where / "mirror" / "normal", mt["normal"])
+        if normal not in ("x", "y", "z"):
+            raise (where / "mirror" / "normal").error(f"{normal!r}: give x, y or z (the plane through the origin "
+                                                      "normal to that axis)")
+        out["mirror"] = Mirror(string(where / "mirror" / "of", mt["of"]), normal)
+        return out
     if "type" in c:
         out["type"] = string(where / "type", c["type"])
     if "nastran" in c:
@@ -252,6 +277,9 @@ def _fe_builders(where: Where, ctx: dict, sel: dict[str, dict], size: dict[str, 
     out = {}
     for name in vehicle + (PAD,):
         w = where / "component" / name if name != PAD else where / PAD
+        if "mirror" in sel[name]:
+            out[name] = None                 # the source's model, reflected (_mirrors)
+            continue
         kind = sel[name].get("type")
         if kind is None:
             raise (w / "type").error("missing: the component's type (" + ", ".join(
@@ -270,6 +298,9 @@ def _fe_builders(where: Where, ctx: dict, sel: dict[str, dict], size: dict[str, 
 def _stick_builders(where: Where, layout: StackLayout, sel: dict[str, dict], spec: Any) -> dict:
     """One StickParams (beams) for all five components; the pad's geometry from PadParams."""
     for name in STICK_VEHICLE + (PAD,):
+        if "mirror" in sel[name]:
+            w = where / "component" / name if name != PAD else where / PAD
+            raise (w / "mirror").error("the stick source builds the Shuttle's components as beams: no mirrors")
         if sel[name].get("type", component_types.NASTRAN) != component_types.NASTRAN:
             w = where / "component" / name if name != PAD else where / PAD
             raise (w / "type").error("the stick source builds the Shuttle's components as beams: it takes no type")
@@ -452,7 +483,9 @@ def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig
     components = {name: ComponentModel(name, builders[name], sizes[name], sel[name].get("n_modes"),
                                        sel[name].get("f_max", None if "n_modes" in sel[name] else DEFAULT_F_MAX),
                                        sel[name].get("nastran"), sel[name].get("type", "stick"))
-                  for name in names + (PAD,)}
+                  for name in names + (PAD,) if "mirror" not in sel[name]}
+    materials = _materials(where / "materials", m.get("materials", {}), source)
+    components = _mirrors(where, sel, names, components, materials)
     if source == "stick":
         if "joint" in m:
             raise (where / "joint").error("the stick source joins the Shuttle's components itself: no [[model.joint]]")
@@ -477,6 +510,43 @@ def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig
                                               "it would be silently ignored")
     # the default: the liquids' slosh modes where there are hydroelastic liquids (issue 25)
     convective = convective or ("slosh" if hydroelastic else "wall")
-    return ModelConfig(source, degree, zeta, layout, components,
-                       _materials(where / "materials", m.get("materials", {}), source), system, max_elements,
+    return ModelConfig(source, degree, zeta, layout, components, materials, system, max_elements,
                        convective, slosh_gravity, names, joints)
+
+
+def _mirrors(where: Where, sel: dict, names: tuple[str, ...], components: dict, materials: dict) -> dict:
+    """The components in the model's order, each mirror (``mirror = {of, normal}``) with its
+    source's mesh size and modes kept. A mirror's source is another vehicle component built
+    here (not a Nastran import, a given model or another mirror), the pad none; a
+    [model.materials] volume of the mirror must repeat its source's (it takes the source's)."""
+    out = {}
+    for name in names + (PAD,):
+        if "mirror" not in sel[name]:
+            out[name] = components[name]
+            continue
+        w = (where / "component" / name if name != PAD else where / PAD) / "mirror"
+        mir = sel[name]["mirror"]
+        if name == PAD:
+            raise w.error("the pad is one body: it cannot be a mirror")
+        src = components.get(mir.of)
+        if mir.of == name or src is None or mir.of == PAD:
+            what = ("itself" if mir.of == name else "the pad" if mir.of == PAD
+                    else "another mirror" if mir.of in names else "no vehicle component")
+            raise (w / "of").error(f"{mir.of!r} is {what}: give a vehicle component built from its own "
+                                   f"geometry ({', '.join(n for n in names if n in components)})")
+        if src.nastran is not None or src.builder is None or not src.type:
+            raise (w / "of").error(f"{mir.of!r} is not built here (a Nastran import or a given model): a mirror "
+                                   "reflects an FE component's mesh and matrices")
+        t = component_types.types().get(src.type)
+        if t is not None and t.model:
+            raise (w / "of").error(f"{mir.of!r} is type {src.type!r}, whose model is given, not built: give the "
+                                   "mirror its own table instead")
+        for vol, mat in materials.items():
+            if vol.startswith(name + "_"):
+                twin = mir.of + vol[len(name):]
+                if materials.get(twin) != mat:
+                    raise (where / "materials" / vol).error(
+                        f"{name!r} mirrors {mir.of!r} and takes its materials: {vol!r} must repeat [model.materials."
+                        f"{twin}] or be left out")
+        out[name] = dataclasses.replace(src, name=name, builder=None, type="", mirror=mir)
+    return out
