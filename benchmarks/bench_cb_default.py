@@ -92,7 +92,8 @@ def main(argv=None) -> int:
 
     sc = parse_scenario(parse_toml(default_text(), "default_scenario.toml"), "default_scenario.toml")
     model = sc.cases[0].model
-    names = a.components or [n for n in list(model.vehicle) + ["pad"] if model.components[n].nastran is None]
+    names = a.components or [n for n in list(model.vehicle) + ["pad"]   # (a mirror takes its source's modes: no solve)
+                              if model.components[n].nastran is None and model.components[n].mirror is None]
     cache = StageCache(a.cache)
     rows = []
     for name in names:

@@ -10,11 +10,12 @@ into README.md by benchmarks/default_figures.py.
     .venv/bin/python benchmarks/booster_grain_compare.py [--f-max 15 25] [--no-solid] [--json FILE]
 
 Each variant is a whole cold run; run them one per process where memory is short (the
-file is updated, not overwritten). Measured here (24 GB): f_max = 15 and 20 Hz run; 25 Hz
-was killed for memory (24 GB resident with LIFTOFF_MODEL_WORKERS=1), so the cut is not
-shown converged on this machine. On 2026-11-28 (the released attach joints), 20 Hz was
-killed for memory after the solid and 15 Hz columns in the same process; the checked-in
-file holds those two.
+file is updated, not overwritten). Measured here (24 GB): with both boosters reduced, 25 Hz
+was killed for memory (24 GB resident with LIFTOFF_MODEL_WORKERS=1), and on 2026-11-28 20 Hz
+after the solid and 15 Hz columns in the same process. Since 2026-12-01 the default's right
+booster mirrors the left one (the edits below go to srb_left; the mirror follows), so one
+grain booster is reduced: ``--f-max 15`` and then ``--f-max 20 25 --no-solid`` ran, the
+second process peaking at 22.8 GB resident; a 30 Hz cut would not fit.
 """
 from __future__ import annotations
 
@@ -26,7 +27,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 JSON = ROOT / "docs" / "figures" / "booster_grain.json"
-BOOSTERS = ("srb_left", "srb_right")
+BOOSTERS = ("srb_left",)       # srb_right mirrors srb_left (the default scenario): it follows
 
 
 def variant_figures(grain: bool, f_max: float | None) -> dict:

@@ -57,8 +57,8 @@ def components_below(f_max: float, pad_f_max: float | None = None, only: tuple[s
     def edit(data: dict) -> dict:
         m = data["model"]
         for name, sel in list(m.get("component", {}).items()) + [("pad", m.get("pad", {}))]:
-            if (only is not None and name not in only) or (name == "pad" and pad_f_max is None):
-                continue
+            if (only is not None and name not in only) or (name == "pad" and pad_f_max is None) or "mirror" in sel:
+                continue                      # (a mirror keeps its source's modes)
             sel.pop("n_modes", None)
             sel["f_max"] = pad_f_max if name == "pad" else f_max
         m.pop("system", None)
@@ -73,8 +73,9 @@ def system_cut(f_max: float, residual: bool, pad_f_max: float | None = None):
     return edit
 
 
-#: the fixed-interface modes the default capped before issue 22
-CAPS = {"core": 30, "srb_left": 20, "srb_right": 20, "orbiter": 20}
+#: the fixed-interface modes the default capped before issue 22 (srb_right, the mirror of
+#: srb_left, keeps its source's)
+CAPS = {"core": 30, "srb_left": 20, "orbiter": 20}
 PAD_CAP = 30
 
 
@@ -87,8 +88,8 @@ def capped(data: dict) -> dict:
 
 
 #: mesh sizes (m) of the refined variant: 0.7 x the default's (core 0.85 and orbiter 0.5 from the
-#: scenario, boosters 0.6 from their builder, pad 2.4)
-REFINED = {"core": 0.6, "srb_left": 0.42, "srb_right": 0.42, "orbiter": 0.35, "pad": 1.7}
+#: scenario, boosters 0.6 from their builder, pad 2.4; srb_right mirrors srb_left's mesh)
+REFINED = {"core": 0.6, "srb_left": 0.42, "orbiter": 0.35, "pad": 1.7}
 
 
 def refined(data: dict) -> dict:

@@ -672,22 +672,22 @@ def render_step(study: dict) -> str:
     """The step study (benchmarks/step_study.py): each run's step, twang and the largest
     change of an envelope peak from the finest run's, and the default's largest rows."""
     pct = lambda d: f"{100 * d:.3f} %"  # noqa: E731
-    ref = study["reference_mode_samples"]
-    lines = [f"| steps a period of the highest mode | steps | h (us) | twang peak (m) at (s); at ignition (m) | "
-             f"largest change of a peak from {ref:g} steps a period: any row; posts; attaches |",
+    ref = f"h0/{1 / study['reference_factor']:g}"
+    lines = [f"| step | steps | h (us) | twang peak (m) at (s); at ignition (m) | "
+             f"largest change of a peak from {ref}: any row; posts; attaches |",
              "|---|---|---|---|---|"]
     for r in study["variants"]:
         tw = r["twang"]
-        name = f"{r['mode_samples']:g}" + (" (the default)" if r["mode_samples"] == study["default_mode_samples"] else "")
+        name = "h0 (the default's automatic step)" if r["factor"] == 1.0 else f"h0/{1 / r['factor']:g}"
         lines.append(f"| {name} | {r['steps']} | {r['h_s'] * 1e6:.1f} | {tw['peak_m']:.4f} at {tw['t_peak_s']:.2f}; "
                      f"{tw['at_ignition_m']:.4f} | {pct(r['all']['deviation'])} ({r['all']['item']}); "
                      f"{pct(r['posts']['deviation'])}; {pct(r['attach']['deviation'])} ({r['attach']['item']}) |")
-    default = next(r for r in study["variants"] if r["mode_samples"] == study["default_mode_samples"])
+    default = next(r for r in study["variants"] if r["factor"] == 1.0)
     lines.append("")
-    lines.append(f"The default's largest changes from {ref:g} steps a period (against the row's own peak; against "
+    lines.append(f"The default's largest changes from {ref} (against the row's own peak; against "
                  f"the largest peak of the point's vector): " + "; ".join(
                      f"{x['item']} {pct(x['deviation'])}, {pct(x['point_deviation'])}" for x in default["largest_rows"])
-                 + f". The highest mode: {default['f_s_hz']:.0f} Hz; the contact frequency of eq. 12: "
+                 + f". The highest dynamic mode: {default['f_s_hz']:.0f} Hz; the contact frequency of eq. 12: "
                  f"{default['f_h_hz']:.0f} Hz (0.25/f_h = {0.25e6 / default['f_h_hz']:.0f} us).")
     return "\n".join(lines) + "\n"
 
@@ -695,15 +695,18 @@ def render_step(study: dict) -> str:
 def render_static_modes(study: dict) -> str:
     """The residual-flexibility study (benchmarks/static_modes_study.py): per cut, the
     static modes, the step, the transients' time and the largest change of an envelope
-    peak from the all-dynamic default (against the row's own peak and the point's vector)."""
+    peak from the default with every mode dynamic (against the row's own peak and the
+    point's vector); the default's own cut marked."""
     pct = lambda d: f"{100 * d:.3g} %"  # noqa: E731
+    default = study.get("default_static_above_hz")
     lines = ["| `[time] static_above_hz` | static modes, vehicle / pad | steps | h (us) | transients, both cases (s) | "
-             "twang peak (m) | largest change of a peak from the all-dynamic default: any row (of its point's vector); "
+             "twang peak (m) | largest change of a peak from every mode dynamic: any row (of its point's vector); "
              "posts; attaches (the row) | rows over 1 % (of the point's vector) |",
              "|---|---|---|---|---|---|---|---|"]
     for r in study["variants"]:
-        cut = "none (the default)" if r["static_above_hz"] is None else (
-            f"{r['static_above_hz']:g} Hz" + (", the default's step" if r["same_step"] else ""))
+        cut = "none (every mode dynamic)" if r["static_above_hz"] is None else (
+            f"{r['static_above_hz']:g} Hz" + (", every mode dynamic's step" if r["same_step"] else "")
+            + (" (the default)" if r["static_above_hz"] == default and not r["same_step"] else ""))
         worst = max(r["largest_rows"], key=lambda x: x["deviation"])
         att = r["attach"]
         lines.append(f"| {cut} | {r['static_modes'][0]} / {r['static_modes'][1]} | {r['steps']} | "

@@ -66,7 +66,6 @@ SOLID = {"model": {"walls": "solid"}}
 SHELL_B = {"model": {"walls": "shell", "component": {
     "core": {"params": {"shell_bending_ratio": 490.0, "attach": "patch"}},
     "srb_left": {"params": {"walls": "shell", "case_shell_bending_ratio": 58.6, "attach": "patch"}},
-    "srb_right": {"params": {"walls": "shell", "case_shell_bending_ratio": 58.6, "attach": "patch"}},
     "orbiter": {"params": {"skin_shell_bending_ratio": 46.5, "attach": "patch"}}},
     "materials": {f"srb_{s}_case": {"E": 205e9 * 0.0127 / 0.0195, "nu": 0.29, "rho": 7850.0} for s in ("left", "right")}}}
 

@@ -68,11 +68,17 @@ class StackLayout:
         return self.srb_skirt_radius - 0.5 * self.srb_skirt_thickness
 
     def holddown_points(self, side: str) -> dict[str, np.ndarray]:
-        """``{"srb_<side>_hd_<k>": (x, y, 0)}``, k = 1.. in azimuth order (about the booster axis)."""
+        """``{"srb_<side>_hd_<k>": (x, y, 0)}``, k = 1.. in the order of ``holddown_azimuths_deg``
+        about the left booster's axis; the right booster's are their mirror images in the plane
+        x = 0 (azimuth 180 - a), so that hold-down k of one booster is the mirror of hold-down k
+        of the other (a booster mirrored from the other, liftoff.reduction.mirror, then names its
+        points as the pad's posts under it)."""
         ax, r = self.srb_axis(side), self.holddown_radius
-        return {f"srb_{side}_hd_{k + 1}": np.array([ax[0] + r * math.cos(math.radians(a)),
-                                                   ax[1] + r * math.sin(math.radians(a)), 0.0])
-                for k, a in enumerate(self.holddown_azimuths_deg)}
+        out = {}
+        for k, a in enumerate(self.holddown_azimuths_deg):
+            a = math.radians(a if side == "left" else 180.0 - a)
+            out[f"srb_{side}_hd_{k + 1}"] = np.array([ax[0] + r * math.cos(a), ax[1] + r * math.sin(a), 0.0])
+        return out
 
     def srb_attach_points(self, side: str) -> dict[str, np.ndarray]:
         """Core-booster attach reference points, midway between the two outer walls."""

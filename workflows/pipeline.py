@@ -630,6 +630,7 @@ def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, wh
     vasm, vmodes, vehicle, pasm, pmodes, pad, unit, vall, pall = _bodies(model, cbs, ckeys, thermal, cache)
     t2 = time.perf_counter()
     comps = {n: comps[n] for n in names if n in comps}     # the model's order, whichever stages were cached
+    cbs = {n: cbs[n] for n in names}                        # (and whichever came last: the mirrors)
     return StackModel(comps, cbs, vasm, vmodes, vehicle, pasm, pmodes, pad, unit, vall, pall,
                       timings={"components+CB (s)": t1 - t0, "system modes (s)": t2 - t1},
                       key=stack_key(model, vasm, ckeys))

@@ -553,8 +553,10 @@ ATTACKS = [
            ("model.component.core.n_modes",)),
     # an integer n_modes beyond the interior DOFs means all of them (craig_bampton); the stick core's
     # every mode then sets a step whose histories no memory holds: refused before any transient
+    # (every mode dynamic, as the run: the default's static_above_hz would take the highest
+    # modes out of the step)
     Attack("run-component-n_modes-1e9-int",
-           _st("[model.component.core]\nn_modes = 1000000000\n"),
+           _st("[model.component.core]\nn_modes = 1000000000\n[time]\nstatic_above_hz = 1e9\n"),
            ("the limit is 50 GB", "modes"), status=4, guard="cases", rss_mb=500),
     # ---- silent wrong results / accepted bad input
     Attack("transient-phi-transposed-square", **_body_attack({"phi": lambda a: a.T.copy()},

@@ -85,7 +85,7 @@ def test_the_default_is_described_by_types_and_joints():
 
     import numpy as np
 
-    from liftoff.config.model import shuttle_joints
+    from liftoff.config.model import Mirror, shuttle_joints
     from liftoff.meshes.pad import PadParams
     from liftoff.meshes.vehicle import BoosterParams, OrbiterParams, core_stage_params
 
@@ -98,8 +98,10 @@ def test_the_default_is_described_by_types_and_joints():
     lay, c = model.layout, model.components
     assert model.vehicle == ("core", "srb_left", "srb_right", "orbiter")
     assert same(c["core"].builder, core_stage_params(lay, mesh_size=0.85, walls="shell", liquid="hydroelastic"))
-    for side in ("left", "right"):
-        assert same(c[f"srb_{side}"].builder, BoosterParams(side=side, layout=lay, walls="solid"))
+    assert same(c["srb_left"].builder, BoosterParams(side="left", layout=lay, walls="solid"))
+    # the right booster is the left one's mirror (liftoff.reduction.mirror), not built
+    assert c["srb_right"].builder is None and c["srb_right"].mirror == Mirror("srb_left", "x")
+    assert c["srb_right"].f_max == c["srb_left"].f_max
     assert same(c["orbiter"].builder, OrbiterParams(layout=lay, mesh_size=0.5, walls="shell"))
     assert same(c["pad"].builder, replace(PadParams(layout=lay), mesh_size=2.4))
     assert set(model.joints) == set(shuttle_joints(lay))

@@ -273,14 +273,15 @@ def test_walls_as_shells_reach_every_vehicle_builder(base):
     to shells (meshes builders' ``walls``); the core takes its bending ratio from its params."""
     d = copy.deepcopy(base)
     d["model"]["walls"] = "shell"
-    for name in ("srb_left", "srb_right"):         # the default keeps the boosters solid
-        d["model"]["component"][name]["params"].pop("walls")
+    d["model"]["component"]["srb_left"]["params"].pop("walls")     # the default keeps the boosters solid
+    # (srb_right mirrors srb_left)
     d["model"].setdefault("component", {}).setdefault("core", {})["params"] = {"shell_bending_ratio": 50.0}
     comps = parse_scenario(d, "s.toml").cases[0].model.components
-    assert all(comps[n].builder.walls == "shell" for n in ("core", "srb_left", "srb_right", "orbiter"))
+    assert all(comps[n].builder.walls == "shell" for n in ("core", "srb_left", "orbiter"))
+    assert comps["srb_right"].mirror.of == "srb_left"          # its model is srb_left's, reflected
     from liftoff.meshes.spec import check_attach
 
-    b = {n: comps[n].builder for n in ("core", "srb_left", "srb_right", "orbiter")}
+    b = {n: comps[n].builder for n in ("core", "srb_left", "orbiter")}
     assert all(check_attach(n, x.walls, x.attach) == "ring" for n, x in b.items())     # rings on shells
     assert comps["core"].builder.shell_bending_ratio == 50.0
     # shells with hydroelastic propellants carry the external tank's ullage pressures (fem.prestress)

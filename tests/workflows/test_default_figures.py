@@ -249,26 +249,22 @@ def test_attach_release_comparison_is_of_the_current_default(figures):
 
 def test_step_study_is_of_the_current_default(figures):
     """docs/workflow.md's "Convergence in the step" (benchmarks/step_study.py, rerun by its
-    script): its run at the default scenario's mode_samples is the default run (the same
-    steps and twang as the checked-in figures, which the figures test keeps current), and
-    its reference samples the highest mode more finely than the default does."""
+    script): its run at the automatic step is the default run (the same steps and twang as
+    the checked-in figures, which the figures test keeps current), and its reference takes
+    a finer step (h0 x the reference factor) and more steps."""
     if not figures.STEP_JSON.is_file():
         pytest.skip("no step study checked in")
     fig = json.loads(figures.DEFAULT_JSON.read_text())
     study = json.loads(figures.STEP_JSON.read_text())
-    from liftoff.config import default_text, parse_scenario, parse_toml
-
-    m = parse_scenario(parse_toml(default_text(), "d"), "d").cases[0].time.mode_samples
-    assert study["default_mode_samples"] == m == fig["step_rule"]["mode_samples"]
-    assert study["reference_mode_samples"] > m
-    row = next(r for r in study["variants"] if r["mode_samples"] == m)
-    assert row["steps"] == fig["steps"]
+    row = next(r for r in study["variants"] if r["factor"] == 1.0)
+    assert row["steps"] == fig["steps"] and row["h_s"] == pytest.approx(fig["h_s"], rel=1e-12)
     assert not figures.differences({k: row["twang"][k] for k in fig["twang"]["nominal"]}, fig["twang"]["nominal"])
     for load in fig["largest_loads"]:          # the default row's envelope is the default run's
         hi, lo = row["peaks"][load["item"]]
         assert not figures.differences([hi if abs(hi) >= abs(lo) else lo], [load["value"]]), load["item"]
-    finest = next(r for r in study["variants"] if r["mode_samples"] == study["reference_mode_samples"])
-    assert finest["steps"] > row["steps"]
+    finest = next(r for r in study["variants"] if r["factor"] == study["reference_factor"])
+    assert study["reference_factor"] < 1 and finest["steps"] > row["steps"]
+    assert finest["h_s"] == pytest.approx(study["reference_factor"] * row["h_s"], rel=1e-3)
 
 
 def test_kernel_floor_block_shows_the_benchmark_file(figures):
@@ -286,27 +282,31 @@ def test_kernel_floor_block_shows_the_benchmark_file(figures):
 
 def test_static_modes_study_is_of_the_current_default(figures):
     """docs/transient.md's "Residual-flexibility modes" (benchmarks/static_modes_study.py,
-    rerun by its script): its run without a cut is the default run (the same steps, twang
-    and largest loads as the checked-in figures, which the figures test keeps current); each
-    cut makes some modes static and, at its own step, takes fewer steps; the runs at the
-    default's step take the default's steps."""
+    rerun by its script): its run at the default scenario's own cut is the default run (the
+    same steps, twang and largest loads as the checked-in figures, which the figures test
+    keeps current); the run without a cut (every mode dynamic) makes no mode static and takes
+    the most steps; each cut makes some modes static and, at its own step, takes fewer steps;
+    the runs at the all-dynamic step take its steps."""
     if not figures.STATIC_MODES_JSON.is_file():
         pytest.skip("no residual-flexibility study checked in")
     from liftoff.config import default_text, parse_scenario, parse_toml
 
-    assert parse_scenario(parse_toml(default_text(), "d"), "d").cases[0].time.static_above_hz is None
+    cut = parse_scenario(parse_toml(default_text(), "d"), "d").cases[0].time.static_above_hz
     fig = json.loads(figures.DEFAULT_JSON.read_text())
     study = json.loads(figures.STATIC_MODES_JSON.read_text())
-    ref = next(r for r in study["variants"] if r["static_above_hz"] is None)
-    assert ref["steps"] == fig["steps"] and ref["static_modes"] == [0, 0]
-    assert not figures.differences({k: ref["twang"][k] for k in fig["twang"]["nominal"]}, fig["twang"]["nominal"])
+    assert study["default_static_above_hz"] == cut
+    default = next(r for r in study["variants"] if r["static_above_hz"] == cut and not r["same_step"])
+    assert default["steps"] == fig["steps"]
+    assert not figures.differences({k: default["twang"][k] for k in fig["twang"]["nominal"]}, fig["twang"]["nominal"])
     for load in fig["largest_loads"]:
-        hi, lo = ref["peaks"][load["item"]]
+        hi, lo = default["peaks"][load["item"]]
         assert not figures.differences([hi if abs(hi) >= abs(lo) else lo], [load["value"]]), load["item"]
+    ref = next(r for r in study["variants"] if r["static_above_hz"] is None)
+    assert ref["static_modes"] == [0, 0]
     for r in study["variants"]:
         if r["static_above_hz"] is None:
             continue
         assert sum(r["static_modes"]) > 0
         assert (r["steps"] == ref["steps"]) if r["same_step"] else (r["steps"] < ref["steps"])
     text = figures.render_static_modes(study)
-    assert text.count("\n") == len(study["variants"]) + 2 and "none (the default)" in text
+    assert text.count("\n") == len(study["variants"]) + 2 and "(the default)" in text
