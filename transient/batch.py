@@ -64,7 +64,7 @@ from .guard import GrowthGuard
 from .kernel import BOLTED, OK, SINGULAR, History, _candidates, _pattern_inverse, _record_contact, _solve_direct
 from .model import TransientProblem
 from .result import TransientResult
-from .solver import (CHUNK, _contact_inputs, _failure, _histories, _modal_inputs, _new_cache, _result,
+from .solver import (CHUNK, _contact_inputs, _failure, _modal_inputs, _new_cache, _result,
                      _spectral_radius, _start, initial_contact_force, initial_state, output_plan)
 from .stepping import check_memory, choose_step
 
@@ -507,7 +507,6 @@ def _shared(cases: list[_Case], plans, contact) -> tuple[Shared, np.ndarray, np.
     B = _basis([np.vstack([c.modal.const[None, :], c.modal.Pk]) for c in cases], "applied loads")
     Vb = _basis([c.modal.V for c in cases], "feedback rows")
     Ub = _basis([c.modal.U.T for c in cases], "feedback columns").T
-    nb, ru = B.shape[0], Ub.shape[1]
     Phi = contact.Phi
     Mq = np.hstack([(Ac[:, None] * B.T), (Bc[:, None] * B.T), ((Ac + Bc)[:, None] * Ub)])
     Mv = np.hstack([(Acd[:, None] * B.T), (Bcd[:, None] * B.T), ((Acd + Bcd)[:, None] * Ub)])
