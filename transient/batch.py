@@ -25,8 +25,9 @@ once for all of them and keeps as per-case data only what must be (3 n a case):
   feedback coordinates through matrices formed once (acceleration = P1 + Pc - 2 zeta omega
   v - omega^2 q substituted).
 
-The products over all modes are then matrix-matrix products over the group (BLAS-3):
-e_free = Phi X_q, Pc = Phi^T F, the load and output products; the contact solve stays per
+The work over all modes is then one pass a step over the group (``_modes``): per mode its
+Pc = Phi^T F, its load terms, the sweep and its share of e_free = Phi X_q, each shared row
+read once (1.3x the separate BLAS products here); the output products stay BLAS-3; the contact solve stays per
 case: kernel.py's candidate rows and active-set solve (``_candidates``, ``_solve_direct``),
 the pattern inverses shared (one W) with each case's last pattern tried first. Before the
 group's first release every row of every case is bolted: one pattern, no iteration, and the
@@ -147,45 +148,88 @@ class GroupHistory(NamedTuple):
 
 # ------------------------------------------------------------------ kernel
 @njit(cache=True, fastmath=False)
-def _sweep(S, Xq, Xv, Pc, Lq, Lv):
-    """X <- the next free state (module docstring), one pass over the modes, the cases of a
-    mode contiguous. A full group (K = :data:`GROUP` = 8) takes :func:`_sweep8`: the same
+def _modes(S, Xq, Xv, Pc, F, PhiT, Mq, Mv, Y, E, from_f):
+    """One pass over the modes of the group's step (module docstring), the cases of a mode
+    contiguous: per mode its contact load Pc = Phi^T f of the last step's force (taken from F
+    when ``from_f``, else the state's Pc as it stands), its load terms Mq Y and Mv Y, the free
+    state X <- F X_q + G X_v + D Pc + L (eq. 9-10 in sweep form), and its share of the contact
+    rows' free displacement E = Phi X_q. Each row of PhiT, Mq and Mv read once a step instead
+    of once a product. A full group (K = :data:`GROUP` = 8) takes :func:`_modes8`: the same
     arithmetic in the same order, bit for bit."""
     n, K = Xq.shape
     if K == 8:
-        _sweep8(S, Xq, Xv, Pc, Lq, Lv)
+        _modes8(S, Xq, Xv, Pc, F, PhiT, Mq, Mv, Y, E, from_f)
         return
-    for m in range(n):
-        F = S[0, m]; G = S[1, m]; Dq = S[2, m]; Fd = S[3, m]; Gd = S[4, m]; Dv = S[5, m]
-        xq = Xq[m]; xv = Xv[m]; p = Pc[m]; lq = Lq[m]; lv = Lv[m]
+    nc, m = PhiT.shape[1], Mq.shape[1]
+    for j in range(nc):
         for k in range(K):
-            q = xq[k]; v = xv[k]; pc = p[k]
-            xq[k] = F * q + G * v + Dq * pc + lq[k]
-            xv[k] = Fd * q + Gd * v + Dv * pc + lv[k]
+            E[j, k] = 0.0
+    for i in range(n):
+        Fq = S[0, i]; G = S[1, i]; Dq = S[2, i]; Fd = S[3, i]; Gd = S[4, i]; Dv = S[5, i]
+        phi = PhiT[i]; mq = Mq[i]; mv = Mv[i]; xq = Xq[i]; xv = Xv[i]; p = Pc[i]
+        for k in range(K):
+            if from_f:
+                pc = 0.0
+                for j in range(nc):
+                    pc = pc + phi[j] * F[j, k]
+                p[k] = pc
+            else:
+                pc = p[k]
+            a = 0.0
+            b = 0.0
+            for j in range(m):
+                a = a + mq[j] * Y[j, k]
+                b = b + mv[j] * Y[j, k]
+            q = xq[k]; v = xv[k]
+            u = Fq * q + G * v + Dq * pc + a
+            xv[k] = Fd * q + Gd * v + Dv * pc + b
+            xq[k] = u
+            for j in range(nc):
+                E[j, k] = E[j, k] + phi[j] * u
 
 
 @njit(cache=True, fastmath=False)
-def _sweep8(S, Xq, Xv, Pc, Lq, Lv):
-    """:func:`_sweep` for eight cases, unrolled with every load of a mode before its stores:
+def _modes8(S, Xq, Xv, Pc, F, PhiT, Mq, Mv, Y, E, from_f):
+    """:func:`_modes` for eight cases, unrolled with every load of a line before its stores:
     LLVM cannot prove the rows apart, so the rolled loop stays scalar (one multiply-add at a
     time); written so, the SLP vectorizer packs each line into vector instructions without
-    reordering a load past a store (the sweep 2-2.6x faster than the rolled loop at 3,300 modes)."""
-    for m in range(Xq.shape[0]):
-        F = S[0, m]; G = S[1, m]; Dq = S[2, m]; Fd = S[3, m]; Gd = S[4, m]; Dv = S[5, m]
-        xq = Xq[m]; xv = Xv[m]; p = Pc[m]; lq = Lq[m]; lv = Lv[m]
+    reordering a load past a store. The same arithmetic in the same order as the rolled loop."""
+    n, nc, m = PhiT.shape[0], PhiT.shape[1], Mq.shape[1]
+    for j in range(nc):
+        e = E[j]
+        e[0] = 0.0; e[1] = 0.0; e[2] = 0.0; e[3] = 0.0; e[4] = 0.0; e[5] = 0.0; e[6] = 0.0; e[7] = 0.0
+    for i in range(n):
+        Fq = S[0, i]; G = S[1, i]; Dq = S[2, i]; Fd = S[3, i]; Gd = S[4, i]; Dv = S[5, i]
+        phi = PhiT[i]; mq = Mq[i]; mv = Mv[i]; xq = Xq[i]; xv = Xv[i]; p = Pc[i]
+        if from_f:
+            p0 = 0.0; p1 = 0.0; p2 = 0.0; p3 = 0.0; p4 = 0.0; p5 = 0.0; p6 = 0.0; p7 = 0.0
+            for j in range(nc):
+                t = phi[j]; f = F[j]
+                f0 = f[0]; f1 = f[1]; f2 = f[2]; f3 = f[3]; f4 = f[4]; f5 = f[5]; f6 = f[6]; f7 = f[7]
+                p0 = p0 + t * f0; p1 = p1 + t * f1; p2 = p2 + t * f2; p3 = p3 + t * f3
+                p4 = p4 + t * f4; p5 = p5 + t * f5; p6 = p6 + t * f6; p7 = p7 + t * f7
+            p[0] = p0; p[1] = p1; p[2] = p2; p[3] = p3; p[4] = p4; p[5] = p5; p[6] = p6; p[7] = p7
+        else:
+            p0 = p[0]; p1 = p[1]; p2 = p[2]; p3 = p[3]; p4 = p[4]; p5 = p[5]; p6 = p[6]; p7 = p[7]
+        a0 = 0.0; a1 = 0.0; a2 = 0.0; a3 = 0.0; a4 = 0.0; a5 = 0.0; a6 = 0.0; a7 = 0.0
+        b0 = 0.0; b1 = 0.0; b2 = 0.0; b3 = 0.0; b4 = 0.0; b5 = 0.0; b6 = 0.0; b7 = 0.0
+        for j in range(m):
+            tq = mq[j]; tv = mv[j]; y = Y[j]
+            y0 = y[0]; y1 = y[1]; y2 = y[2]; y3 = y[3]; y4 = y[4]; y5 = y[5]; y6 = y[6]; y7 = y[7]
+            a0 = a0 + tq * y0; a1 = a1 + tq * y1; a2 = a2 + tq * y2; a3 = a3 + tq * y3
+            a4 = a4 + tq * y4; a5 = a5 + tq * y5; a6 = a6 + tq * y6; a7 = a7 + tq * y7
+            b0 = b0 + tv * y0; b1 = b1 + tv * y1; b2 = b2 + tv * y2; b3 = b3 + tv * y3
+            b4 = b4 + tv * y4; b5 = b5 + tv * y5; b6 = b6 + tv * y6; b7 = b7 + tv * y7
         q0 = xq[0]; q1 = xq[1]; q2 = xq[2]; q3 = xq[3]; q4 = xq[4]; q5 = xq[5]; q6 = xq[6]; q7 = xq[7]
         v0 = xv[0]; v1 = xv[1]; v2 = xv[2]; v3 = xv[3]; v4 = xv[4]; v5 = xv[5]; v6 = xv[6]; v7 = xv[7]
-        p0 = p[0]; p1 = p[1]; p2 = p[2]; p3 = p[3]; p4 = p[4]; p5 = p[5]; p6 = p[6]; p7 = p[7]
-        a0 = lq[0]; a1 = lq[1]; a2 = lq[2]; a3 = lq[3]; a4 = lq[4]; a5 = lq[5]; a6 = lq[6]; a7 = lq[7]
-        b0 = lv[0]; b1 = lv[1]; b2 = lv[2]; b3 = lv[3]; b4 = lv[4]; b5 = lv[5]; b6 = lv[6]; b7 = lv[7]
-        xq[0] = F * q0 + G * v0 + Dq * p0 + a0
-        xq[1] = F * q1 + G * v1 + Dq * p1 + a1
-        xq[2] = F * q2 + G * v2 + Dq * p2 + a2
-        xq[3] = F * q3 + G * v3 + Dq * p3 + a3
-        xq[4] = F * q4 + G * v4 + Dq * p4 + a4
-        xq[5] = F * q5 + G * v5 + Dq * p5 + a5
-        xq[6] = F * q6 + G * v6 + Dq * p6 + a6
-        xq[7] = F * q7 + G * v7 + Dq * p7 + a7
+        u0 = Fq * q0 + G * v0 + Dq * p0 + a0
+        u1 = Fq * q1 + G * v1 + Dq * p1 + a1
+        u2 = Fq * q2 + G * v2 + Dq * p2 + a2
+        u3 = Fq * q3 + G * v3 + Dq * p3 + a3
+        u4 = Fq * q4 + G * v4 + Dq * p4 + a4
+        u5 = Fq * q5 + G * v5 + Dq * p5 + a5
+        u6 = Fq * q6 + G * v6 + Dq * p6 + a6
+        u7 = Fq * q7 + G * v7 + Dq * p7 + a7
         xv[0] = Fd * q0 + Gd * v0 + Dv * p0 + b0
         xv[1] = Fd * q1 + Gd * v1 + Dv * p1 + b1
         xv[2] = Fd * q2 + Gd * v2 + Dv * p2 + b2
@@ -194,6 +238,13 @@ def _sweep8(S, Xq, Xv, Pc, Lq, Lv):
         xv[5] = Fd * q5 + Gd * v5 + Dv * p5 + b5
         xv[6] = Fd * q6 + Gd * v6 + Dv * p6 + b6
         xv[7] = Fd * q7 + Gd * v7 + Dv * p7 + b7
+        xq[0] = u0; xq[1] = u1; xq[2] = u2; xq[3] = u3; xq[4] = u4; xq[5] = u5; xq[6] = u6; xq[7] = u7
+        for j in range(nc):
+            t = phi[j]; e = E[j]
+            e0 = e[0]; e1 = e[1]; e2 = e[2]; e3 = e[3]; e4 = e[4]; e5 = e[5]; e6 = e[6]; e7 = e[7]
+            e[0] = e0 + t * u0; e[1] = e1 + t * u1; e[2] = e2 + t * u2; e[3] = e3 + t * u3
+            e[4] = e4 + t * u4; e[5] = e5 + t * u5; e[6] = e6 + t * u6; e[7] = e7 + t * u7
+
 
 
 @njit(cache=True)
@@ -346,7 +397,6 @@ def march_group(i0, i1, t0, h, max_iter, sh, cs, st, keys, invs, used, hist):
     Y_a, Y_b, Fc, states, iters = hist
     n, K = Xq.shape
     nc, nb, ru, m = sh.Phi.shape[0], g.shape[1], cs.Du.shape[1], sh.Mq.shape[1]
-    Lq = np.zeros((n, K)); Lv = np.zeros((n, K))
     Y = np.zeros((m, K))               # [g(ta); g(tb); z] per case: the load columns' coefficients
     Xo = np.zeros((nc + nb + ru, K))   # [f; g(tb); z]: the outputs' small columns
     E = np.empty((nc, K))
@@ -367,11 +417,7 @@ def march_group(i0, i1, t0, h, max_iter, sh, cs, st, keys, invs, used, hist):
             Sfb += np.dot(sh.Vv, Xv)
             Sfb += np.dot(sh.Vf, F)
         _load_columns(ta, tb, cs, g, ptr, Sfb, has_fb, Y)
-        if m > 0:
-            np.dot(sh.Mq, Y, Lq)
-            np.dot(sh.Mv, Y, Lv)
-        _sweep(sh.S, Xq, Xv, Pc, Lq, Lv)
-        np.dot(sh.Phi, Xq, E)
+        _modes(sh.S, Xq, Xv, Pc, F, sh.PhiT, sh.Mq, sh.Mv, Y, E, i > i0)
         # ---------------- the contact solve
         if tb < first_release:
             if not _solve_bolted(row, sh, E, keys, invs, used, last, F, active, Fc, states, iters):
@@ -381,8 +427,7 @@ def march_group(i0, i1, t0, h, max_iter, sh, cs, st, keys, invs, used, hist):
                                                    active, Fc, states, iters)
             if status != OK:
                 return status, i + 1, info1, info2, k
-        # ---------------- the contact loads (BLAS-3) and the outputs at tb
-        np.dot(sh.PhiT, F, Pc)
+        # ---------------- the outputs at tb (the contact load Phi^T f: the next step's _modes)
         for k in range(K):
             for j in range(nc):
                 Xo[j, k] = F[j, k]
@@ -392,6 +437,8 @@ def march_group(i0, i1, t0, h, max_iter, sh, cs, st, keys, invs, used, hist):
             _outputs(sh.Aq_a, sh.iq_a, sh.Av_a, sh.iv_a, sh.Ax_a, Xq[:na], Xv[:na], Xo, ya, Y_a, row)
         if yb.shape[0] > 0 and n > na:
             _outputs(sh.Aq_b, sh.iq_b, sh.Av_b, sh.iv_b, sh.Ax_b, Xq[na:], Xv[na:], Xo, yb, Y_b, row)
+    if i1 > i0:                        # the state's Pc of the last force, as the chunk's caller reads it
+        np.dot(sh.PhiT, F, Pc)
     return OK, i1, 0.0, 0.0, -1
 
 

@@ -115,22 +115,51 @@ def test_batch_refuses_what_it_cannot_share():
     assert math.isfinite(solve_batch([p0])[0].separation_time[0])
 
 
-def test_full_group_sweep_is_the_rolled_loop_bit_for_bit():
-    """A full group's sweep (_sweep8, unrolled so it vectorizes) against the rolled loop that
-    partial groups take (the same eight cases as two groups of four): the same arithmetic in
-    the same order, so equal bit for bit, including signed zeros and subnormals."""
-    from liftoff.transient.batch import _sweep
-    rng = np.random.default_rng(7)
-    n = 37
+def _modes_inputs(rng, n=37, nc=5, m=3):
     S = rng.standard_normal((6, n))
-    X = [rng.standard_normal((n, 8)) for _ in range(5)]
-    X[0][3, 2], X[1][4, 5], X[2][5, 1] = -0.0, 5e-320, 1e-310
-    full = [x.copy() for x in X]
-    halves = [[np.ascontiguousarray(x[:, :4]) for x in X], [np.ascontiguousarray(x[:, 4:]) for x in X]]
-    for _ in range(3):
-        _sweep(S, *full)
+    X = [rng.standard_normal((n, 8)) for _ in range(5)]     # Xq, Xv, Pc, F (nc rows), Y (m rows)
+    X[3], X[4] = X[3][:nc].copy(), X[4][:m].copy()
+    X[0][3, 2], X[1][4, 5], X[2][5, 1], X[3][1, 6] = -0.0, 5e-320, 1e-310, -0.0
+    PhiT, Mq, Mv = rng.standard_normal((n, nc)), rng.standard_normal((n, m)), rng.standard_normal((n, m))
+    return S, X, PhiT, Mq, Mv
+
+
+def test_full_group_step_is_the_rolled_loop_bit_for_bit():
+    """A full group's pass over the modes (_modes8, unrolled so it vectorizes) against the
+    rolled loop that partial groups take (the same eight cases as two groups of four), with
+    Pc taken from the state and from F: the same arithmetic in the same order, so equal bit
+    for bit, including signed zeros and subnormals."""
+    from liftoff.transient.batch import _modes
+    S, X, PhiT, Mq, Mv = _modes_inputs(np.random.default_rng(7))
+    nc = X[3].shape[0]
+    full = [x.copy() for x in X] + [np.empty((nc, 8))]
+    halves = [[np.ascontiguousarray(x[:, s]) for x in X] + [np.empty((nc, 4))] for s in (slice(0, 4), slice(4, 8))]
+    for from_f in (False, True, True):
+        _modes(S, *full[:3], full[3], PhiT, Mq, Mv, full[4], full[5], from_f)
         for h in halves:
-            _sweep(S, *h)
-    for j in (0, 1):
-        rolled = np.hstack([halves[0][j], halves[1][j]])
-        assert np.array_equal(full[j].view(np.int64), rolled.view(np.int64))
+            _modes(S, *h[:3], h[3], PhiT, Mq, Mv, h[4], h[5], from_f)
+        for j in (0, 1, 2, 5):
+            rolled = np.hstack([halves[0][j], halves[1][j]])
+            assert np.array_equal(full[j].view(np.int64), rolled.view(np.int64))
+
+
+@pytest.mark.parametrize("K", [8, 3])
+def test_step_over_the_modes_is_the_matrix_products(K):
+    """_modes against the same step written as numpy's matrix products (Pc = Phi^T F, the
+    load terms Mq Y and Mv Y, the sweep, E = Phi X_q): equal to the round-off of sums of
+    nc, m or n terms (here at most 37 terms of O(1): 1e-13 of the values' O(10) scale is
+    far above the ~1e-15 such sums can differ by in another order, far below any error)."""
+    from liftoff.transient.batch import _modes
+    S, X, PhiT, Mq, Mv = _modes_inputs(np.random.default_rng(11))
+    Xq, Xv, Pc, F, Y = (np.ascontiguousarray(x[:, :K]) for x in X)
+    E = np.empty((F.shape[0], K))
+    Pc_ref = PhiT @ F
+    Lq, Lv = Mq @ Y, Mv @ Y
+    Xq_ref = S[0, :, None] * Xq + S[1, :, None] * Xv + S[2, :, None] * Pc_ref + Lq
+    Xv_ref = S[3, :, None] * Xq + S[4, :, None] * Xv + S[5, :, None] * Pc_ref + Lv
+    _modes(S, Xq, Xv, Pc, F, PhiT, Mq, Mv, Y, E, True)
+    for got, ref in ((Pc, Pc_ref), (Xq, Xq_ref), (Xv, Xv_ref), (E, PhiT.T @ Xq_ref)):
+        assert np.max(np.abs(got - ref)) <= 1e-13 * max(1.0, np.max(np.abs(ref)))
+    keep = Pc.copy()
+    _modes(S, Xq, Xv, Pc, F * 2.0, PhiT, Mq, Mv, Y, E, False)     # from the state: F ignored, Pc kept
+    assert np.array_equal(Pc, keep)
