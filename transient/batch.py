@@ -27,7 +27,7 @@ once for all of them and keeps as per-case data only what must be (3 n a case):
 
 The work over all modes is then one pass a step over the group (``_modes``): per mode its
 Pc = Phi^T F, its load terms, the sweep and its share of e_free = Phi X_q, each shared row
-read once (1.3x the separate BLAS products here); the output products stay BLAS-3; the contact solve stays per
+read once; the output products stay BLAS-3; the contact solve stays per
 case: kernel.py's candidate rows and active-set solve (``_candidates``, ``_solve_direct``),
 the pattern inverses shared (one W) with each case's last pattern tried first. Before the
 group's first release every row of every case is bolted: one pattern, no iteration, and the
@@ -85,8 +85,7 @@ class Shared(NamedTuple):
     S: np.ndarray        # (6, n) sweep coefficients F G Dq Fd Gd Dv, Dq = F Bc + G Bcd + Ac (Dv alike)
     Mq: np.ndarray       # (n, m) X_q's load columns: [Ac B^T | Bc B^T | (Ac + Bc) Ub]
     Mv: np.ndarray       # (n, m) X_v's: [Acd B^T | Bcd B^T | (Acd + Bcd) Ub]
-    Phi: np.ndarray      # (n_c, n) contact rows [Phi_a, -Phi_b]
-    PhiT: np.ndarray     # (n, n_c)
+    PhiT: np.ndarray     # (n, n_c) contact rows [Phi_a, -Phi_b] transposed (a mode's row contiguous)
     Vq: np.ndarray       # (r_v, n) feedback basis on q
     Vv: np.ndarray       # (r_v, n) on v
     Vf: np.ndarray       # (r_v, n_c) on the contact force (the state's Bc Pc, Bcd Pc parts)
@@ -246,7 +245,6 @@ def _modes8(S, Xq, Xv, Pc, F, PhiT, Mq, Mv, Y, E, from_f):
             e[4] = e4 + t * u4; e[5] = e5 + t * u5; e[6] = e6 + t * u6; e[7] = e7 + t * u7
 
 
-
 @njit(cache=True)
 def _load_at(c, tk, n_tk, gk, ptr, tb, out):
     """out = the case's load coefficients at tb (constant + table interpolated from position
@@ -396,7 +394,7 @@ def march_group(i0, i1, t0, h, max_iter, sh, cs, st, keys, invs, used, hist):
     Xq, Xv, Pc, F, active, g, ptr, last = st
     Y_a, Y_b, Fc, states, iters = hist
     n, K = Xq.shape
-    nc, nb, ru, m = sh.Phi.shape[0], g.shape[1], cs.Du.shape[1], sh.Mq.shape[1]
+    nc, nb, ru, m = sh.PhiT.shape[1], g.shape[1], cs.Du.shape[1], sh.Mq.shape[1]
     Y = np.zeros((m, K))               # [g(ta); g(tb); z] per case: the load columns' coefficients
     Xo = np.zeros((nc + nb + ru, K))   # [f; g(tb); z]: the outputs' small columns
     E = np.empty((nc, K))
@@ -601,7 +599,7 @@ def _shared(cases: list[_Case], plans, contact) -> tuple[Shared, np.ndarray, np.
     for plan, sl in ((plans[0], slice(0, na)), (plans[1], slice(na, n))):   # Phi's b part is -Phi_b: as the force acts
         outs += _output_matrices(plan, coef[:, sl], m0.w2[sl], m0.zw2[sl], Phi[:, sl], B[:, sl], Ub[sl], nc)
     C = np.ascontiguousarray
-    sh = Shared(C(S), C(Mq), C(Mv), C(Phi), C(Phi.T), C(Vq), C(Vv), C(Vf), C(contact.W), C(contact.C2),
+    sh = Shared(C(S), C(Mq), C(Mv), C(Phi.T), C(Vq), C(Vv), C(Vf), C(contact.W), C(contact.C2),
                 C(contact.offset), C(contact.contact), C(contact.axial), C(contact.sign), int(na), *outs)
     return sh, B, Vb, Ub
 
@@ -619,8 +617,8 @@ def _group_inputs(group: list[_Case], B, Vb, Ub, sh: Shared) -> tuple[Cases, Gro
     since, until = np.zeros((K, r)), np.zeros((K, r))       # since = until: a padded term, never on
     release = np.zeros((K, group[0].rows.release.size))
     Xq, Xv, Pc = np.zeros((n, K)), np.zeros((n, K)), np.zeros((n, K))
-    F = np.zeros((sh.Phi.shape[0], K))
-    active = np.zeros((K, sh.Phi.shape[0]), dtype=np.bool_)
+    F = np.zeros((sh.PhiT.shape[1], K))
+    active = np.zeros((K, sh.PhiT.shape[1]), dtype=np.bool_)
     g = np.zeros((K, nb))
     Bc, Bcd = group[0].modal.coef[3], group[0].modal.coef[7]
     for k, case in enumerate(group):
