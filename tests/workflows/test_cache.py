@@ -41,6 +41,53 @@ def test_hit_damaged_and_foreign_entries(tmp_path):
     assert builds == ["ka", "kb", "ka", "kb", "kb"]
 
 
+def _counting_sha(monkeypatch):
+    import liftoff.workflows.cache as cache_mod
+
+    calls = []
+    real = cache_mod.file_sha256
+    monkeypatch.setattr(cache_mod, "file_sha256", lambda f: calls.append(f) or real(f))
+    return calls
+
+
+def test_a_stamped_entry_is_not_read_again_and_any_write_is_caught(tmp_path, monkeypatch):
+    """A hit on an entry whose files keep the stat stamp of their last checksum reads none of
+    them (the margin RACY_NS set to 0 here: the next test checks it); a file rewritten with
+    the same size and its modification time set back has a new change time (no user call sets
+    it), so it is checksummed again and caught."""
+    import liftoff.workflows.cache as cache_mod
+
+    monkeypatch.setattr(cache_mod, "RACY_NS", 0)
+    calls = _counting_sha(monkeypatch)
+    cache, builds = StageCache(tmp_path), []
+    a = np.arange(5.0)
+    _get(cache, "ka", a, builds)
+    time.sleep(0.05)
+    calls.clear()
+    assert np.array_equal(_get(cache, "ka", a, builds), a) and builds == ["ka"] and calls == []   # a hit, no read
+    entry = tmp_path / "system" / "ka.npz"
+    st = entry.stat()
+    raw = bytearray(entry.read_bytes())
+    raw[len(raw) // 2] ^= 0xFF
+    entry.write_bytes(bytes(raw))
+    os.utime(entry, ns=(st.st_atime_ns, st.st_mtime_ns))    # same size, same modification time
+    assert entry.stat().st_size == st.st_size and entry.stat().st_mtime_ns == st.st_mtime_ns
+    with pytest.warns(UserWarning, match="does not match its checksum"):
+        assert np.array_equal(_get(cache, "ka", a, builds), a)
+    assert builds == ["ka", "ka"] and calls
+
+
+def test_an_entry_changed_near_its_stamp_is_checksummed(tmp_path, monkeypatch):
+    """Within RACY_NS of the stamp (here: right after the build) a file's times cannot vouch for
+    it (the kernel's file clock is coarse): a hit checksums every file."""
+    calls = _counting_sha(monkeypatch)
+    cache, builds = StageCache(tmp_path), []
+    _get(cache, "ka", np.arange(5.0), builds)
+    calls.clear()
+    _get(cache, "ka", np.arange(5.0), builds)
+    assert builds == ["ka"] and [f.name for f in calls] == ["ka.npz"]
+
+
 def test_one_build_per_key_under_concurrency(tmp_path):
     builds = []
     threads = [threading.Thread(target=_get, args=(StageCache(tmp_path), "k", np.ones(3), builds)) for _ in range(4)]
