@@ -10,6 +10,17 @@ u = [[Phi, Psi], [0, I]] [q; x_b] the reduced matrices are eq. 13:
 
 C_M = Phi^T (M_ii Psi + M_ib), M_B = T_c^T M T_c, K_B = K_bb + K_bi Psi (T_c the
 constraint modes on all DOFs). Units SI: omega rad/s, M kg (kg m, kg m^2), K N/m ...
+
+Residual vectors (``residual_vectors=True``, Nastran's RESVEC for a superelement; the
+"modal truncation augmentation" of Dickens, Nakagawa & Wittbrodt, Comput. Struct. 62,
+1997): the interior's static response to the inertia loads of unit boundary accelerations,
+X = K_ii^-1 (M_ii Psi + M_ib), from the same factor, made M_ii-orthogonal to the kept
+modes and diagonalised on the subspace that is left (Rayleigh-Ritz), are appended to
+them as modes of their own. Since K_ii Phi = M_ii Phi Lambda, Phi^T K_ii X = Lambda
+Phi^T M_ii X = 0 as well, so eq. 13 keeps its form: the residual modes are more
+fixed-interface modes, above the cut. What the cut leaves out then answers boundary
+motion (and any load in the span of M T_c: gravity, a rigid body's inertia) statically
+and exactly instead of not at all.
 """
 from __future__ import annotations
 
@@ -110,6 +121,7 @@ class CBModel:
     timings: dict = field(default_factory=dict)
     source_units: str = "SI"
     recovery: tuple[CBRecovery, ...] = ()
+    n_residual: int = 0        # the last n_residual modal coordinates are residual vectors (module docstring)
 
     def recovery_item(self, name: str) -> CBRecovery:
         for item in self.recovery:
@@ -127,12 +139,18 @@ class CBModel:
         below ``f_max`` Hz (None: no limit): rows and columns of the dropped modal
         coordinates removed from M, K, the label transform, the mode shapes and the
         recovery items (eq. 13 is block-diagonal in K, so this is the CB model a smaller
-        selection would have given)."""
-        keep = np.arange(self.n_modes)
+        selection would have given). A model with residual vectors keeps every mode (they
+        are orthogonal to the modes it was reduced with, not to a subset)."""
+        keep = np.arange(self.n_modes - self.n_residual)
         if f_max is not None:
             keep = keep[self.fixed_freq_hz[keep] <= f_max * (1 + 1e-12)]
         if n_modes is not None:
             keep = keep[:n_modes]
+        if self.n_residual and keep.size < self.n_modes - self.n_residual:
+            raise InputError(f"CB model {self.name!r}: its {self.n_residual} residual vectors are orthogonal to all "
+                             f"{self.n_modes - self.n_residual} of its fixed-interface modes; reduce it again with "
+                             "the cut you want instead of selecting fewer modes")
+        keep = np.concatenate([keep, np.arange(self.n_modes - self.n_residual, self.n_modes)])
         if keep.size == self.n_modes:
             return self
         cols = np.concatenate([keep, self.n_modes + np.arange(self.n_boundary)])
@@ -221,7 +239,10 @@ class CBSolver(Protocol):
     ``dof_name(dof)`` a DOF (its label if it has one). A band (``n_modes`` None) holding more than
     ``band_limit`` modes is an InputError; so is a singular K_ii (the component floats
     once its boundary is fixed). :func:`scipy_solver` is the default; ``liftoff.fem``
-    provides the PETSc/SLEPc one (``fem.petsc_cb.petsc_solver``)."""
+    provides the PETSc/SLEPc one (``fem.petsc_cb.petsc_solver``). Called with
+    ``inertia_residuals=True`` it returns a fifth item, X = K_ii^-1 (M_ii Psi + M_ib)
+    (n_i x n_b, the same factor), for the residual vectors; a solver that does not take the
+    keyword cannot give them."""
 
     def __call__(self, K: sp.csr_matrix, M: sp.csr_matrix, interior: np.ndarray, boundary: np.ndarray, *,
                  n_modes: int | None, f_max: float | None, band_limit: int, who: str,
@@ -238,7 +259,7 @@ class ScipySolver:
     ordering: str = ORDERING
 
     def __call__(self, K, M, interior, boundary, *, n_modes, f_max, band_limit, who, dof_name=str,
-                 added_mass=None):
+                 added_mass=None, inertia_residuals: bool = False):
         timings = {}
         t0 = time.perf_counter()
         K, M = K.tocsc(), M.tocsc()
@@ -256,7 +277,14 @@ class ScipySolver:
             Mii = added_mass.operator(Mii, interior)
         lam, phi = fixed_interface_eig(Kii, Mii, lu, n_modes, f_max, who, band_limit)
         timings["eigensolve_s"] = time.perf_counter() - t0
-        return lam, phi, psi, timings
+        if not inertia_residuals:
+            return lam, phi, psi, timings
+        if added_mass is not None:
+            raise InputError(f"{who}: residual vectors of a component with a hydroelastic liquid are not implemented")
+        t0 = time.perf_counter()
+        X = lu.solve(np.asarray(Mii @ psi) + np.asarray(Mi[:, boundary].todense()))
+        timings["residual_solve_s"] = time.perf_counter() - t0
+        return lam, phi, psi, timings, X
 
 
 def scipy_solver(ordering: str = ORDERING) -> ScipySolver:
@@ -266,12 +294,15 @@ def scipy_solver(ordering: str = ORDERING) -> ScipySolver:
 
 # ------------------------------------------------------------------------ reduction
 def craig_bampton(component: Component, boundary_labels, n_modes: int | None = None,
-                  f_max: float | None = None, solver: CBSolver | None = None) -> CBModel:
+                  f_max: float | None = None, solver: CBSolver | None = None,
+                  residual_vectors: bool = False) -> CBModel:
     """Craig-Bampton model of ``component`` with the given boundary DOF labels, keeping
     fixed-interface modes by count (``n_modes``), by band (below ``f_max`` Hz), or both
     (the first n_modes below f_max). n_modes=0 gives a Guyan (static) reduction.
     ``solver``: the factorisation + eigensolver (:class:`CBSolver`); default
-    :func:`scipy_solver`, ``liftoff.fem.petsc_solver()`` for PETSc/SLEPc under MPI."""
+    :func:`scipy_solver`, ``liftoff.fem.petsc_solver()`` for PETSc/SLEPc under MPI.
+    ``residual_vectors``: the kept modes augmented with the static response to the boundary
+    accelerations' inertia loads (module docstring; :func:`residual_modes`)."""
     who = f"component {component.name!r}"
     boundary_labels = _check_request(who, boundary_labels, n_modes, f_max)
     b = component.dofs_of(boundary_labels)
@@ -290,12 +321,30 @@ def craig_bampton(component: Component, boundary_labels, n_modes: int | None = N
                                 "available: keep fewer (n_modes, f_max) or mesh coarser")
     solver = scipy_solver() if solver is None else solver
     liquid = component.liquid              # hydroelastic liquid (reduction.liquid.LiquidMass) or None
-    lam, phi, psi, timings = solver(component.K, component.M, i, b, n_modes=n_modes, f_max=f_max,
-                                    band_limit=BAND_MODE_LIMIT, who=who, dof_name=lambda d: _dof_name(component, d),
-                                    **({} if liquid is None else {"added_mass": liquid}))
+    if residual_vectors and (liquid is not None or component.slosh is not None):
+        raise InputError(f"{who}: residual vectors of a component with a hydroelastic liquid or slosh pendulums are "
+                         "not implemented (its mass is not M alone); reduce it without them")
+    extra = {} if liquid is None else {"added_mass": liquid}
+    if residual_vectors:
+        extra["inertia_residuals"] = True
+    try:
+        got = solver(component.K, component.M, i, b, n_modes=n_modes, f_max=f_max, band_limit=BAND_MODE_LIMIT,
+                     who=who, dof_name=lambda d: _dof_name(component, d), **extra)
+    except TypeError as exc:
+        if residual_vectors and "inertia_residuals" in str(exc):
+            raise InputError(f"{who}: CB solver {type(solver).__name__} does not give residual vectors") from None
+        raise
+    lam, phi, psi, timings = got[:4]
     timings = dict(timings)
     lam, phi = _select(np.asarray(lam, float), np.asarray(phi, float), n_modes, f_max)
     psi = np.asarray(psi, float)
+    n_res = 0
+    if residual_vectors:
+        t0 = time.perf_counter()
+        Kii, Mii = component.K[i][:, i], component.M[i][:, i]
+        lam_r, res = residual_modes(Kii, Mii, phi, np.asarray(got[4], float), who)
+        lam, phi, n_res = np.concatenate([lam, lam_r]), np.hstack([phi, res]), lam_r.size
+        timings["residual_modes_s"] = time.perf_counter() - t0
     if phi.shape != (i.size, lam.size) or psi.shape != (i.size, b.size):
         raise InputError(f"{who}: CB solver {type(solver).__name__} returned modes {phi.shape} and "
                          f"constraint modes {psi.shape}, expected ({i.size}, {lam.size}) and ({i.size}, {b.size})")
@@ -328,9 +377,47 @@ def craig_bampton(component: Component, boundary_labels, n_modes: int | None = N
                    points=component.points, point_coords=component.point_coords.copy(),
                    dof_labels=component.dof_labels,
                    label_transform=np.hstack([fim[component.label_dofs], cm[component.label_dofs]]),
-                   n_dof=n, constraint_modes=cm, fixed_interface_modes=fim, timings=timings,
+                   n_dof=n, constraint_modes=cm, fixed_interface_modes=fim, timings=timings, n_residual=n_res,
                    recovery=(() if liquid is None else liquid.cb_recovery(fim, cm, rigid=cm @ _axial(boundary_labels)))
                    + (() if component.slosh is None else component.slosh.cb_recovery(fim, cm)))
+
+
+#: residual directions whose squared M_ii-norm after the projection on the kept modes is below
+#: this fraction of their own before it (each column scaled to 1 first: boundary translations
+#: and rotations differ in units) are dropped: a part 1e-5 of a vector's size is at the kept
+#: modes' accuracy (eigen-residual 1e-10, times the conditioning), round-off rather than a shape
+#: (a component whose every mode is kept has none left)
+RESIDUAL_RTOL = 1e-10
+
+
+def residual_modes(Kii, Mii, phi: np.ndarray, X: np.ndarray, who: str = "component") -> tuple[np.ndarray, np.ndarray]:
+    """(omega^2, modes) of the residual vectors ``X`` (n_i x k: K_ii^-1 of the inertia loads,
+    module docstring) against the kept, M_ii-normalised modes ``phi``: X made M_ii-orthogonal
+    to them (Gram-Schmidt twice), its independent directions M_ii-orthonormalised (those
+    below RESIDUAL_RTOL dropped) and diagonalised, K_ii Z = M_ii Z omega^2 on their span
+    (Rayleigh-Ritz), so Z^T M_ii Z = I, Z^T K_ii Z = diag(omega^2), and both zero against phi."""
+    if X.size == 0:
+        return np.zeros(0), np.zeros((X.shape[0], 0))
+    norms = np.sqrt(np.einsum("ij,ij->j", X, Mii @ X))
+    X = X[:, norms > 0] / norms[norms > 0]
+    for _ in range(2):
+        X = X - phi @ (phi.T @ (Mii @ X))
+    MX = Mii @ X
+    Mr = X.T @ MX
+    s, U = sla.eigh(0.5 * (Mr + Mr.T))
+    keep = s > RESIDUAL_RTOL
+    if not keep.any():
+        return np.zeros(0), np.zeros((X.shape[0], 0))
+    Y = X @ (U[:, keep] / np.sqrt(s[keep]))
+    Kr = Y.T @ (Kii @ Y)
+    lam, V = sla.eigh(0.5 * (Kr + Kr.T))
+    Z = Y @ V
+    norms = np.sqrt(np.einsum("ij,ij->j", Z, Mii @ Z))
+    Z = Z / norms
+    if lam[0] <= 0:
+        raise InputError(f"{who}: a residual vector has a negative stiffness ({lam[0]:.3e}); K_ii is not "
+                         "positive definite")
+    return lam, Z
 
 
 def _axial(boundary_labels) -> np.ndarray:
@@ -458,6 +545,8 @@ def save_cb(cb: CBModel, path, recovery: bool = True) -> Path:
             "points": np.array(cb.points, dtype="U"), "point_coords": cb.point_coords,
             "dof_labels": np.array(cb.dof_labels, dtype="U"), "label_transform": cb.label_transform,
             "n_dof": np.array(cb.n_dof)}
+    if cb.n_residual:
+        data["n_residual"] = np.array(cb.n_residual)
     if recovery and cb.constraint_modes is not None and cb.fixed_interface_modes is not None:
         data["constraint_modes"] = cb.constraint_modes
         data["fixed_interface_modes"] = cb.fixed_interface_modes
@@ -485,7 +574,8 @@ def load_cb(path, mmap: bool = False) -> CBModel:
                      point_coords=z["point_coords"], dof_labels=tuple(z["dof_labels"]),
                      label_transform=z["label_transform"], n_dof=int(z["n_dof"]),
                      constraint_modes=z.get("constraint_modes"), fixed_interface_modes=z.get("fixed_interface_modes"),
-                     source_units=str(rec.attrs.get("source_units", "SI")), recovery=items)
+                     source_units=str(rec.attrs.get("source_units", "SI")), recovery=items,
+                     n_residual=int(z.get("n_residual", 0)))
     except InputError as exc:
         raise InputError(f"CB model file {str(path)!r}: {exc}") from None
     except Exception as exc:
@@ -506,6 +596,8 @@ def validate_cb(cb: CBModel, where: str = "") -> None:
             raise InputError(f"{who}: boundary label {lab!r} names a point without coordinates")
     if cb.point_coords.shape != (len(cb.points), 3):
         raise InputError(f"{who}: point_coords has shape {cb.point_coords.shape}, expected ({len(cb.points)}, 3)")
+    if not 0 <= cb.n_residual <= nq:
+        raise InputError(f"{who}: n_residual = {cb.n_residual} must lie in [0, {nq}] (the modal coordinates)")
     if cb.label_transform.shape != (len(cb.dof_labels), nq + nb):
         raise InputError(f"{who}: label_transform has shape {cb.label_transform.shape}")
     for nm in ("M", "K", "fixed_omega", "point_coords", "label_transform"):

@@ -68,7 +68,8 @@ def main(argv=None) -> None:
     solver = cb_solver(model)[0]
     for name, c in comps.items():
         cm = model.components[name]
-        cbs[name] = craig_bampton(c, points_labels(boundary_points(c)), cm.n_modes, cm.f_max, solver=solver)
+        cbs[name] = craig_bampton(c, points_labels(boundary_points(c)), cm.n_modes, cm.f_max, solver=solver,
+                                  residual_vectors=cm.residual_vectors)
         print(f"{name:10s} CB: {cbs[name].n_modes} fixed-interface modes up to {cbs[name].fixed_freq_hz[-1]:.1f} Hz")
 
     # 4. Vehicle: overlay the components on shared points, free-free system modes (eq. 4);

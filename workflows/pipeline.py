@@ -242,6 +242,8 @@ def _cb_key(model: ModelConfig, name: str, comp: Component, comp_key: str) -> tu
     solver_code, solver_name = _cb_solver_id(model)
     params = {"boundary": points_labels(boundary_points(comp)), "n_modes": sel.n_modes, "f_max": sel.f_max,
               "solver": solver_name}
+    if sel.residual_vectors:            # (only when asked: the keys of models without them unchanged)
+        params["residual_vectors"] = True
     return stage_key("cb", params, ("liftoff.reduction", "liftoff.core", *solver_code), (comp_key,)), params
 
 
@@ -259,10 +261,11 @@ def cb_stage(model: ModelConfig, name: str, comp: Component, comp_key: str, cach
     if model.components[name].mirror is not None:
         return _mirror_cb_stage(model, name, comp_key, cache, source)
     key, params = _cb_key(model, name, comp, comp_key)
+    sel = model.components[name]
     solver = cb_solver(model)[0]
     cb = cache.get_or_build("cb", key, ".npz",
                             lambda: craig_bampton(comp, params["boundary"], params["n_modes"], params["f_max"],
-                                                  solver=solver),
+                                                  solver=solver, residual_vectors=sel.residual_vectors),
                             lambda out, p: out.save(p, recovery=True), _load_cached_cb, label=name)
     return cb, key
 

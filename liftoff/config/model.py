@@ -67,7 +67,7 @@ CONVECTIVE = ("wall", "free", "slosh")    # [model] convective: a hydroelastic l
 #: to 10 g), beyond which the rigid-tank slosh frequencies sqrt(g_eff) mean nothing here
 SLOSH_GRAVITY_RANGE = (0.1 * G0, 10.0 * G0)
 _VEHICLE = {"mesh_size", "params"}
-_COMP = {"type", "mesh_size", "n_modes", "f_max", "params", "nastran", "mirror"}
+_COMP = {"type", "mesh_size", "n_modes", "f_max", "residual_vectors", "params", "nastran", "mirror"}
 _MIRROR = {"of", "normal"}
 _JOINT = {"name", "components", "release"}
 _NASTRAN = {"file", "units", "grids", "asm", "pch", "op4", "bulk", "stiffness", "mass", "se", "recovery"}
@@ -114,7 +114,8 @@ class ComponentModel:
     "stick"), its builder's parameters (the type's dataclass; None for a Nastran model),
     mesh size (m; stick: beam element length; None: the builder's default) and the
     fixed-interface modes kept by Craig-Bampton (the first ``n_modes``, at most ``f_max``
-    Hz; None: no limit)."""
+    Hz; None: no limit), with ``residual_vectors`` the static response to the boundary
+    accelerations' inertia loads appended (reduction.craig_bampton, Nastran's RESVEC)."""
 
     name: str
     builder: Any               # the type's parameter dataclass (fe); StickParams (stick); None (nastran)
@@ -124,6 +125,7 @@ class ComponentModel:
     nastran: NastranSource | None = None
     type: str = ""
     mirror: Mirror | None = None       # the source's model reflected, not built (then builder is None)
+    residual_vectors: bool = False
 
 
 @dataclass(frozen=True)
@@ -249,6 +251,11 @@ def _sizes(where: Where, spec: dict, keys: set[str], base: Path = Path(".")) -> 
         return out
     if "type" in c:
         out["type"] = string(where / "type", c["type"])
+    if "residual_vectors" in c:
+        out["residual_vectors"] = boolean(where / "residual_vectors", c["residual_vectors"])
+        if out["residual_vectors"] and ("nastran" in c or out.get("type") == component_types.NASTRAN):
+            raise (where / "residual_vectors").error("a Nastran component's modes are Nastran's: give its residual "
+                                                     "vectors there (RESVEC), not here")
     if "nastran" in c:
         if out.setdefault("type", component_types.NASTRAN) != component_types.NASTRAN:
             raise (where / "nastran").error(f"a Nastran model is type = {component_types.NASTRAN!r}, not "
@@ -482,7 +489,8 @@ def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig
         builders = _stick_builders(where, layout, sel, m.get("stick", {}))
     components = {name: ComponentModel(name, builders[name], sizes[name], sel[name].get("n_modes"),
                                        sel[name].get("f_max", None if "n_modes" in sel[name] else DEFAULT_F_MAX),
-                                       sel[name].get("nastran"), sel[name].get("type", "stick"))
+                                       sel[name].get("nastran"), sel[name].get("type", "stick"),
+                                       residual_vectors=sel[name].get("residual_vectors", False))
                   for name in names + (PAD,) if "mirror" not in sel[name]}
     materials = _materials(where / "materials", m.get("materials", {}), source)
     components = _mirrors(where, sel, names, components, materials)

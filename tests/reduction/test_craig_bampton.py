@@ -2,6 +2,7 @@
 import numpy as np
 import pytest
 import scipy.linalg as sla
+from liftoff.core.errors import InputError
 from liftoff.reduction import CBModel, craig_bampton, load_cb
 from liftoff.reduction.craig_bampton import DENSE_LIMIT, scipy_solver
 from liftoff.reduction.models import chain_component, hex_block, six_labels, spider_component
@@ -188,3 +189,88 @@ def test_band_holding_too_many_modes_is_a_clear_error(monkeypatch):
     assert "\n" not in str(err.value)
     # the same band with an explicit count is fine
     assert craig_bampton(comp, six_labels("root"), n_modes=40, f_max=1e6).n_modes == 40
+
+
+# ------------------------------------------------------------------ residual vectors (RESVEC)
+def _clamped_static(comp, bl, cb, f):
+    """Interior displacements under the load ``f`` with the boundary held: the full model's
+    (dense solve) and the CB model's (its modal coordinates alone, q = Lambda^-1 Phi^T f)."""
+    K = comp.K.toarray()
+    b = comp.dofs_of(bl)
+    i = np.setdiff1d(np.arange(comp.n_dof), b)
+    full = np.linalg.solve(K[np.ix_(i, i)], f[i])
+    q = cb.generalized_load(f)[: cb.n_modes] / cb.fixed_omega ** 2
+    return full, (cb.fixed_interface_modes @ q)[i], interior_cond(comp, bl)
+
+
+def test_residual_vectors_make_the_static_inertia_response_exact(frame):
+    """Independent reference: the full model's static solve. With the boundary held and a
+    uniform 1 g body load along each axis (f = M r, r a rigid translation: f_i = (M_ii Psi +
+    M_ib) r_b, since the constraint modes carry rigid motion), three fixed-interface modes miss
+    what the cut leaves out; with the residual vectors of the same cut (K_ii^-1 of those inertia
+    loads) the CB model's response is the full model's to the solve's round-off."""
+    comp, bl, _ = frame
+    plain = craig_bampton(comp, bl, n_modes=3)
+    rv = craig_bampton(comp, bl, n_modes=3, residual_vectors=True)
+    assert rv.n_residual > 0 and rv.n_modes == 3 + rv.n_residual and plain.n_residual == 0
+    assert np.all(rv.fixed_omega[3:] >= rv.fixed_omega[2])          # above the kept modes
+    # eq. 13's form kept: the modal block of M is I, of K diagonal, exactly as built (M_ii-
+    # orthonormal, K_ii-diagonal Ritz vectors, orthogonal to the kept modes)
+    nq = rv.n_modes
+    Mq = rv.fixed_interface_modes.T @ comp.M @ rv.fixed_interface_modes
+    Kq = rv.fixed_interface_modes.T @ comp.K @ rv.fixed_interface_modes
+    assert np.abs(Mq - np.eye(nq)).max() < 1e-9
+    assert np.abs(Kq - np.diag(rv.fixed_omega ** 2)).max() < 1e-9 * rv.fixed_omega.max() ** 2
+    for axis in range(3):
+        r = np.zeros(comp.n_dof)
+        r[axis::6] = 1.0                                            # chain_component: 6 DOFs a node
+        f = comp.M @ r * 9.81
+        full, with_rv, cond = _clamped_static(comp, bl, rv, f)
+        _, without, _ = _clamped_static(comp, bl, plain, f)
+        err_rv = np.abs(with_rv - full).max() / np.abs(full).max()
+        err_plain = np.abs(without - full).max() / np.abs(full).max()
+        print(f"axis {axis}: 1 g static, 3 modes {err_plain:.2e}, 3 modes + {rv.n_residual} residual {err_rv:.2e}")
+        assert err_plain > 1e-3                                      # the cut matters here ...
+        assert err_rv < solve_rtol(cond, comp.n_dof)                 # ... and residual vectors restore it
+
+
+def test_residual_vectors_converge_the_free_free_modes_faster(frame):
+    """Independent reference: the full model's free-free frequencies (dense eigh). Residual
+    vectors only add to the Ritz space, so frequencies stay upper bounds (Rayleigh-Ritz) and
+    fall; at each cut the worst error below the cut frequency drops by more than 10x (measured:
+    17 % -> 0.35 % at the cut, 3.4 % -> 0.01 % at 1.5x)."""
+    comp, bl, f_full = frame
+    f_c = f_full[6 + 8]
+    below = (f_full > 1e-3 * f_c) & (f_full <= f_c * (1 + 1e-9))
+    for ratio in (1.0, 1.5):
+        errs = []
+        for rv in (False, True):
+            cb = craig_bampton(comp, bl, f_max=ratio * f_c, residual_vectors=rv)
+            f_cb = freefree_hz(cb.K, cb.M)
+            err = f_cb[below[: f_cb.size]] / f_full[below] - 1
+            assert err.min() > -1e-9                  # upper bounds, to round-off
+            errs.append(err.max())
+        print(f"cut {ratio} x f_c: worst below f_c {errs[0]:.2e} -> {errs[1]:.2e} with residual vectors")
+        assert errs[1] < errs[0] / 10
+
+
+def test_residual_vectors_saved_kept_and_refused_where_they_do_not_apply(tmp_path, frame):
+    comp, bl, _ = frame
+    cb = craig_bampton(comp, bl, n_modes=4, residual_vectors=True)
+    back = load_cb(cb.save(tmp_path / "rv.npz"))
+    assert back.n_residual == cb.n_residual and np.array_equal(back.fixed_omega, cb.fixed_omega)
+    assert cb.select_modes(f_max=1e9) is cb
+    with pytest.raises(InputError, match="residual vectors are orthogonal"):
+        cb.select_modes(n_modes=2)
+    # every mode kept: nothing is left for the residual vectors (round-off, dropped)
+    full = craig_bampton(comp, bl, n_modes=comp.n_dof - len(bl), residual_vectors=True)
+    assert full.n_residual == 0
+
+    class OldSolver:                                  # a solver written before residual vectors
+        def __call__(self, K, M, interior, boundary, *, n_modes, f_max, band_limit, who, dof_name=str):
+            return scipy_solver()(K, M, interior, boundary, n_modes=n_modes, f_max=f_max, band_limit=band_limit,
+                                  who=who)
+
+    with pytest.raises(InputError, match="does not give residual vectors"):
+        craig_bampton(comp, bl, n_modes=4, solver=OldSolver(), residual_vectors=True)
+    assert craig_bampton(comp, bl, n_modes=4, solver=OldSolver()).n_modes == 4
