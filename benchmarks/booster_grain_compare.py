@@ -30,9 +30,9 @@ JSON = ROOT / "docs" / "figures" / "booster_grain.json"
 BOOSTERS = ("srb_left",)       # srb_right mirrors srb_left (the default scenario): it follows
 
 
-def variant_figures(grain: bool, f_max: float | None) -> dict:
-    """Figures of the default run with grain boosters (``grain``) cut at ``f_max`` Hz, or the
-    default itself."""
+def variant_figures(grain: bool, f_max: float | None, residual: bool = False) -> dict:
+    """Figures of the default run with grain boosters (``grain``) cut at ``f_max`` Hz (with
+    ``residual``: and their residual vectors), or the default itself."""
     fig = runpy.run_path(str(ROOT / "benchmarks" / "default_figures.py"), run_name="default_figures")
 
     def edit(d):
@@ -40,6 +40,8 @@ def variant_figures(grain: bool, f_max: float | None) -> dict:
             if grain:
                 d["model"]["component"][b]["params"].update(walls="shell", grain=True)
                 d["model"]["component"][b]["f_max"] = f_max
+                if residual:
+                    d["model"]["component"][b]["residual_vectors"] = True
                 # the default's [model.materials] srb_*_case is the thickened solid's equivalent
                 # (rho 1024 kg/m^3, E 17.4 GPa): the shell case is the steel wall itself
                 d["model"].get("materials", {}).pop(f"{b}_case", None)
@@ -47,13 +49,22 @@ def variant_figures(grain: bool, f_max: float | None) -> dict:
 
     out, wall_s = fig["timed_variant"](edit, None)
     cut = out.results["nominal"][1].case.model.components[BOOSTERS[0]].f_max    # the run's own (default: 120 Hz)
-    return {**fig["variant_summary"](out, wall_s, BOOSTERS[0]), "booster_f_max_hz": cut}
+    return {**fig["variant_summary"](out, wall_s, BOOSTERS[0]), "booster_f_max_hz": cut,
+            "booster_residual_vectors": stack_residual(out)}
+
+
+def stack_residual(out) -> int:
+    """The booster's residual vectors in the run's CB model (0 without them)."""
+    stack = next(iter(out.stacks.values()))
+    return int(stack.cbs[BOOSTERS[0]].n_residual)
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--f-max", type=float, nargs="*", default=[15.0, 25.0])
     ap.add_argument("--no-solid", action="store_true", help="keep the file's solid-booster figures")
+    ap.add_argument("--residual", action="store_true",
+                    help="the grain boosters with residual vectors (their columns under 'grain_rv')")
     ap.add_argument("--json", type=Path, default=JSON)
     args = ap.parse_args(argv)
     import pyvista  # noqa: F401  (before dolfinx, FENICSX-NOTES.md)
@@ -62,10 +73,14 @@ def main(argv=None) -> int:
     if not args.no_solid:
         print("booster_grain_compare: the default (thickened solid boosters) ...", flush=True)
         out["solid"] = variant_figures(False, None)
+    group = "grain_rv" if args.residual else "grain"
+    out.setdefault(group, {})
     for f in args.f_max:
-        print(f"booster_grain_compare: case + grain boosters, f_max = {f:g} Hz ...", flush=True)
-        out["grain"][f"{f:g}"] = variant_figures(True, f)
-    out["grain"] = dict(sorted(out["grain"].items(), key=lambda kv: float(kv[0])))
+        print(f"booster_grain_compare: case + grain boosters, f_max = {f:g} Hz"
+              f"{' with residual vectors' if args.residual else ''} ...", flush=True)
+        out[group][f"{f:g}"] = variant_figures(True, f, args.residual)
+        args.json.write_text(json.dumps(out, indent=1, default=float) + "\n")      # each column as it comes
+    out[group] = dict(sorted(out[group].items(), key=lambda kv: float(kv[0])))
     args.json.write_text(json.dumps(out, indent=1, default=float) + "\n")
     print(f"wrote {args.json}")
     return 0
