@@ -19,7 +19,7 @@ beside the run (workflows/beside.py), as one job per stage. A ``"model"`` output
 with ``cache_on`` (a function of ``(stack, cp)`` giving what, besides the stack model, its
 files depend on) keeps its files in the stage cache, keyed by that, the stack's key and the
 source of its module and ``code``: a run on a cached model copies them instead of writing
-them again (the mode shapes' VTU and the recovery OP4 take seconds). From Python, before
+them again (the mode shapes' VTU and the recovery OP4 take seconds, the modal tables half of one). From Python, before
 ``liftoff.workflows.run.run``::
 
     from liftoff.workflows.outputs import register_output
@@ -192,7 +192,8 @@ def _register_builtin() -> None:
     from . import fields, report
 
     register_output("modal_tables", "model", "modes_vehicle.csv/.h5, modal_mass_vehicle_held.csv, "
-                    "modal_mass_pad.csv")(report.write_modal_tables)
+                    "modal_mass_pad.csv", cache_on=report.modal_tables_inputs,
+                    code=("liftoff.reduction", "liftoff.analysis", "liftoff.core"))(report.write_modal_tables)
     register_output("recovery_op4", "model", "recovery_vehicle.op4 and its index", beside=True,
                     cache_on=report.recovery_op4_inputs, code=("liftoff.reduction",))(report.write_recovery_op4)
     register_output("cb_checks", "model", "cb_checks.txt/.json")(report.write_cb_checks)

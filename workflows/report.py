@@ -201,6 +201,18 @@ def write_cb_checks(stack, cp, out: Path) -> list[Path]:
                                                           indent=1, default=float) + "\n")]
 
 
+def modal_tables_inputs(stack, cp) -> dict:
+    """What :func:`write_modal_tables`'s files depend on besides the stack's key (their cache
+    key, workflows/outputs.py): the vehicle's contact DOFs (the held condition) and a SHA-256 of
+    both bodies' system modes (a system stage rebuilt under the same key may flip a sign)."""
+    from .cache import content_sha256
+
+    pm = None if stack.pad.is_ground else stack.pad_modes
+    return {"contact": [lab for c in cp.problem.contacts for lab in c.labels_a],
+            "modes": content_sha256((stack.vehicle_modes.omega, stack.vehicle_modes.phi)
+                                    + (() if pm is None else (pm.omega, pm.phi)))}
+
+
 def write_modal_tables(stack, cp, out: Path) -> list[Path]:
     """The modal deliverables of the stack (reduction/modal_mass.py): ``modes_vehicle.csv``
     (the vehicle's free-free system modes the transient uses: rigid, elastic, residual

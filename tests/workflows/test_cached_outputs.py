@@ -241,3 +241,30 @@ def test_the_keys_see_what_the_files_depend_on():
     m0 = mode_shapes_inputs(stack, None)
     phi[:, 2] *= -1.0
     assert mode_shapes_inputs(stack, None) != m0
+
+
+def test_the_modal_tables_key_sees_the_contacts_and_both_bodies_modes():
+    """The modal tables (modes_vehicle.csv/.h5, the held vehicle's and the pad's effective mass)
+    are keyed, besides the stack, by the vehicle's contact DOFs (the held condition) and both
+    bodies' system modes; a rigid ground has none of its own."""
+    import numpy as np
+
+    from liftoff.workflows.report import modal_tables_inputs
+
+    rng = np.random.default_rng(2)
+    vm = SimpleNamespace(omega=np.arange(4.0), phi=rng.standard_normal((8, 4)))
+    pm = SimpleNamespace(omega=np.arange(1.0, 3.0), phi=rng.standard_normal((5, 2)))
+    contacts = [SimpleNamespace(labels_a=["hd_1:Tx", "hd_1:Tz"])]
+    stack = SimpleNamespace(vehicle_modes=vm, pad_modes=pm, pad=SimpleNamespace(is_ground=False))
+    cp = SimpleNamespace(problem=SimpleNamespace(contacts=contacts))
+    k0 = modal_tables_inputs(stack, cp)
+    assert modal_tables_inputs(stack, cp) == k0
+    pm.phi[3, 1] *= -1.0                                       # the pad's modes
+    k1 = modal_tables_inputs(stack, cp)
+    vm.phi[0, 2] *= -1.0                                       # the vehicle's
+    k2 = modal_tables_inputs(stack, cp)
+    contacts[0].labels_a.append("hd_1:Ty")                     # another held DOF
+    k3 = modal_tables_inputs(stack, cp)
+    assert len({repr(k) for k in (k0, k1, k2, k3)}) == 4
+    ground = SimpleNamespace(vehicle_modes=vm, pad_modes=None, pad=SimpleNamespace(is_ground=True))
+    assert modal_tables_inputs(ground, cp) != k3

@@ -262,16 +262,18 @@ def test_stick_scenario_end_to_end_and_cache(tmp_path, capsys):
                  "--no-snapshots"]) == 0
     text = capsys.readouterr().out
     assert "(built)" not in text and text.count("(hit)") == 12     # 5 components, 5 CB, 2 system
-    # the model's outputs (recovery OP4, mode shapes) copied from the cache, written once per model
-    assert len(list((cache / "outputs").glob("*.entry.json"))) == 2
-    for f in ("recovery_vehicle.op4", "recovery_vehicle_op4.csv", "modes_vehicle.vtu"):
+    # the model's outputs (recovery OP4, mode shapes, modal tables) copied from the cache, written
+    # once per model
+    assert len(list((cache / "outputs").glob("*.entry.json"))) == 3
+    for f in ("recovery_vehicle.op4", "recovery_vehicle_op4.csv", "modes_vehicle.vtu", "modes_vehicle.csv",
+              "modes_vehicle.h5", "modal_mass_vehicle_held.csv", "modal_mass_pad.csv"):
         assert (tmp_path / "b" / f).read_bytes() == (tmp_path / "a" / f).read_bytes()
     # a model change rebuilds (never a stale model)
     p3 = _scenario(tmp_path, {**STICK, "mesh_size": 7.0}, cases=[{"name": "nominal"}], name="s3.toml")
     assert main(["run", str(p3), "--out", str(tmp_path / "c"), "--cache", str(cache), "--no-progress",
                  "--no-snapshots"]) == 0
     assert capsys.readouterr().out.count("(built)") == 12
-    assert len(list((cache / "outputs").glob("*.entry.json"))) == 4
+    assert len(list((cache / "outputs").glob("*.entry.json"))) == 6
 
 
 def test_cli_bad_scenario_one_line(tmp_path, capsys):
