@@ -2,7 +2,7 @@
 by one (liftoff.transient.solve): issue 28's batched-marching target.
 
     .venv/bin/python benchmarks/bench_batch.py [--modes 3000 300] [--cases 64] [--repeat 3]
-                                               [--json docs/figures/bench_batch.json]
+                                               [--default-cases 8] [--json docs/figures/bench_batch.json]
 
 The problem is benchmarks/bench_transient.py's (8 hold-down points x 3 directions = 24
 penalty contact rows, gravity, a thrust ramp; bolted throughout, as the issue's
@@ -11,6 +11,12 @@ measurement asked), at ``--modes`` vehicle + pad modes; case k's thrust is scale
 2,500 steps), so the set-up (static solves, step choice, the batch's bases) drops out;
 the minimum of ``--repeat`` runs, batched and one-by-one taken in turns; the one-by-one
 time is measured on ``--check`` of the cases and scaled to ``--cases``.
+
+With ``--default-cases N`` (8 unless 0) also the default scenario's first N generated cases,
+the problems `liftoff run --cases` marches (1,384 + 78 modes, 24 contact rows and every output
+row the run recovers), whole solves batched and one by one: where the one-by-one step already
+runs from the core's cache, batching saves little, and that is what `liftoff run --cases`
+chooses by (it solves its cases one by one).
 
 Equality: the largest difference of the contact forces and the vehicle outputs, batched
 against one by one, relative to each history's peak; beside it the one-by-one solve's own
@@ -60,6 +66,38 @@ def cases(n_steps: int, n_veh: int, n_pad: int, K: int, reverse: bool = False):
         for k in range(K)]
 
 
+def default_cases(n: int, cache: Path) -> list:
+    """The problems of the default scenario's first ``n`` generated cases (the model from the
+    stage ``cache``, built there if missing): what `liftoff run --cases` marches."""
+    from liftoff.config import Where, load_scenario
+    from liftoff.workflows.cache import StageCache
+    from liftoff.workflows.loads import build_problem
+    from liftoff.workflows.pipeline import build_stack
+
+    sc = load_scenario(None, n_cases=n)
+    case0 = sc.generated_case(0)
+    stack = build_stack(case0.model, StageCache(cache), progress=False, where=Where(case0.source, "model"))
+    return [dataclasses.replace(build_problem(sc.generated_case(i), stack, progress=False).problem, progress=False)
+            for i in range(n)]
+
+
+def measure_default(n: int, repeat: int, cache: Path) -> dict:
+    """Whole solves (set-up included) of the default's first ``n`` generated cases, batched and
+    one by one, taken in turns, the least of ``repeat`` each; and how far apart their contact
+    forces land (of each history's peak)."""
+    P = default_cases(n, cache)
+    solve_batch(P[:2]), solve(P[0])                      # compile (numba's cache)
+    tb, to, rb, r1 = [], [], None, None
+    for _ in range(repeat):
+        t = _time.perf_counter(); rb = solve_batch(P); tb.append(_time.perf_counter() - t)
+        t = _time.perf_counter(); r1 = [solve(p) for p in P]; to.append(_time.perf_counter() - t)
+    p0 = P[0]
+    return {"cases": n, "group": GROUP, "vehicle_modes": int(p0.body_a.n_modes), "pad_modes": int(p0.body_b.n_modes),
+            "contact_rows": int(sum(len(c.labels_a) for c in p0.contacts)), "steps": int(rb[0].time.size - 1),
+            "batched_s": min(tb) / n, "one_by_one_s": min(to) / n, "batched_all_s": tb, "one_by_one_all_s": to,
+            "contact_force_diff": max(_rel(a.contact_force, b.contact_force) for a, b in zip(rb, r1))}
+
+
 def _rel(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.abs(a - b).max() / max(np.abs(b).max(), 1e-300))
 
@@ -71,6 +109,10 @@ def main(argv=None) -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--check", type=int, default=4, help="cases solved one by one (their time scaled to --cases)")
     ap.add_argument("--json", type=Path, default=None, help="also write the figures here")
+    ap.add_argument("--default-cases", type=int, default=8, metavar="N",
+                    help="also the default scenario's first N generated cases, whole solves (0: not)")
+    ap.add_argument("--cache", type=Path, default=Path(__file__).resolve().parent.parent / "out" / ".liftoff-cache",
+                    help="the stage cache of the default's model (built there if missing)")
     args = ap.parse_args(argv)
     warnings.simplefilter("ignore")                      # the synthetic stack's step warning
     nv, npd, K = args.modes[0], args.modes[1], args.cases
@@ -102,6 +144,13 @@ def main(argv=None) -> None:
           f" (issue 28 asked >= {TARGET:g})")
     print(f"  batched vs one by one, of the peak: contact forces {dF:.1e}, vehicle outputs {dY:.1e}; one by one with "
           f"the modes reordered: {sF:.1e}, {sY:.1e}")
+    dflt = None
+    if args.default_cases:
+        dflt = measure_default(args.default_cases, args.repeat, args.cache)
+        print(f"  the default's first {dflt['cases']} generated cases ({dflt['vehicle_modes']} + {dflt['pad_modes']} "
+              f"modes, {dflt['contact_rows']} contact rows, {dflt['steps']} steps), whole solves: batched "
+              f"{dflt['batched_s']:.3f} s a case, one by one {dflt['one_by_one_s']:.3f} s; speed-up "
+              f"{dflt['one_by_one_s'] / dflt['batched_s']:.2f}; contact forces {dflt['contact_force_diff']:.1e} apart")
     if args.json is not None:
         from liftoff.core.records import write_text
 
@@ -110,7 +159,8 @@ def main(argv=None) -> None:
             "load_average_end": os.getloadavg()[0], "repeat": args.repeat, "vehicle_modes": nv, "pad_modes": npd,
             "contact_rows": 24, "cases": K, "group": GROUP, "batched_us": per_b, "one_by_one_us": per_1,
             "batched_all_us": tb, "one_by_one_all_us": to, "contact_force_diff": dF, "output_diff": dY,
-            "reordered_contact_force_diff": sF, "reordered_output_diff": sY}, indent=1) + "\n")
+            "reordered_contact_force_diff": sF, "reordered_output_diff": sY,
+            **({"default": dflt} if dflt else {})}, indent=1) + "\n")
 
 
 if __name__ == "__main__":
