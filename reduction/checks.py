@@ -41,8 +41,9 @@ def stiffness_scale(cb: CBModel) -> float:
     """Stiffness scale of a CB model: |K_B| or, when K_B is (near) zero as for a
     statically determinate interface, omega_max^2 x the largest boundary mass term."""
     kb = float(np.abs(cb.K_B).sum(axis=1).max())
-    if cb.n_modes:
-        kb = max(kb, float(cb.fixed_omega.max() ** 2 * np.abs(np.diag(cb.M_B)).max()))
+    n_eig = cb.n_modes - cb.n_residual           # the kept eigenmodes (residual vectors lie far above them)
+    if n_eig:
+        kb = max(kb, float(cb.fixed_omega[:n_eig].max() ** 2 * np.abs(np.diag(cb.M_B)).max()))
     return kb
 
 
@@ -81,8 +82,8 @@ def cb_check(cb: CBModel, component: Component | None = None, ref_point=None,
     frequencies are compared."""
     nq = cb.n_modes
     ref = cb.point_coord(cb.boundary_points[0]) if ref_point is None else np.asarray(ref_point, float)
-    s: dict = {"name": cb.name, "n_modes": nq, "n_boundary": cb.n_boundary, "ref_point": list(map(float, ref)),
-               "units": "SI (kg, m, kg m^2, Hz)"}
+    s: dict = {"name": cb.name, "n_modes": nq, "n_residual": cb.n_residual, "n_boundary": cb.n_boundary,
+               "ref_point": list(map(float, ref)), "units": "SI (kg, m, kg m^2, Hz)"}
     s["M_asymmetry"], s["K_asymmetry"] = _rel_asym(cb.M), _rel_asym(cb.K)
     m_eig = sla.eigvalsh(0.5 * (cb.M + cb.M.T))         # PSD is enough: massless DOFs are condensed below
     kb_eig = sla.eigvalsh(0.5 * (cb.K_B + cb.K_B.T))
@@ -139,7 +140,10 @@ def cb_check(cb: CBModel, component: Component | None = None, ref_point=None,
 
 def _report(s: dict) -> str:
     m_def = "PD" if s["M_positive_definite"] else f"NOT PD: {s['M_n_massless']} massless, condensed"
-    out = [f"Craig-Bampton check: {s['name']}  ({s['n_modes']} modes, {s['n_boundary']} boundary DOFs; SI units)",
+    n_res = s.get("n_residual", 0)
+    of_them = f", the last {n_res} residual vectors" if n_res else ""
+    out = [f"Craig-Bampton check: {s['name']}  ({s['n_modes']} modes{of_them}, {s['n_boundary']} boundary DOFs; "
+           "SI units)",
            f"  symmetry      M {s['M_asymmetry']:.1e}   K {s['K_asymmetry']:.1e}  (max |A-A^T| / max |A|)",
            f"  definiteness  M min/max eig {s['M_min_eig_rel']:.2e} ({m_def})"
            f"   K_B min eig / scale {s['K_B_min_eig_rel']:.1e}, {s['K_B_n_zero_eig']} zero"
@@ -161,10 +165,14 @@ def _report(s: dict) -> str:
     out.append("  modal effective mass (% of total, per fixed-interface mode):")
     out.append("    mode   f (Hz)   " + "".join(f"{d:>8s}" for d in COMPONENTS))
     pct = np.array(s["effective_mass_percent"]).reshape(-1, 6)
+    n_eig = pct.shape[0] - n_res
     for j, f in enumerate(s["fixed_interface_freq_hz"]):
-        out.append(f"    {j + 1:4d} {f:9.3f}  " + "".join(f"{v:8.2f}" for v in pct[j]))
-    if pct.size:
-        out.append("    total           " + "".join(f"{v:8.2f}" for v in pct.sum(axis=0)))
+        out.append(f"    {j + 1:4d} {f:9.3f}  " + "".join(f"{v:8.2f}" for v in pct[j]) + ("  residual" if j >= n_eig else ""))
+    if n_eig:
+        out.append("    total           " + "".join(f"{v:8.2f}" for v in pct[:n_eig].sum(axis=0))
+                   + ("  (eigenmodes)" if n_res else ""))
+    if n_res:
+        out.append("    residual vectors" + "".join(f"{v:8.2f}" for v in pct[n_eig:].sum(axis=0)))
     out.append("  free-free frequencies (Hz): CB" + (" vs FE, rel. error" if "freefree_freq_hz_fe" in s else ""))
     for j, f in enumerate(s["freefree_freq_hz_cb"]):
         line = f"    {j + 1:4d} {f:12.5f}"

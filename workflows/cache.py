@@ -199,10 +199,10 @@ class StageCache:
         try:
             save(out, p)
             paths = entry_files(p.parent, key)
-            files = {f.name: file_sha256(f) for f in paths}
+            files, stamps = _checksums(p.parent, key, paths)
             write_text(p.with_name(f"{key}.entry.json"),
                        json.dumps({"format": ENTRY_FORMAT, "version": 1, "stage": stage, "key": key,
-                                   "files": files, "libraries": library_versions(), **_stamps(paths)}, indent=1))
+                                   "files": files, "libraries": library_versions(), **stamps}, indent=1))
         except OSError as exc:  # a full or read-only disk: keep the result, drop the entry
             for f in entry_files(p.parent, key):
                 f.unlink(missing_ok=True)
@@ -229,16 +229,35 @@ def _stat(f: Path) -> list[int]:
     return [st.st_size, st.st_mtime_ns, st.st_ctime_ns, st.st_ino, st.st_dev]
 
 
-def _stamps(paths: list[Path]) -> dict:
-    """The record's stat stamps of an entry's files whose checksums were just taken: size,
-    modification and change times, inode and device of each, and when they were taken."""
-    return {"stat": {f.name: _stat(f) for f in paths}, "stat_ns": time.time_ns()}
+def _fs_now(folder: Path, key: str) -> int:
+    """The file system's clock now (ns): the modification time it gives the entry's lock file,
+    touched (on a network file system the server's clock, which sets the files' times; this
+    host's clock where the lock cannot be touched)."""
+    lock = Path(folder) / f"{key}.lock"
+    try:
+        os.utime(lock)
+        return lock.stat().st_mtime_ns
+    except OSError:
+        return time.time_ns()
+
+
+def _checksums(folder: Path, key: str, paths: list[Path]) -> tuple[dict, dict]:
+    """({name: SHA-256}, the record's stat stamps) of an entry's files. The stamps (size,
+    modification and change times, inode and device of each, and the file system's time when
+    they were taken) are taken BEFORE the files are read, and given only if no file's stat moved
+    while they were read: a file rewritten meanwhile is left to the next hit's checksum, never
+    vouched for by a stamp its bytes were not read under."""
+    at = _fs_now(folder, key)
+    before = {f.name: _stat(f) for f in paths}
+    digests = {f.name: file_sha256(f) for f in paths}
+    after = {f.name: _stat(f) for f in paths}
+    return digests, ({"stat": before, "stat_ns": at} if after == before else {})
 
 
 def _stamped(rec: dict, files: dict[str, Path]) -> bool:
     """Whether every file of the entry is, by its stat, the one whose checksum the record holds:
-    the same size, times, inode and device as when the checksums were taken, and changed last
-    well before then (RACY_NS). Any write, copy or move over a file changes its change time
+    the same size, times, inode and device as just before the checksums were taken, and changed
+    last well before then (RACY_NS, on the file system's clock: :func:`_fs_now`). Any write, copy or move over a file changes its change time
     (which no user call can set back), so such a file is checksummed again."""
     stat, at = rec.get("stat"), rec.get("stat_ns")
     if not isinstance(stat, dict) or not isinstance(at, int) or set(stat) != set(files):
@@ -267,13 +286,16 @@ def _entry_problem(folder: Path, key: str, record: Path) -> str | None:
         return "has missing or extra files"
     if _stamped(rec, files):
         return None
+    digests, stamps = _checksums(folder, key, list(files.values()))
     for name, digest in rec["files"].items():
-        if file_sha256(files[name]) != digest:
+        if digests[name] != digest:
             return f"file {name} does not match its checksum"
-    try:                                # stamped anew (a record of another writer is replaced whole)
-        write_text(record, json.dumps({**rec, **_stamps(list(files.values()))}, indent=1))
-    except OSError:                     # a read-only cache: checksummed again next time
-        pass
+    if stamps:
+        try:                            # stamped anew, under the entry's lock (get_or_build)
+            write_text(record, json.dumps({**{k: v for k, v in rec.items() if k not in ("stat", "stat_ns")},
+                                           **stamps}, indent=1))
+        except OSError:                 # a read-only cache: checksummed again next time
+            pass
     return None
 
 

@@ -70,7 +70,9 @@ def main(argv=None) -> None:
         cm = model.components[name]
         cbs[name] = craig_bampton(c, points_labels(boundary_points(c)), cm.n_modes, cm.f_max, solver=solver,
                                   residual_vectors=cm.residual_vectors)
-        print(f"{name:10s} CB: {cbs[name].n_modes} fixed-interface modes up to {cbs[name].fixed_freq_hz[-1]:.1f} Hz")
+        cb, n_eig = cbs[name], cbs[name].n_modes - cbs[name].n_residual
+        print(f"{name:10s} CB: {n_eig} fixed-interface modes up to {cb.fixed_freq_hz[n_eig - 1] if n_eig else 0:.1f} Hz"
+              + (f" and {cb.n_residual} residual vectors" if cb.n_residual else ""))
 
     # 4. Vehicle: overlay the components on shared points, free-free system modes (eq. 4);
     #    pad: grounded, reduced to its posts. Modal bodies with gravity participation (eq. 14).

@@ -277,6 +277,23 @@ def _sizes(where: Where, spec: dict, keys: set[str], base: Path = Path(".")) -> 
     return out
 
 
+def _check_residual_vectors(where: Where, components: dict) -> None:
+    """``residual_vectors`` only where the CB stage reduces a component that takes them: not a
+    type whose CB model is given directly (nothing to reduce), not a hydroelastic liquid's
+    component (its mass is not M alone: reduction.craig_bampton refuses it after the FE build)."""
+    for name, c in components.items():
+        if not c.residual_vectors:
+            continue
+        w = (where / PAD if name == PAD else where / "component" / name) / "residual_vectors"
+        t = component_types.types().get(c.type)
+        if t is not None and t.model:
+            raise w.error(f"a {c.type!r} component's Craig-Bampton model is given directly, with no interior to "
+                          "reduce: residual vectors do not apply")
+        if getattr(c.builder, "liquid", "") == "hydroelastic":
+            raise w.error("not for a component with a hydroelastic liquid (its mass is not M alone); give it "
+                          "without residual vectors or with liquid = \"smeared\"")
+
+
 def _fe_builders(where: Where, ctx: dict, sel: dict[str, dict], size: dict[str, float | None],
                  vehicle: tuple[str, ...]) -> dict:
     """The builder dataclass of every FE component, read by its registered type
@@ -506,6 +523,7 @@ def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig
                             number(where / "system" / k, v, positive=True) for k, v in s.items()})
     max_elements = integer(where / "max_elements", m.get("max_elements", MAX_ELEMENTS[source]), 1)
     hydroelastic = any(getattr(c.builder, "liquid", "") == "hydroelastic" for c in components.values())
+    _check_residual_vectors(where, components)
     if convective == "slosh" and not hydroelastic:
         raise (where / "convective").error('"slosh" needs a hydroelastic liquid, and no component has one '
                                            '([model] liquid = "hydroelastic" or a component\'s own liquid); '

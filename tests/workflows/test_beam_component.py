@@ -140,3 +140,21 @@ def test_residual_vectors_refused_for_a_nastran_component():
                                           "nastran": {"file": "x.op4", "units": "SI", "grids": {}}}
     with pytest.raises(InputError, match="residual_vectors: a Nastran component's modes are Nastran's"):
         parse_scenario(d, str(SCENARIO), SCENARIO.parent)
+
+
+def test_residual_vectors_refused_where_nothing_takes_them():
+    """A rigid mass's CB model is given directly (no interior), and a hydroelastic tank's mass
+    is not M alone: ``residual_vectors`` there is a one-line error naming the key, on reading."""
+    import tomllib
+
+    from liftoff.config import default_text, parse_scenario
+    from liftoff.core.errors import InputError
+
+    d = tomllib.loads(SCENARIO.read_text())
+    d["model"]["component"]["payload"]["residual_vectors"] = True
+    with pytest.raises(InputError, match=r"component\.payload\.residual_vectors: a 'rigid_mass' component's"):
+        parse_scenario(d, str(SCENARIO), SCENARIO.parent)
+    d = tomllib.loads(default_text())                  # the default's core: hydroelastic tanks
+    d["model"]["component"]["core"]["residual_vectors"] = True
+    with pytest.raises(InputError, match=r"component\.core\.residual_vectors: not for a component with a hydroelastic"):
+        parse_scenario(d, "default.toml")

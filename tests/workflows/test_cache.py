@@ -5,6 +5,8 @@ import os
 import threading
 import time
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -62,7 +64,8 @@ def test_a_stamped_entry_is_not_read_again_and_any_write_is_caught(tmp_path, mon
     cache, builds = StageCache(tmp_path), []
     a = np.arange(5.0)
     _get(cache, "ka", a, builds)
-    time.sleep(0.05)
+    time.sleep(0.05)                  # past the file clock's tick (its times are coarse: a few ms)
+    _get(cache, "ka", a, builds)      # (stamped at the build in the same tick as the files: checksummed, stamped)
     calls.clear()
     assert np.array_equal(_get(cache, "ka", a, builds), a) and builds == ["ka"] and calls == []   # a hit, no read
     entry = tmp_path / "system" / "ka.npz"
@@ -75,6 +78,34 @@ def test_a_stamped_entry_is_not_read_again_and_any_write_is_caught(tmp_path, mon
     with pytest.warns(UserWarning, match="does not match its checksum"):
         assert np.array_equal(_get(cache, "ka", a, builds), a)
     assert builds == ["ka", "ka"] and calls
+
+
+def test_a_file_rewritten_while_it_is_checksummed_is_never_stamped(tmp_path, monkeypatch):
+    """A file rewritten while a hit reads it for its checksum (after the read, before the stamp)
+    must not be vouched for by that hit's stamp: the stamp's stats are taken before the read
+    and given only if none moved, so the next hit checksums again and catches it."""
+    import liftoff.workflows.cache as cache_mod
+
+    monkeypatch.setattr(cache_mod, "RACY_NS", 0)
+    cache, builds = StageCache(tmp_path), []
+    a, other = np.arange(5.0), np.arange(0.0, 35.0, 7.0)
+    _get(cache, "ka", a, builds)
+    time.sleep(0.05)
+    entry = tmp_path / "system" / "ka.npz"
+    real = cache_mod.file_sha256
+
+    def rewrite_after_reading(f):
+        digest = real(f)
+        if Path(f) == entry:                        # another writer, right after the read
+            save_arrays({"v": other}, entry)
+        return digest
+
+    monkeypatch.setattr(cache_mod, "file_sha256", rewrite_after_reading)
+    assert np.array_equal(_get(cache, "ka", a, builds), other)     # this hit read the old bytes, loads the new
+    monkeypatch.setattr(cache_mod, "file_sha256", real)
+    with pytest.warns(UserWarning, match="does not match its checksum"):
+        assert np.array_equal(_get(cache, "ka", a, builds), a)     # ... but stamped nothing: caught, rebuilt
+    assert builds == ["ka", "ka"]
 
 
 def test_an_entry_changed_near_its_stamp_is_checksummed(tmp_path, monkeypatch):

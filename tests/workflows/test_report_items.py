@@ -75,11 +75,10 @@ def test_band_check_warns_when_the_band_reaches_a_component_cut():
     from liftoff.analysis.spectra import LOWPASS_ORDER
 
     six = ("a:Tx", "a:Ty", "a:Tz", "b:Tx", "b:Ty", "b:Tz")
-    cbs = {"core": SimpleNamespace(n_modes=2, fixed_freq_hz=np.array([10.0, 59.0]), n_dof=100, boundary_labels=six),
-           "srb": SimpleNamespace(n_modes=1, fixed_freq_hz=np.array([80.0]), n_dof=100, boundary_labels=six),
-           "rigid": SimpleNamespace(n_modes=0, fixed_freq_hz=np.zeros(0), n_dof=6, boundary_labels=six),
-           "whole": SimpleNamespace(n_modes=3, fixed_freq_hz=np.array([1.0, 2.0, 5.0]), n_dof=9,   # all 3 interior
-                                    boundary_labels=six)}                                       # modes: no cut
+    cb = lambda n, f, n_dof, r=0: SimpleNamespace(n_modes=n, n_residual=r, fixed_freq_hz=np.array(f, float),  # noqa: E731
+                                                  n_dof=n_dof, boundary_labels=six)
+    cbs = {"core": cb(2, [10.0, 59.0], 100), "srb": cb(1, [80.0], 100), "rigid": cb(0, [], 6),
+           "whole": cb(3, [1.0, 2.0, 5.0], 9)}                 # all 3 interior modes: no cut
     ok = report.band_lines(40.0, cbs)
     leak = 1 / (1 + (59.0 / 40.0) ** (2 * LOWPASS_ORDER))
     assert len(ok) == 1 and f"passes {100 * leak:.2g} % at 59.0 Hz" in ok[0] and "'core'" in ok[0]
@@ -89,6 +88,9 @@ def test_band_check_warns_when_the_band_reaches_a_component_cut():
     by_band = report.band_lines(40.0, cbs, {"core": 60.0})   # selected by band: cut at f_max, not at 59 Hz
     assert "at 60.0 Hz" in by_band[0] and "'core'" in by_band[0]
     assert "passes" not in report.band_lines(40.0, {})[0]      # a model without CB components
+    # residual vectors (above the cut, reduction.craig_bampton) do not move it: still 59 Hz, still a warning
+    with_rv = report.band_lines(55.0, {**cbs, "core": cb(4, [10.0, 59.0, 900.0, 1500.0], 100, r=2)})
+    assert len(with_rv) == 2 and "at 59.0 Hz" in with_rv[1] and "'core'" in with_rv[1]
 
 
 def test_display_points_keep_every_peak_where_it_is():
