@@ -71,7 +71,7 @@ class PetscSolver:
         if inertia_residuals and added_mass is not None:
             raise InputError(f"{who}: residual vectors of a component with a hydroelastic liquid are not implemented")
         t0 = time.perf_counter()
-        Kii, Mii, Kib_loc = interior_matrices(self.comm, K, M, interior, boundary)
+        Kii, Mii, Kib_loc, *Mib_loc = interior_matrices(self.comm, K, M, interior, boundary, inertia_residuals)
         B = wet = None
         if added_mass is not None:          # hydroelastic liquid: M_ii + M_a,ii as a shell (fem.liquid)
             from .liquid import wet_mass
@@ -118,9 +118,7 @@ class PetscSolver:
                 _check_finite(self.comm, psi_loc, who)
                 if inertia_residuals:       # X = K_ii^-1 (M_ii Psi + M_ib), on the same factor
                     t0 = time.perf_counter()
-                    r0, r1 = row_range(self.comm, n_i)
-                    Mib_loc = np.asarray(sp.csr_matrix(M)[interior[r0:r1]][:, boundary].todense())
-                    res_loc = _factor_solve(ksp, _mat_block(Mii, psi_loc) + Mib_loc, n_i)
+                    res_loc = _factor_solve(ksp, _mat_block(Mii, psi_loc) + Mib_loc[0], n_i)
                     timings["residual_solve_s"] = time.perf_counter() - t0
             # n_modes: after the factor is freed (never two factors at once, as the band's count)
             if n_modes is not None and 0 < want < n_i and timings.get("eigen_blocks", 1) and lam[-1] > 0:
@@ -210,23 +208,24 @@ def row_range(comm: MPI.Comm, n: int) -> tuple[int, int]:
 
 
 def interior_matrices(comm: MPI.Comm, K: sp.csr_matrix, M: sp.csr_matrix, interior: np.ndarray,
-                      boundary: np.ndarray) -> tuple[PETSc.Mat, PETSc.Mat, np.ndarray]:
+                      boundary: np.ndarray, mass_boundary: bool = False):
     """Distributed K_ii, M_ii (PETSc AIJ, interior numbering) and this process's rows of
-    K_ib (dense, n_local x n_b), from the whole scipy K, M present on every process."""
+    K_ib (dense, n_local x n_b), from the whole scipy K, M present on every process; with
+    ``mass_boundary`` this process's rows of M_ib too, a fourth item (residual vectors)."""
     n_i = interior.size
     r0, r1 = row_range(comm, n_i)
     rows = interior[r0:r1]
-    mats, Kib_loc = [], None
+    mats, ib = [], []
     for A in (K, M):          # one matrix at a time: its local copies live only until PETSc has its own
         A_rows = sp.csr_matrix(A)[rows]
-        if Kib_loc is None:
-            Kib_loc = np.asarray(A_rows[:, boundary].todense())
+        if not ib or mass_boundary:
+            ib.append(np.asarray(A_rows[:, boundary].todense()))
         A_ii = A_rows[:, interior]
         del A_rows
         mats.append(pb.csr_matrix(comm, rows.size, rows.size, n_i, A_ii))
         del A_ii
         mats[-1].setOption(PETSc.Mat.Option.SYMMETRIC, True)
-    return mats[0], mats[1], Kib_loc
+    return (mats[0], mats[1], *ib)
 
 
 #: MUMPS INFOG(1) codes of a singular matrix (-6 structurally, -10 numerically)

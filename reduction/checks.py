@@ -41,9 +41,8 @@ def stiffness_scale(cb: CBModel) -> float:
     """Stiffness scale of a CB model: |K_B| or, when K_B is (near) zero as for a
     statically determinate interface, omega_max^2 x the largest boundary mass term."""
     kb = float(np.abs(cb.K_B).sum(axis=1).max())
-    n_eig = cb.n_modes - cb.n_residual           # the kept eigenmodes (residual vectors lie far above them)
-    if n_eig:
-        kb = max(kb, float(cb.fixed_omega[:n_eig].max() ** 2 * np.abs(np.diag(cb.M_B)).max()))
+    if cb.n_eigenmodes:                          # (residual vectors lie far above them)
+        kb = max(kb, float(cb.fixed_omega[:cb.n_eigenmodes].max() ** 2 * np.abs(np.diag(cb.M_B)).max()))
     return kb
 
 

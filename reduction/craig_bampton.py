@@ -134,6 +134,11 @@ class CBModel:
     def n_modes(self) -> int:
         return self.fixed_omega.size
 
+    @property
+    def n_eigenmodes(self) -> int:
+        """The fixed-interface eigenmodes kept: the modal coordinates less the residual vectors."""
+        return self.n_modes - self.n_residual
+
     def select_modes(self, n_modes: int | None = None, f_max: float | None = None) -> "CBModel":
         """The same component keeping only its first ``n_modes`` fixed-interface modes at or
         below ``f_max`` Hz (None: no limit): rows and columns of the dropped modal
@@ -141,16 +146,16 @@ class CBModel:
         recovery items (eq. 13 is block-diagonal in K, so this is the CB model a smaller
         selection would have given). A model with residual vectors keeps every mode (they
         are orthogonal to the modes it was reduced with, not to a subset)."""
-        keep = np.arange(self.n_modes - self.n_residual)
+        keep = np.arange(self.n_eigenmodes)
         if f_max is not None:
             keep = keep[self.fixed_freq_hz[keep] <= f_max * (1 + 1e-12)]
         if n_modes is not None:
             keep = keep[:n_modes]
-        if self.n_residual and keep.size < self.n_modes - self.n_residual:
+        if self.n_residual and keep.size < self.n_eigenmodes:
             raise InputError(f"CB model {self.name!r}: its {self.n_residual} residual vectors are orthogonal to all "
-                             f"{self.n_modes - self.n_residual} of its fixed-interface modes; reduce it again with "
+                             f"{self.n_eigenmodes} of its fixed-interface modes; reduce it again with "
                              "the cut you want instead of selecting fewer modes")
-        keep = np.concatenate([keep, np.arange(self.n_modes - self.n_residual, self.n_modes)])
+        keep = np.concatenate([keep, np.arange(self.n_eigenmodes, self.n_modes)])
         if keep.size == self.n_modes:
             return self
         cols = np.concatenate([keep, self.n_modes + np.arange(self.n_boundary)])
@@ -345,8 +350,7 @@ def craig_bampton(component: Component, boundary_labels, n_modes: int | None = N
     if residual_vectors:
         t0 = time.perf_counter()
         Kii, Mii = component.K[i][:, i], component.M[i][:, i]
-        lam_r, res = residual_modes(Kii, Mii, phi, np.asarray(got[4], float), float(lam[-1]) if lam.size else 0.0,
-                                    who)
+        lam_r, res = residual_modes(Kii, Mii, phi, np.asarray(got[4], float), float(lam[-1]) if lam.size else 0.0)
         lam, phi, n_res = np.concatenate([lam, lam_r]), np.hstack([phi, res]), lam_r.size
         timings["residual_modes_s"] = time.perf_counter() - t0
     if phi.shape != (i.size, lam.size) or psi.shape != (i.size, b.size):
@@ -397,8 +401,7 @@ def craig_bampton(component: Component, boundary_labels, n_modes: int | None = N
 RESIDUAL_RTOL = 1e-20
 
 
-def residual_modes(Kii, Mii, phi: np.ndarray, X: np.ndarray, lam_kept: float = 0.0,
-                   who: str = "component") -> tuple[np.ndarray, np.ndarray]:
+def residual_modes(Kii, Mii, phi: np.ndarray, X: np.ndarray, lam_kept: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """(omega^2, modes) of the residual vectors ``X`` (n_i x k: K_ii^-1 of the inertia loads,
     module docstring) against the kept, M_ii-normalised modes ``phi`` (the highest of their
     eigenvalues ``lam_kept``): X made M_ii-orthogonal to them (Gram-Schmidt twice), its

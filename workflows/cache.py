@@ -257,8 +257,9 @@ def _checksums(folder: Path, key: str, paths: list[Path]) -> tuple[dict, dict]:
 def _stamped(rec: dict, files: dict[str, Path]) -> bool:
     """Whether every file of the entry is, by its stat, the one whose checksum the record holds:
     the same size, times, inode and device as just before the checksums were taken, and changed
-    last well before then (RACY_NS, on the file system's clock: :func:`_fs_now`). Any write, copy or move over a file changes its change time
-    (which no user call can set back), so such a file is checksummed again."""
+    last well before then (RACY_NS, on the file system's clock: :func:`_fs_now`). Any write,
+    copy or move over a file changes its change time (which no user call can set back), so
+    such a file is checksummed again."""
     stat, at = rec.get("stat"), rec.get("stat_ns")
     if not isinstance(stat, dict) or not isinstance(at, int) or set(stat) != set(files):
         return False
@@ -292,8 +293,7 @@ def _entry_problem(folder: Path, key: str, record: Path) -> str | None:
             return f"file {name} does not match its checksum"
     if stamps:
         try:                            # stamped anew, under the entry's lock (get_or_build)
-            write_text(record, json.dumps({**{k: v for k, v in rec.items() if k not in ("stat", "stat_ns")},
-                                           **stamps}, indent=1))
+            write_text(record, json.dumps({**rec, **stamps}, indent=1))
         except OSError:                 # a read-only cache: checksummed again next time
             pass
     return None

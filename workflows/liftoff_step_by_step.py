@@ -70,8 +70,9 @@ def main(argv=None) -> None:
         cm = model.components[name]
         cbs[name] = craig_bampton(c, points_labels(boundary_points(c)), cm.n_modes, cm.f_max, solver=solver,
                                   residual_vectors=cm.residual_vectors)
-        cb, n_eig = cbs[name], cbs[name].n_modes - cbs[name].n_residual
-        print(f"{name:10s} CB: {n_eig} fixed-interface modes up to {cb.fixed_freq_hz[n_eig - 1] if n_eig else 0:.1f} Hz"
+        cb = cbs[name]
+        top = cb.fixed_freq_hz[cb.n_eigenmodes - 1] if cb.n_eigenmodes else 0.0
+        print(f"{name:10s} CB: {cb.n_eigenmodes} fixed-interface modes up to {top:.1f} Hz"
               + (f" and {cb.n_residual} residual vectors" if cb.n_residual else ""))
 
     # 4. Vehicle: overlay the components on shared points, free-free system modes (eq. 4);

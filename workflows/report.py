@@ -477,15 +477,15 @@ def band_lines(band: float, cbs: dict, f_max: dict | None = None) -> list[str]:
     ``f_max[name]`` Hz when it was selected by band alone; a component that keeps all its
     interior modes cuts nothing. The modes above a cut are left out, so whatever the band
     passes there is not converged; a warning above BAND_LEAK_WARNING. ``cbs``: the vehicle's
-    CB models (n_modes, n_residual, fixed_freq_hz, n_dof, boundary_labels)."""
+    CB models (n_modes, n_eigenmodes, fixed_freq_hz, n_dof, boundary_labels)."""
     from liftoff.analysis.spectra import lowpass_gain
 
     head = "  accelerations and liquid pressures in the max/min tables: "
     tail = " ([postprocess] acceleration_band_hz; SRS and PSD unfiltered)"
     f_max = f_max or {}
     # (the highest kept eigenmode: residual vectors, above it, are not the modes the cut keeps)
-    cuts = {name: max(float(cb.fixed_freq_hz[:cb.n_modes - cb.n_residual].max()), f_max.get(name) or 0.0)
-            for name, cb in cbs.items() if 0 < cb.n_modes - cb.n_residual < cb.n_dof - len(cb.boundary_labels)}
+    cuts = {name: max(float(cb.fixed_freq_hz[:cb.n_eigenmodes].max()), f_max.get(name) or 0.0)
+            for name, cb in cbs.items() if 0 < cb.n_eigenmodes < cb.n_dof - len(cb.boundary_labels)}
     if not band > 0:
         return [head + "unfiltered" + tail]
     if not cuts:

@@ -75,7 +75,7 @@ def test_band_check_warns_when_the_band_reaches_a_component_cut():
     from liftoff.analysis.spectra import LOWPASS_ORDER
 
     six = ("a:Tx", "a:Ty", "a:Tz", "b:Tx", "b:Ty", "b:Tz")
-    cb = lambda n, f, n_dof, r=0: SimpleNamespace(n_modes=n, n_residual=r, fixed_freq_hz=np.array(f, float),  # noqa: E731
+    cb = lambda n, f, n_dof, r=0: SimpleNamespace(n_modes=n, n_eigenmodes=n - r, fixed_freq_hz=np.array(f, float),  # noqa: E731
                                                   n_dof=n_dof, boundary_labels=six)
     cbs = {"core": cb(2, [10.0, 59.0], 100), "srb": cb(1, [80.0], 100), "rigid": cb(0, [], 6),
            "whole": cb(3, [1.0, 2.0, 5.0], 9)}                 # all 3 interior modes: no cut
