@@ -24,6 +24,14 @@ a factor of 4.1e7 entries) one solve takes 74 ms, one of 16 or more vectors 13 m
   relation); a pair is converged when that residual is below ``tol`` times theta, the
   criterion of SLEPc's default (EPS_CONV_REL on the shift-inverted operator).
 
+Memory: V (n x dimension) and, to save a mass application a block, its B-image BV. Where
+both would take more than MASS_IMAGE_SHARE of the machine's memory at the largest basis
+allowed (a grain booster: 270,786 DOFs, 457 pairs below 25 Hz, a run peaking at 22.8 GB of
+24), BV is not kept: the last two blocks' B-images are, and each block is B-applied twice
+(before its full Gram-Schmidt pass, for the coefficients V^T (B W), and after it), three
+times when the second pass is taken. The arithmetic is the same; the results agree to
+round-off.
+
 The operators are injected (``solve``: X -> K^-1 X, ``mass``: X -> B X, on this process's
 rows of a block), so B may be a shell (the wet mass M + G^T H^-1 G of fem/liquid.py) and
 K's factor anything that solves many right-hand sides at once. Rows are distributed over
@@ -31,6 +39,7 @@ K's factor anything that solves many right-hand sides at once. Rows are distribu
 """
 from __future__ import annotations
 
+import os
 from typing import Callable
 
 import numpy as np
@@ -40,6 +49,24 @@ from mpi4py import MPI
 from liftoff.core.errors import ConvergenceError
 
 Block = Callable[[np.ndarray], np.ndarray]
+
+#: the share of the machine's memory that the basis V and its B-image BV may take together
+#: at the largest basis allowed (``max_dim``); beyond it BV is not kept (module docstring)
+MASS_IMAGE_SHARE = 0.25
+
+
+def physical_memory() -> float:
+    """This machine's memory in bytes (inf where the system does not say)."""
+    try:
+        return float(os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
+    except (ValueError, OSError, AttributeError):
+        return float("inf")
+
+
+def keeps_mass_image(n_global: int, dim: int) -> bool:
+    """Whether :func:`block_lanczos` keeps the basis' B-image for ``dim`` basis vectors of
+    ``n_global`` rows (all processes' rows: they share a machine's memory at worst)."""
+    return 2 * 8.0 * n_global * dim <= MASS_IMAGE_SHARE * physical_memory()
 
 
 def block_size(want: int) -> int:
@@ -84,7 +111,8 @@ def _colsum(comm: MPI.Comm, A: np.ndarray) -> np.ndarray:
 def _b_orthonormalise(comm, W, BW, V, BV, mass, rng_block):
     """(Q, BQ, R) with W = Q R and Q^T B Q = I, for a W already B-orthogonal to V: Cholesky
     QR, twice. Directions of W (numerically) inside span(V) are replaced by random ones
-    B-orthogonal to V (their rows of R zero), so that the basis always grows by a full block."""
+    B-orthogonal to V (their rows of R zero), so that the basis always grows by a full block.
+    ``BV``: V's B-image, or None (not kept: B is applied to the random block instead)."""
     p = W.shape[1]
     R = np.eye(p)
     for _ in range(2):
@@ -107,7 +135,7 @@ def _b_orthonormalise(comm, W, BW, V, BV, mass, rng_block):
             for _ in range(2):
                 for basis, bbasis in ((V, BV), (Q, BQ)):
                     if basis.shape[1]:
-                        Z = Z - basis @ _dot(comm, bbasis, Z)
+                        Z = Z - basis @ (_dot(comm, bbasis, Z) if bbasis is not None else _dot(comm, basis, mass(Z)))
             BZ = mass(Z)
             Gz = _dot(comm, Z, BZ)
             Lz = np.linalg.cholesky(0.5 * (Gz + Gz.T))
@@ -140,15 +168,16 @@ def default_max_dim(want: int, block: int) -> int:
 
 def block_lanczos(solve: Block, mass: Block, n_local: int, n_global: int, row0: int, want: int,
                   comm: MPI.Comm = MPI.COMM_SELF, *, tol: float = 1e-10, block: int | None = None,
-                  max_dim: int | None = None, seed: int = 20261126, who: str = "eigensolve"
-                  ) -> tuple[np.ndarray, np.ndarray, dict]:
+                  max_dim: int | None = None, seed: int = 20261126, who: str = "eigensolve",
+                  keep_mass_image: bool | None = None) -> tuple[np.ndarray, np.ndarray, dict]:
     """The ``want`` lowest eigenvalues of K x = lambda B x (K, B symmetric positive definite)
     and this process's rows (``row0`` .. ``row0 + n_local``) of their B-normalised vectors;
     returns (lambda ascending, X, info {'dimension', 'blocks', 'second_passes'}). ``solve``/``mass`` apply
     K^-1 and B to this process's rows of a block. Needs ``n_global`` > ``want`` + 4 blocks
     (a smaller problem is a dense one); ConvergenceError if ``want`` pairs have not
     converged at ``max_dim`` basis vectors (default 6 want + 10 blocks, at least 20 blocks; the
-    default components needed 2.2-3.9 want)."""
+    default components needed 2.2-3.9 want). ``keep_mass_image``: keep the basis' B-image
+    (None: :func:`keeps_mass_image`; module docstring); info's 'mass_image' says which."""
     p = block or block_size(want)
     if n_global <= want + 4 * p:
         raise ValueError(f"{who}: {n_global} DOFs for {want} modes: solve it densely")
@@ -160,29 +189,42 @@ def block_lanczos(solve: Block, mass: Block, n_local: int, n_global: int, row0: 
 
     # the whole basis at once, Fortran order (V[:, :m] contiguous for BLAS): pages are touched
     # only as columns are written, and nothing is copied as it grows
+    keep = keeps_mass_image(n_global, cap_dim) if keep_mass_image is None else bool(keep_mass_image)
     V = np.empty((n_local, cap_dim), order="F")
-    BV = np.empty((n_local, cap_dim), order="F")
+    BV = np.empty((n_local, cap_dim), order="F") if keep else None
     H = np.zeros((cap_dim, cap_dim))
     work = np.empty((n_local, p), order="F")
     none = np.empty((n_local, 0))
     W = solve(mass(rng_block(p)))            # one application damps the start's high modes
-    Q, BQ, _ = _b_orthonormalise(comm, W, mass(W), none, none, mass, rng_block)
-    V[:, :p], BV[:, :p] = Q, BQ
+    Q, BQ, _ = _b_orthonormalise(comm, W, mass(W), none, none if keep else None, mass, rng_block)
+    V[:, :p] = Q
+    if keep:
+        BV[:, :p] = BQ
+    else:                                    # the B-images of the last two blocks only
+        BL = np.zeros((n_local, 2 * p), order="F")
+        BL[:, p:] = BQ
     m, blocks, next_check, again = p, 0, 0, 0
     while True:
         j0 = m - p                           # A V = V H + W e_last^T, W B-orthogonal to V
         l0 = max(0, j0 - p)                  # the blocks j - 1, j: H's block tridiagonal rows
-        W = np.asfortranarray(solve(BV[:, j0:m]))
-        C = _dot(comm, BV[:, l0:m], W)
+        BVl = BV[:, l0:m] if keep else BL[:, (2 * p - (m - l0)):]
+        W = np.asfortranarray(solve(BVl[:, -p:]))
+        C = _dot(comm, BVl, W)
         W -= np.matmul(V[:, l0:m], C, out=work)
-        C2 = _dot(comm, BV[:, :m], W)        # full reorthogonalisation
+        C2 = _dot(comm, BV[:, :m], W) if keep else _dot(comm, V[:, :m], mass(W))   # full reorthogonalisation
         W -= np.matmul(V[:, :m], C2, out=work)
         H[:m, j0:m] = C2
         H[l0:m, j0:m] += C
         blocks += 1
         BW = mass(W)
         if _second_pass(_colsum(comm, W * BW), C2):
-            H[:m, j0:m] += _pass_again(comm, V[:, :m], BV[:, :m], W, BW, work)
+            if keep:
+                H[:m, j0:m] += _pass_again(comm, V[:, :m], BV[:, :m], W, BW, work)
+            else:
+                C3 = _dot(comm, V[:, :m], BW)
+                W -= np.matmul(V[:, :m], C3, out=work)
+                BW = mass(W)
+                H[:m, j0:m] += C3
             again += 1
         if m >= want and (blocks >= next_check or m + p > cap_dim):     # a last check when the basis is full
             theta, Y = _ritz(H, m, p, want)
@@ -194,7 +236,7 @@ def block_lanczos(solve: Block, mass: Block, n_local: int, n_global: int, row0: 
                 # V is B-orthonormal and Y orthonormal: X = V Y is B-normalised (to round-off)
                 order = np.argsort(1.0 / theta, kind="stable")
                 return (1.0 / theta)[order], V[:, :m] @ Y[:, order], {"dimension": m, "blocks": blocks,
-                                                                       "second_passes": again}
+                                                                       "second_passes": again, "mass_image": keep}
             # a block converges about p / 3 pairs: the next check when about half the rest may have
             next_check = blocks + max(1, (3 * bad) // (2 * p))
             if m + p > cap_dim:
@@ -203,7 +245,12 @@ def block_lanczos(solve: Block, mass: Block, n_local: int, n_global: int, row0: 
                                        f"{float(np.max(resid / np.abs(theta))):.2g})")
         elif m < want and m + p > cap_dim:
             raise ConvergenceError(f"{who}: block Lanczos reached {m} basis vectors before {want} pairs")
-        Q, BQ, R = _b_orthonormalise(comm, W, BW, V[:, :m], BV[:, :m], mass, rng_block)
-        V[:, m:m + p], BV[:, m:m + p] = Q, BQ
+        Q, BQ, R = _b_orthonormalise(comm, W, BW, V[:, :m], BV[:, :m] if keep else None, mass, rng_block)
+        V[:, m:m + p] = Q
+        if keep:
+            BV[:, m:m + p] = BQ
+        else:
+            BL[:, :p] = BL[:, p:]
+            BL[:, p:] = BQ
         H[m:m + p, j0:m] = R
         m += p

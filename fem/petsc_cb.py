@@ -450,7 +450,7 @@ def fixed_interface_pairs(ksp, Kii: PETSc.Mat, Mii: PETSc.Mat, wet, want: int, t
     sides through the one factor), or a dense solve where the interior is too small for the
     Krylov space block_lanczos would build (block_lanczos.default_max_dim). ``wet``: the wet-mass context of
     fem.liquid.wet_mass, or None. Returns (omega^2 ascending, this process's rows of the
-    mass-normalised modes, {'eigen_dimension', 'eigen_blocks', 'eigen_second_passes'})."""
+    mass-normalised modes, {'eigen_dimension', 'eigen_blocks', 'eigen_second_passes', 'eigen_mass_image'})."""
     from .block_lanczos import block_lanczos, block_size, default_max_dim
 
     comm = Kii.getComm().tompi4py()
@@ -477,7 +477,7 @@ def fixed_interface_pairs(ksp, Kii: PETSc.Mat, Mii: PETSc.Mat, wet, want: int, t
     except np.linalg.LinAlgError as exc:
         raise ConvergenceError(f"{who}: fixed-interface eigensolve failed ({exc})") from None
     return lam, phi, {"eigen_dimension": info["dimension"], "eigen_blocks": info["blocks"],
-                      "eigen_second_passes": info["second_passes"]}
+                      "eigen_second_passes": info["second_passes"], "eigen_mass_image": info["mass_image"]}
 
 
 def _factor_solve(ksp: PETSc.KSP, B_loc: np.ndarray, n: int) -> np.ndarray:

@@ -33,13 +33,16 @@ def grid_laplacian(k: int) -> tuple[sp.csc_matrix, np.ndarray]:
     return K, np.sort((s[:, None] + s[None, :]).ravel())
 
 
+@pytest.mark.parametrize("keep", [True, False])
 @pytest.mark.parametrize("block", [None, 5])
-def test_grid_laplacian_against_closed_form_with_double_eigenvalues(block):
+def test_grid_laplacian_against_closed_form_with_double_eigenvalues(block, keep):
+    """(``keep``: with and without the basis' B-image kept.)"""
     K, exact = grid_laplacian(50)
     n, want = K.shape[0], 70
     mass = 2.0                                   # B = 2 I: lambda = closed form / 2
     lu = spla.splu(K)
-    lam, X, info = block_lanczos(lu.solve, lambda Y: mass * Y, n, n, 0, want, block=block)
+    lam, X, info = block_lanczos(lu.solve, lambda Y: mass * Y, n, n, 0, want, block=block, keep_mass_image=keep)
+    assert info["mass_image"] is keep
     ref = exact[:want] / mass
     assert np.sum(np.isclose(ref[1:], ref[:-1], rtol=1e-12)) >= 30      # the doubles are there
     err = np.max(np.abs(lam / ref - 1))
@@ -49,7 +52,8 @@ def test_grid_laplacian_against_closed_form_with_double_eigenvalues(block):
     assert err < 1e-11 and orth < 1e-12 and res.max() < 1e-8
 
 
-def test_shell_mass_pencil_against_dense_eigh():
+@pytest.mark.parametrize("keep", [True, False])
+def test_shell_mass_pencil_against_dense_eigh(keep):
     rng = np.random.default_rng(3)
     K, _ = grid_laplacian(40)
     n = K.shape[0]
@@ -62,7 +66,7 @@ def test_shell_mass_pencil_against_dense_eigh():
 
     lu = spla.splu(K)
     want = 40
-    lam, X, _ = block_lanczos(lu.solve, wet, n, n, 0, want)
+    lam, X, _ = block_lanczos(lu.solve, wet, n, n, 0, want, keep_mass_image=keep)
     Bd = M.toarray() + G.T.toarray() @ np.linalg.solve(Hl.toarray(), G.toarray())
     ref = sla.eigh(K.toarray(), Bd, eigvals_only=True, subset_by_index=[0, want - 1])
     assert np.max(np.abs(lam / ref - 1)) < 1e-11
@@ -95,8 +99,9 @@ def test_a_full_basis_is_checked_before_it_would_overflow():
         assert np.max(np.abs(lam / exact[:want] - 1)) < 1e-11, info
 
 
+@pytest.mark.parametrize("keep", [True, False])
 @pytest.mark.parametrize("pencil", ["identity", "shell"])
-def test_the_second_gram_schmidt_pass_keeps_the_arnoldi_relation(monkeypatch, pencil):
+def test_the_second_gram_schmidt_pass_keeps_the_arnoldi_relation(monkeypatch, pencil, keep):
     """The second full Gram-Schmidt pass (DGKS, taken where a column lost most of its
     B-norm) updates the block, its B-image and H together: forced for every block, the
     pairs are those of the one-pass solve (dense reference, the module's tolerances) and
@@ -120,10 +125,10 @@ def test_the_second_gram_schmidt_pass_keeps_the_arnoldi_relation(monkeypatch, pe
 
         Bd = M.toarray() + G.T.toarray() @ np.linalg.solve(Hl.toarray(), G.toarray())
         ref = sla.eigh(K.toarray(), Bd, eigvals_only=True, subset_by_index=[0, want - 1])
-    _, _, plain = block_lanczos(lu.solve, mass, n, n, 0, want)
+    _, _, plain = block_lanczos(lu.solve, mass, n, n, 0, want, keep_mass_image=keep)
     assert plain["second_passes"] == 0
     monkeypatch.setattr(bl, "_second_pass", lambda after, C: True)
-    lam, X, info = block_lanczos(lu.solve, mass, n, n, 0, want)
+    lam, X, info = block_lanczos(lu.solve, mass, n, n, 0, want, keep_mass_image=keep)
     assert info["second_passes"] == info["blocks"] > 0
     assert np.max(np.abs(lam / ref - 1)) < 1e-11
     assert np.max(np.abs(X.T @ Bd @ X - np.eye(want))) < 1e-12
@@ -154,3 +159,89 @@ def test_a_repeated_pass_updates_the_block_and_its_b_image():
     left = np.linalg.norm(W, axis=0)
     assert np.all(np.abs(V.T @ B @ W) <= 1e-4 * left)
     assert np.all(np.linalg.norm(BW - B @ W, axis=0) <= 1e-4 * np.linalg.norm(B @ W, axis=0))
+
+
+def test_the_basis_b_image_is_dropped_where_memory_is_short(monkeypatch):
+    """Without the basis' B-image (what a machine too small for it gets: its memory here set
+    to what the basis alone would take) the solver counts its mass applications, about two a
+    block against one, and returns the pairs of the solve that keeps it: the same
+    arithmetic in another order, so eigenvalues to round-off of the Rayleigh-Ritz step
+    (1e-12 here: cond ~1e3 x eps) and the vectors to the convergence tolerance over the
+    smallest relative gap of the well separated pairs compared (below 1e-6)."""
+    from liftoff.fem import block_lanczos as bl
+
+    rng = np.random.default_rng(11)
+    K, _ = grid_laplacian(40)
+    n, want = K.shape[0], 40
+    M = sp.diags(1.0 + rng.random(n))
+    lu = spla.splu(K)
+    applied = {"n": 0}
+
+    def mass(Y):
+        applied["n"] += 1
+        return M @ Y
+
+    dim = bl.default_max_dim(want, bl.block_size(want))
+    assert bl.keeps_mass_image(n, dim)                          # this machine: a small basis is kept
+    lam1, X1, info1 = block_lanczos(lu.solve, mass, n, n, 0, want)
+    kept_calls = applied["n"]
+    monkeypatch.setattr(bl, "physical_memory", lambda: 8.0 * n * dim / bl.MASS_IMAGE_SHARE)
+    assert not bl.keeps_mass_image(n, dim)
+    applied["n"] = 0
+    lam2, X2, info2 = block_lanczos(lu.solve, mass, n, n, 0, want)
+    assert info1["mass_image"] and not info2["mass_image"]
+    assert info1["blocks"] == info2["blocks"]
+    assert applied["n"] >= kept_calls + info2["blocks"] - 1
+    assert np.max(np.abs(lam2 / lam1 - 1)) < 1e-12
+    gap = np.diff(lam1) / lam1[1:]
+    sep = np.flatnonzero((np.r_[gap, np.inf] > 1e-2) & (np.r_[np.inf, gap] > 1e-2))
+    signs = np.sign(np.sum(X1[:, sep] * (M @ X2[:, sep]), axis=0))
+    assert sep.size > 5 and np.max(np.abs(X2[:, sep] * signs - X1[:, sep])) < 1e-6
+
+
+@pytest.mark.parametrize("keep", [True, False])
+def test_an_exhausted_krylov_space_grows_on(keep):
+    """K with 8 distinct eigenvalues of multiplicity 40 (B = 2 I): the Krylov space of a block
+    of 4 has at most 32 dimensions, so from the 9th block on what is left after the Gram-Schmidt
+    passes is round-off, which the Cholesky QR normalises into new directions (with and
+    without the basis' B-image). Closed form: 40 pairs at 0.5 and 10 at 1.0, B-orthonormal
+    (tolerances as above)."""
+    n, want = 320, 50
+    k = np.repeat(np.arange(1.0, 9.0), 40)
+    lam, X, info = block_lanczos(lambda Y: Y / k[:, None], lambda Y: 2.0 * Y, n, n, 0, want, block=4,
+                                 keep_mass_image=keep)
+    assert info["dimension"] > 32 and info["mass_image"] is keep
+    assert np.max(np.abs(lam - np.r_[np.full(40, 0.5), np.full(10, 1.0)])) < 1e-11
+    assert np.max(np.abs(2.0 * X.T @ X - np.eye(want))) < 1e-12
+
+
+@pytest.mark.parametrize("keep", [True, False])
+def test_a_rank_deficient_block_is_completed_by_random_directions(keep):
+    """_b_orthonormalise on a block whose columns 2 and 3 repeat columns 0 and 1 (rank 2 of
+    4): W = Q R with Q B-orthonormal, B-orthogonal to V, and R's last two rows zero (the
+    random directions carry nothing of W); with and without V's B-image (round-off: 1e-12)."""
+    from mpi4py import MPI
+
+    from liftoff.fem.block_lanczos import _b_orthonormalise
+
+    rng = np.random.default_rng(13)
+    n, m = 200, 12
+    b = 1.0 + rng.random(n)
+
+    def mass(Y):
+        return b[:, None] * Y
+
+    V, _ = np.linalg.qr(rng.standard_normal((n, m)))
+    V = np.linalg.solve(np.linalg.cholesky(V.T @ mass(V)), V.T).T     # B-orthonormal
+    W = rng.standard_normal((n, 2))
+    W = W - V @ (V.T @ mass(W))
+    W = np.hstack([W, W])
+
+    def rng_block(k):
+        return rng.standard_normal((n, k))
+
+    Q, BQ, R = _b_orthonormalise(MPI.COMM_SELF, W, mass(W), V, mass(V) if keep else None, mass, rng_block)
+    assert np.max(np.abs(Q.T @ mass(Q) - np.eye(4))) < 1e-12
+    assert np.max(np.abs(V.T @ mass(Q))) < 1e-12
+    assert np.max(np.abs(BQ - mass(Q))) < 1e-12
+    assert np.max(np.abs(Q @ R - W)) < 1e-12 * np.abs(W).max() and np.all(R[2:] == 0.0)
