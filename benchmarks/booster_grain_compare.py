@@ -10,17 +10,22 @@ into README.md by benchmarks/default_figures.py.
     .venv/bin/python benchmarks/booster_grain_compare.py [--f-max 15 25] [--no-solid] [--json FILE]
 
 Each variant is a whole cold run; run them one per process where memory is short (the
-file is updated, not overwritten). Measured here (24 GB): with both boosters reduced, 25 Hz
+file is updated, not overwritten; each column's ``peak_rss_gb`` is its process's peak so far,
+the column's own where it ran first). Measured here (24 GB): with both boosters reduced, 25 Hz
 was killed for memory (24 GB resident with LIFTOFF_MODEL_WORKERS=1), and on 2026-11-28 20 Hz
 after the solid and 15 Hz columns in the same process. Since 2026-12-01 the default's right
 booster mirrors the left one (the edits below go to srb_left; the mirror follows), so one
 grain booster is reduced: ``--f-max 15`` and then ``--f-max 20 25 --no-solid`` ran, the
-second process peaking at 22.8 GB resident; a 30 Hz cut would not fit.
+second process peaking at 22.8 GB resident. On 2026-12-07 ``--f-max 30 --no-solid`` ran in
+a process of its own (817 booster modes): 22.9 GB used on the machine at its peak keeping the
+block Lanczos basis' B-image, 18.6 GB (17.9 in one process) without it (fem.block_lanczos
+drops it for a basis this large).
 """
 from __future__ import annotations
 
 import argparse
 import json
+import resource
 import runpy
 import sys
 from pathlib import Path
@@ -50,7 +55,13 @@ def variant_figures(grain: bool, f_max: float | None, residual: bool = False) ->
     out, wall_s = fig["timed_variant"](edit, None)
     cut = out.results["nominal"][1].case.model.components[BOOSTERS[0]].f_max    # the run's own (default: 120 Hz)
     return {**fig["variant_summary"](out, wall_s, BOOSTERS[0]), "booster_f_max_hz": cut,
-            "booster_residual_vectors": stack_residual(out)}
+            "booster_residual_vectors": stack_residual(out), "peak_rss_gb": peak_rss_gb()}
+
+
+def peak_rss_gb() -> float:
+    """The largest resident set (GB) of this process and of its finished children (the model
+    stages' pool, the h/2 runs) so far: a variant's own where it is the process's first."""
+    return max(resource.getrusage(who).ru_maxrss for who in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN)) * 1024 / 1e9
 
 
 def stack_residual(out) -> int:

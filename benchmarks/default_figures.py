@@ -637,7 +637,9 @@ def render_booster_grain(fig: dict) -> str:
     lead = [("booster FE DOFs; fixed-interface modes (below f_max Hz)", modes),
             ("booster FE, CB stage times, cold (s, this machine)",
              lambda v: f"{sec(v['booster_fe_s'])}, {sec(v['booster_cb_s'])}"),
-            ("vehicle system modes; mass (t)", lambda v: f"{v['vehicle_modes']}; {v['vehicle_mass_t']:.1f}")]
+            ("vehicle system modes; mass (t)", lambda v: f"{v['vehicle_modes']}; {v['vehicle_mass_t']:.1f}"),
+            ("peak resident memory of the run's processes (GB; - : not recorded)",
+             lambda v: "-" if v.get("peak_rss_gb") is None else f"{v['peak_rss_gb']:.1f}")]
     base = fig["solid"]["attach_n"]
     return _variant_table("boosters", cols, lead, sorted(base, key=lambda k: -abs(base[k]))[:5])
 
