@@ -40,6 +40,7 @@ K's factor anything that solves many right-hand sides at once. Rows are distribu
 from __future__ import annotations
 
 import os
+from contextlib import contextmanager
 from typing import Callable
 
 import numpy as np
@@ -53,6 +54,25 @@ Block = Callable[[np.ndarray], np.ndarray]
 #: the share of the machine's memory that the basis V and its B-image BV may take together
 #: at the largest basis allowed (``max_dim``); beyond it BV is not kept (module docstring)
 MASS_IMAGE_SHARE = 0.25
+
+
+@contextmanager
+def _small_pages():
+    """numpy's large arrays allocated without its transparent-huge-page advice (madvise), then
+    the advice restored. Where the machine's memory is fragmented (a page cache full of cached
+    models) the first touch of each huge page may compact memory: filling a 1 GB basis took
+    1.0-1.4 s against 0.32-0.38 s in 4 kB pages, and the default booster's CB stage 30.2-30.6 s
+    against 28.0-28.4 s (one BLAS thread, 2026-12-07); the transient, whose histories are
+    touched as often as written, was not faster without it (0.91-0.94 against 0.97 s a case)."""
+    setter = getattr(np.core.multiarray, "_set_madvise_hugepage", None)
+    if setter is None:
+        yield
+        return
+    before = setter(False)
+    try:
+        yield
+    finally:
+        setter(before)
 
 
 def physical_memory() -> float:
@@ -146,16 +166,23 @@ def _b_orthonormalise(comm, W, BW, V, BV, mass, rng_block):
     return W, BW, R
 
 
-def _ritz(H: np.ndarray, m: int, p: int, want: int) -> tuple[np.ndarray, np.ndarray]:
-    """The ``want`` largest eigenpairs of the symmetric part of H[:m, :m], taken as block
-    tridiagonal (bandwidth 2p - 1): with full reorthogonalisation the entries beyond are
-    round-off (below 1e-15 of H's norm), and a banded eigensolve costs O(m^2 p), not O(m^3)."""
+def _ritz(H: np.ndarray, m: int, p: int, want: int, magnitude: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """The ``want`` largest eigenpairs of the symmetric part of H[:m, :m] (``magnitude``: of
+    largest magnitude, both ends of the spectrum), taken as block tridiagonal (bandwidth
+    2p - 1): with full reorthogonalisation the entries beyond are round-off (below 1e-15 of
+    H's norm), and a banded eigensolve costs O(m^2 p), not O(m^3)."""
     T = 0.5 * (H[:m, :m] + H[:m, :m].T)
     u = min(2 * p - 1, m - 1)
     band = np.zeros((u + 1, m))
     for k in range(u + 1):                   # upper form: band[u - k, k:] = diag(T, k)
         band[u - k, k:] = np.diagonal(T, k)
-    return sla.eig_banded(band, lower=False, select="i", select_range=(m - want, m - 1))
+    if not magnitude:
+        return sla.eig_banded(band, lower=False, select="i", select_range=(m - want, m - 1))
+    ev = sla.eig_banded(band, lower=False, eigvals_only=True)          # ascending
+    low = int(np.sum(np.argsort(-np.abs(ev), kind="stable")[:want] < np.sum(ev < 0)))   # of them negative
+    parts = [sla.eig_banded(band, lower=False, select="i", select_range=r)
+             for r in ((0, low - 1), (m - (want - low), m - 1)) if r[1] >= r[0]]
+    return np.concatenate([t for t, _ in parts]), np.hstack([y for _, y in parts])
 
 
 def default_max_dim(want: int, block: int) -> int:
@@ -169,7 +196,7 @@ def default_max_dim(want: int, block: int) -> int:
 def block_lanczos(solve: Block, mass: Block, n_local: int, n_global: int, row0: int, want: int,
                   comm: MPI.Comm = MPI.COMM_SELF, *, tol: float = 1e-10, block: int | None = None,
                   max_dim: int | None = None, seed: int = 20261126, who: str = "eigensolve",
-                  keep_mass_image: bool | None = None) -> tuple[np.ndarray, np.ndarray, dict]:
+                  keep_mass_image: bool | None = None, shift: float = 0.0) -> tuple[np.ndarray, np.ndarray, dict]:
     """The ``want`` lowest eigenvalues of K x = lambda B x (K, B symmetric positive definite)
     and this process's rows (``row0`` .. ``row0 + n_local``) of their B-normalised vectors;
     returns (lambda ascending, X, info {'dimension', 'blocks', 'second_passes'}). ``solve``/``mass`` apply
@@ -177,7 +204,11 @@ def block_lanczos(solve: Block, mass: Block, n_local: int, n_global: int, row0: 
     (a smaller problem is a dense one); ConvergenceError if ``want`` pairs have not
     converged at ``max_dim`` basis vectors (default 6 want + 10 blocks, at least 20 blocks; the
     default components needed 2.2-3.9 want). ``keep_mass_image``: keep the basis' B-image
-    (None: :func:`keeps_mass_image`; module docstring); info's 'mass_image' says which."""
+    (None: :func:`keeps_mass_image`; module docstring); info's 'mass_image' says which.
+    ``shift`` sigma > 0: ``solve`` applies (K - sigma B)^-1 (module docstring, "Shift"): the
+    ``want`` eigenvalues nearest sigma, lambda = sigma + 1 / theta for the Ritz values theta of
+    largest magnitude; info's 'below_shift' counts those below sigma (the factor's inertia
+    must say the same)."""
     p = block or block_size(want)
     if n_global <= want + 4 * p:
         raise ValueError(f"{who}: {n_global} DOFs for {want} modes: solve it densely")
@@ -190,8 +221,9 @@ def block_lanczos(solve: Block, mass: Block, n_local: int, n_global: int, row0: 
     # the whole basis at once, Fortran order (V[:, :m] contiguous for BLAS): pages are touched
     # only as columns are written, and nothing is copied as it grows
     keep = keeps_mass_image(n_global, cap_dim) if keep_mass_image is None else bool(keep_mass_image)
-    V = np.empty((n_local, cap_dim), order="F")
-    BV = np.empty((n_local, cap_dim), order="F") if keep else None
+    with _small_pages():
+        V = np.empty((n_local, cap_dim), order="F")
+        BV = np.empty((n_local, cap_dim), order="F") if keep else None
     H = np.zeros((cap_dim, cap_dim))
     work = np.empty((n_local, p), order="F")
     none = np.empty((n_local, 0))
@@ -227,16 +259,20 @@ def block_lanczos(solve: Block, mass: Block, n_local: int, n_global: int, row0: 
                 H[:m, j0:m] += C3
             again += 1
         if m >= want and (blocks >= next_check or m + p > cap_dim):     # a last check when the basis is full
-            theta, Y = _ritz(H, m, p, want)
+            theta, Y = _ritz(H, m, p, want, magnitude=shift != 0.0)
             G = _dot(comm, W, BW)            # ||W y_last||_B: the exact residual of each pair
             Yl = Y[j0:m]
             resid = np.sqrt(np.maximum(np.einsum("ij,ij->j", Yl, G @ Yl), 0.0))
-            bad = int(np.sum(~(resid <= tol * theta)))
-            if bad == 0 and np.all(theta > 0):
+            bad = int(np.sum(~(resid <= tol * np.abs(theta))))
+            if bad == 0 and (np.all(theta > 0) if shift == 0.0 else np.all(theta != 0)):
                 # V is B-orthonormal and Y orthonormal: X = V Y is B-normalised (to round-off)
-                order = np.argsort(1.0 / theta, kind="stable")
-                return (1.0 / theta)[order], V[:, :m] @ Y[:, order], {"dimension": m, "blocks": blocks,
-                                                                       "second_passes": again, "mass_image": keep}
+                lam = shift + 1.0 / theta
+                order = np.argsort(lam, kind="stable")
+                with _small_pages():
+                    X = np.empty((n_local, want))
+                np.matmul(V[:, :m], Y[:, order], out=X)
+                return lam[order], X, {"dimension": m, "blocks": blocks, "second_passes": again,
+                                       "mass_image": keep, "below_shift": int(np.sum(theta < 0))}
             # a block converges about p / 3 pairs: the next check when about half the rest may have
             next_check = blocks + max(1, (3 * bad) // (2 * p))
             if m + p > cap_dim:

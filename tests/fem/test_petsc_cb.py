@@ -96,11 +96,18 @@ def test_all_fixed_interface_modes_give_the_full_model():
     assert err.max() < 1e-8
 
 
+@pytest.mark.parametrize("shifted", [False, True])
 @pytest.mark.parametrize("k", [0, 7, 30])
-def test_band_returns_exactly_the_modes_below_f_max(k):
+def test_band_returns_exactly_the_modes_below_f_max(k, shifted, monkeypatch):
     # dense eigensolution of K_ii, M_ii; f_max halfway between modes k and k+1 (k = 0:
     # below the first mode: a band with no mode), then just above mode k+1 (relative gap
-    # 1e-6 >> SLEPc's accuracy): mode k+1 is in the band
+    # 1e-6 >> SLEPc's accuracy): mode k+1 is in the band. ``shifted``: the band solved
+    # shift-inverted at its middle (fem.petsc_cb.shifted_pairs), as bands of 100 modes or
+    # more are (forced here: SHIFT_MIN_MODES = 1; 31 modes stay below the dense size)
+    from liftoff.fem import petsc_cb
+
+    if shifted:
+        monkeypatch.setattr(petsc_cb, "SHIFT_MIN_MODES", 1)
     comp, bl = block()
     i = np.setdiff1d(np.arange(comp.n_dof), comp.dofs_of(bl))
     lam = sla.eigh(comp.K[i][:, i].toarray(), comp.M[i][:, i].toarray(), eigvals_only=True)
@@ -112,6 +119,74 @@ def test_band_returns_exactly_the_modes_below_f_max(k):
     cb = craig_bampton(comp, bl, f_max=f[k] * (1 + 1e-6), solver=petsc_solver())
     assert cb.n_modes == k + 1 and np.allclose(cb.fixed_freq_hz, f[: k + 1], rtol=1e-10)
     assert "count_s" in cb.timings
+    dense = petsc_cb.dense_interior(i.size, k + 1)
+    assert ("eigen_shift" in cb.timings) == (shifted and not dense)
+
+
+def test_a_large_band_is_shift_inverted_at_its_middle(monkeypatch):
+    """A band of 120 fixed-interface modes (at least SHIFT_MIN_MODES) of a 3,690-DOF hex block:
+    solved shift-inverted at half its top eigenvalue (the basis smaller than the unshifted
+    one's), against the unshifted block Lanczos solve (SHIFT_MIN_MODES raised) and the scipy
+    CB (ARPACK): the same count, frequencies within 1e-10 (both solves meet a 1e-10 relative
+    residual and the shifted eigenvalues are Rayleigh quotients, accurate to its square), K
+    and M within 1e-8 (the module's tolerances)."""
+    from liftoff.fem import petsc_cb
+
+    comp, bl = block((4, 5, 40), (0.1, 0.13, 1.2))
+    i = np.setdiff1d(np.arange(comp.n_dof), comp.dofs_of(bl))
+    lam = sla.eigh(comp.K[i][:, i].toarray(), comp.M[i][:, i].toarray(), eigvals_only=True, subset_by_index=[0, 130])
+    f = np.sqrt(lam) / (2 * np.pi)
+    f_max = 0.5 * (f[119] + f[120])
+    assert f[120] / f[119] - 1 > 1e-4
+    cb = craig_bampton(comp, bl, f_max=f_max, solver=petsc_solver())
+    assert cb.n_modes == 120 >= petsc_cb.SHIFT_MIN_MODES
+    assert cb.timings["eigen_shift"] == pytest.approx(0.5 * (2 * np.pi * f_max) ** 2)
+    assert cb.timings["eigen_below_shift"] == np.sum(lam < cb.timings["eigen_shift"])
+    monkeypatch.setattr(petsc_cb, "SHIFT_MIN_MODES", 10 ** 6)
+    plain = craig_bampton(comp, bl, f_max=f_max, solver=petsc_solver())
+    assert "eigen_shift" not in plain.timings
+    assert cb.timings["eigen_dimension"] < plain.timings["eigen_dimension"]
+    ref = craig_bampton(comp, bl, f_max=f_max)
+    for other in (plain, ref):
+        df, dK, dM = compare(other, cb, comp.M)
+        print(f"shifted basis {cb.timings['eigen_dimension']} (unshifted {plain.timings['eigen_dimension']}): "
+              f"freq {df:.1e}, K {dK:.1e}, M {dM:.1e}")
+        assert df < 1e-10 and dK < 1e-8 and dM < 1e-8
+    assert np.allclose(cb.fixed_freq_hz, f[:120], rtol=1e-10)
+
+
+def test_the_shifted_solve_checks_its_count_and_steps_back_where_sigma_is_singular(monkeypatch):
+    """The pairs a shifted solve finds below sigma must number the negative pivots of K_ii -
+    sigma M_ii (a ConvergenceError otherwise: a lost mode of a cluster); where that factor
+    fails as singular (sigma an eigenvalue) the band is solved unshifted, the same modes."""
+    from liftoff.core.errors import ConvergenceError
+    from liftoff.fem import petsc_cb
+
+    monkeypatch.setattr(petsc_cb, "SHIFT_MIN_MODES", 1)
+    comp, bl = block()
+    ref = craig_bampton(comp, bl, f_max=15000.0, solver=petsc_solver())
+    assert "eigen_shift" in ref.timings and ref.n_modes >= 20
+    real = petsc_cb.fixed_interface_pairs
+
+    def one_lost(*a, **k):
+        lam, phi, info = real(*a, **k)
+        return lam, phi, {**info, "eigen_below_shift": info["eigen_below_shift"] - 1}
+
+    monkeypatch.setattr(petsc_cb, "fixed_interface_pairs", one_lost)
+    with pytest.raises(ConvergenceError, match="a mode of a near-multiple cluster was missed"):
+        craig_bampton(comp, bl, f_max=15000.0, solver=petsc_solver())
+    monkeypatch.setattr(petsc_cb, "fixed_interface_pairs", real)
+    real_set_up = petsc_cb._set_up
+
+    def singular_when_shifted(ksp, who, setup=None, definite=True):
+        if not definite:
+            raise InputError("singular")
+        return real_set_up(ksp, who, setup, definite)
+
+    monkeypatch.setattr(petsc_cb, "_set_up", singular_when_shifted)
+    cb = craig_bampton(comp, bl, f_max=15000.0, solver=petsc_solver())
+    assert "eigen_shift" not in cb.timings and cb.n_modes == ref.n_modes
+    assert np.allclose(cb.fixed_freq_hz, ref.fixed_freq_hz, rtol=1e-10)
 
 
 @pytest.mark.parametrize("select", [dict(n_modes=40), dict(f_max=15000.0)])
@@ -223,14 +298,15 @@ def test_fe_component_serial_and_two_ranks(msh):
     runs = [_mpirun(n, path, 3000.0) for n in (1, 2)]
     assert [r["size"] for r in runs] == [1, 2] and runs[0]["n_dof"] == runs[1]["n_dof"]
     for r in runs:
-        for key in ("count", "band"):
+        assert r["band_shifted"]["shifted"] and not r["band"]["shifted"]
+        for key in ("count", "band", "band_shifted"):
             c = r[key]
             print(f"{r['size']} rank(s), {key}: {c['n']} modes, freq {c['freq_err']:.1e}, K {c['K_err']:.1e}, "
                   f"M {c['M_err']:.1e}, T_c {c['T_err']:.1e}")
             assert c["n"][0] == c["n"][1] and c["freq_err"] < 1e-10 and c["K_err"] < 1e-8 and c["M_err"] < 1e-8
             assert c["T_err"] < 1e-8
     assert runs[0]["band"]["n"][0] >= 3
-    for key in ("count", "band"):
+    for key in ("count", "band", "band_shifted"):
         a, b = runs[0][key], runs[1][key]
         assert np.allclose(a["freq"], b["freq"], rtol=1e-10)
         for m in ("K_B", "M_B"):
