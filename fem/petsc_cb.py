@@ -474,8 +474,10 @@ def fixed_interface_pairs(ksp, Kii: PETSc.Mat, Mii: PETSc.Mat, wet, want: int, t
     fem.liquid.wet_mass, or None. ``shift`` sigma > 0: ``ksp`` holds the factor of K_ii - sigma
     M_ii (dry components, :func:`shifted_pairs`), the pairs are the ``want`` nearest sigma and
     their eigenvalues the Rayleigh quotients x^T K_ii x / x^T M_ii x (sigma + 1 / theta loses
-    sigma / lambda of its digits to cancellation for the lowest modes: 7.7e-10 on the default
-    orbiter's first). Returns (omega^2 ascending, this process's rows of the mass-normalised
+    sigma / lambda of its digits for the lowest modes; against SLEPc's the quotients were the
+    closer on the two default components tried: the booster 5e-12 against 5e-11, the orbiter
+    3e-10 against 8e-10, its lowest mode, where sigma's nearness to an eigenvalue amplifies
+    round-off either way). Returns (omega^2 ascending, this process's rows of the mass-normalised
     modes, {'eigen_dimension', 'eigen_blocks', 'eigen_second_passes', 'eigen_mass_image',
     'eigen_below_shift'})."""
     from .block_lanczos import block_lanczos
@@ -517,12 +519,14 @@ def fixed_interface_pairs(ksp, Kii: PETSc.Mat, Mii: PETSc.Mat, wet, want: int, t
 
 
 #: a band of at least this many fixed-interface modes of a dry component is solved with the
-#: shift at its middle (:func:`shifted_pairs`), at the cost of one more factor; measured on
-#: the default's components (2026-12-07, two BLAS threads): srb_left's 304 modes took a basis
-#: of 736 vectors instead of 960 and 17.9 s instead of 27.6 (its factor 1.5 s), the orbiter's
-#: 166 432 instead of 544 and 8.6 s instead of 11.7 (0.9 s), the pad's 30 192 instead of 240,
-#: 4.5 s instead of 5.6, but its factor took 2.8 s: a loss below about a hundred modes
-SHIFT_MIN_MODES = 100
+#: shift at its middle (:func:`shifted_pairs`), at the cost of one more factor. Measured on the
+#: default's components (2026-12-07, benchmarks/bench_cb_default.py, two BLAS threads, each
+#: solve with its own factor): srb_left's 304 modes 20.8 s shifted (a basis of 736 vectors)
+#: against 24.7 s + 1.5 s (960), its eigenvalues 5e-12 from SLEPc's; the orbiter's 166 modes
+#: 9.7 s either way (432 against 544 vectors) and its lowest eigenvalue 3e-10 from SLEPc's
+#: (round-off amplified where sigma nears an eigenvalue); the pad's 30 a loss (its factor
+#: 2.8 s against 1.1 s saved): the shift pays from a few hundred modes
+SHIFT_MIN_MODES = 200
 
 
 def shifted_pairs(Kii: PETSc.Mat, Mii: PETSc.Mat, want: int, lam_max: float, tol: float,
