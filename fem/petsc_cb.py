@@ -520,12 +520,13 @@ def fixed_interface_pairs(ksp, Kii: PETSc.Mat, Mii: PETSc.Mat, wet, want: int, t
 
 #: a band of at least this many fixed-interface modes of a dry component is solved with the
 #: shift at its middle (:func:`shifted_pairs`), at the cost of one more factor. Measured on the
-#: default's components (2026-12-07, benchmarks/bench_cb_default.py, two BLAS threads, each
-#: solve with its own factor): srb_left's 304 modes 20.8 s shifted (a basis of 736 vectors)
-#: against 24.7 s + 1.5 s (960), its eigenvalues 5e-12 from SLEPc's; the orbiter's 166 modes
-#: 9.7 s either way (432 against 544 vectors) and its lowest eigenvalue 3e-10 from SLEPc's
-#: (round-off amplified where sigma nears an eigenvalue); the pad's 30 a loss (its factor
-#: 2.8 s against 1.1 s saved): the shift pays from a few hundred modes
+#: default's components (2026-12-07, benchmarks/bench_cb_default.py, two BLAS threads; the
+#: shifted solve's time includes its extra factor, K_ii's is needed by the constraint modes
+#: either way): srb_left's 304 modes 20.0-20.8 s shifted (a basis of 736 vectors) against
+#: 23.7-24.7 s (960), its eigenvalues 5e-12 from SLEPc's; the orbiter's 166 modes 9.7 s either
+#: way (432 against 544 vectors) and its lowest eigenvalue 3e-10 from SLEPc's (round-off
+#: amplified where sigma nears an eigenvalue); the pad's 30 a loss (its factor 2.8 s against
+#: 1.1 s saved): the shift pays from a few hundred modes
 SHIFT_MIN_MODES = 200
 
 
