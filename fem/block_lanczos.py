@@ -1,4 +1,4 @@
-"""The lowest eigenpairs of K x = lambda B x by block shift-invert Lanczos: blocks of
+"""The lowest eigenpairs of K x = lambda B x (or those nearest a shift) by block shift-invert Lanczos: blocks of
 right-hand sides through one factor of K.
 
 A Craig-Bampton reduction needs every fixed-interface mode below f_max (section 3.0 of
@@ -23,6 +23,11 @@ a factor of 4.1e7 entries) one solve takes 74 ms, one of 16 or more vectors 13 m
   each, ||A x - theta x||_B = ||E y_last||, is exact (no estimate beyond the Arnoldi
   relation); a pair is converged when that residual is below ``tol`` times theta, the
   criterion of SLEPc's default (EPS_CONV_REL on the shift-inverted operator).
+
+Shift: with ``shift`` sigma > 0 the operator is A = (K - sigma B)^-1 B (the caller's factor)
+and lambda = sigma + 1 / theta; the ``want`` Ritz values of largest magnitude are taken, both
+ends of the spectrum: for sigma = lambda_max / 2 they are the band [0, lambda_max] exactly
+(fem.petsc_cb.shifted_pairs), and its top converges in a smaller basis than at sigma = 0.
 
 Memory: V (n x dimension) and, to save a mass application a block, its B-image BV. Where
 both would take more than MASS_IMAGE_SHARE of the machine's memory at the largest basis
@@ -64,7 +69,8 @@ def _small_pages():
     1.0-1.4 s against 0.32-0.38 s in 4 kB pages, and the default booster's CB stage 30.2-30.6 s
     against 28.0-28.4 s (one BLAS thread, 2026-12-07); the transient, whose histories are
     touched as often as written, was not faster without it (0.91-0.94 against 0.97 s a case)."""
-    setter = getattr(np.core.multiarray, "_set_madvise_hugepage", None)
+    core = getattr(np, "_core", None) or np.core
+    setter = getattr(core.multiarray, "_set_madvise_hugepage", None)
     if setter is None:
         yield
         return
@@ -76,11 +82,17 @@ def _small_pages():
 
 
 def physical_memory() -> float:
-    """This machine's memory in bytes (inf where the system does not say)."""
+    """This machine's memory in bytes, or its container's limit where smaller (inf where the
+    system does not say)."""
     try:
-        return float(os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
+        total = float(os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
     except (ValueError, OSError, AttributeError):
-        return float("inf")
+        total = float("inf")
+    try:                                     # a container's limit (cgroup v2), where smaller
+        limit = open("/sys/fs/cgroup/memory.max").read().strip()
+        return min(total, float(limit)) if limit.isdigit() else total
+    except OSError:
+        return total
 
 
 def keeps_mass_image(n_global: int, dim: int) -> bool:
@@ -205,7 +217,7 @@ def block_lanczos(solve: Block, mass: Block, n_local: int, n_global: int, row0: 
     converged at ``max_dim`` basis vectors (default 6 want + 10 blocks, at least 20 blocks; the
     default components needed 2.2-3.9 want). ``keep_mass_image``: keep the basis' B-image
     (None: :func:`keeps_mass_image`; module docstring); info's 'mass_image' says which.
-    ``shift`` sigma > 0: ``solve`` applies (K - sigma B)^-1 (module docstring, "Shift"): the
+    ``shift`` sigma > 0: ``solve`` applies (K - sigma B)^-1 (module docstring, "Shift:"): the
     ``want`` eigenvalues nearest sigma, lambda = sigma + 1 / theta for the Ritz values theta of
     largest magnitude; info's 'below_shift' counts those below sigma (the factor's inertia
     must say the same)."""
@@ -221,6 +233,8 @@ def block_lanczos(solve: Block, mass: Block, n_local: int, n_global: int, row0: 
     # the whole basis at once, Fortran order (V[:, :m] contiguous for BLAS): pages are touched
     # only as columns are written, and nothing is copied as it grows
     keep = keeps_mass_image(n_global, cap_dim) if keep_mass_image is None else bool(keep_mass_image)
+    if comm.size > 1:                        # one choice on every process (their machines may differ)
+        keep = bool(comm.allreduce(keep, op=MPI.LAND))
     with _small_pages():
         V = np.empty((n_local, cap_dim), order="F")
         BV = np.empty((n_local, cap_dim), order="F") if keep else None

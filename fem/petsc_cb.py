@@ -12,7 +12,9 @@ by ``reduction.craig_bampton`` (one CB method, the solver injected):
   MUMPS; faster than SLEPc's one-vector Krylov-Schur on every default component,
   benchmarks/bench_cb_default.py), and it gives the constraint
   modes Psi = -K_ii^-1 K_ib in one multi-right-hand-side solve (``MatMatSolve`` of the
-  factor: petsc4py 3.18 has no KSP.matSolve);
+  factor: petsc4py 3.18 has no KSP.matSolve); a band of ``SHIFT_MIN_MODES`` or more of a dry
+  component is solved on a second factor, of K_ii - sigma M_ii at the band's middle
+  (:func:`shifted_pairs`), before K_ii's (one factor at a time);
 * a band (``f_max`` without ``n_modes``): the number of eigenvalues below
   (2 pi f_max)^2 is the number of negative pivots of an LDL^T factor of
   K_ii - (2 pi f_max)^2 M_ii (Sylvester's law of inertia, MUMPS INFOG(12)); that many
@@ -105,7 +107,7 @@ class PetscSolver:
                     and not dense_interior(n_i, want)):      # the band's middle as the shift, its own factor
                 t0 = time.perf_counter()
                 shifted = shifted_pairs(Kii, Mii, want, lam_max, self.tol, who)
-                timings["eigensolve_s"] = time.perf_counter() - t0
+                timings["eigensolve_s" if shifted is not None else "shift_attempt_s"] = time.perf_counter() - t0
             t0 = time.perf_counter()
             with _factored_operator(Kii, Mii if B is None else B, want, self.tol, who, self.eigensolver) as (ksp, eps):
                 timings["factor_s"] = time.perf_counter() - t0
@@ -410,7 +412,7 @@ def _factor_kii(Kii: PETSc.Mat, who: str, workspace: int | None = None):
             ksp.destroy()
 
 
-def _set_up(ksp, who: str, setup=None, definite: bool = True) -> tuple[int, int]:
+def _set_up(ksp, who: str, setup=None, definite: bool = True, what: str = "K_ii") -> tuple[int, int]:
     """Factor K_ii (``setup``: what factors it, default ``ksp.setUp``; SLEPc's EPSSetUp);
     a null or negative pivot means K_ii is singular (``definite`` False: a shifted K_ii -
     sigma M_ii, whose negative pivots are its eigenvalues below sigma, allowed). A failure of
@@ -423,7 +425,7 @@ def _set_up(ksp, who: str, setup=None, definite: bool = True) -> tuple[int, int]
         _raise_if_short(ksp)
         info = _mumps_infog(ksp)
         if info is not None and info[0] < 0 and info[0] not in MUMPS_SINGULAR:
-            raise ResourceError(f"{who}: MUMPS failed to factor K_ii (PETSc error {exc.ierr}, INFOG(1) = {info[0]}, "
+            raise ResourceError(f"{who}: MUMPS failed to factor {what} (PETSc error {exc.ierr}, INFOG(1) = {info[0]}, "
                                 f"INFOG(2) = {info[1]}: its workspace or memory, not a singular matrix); run again, "
                                 "with fewer ranks or more memory") from None
         detail = f"PETSc error {exc.ierr}" + ("" if info is None else f", INFOG(1) = {info[0]}")
@@ -549,7 +551,7 @@ def shifted_pairs(Kii: PETSc.Mat, Mii: PETSc.Mat, want: int, lam_max: float, tol
         for workspace in MUMPS_WORKSPACE_TRIES:
             with _factor_kii(A, who, workspace) as ksp:
                 try:
-                    nneg, nzero = _set_up(ksp, who, definite=False)
+                    nneg, nzero = _set_up(ksp, who, definite=False, what="K_ii - sigma M_ii")
                 except _WorkspaceShort as exc:
                     short = exc
                     continue
