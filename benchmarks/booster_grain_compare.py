@@ -19,7 +19,8 @@ grain booster is reduced: ``--f-max 15`` and then ``--f-max 20 25 --no-solid`` r
 second process peaking at 22.8 GB resident. On 2026-12-07 ``--f-max 30 --no-solid`` ran in
 a process of its own (817 booster modes): 22.9 GB used on the machine at its peak keeping the
 block Lanczos basis' B-image, 18.6 GB (17.9 in one process) without it (fem.block_lanczos
-drops it for a basis this large).
+drops it for a basis this large), 16.2 GB (17.0) and a CB stage of 205 s instead of 326 s
+with the band shift-inverted at its middle (fem.petsc_cb.shifted_pairs).
 """
 from __future__ import annotations
 
