@@ -123,14 +123,18 @@ def _second_pass(after: np.ndarray, C: np.ndarray) -> bool:
     return bool(np.any(after < 0.25 * (after + np.einsum("ij,ij->j", C, C))))
 
 
-def _pass_again(comm: MPI.Comm, V: np.ndarray, BV: np.ndarray, W: np.ndarray, BW: np.ndarray,
-                work: np.ndarray) -> np.ndarray:
+def _pass_again(comm: MPI.Comm, V: np.ndarray, BV: np.ndarray | None, W: np.ndarray, BW: np.ndarray,
+                work: np.ndarray, mass: Block | None = None) -> np.ndarray:
     """One more Gram-Schmidt pass of the block W against the B-orthonormal V, in place, and
-    of its B-image BW with it (BW - BV C = B (W - V C): no mass application); returns the
-    coefficients C = (BV)^T W."""
-    C = _dot(comm, BV, W)
+    of its B-image BW with it; returns the coefficients C. With V's B-image ``BV``: C =
+    (BV)^T W and BW - BV C = B (W - V C), no mass application; without it (None: not kept,
+    module docstring): C = V^T BW and BW = ``mass``(W) again."""
+    C = _dot(comm, BV, W) if BV is not None else _dot(comm, V, BW)
     W -= np.matmul(V, C, out=work)
-    BW -= BV @ C
+    if BV is not None:
+        BW -= BV @ C
+    else:
+        BW[...] = mass(W)
     return C
 
 
@@ -264,13 +268,7 @@ def block_lanczos(solve: Block, mass: Block, n_local: int, n_global: int, row0: 
         blocks += 1
         BW = mass(W)
         if _second_pass(_colsum(comm, W * BW), C2):
-            if keep:
-                H[:m, j0:m] += _pass_again(comm, V[:, :m], BV[:, :m], W, BW, work)
-            else:
-                C3 = _dot(comm, V[:, :m], BW)
-                W -= np.matmul(V[:, :m], C3, out=work)
-                BW = mass(W)
-                H[:m, j0:m] += C3
+            H[:m, j0:m] += _pass_again(comm, V[:, :m], BV[:, :m] if keep else None, W, BW, work, mass)
             again += 1
         if m >= want and (blocks >= next_check or m + p > cap_dim):     # a last check when the basis is full
             theta, Y = _ritz(H, m, p, want, magnitude=shift != 0.0)

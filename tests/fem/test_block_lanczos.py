@@ -134,11 +134,13 @@ def test_the_second_gram_schmidt_pass_keeps_the_arnoldi_relation(monkeypatch, pe
     assert np.max(np.abs(X.T @ Bd @ X - np.eye(want))) < 1e-12
 
 
-def test_a_repeated_pass_updates_the_block_and_its_b_image():
+@pytest.mark.parametrize("keep", [True, False])
+def test_a_repeated_pass_updates_the_block_and_its_b_image(keep):
     """The repeated pass (fem.block_lanczos._pass_again) on a block that is almost all in
     span(V) (what the DGKS criterion catches): what is left is B-orthogonal to V and its
-    B-image is kept equal to B times it without a mass application (both to round-off of
-    the removed part: eps x 1e10 of what is left)."""
+    B-image is kept equal to B times it, without a mass application where V's B-image is
+    kept, by one where it is not (``keep``; both to round-off of the removed part: eps x 1e10
+    of what is left)."""
     from mpi4py import MPI
 
     from liftoff.fem.block_lanczos import _pass_again, _second_pass
@@ -153,7 +155,7 @@ def test_a_repeated_pass_updates_the_block_and_its_b_image():
     W = np.asfortranarray(V @ rng.standard_normal((m, p)) + 1e-10 * rng.standard_normal((n, p)))
     BW = B @ W
     before = np.einsum("ij,ij->j", W, BW)
-    C = _pass_again(MPI.COMM_SELF, V, BV, W, BW, np.empty((n, p), order="F"))
+    C = _pass_again(MPI.COMM_SELF, V, BV if keep else None, W, BW, np.empty((n, p), order="F"), lambda X: B @ X)
     after = np.einsum("ij,ij->j", W, BW)
     assert _second_pass(after, C) and not _second_pass(before, np.zeros((m, p)))
     left = np.linalg.norm(W, axis=0)
