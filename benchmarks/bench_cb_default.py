@@ -61,7 +61,7 @@ def bench_component(model, name: str, cache, repeat: int) -> dict:
                                comp.liquid.G[:, interior], comp.liquid.H, lam_max, name)
     times = {"block_lanczos": [], "slepc": [], "shifted": []}
     lam = {}
-    shifted = wet is None and want >= pc.SHIFT_MIN_MODES and not pc.dense_interior(interior.size, want)
+    shifted = pc.shifts_band(want, interior.size, wet is not None)
     shifted_dim = None
     try:
         for _ in range(repeat if shifted else 0):   # the CB stage's solve of this band: its own factor, timed

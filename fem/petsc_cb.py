@@ -103,13 +103,13 @@ class PetscSolver:
                     raise InputError(_band_error(who, band_limit, f_max, from_count))
                 want = count_max
             shifted = None
-            if (n_modes is None and B is None and self.eigensolver == "block-lanczos" and want >= SHIFT_MIN_MODES
-                    and not dense_interior(n_i, want)):      # the band's middle as the shift, its own factor
+            if n_modes is None and self.eigensolver == "block-lanczos" and shifts_band(want, n_i, B is not None):
+                #                                   the band's middle as the shift, its own factor
                 t0 = time.perf_counter()
                 shifted = shifted_pairs(Kii, Mii, want, lam_max, self.tol, who)
                 timings["eigensolve_s" if shifted is not None else "shift_attempt_s"] = time.perf_counter() - t0
             t0 = time.perf_counter()
-            with _factored_operator(Kii, Mii if B is None else B, want, self.tol, who, self.eigensolver) as (ksp, eps):
+            with _factored_operator(Kii, Mii if B is None else B, want, self.tol, who, self.eigensolver) as (ksp, eps, _):
                 timings["factor_s"] = time.perf_counter() - t0
                 t0 = time.perf_counter()
                 if shifted is not None:
@@ -195,20 +195,22 @@ def _operator(Kii: PETSc.Mat, B: PETSc.Mat, want: int, tol: float, who: str, eig
 
 
 @contextmanager
-def _factored_operator(Kii: PETSc.Mat, B: PETSc.Mat, want: int, tol: float, who: str, eigensolver: str):
-    """:func:`_operator` with K_ii factored (:func:`_set_up`), the factor redone with a
-    larger MUMPS workspace while MUMPS reports its workspace too small."""
+def _factored_operator(Kii: PETSc.Mat, B: PETSc.Mat, want: int, tol: float, who: str, eigensolver: str,
+                       definite: bool = True, what: str = "K_ii"):
+    """(ksp, eps, (negative, null) pivots): :func:`_operator` with K_ii factored
+    (:func:`_set_up`; ``definite``, ``what`` as its), the factor redone with a larger MUMPS
+    workspace while MUMPS reports its workspace too small."""
     short = None
     for workspace in MUMPS_WORKSPACE_TRIES:
         with _operator(Kii, B, want, tol, who, eigensolver, workspace) as (ksp, eps):
             try:
-                _set_up(ksp, who, setup=None if eps is None else eps.setUp)
+                pivots = _set_up(ksp, who, setup=None if eps is None else eps.setUp, definite=definite, what=what)
             except _WorkspaceShort as exc:
                 short = exc
                 continue
-            yield ksp, eps
+            yield ksp, eps, pivots
             return
-    raise _workspace_error(who, "K_ii", short)
+    raise _workspace_error(who, what, short)
 
 
 # ------------------------------------------------------------------ pieces
@@ -532,6 +534,12 @@ def fixed_interface_pairs(ksp, Kii: PETSc.Mat, Mii: PETSc.Mat, wet, want: int, t
 SHIFT_MIN_MODES = 200
 
 
+def shifts_band(want: int, n_i: int, wet: bool) -> bool:
+    """Whether a band of ``want`` modes of an interior of ``n_i`` DOFs is solved by
+    :func:`shifted_pairs` (block Lanczos, no wet mass, at least SHIFT_MIN_MODES, not dense)."""
+    return not wet and want >= SHIFT_MIN_MODES and not dense_interior(n_i, want)
+
+
 def shifted_pairs(Kii: PETSc.Mat, Mii: PETSc.Mat, want: int, lam_max: float, tol: float,
                   who: str) -> tuple[np.ndarray, np.ndarray, dict] | None:
     """The ``want`` eigenpairs of K_ii x = lambda M_ii x in [0, ``lam_max``] (the band's count)
@@ -542,30 +550,23 @@ def shifted_pairs(Kii: PETSc.Mat, Mii: PETSc.Mat, want: int, lam_max: float, tol
     sigma must number the factor's negative pivots (Sylvester), else a ConvergenceError.
     None where sigma is (numerically) an eigenvalue: the caller solves unshifted."""
     sigma = 0.5 * lam_max
-    comm = Kii.getComm().tompi4py()
     A = Kii.copy()
-    short = None
     try:
         A.axpy(-sigma, Mii, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
         A.setOption(PETSc.Mat.Option.SYMMETRIC, True)
-        for workspace in MUMPS_WORKSPACE_TRIES:
-            with _factor_kii(A, who, workspace) as ksp:
-                try:
-                    nneg, nzero = _set_up(ksp, who, definite=False, what="K_ii - sigma M_ii")
-                except _WorkspaceShort as exc:
-                    short = exc
-                    continue
-                except InputError:          # singular at sigma
-                    return None
+        try:
+            with _factored_operator(A, Mii, want, tol, who, "block-lanczos", definite=False,
+                                    what="K_ii - sigma M_ii") as (ksp, _, (nneg, nzero)):
                 if nzero:
                     return None
                 lam, phi, info = fixed_interface_pairs(ksp, Kii, Mii, None, want, tol, who, shift=sigma)
-                if info["eigen_below_shift"] != nneg:
-                    raise ConvergenceError(f"{who}: the fixed-interface eigensolve found {info['eigen_below_shift']} modes "
-                                           f"below {np.sqrt(sigma) / (2 * np.pi):.6g} Hz, where the inertia of K_ii - "
-                                           f"sigma M_ii counts {nneg}: a mode of a near-multiple cluster was missed")
-                return lam, phi, {**info, "eigen_shift": sigma}
-        raise _workspace_error(who, "K_ii - sigma M_ii", short)
+        except InputError:                  # _set_up's: the factor failed as singular at sigma
+            return None
+        if info["eigen_below_shift"] != nneg:
+            raise ConvergenceError(f"{who}: the fixed-interface eigensolve found {info['eigen_below_shift']} modes "
+                                   f"below {np.sqrt(sigma) / (2 * np.pi):.6g} Hz, where the inertia of K_ii - "
+                                   f"sigma M_ii counts {nneg}: a mode of a near-multiple cluster was missed")
+        return lam, phi, {**info, "eigen_shift": sigma}
     finally:
         A.destroy()
 
