@@ -26,16 +26,18 @@ once for all of them and keeps as per-case data only what must be (3 n a case):
   v - omega^2 q substituted).
 
 The work over all modes is then one pass a step over the group (``_modes``): per mode its
-Pc = Phi^T F, its load terms, the sweep and its share of e_free = Phi X_q, each shared row
-read once; the output products stay BLAS-3; the contact solve stays per
+Pc = Phi^T F, its load terms, the sweep and its shares of e_free = Phi X_q and of the
+outputs' state terms (its body's output rows on X_q and X_v), each shared row read once,
+four modes at a time for a full group (``_modes8``); the contact solve stays per
 case: kernel.py's candidate rows and active-set solve (``_candidates``, ``_solve_direct``),
 the pattern inverses shared (one W) with each case's last pattern tried first. Before the
 group's first release every row of every case is bolted: one pattern, no iteration, and the
 group's forces are one product with its inverse.
 
 Measured: benchmarks/bench_batch.py at 3,000 + 300 modes, 24 rows, 64 cases, its figures
-rendered into README "Benchmarks"; the speed-up depends on the machine's cache and BLAS (the
-products with 8 columns are short of BLAS-3 speed where the core's L2 is small).
+rendered into README "Benchmarks"; the speed-up depends on the machine's cache (the pass
+streams Phi and the output rows from the core's L2 where they fit: 0.6 MB at 3,300 modes
+and 24 rows).
 
 Scope: the reference's contact law with penalty rows and the direct solve (no rigid rows,
 friction, dashpots, latches or soft release: solve those one by one); one step for all
@@ -43,7 +45,7 @@ friction, dashpots, latches or soft release: solve those one by one); one step f
 outside it is refused with the field that differs.
 
 Results are the one-by-one solve's to round-off, not bit for bit: the sums run in another
-order (BLAS-3 and the substituted state). How far apart two orders of the same sums may land
+order (the fused pass and the substituted state). How far apart two orders of the same sums may land
 is a property of the problem, not of this module: a bolted stack's contact forces are K_C
 times small differences of large modal displacements (tests/transient/test_batch.py
 measures it against a one-by-one solve of the same case with its modes reordered).
@@ -82,7 +84,7 @@ BASIS_RTOL = 1e-14
 class Shared(NamedTuple):
     """What every case of a batch shares (n modes of both bodies, n_c contact rows)."""
 
-    S: np.ndarray        # (6, n) sweep coefficients F G Dq Fd Gd Dv, Dq = F Bc + G Bcd + Ac (Dv alike)
+    ST: np.ndarray       # (n, 6) sweep coefficients F G Dq Fd Gd Dv of each mode, Dq = F Bc + G Bcd + Ac (Dv alike)
     Mq: np.ndarray       # (n, m) X_q's load columns: [Ac B^T | Bc B^T | (Ac + Bc) Ub]
     Mv: np.ndarray       # (n, m) X_v's: [Acd B^T | Bcd B^T | (Acd + Bcd) Ub]
     PhiT: np.ndarray     # (n, n_c) contact rows [Phi_a, -Phi_b] transposed (a mode's row contiguous)
@@ -96,16 +98,11 @@ class Shared(NamedTuple):
     axial: np.ndarray    # (n_c,) bool
     nsign: np.ndarray    # (n_c,) normal sign
     na: int              # modes of body a (then body b's)
-    Aq_a: np.ndarray     # (k_q, na) body a's outputs from X_q, its rows that are not zero ...
-    iq_a: np.ndarray     # (k_q,) int64 ... and the targets they add to
-    Av_a: np.ndarray     # (k_v, na) from X_v
-    iv_a: np.ndarray     # (k_v,) int64
-    Ax_a: np.ndarray     # (ntarg_a, n_c + n_b + r_u) from [f; g(tb); z]
-    Aq_b: np.ndarray     # the same for body b
-    iq_b: np.ndarray
-    Av_b: np.ndarray
-    iv_b: np.ndarray
-    Ax_b: np.ndarray
+    R: tuple             # (RqT_a, RvT_a, RqT_b, RvT_b): each body's output rows on its X_q, X_v that are
+    #                      not zero, transposed ((na, k) and (n - na, k)) ...
+    iR: tuple            # ... and the targets each adds to (int64; body b's after body a's ntarg_a)
+    Ax: np.ndarray       # (ntarg_a + ntarg_b, n_c + n_b + r_u) the outputs from [f; g(tb); z]
+    ntarg_a: int         # body a's targets (then body b's)
 
 
 class Cases(NamedTuple):
@@ -147,25 +144,39 @@ class GroupHistory(NamedTuple):
 
 # ------------------------------------------------------------------ kernel
 @njit(cache=True, fastmath=False)
-def _modes(S, Xq, Xv, Pc, F, PhiT, Mq, Mv, Y, E, from_f):
+def _modes(ST, Xq, Xv, Pc, F, PhiT, Mq, Mv, Y, E, na, R, O, from_f):
     """One pass over the modes of the group's step (module docstring), the cases of a mode
     contiguous: per mode its contact load Pc = Phi^T f of the last step's force (taken from F
     when ``from_f``, else the state's Pc as it stands), its load terms Mq Y and Mv Y, the free
-    state X <- F X_q + G X_v + D Pc + L (eq. 9-10 in sweep form), and its share of the contact
-    rows' free displacement E = Phi X_q. Each row of PhiT, Mq and Mv read once a step instead
-    of once a product. A full group (K = :data:`GROUP` = 8) takes :func:`_modes8`: the same
-    arithmetic in the same order, bit for bit."""
+    state X <- F X_q + G X_v + D Pc + L (eq. 9-10 in sweep form), and its shares of the contact
+    rows' free displacement E = Phi X_q and of its body's output terms O = (Rq_a X_q_a, Rv_a X_v_a,
+    Rq_b X_q_b, Rv_b X_v_b) (R: the rows transposed, as Shared.R). Each row of PhiT, Mq, Mv and
+    R read once a step instead of once a product (with 8 columns a BLAS product spent more time
+    packing the state than multiplying). Body a's modes (the first ``na``), then body b's, each
+    with its own output rows; E sums the modes in order. A full group (K = :data:`GROUP` = 8)
+    takes :func:`_modes8`: the same arithmetic in the same order, bit for bit."""
     n, K = Xq.shape
-    if K == 8:
-        _modes8(S, Xq, Xv, Pc, F, PhiT, Mq, Mv, Y, E, from_f)
-        return
-    nc, m = PhiT.shape[1], Mq.shape[1]
-    for j in range(nc):
-        for k in range(K):
-            E[j, k] = 0.0
+    E[:] = 0.0
+    for o in O:
+        o[:] = 0.0
+    for lo, hi, RqT, RvT, Oq, Ov in ((0, na, R[0], R[1], O[0], O[1]), (na, n, R[2], R[3], O[2], O[3])):
+        if K == 8:
+            _modes8(ST[lo:hi], Xq[lo:hi], Xv[lo:hi], Pc[lo:hi], F, PhiT[lo:hi], Mq[lo:hi], Mv[lo:hi], Y, E, RqT, RvT,
+                    Oq, Ov, from_f)
+        else:
+            _modes_rolled(ST[lo:hi], Xq[lo:hi], Xv[lo:hi], Pc[lo:hi], F, PhiT[lo:hi], Mq[lo:hi], Mv[lo:hi], Y, E,
+                          RqT, RvT, Oq, Ov, from_f)
+
+
+@njit(cache=True, fastmath=False)
+def _modes_rolled(ST, Xq, Xv, Pc, F, PhiT, Mq, Mv, Y, E, RqT, RvT, Oq, Ov, from_f):
+    """:func:`_modes` over one body's modes (the arrays its rows), any number of cases; adds to
+    E, Oq and Ov."""
+    n, K = Xq.shape
+    nc, m, kq, kv = PhiT.shape[1], Mq.shape[1], RqT.shape[1], RvT.shape[1]
     for i in range(n):
-        Fq = S[0, i]; G = S[1, i]; Dq = S[2, i]; Fd = S[3, i]; Gd = S[4, i]; Dv = S[5, i]
-        phi = PhiT[i]; mq = Mq[i]; mv = Mv[i]; xq = Xq[i]; xv = Xv[i]; p = Pc[i]
+        Fq = ST[i, 0]; G = ST[i, 1]; Dq = ST[i, 2]; Fd = ST[i, 3]; Gd = ST[i, 4]; Dv = ST[i, 5]
+        phi = PhiT[i]; mq = Mq[i]; mv = Mv[i]; xq = Xq[i]; xv = Xv[i]; p = Pc[i]; rq = RqT[i]; rv = RvT[i]
         for k in range(K):
             if from_f:
                 pc = 0.0
@@ -181,68 +192,183 @@ def _modes(S, Xq, Xv, Pc, F, PhiT, Mq, Mv, Y, E, from_f):
                 b = b + mv[j] * Y[j, k]
             q = xq[k]; v = xv[k]
             u = Fq * q + G * v + Dq * pc + a
-            xv[k] = Fd * q + Gd * v + Dv * pc + b
+            w = Fd * q + Gd * v + Dv * pc + b
+            xv[k] = w
             xq[k] = u
             for j in range(nc):
                 E[j, k] = E[j, k] + phi[j] * u
+            for j in range(kq):
+                Oq[j, k] = Oq[j, k] + rq[j] * u
+            for j in range(kv):
+                Ov[j, k] = Ov[j, k] + rv[j] * w
 
 
 @njit(cache=True, fastmath=False)
-def _modes8(S, Xq, Xv, Pc, F, PhiT, Mq, Mv, Y, E, from_f):
-    """:func:`_modes` for eight cases, unrolled with every load of a line before its stores:
-    LLVM cannot prove the rows apart, so the rolled loop stays scalar (one multiply-add at a
-    time); written so, the SLP vectorizer packs each line into vector instructions without
-    reordering a load past a store. The same arithmetic in the same order as the rolled loop."""
-    n, nc, m = PhiT.shape[0], PhiT.shape[1], Mq.shape[1]
-    for j in range(nc):
-        e = E[j]
-        e[0] = 0.0; e[1] = 0.0; e[2] = 0.0; e[3] = 0.0; e[4] = 0.0; e[5] = 0.0; e[6] = 0.0; e[7] = 0.0
-    for i in range(n):
-        Fq = S[0, i]; G = S[1, i]; Dq = S[2, i]; Fd = S[3, i]; Gd = S[4, i]; Dv = S[5, i]
-        phi = PhiT[i]; mq = Mq[i]; mv = Mv[i]; xq = Xq[i]; xv = Xv[i]; p = Pc[i]
+def _modes8(ST, Xq, Xv, Pc, F, PhiT, Mq, Mv, Y, E, RqT, RvT, Oq, Ov, from_f):
+    """:func:`_modes_rolled` for eight cases, four modes at a time: their contact loads (each F row
+    loaded once for the four), then each mode's load terms and sweep, then their shares of E
+    (each E row loaded and stored once for the four), and of Oq and Ov likewise. Every line is unrolled over the cases
+    with its loads before its stores: LLVM cannot prove the rows apart, so a rolled loop stays
+    scalar (one multiply-add at a time); written so, the SLP vectorizer packs each line into
+    vector instructions. Per mode and case the same arithmetic in the same order as the rolled
+    loop, so the same bits (tests/transient/test_batch.py); the four-mode blocks took the pass
+    at 3,300 modes and 24 rows from 97-103 to 62-64 us on this machine (2026-12-07: the products
+    with F and E had been bound by their loads and stores)."""
+    n = PhiT.shape[0]
+    kq, kv = RqT.shape[1], RvT.shape[1]
+    n4 = n - n % 4
+    for i in range(0, n4, 4):
         if from_f:
-            p0 = 0.0; p1 = 0.0; p2 = 0.0; p3 = 0.0; p4 = 0.0; p5 = 0.0; p6 = 0.0; p7 = 0.0
-            for j in range(nc):
-                t = phi[j]; f = F[j]
-                f0 = f[0]; f1 = f[1]; f2 = f[2]; f3 = f[3]; f4 = f[4]; f5 = f[5]; f6 = f[6]; f7 = f[7]
-                p0 = p0 + t * f0; p1 = p1 + t * f1; p2 = p2 + t * f2; p3 = p3 + t * f3
-                p4 = p4 + t * f4; p5 = p5 + t * f5; p6 = p6 + t * f6; p7 = p7 + t * f7
-            p[0] = p0; p[1] = p1; p[2] = p2; p[3] = p3; p[4] = p4; p[5] = p5; p[6] = p6; p[7] = p7
-        else:
-            p0 = p[0]; p1 = p[1]; p2 = p[2]; p3 = p[3]; p4 = p[4]; p5 = p[5]; p6 = p[6]; p7 = p[7]
-        a0 = 0.0; a1 = 0.0; a2 = 0.0; a3 = 0.0; a4 = 0.0; a5 = 0.0; a6 = 0.0; a7 = 0.0
-        b0 = 0.0; b1 = 0.0; b2 = 0.0; b3 = 0.0; b4 = 0.0; b5 = 0.0; b6 = 0.0; b7 = 0.0
-        for j in range(m):
-            tq = mq[j]; tv = mv[j]; y = Y[j]
-            y0 = y[0]; y1 = y[1]; y2 = y[2]; y3 = y[3]; y4 = y[4]; y5 = y[5]; y6 = y[6]; y7 = y[7]
-            a0 = a0 + tq * y0; a1 = a1 + tq * y1; a2 = a2 + tq * y2; a3 = a3 + tq * y3
-            a4 = a4 + tq * y4; a5 = a5 + tq * y5; a6 = a6 + tq * y6; a7 = a7 + tq * y7
-            b0 = b0 + tv * y0; b1 = b1 + tv * y1; b2 = b2 + tv * y2; b3 = b3 + tv * y3
-            b4 = b4 + tv * y4; b5 = b5 + tv * y5; b6 = b6 + tv * y6; b7 = b7 + tv * y7
-        q0 = xq[0]; q1 = xq[1]; q2 = xq[2]; q3 = xq[3]; q4 = xq[4]; q5 = xq[5]; q6 = xq[6]; q7 = xq[7]
-        v0 = xv[0]; v1 = xv[1]; v2 = xv[2]; v3 = xv[3]; v4 = xv[4]; v5 = xv[5]; v6 = xv[6]; v7 = xv[7]
-        u0 = Fq * q0 + G * v0 + Dq * p0 + a0
-        u1 = Fq * q1 + G * v1 + Dq * p1 + a1
-        u2 = Fq * q2 + G * v2 + Dq * p2 + a2
-        u3 = Fq * q3 + G * v3 + Dq * p3 + a3
-        u4 = Fq * q4 + G * v4 + Dq * p4 + a4
-        u5 = Fq * q5 + G * v5 + Dq * p5 + a5
-        u6 = Fq * q6 + G * v6 + Dq * p6 + a6
-        u7 = Fq * q7 + G * v7 + Dq * p7 + a7
-        xv[0] = Fd * q0 + Gd * v0 + Dv * p0 + b0
-        xv[1] = Fd * q1 + Gd * v1 + Dv * p1 + b1
-        xv[2] = Fd * q2 + Gd * v2 + Dv * p2 + b2
-        xv[3] = Fd * q3 + Gd * v3 + Dv * p3 + b3
-        xv[4] = Fd * q4 + Gd * v4 + Dv * p4 + b4
-        xv[5] = Fd * q5 + Gd * v5 + Dv * p5 + b5
-        xv[6] = Fd * q6 + Gd * v6 + Dv * p6 + b6
-        xv[7] = Fd * q7 + Gd * v7 + Dv * p7 + b7
-        xq[0] = u0; xq[1] = u1; xq[2] = u2; xq[3] = u3; xq[4] = u4; xq[5] = u5; xq[6] = u6; xq[7] = u7
-        for j in range(nc):
-            t = phi[j]; e = E[j]
-            e0 = e[0]; e1 = e[1]; e2 = e[2]; e3 = e[3]; e4 = e[4]; e5 = e[5]; e6 = e[6]; e7 = e[7]
-            e[0] = e0 + t * u0; e[1] = e1 + t * u1; e[2] = e2 + t * u2; e[3] = e3 + t * u3
-            e[4] = e4 + t * u4; e[5] = e5 + t * u5; e[6] = e6 + t * u6; e[7] = e7 + t * u7
+            _contact_load8x4(PhiT, F, Pc, i)
+        _sweep8(ST, Xq, Xv, Pc, Mq, Mv, Y, i)
+        _sweep8(ST, Xq, Xv, Pc, Mq, Mv, Y, i + 1)
+        _sweep8(ST, Xq, Xv, Pc, Mq, Mv, Y, i + 2)
+        _sweep8(ST, Xq, Xv, Pc, Mq, Mv, Y, i + 3)
+        _contact_rows8x4(PhiT, Xq, E, i)
+        if kq:
+            _contact_rows8x4(RqT, Xq, Oq, i)
+        if kv:
+            _contact_rows8x4(RvT, Xv, Ov, i)
+    for i in range(n4, n):
+        if from_f:
+            _contact_load8(PhiT, F, Pc, i)
+        _sweep8(ST, Xq, Xv, Pc, Mq, Mv, Y, i)
+        _contact_rows8(PhiT, Xq, E, i)
+        if kq:
+            _contact_rows8(RqT, Xq, Oq, i)
+        if kv:
+            _contact_rows8(RvT, Xv, Ov, i)
+
+
+@njit(cache=True, inline="always")
+def _contact_load8(PhiT, F, Pc, i):
+    """Pc[i] = PhiT[i] F for eight cases (one mode of :func:`_modes8`)."""
+    phi = PhiT[i]
+    p0 = 0.0; p1 = 0.0; p2 = 0.0; p3 = 0.0; p4 = 0.0; p5 = 0.0; p6 = 0.0; p7 = 0.0
+    for j in range(F.shape[0]):
+        t = phi[j]; f = F[j]
+        f0 = f[0]; f1 = f[1]; f2 = f[2]; f3 = f[3]; f4 = f[4]; f5 = f[5]; f6 = f[6]; f7 = f[7]
+        p0 = p0 + t * f0; p1 = p1 + t * f1; p2 = p2 + t * f2; p3 = p3 + t * f3
+        p4 = p4 + t * f4; p5 = p5 + t * f5; p6 = p6 + t * f6; p7 = p7 + t * f7
+    p = Pc[i]
+    p[0] = p0; p[1] = p1; p[2] = p2; p[3] = p3; p[4] = p4; p[5] = p5; p[6] = p6; p[7] = p7
+
+
+@njit(cache=True, inline="always")
+def _contact_rows8(PhiT, Xq, E, i):
+    """E += PhiT[i]^T Xq[i] for eight cases (one mode of :func:`_modes8`; also Oq and Ov)."""
+    phi = PhiT[i]; x = Xq[i]
+    u0 = x[0]; u1 = x[1]; u2 = x[2]; u3 = x[3]; u4 = x[4]; u5 = x[5]; u6 = x[6]; u7 = x[7]
+    for j in range(E.shape[0]):
+        t = phi[j]; e = E[j]
+        e0 = e[0]; e1 = e[1]; e2 = e[2]; e3 = e[3]; e4 = e[4]; e5 = e[5]; e6 = e[6]; e7 = e[7]
+        e[0] = e0 + t * u0; e[1] = e1 + t * u1; e[2] = e2 + t * u2; e[3] = e3 + t * u3
+        e[4] = e4 + t * u4; e[5] = e5 + t * u5; e[6] = e6 + t * u6; e[7] = e7 + t * u7
+
+
+@njit(cache=True, inline="always")
+def _contact_load8x4(PhiT, F, Pc, i):
+    """Pc[i:i + 4] = PhiT[i:i + 4] F for eight cases: each F row loaded once for four modes;
+    per mode the sum over the rows in the order of :func:`_modes`' rolled loop."""
+    r0 = PhiT[i]; r1 = PhiT[i + 1]; r2 = PhiT[i + 2]; r3 = PhiT[i + 3]
+    a0 = 0.0; a1 = 0.0; a2 = 0.0; a3 = 0.0; a4 = 0.0; a5 = 0.0; a6 = 0.0; a7 = 0.0
+    b0 = 0.0; b1 = 0.0; b2 = 0.0; b3 = 0.0; b4 = 0.0; b5 = 0.0; b6 = 0.0; b7 = 0.0
+    c0 = 0.0; c1 = 0.0; c2 = 0.0; c3 = 0.0; c4 = 0.0; c5 = 0.0; c6 = 0.0; c7 = 0.0
+    d0 = 0.0; d1 = 0.0; d2 = 0.0; d3 = 0.0; d4 = 0.0; d5 = 0.0; d6 = 0.0; d7 = 0.0
+    for j in range(F.shape[0]):
+        f = F[j]
+        f0 = f[0]; f1 = f[1]; f2 = f[2]; f3 = f[3]; f4 = f[4]; f5 = f[5]; f6 = f[6]; f7 = f[7]
+        t = r0[j]
+        a0 = a0 + t * f0; a1 = a1 + t * f1; a2 = a2 + t * f2; a3 = a3 + t * f3
+        a4 = a4 + t * f4; a5 = a5 + t * f5; a6 = a6 + t * f6; a7 = a7 + t * f7
+        t = r1[j]
+        b0 = b0 + t * f0; b1 = b1 + t * f1; b2 = b2 + t * f2; b3 = b3 + t * f3
+        b4 = b4 + t * f4; b5 = b5 + t * f5; b6 = b6 + t * f6; b7 = b7 + t * f7
+        t = r2[j]
+        c0 = c0 + t * f0; c1 = c1 + t * f1; c2 = c2 + t * f2; c3 = c3 + t * f3
+        c4 = c4 + t * f4; c5 = c5 + t * f5; c6 = c6 + t * f6; c7 = c7 + t * f7
+        t = r3[j]
+        d0 = d0 + t * f0; d1 = d1 + t * f1; d2 = d2 + t * f2; d3 = d3 + t * f3
+        d4 = d4 + t * f4; d5 = d5 + t * f5; d6 = d6 + t * f6; d7 = d7 + t * f7
+    p = Pc[i + 0]
+    p[0] = a0; p[1] = a1; p[2] = a2; p[3] = a3; p[4] = a4; p[5] = a5; p[6] = a6; p[7] = a7
+    p = Pc[i + 1]
+    p[0] = b0; p[1] = b1; p[2] = b2; p[3] = b3; p[4] = b4; p[5] = b5; p[6] = b6; p[7] = b7
+    p = Pc[i + 2]
+    p[0] = c0; p[1] = c1; p[2] = c2; p[3] = c3; p[4] = c4; p[5] = c5; p[6] = c6; p[7] = c7
+    p = Pc[i + 3]
+    p[0] = d0; p[1] = d1; p[2] = d2; p[3] = d3; p[4] = d4; p[5] = d5; p[6] = d6; p[7] = d7
+
+
+@njit(cache=True, inline="always")
+def _contact_rows8x4(PhiT, Xq, E, i):
+    """E += PhiT[i:i + 4]^T Xq[i:i + 4] for eight cases: each E row loaded and stored once for
+    four modes, the four added one after another as :func:`_modes`' rolled loop adds them (also
+    Oq += RqT[i:i + 4]^T Xq[i:i + 4] and Ov likewise)."""
+    r0 = PhiT[i]; r1 = PhiT[i + 1]; r2 = PhiT[i + 2]; r3 = PhiT[i + 3]
+    x = Xq[i + 0]
+    ua0 = x[0]; ua1 = x[1]; ua2 = x[2]; ua3 = x[3]; ua4 = x[4]; ua5 = x[5]; ua6 = x[6]; ua7 = x[7]
+    x = Xq[i + 1]
+    ub0 = x[0]; ub1 = x[1]; ub2 = x[2]; ub3 = x[3]; ub4 = x[4]; ub5 = x[5]; ub6 = x[6]; ub7 = x[7]
+    x = Xq[i + 2]
+    uc0 = x[0]; uc1 = x[1]; uc2 = x[2]; uc3 = x[3]; uc4 = x[4]; uc5 = x[5]; uc6 = x[6]; uc7 = x[7]
+    x = Xq[i + 3]
+    ud0 = x[0]; ud1 = x[1]; ud2 = x[2]; ud3 = x[3]; ud4 = x[4]; ud5 = x[5]; ud6 = x[6]; ud7 = x[7]
+    for j in range(E.shape[0]):
+        e = E[j]
+        e0 = e[0]; e1 = e[1]; e2 = e[2]; e3 = e[3]; e4 = e[4]; e5 = e[5]; e6 = e[6]; e7 = e[7]
+        t = r0[j]
+        e0 = e0 + t * ua0; e1 = e1 + t * ua1; e2 = e2 + t * ua2; e3 = e3 + t * ua3
+        e4 = e4 + t * ua4; e5 = e5 + t * ua5; e6 = e6 + t * ua6; e7 = e7 + t * ua7
+        t = r1[j]
+        e0 = e0 + t * ub0; e1 = e1 + t * ub1; e2 = e2 + t * ub2; e3 = e3 + t * ub3
+        e4 = e4 + t * ub4; e5 = e5 + t * ub5; e6 = e6 + t * ub6; e7 = e7 + t * ub7
+        t = r2[j]
+        e0 = e0 + t * uc0; e1 = e1 + t * uc1; e2 = e2 + t * uc2; e3 = e3 + t * uc3
+        e4 = e4 + t * uc4; e5 = e5 + t * uc5; e6 = e6 + t * uc6; e7 = e7 + t * uc7
+        t = r3[j]
+        e0 = e0 + t * ud0; e1 = e1 + t * ud1; e2 = e2 + t * ud2; e3 = e3 + t * ud3
+        e4 = e4 + t * ud4; e5 = e5 + t * ud5; e6 = e6 + t * ud6; e7 = e7 + t * ud7
+        e[0] = e0; e[1] = e1; e[2] = e2; e[3] = e3; e[4] = e4; e[5] = e5; e[6] = e6; e[7] = e7
+
+
+
+@njit(cache=True, inline="always")
+def _sweep8(ST, Xq, Xv, Pc, Mq, Mv, Y, i):
+    """Mode i's load terms a = Mq[i] Y, b = Mv[i] Y and its free state X <- F X_q + G X_v + D Pc
+    + L (eq. 9-10 in sweep form) for eight cases, Pc[i] as it stands (one mode of :func:`_modes8`)."""
+    c = ST[i]
+    Fq = c[0]; G = c[1]; Dq = c[2]; Fd = c[3]; Gd = c[4]; Dv = c[5]
+    mq = Mq[i]; mv = Mv[i]; xq = Xq[i]; xv = Xv[i]; p = Pc[i]
+    p0 = p[0]; p1 = p[1]; p2 = p[2]; p3 = p[3]; p4 = p[4]; p5 = p[5]; p6 = p[6]; p7 = p[7]
+    a0 = 0.0; a1 = 0.0; a2 = 0.0; a3 = 0.0; a4 = 0.0; a5 = 0.0; a6 = 0.0; a7 = 0.0
+    b0 = 0.0; b1 = 0.0; b2 = 0.0; b3 = 0.0; b4 = 0.0; b5 = 0.0; b6 = 0.0; b7 = 0.0
+    for j in range(Mq.shape[1]):
+        tq = mq[j]; tv = mv[j]; y = Y[j]
+        y0 = y[0]; y1 = y[1]; y2 = y[2]; y3 = y[3]; y4 = y[4]; y5 = y[5]; y6 = y[6]; y7 = y[7]
+        a0 = a0 + tq * y0; a1 = a1 + tq * y1; a2 = a2 + tq * y2; a3 = a3 + tq * y3
+        a4 = a4 + tq * y4; a5 = a5 + tq * y5; a6 = a6 + tq * y6; a7 = a7 + tq * y7
+        b0 = b0 + tv * y0; b1 = b1 + tv * y1; b2 = b2 + tv * y2; b3 = b3 + tv * y3
+        b4 = b4 + tv * y4; b5 = b5 + tv * y5; b6 = b6 + tv * y6; b7 = b7 + tv * y7
+    q0 = xq[0]; q1 = xq[1]; q2 = xq[2]; q3 = xq[3]; q4 = xq[4]; q5 = xq[5]; q6 = xq[6]; q7 = xq[7]
+    v0 = xv[0]; v1 = xv[1]; v2 = xv[2]; v3 = xv[3]; v4 = xv[4]; v5 = xv[5]; v6 = xv[6]; v7 = xv[7]
+    u0 = Fq * q0 + G * v0 + Dq * p0 + a0
+    u1 = Fq * q1 + G * v1 + Dq * p1 + a1
+    u2 = Fq * q2 + G * v2 + Dq * p2 + a2
+    u3 = Fq * q3 + G * v3 + Dq * p3 + a3
+    u4 = Fq * q4 + G * v4 + Dq * p4 + a4
+    u5 = Fq * q5 + G * v5 + Dq * p5 + a5
+    u6 = Fq * q6 + G * v6 + Dq * p6 + a6
+    u7 = Fq * q7 + G * v7 + Dq * p7 + a7
+    xv[0] = Fd * q0 + Gd * v0 + Dv * p0 + b0
+    xv[1] = Fd * q1 + Gd * v1 + Dv * p1 + b1
+    xv[2] = Fd * q2 + Gd * v2 + Dv * p2 + b2
+    xv[3] = Fd * q3 + Gd * v3 + Dv * p3 + b3
+    xv[4] = Fd * q4 + Gd * v4 + Dv * p4 + b4
+    xv[5] = Fd * q5 + Gd * v5 + Dv * p5 + b5
+    xv[6] = Fd * q6 + Gd * v6 + Dv * p6 + b6
+    xv[7] = Fd * q7 + Gd * v7 + Dv * p7 + b7
+    xq[0] = u0; xq[1] = u1; xq[2] = u2; xq[3] = u3; xq[4] = u4; xq[5] = u5; xq[6] = u6; xq[7] = u7
 
 
 @njit(cache=True)
@@ -275,24 +401,21 @@ def _load_at(c, tk, n_tk, gk, ptr, tb, out):
 
 
 @njit(cache=True)
-def _outputs(Aq, iq, Av, iv, Ax, Xq, Xv, Xo, y, Y, row):
-    """Row ``row`` of every case's output history Y (K, n_t, ntarg): Ax [f; g; z] plus the
-    rows of Aq X_q and Av X_v that are not zero (module docstring)."""
-    np.dot(Ax, Xo, y)
+def _outputs(sh, O, Xo, y, Y_a, Y_b, row):
+    """Row ``row`` of every case's output histories Y_a, Y_b (K, n_t, ntarg): Ax [f; g; z]
+    plus the state terms O that :func:`_modes` summed (module docstring)."""
+    np.dot(sh.Ax, Xo, y)
     K = y.shape[1]
-    if iq.size:
-        t = np.dot(Aq, Xq)
-        for i in range(iq.size):
+    for o, targets in zip(O, sh.iR):
+        for i in range(targets.size):
             for k in range(K):
-                y[iq[i], k] += t[i, k]
-    if iv.size:
-        t = np.dot(Av, Xv)
-        for i in range(iv.size):
-            for k in range(K):
-                y[iv[i], k] += t[i, k]
+                y[targets[i], k] += o[i, k]
+    na = sh.ntarg_a
     for k in range(K):
-        for j in range(y.shape[0]):
-            Y[k, row, j] = y[j, k]
+        for j in range(na):
+            Y_a[k, row, j] = y[j, k]
+        for j in range(na, y.shape[0]):
+            Y_b[k, row, j - na] = y[j, k]
 
 
 @njit(cache=True)
@@ -389,17 +512,18 @@ def march_group(i0, i1, t0, h, max_iter, sh, cs, st, keys, invs, used, hist):
     """March the group's cases through steps i0 -> i1 (time t0 + i h). Returns (status,
     step, info1, info2, case): the first case that failed, else -1. ``keys``, ``invs``,
     ``used``: the shared pattern cache (kernel.Cache's arrays)."""
-    na = sh.na
     release = cs.release
     Xq, Xv, Pc, F, active, g, ptr, last = st
     Y_a, Y_b, Fc, states, iters = hist
-    n, K = Xq.shape
+    K = Xq.shape[1]
     nc, nb, ru, m = sh.PhiT.shape[1], g.shape[1], cs.Du.shape[1], sh.Mq.shape[1]
     Y = np.zeros((m, K))               # [g(ta); g(tb); z] per case: the load columns' coefficients
     Xo = np.zeros((nc + nb + ru, K))   # [f; g(tb); z]: the outputs' small columns
     E = np.empty((nc, K))
+    O = (np.empty((sh.R[0].shape[1], K)), np.empty((sh.R[1].shape[1], K)),
+         np.empty((sh.R[2].shape[1], K)), np.empty((sh.R[3].shape[1], K)))
     Sfb = np.zeros((sh.Vq.shape[0], K))
-    ya = np.empty((sh.Ax_a.shape[0], K)); yb = np.empty((sh.Ax_b.shape[0], K))
+    y = np.empty((sh.Ax.shape[0], K))
     first_release = np.inf
     for k in range(K):
         for ci in range(release.shape[1]):
@@ -415,7 +539,7 @@ def march_group(i0, i1, t0, h, max_iter, sh, cs, st, keys, invs, used, hist):
             Sfb += np.dot(sh.Vv, Xv)
             Sfb += np.dot(sh.Vf, F)
         _load_columns(ta, tb, cs, g, ptr, Sfb, has_fb, Y)
-        _modes(sh.S, Xq, Xv, Pc, F, sh.PhiT, sh.Mq, sh.Mv, Y, E, i > i0)
+        _modes(sh.ST, Xq, Xv, Pc, F, sh.PhiT, sh.Mq, sh.Mv, Y, E, sh.na, sh.R, O, i > i0)
         # ---------------- the contact solve
         if tb < first_release:
             if not _solve_bolted(row, sh, E, keys, invs, used, last, F, active, Fc, states, iters):
@@ -431,10 +555,8 @@ def march_group(i0, i1, t0, h, max_iter, sh, cs, st, keys, invs, used, hist):
                 Xo[j, k] = F[j, k]
             for j in range(nb + ru):
                 Xo[nc + j, k] = Y[nb + j, k]
-        if ya.shape[0] > 0:
-            _outputs(sh.Aq_a, sh.iq_a, sh.Av_a, sh.iv_a, sh.Ax_a, Xq[:na], Xv[:na], Xo, ya, Y_a, row)
-        if yb.shape[0] > 0 and n > na:
-            _outputs(sh.Aq_b, sh.iq_b, sh.Av_b, sh.iv_b, sh.Ax_b, Xq[na:], Xv[na:], Xo, yb, Y_b, row)
+        if y.shape[0] > 0:
+            _outputs(sh, O, Xo, y, Y_a, Y_b, row)
     if i1 > i0:                        # the state's Pc of the last force, as the chunk's caller reads it
         np.dot(sh.PhiT, F, Pc)
     return OK, i1, 0.0, 0.0, -1
@@ -521,8 +643,8 @@ class _Case:
 
 
 def _output_matrices(plan, coef, w2, zw2, Phi_body, B_body, Ub_body, nc) -> tuple[np.ndarray, ...]:
-    """(Aq, iq, Av, iv, Ax) of one body: its output targets from X_q, X_v (the rows that are
-    not zero, and the targets they add to) and from [f; g(tb); z] (module docstring); ``coef`` (8, n_body), ``Phi_body`` (n_c, n_body): the body's part of
+    """(Aq, Av, Ax) of one body: its output targets from X_q, X_v and from [f; g(tb); z]
+    (module docstring); ``coef`` (8, n_body), ``Phi_body`` (n_c, n_body): the body's part of
     [Phi_a, -Phi_b]; ``B_body`` (n_b, n_body), ``Ub_body`` (n_body, r_u) its part of the bases."""
     nbody = coef.shape[1]
     nb, ru = B_body.shape[0], Ub_body.shape[1]
@@ -543,9 +665,7 @@ def _output_matrices(plan, coef, w2, zw2, Phi_body, B_body, Ub_body, nc) -> tupl
             Ax[t, :nc] += Phi_body @ (L - Lw * Bc - Lz * Bcd)
             Ax[t, nc:nc + nb] += B_body @ L
             Ax[t, nc + nb:] += L @ Ub_body
-    iq, iv = np.flatnonzero(np.any(Aq != 0, axis=1)), np.flatnonzero(np.any(Av != 0, axis=1))
-    C = np.ascontiguousarray
-    return C(Aq[iq]), iq.astype(np.int64), C(Av[iv]), iv.astype(np.int64), C(Ax)
+    return Aq, Av, Ax
 
 
 def _case(k: int, p: TransientProblem, rows_p, step, coefs, plans, contact, hist: History) -> _Case:
@@ -595,12 +715,19 @@ def _shared(cases: list[_Case], plans, contact) -> tuple[Shared, np.ndarray, np.
     Vq, Vv = Vb[:, :n], Vb[:, n:]
     Vf = (Vq * Bc + Vv * Bcd) @ Phi.T
     nc = Phi.shape[0]
-    outs = []
-    for plan, sl in ((plans[0], slice(0, na)), (plans[1], slice(na, n))):   # Phi's b part is -Phi_b: as the force acts
-        outs += _output_matrices(plan, coef[:, sl], m0.w2[sl], m0.zw2[sl], Phi[:, sl], B[:, sl], Ub[sl], nc)
     C = np.ascontiguousarray
-    sh = Shared(C(S), C(Mq), C(Mv), C(Phi.T), C(Vq), C(Vv), C(Vf), C(contact.W), C(contact.C2),
-                C(contact.offset), C(contact.contact), C(contact.axial), C(contact.sign), int(na), *outs)
+    R, iR, Ax = [], [], []
+    for plan, sl, t0 in ((plans[0], slice(0, na), 0),                       # Phi's b part is -Phi_b: as the
+                         (plans[1], slice(na, n), plans[0].ntarg)):         # force acts
+        Aq, Av, ax = _output_matrices(plan, coef[:, sl], m0.w2[sl], m0.zw2[sl], Phi[:, sl], B[:, sl], Ub[sl], nc)
+        for A in (Aq, Av):
+            rows = np.flatnonzero(np.any(A != 0, axis=1))
+            R.append(C(A[rows].T))
+            iR.append((rows + t0).astype(np.int64))
+        Ax.append(ax)
+    sh = Shared(C(S.T), C(Mq), C(Mv), C(Phi.T), C(Vq), C(Vv), C(Vf), C(contact.W), C(contact.C2),
+                C(contact.offset), C(contact.contact), C(contact.axial), C(contact.sign), int(na), tuple(R), tuple(iR),
+                C(np.vstack(Ax)), int(plans[0].ntarg))
     return sh, B, Vb, Ub
 
 

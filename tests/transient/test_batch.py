@@ -115,51 +115,71 @@ def test_batch_refuses_what_it_cannot_share():
     assert math.isfinite(solve_batch([p0])[0].separation_time[0])
 
 
-def _modes_inputs(rng, n=37, nc=5, m=3):
+def _modes_inputs(rng, n=37, nc=5, m=3, kq=(4, 2), kv=(2, 0), na=22):
+    """A step's inputs for _modes: 37 modes, 22 of body a (five blocks of four and two alone),
+    15 of body b (three and three alone); kq, kv: each body's output rows on X_q and X_v."""
     S = rng.standard_normal((6, n))
     X = [rng.standard_normal((n, 8)) for _ in range(5)]     # Xq, Xv, Pc, F (nc rows), Y (m rows)
     X[3], X[4] = X[3][:nc].copy(), X[4][:m].copy()
     X[0][3, 2], X[1][4, 5], X[2][5, 1], X[3][1, 6] = -0.0, 5e-320, 1e-310, -0.0
     PhiT, Mq, Mv = rng.standard_normal((n, nc)), rng.standard_normal((n, m)), rng.standard_normal((n, m))
-    return S, X, PhiT, Mq, Mv
+    R = (rng.standard_normal((na, kq[0])), rng.standard_normal((na, kv[0])),
+         rng.standard_normal((n - na, kq[1])), rng.standard_normal((n - na, kv[1])))
+    return np.ascontiguousarray(S.T), X, PhiT, Mq, Mv, R, na
 
 
-def test_full_group_step_is_the_rolled_loop_bit_for_bit():
-    """A full group's pass over the modes (_modes8, unrolled so it vectorizes) against the
-    rolled loop that partial groups take (the same eight cases as two groups of four), with
-    Pc taken from the state and from F: the same arithmetic in the same order, so equal bit
-    for bit, including signed zeros and subnormals."""
+def _pass(ST, X, PhiT, Mq, Mv, R, na, from_f):
+    """_modes on the state X = [Xq, Xv, Pc, F, Y, E, O] (mutated)."""
     from liftoff.transient.batch import _modes
-    S, X, PhiT, Mq, Mv = _modes_inputs(np.random.default_rng(7))
+    _modes(ST, *X[:4], PhiT, Mq, Mv, X[4], X[5], na, R, X[6], from_f)
+
+
+def _scratch(nc, R, K):
+    return [np.full((nc, K), np.nan), tuple(np.full((r.shape[1], K), np.nan) for r in R)]
+
+
+@pytest.mark.parametrize("kq, kv", [((4, 2), (2, 0)), ((0, 0), (0, 0)), ((3, 1), (1, 2))])
+def test_full_group_step_is_the_rolled_loop_bit_for_bit(kq, kv):
+    """A full group's pass over the modes (_modes8: four modes at a time, unrolled so it
+    vectorizes; each body's last modes alone) against the rolled loop that partial groups take
+    (the same eight cases as two groups of four), with Pc taken from the state and from F,
+    with and without output rows: the same arithmetic in the same order, so equal bit for
+    bit, including signed zeros and subnormals."""
+    ST, X, PhiT, Mq, Mv, R, na = _modes_inputs(np.random.default_rng(7), kq=kq, kv=kv)
     nc = X[3].shape[0]
-    full = [x.copy() for x in X] + [np.empty((nc, 8))]
-    halves = [[np.ascontiguousarray(x[:, s]) for x in X] + [np.empty((nc, 4))] for s in (slice(0, 4), slice(4, 8))]
+    full = [x.copy() for x in X] + _scratch(nc, R, 8)
+    halves = [[np.ascontiguousarray(x[:, s]) for x in X] + _scratch(nc, R, 4) for s in (slice(0, 4), slice(4, 8))]
     for from_f in (False, True, True):
-        _modes(S, *full[:3], full[3], PhiT, Mq, Mv, full[4], full[5], from_f)
+        _pass(ST, full, PhiT, Mq, Mv, R, na, from_f)
         for h in halves:
-            _modes(S, *h[:3], h[3], PhiT, Mq, Mv, h[4], h[5], from_f)
+            _pass(ST, h, PhiT, Mq, Mv, R, na, from_f)
         for j in (0, 1, 2, 5):
             rolled = np.hstack([halves[0][j], halves[1][j]])
             assert np.array_equal(full[j].view(np.int64), rolled.view(np.int64))
+        for o, a, b in zip(full[6], halves[0][6], halves[1][6]):
+            assert np.array_equal(o.view(np.int64), np.hstack([a, b]).view(np.int64))
 
 
 @pytest.mark.parametrize("K", [8, 3])
 def test_step_over_the_modes_is_the_matrix_products(K):
     """_modes against the same step written as numpy's matrix products (Pc = Phi^T F, the
-    load terms Mq Y and Mv Y, the sweep, E = Phi X_q): equal to the round-off of sums of
-    nc, m or n terms (here at most 37 terms of O(1): 1e-13 of the values' O(10) scale is
-    far above the ~1e-15 such sums can differ by in another order, far below any error)."""
-    from liftoff.transient.batch import _modes
-    S, X, PhiT, Mq, Mv = _modes_inputs(np.random.default_rng(11))
+    load terms Mq Y and Mv Y, the sweep, E = Phi X_q, each body's output rows' Rq X_q and
+    Rv X_v): equal to the round-off of sums of nc, m or n terms (here at most 37 terms of
+    O(1): 1e-13 of the values' O(10) scale is far above the ~1e-15 such sums can differ by in
+    another order, far below any error)."""
+    ST, X, PhiT, Mq, Mv, R, na = _modes_inputs(np.random.default_rng(11))
+    S = ST.T
     Xq, Xv, Pc, F, Y = (np.ascontiguousarray(x[:, :K]) for x in X)
-    E = np.empty((F.shape[0], K))
+    state = [Xq, Xv, Pc, F, Y] + _scratch(F.shape[0], R, K)
     Pc_ref = PhiT @ F
     Lq, Lv = Mq @ Y, Mv @ Y
     Xq_ref = S[0, :, None] * Xq + S[1, :, None] * Xv + S[2, :, None] * Pc_ref + Lq
     Xv_ref = S[3, :, None] * Xq + S[4, :, None] * Xv + S[5, :, None] * Pc_ref + Lv
-    _modes(S, Xq, Xv, Pc, F, PhiT, Mq, Mv, Y, E, True)
-    for got, ref in ((Pc, Pc_ref), (Xq, Xq_ref), (Xv, Xv_ref), (E, PhiT.T @ Xq_ref)):
-        assert np.max(np.abs(got - ref)) <= 1e-13 * max(1.0, np.max(np.abs(ref)))
+    _pass(ST, state, PhiT, Mq, Mv, R, na, True)
+    O_ref = (R[0].T @ Xq_ref[:na], R[1].T @ Xv_ref[:na], R[2].T @ Xq_ref[na:], R[3].T @ Xv_ref[na:])
+    for got, ref in ((Pc, Pc_ref), (Xq, Xq_ref), (Xv, Xv_ref), (state[5], PhiT.T @ Xq_ref), *zip(state[6], O_ref)):
+        assert np.max(np.abs(got - ref), initial=0.0) <= 1e-13 * max(1.0, np.max(np.abs(ref), initial=0.0))
     keep = Pc.copy()
-    _modes(S, Xq, Xv, Pc, F * 2.0, PhiT, Mq, Mv, Y, E, False)     # from the state: F ignored, Pc kept
+    state[3] = F * 2.0
+    _pass(ST, state, PhiT, Mq, Mv, R, na, False)     # from the state: F ignored, Pc kept
     assert np.array_equal(Pc, keep)
