@@ -240,7 +240,7 @@ def _modes8(ST, Xq, Xv, Pc, F, PhiT, Mq, Mv, Y, E, RqT, RvT, Oq, Ov, from_f):
             _contact_rows8(RvT, Xv, Ov, i)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _contact_load8(PhiT, F, Pc, i):
     """Pc[i] = PhiT[i] F for eight cases (one mode of :func:`_modes8`)."""
     phi = PhiT[i]
@@ -254,7 +254,7 @@ def _contact_load8(PhiT, F, Pc, i):
     p[0] = p0; p[1] = p1; p[2] = p2; p[3] = p3; p[4] = p4; p[5] = p5; p[6] = p6; p[7] = p7
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _contact_rows8(PhiT, Xq, E, i):
     """E += PhiT[i]^T Xq[i] for eight cases (one mode of :func:`_modes8`; also Oq and Ov)."""
     phi = PhiT[i]; x = Xq[i]
@@ -266,7 +266,7 @@ def _contact_rows8(PhiT, Xq, E, i):
         e[4] = e4 + t * u4; e[5] = e5 + t * u5; e[6] = e6 + t * u6; e[7] = e7 + t * u7
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _contact_load8x4(PhiT, F, Pc, i):
     """Pc[i:i + 4] = PhiT[i:i + 4] F for eight cases: each F row loaded once for four modes;
     per mode the sum over the rows in the order of :func:`_modes`' rolled loop."""
@@ -300,7 +300,7 @@ def _contact_load8x4(PhiT, F, Pc, i):
     p[0] = d0; p[1] = d1; p[2] = d2; p[3] = d3; p[4] = d4; p[5] = d5; p[6] = d6; p[7] = d7
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _contact_rows8x4(PhiT, Xq, E, i):
     """E += PhiT[i:i + 4]^T Xq[i:i + 4] for eight cases: each E row loaded and stored once for
     four modes, the four added one after another as :func:`_modes`' rolled loop adds them (also
@@ -333,7 +333,7 @@ def _contact_rows8x4(PhiT, Xq, E, i):
 
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _sweep8(ST, Xq, Xv, Pc, Mq, Mv, Y, i):
     """Mode i's load terms a = Mq[i] Y, b = Mv[i] Y and its free state X <- F X_q + G X_v + D Pc
     + L (eq. 9-10 in sweep form) for eight cases, Pc[i] as it stands (one mode of :func:`_modes8`)."""
