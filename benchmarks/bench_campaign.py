@@ -133,6 +133,8 @@ def main() -> None:
     ap.add_argument("--scaling-workers", default="", metavar="1,2,4",
                     help="worker counts for --scaling (default: 1 and --workers)")
     ap.add_argument("--no-snapshots", action="store_true", help="pass --no-snapshots (no pyvista)")
+    ap.add_argument("--march-together", type=int, default=1, metavar="K",
+                    help="the --cases run with K cases marched together a task (liftoff run --march-together)")
     ap.add_argument("--json", type=Path, help="write the measurements (docs/figures/bench_campaign.json)")
     ap.add_argument("--append", action="store_true", help="add the runs to those --json already holds")
     args = ap.parse_args()
@@ -153,15 +155,18 @@ def main() -> None:
                   *(["--no-snapshots"] if args.no_snapshots else [])]
         report(measure(["--out", str(tmp / "warm"), *common], "warm-up (named cases only)"))
 
-        def one(n, workers, extra=(), tag="", kind="pool"):
+        def one(n, workers, extra=(), tag="", kind="pool", together=1):
             out = tmp / f"o_{tag}"
             r = measure(["--out", str(out), "--campaign", str(tmp / f"c_{tag}"), "--cases", str(n),
                          "--workers", str(workers), *extra, *common], tag)
-            rows.append({"cases": n, "workers": workers, "executor": kind,
+            rows.append({"cases": n, "workers": workers, "executor": kind, "march_together": together,
                          **{k: v for k, v in r.items() if k != "samples"}})
             return r
 
-        runs = [one(args.cases, args.workers, tag=f"{args.cases} cases, process pool of {args.workers}")]
+        k = args.march_together
+        runs = [one(args.cases, args.workers, ("--march-together", str(k)) if k > 1 else (),
+                    tag=f"{args.cases} cases, process pool of {args.workers}"
+                        + (f", {k} marched together" if k > 1 else ""), together=k)]
         report(runs[-1])
         if args.dask:
             runs.append(one(args.cases, args.workers, ("--dask", "local"),

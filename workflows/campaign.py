@@ -104,6 +104,9 @@ class CaseTask:
     columns: tuple[str, ...] = ()
     capture: bool = False
     envelope: RunningEnvelope | None = None
+    #: further generated cases marched together with ``index`` (liftoff.transient.solve_batch): the
+    #: worker sends back a list of summaries, ``index``'s first
+    together: tuple[int, ...] = ()
 
 
 @dataclass
@@ -231,20 +234,61 @@ def solve_generated(task: CaseTask, keep_modal: bool | str = False, modal_scratc
         raise type(exc)(msg) from None
 
 
+def solve_together(task: CaseTask) -> list:
+    """[(index, result, CaseProblem, Case, wall s)] of generated cases ``task.index`` and
+    ``task.together``, marched together (liftoff.transient.solve_batch; each wall the batch's
+    share). Cases the batch cannot march (friction, dashpots, latches, soft release, rigid
+    rows: its scope, which it names) or whose start fails are solved one by one, so that a
+    case's error names that case as solve_generated names it."""
+    from dataclasses import asdict
+
+    from liftoff.transient import solve_batch
+
+    from .cache import stage_key
+    from .loads import build_problem
+
+    sc, stack = _worker_state(task)
+    indexes = (task.index, *task.together)
+    cases = [sc.generated_case(i) for i in indexes]
+    for case in cases:
+        if stage_key("model", asdict(case.model)) != task.model_key:
+            raise InputError(f"{sc.path}: case {case.name}: its [model] differs from the campaign's")
+    t0 = time.perf_counter()
+    try:
+        cps = [build_problem(case, stack, progress=False) for case in cases]
+        results = solve_batch([cp.problem for cp in cps])
+    except (InputError, ConvergenceError):
+        return [(i, *solve_generated(replace(task, index=i, together=()))) for i in indexes]
+    wall = (time.perf_counter() - t0) / len(cases)
+    return [(i, res, cp, case, wall) for i, res, cp, case in zip(indexes, results, cps, cases)]
+
+
 def run_case(task: CaseTask):
     """Worker entry point: the summary of one generated case (with ``task.capture`` the
     histories of the items reaching the envelope it was sent), or (time, {item: history})
-    of the items in ``task.columns``."""
-    from . import report
+    of the items in ``task.columns``; with ``task.together`` the list of the summaries of
+    the cases marched together."""
     from .beside import trim_heap
 
     trim_heap()                          # the previous case's freed arrays back to the system
+    if task.together and not task.columns:
+        return [_summary(replace(task, index=i), res, cp, case, wall) for i, res, cp, case, wall in solve_together(task)]
     res, cp, case, wall = solve_generated(task)
-    sc = _MEMO["scenario"]
-    its = report.items(res, cp.attach, report.liquid_heads(cp), sc.post.acceleration_band_hz)
     if task.columns:
+        from . import report
+
+        its = report.items(res, cp.attach, report.liquid_heads(cp), _MEMO["scenario"].post.acceleration_band_hz)
         by_name = {it.name: it.values for it in its}
         return task.index, res.time, {c: by_name[c] for c in task.columns}
+    return _summary(task, res, cp, case, wall)
+
+
+def _summary(task: CaseTask, res, cp, case, wall: float) -> CaseSummary:
+    """run_case's summary of a solved generated case (module docstring)."""
+    from . import report
+
+    sc = _MEMO["scenario"]
+    its = report.items(res, cp.attach, report.liquid_heads(cp), sc.post.acceleration_band_hz)
     s = summarize(res, cp, case.name, task.index, sc.post, wall, its=its)
     if task.capture:
         env = task.envelope
@@ -362,7 +406,9 @@ def run_tasks(executor, tasks: Iterable[CaseTask], on_result: Callable, window: 
         while pending:
             done, pending = wait(pending, return_when=FIRST_COMPLETED)
             for fut in done:
-                on_result(fut.result())
+                got = fut.result()
+                for r in (got if isinstance(got, list) else [got]):     # (cases marched together: a list)
+                    on_result(r)
                 nxt = next(it, None)
                 if nxt is not None:
                     pending.add(executor.submit(run_case, nxt))
@@ -477,8 +523,11 @@ class CampaignRun:
 
 
 def run_campaign(sc, ref: ScenarioRef, cache_root: Path, model_key: str, executor, folder: Path,
-                 progress: bool = True, window: int = 0, echo=print) -> CampaignRun:
-    """Run every generated case of ``sc`` not already recorded in ``folder`` on ``executor``."""
+                 progress: bool = True, window: int = 0, echo=print, together: int = 1) -> CampaignRun:
+    """Run every generated case of ``sc`` not already recorded in ``folder`` on ``executor``;
+    ``together`` cases a task (marched together, :func:`solve_together`; 1: one by one)."""
+    if int(together) < 1:
+        raise InputError(f"campaign: march together {together!r} cases: must be 1 (one by one) or more")
     t0 = time.perf_counter()
     folder = Path(folder)
     (folder / "cases").mkdir(parents=True, exist_ok=True)
@@ -514,7 +563,9 @@ def run_campaign(sc, ref: ScenarioRef, cache_root: Path, model_key: str, executo
             bar.update(1)
 
     # (a generator: each task takes the running envelope when it is sent)
-    tasks = (CaseTask(ref, i, str(cache_root), model_key, (), True, captured.running()) for i in todo)
+    k = int(together)
+    tasks = (CaseTask(ref, todo[j], str(cache_root), model_key, (), True, captured.running(), tuple(todo[j + 1:j + k]))
+             for j in range(0, len(todo), k))
     try:
         run_tasks(executor, tasks, store, window or 4 * max(1, getattr(executor, "_max_workers", 2) or 2))
     finally:

@@ -68,6 +68,9 @@ class Options:
     #: default case). False (the command line): dropped once the case's results file and snapshots are
     #: handed off (they are in results_<case>.h5), unless the fields (--fields) need them
     modal_results: bool = True
+    #: generated cases a worker marches together (liftoff.transient.solve_batch; 1: one by one). Faster
+    #: per case, but a worker holds that many cases' histories and results at once (docs/workflow.md)
+    march_together: int = 1
 
 
 def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None | bool = None,
@@ -327,7 +330,7 @@ def _run_generated(sc, prep: Prepared, cache: StageCache, executor, how: str, ou
     campaign.prime(sc, str(cache.root), prep.gen_model, prep.stacks[prep.gen_model])
     echo(f"  running generated cases on {how}")
     camp = campaign.run_campaign(sc, campaign.ScenarioRef.of(sc), cache.root, prep.gen_model, executor, folder,
-                                 progress=progress, echo=echo)
+                                 progress=progress, echo=echo, together=opt.march_together)
     prep.stage_times.append((f"generated cases ({camp.ran} run, {camp.reused} reused)", camp.wall))
     return camp
 
@@ -662,6 +665,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--mpi", action="store_true",
                    help="run them on mpi4py.futures (start as mpiexec -n K python -m mpi4py.futures "
                         "-m liftoff.workflows.cli run ... --mpi)")
+    g.add_argument("--march-together", type=int, default=1, metavar="K",
+                   help="generated cases each worker marches together (liftoff.transient.solve_batch: faster a "
+                        "case, K cases' histories held at once; 1: one by one) [1]")
     g.add_argument("--campaign", type=Path, default=None, metavar="DIR",
                    help="per-case records, so that a restarted run skips finished cases (default DIR.campaign)")
     g.add_argument("--keep-histories", action="store_true",
@@ -702,9 +708,11 @@ def _cli(args: argparse.Namespace) -> int:
             return launch(args.ranks, _child_args(args))
     opt = Options(workers=args.workers, dask=args.dask, mpi=args.mpi, campaign=args.campaign,
                   keep_histories=args.keep_histories, fields=args.fields, compare=args.compare,
-                  contributions=args.contributions, modal_results=False)
+                  contributions=args.contributions, modal_results=False, march_together=args.march_together)
     if args.cases is not None and args.cases < 0:
         raise InputError(f"--cases {args.cases}: must be 0 or more")
+    if args.march_together < 1:
+        raise InputError(f"--march-together {args.march_together}: must be 1 (one by one) or more")
     run(args.scenario, args.out, n_cases=args.cases, options=opt, error_estimate=not args.no_error_estimate,
         max_memory=None if args.max_memory is None else args.max_memory * 1e9, plots=not args.no_plots, **kw)
     return 0

@@ -528,3 +528,57 @@ def test_the_runs_own_pool_is_closed_before_its_outputs(tmp_path, monkeypatch):
                 options=Options(executor=mine, campaign=tmp_path / "out.campaign"), **QUIET)
     assert (again.campaign.ran, again.campaign.reused) == (1, 2) and [t.index for t in mine.tasks] == [2]
     assert mine.submit(pow, 2, 5).result() == 32          # still open
+
+
+def test_cases_marched_together_give_the_one_by_one_peaks(tmp_path, campaign4, monkeypatch):
+    """Options(march_together=3) (--march-together 3): the 4 generated cases as a task of
+    three marched together (liftoff.transient.solve_batch) and one alone. Each case's record
+    (every item's max and min) equals the one-by-one campaign's to round-off: within 1e-9 of
+    the item's largest magnitude over the cases (the batch sums in another order; on this
+    model its contact forces land 1e-12 of their peak from a one-by-one solve, docs/transient.md);
+    where the time of an extreme differs (a plateau, its first step decided by round-off) the
+    one-by-one history holds that extreme at the batch's time too; the envelope the same
+    values to that tolerance."""
+    import liftoff.transient as lt
+    from liftoff.workflows import campaign
+
+    marched = []
+    batch = lt.solve_batch
+    monkeypatch.setattr(lt, "solve_batch", lambda problems: marched.append(len(problems)) or batch(problems))
+    tmp0, p, first = campaign4
+    out = run(p, tmp_path / "out", cache_dir=tmp0 / "cache", n_cases=4,
+              options=Options(executor=InlineExecutor(), campaign=tmp_path / "camp", march_together=3), **QUIET)
+    assert (out.campaign.ran, out.campaign.reused) == (4, 0)
+    assert marched == [3]          # solve_batch, not a step back to one by one; the fourth case alone: solve
+    batched = [campaign.load_summary(out.campaign.records[i]) for i in range(4)]
+    alone = [campaign.load_summary(first.campaign.records[i]) for i in range(4)]
+    scale = np.max([np.maximum(np.abs(s.mx), np.abs(s.mn)) for s in alone], axis=0) + 1e-300
+    sc, stack = first.scenario, next(iter(first.stacks.values()))
+    for i, (b, a) in enumerate(zip(batched, alone)):
+        assert (b.name, b.index, b.items) == (a.name, a.index, a.items)
+        for got, ref in ((b.mx, a.mx), (b.mn, a.mn)):
+            assert np.all(np.abs(got - ref) <= 1e-9 * scale)
+        cp = build_problem(sc.generated_case(i), stack, progress=False)
+        res = solve(cp.problem)
+        its = report.items(res, cp.attach, band_hz=sc.post.acceleration_band_hz)
+        for got, ref, value in ((b.t_mx, a.t_mx, a.mx), (b.t_mn, a.t_mn, a.mn)):
+            for j in np.flatnonzero(got != ref):
+                at = int(np.argmin(np.abs(res.time - got[j])))
+                assert abs(res.time[at] - got[j]) <= 1e-9 and abs(its[j].values[at] - value[j]) <= 1e-9 * scale[j]
+        assert np.array_equal(b.recontacts, a.recontacts)
+        np.testing.assert_allclose(b.separation, a.separation, rtol=0, atol=0.5 * a.h)
+    assert [r["item"] for r in out.envelope] == [r["item"] for r in first.envelope]
+    for r, q in zip(out.envelope, first.envelope):
+        for side in ("max", "min"):
+            assert abs(r[side] - q[side]) <= 1e-9 * max(abs(q["max"]), abs(q["min"]), 1e-300), (r, q)
+
+
+def test_march_together_refuses_fewer_than_one(tmp_path, campaign4, capsys):
+    from liftoff.workflows.cli import main
+
+    tmp0, p, _ = campaign4
+    assert main(["run", str(p), "--out", str(tmp_path / "o"), "--cache", str(tmp0 / "cache"), "--cases", "2",
+                 "--march-together", "0"]) == 2
+    err = capsys.readouterr().err
+    assert "--march-together 0" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists()
