@@ -1,7 +1,8 @@
 """The case runner of a load campaign: generated cases run on any concurrent.futures.Executor.
 
 A task (:class:`CaseTask`) is small: the scenario (its mapping and folder), the case
-index, the stage cache's folder and the model's key. A worker rebuilds the case from
+index (with ``--march-together K``, K indexes, marched together: :func:`solve_together`),
+the stage cache's folder and the model's key. A worker rebuilds the case from
 the scenario and its index (:meth:`liftoff.config.Scenario.generated_case`), loads the
 reduced model from the stage cache by path (every model stage is a cache hit: the main
 process built them first), solves the transient without any modal history and sends
@@ -272,7 +273,12 @@ def run_case(task: CaseTask):
 
     trim_heap()                          # the previous case's freed arrays back to the system
     if task.together and not task.columns:
-        return [_summary(replace(task, index=i), res, cp, case, wall) for i, res, cp, case, wall in solve_together(task)]
+        solved, out = solve_together(task), []
+        while solved:                    # each case's result let go once summarised
+            i, res, cp, case, wall = solved.pop(0)
+            out.append(_summary(replace(task, index=i), res, cp, case, wall))
+            del res, cp
+        return out
     res, cp, case, wall = solve_generated(task)
     if task.columns:
         from . import report
@@ -566,8 +572,9 @@ def run_campaign(sc, ref: ScenarioRef, cache_root: Path, model_key: str, executo
     k = int(together)
     tasks = (CaseTask(ref, todo[j], str(cache_root), model_key, (), True, captured.running(), tuple(todo[j + 1:j + k]))
              for j in range(0, len(todo), k))
-    try:
-        run_tasks(executor, tasks, store, window or 4 * max(1, getattr(executor, "_max_workers", 2) or 2))
+    try:                                 # (marched tasks: one running and one waiting a worker, as each holds k cases)
+        workers = max(1, getattr(executor, "_max_workers", 2) or 2)
+        run_tasks(executor, tasks, store, window or (4 if k == 1 else 2) * workers)
     finally:
         if bar is not None:
             bar.close()
