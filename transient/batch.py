@@ -269,7 +269,7 @@ def _contact_rows8(PhiT, Xq, E, i):
 @njit(cache=True)
 def _contact_load8x4(PhiT, F, Pc, i):
     """Pc[i:i + 4] = PhiT[i:i + 4] F for eight cases: each F row loaded once for four modes;
-    per mode the sum over the rows in the order of :func:`_modes`' rolled loop."""
+    per mode the sum over the rows in the order of :func:`_modes_rolled`."""
     r0 = PhiT[i]; r1 = PhiT[i + 1]; r2 = PhiT[i + 2]; r3 = PhiT[i + 3]
     a0 = 0.0; a1 = 0.0; a2 = 0.0; a3 = 0.0; a4 = 0.0; a5 = 0.0; a6 = 0.0; a7 = 0.0
     b0 = 0.0; b1 = 0.0; b2 = 0.0; b3 = 0.0; b4 = 0.0; b5 = 0.0; b6 = 0.0; b7 = 0.0
@@ -303,7 +303,7 @@ def _contact_load8x4(PhiT, F, Pc, i):
 @njit(cache=True)
 def _contact_rows8x4(PhiT, Xq, E, i):
     """E += PhiT[i:i + 4]^T Xq[i:i + 4] for eight cases: each E row loaded and stored once for
-    four modes, the four added one after another as :func:`_modes`' rolled loop adds them (also
+    four modes, the four added one after another as :func:`_modes_rolled` adds them (also
     Oq += RqT[i:i + 4]^T Xq[i:i + 4] and Ov likewise)."""
     r0 = PhiT[i]; r1 = PhiT[i + 1]; r2 = PhiT[i + 2]; r3 = PhiT[i + 3]
     x = Xq[i + 0]
