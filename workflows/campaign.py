@@ -258,7 +258,14 @@ def solve_together(task: CaseTask) -> list:
     try:
         cps = [build_problem(case, stack, progress=False) for case in cases]
         results = solve_batch([cp.problem for cp in cps])
-    except (InputError, ConvergenceError):
+    except (InputError, ConvergenceError) as exc:
+        if not _MEMO.get("warned"):      # once a worker: the cases are right, only not marched together
+            _MEMO["warned"] = True
+            import warnings
+
+            warnings.warn(f"--march-together: cases {', '.join(c.name for c in cases)} solved one by one "
+                          f"({' '.join(str(exc).split())[:300]}); further such groups of this worker likewise",
+                          stacklevel=2)
         return [(i, *solve_generated(replace(task, index=i, together=()))) for i in indexes]
     wall = (time.perf_counter() - t0) / len(cases)
     return [(i, res, cp, case, wall) for i, res, cp, case in zip(indexes, results, cps, cases)]

@@ -111,6 +111,8 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
 
     check_case_memory(sc.path, sc.n_generated, max_memory)      # before any case is generated
     check_dask_address(opt.dask)
+    if not (isinstance(opt.march_together, int) and opt.march_together >= 1):
+        raise InputError(f"--march-together {opt.march_together!r}: must be 1 (one by one) or more")
     if sc.n_generated:              # the case pool (_executor) is made only then: checked before the model stages
         if opt.dask not in (None, "local"):
             on_root(comm, lambda: probe_dask_scheduler(opt.dask), share=False)

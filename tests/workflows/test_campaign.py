@@ -582,3 +582,35 @@ def test_march_together_refuses_fewer_than_one(tmp_path, campaign4, capsys):
     err = capsys.readouterr().err
     assert "--march-together 0" in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "o").exists()
+
+
+def test_cases_the_batch_refuses_are_solved_one_by_one_and_said(tmp_path, campaign4, monkeypatch):
+    """A group the batch cannot march (its InputError: here forced) is solved one by one, the
+    records those of the one-by-one campaign bit for bit, and the worker says so once."""
+    import liftoff.transient as lt
+    from liftoff.core.errors import InputError
+    from liftoff.workflows import campaign
+
+    def refuse(problems):
+        raise InputError("batch: friction, dashpots, latches and soft release are not marched batched")
+
+    monkeypatch.setattr(lt, "solve_batch", refuse)
+    tmp0, p, first = campaign4
+    with pytest.warns(UserWarning, match="--march-together: cases d0000, d0001 solved one by one") as got:
+        out = run(p, tmp_path / "out", cache_dir=tmp0 / "cache", n_cases=4,
+                  options=Options(executor=InlineExecutor(), campaign=tmp_path / "camp", march_together=2), **QUIET)
+    assert sum("--march-together" in str(w.message) for w in got) == 1
+    for i in range(4):
+        a, b = (campaign.load_summary(o.campaign.records[i]) for o in (first, out))
+        assert np.array_equal(a.mx, b.mx) and np.array_equal(a.t_mn, b.t_mn)
+    assert _same(out.envelope, first.envelope)
+
+
+def test_march_together_checked_before_the_model_stages(tmp_path, campaign4):
+    from liftoff.core.errors import InputError
+
+    _, p, _ = campaign4
+    with pytest.raises(InputError, match="--march-together 0"):
+        run(p, tmp_path / "out", cache_dir=tmp_path / "empty-cache", n_cases=2, options=Options(march_together=0),
+            **QUIET)
+    assert not (tmp_path / "empty-cache").exists() or not any((tmp_path / "empty-cache").rglob("*.npz"))
