@@ -157,6 +157,7 @@ def main() -> None:
 
         def one(n, workers, extra=(), tag="", kind="pool", together=1):
             out = tmp / f"o_{tag}"
+            extra = (*extra, "--march-together", str(together)) if together > 1 else extra
             r = measure(["--out", str(out), "--campaign", str(tmp / f"c_{tag}"), "--cases", str(n),
                          "--workers", str(workers), *extra, *common], tag)
             rows.append({"cases": n, "workers": workers, "executor": kind, "march_together": together,
@@ -164,9 +165,8 @@ def main() -> None:
             return r
 
         k = args.march_together
-        runs = [one(args.cases, args.workers, ("--march-together", str(k)) if k > 1 else (),
-                    tag=f"{args.cases} cases, process pool of {args.workers}"
-                        + (f", {k} marched together" if k > 1 else ""), together=k)]
+        runs = [one(args.cases, args.workers, tag=f"{args.cases} cases, process pool of {args.workers}"
+                    + (f", {k} marched together" if k > 1 else ""), together=k)]
         report(runs[-1])
         if args.dask:
             runs.append(one(args.cases, args.workers, ("--dask", "local"),

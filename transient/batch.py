@@ -205,12 +205,12 @@ def _modes_rolled(ST, Xq, Xv, Pc, F, PhiT, Mq, Mv, Y, E, RqT, RvT, Oq, Ov, from_
 
 @njit(cache=True, fastmath=False)
 def _modes8(ST, Xq, Xv, Pc, F, PhiT, Mq, Mv, Y, E, RqT, RvT, Oq, Ov, from_f):
-    """:func:`_modes_rolled` for eight cases, four modes at a time: their contact loads (each F row
-    loaded once for the four), then each mode's load terms and sweep, then their shares of E
-    (each E row loaded and stored once for the four), and of Oq and Ov likewise. Every line is unrolled over the cases
-    with its loads before its stores: LLVM cannot prove the rows apart, so a rolled loop stays
-    scalar (one multiply-add at a time); written so, the SLP vectorizer packs each line into
-    vector instructions. Per mode and case the same arithmetic in the same order as the rolled
+    """:func:`_modes_rolled` for eight cases, four modes at a time: their contact loads (each F
+    row loaded once for the four), then each mode's load terms and sweep, then their shares of
+    E, Oq and Ov (each row of those loaded and stored once for the four); the last n % 4 modes
+    through the rolled loop. Every line is unrolled over the cases with its loads before its
+    stores: LLVM cannot prove the rows apart, so a rolled loop stays scalar (one multiply-add
+    at a time); written so, the SLP vectorizer packs each line into vector instructions. Per mode and case the same arithmetic in the same order as the rolled
     loop, so the same bits (tests/transient/test_batch.py); the four-mode blocks took the pass
     at 3,300 modes and 24 rows from 97-103 to 62-64 us on this machine (2026-12-07: the products
     with F and E had been bound by their loads and stores)."""
@@ -224,46 +224,14 @@ def _modes8(ST, Xq, Xv, Pc, F, PhiT, Mq, Mv, Y, E, RqT, RvT, Oq, Ov, from_f):
         _sweep8(ST, Xq, Xv, Pc, Mq, Mv, Y, i + 1)
         _sweep8(ST, Xq, Xv, Pc, Mq, Mv, Y, i + 2)
         _sweep8(ST, Xq, Xv, Pc, Mq, Mv, Y, i + 3)
-        _contact_rows8x4(PhiT, Xq, E, i)
+        _add_rows8x4(PhiT, Xq, E, i)
         if kq:
-            _contact_rows8x4(RqT, Xq, Oq, i)
+            _add_rows8x4(RqT, Xq, Oq, i)
         if kv:
-            _contact_rows8x4(RvT, Xv, Ov, i)
-    for i in range(n4, n):
-        if from_f:
-            _contact_load8(PhiT, F, Pc, i)
-        _sweep8(ST, Xq, Xv, Pc, Mq, Mv, Y, i)
-        _contact_rows8(PhiT, Xq, E, i)
-        if kq:
-            _contact_rows8(RqT, Xq, Oq, i)
-        if kv:
-            _contact_rows8(RvT, Xv, Ov, i)
-
-
-@njit(cache=True)
-def _contact_load8(PhiT, F, Pc, i):
-    """Pc[i] = PhiT[i] F for eight cases (one mode of :func:`_modes8`)."""
-    phi = PhiT[i]
-    p0 = 0.0; p1 = 0.0; p2 = 0.0; p3 = 0.0; p4 = 0.0; p5 = 0.0; p6 = 0.0; p7 = 0.0
-    for j in range(F.shape[0]):
-        t = phi[j]; f = F[j]
-        f0 = f[0]; f1 = f[1]; f2 = f[2]; f3 = f[3]; f4 = f[4]; f5 = f[5]; f6 = f[6]; f7 = f[7]
-        p0 = p0 + t * f0; p1 = p1 + t * f1; p2 = p2 + t * f2; p3 = p3 + t * f3
-        p4 = p4 + t * f4; p5 = p5 + t * f5; p6 = p6 + t * f6; p7 = p7 + t * f7
-    p = Pc[i]
-    p[0] = p0; p[1] = p1; p[2] = p2; p[3] = p3; p[4] = p4; p[5] = p5; p[6] = p6; p[7] = p7
-
-
-@njit(cache=True)
-def _contact_rows8(PhiT, Xq, E, i):
-    """E += PhiT[i]^T Xq[i] for eight cases (one mode of :func:`_modes8`; also Oq and Ov)."""
-    phi = PhiT[i]; x = Xq[i]
-    u0 = x[0]; u1 = x[1]; u2 = x[2]; u3 = x[3]; u4 = x[4]; u5 = x[5]; u6 = x[6]; u7 = x[7]
-    for j in range(E.shape[0]):
-        t = phi[j]; e = E[j]
-        e0 = e[0]; e1 = e[1]; e2 = e[2]; e3 = e[3]; e4 = e[4]; e5 = e[5]; e6 = e[6]; e7 = e[7]
-        e[0] = e0 + t * u0; e[1] = e1 + t * u1; e[2] = e2 + t * u2; e[3] = e3 + t * u3
-        e[4] = e4 + t * u4; e[5] = e5 + t * u5; e[6] = e6 + t * u6; e[7] = e7 + t * u7
+            _add_rows8x4(RvT, Xv, Ov, i)
+    if n4 < n:                           # the last modes one at a time: the rolled loop, the same sums
+        _modes_rolled(ST[n4:], Xq[n4:], Xv[n4:], Pc[n4:], F, PhiT[n4:], Mq[n4:], Mv[n4:], Y, E, RqT[n4:], RvT[n4:],
+                      Oq, Ov, from_f)
 
 
 @njit(cache=True)
@@ -301,18 +269,18 @@ def _contact_load8x4(PhiT, F, Pc, i):
 
 
 @njit(cache=True)
-def _contact_rows8x4(PhiT, Xq, E, i):
-    """E += PhiT[i:i + 4]^T Xq[i:i + 4] for eight cases: each E row loaded and stored once for
-    four modes, the four added one after another as :func:`_modes_rolled` adds them (also
-    Oq += RqT[i:i + 4]^T Xq[i:i + 4] and Ov likewise)."""
-    r0 = PhiT[i]; r1 = PhiT[i + 1]; r2 = PhiT[i + 2]; r3 = PhiT[i + 3]
-    x = Xq[i + 0]
+def _add_rows8x4(RT, X, E, i):
+    """E += RT[i:i + 4]^T X[i:i + 4] for eight cases (rows RT transposed: the contact rows on X_q,
+    or a body's output rows on X_q or X_v): each E row loaded and stored once for four modes,
+    the four added one after another as :func:`_modes_rolled` adds them."""
+    r0 = RT[i]; r1 = RT[i + 1]; r2 = RT[i + 2]; r3 = RT[i + 3]
+    x = X[i + 0]
     ua0 = x[0]; ua1 = x[1]; ua2 = x[2]; ua3 = x[3]; ua4 = x[4]; ua5 = x[5]; ua6 = x[6]; ua7 = x[7]
-    x = Xq[i + 1]
+    x = X[i + 1]
     ub0 = x[0]; ub1 = x[1]; ub2 = x[2]; ub3 = x[3]; ub4 = x[4]; ub5 = x[5]; ub6 = x[6]; ub7 = x[7]
-    x = Xq[i + 2]
+    x = X[i + 2]
     uc0 = x[0]; uc1 = x[1]; uc2 = x[2]; uc3 = x[3]; uc4 = x[4]; uc5 = x[5]; uc6 = x[6]; uc7 = x[7]
-    x = Xq[i + 3]
+    x = X[i + 3]
     ud0 = x[0]; ud1 = x[1]; ud2 = x[2]; ud3 = x[3]; ud4 = x[4]; ud5 = x[5]; ud6 = x[6]; ud7 = x[7]
     for j in range(E.shape[0]):
         e = E[j]
@@ -332,11 +300,10 @@ def _contact_rows8x4(PhiT, Xq, E, i):
         e[0] = e0; e[1] = e1; e[2] = e2; e[3] = e3; e[4] = e4; e[5] = e5; e[6] = e6; e[7] = e7
 
 
-
 @njit(cache=True)
 def _sweep8(ST, Xq, Xv, Pc, Mq, Mv, Y, i):
     """Mode i's load terms a = Mq[i] Y, b = Mv[i] Y and its free state X <- F X_q + G X_v + D Pc
-    + L (eq. 9-10 in sweep form) for eight cases, Pc[i] as it stands (one mode of :func:`_modes8`)."""
+    + L (eq. 9-10 in sweep form) for eight cases, Pc[i] as it stands (a mode of :func:`_modes8`)."""
     c = ST[i]
     Fq = c[0]; G = c[1]; Dq = c[2]; Fd = c[3]; Gd = c[4]; Dv = c[5]
     mq = Mq[i]; mv = Mv[i]; xq = Xq[i]; xv = Xv[i]; p = Pc[i]

@@ -538,9 +538,8 @@ class CampaignRun:
 def run_campaign(sc, ref: ScenarioRef, cache_root: Path, model_key: str, executor, folder: Path,
                  progress: bool = True, window: int = 0, echo=print, together: int = 1) -> CampaignRun:
     """Run every generated case of ``sc`` not already recorded in ``folder`` on ``executor``;
-    ``together`` cases a task (marched together, :func:`solve_together`; 1: one by one)."""
-    if int(together) < 1:
-        raise InputError(f"campaign: march together {together!r} cases: must be 1 (one by one) or more")
+    ``together`` cases a task (marched together, :func:`solve_together`; 1: one by one; run()
+    checks it, before the model stages)."""
     t0 = time.perf_counter()
     folder = Path(folder)
     (folder / "cases").mkdir(parents=True, exist_ok=True)

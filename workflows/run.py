@@ -713,8 +713,6 @@ def _cli(args: argparse.Namespace) -> int:
                   contributions=args.contributions, modal_results=False, march_together=args.march_together)
     if args.cases is not None and args.cases < 0:
         raise InputError(f"--cases {args.cases}: must be 0 or more")
-    if args.march_together < 1:
-        raise InputError(f"--march-together {args.march_together}: must be 1 (one by one) or more")
     run(args.scenario, args.out, n_cases=args.cases, options=opt, error_estimate=not args.no_error_estimate,
         max_memory=None if args.max_memory is None else args.max_memory * 1e9, plots=not args.no_plots, **kw)
     return 0
