@@ -211,20 +211,27 @@ def _worker_state(task: CaseTask):
     return _MEMO["scenario"], _MEMO["stack"]
 
 
+def _generated_case(sc, index: int, model_key: str):
+    """Generated case ``index`` of ``sc``; InputError if its [model] is not the campaign's."""
+    from dataclasses import asdict
+
+    from .cache import stage_key
+
+    case = sc.generated_case(index)
+    if stage_key("model", asdict(case.model)) != model_key:
+        raise InputError(f"{sc.path}: case {case.name}: its [model] differs from the campaign's")
+    return case
+
+
 def solve_generated(task: CaseTask, keep_modal: bool | str = False, modal_scratch: Path | None = None):
     """(result, CaseProblem, Case, wall s) of generated case ``task.index``; ``modal_scratch``:
     the folder of the kept modal histories' scratch file (TransientProblem.modal_scratch)."""
-    from dataclasses import asdict
-
     from liftoff.transient import solve
 
-    from .cache import stage_key
     from .loads import build_problem
 
     sc, stack = _worker_state(task)
-    case = sc.generated_case(task.index)
-    if stage_key("model", asdict(case.model)) != task.model_key:
-        raise InputError(f"{sc.path}: case {case.name}: its [model] differs from the campaign's")
+    case = _generated_case(sc, task.index, task.model_key)
     t0 = time.perf_counter()
     try:
         cp = build_problem(case, stack, progress=False, keep_modal=keep_modal)
@@ -241,19 +248,13 @@ def solve_together(task: CaseTask) -> list:
     share). Cases the batch cannot march (friction, dashpots, latches, soft release, rigid
     rows: its scope, which it names) or whose start fails are solved one by one, so that a
     case's error names that case as solve_generated names it."""
-    from dataclasses import asdict
-
     from liftoff.transient import solve_batch
 
-    from .cache import stage_key
     from .loads import build_problem
 
     sc, stack = _worker_state(task)
     indexes = (task.index, *task.together)
-    cases = [sc.generated_case(i) for i in indexes]
-    for case in cases:
-        if stage_key("model", asdict(case.model)) != task.model_key:
-            raise InputError(f"{sc.path}: case {case.name}: its [model] differs from the campaign's")
+    cases = [_generated_case(sc, i, task.model_key) for i in indexes]
     t0 = time.perf_counter()
     try:
         cps = [build_problem(case, stack, progress=False) for case in cases]
