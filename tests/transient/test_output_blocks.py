@@ -62,3 +62,25 @@ def test_block_outputs_are_each_steps_own(monkeypatch, n_steps, chunk):
     assert res.time.size == n_steps + 1 and np.isfinite(res.separation_time).any()   # the run released and lifted off
     _check(res, problem)
     assert np.abs(res.displacement["a"][1:]).min(axis=0).max() > 0     # no row left unwritten (zero)
+
+
+def test_zero_rows_are_skipped():
+    """Rows that are zero throughout (a recovery component no mode loads) are not handed to
+    the kernel (OutputPlan.kernel_rows); the kernel zeroes each output row before it adds
+    the products, so their targets stay exactly 0, and every other history is still L x of
+    its step (the same bound as above: with fewer rows in a product, BLAS may split it
+    otherwise, so the bits may differ from a run with the zero rows; the default's did not)."""
+    problem = _problem(2 * OUT_BLOCK + 9)
+    rec = problem.recoveries[0]
+    rec.disp[1] = 0.0                            # "r1": zero on q and v, loaded on acc
+    rec.vel[1] = 0.0
+    zero = Recovery("zero", "a", ["z0", "z1"], disp=np.zeros((2, problem.body_a.n_modes)))
+    problem = TransientProblem(**{**problem.__dict__, "recoveries": [*problem.recoveries, zero]})
+    plan = solver.output_plan(problem, "a")
+    L, kind, targ = plan.kernel_rows()
+    assert L.shape[0] == plan.L.shape[0] - 4 and np.all(np.any(L != 0, axis=1))
+    assert np.all(np.diff(kind) >= 0)                                  # still grouped by kind
+    res = solve(problem)
+    _check(res, problem)
+    assert np.all(res.recovered["zero"] == 0.0)
+    assert np.all(np.abs(res.recovered["mixed"][1:]).min(axis=0) > 0)   # "r1" (acc only) recovered
