@@ -144,6 +144,13 @@ def _colsum(comm: MPI.Comm, A: np.ndarray) -> np.ndarray:
     return comm.allreduce(local, op=MPI.SUM) if comm.size > 1 else local
 
 
+def _times_inverse_lt(X: np.ndarray, L: np.ndarray) -> np.ndarray:
+    """X L^-T for a lower-triangular L (p x p), a new Fortran-ordered array: one BLAS trsm on
+    X's columns in place of solve_triangular(L, X^T)^T, which copied X twice and checked it
+    for infinities (its time a block on the default booster: 8.5 ms against 2.6)."""
+    return sla.blas.dtrsm(1.0, L, np.asfortranarray(X), side=1, lower=1, trans_a=1, overwrite_b=0)
+
+
 def _b_orthonormalise(comm, W, BW, V, BV, mass, rng_block):
     """(Q, BQ, R) with W = Q R and Q^T B Q = I, for a W already B-orthogonal to V: Cholesky
     QR, twice. Directions of W (numerically) inside span(V) are replaced by random ones
@@ -159,8 +166,7 @@ def _b_orthonormalise(comm, W, BW, V, BV, mass, rng_block):
         if smax > 0 and s[0] > 1e-12 * smax:
             L = np.linalg.cholesky(G)                   # G = L L^T: W = (W L^-T) L^T
             Rk = L.T
-            W = sla.solve_triangular(L, W.T, lower=True).T
-            BW = sla.solve_triangular(L, BW.T, lower=True).T
+            W, BW = _times_inverse_lt(W, L), _times_inverse_lt(BW, L)
         else:                                           # rank-deficient: keep the good directions
             good = s > 1e-12 * smax if smax > 0 else np.zeros(p, bool)
             Ug, sg = U[:, good], np.sqrt(s[good])
@@ -175,8 +181,7 @@ def _b_orthonormalise(comm, W, BW, V, BV, mass, rng_block):
             BZ = mass(Z)
             Gz = _dot(comm, Z, BZ)
             Lz = np.linalg.cholesky(0.5 * (Gz + Gz.T))
-            Z = sla.solve_triangular(Lz, Z.T, lower=True).T
-            BZ = sla.solve_triangular(Lz, BZ.T, lower=True).T
+            Z, BZ = _times_inverse_lt(Z, Lz), _times_inverse_lt(BZ, Lz)
             W, BW = np.hstack([Q, Z]), np.hstack([BQ, BZ])
         R = Rk @ R
     return W, BW, R
@@ -184,21 +189,19 @@ def _b_orthonormalise(comm, W, BW, V, BV, mass, rng_block):
 
 def _ritz(H: np.ndarray, m: int, p: int, want: int, magnitude: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """The ``want`` largest eigenpairs of the symmetric part of H[:m, :m] (``magnitude``: of
-    largest magnitude, both ends of the spectrum), taken as block tridiagonal (bandwidth
-    2p - 1): with full reorthogonalisation the entries beyond are round-off (below 1e-15 of
-    H's norm), and a banded eigensolve costs O(m^2 p), not O(m^3)."""
+    largest magnitude, both ends of the spectrum). H is block tridiagonal in exact
+    arithmetic (full reorthogonalisation leaves round-off beyond the band, kept here). A dense
+    eigensolve (LAPACK's blocked tridiagonalisation, then MRRR for the ``want`` vectors) is
+    faster than a banded one with vectors, whose reduction accumulates its rotations into an
+    m x m matrix one at a time: at the default core's last check (m = 1288, 466 pairs) 0.27
+    against 0.45 s, one thread (2026-12-07)."""
     T = 0.5 * (H[:m, :m] + H[:m, :m].T)
-    u = min(2 * p - 1, m - 1)
-    band = np.zeros((u + 1, m))
-    for k in range(u + 1):                   # upper form: band[u - k, k:] = diag(T, k)
-        band[u - k, k:] = np.diagonal(T, k)
     if not magnitude:
-        return sla.eig_banded(band, lower=False, select="i", select_range=(m - want, m - 1))
-    ev = sla.eig_banded(band, lower=False, eigvals_only=True)          # ascending
+        return sla.eigh(T, subset_by_index=(m - want, m - 1), driver="evr")
+    ev, Y = sla.eigh(T, driver="evd")                                  # ascending
     low = int(np.sum(np.argsort(-np.abs(ev), kind="stable")[:want] < np.sum(ev < 0)))   # of them negative
-    parts = [sla.eig_banded(band, lower=False, select="i", select_range=r)
-             for r in ((0, low - 1), (m - (want - low), m - 1)) if r[1] >= r[0]]
-    return np.concatenate([t for t, _ in parts]), np.hstack([y for _, y in parts])
+    pick = np.concatenate([np.arange(low), np.arange(m - (want - low), m)])
+    return ev[pick], Y[:, pick]
 
 
 def default_max_dim(want: int, block: int) -> int:
