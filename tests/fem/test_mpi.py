@@ -4,6 +4,7 @@ import os
 import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -24,10 +25,17 @@ def _run(n, path, degree, script="mpi_modes_script.py", extra=()):
         pytest.skip("mpirun not installed (Debian package openmpi-bin comes with python3-dolfinx-real)")
     env = dict(mpirun_env(os.environ), PYTHONPATH=str(ROOT), OMPI_MCA_rmaps_base_oversubscribe="1",
                PYVISTA_OFF_SCREEN="true")      # this process may have initialised MPI (parallel.mpirun_env)
-    cmd = [mpirun, "-n", str(n), sys.executable, str(HERE / script), path, *extra, str(degree)]
-    res = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=300, cwd=ROOT)
-    lines = [ln for ln in res.stdout.splitlines() if ln.startswith("RESULT ")]
-    assert res.returncode == 0 and lines, f"mpirun failed ({res.returncode}): {res.stderr[-2000:]}"
+    with tempfile.TemporaryDirectory() as logs:
+        # each rank's own stdout and stderr in files (mpirun --output-filename): a rank that
+        # exits at once may lose what it wrote to mpirun's forwarding (under the parallel suite
+        # a two-rank run here exited 1 with none of its output shown), and they name the cause
+        cmd = [mpirun, "--output-filename", logs, "-n", str(n), sys.executable, str(HERE / script), path, *extra,
+               str(degree)]
+        res = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=300, cwd=ROOT)
+        own = {f.relative_to(logs).as_posix(): f.read_text(errors="replace") for f in sorted(Path(logs).rglob("std*"))}
+    lines = [ln for text in [res.stdout, *own.values()] for ln in text.splitlines() if ln.startswith("RESULT ")]
+    ranks = "\n".join(f"--- {name}:\n{text[-1500:]}" for name, text in own.items() if text.strip())
+    assert res.returncode == 0 and lines, f"mpirun failed ({res.returncode}): {res.stderr[-1000:]}\n{ranks}"
     return json.loads(lines[0][7:])
 
 
