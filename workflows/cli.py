@@ -25,7 +25,7 @@ import warnings
 from pathlib import Path
 from typing import Callable
 
-from .outdir import check_target, staged_output
+from .outdir import SIGNALLED, Terminated, check_target, staged_output
 
 EXIT_OK, EXIT_INTERNAL, EXIT_INPUT, EXIT_CONVERGENCE, EXIT_RESOURCES = 0, 1, 2, 3, 4
 EXIT_SIGINT, EXIT_SIGTERM = 130, 143
@@ -201,16 +201,9 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-class _Terminated(BaseException):
-    """SIGTERM, raised in the main thread so that every cleanup (finally) runs."""
-
-
-_SIGNALLED: list[int] = []     # SIGTERM seen (its exception may surface as another one)
-
-
 def _on_sigterm(signum, frame):
-    _SIGNALLED.append(signum)
-    raise _Terminated()
+    SIGNALLED.append(signum)      # (outdir.SIGNALLED: its exception may surface as another one, or be lost)
+    raise Terminated()
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -222,6 +215,7 @@ def main(argv: list[str] | None = None) -> int:
 
     args = build_parser().parse_args(argv)
     warnings.showwarning = _show_warning
+    SIGNALLED.clear()             # (an earlier main() in this process may have been signalled)
     previous = signal.signal(signal.SIGTERM, _on_sigterm)
     try:
         return args.func(args)
@@ -237,7 +231,7 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("liftoff: interrupted (SIGINT), no results written", file=sys.stderr)
         return EXIT_SIGINT
-    except _Terminated:
+    except Terminated:
         print("liftoff: terminated (SIGTERM), no results written", file=sys.stderr)
         return EXIT_SIGTERM
     except ModuleNotFoundError as exc:
@@ -248,7 +242,7 @@ def main(argv: list[str] | None = None) -> int:
         return _fail(EXIT_INPUT, f"this needs the Python package {exc.name.split('.')[0]!r}, which is not installed: "
                                  f"{how}")
     except Exception as exc:  # a bug: still one line, and a way to report it
-        if _SIGNALLED:        # SIGTERM inside a C extension's import surfaces as "ImportError: initialization failed"
+        if SIGNALLED:         # SIGTERM inside a C extension's import surfaces as "ImportError: initialization failed"
             print("liftoff: terminated (SIGTERM), no results written", file=sys.stderr)
             return EXIT_SIGTERM
         return _fail(EXIT_INTERNAL, f"internal error ({type(exc).__name__}: {exc}); please report it with the "

@@ -32,6 +32,18 @@ MANIFEST = "MANIFEST.json"
 FORMAT = "liftoff-run-manifest"
 
 
+class Terminated(BaseException):
+    """SIGTERM (the command line's handler, workflows.cli), raised in the main thread so that
+    every cleanup (finally) runs."""
+
+
+#: SIGTERMs received (the command line's handler appends). Its exception may surface as
+#: another one, or be lost: raised while Python runs an import's or a destructor's code, it
+#: is printed as "Exception ignored" and the run goes on (a run signalled so exited 0 with
+#: its files published). A run that saw one is not published (:func:`staged_output`).
+SIGNALLED: list[int] = []
+
+
 NAME_MAX = 255              # bytes of one file name (Linux, most file systems)
 STAGING_EXTRA = 48          # the staging folder's name: "." + name + TEMP_TAG + pid + "-old-" + random
 
@@ -139,6 +151,8 @@ def staged_output(out, command: str = "") -> Iterator[Path]:
     stage = Path(tempfile.mkdtemp(prefix=f".{out.name}{TEMP_TAG}{os.getpid()}-", dir=parent))
     try:
         yield stage
+        if SIGNALLED:               # a SIGTERM whose exception was lost on the way (SIGNALLED)
+            raise Terminated()
         write_text(stage / MANIFEST, json.dumps(_manifest(stage, command), indent=1) + "\n")
         _publish(stage, out)
     finally:
