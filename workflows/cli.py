@@ -215,7 +215,6 @@ def main(argv: list[str] | None = None) -> int:
 
     args = build_parser().parse_args(argv)
     warnings.showwarning = _show_warning
-    SIGNALLED.clear()             # (an earlier main() in this process may have been signalled)
     previous = signal.signal(signal.SIGTERM, _on_sigterm)
     try:
         return args.func(args)
@@ -249,6 +248,7 @@ def main(argv: list[str] | None = None) -> int:
                                     "command and input that caused it")
     finally:
         signal.signal(signal.SIGTERM, previous)
+        SIGNALLED.clear()         # this main()'s own: not a later run()'s in this process
 
 
 def _fail(code: int, exc) -> int:

@@ -220,7 +220,7 @@ def test_a_sigterm_whose_exception_is_lost_publishes_nothing(tmp_path, monkeypat
     left."""
     import argparse
 
-    from liftoff.workflows import cli
+    from liftoff.workflows import cli, outdir
 
     out = tmp_path / "out"
     out.mkdir()                                  # an empty folder: the run may write there
@@ -244,3 +244,4 @@ def test_a_sigterm_whose_exception_is_lost_publishes_nothing(tmp_path, monkeypat
     assert cli.main([]) == 143
     assert went_on == [True]                     # the exception was lost: SIGNALLED stopped it
     assert list(out.iterdir()) == [] and not _staging(tmp_path)
+    assert not outdir.SIGNALLED                  # main()'s own: a later run() in this process publishes
