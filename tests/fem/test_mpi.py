@@ -20,17 +20,22 @@ ROOT = HERE.parents[1]
 
 
 def _run(n, path, degree, script="mpi_modes_script.py", extra=()):
+    return run_script(n, script, [path, *extra, str(degree)])
+
+
+def run_script(n: int, script: str, args) -> dict:
+    """``mpirun -n n python tests/fem/<script> args...``: the JSON its rank 0 prints on its
+    "RESULT " line. Each rank's own stdout and stderr go to files (mpirun --output-filename)
+    and are shown when the run fails. Under the parallel fem suite, runs whose output went
+    through mpirun's forwarding alone exited 1 with none of it, in most of 16 runs of
+    tests/fem (2026-12-07; once on 2026-11-28 too); with the files, 6 of 6 passed."""
     mpirun = shutil.which("mpirun")
     if mpirun is None:
         pytest.skip("mpirun not installed (Debian package openmpi-bin comes with python3-dolfinx-real)")
     env = dict(mpirun_env(os.environ), PYTHONPATH=str(ROOT), OMPI_MCA_rmaps_base_oversubscribe="1",
                PYVISTA_OFF_SCREEN="true")      # this process may have initialised MPI (parallel.mpirun_env)
     with tempfile.TemporaryDirectory() as logs:
-        # each rank's own stdout and stderr in files (mpirun --output-filename): a rank that
-        # exits at once may lose what it wrote to mpirun's forwarding (under the parallel suite
-        # a two-rank run here exited 1 with none of its output shown), and they name the cause
-        cmd = [mpirun, "--output-filename", logs, "-n", str(n), sys.executable, str(HERE / script), path, *extra,
-               str(degree)]
+        cmd = [mpirun, "--output-filename", logs, "-n", str(n), sys.executable, str(HERE / script), *map(str, args)]
         res = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=300, cwd=ROOT)
         own = {f.relative_to(logs).as_posix(): f.read_text(errors="replace") for f in sorted(Path(logs).rglob("std*"))}
     lines = [ln for text in [res.stdout, *own.values()] for ln in text.splitlines() if ln.startswith("RESULT ")]

@@ -8,12 +8,6 @@ at machine precision; for a symmetric definite pencil the eigenvalue error is of
 order of the residual squared over the gap, so frequencies agree far below 1e-10
 (measured ~1e-14); eigenvectors, hence C_M, to residual/relative gap (gaps >= 1e-2
 here: required 1e-8)."""
-import json
-import os
-import shutil
-import subprocess
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -25,11 +19,8 @@ from liftoff.core.errors import InputError  # noqa: E402
 from liftoff.fem import petsc_solver  # noqa: E402
 from liftoff.reduction import Component, assemble, craig_bampton, system_modes  # noqa: E402
 from liftoff.reduction.models import chain_component, hex_block, six_labels, spider_component  # noqa: E402
-from liftoff.workflows.parallel import mpirun_env  # noqa: E402
 
 pytestmark = pytest.mark.fem
-HERE = Path(__file__).resolve().parent
-ROOT = HERE.parents[1]
 BOX = dict(L=1.0, W=0.1, H=0.07, n=(24, 3, 2))
 
 
@@ -285,17 +276,9 @@ def test_workspace_too_small_is_enlarged_not_called_singular(monkeypatch, select
 
 # ------------------------------------------------------------------ FE component, MPI
 def _mpirun(n, path, f_max):
-    mpirun = shutil.which("mpirun")
-    if mpirun is None:
-        pytest.skip("mpirun not installed (Debian package openmpi-bin comes with python3-dolfinx-real)")
-    env = dict(mpirun_env(os.environ), PYTHONPATH=str(ROOT), OMPI_MCA_rmaps_base_oversubscribe="1",
-               PYVISTA_OFF_SCREEN="true")      # this process may have initialised MPI (parallel.mpirun_env)
-    cmd = [mpirun, "-n", str(n), sys.executable, str(HERE / "mpi_cb_script.py"), path,
-           *(str(BOX[k]) for k in "LWH"), str(f_max)]
-    res = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=300, cwd=ROOT)
-    lines = [ln for ln in res.stdout.splitlines() if ln.startswith("RESULT ")]
-    assert res.returncode == 0 and lines, f"mpirun failed ({res.returncode}): {res.stderr[-2000:]}"
-    return json.loads(lines[0][7:])
+    from .test_mpi import run_script
+
+    return run_script(n, "mpi_cb_script.py", [path, *(BOX[k] for k in "LWH"), f_max])
 
 
 @pytest.mark.slow
