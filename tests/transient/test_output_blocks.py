@@ -3,6 +3,8 @@ product per body and kind, transient/kernel.py ``_outputs_block``) instead of on
 matrix-vector product a step. Every output row must still be L x of its own step: checked
 against the modal histories of the same run (keep_modal), for chunks that end inside a
 block and runs shorter than one block."""
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -75,7 +77,7 @@ def test_zero_rows_are_skipped():
     rec.disp[1] = 0.0                            # "r1": zero on q and v, loaded on acc
     rec.vel[1] = 0.0
     zero = Recovery("zero", "a", ["z0", "z1"], disp=np.zeros((2, problem.body_a.n_modes)))
-    problem = TransientProblem(**{**problem.__dict__, "recoveries": [*problem.recoveries, zero]})
+    problem = replace(problem, recoveries=[*problem.recoveries, zero])
     plan = solver.output_plan(problem, "a")
     L, kind, targ = plan.kernel_rows()
     assert L.shape[0] == plan.L.shape[0] - 4 and np.all(np.any(L != 0, axis=1))
