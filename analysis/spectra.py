@@ -137,11 +137,20 @@ def lowpass(values: np.ndarray, h: float, f_hz: float) -> np.ndarray:
     phase, so peaks keep their times; -6 dB at f_hz, 2 x LOWPASS_ORDER x 6 dB per octave
     beyond: :func:`lowpass_gain`). Unchanged when f_hz <= 0, when f_hz is above 0.45 of the
     sample rate, or for fewer than 16 samples."""
-    from scipy.signal import butter, sosfiltfilt
+    from scipy.signal import sosfiltfilt
 
     values = np.asarray(values, dtype=float)
     fs = 1.0 / h
     if not f_hz > 0 or f_hz >= 0.45 * fs or values.shape[0] < 16:
         return values
-    sos = butter(LOWPASS_ORDER, f_hz, fs=fs, output="sos")
+    sos = _butter_sos(float(f_hz), float(fs)).copy()      # (a few numbers: the cached one stays as designed)
     return sosfiltfilt(sos, values, axis=0, padlen=min(values.shape[0] - 1, 3 * (2 * len(sos) + 1)))
+
+
+@lru_cache(maxsize=64)
+def _butter_sos(f_hz: float, fs: float) -> np.ndarray:
+    """The second-order sections of :func:`lowpass`'s filter (designed once per band and
+    rate: a case filters a dozen histories with the same one)."""
+    from scipy.signal import butter
+
+    return butter(LOWPASS_ORDER, f_hz, fs=fs, output="sos")

@@ -33,10 +33,15 @@ def _finite(name: str, value) -> np.ndarray:
         arr = arr.astype(float)
     except (TypeError, ValueError):
         raise InputError(f"{name} is not numeric") from None
-    if not np.all(np.isfinite(arr)):
+    if not arr.size:
+        return arr
+    # two reductions, no temporaries (a case checks n x n feedback matrices): NaN or inf in any
+    # entry makes the max or the min NaN or infinite
+    big = max(abs(float(arr.max())), abs(float(arr.min())))
+    if not math.isfinite(big):
         raise InputError(f"{name} contains NaN or inf")
-    if arr.size and np.abs(arr).max() > MAX_MAGNITUDE:
-        raise InputError(f"{name} has a value of magnitude {np.abs(arr).max():.3g}, beyond {MAX_MAGNITUDE:g} "
+    if big > MAX_MAGNITUDE:
+        raise InputError(f"{name} has a value of magnitude {big:.3g}, beyond {MAX_MAGNITUDE:g} "
                          "(SI units): it would overflow inside")
     return arr
 

@@ -205,7 +205,8 @@ def recoveries(case: Case, stack: StackModel, cryo: dict | None = None) -> tuple
         held = [lab for lab in labels if not stack.vehicle_asm.released_apart(comp, lab)]
         rows = [labels.index(lab) for lab in held]
         D, A = (np.zeros((len(labels), body.n_modes)) for _ in range(2))   # a released direction: no force
-        D[rows], A[rows] = interface_force_recovery(stack.vehicle_asm, stack.vehicle_modes, comp, held)
+        D[rows], A[rows] = stack.product(("interface_force", comp, tuple(held)), lambda: interface_force_recovery(
+            stack.vehicle_asm, stack.vehicle_modes, comp, held))
         const = A @ body.modal_gravity(-g)                    # less the component's weight lumped here
         if case.cryo.enabled and comp == case.cryo.component:   # and its cryo preload
             const[rows] -= [cryo.get(stack.vehicle_asm.system_label(comp, lab), 0.0) for lab in held]
@@ -214,10 +215,11 @@ def recoveries(case: Case, stack: StackModel, cryo: dict | None = None) -> tuple
                             category="interface_force", const=const,
                             description=f"force of the rest of the vehicle on {comp} at {point}"))
         attach[name] = (point, comp)
-    out.append(Recovery("cg_motion", "a", COMPONENTS, disp=cg_motion_matrix(body), units=("m",) * 3 + ("rad",) * 3,
-                        category="cg_motion", description="vehicle c.g. motion (eq. 23)"))
+    out.append(Recovery("cg_motion", "a", COMPONENTS, disp=stack.product(("cg_motion",), lambda: cg_motion_matrix(body)),
+                        units=("m",) * 3 + ("rad",) * 3, category="cg_motion", description="vehicle c.g. motion (eq. 23)"))
     for comp in (cb.name for cb in stack.vehicle_asm.components):
-        A, mass = cg_acceleration_recovery(stack.vehicle_asm, stack.vehicle_modes, comp)
+        A, mass = stack.product(("cg_acceleration", comp), lambda: cg_acceleration_recovery(
+            stack.vehicle_asm, stack.vehicle_modes, comp))
         out.append(Recovery(f"cg_accel_{comp}", "a", TRANSLATIONS, acc=A, units="m/s^2", category=CG_ACCELERATION,
                             description=f"net acceleration of {comp}'s c.g. (rigid-body mass x/y/z "
                                         f"{'/'.join(f'{m:.6g}' for m in mass)} kg)"))

@@ -16,6 +16,7 @@ import tempfile
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Any, Callable
 
 import numpy as np
 from liftoff.reduction import (
@@ -65,6 +66,16 @@ class StackModel:
     timings: dict = field(default_factory=dict)
     key: str = ""         # what made it (its stages' keys, the modes kept, zeta); "": unknown
     _checks: dict = field(default_factory=dict, repr=False)
+    _products: dict = field(default_factory=dict, repr=False)
+
+    def product(self, key: tuple, build: Callable[[], Any]) -> Any:
+        """``build()``, computed once per ``key`` for this stack: what depends on the model
+        alone (a recovery matrix of its modes), which every case on it would otherwise rebuild
+        (a campaign's worker runs hundreds of cases on one stack). The product is shared: its
+        users must not change it in place."""
+        if key not in self._products:
+            self._products[key] = build()
+        return self._products[key]
 
     def truncation(self, contact_a, contact_b, attach) -> tuple[TruncationCheck, TruncationCheck]:
         """The truncation checks (reduction/truncation.py) of the vehicle at its contact

@@ -97,3 +97,35 @@ def test_no_overflow_for_huge_omega_h():
         assert np.all(np.isfinite(getattr(c, key))), key
     # static limit: a constant force P gives q -> P/omega^2 (Ac + Bc -> 1/omega^2)
     assert np.allclose(c.Ac + c.Bc, 1e-18, rtol=1e-9)
+
+
+def test_recent_coefficients_are_the_computed_ones_and_their_own():
+    """A set of modes seen before (a campaign's cases share the bodies and the step) gets its
+    coefficients from the recent ones (transient.coefficients._RECENT): the same numbers, bit
+    for bit, as evaluated anew, in arrays of the caller's own (a change to one set does not
+    reach the next caller); another step, damping or static mask is evaluated anew."""
+    from liftoff.transient import coefficients as co
+
+    rng = np.random.default_rng(3)
+    omega = np.concatenate([np.zeros(6), np.sort(rng.uniform(1.0, 4000.0, 60))])
+    zeta = np.full(omega.size, 0.01)
+    static = omega > 3000.0
+    with co._RECENT_LOCK:
+        co._RECENT.clear()
+    first = step_coefficients(omega, zeta, 1e-3, static)
+    assert len(co._RECENT) == 1
+    first.Bc[:] = -1.0                                   # the caller's arrays only
+    again = step_coefficients(omega, zeta, 1e-3, static)
+    with co._RECENT_LOCK:
+        co._RECENT.clear()
+    fresh = step_coefficients(omega, zeta, 1e-3, static)
+    for k in ("F", "G", "Ac", "Bc", "Fd", "Gd", "Acd", "Bcd"):
+        assert np.array_equal(getattr(again, k), getattr(fresh, k)), k
+    assert np.all(again.Bc != -1.0)
+    other = [step_coefficients(omega, zeta, 0.5e-3, static), step_coefficients(omega, 2 * zeta, 1e-3, static),
+             step_coefficients(omega, zeta, 1e-3, None)]
+    assert not np.array_equal(other[0].G, fresh.G) and not np.array_equal(other[1].F, fresh.F)
+    assert not np.array_equal(other[2].Bc, fresh.Bc)
+    assert len(co._RECENT) == 4
+    few = step_coefficients(omega[:3], zeta[:3], 1e-3)  # below RECENT_MIN_MODES: not kept
+    assert len(co._RECENT) == 4 and few.G.size == 3

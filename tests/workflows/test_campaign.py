@@ -614,3 +614,30 @@ def test_march_together_checked_before_the_model_stages(tmp_path, campaign4):
         run(p, tmp_path / "out", cache_dir=tmp_path / "empty-cache", n_cases=2, options=Options(march_together=0),
             **QUIET)
     assert not (tmp_path / "empty-cache").exists() or not any((tmp_path / "empty-cache").rglob("*.npz"))
+
+
+def test_model_products_are_built_once_per_stack(campaign4, monkeypatch):
+    """The recovery matrices that depend on the model alone (attach forces, c.g. motion and
+    accelerations) are built by a stack's first case and taken from it by the next
+    (StackModel.product: a campaign worker's cases share its stack): the same matrices, bit
+    for bit, as a first case's, with no call to the functions that build them."""
+    import liftoff.reduction as red
+
+    _, _, out = campaign4
+    sc, stack = out.scenario, next(iter(out.stacks.values()))
+    stack._products.clear()
+    first = build_problem(sc.cases[0], stack, progress=False)
+    assert {k[0] for k in stack._products} == {"interface_force", "cg_motion", "cg_acceleration"}
+
+    def built_again(*a, **k):
+        raise AssertionError("a model product built again")
+
+    monkeypatch.setattr(red, "interface_force_recovery", built_again)
+    monkeypatch.setattr(red, "cg_acceleration_recovery", built_again)
+    again = build_problem(sc.cases[0], stack, progress=False)
+    for r1, r2 in zip(first.problem.recoveries, again.problem.recoveries, strict=True):
+        assert r1.name == r2.name
+        for part in ("disp", "vel", "acc", "const"):
+            a, b = getattr(r1, part), getattr(r2, part)
+            assert (a is None and b is None) or np.array_equal(a, b), (r1.name, part)
+            assert a is None or a is not b                # each problem holds its own copy
