@@ -53,6 +53,32 @@ def test_errors_come_back_naming_the_job(tmp_path):
         b.wait()
 
 
+def test_preloads_run_once_in_the_parent_before_the_first_fork(tmp_path):
+    """Beside.preload: each loader runs once, in this process, before the first child is
+    forked (which then has what it loaded); a loader that fails is no error here (the child
+    that needs it says why); an inline Beside runs none."""
+    calls = []
+
+    def loader():
+        calls.append(os.getpid())
+
+    def broken():
+        raise ImportError("no such library")
+
+    b = Beside(True)
+    b.preload(loader, broken)
+    assert calls == []                               # nothing before a job comes
+    b.submit("one", lambda: _write(tmp_path / "one.txt", str(len(calls))))
+    b.submit("two", lambda: _write(tmp_path / "two.txt", str(len(calls))))
+    b.wait()
+    assert calls == [os.getpid()]                     # once, here
+    assert (tmp_path / "one.txt").read_text() == "1" == (tmp_path / "two.txt").read_text()   # children inherit it
+    inline = Beside(False)
+    inline.preload(loader)
+    inline.submit("three", lambda: [])
+    assert calls == [os.getpid()]
+
+
 def test_kill_leaves_no_child(tmp_path):
     b = Beside(True)
     b.submit("slow", lambda: time.sleep(60) or [])
