@@ -52,7 +52,7 @@ ULLAGE_PRESSURE = {"lh2": 32.0 * PSI, "lox": 20.0 * PSI}
 
 def core_stage_params(layout: StackLayout | None = None, mesh_size: float = 0.9, walls: str = "solid",
                       shell_bending_ratio: float = 1.0, liquid: str = "smeared",
-                      ullage_pressure: dict | None = None, attach: str | None = None) -> TankParams:
+                      ullage_pressure: dict | None = None, attach: str | None = None, **beams) -> TankParams:
     """External-tank-like core stage: LH2 tank (aft), intertank skirt, LOX tank (forward),
     Al 2219 wall thickened to 0.15 m (``walls="solid"``) or its mid-surface as an Al 2219
     shell of the thickness that weighs the dry mass, 6.8 mm (``walls="shell"``, bending
@@ -64,7 +64,10 @@ def core_stage_params(layout: StackLayout | None = None, mesh_size: float = 0.9,
     booster and orbiter attach points as rigid 1 m x 1 m ``"patch"``es or, shell walls only,
     as ``"ring"`` interpolations over half the wall's circumference at their station (the
     ring frames there: the LH2 tank's aft frame, the intertank's booster beam frame);
-    None: ``"ring"`` with shell walls, ``"patch"`` with solid ones."""
+    None: ``"ring"`` with shell walls, ``"patch"`` with solid ones. ``beams``: TankParams'
+    ring frames and stringers (``frames``, ``frame_section``, ``frame_material``,
+    ``stringers``, ``stringer_azimuth``, ``stringer_section``, ``stringer_material``; shell
+    walls), none by default."""
     lay = layout or StackLayout()
     lay.check()
     patches = {}
@@ -80,7 +83,7 @@ def core_stage_params(layout: StackLayout | None = None, mesh_size: float = 0.9,
         intertank_length=6.9, z_bottom=lay.core_bottom_z, axis_xy=(0.0, 0.0),
         material=replace(AL2219), dry_mass=26_500.0, patches=patches, patch_half_width=0.5,
         mesh_size=mesh_size, walls=walls, shell_bending_ratio=shell_bending_ratio, liquid=liquid,
-        attach=check_attach("core_stage_params", walls, attach))
+        attach=check_attach("core_stage_params", walls, attach), **beams)
     p.patches["stack_top"] = np.array([0.0, 0.0, lay.core_bottom_z + tank_height(p)])
     return p
 

@@ -149,6 +149,32 @@ def test_launch_table_girder_deck_from_toml():
         parse_scenario(bad, "s.toml")
 
 
+def test_core_stage_frames_and_stringers_from_toml():
+    """The external tank's ring frames and stringers from the scenario (its shell wall, as a
+    tank stage's): heights, sections, count and azimuth reach its TankParams; a height off the
+    cylindrical wall, a wrong section and an unknown key are named by their keys."""
+    d = tomllib.loads(default_text())
+    d["model"]["component"]["core"]["params"] = {
+        "frames": [13.2, 25.1, 40.5], "frame_section": {"shape": "t", "h": 0.25, "b": 0.1, "tw": 0.006, "tf": 0.01},
+        "stringers": 24, "stringer_azimuth": 7.5,
+        "stringer_section": {"shape": "hat", "h": 0.05, "b": 0.04, "c": 0.02, "t": 0.003},
+        "stringer_material": {"E": 73e9, "nu": 0.33, "rho": 2800.0}}
+    b = parse_scenario(d, "s.toml").cases[0].model.components["core"].builder
+    assert b.frames == (13.2, 25.1, 40.5) and b.frame_section["shape"] == "t" and b.frame_material is None
+    assert b.stringers == 24 and b.stringer_azimuth == 7.5 and b.stringer_material.name == "core-stringers"
+    assert b.walls == "shell" and b.dry_mass == 26_500.0
+    plain = parse_scenario(tomllib.loads(default_text()), "s.toml").cases[0].model.components["core"].builder
+    assert plain.frames == () and plain.stringers == 0          # the default: a bare skin
+    for key, value, match in (("frames", [13.2, 60.0], r"core\.params: .*frames: height 60.0 m is not on the cylindrical"),
+                              ("frame_section", {"shape": "t", "h": 0.25}, r"core\.params\.frame_section: .*missing"),
+                              ("frames", 13.2, r"core\.params\.frames: expected a list"),
+                              ("ribs", 3, r"core\.params: unknown key 'ribs'")):
+        bad = copy.deepcopy(d)
+        bad["model"]["component"]["core"]["params"][key] = value
+        with pytest.raises(InputError, match=match):
+            parse_scenario(bad, "s.toml")
+
+
 def test_orbiter_skin_frames_from_toml():
     """The orbiter's ring frames from the scenario (shell skin): heights and a standard
     section; a wrong shape named by its key."""

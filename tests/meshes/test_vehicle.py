@@ -129,3 +129,37 @@ def test_equivalent_materials_keep_specific_stiffness(stack):
     assert case.E / case.rho == pytest.approx(205e9 / 7850.0, rel=1e-12)
     core = stack["core"].volumes["core_wall"]
     assert core.E / core.rho == pytest.approx(73.8e9 / 2840.0, rel=1e-12)
+
+
+def test_core_stage_ring_frames_and_stringers(tmp_path):
+    """The external tank's shell wall with ring frames and stringers (beams; issue 26): their
+    groups on the geometry, the frames' circles at the wall's inner face (the mid-surface radius
+    plus their radial offset: half the skin and the section's centroid depth inwards), the
+    stringers the cylindrical wall's length each,
+    and the tank's dry mass kept: wall + frames + stringers = 26.5 t (their mass comes off the
+    skin's thickness; the wetted areas' CAD integration, CAD_RTOL, the only error)."""
+    import pyvista  # noqa: F401  (before dolfinx, FENICSX-NOTES.md)
+
+    from liftoff.core.beam import standard_section
+    from liftoff.meshes.tank import build_tank
+
+    tee = {"shape": "t", "h": 0.25, "b": 0.1, "tw": 0.006, "tf": 0.01}
+    hat = {"shape": "hat", "h": 0.05, "b": 0.04, "c": 0.02, "t": 0.003}
+    frames = (13.2, 25.1, 40.5)
+    p = core_stage_params(mesh_size=2.0, walls="shell", liquid="hydroelastic", frames=frames, frame_section=tee,
+                          stringers=12, stringer_azimuth=7.5, stringer_section=hat)
+    geo = build_tank(p, tmp_path)
+    fr, st = geo.beams["core_frames"], geo.beams["core_stringers"]
+    assert fr.section == standard_section(tee)[0] and st.section == standard_section(hat)[0]
+    t = geo.shells["core_wall"]
+    r = p.radius - p.wall_thickness / 2 + fr.radial_offset     # the shell at the drawn wall's mid-surface
+    assert geo.curve_lengths["core_frames"] == pytest.approx(len(frames) * 2 * np.pi * r, rel=1e-9)
+    cylinder = 25.6 + 6.9 + 4.65                     # LH2 barrel, intertank, LOX barrel (m)
+    assert geo.curve_lengths["core_stringers"] == pytest.approx(12 * cylinder, rel=1e-9)
+    wall = geo.volumes["core_wall"]
+    dry = (wall.rho * t * geo.surface_areas["core_wall"]
+           + fr.material.rho * fr.section.A * geo.curve_lengths["core_frames"]
+           + st.material.rho * st.section.A * geo.curve_lengths["core_stringers"])
+    assert dry == pytest.approx(26_500.0, rel=CAD_RTOL)
+    bare = build_tank(core_stage_params(mesh_size=2.0, walls="shell", liquid="hydroelastic"), tmp_path / "bare")
+    assert not bare.beams and t < bare.shells["core_wall"]
