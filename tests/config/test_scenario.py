@@ -143,7 +143,7 @@ BAD = [
     ("model.component.srb_left.params", {"side": "up"}, "model.component.srb_left.params: booster side must be one of"),
     ("model.component.srb_left.params", {"walls": "solid"}, "model.component.srb_left.params.side: missing"),
     ("model.component.orbiter.params", {"wing_spam": 20.0}, "model.component.orbiter.params: unknown key 'wing_spam'"),
-    ("model.component.core.params", {"radius": 4.0}, "model.component.core.params: unknown key 'radius': the core stage takes only attach, shell_bending_ratio, ullage_pressure"),
+    ("model.component.core.params", {"radius": 4.0}, "model.component.core.params: unknown key 'radius': the core stage takes only attach, frame_material, frame_section, frames, shell_bending_ratio, stringer_azimuth, stringer_material, stringer_section, stringers, ullage_pressure"),
     ("model.component.core.params", {"ullage_pressure": {"lh2": 1e5}},
      "model.component.core.params.ullage_pressure: missing required key 'lox'"),
     ("model.component.core.params", {"ullage_pressure": {"lh2": -1.0, "lox": 0.0}},
