@@ -41,6 +41,7 @@ STATIC_MODES_JSON = FIGURES / "static_modes_study.json"  # benchmarks/static_mod
 CAMPAIGN_BENCH_JSON = FIGURES / "bench_campaign.json"  # benchmarks/bench_campaign.py --json (machine-dependent)
 BATCH_BENCH_JSON = FIGURES / "bench_batch.json"    # benchmarks/bench_batch.py --json (machine-dependent)
 MPI_BENCH_JSON = FIGURES / "bench_mpi_components.json"  # benchmarks/bench_mpi_components.py --json (machine-dependent)
+STIFFENERS_JSON = FIGURES / "stiffeners.json"  # benchmarks/stiffener_compare.py
 EXAMPLE_JSONS = {n: FIGURES / f"{n}.json" for n in ("single_stick", "saturn_v")}   # benchmarks/example_figures.py
 DOCS = (ROOT / "README.md", ROOT / "docs" / "workflow.md", ROOT / "docs" / "transient.md")
 #: figures agree when within this relative difference (of the larger of the two or, inside a
@@ -262,7 +263,8 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
                   booster_grain: dict | None = None, campaign_bench: dict | None = None,
                   attach_release: dict | None = None, step: dict | None = None,
                   kernel_floor: dict | None = None, static_modes: dict | None = None,
-                  batch_bench: dict | None = None, mpi_bench: dict | None = None) -> dict[str, str]:
+                  batch_bench: dict | None = None, mpi_bench: dict | None = None,
+                  stiffeners: dict | None = None) -> dict[str, str]:
     """{block name: markdown} from the figures (and the convergence, twang and mesh studies,
     the workflow benchmark and the launcher examples' figures {name: figures}, if any)."""
     tw, twn = fig["twang"]["nominal"], fig["twang"]
@@ -352,6 +354,8 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
         blocks["bench-batch"] = render_batch_bench(batch_bench)
     if mpi_bench:
         blocks["bench-mpi"] = render_mpi_bench(mpi_bench)
+    if stiffeners and "bare" in stiffeners:
+        blocks["stiffeners"] = render_stiffeners(stiffeners)
     if examples:
         import runpy
 
@@ -675,6 +679,39 @@ def render_attach_release(fig: dict) -> str:
     return _variant_table("attach joints", [(RELEASE_TITLES[k], v) for k, v in fig.items()], [], items)
 
 
+#: stiffener_compare.py's variants, as the table heads them
+STIFFENER_TITLES = {"bare": "bare skins, solid deck (default)", "tank": "external tank: ring frames and stringers",
+                    "tank_orbiter": "and the orbiter's", "tank_orbiter_girders": "and the launch table's girder deck"}
+
+
+def render_stiffeners(fig: dict) -> str:
+    """The default run with its walls bare and stiffened by ring frames, stringers and
+    girders as beams (benchmarks/stiffener_compare.py); the largest change of an attach
+    force's peak magnitude from the bare run's (the peaks are signed: a small load's may
+    change sign between runs)."""
+    base = fig["bare"]["attach_n"]
+    items = [k for k in sorted(base, key=lambda k: (k.split(" on ")[0], k)) if k.endswith(("Tx", "Ty", "Tz"))]
+
+    def change(v):
+        k = max(items, key=lambda k: abs(abs(v["attach_n"].get(k, 0.0)) - abs(base[k])))
+        d = abs(v["attach_n"].get(k, 0.0)) - abs(base[k])
+        return f"{d / 1e6:+.2f} MN ({100 * d / abs(base[k]):+.0f} % of the default's), {k}"
+
+    def built(v):                      # the components this variant built (the others: cache hits)
+        parts = [(c, v["components"][c]) for c in ("core", "orbiter", "pad")]
+        return "; ".join(f"{c} {p['fe_s']:.0f}, {p['cb_s']:.0f}" for c, p in parts
+                         if p["fe_s"] is not None and p["cb_s"] is not None) or "-"
+
+    lead = [("FE DOFs; fixed-interface modes: core, orbiter, pad",
+             lambda v: "; ".join(f"{v['components'][c]['fe_dofs']}, {v['components'][c]['cb_modes']}"
+                                 for c in ("core", "orbiter", "pad"))),
+            ("FE, CB stage times of the components this run built, cold (s, this machine)", built),
+            ("vehicle system modes; mass (t)", lambda v: f"{v['vehicle_modes']}; {v['vehicle_mass_t']:.1f}"),
+            ("largest change of an attach force's peak magnitude from the default's",
+             lambda v: "-" if v is fig["bare"] else change(v))]
+    return _variant_table("walls and deck", [(STIFFENER_TITLES[k], v) for k, v in fig.items()], lead, items)
+
+
 def render_mesh(study: dict) -> str:
     """The static mesh study: each level's DOFs, post axial loads at t0 and its largest
     changes from the finest level."""
@@ -821,7 +858,8 @@ def studies() -> tuple[dict | None, ...]:
                   json.loads(KERNEL_FLOOR_JSON.read_text()) if KERNEL_FLOOR_JSON.is_file() else None,
                   json.loads(STATIC_MODES_JSON.read_text()) if STATIC_MODES_JSON.is_file() else None,
                   json.loads(BATCH_BENCH_JSON.read_text()) if BATCH_BENCH_JSON.is_file() else None,
-                  json.loads(MPI_BENCH_JSON.read_text()) if MPI_BENCH_JSON.is_file() else None)
+                  json.loads(MPI_BENCH_JSON.read_text()) if MPI_BENCH_JSON.is_file() else None,
+                  json.loads(STIFFENERS_JSON.read_text()) if STIFFENERS_JSON.is_file() else None)
 
 
 # ------------------------------------------------------------------ comparing
