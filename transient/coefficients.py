@@ -32,6 +32,7 @@ The kernel's acceleration P - 2 zeta omega v - omega^2 q is then 0 to round-off 
 """
 from __future__ import annotations
 
+import os
 import threading
 from collections import OrderedDict
 from dataclasses import dataclass, fields
@@ -196,12 +197,13 @@ def step_coefficients(omega, zeta, h: float, static=None) -> StepCoefficients:
                          "residual-flexibility modes")
     key = (omega.tobytes(), np.ascontiguousarray(zeta).tobytes(), float(h), static.tobytes()) \
         if n >= RECENT_MIN_MODES else None
-    with _RECENT_LOCK:
-        known = _RECENT.get(key) if key is not None else None
+    if key is not None:
+        with _RECENT_LOCK:
+            known = _RECENT.get(key)
+            if known is not None:
+                _RECENT.move_to_end(key)
         if known is not None:
-            _RECENT.move_to_end(key)
-    if known is not None:
-        return _copied(known)
+            return _copied(known)
     out = {k: np.empty(n) for k in ("F", "G", "Ac", "Bc", "Fd", "Gd", "Acd", "Bcd")}
     for i in range(n):
         w, z = omega[i], zeta[i]
@@ -239,6 +241,17 @@ RECENT_SIZE = 8
 RECENT_MIN_MODES = 32
 _RECENT: OrderedDict = OrderedDict()
 _RECENT_LOCK = threading.Lock()       # the error estimate's halved runs step in a thread of their own
+
+
+def _new_lock_in_child() -> None:
+    """A forked child (workflows/beside.py forks while the halved runs' thread may hold the
+    lock) starts with a lock of its own, never one held by a thread it does not have."""
+    global _RECENT_LOCK
+    _RECENT_LOCK = threading.Lock()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_new_lock_in_child)
 
 
 def _copied(c: StepCoefficients) -> StepCoefficients:

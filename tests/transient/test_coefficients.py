@@ -129,3 +129,37 @@ def test_recent_coefficients_are_the_computed_ones_and_their_own():
     assert len(co._RECENT) == 4
     few = step_coefficients(omega[:3], zeta[:3], 1e-3)  # below RECENT_MIN_MODES: not kept
     assert len(co._RECENT) == 4 and few.G.size == 3
+
+
+def test_a_forked_child_gets_a_free_lock_of_the_recent_coefficients():
+    """workflows/beside.py forks while the error estimate's thread may be inside
+    step_coefficients: the child's lock of the recent coefficients is a new one, free, so the
+    child never waits on a thread it does not have (here the parent holds the lock across the
+    fork; the child evaluates a body's coefficients and exits 0 within the time limit)."""
+    import os
+    import signal
+    import time
+
+    from liftoff.transient import coefficients as co
+
+    omega = np.linspace(1.0, 100.0, 40)
+    with co._RECENT_LOCK:
+        pid = os.fork()
+        if pid == 0:                                   # the child: must not block
+            signal.alarm(20)
+            try:
+                step_coefficients(omega, np.full(40, 0.02), 1e-3)
+                os._exit(0)
+            except BaseException:                      # noqa: BLE001
+                os._exit(1)
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        done, status = os.waitpid(pid, os.WNOHANG)
+        if done:
+            break
+        time.sleep(0.05)
+    else:
+        os.kill(pid, 9)
+        os.waitpid(pid, 0)
+        raise AssertionError("the forked child blocked on the recent coefficients' lock")
+    assert os.WIFEXITED(status) and os.WEXITSTATUS(status) == 0
