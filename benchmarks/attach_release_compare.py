@@ -32,8 +32,6 @@ benchmarks/default_figures.py (block ``attach-release``).
 """
 from __future__ import annotations
 
-import argparse
-import json
 import runpy
 import sys
 from pathlib import Path
@@ -77,21 +75,8 @@ def variant_figures(name: str, cache: Path) -> dict:
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--cache", type=Path, default=ROOT / "out" / ".liftoff-cache")
-    ap.add_argument("--variants", nargs="*", default=list(VARIANTS), choices=list(VARIANTS))
-    ap.add_argument("--json", type=Path, default=JSON)
-    args = ap.parse_args(argv)
-    import pyvista  # noqa: F401  (before dolfinx, FENICSX-NOTES.md)
-
-    out = json.loads(args.json.read_text()) if args.json.is_file() else {}
-    for name in args.variants:
-        print(f"attach_release_compare: {name} ...", flush=True)
-        out[name] = variant_figures(name, args.cache)
-    out = {k: out[k] for k in VARIANTS if k in out}
-    args.json.write_text(json.dumps(out, indent=1, default=float) + "\n")
-    print(f"wrote {args.json}")
-    return 0
+    fig = runpy.run_path(str(ROOT / "benchmarks" / "default_figures.py"), run_name="default_figures")
+    return fig["compare_main"](argv, __doc__, VARIANTS, variant_figures, JSON, "attach_release_compare")
 
 
 if __name__ == "__main__":

@@ -77,6 +77,28 @@ def timed_variant(edit, cache: Path | None):
     return out, time.perf_counter() - t0
 
 
+def compare_main(argv, doc: str, variants: dict, figures_of, json_path: Path, tag: str) -> int:
+    """The command line of a comparison of default-like runs (attach_release_compare.py,
+    stiffener_compare.py): ``--variants`` (default all of ``variants``' keys) each run by
+    ``figures_of(name, cache)`` and written to ``--json`` (default ``json_path``), in
+    ``variants``' order, keeping the file's other variants."""
+    ap = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--cache", type=Path, default=ROOT / "out" / ".liftoff-cache")
+    ap.add_argument("--variants", nargs="*", default=list(variants), choices=list(variants))
+    ap.add_argument("--json", type=Path, default=json_path)
+    args = ap.parse_args(argv)
+    import pyvista  # noqa: F401  (before dolfinx, FENICSX-NOTES.md)
+
+    out = json.loads(args.json.read_text()) if args.json.is_file() else {}
+    for name in args.variants:
+        print(f"{tag}: {name} ...", flush=True)
+        out[name] = figures_of(name, args.cache)
+    out = {k: out[k] for k in variants if k in out}
+    args.json.write_text(json.dumps(out, indent=1, default=float) + "\n")
+    print(f"wrote {args.json}")
+    return 0
+
+
 def variant_summary(out, wall_s: float, component: str) -> dict:
     """The figures a comparison of default-like runs tabulates (booster_grain_compare.py,
     attach_release_compare.py): ``component``'s FE DOFs, CB modes and stage times, the

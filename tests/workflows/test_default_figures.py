@@ -183,6 +183,15 @@ def test_slosh_comparison_is_of_the_current_default(figures):
     assert cmp["free"]["vehicle_mass_t"] < wall["vehicle_mass_t"]
 
 
+def _is_the_default_run(col: dict, fig: dict, figures) -> None:
+    """A comparison's column (default_figures.variant_summary) is the default run: its modes,
+    steps, twang, peak post compression and mass are the default figures'."""
+    assert col["vehicle_modes"] == fig["vehicle"]["modes"] and col["steps"] == fig["steps"]
+    assert not figures.differences({k: col["twang"][k] for k in fig["twang"]["nominal"]}, fig["twang"]["nominal"])
+    assert not figures.differences([col["peak_post_compression_n"], col["vehicle_mass_t"]],
+                                   [fig["peak_post_compression_n"], fig["vehicle"]["mass_t"]])
+
+
 def test_booster_grain_comparison_is_of_the_current_default(figures):
     """benchmarks/booster_grain_compare.py's thickened-solid column is the default run (the
     same model and step, without the h/2 error estimate): its twang, peak post compression,
@@ -193,10 +202,7 @@ def test_booster_grain_comparison_is_of_the_current_default(figures):
     fig = json.loads(figures.DEFAULT_JSON.read_text())
     bg = json.loads(figures.BOOSTER_GRAIN_JSON.read_text())
     solid = bg["solid"]
-    assert solid["vehicle_modes"] == fig["vehicle"]["modes"] and solid["steps"] == fig["steps"]
-    assert not figures.differences({k: solid["twang"][k] for k in fig["twang"]["nominal"]}, fig["twang"]["nominal"])
-    assert not figures.differences([solid["peak_post_compression_n"], solid["vehicle_mass_t"]],
-                                   [fig["peak_post_compression_n"], fig["vehicle"]["mass_t"]])
+    _is_the_default_run(solid, fig, figures)
     for cut, col in bg["grain"].items():
         assert col["booster_f_max_hz"] == float(cut) < solid["booster_f_max_hz"]
         assert col["booster_fe_dofs"] > solid["booster_fe_dofs"]
@@ -229,10 +235,7 @@ def test_attach_release_comparison_is_of_the_current_default(figures):
     default = next((col for col in ar.values() if col["release"] == releases), None)
     assert default is not None, f"no column of attach_release.json has the default's releases {releases}"
     assert {"att_srb_fwd", "att_srb_aft", "att_orb_fwd", "att_orb_aft"} <= set(releases)
-    assert default["vehicle_modes"] == fig["vehicle"]["modes"] and default["steps"] == fig["steps"]
-    assert not figures.differences({k: default["twang"][k] for k in fig["twang"]["nominal"]}, fig["twang"]["nominal"])
-    assert not figures.differences([default["peak_post_compression_n"], default["vehicle_mass_t"]],
-                                   [fig["peak_post_compression_n"], fig["vehicle"]["mass_t"]])
+    _is_the_default_run(default, fig, figures)
     welded = ar["welded"]
     assert welded["release"] == {}
     for name, col in ar.items():
@@ -265,10 +268,7 @@ def test_stiffener_comparison_is_of_the_current_default(figures):
     fig = json.loads(figures.DEFAULT_JSON.read_text())
     st = json.loads(figures.STIFFENERS_JSON.read_text())
     bare = st["bare"]
-    assert bare["vehicle_modes"] == fig["vehicle"]["modes"] and bare["steps"] == fig["steps"]
-    assert not figures.differences({k: bare["twang"][k] for k in fig["twang"]["nominal"]}, fig["twang"]["nominal"])
-    assert not figures.differences([bare["peak_post_compression_n"], bare["vehicle_mass_t"]],
-                                   [fig["peak_post_compression_n"], fig["vehicle"]["mass_t"]])
+    _is_the_default_run(bare, fig, figures)
     for name, parts in mod["VARIANTS"].items():
         model = parse_scenario(mod["edit_for"](name)(tomllib.loads(default_text())), "s.toml").cases[0].model
         core, orbiter, pad = (model.components[c].builder for c in ("core", "orbiter", "pad"))
