@@ -80,8 +80,8 @@ class Beside:
     def preload(self, *loaders: Callable[[], object]) -> None:
         """Imports the children will need (``loaders``: each imports a module), done once in
         this process before the first fork, so that each child inherits them instead of
-        importing them again: pyplot and pyvista took 0.18 s each a process, four children
-        a default run (2026-12-07). A loader that fails is left to the child, which says why."""
+        importing them again: pyplot took 0.18 s a process, in four children of a default run
+        (2026-12-07). A loader that fails is left to the child, which says why."""
         self._preloads += loaders
 
     def submit(self, name: str, work: Callable[[], list]) -> None:

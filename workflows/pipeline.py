@@ -65,8 +65,9 @@ class StackModel:
     pad_all: SystemModes | None = None
     timings: dict = field(default_factory=dict)
     key: str = ""         # what made it (its stages' keys, the modes kept, zeta); "": unknown
-    _checks: dict = field(default_factory=dict, repr=False)
-    _products: dict = field(default_factory=dict, repr=False)
+    # memos of this stack's own model (a stack made by dataclasses.replace starts without them)
+    _checks: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    _products: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def product(self, key: tuple, build: Callable[[], Any]) -> Any:
         """``build()``, computed once per ``key`` for this stack: what depends on the model

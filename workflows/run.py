@@ -347,7 +347,7 @@ def write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, e
     from .beside import Beside, available
 
     beside = Beside(available())
-    beside.preload(*report.drawing_modules(plots, want_pics))
+    beside.preload(*report.drawing_modules(plots))
     try:
         return _write_results(sc, prep, out, plots, want_pics, echo, t_start, camp, error_estimate, beside)
     except BaseException:

@@ -168,6 +168,8 @@ def test_core_stage_frames_and_stringers_from_toml():
     for key, value, match in (("frames", [13.2, 60.0], r"core\.params: .*frames: height 60.0 m is not on the cylindrical"),
                               ("frame_section", {"shape": "t", "h": 0.25}, r"core\.params\.frame_section: .*missing"),
                               ("frames", 13.2, r"core\.params\.frames: expected a list"),
+                              ("stringers", float("nan"), r"core\.params\.stringers: .*NaN"),
+                              ("stringers", 2.5, r"core\.params: .*stringers must be a whole number"),
                               ("ribs", 3, r"core\.params: unknown key 'ribs'")):
         bad = copy.deepcopy(d)
         bad["model"]["component"]["core"]["params"][key] = value

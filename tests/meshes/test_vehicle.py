@@ -138,8 +138,6 @@ def test_core_stage_ring_frames_and_stringers(tmp_path):
     stringers the cylindrical wall's length each,
     and the tank's dry mass kept: wall + frames + stringers = 26.5 t (their mass comes off the
     skin's thickness; the wetted areas' CAD integration, CAD_RTOL, the only error)."""
-    import pyvista  # noqa: F401  (before dolfinx, FENICSX-NOTES.md)
-
     from liftoff.core.beam import standard_section
     from liftoff.meshes.tank import build_tank
 

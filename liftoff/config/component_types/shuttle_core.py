@@ -38,7 +38,7 @@ def read(ctx: Context, where: Where, params: dict):
     if not isinstance(frames, (list, tuple)):
         raise (where / "frames").error(f"expected a list of heights (m), got {frames!r}")
     beams = {"frames": tuple(number(where / "frames" / i, z) for i, z in enumerate(frames)),
-             "stringers": params.get("stringers", 0),
+             "stringers": number(where / "stringers", params.get("stringers", 0), nonneg=True),
              "stringer_azimuth": number(where / "stringer_azimuth", params.get("stringer_azimuth", 0.0)), **members}
     size = mesh_size_kw(ctx.mesh_size)
     try:
