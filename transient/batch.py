@@ -566,6 +566,9 @@ def _check_shared(problems: Sequence[TransientProblem], rows_k) -> None:
                          "problems one by one (liftoff.transient.solve)")
     for k, (p, rows) in enumerate(zip(problems, rows_k)):
         who = f"batch problem {k}"
+        if rows.laws:                        # (each problem's: the kernel is built from problem 0's rows)
+            raise InputError(f"{who}: friction, dashpots, latches or soft release are not marched batched; solve "
+                             "these problems one by one (liftoff.transient.solve)")
         if p.method != "direct":
             raise InputError(f"{who}: method {p.method!r}; a batch uses the direct active-set solve")
         if p.accuracy is not None:
@@ -576,7 +579,8 @@ def _check_shared(problems: Sequence[TransientProblem], rows_k) -> None:
         for key in ("body_a", "body_b"):
             a, b = getattr(p0, key), getattr(p, key)
             if a is not b and not (a.dof_labels == b.dof_labels and all(
-                    _same(getattr(a, f), getattr(b, f)) for f in ("omega", "zeta", "phi"))):
+                    _same(getattr(a, f), getattr(b, f)) for f in ("omega", "zeta", "phi", "ref_point",
+                                                                  "rigid_body_mass", "participation"))):
                 raise InputError(f"{who}: its {key} differs from problem 0's; a batch shares both bodies")
         for f in ("t0", "t_end", "h", "mode_samples", "static_above_hz", "max_iter"):
             if not _same(getattr(p, f), getattr(p0, f)):

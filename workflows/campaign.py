@@ -26,12 +26,13 @@ import json
 import time
 from concurrent.futures import FIRST_COMPLETED, wait
 from dataclasses import dataclass, field, replace
+from functools import lru_cache
 from pathlib import Path
 from typing import Callable, Iterable
 
 import numpy as np
 
-from liftoff.core.errors import ConvergenceError, InputError
+from liftoff.core.errors import ConvergenceError, InputError, ResourceError
 from liftoff.core.records import read_record, write_record
 
 #: bytes the main process keeps per generated case until the envelope is written: the
@@ -259,14 +260,15 @@ def solve_together(task: CaseTask) -> list:
     try:
         cps = [build_problem(case, stack, progress=False) for case in cases]
         results = solve_batch([cp.problem for cp in cps])
-    except (InputError, ConvergenceError) as exc:
+    except (InputError, ConvergenceError, ResourceError) as exc:     # (its memory: K cases' histories at once)
         if not _MEMO.get("warned"):      # once a worker: the cases are right, only not marched together
             _MEMO["warned"] = True
             import warnings
 
             warnings.warn(f"--march-together: cases {', '.join(c.name for c in cases)} solved one by one "
-                          f"({' '.join(str(exc).split())[:300]}); further such groups of this worker likewise",
-                          stacklevel=2)
+                          f"({' '.join(str(exc).split())[:300]}); further such groups of this worker likewise"
+                          + ("; a smaller --march-together needs less memory" if isinstance(exc, ResourceError)
+                             else ""), stacklevel=2)
         return [(i, *solve_generated(replace(task, index=i, together=()))) for i in indexes]
     wall = (time.perf_counter() - t0) / len(cases)
     return [(i, res, cp, case, wall) for i, res, cp, case in zip(indexes, results, cps, cases)]
@@ -318,7 +320,6 @@ def check_case_memory(source: str, n_cases: int, limit: float | None = None) -> 
     generated cases (CASE_BYTES each) within ``limit`` bytes (None: MEMORY_FRACTION of the
     memory available)."""
     from liftoff.core import memory
-    from liftoff.core.errors import ResourceError
 
     need = n_cases * CASE_BYTES
     limit = memory.MEMORY_FRACTION * memory.available_memory() if limit is None else limit
@@ -329,15 +330,53 @@ def check_case_memory(source: str, n_cases: int, limit: float | None = None) -> 
 
 
 # ------------------------------------------------------------------ records
-def case_key(sc, index: int, model_key: str) -> str:
-    """Hash of everything a generated case's summary depends on: its scenario mapping, the
-    model, the post-processing settings and the code of the packages that compute it."""
+def case_key(sc, index: int, model_key: str, stack_key: str = "") -> str:
+    """Hash of everything a generated case's summary depends on: its scenario mapping and the
+    contents of the files it names (a force table's CSV: :func:`referenced_files`), the model
+    (``model_key``: its parameters; ``stack_key``: StackModel.key, what its stages were built
+    from: their code, libraries and input files, the modes kept), the post-processing settings
+    and the code of the packages that compute it."""
     from .cache import _canonical, code_version
 
     raw, _ = sc.generated_raw(index)
-    payload = json.dumps({"case": _canonical(raw), "model": model_key, "post": repr(sc.post),
+    payload = json.dumps({"case": _canonical(raw), "files": referenced_files(raw, Path(sc.base)),
+                          "model": model_key, "stack": stack_key, "post": repr(sc.post),
                           "code": code_version(*CODE)}, sort_keys=True, default=repr)
     return hashlib.sha256(payload.encode()).hexdigest()[:16]
+
+
+def referenced_files(raw, base: Path) -> dict[str, str]:
+    """{name: SHA-256} of every string in the scenario mapping ``raw`` that names a file
+    (relative to ``base`` or absolute): a record made before such a file changed is not
+    reused. Digests are kept per (path, size, times, inode) in this process (a large Nastran
+    file a thousand cases name is read once)."""
+    out: dict[str, str] = {}
+
+    def walk(x):
+        if isinstance(x, dict):
+            for v in x.values():
+                walk(v)
+        elif isinstance(x, (list, tuple)):
+            for v in x:
+                walk(v)
+        elif isinstance(x, str) and x and len(x) < 4096 and "\0" not in x:
+            p = Path(x) if Path(x).is_absolute() else base / x
+            try:
+                st = p.stat()
+            except (OSError, ValueError):
+                return
+            if p.is_file():
+                out[x] = _digest(str(p.resolve()), st.st_size, st.st_mtime_ns, st.st_ctime_ns, st.st_ino)
+
+    walk(raw)
+    return out
+
+
+@lru_cache(maxsize=256)
+def _digest(path: str, size: int, mtime_ns: int, ctime_ns: int, inode: int) -> str:
+    from liftoff.core.records import file_sha256
+
+    return file_sha256(path)
 
 
 def record_path(folder: Path, name: str, key: str) -> Path:
@@ -395,7 +434,7 @@ def record_problem(path: Path, name: str, index: int, key: str) -> str | None:
         rec = read_record(path, RECORD_FORMAT, (RECORD_VERSION,), what="campaign record")
         s = _summary_of(rec, path)
         meta = json.loads(rec.attrs.get("metadata", "{}"))
-    except (InputError, ValueError, TypeError, KeyError) as exc:
+    except (InputError, ResourceError, ValueError, TypeError, KeyError) as exc:   # (a damaged header may declare GBs)
         return " ".join(str(exc).split())[:200]
     if s.name != name or s.index != index:
         return f"it is the record of case {s.name!r} (index {s.index}), not of {name!r}"
@@ -508,9 +547,10 @@ class Captured:
             rec = read_record(p, HISTORY_FORMAT, (HISTORY_VERSION,), what="campaign histories")
             meta = json.loads(rec.attrs.get("metadata", "{}"))
             t, names, value = rec.data["time"], [str(x) for x in np.atleast_1d(rec.data["items"])], rec.data["value"]
-        except (InputError, ValueError, TypeError, KeyError):
+        except (InputError, ResourceError, ValueError, TypeError, KeyError):   # (a damaged header may declare GBs)
             return None
-        if meta.get("key") != record_key(self.records[index]) or np.shape(value) != (len(names), t.size):
+        if not isinstance(meta, dict) or meta.get("key") != record_key(self.records[index]) \
+                or np.shape(value) != (len(names), t.size):
             return None
         col = {n: value[k] for k, n in enumerate(names)}
         return (t, {n: col[n] for n in items}) if all(n in col for n in items) else None
@@ -537,10 +577,12 @@ class CampaignRun:
 
 
 def run_campaign(sc, ref: ScenarioRef, cache_root: Path, model_key: str, executor, folder: Path,
-                 progress: bool = True, window: int = 0, echo=print, together: int = 1) -> CampaignRun:
+                 progress: bool = True, window: int = 0, echo=print, together: int = 1,
+                 stack_key: str = "") -> CampaignRun:
     """Run every generated case of ``sc`` not already recorded in ``folder`` on ``executor``;
     ``together`` cases a task (marched together, :func:`solve_together`; 1: one by one; run()
-    checks it, before the model stages)."""
+    checks it, before the model stages); ``stack_key``: the model's StackModel.key (in each
+    record's key: :func:`case_key`)."""
     t0 = time.perf_counter()
     folder = Path(folder)
     (folder / "cases").mkdir(parents=True, exist_ok=True)
@@ -548,7 +590,7 @@ def run_campaign(sc, ref: ScenarioRef, cache_root: Path, model_key: str, executo
     for i in range(sc.n_generated):
         from liftoff.config.dispersion import case_name
 
-        key = case_key(sc, i, model_key)
+        key = case_key(sc, i, model_key, stack_key)
         p = record_path(folder, case_name(i), key)
         records[i] = p
         if not p.is_file():

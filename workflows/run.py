@@ -332,7 +332,8 @@ def _run_generated(sc, prep: Prepared, cache: StageCache, executor, how: str, ou
     campaign.prime(sc, str(cache.root), prep.gen_model, prep.stacks[prep.gen_model])
     echo(f"  running generated cases on {how}")
     camp = campaign.run_campaign(sc, campaign.ScenarioRef.of(sc), cache.root, prep.gen_model, executor, folder,
-                                 progress=progress, echo=echo, together=opt.march_together)
+                                 progress=progress, echo=echo, together=opt.march_together,
+                                 stack_key=prep.stacks[prep.gen_model].key)
     prep.stage_times.append((f"generated cases ({camp.ran} run, {camp.reused} reused)", camp.wall))
     return camp
 

@@ -111,6 +111,14 @@ def test_batch_refuses_what_it_cannot_share():
         solve_batch([replace(p0, keep_modal=True)])
     with pytest.raises(InputError, match="contacts differ"):
         solve_batch([p0, replace(p0, contacts=holddown_contacts(4, stiffness=3e9, release_time=RELEASE))])
+    # a later problem's contact laws (the kernel is built from problem 0's rows: they would be dropped)
+    rubbing = [replace(c, friction=0.3) for c in p0.contacts]
+    with pytest.raises(InputError, match="batch problem 1: friction, dashpots"):
+        solve_batch([p0, replace(p0, contacts=rubbing)])
+    # a body that differs only in its reference point (problem 0's rigid-body output rows would be used)
+    moved = replace(vehicle, ref_point=np.asarray(vehicle.ref_point, float) + [0.0, 0.0, 1.0])
+    with pytest.raises(InputError, match="batch problem 1: its body_a differs"):
+        solve_batch([p0, replace(p0, body_a=moved)])
     assert solve_batch([]) == []
     assert math.isfinite(solve_batch([p0])[0].separation_time[0])
 

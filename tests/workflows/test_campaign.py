@@ -179,6 +179,36 @@ def test_restart_skips_done_cases(campaign4):
     assert (other.campaign.ran, other.campaign.reused) == (4, 0)
 
 
+def test_records_follow_the_built_model_and_the_files_a_case_names(tmp_path, campaign4, monkeypatch):
+    """A record's key holds the built model's StackModel.key (its stages' code, libraries and
+    input files: a record made on another build of the same [model] parameters is not
+    reused) and the contents of every file the case's mapping names (a force table's CSV
+    edited between runs: its records run again); referenced_files finds relative and
+    absolute names and ignores strings that name no file."""
+    from liftoff.workflows import campaign
+
+    tmp, p, first = campaign4
+    sc = first.scenario
+    stack = next(iter(first.stacks.values()))
+    mkey = next(iter(first.stacks))
+    assert stack.key
+    assert campaign.case_key(sc, 0, mkey, stack.key) != campaign.case_key(sc, 0, mkey, stack.key + "x")
+    opts = Options(executor=InlineExecutor(), campaign=tmp / "out.campaign")
+    again = run(p, tmp_path / "again", cache_dir=tmp / "cache", n_cases=4, options=opts, **QUIET)
+    assert (again.campaign.ran, again.campaign.reused) == (0, 4)
+    real = campaign.case_key
+    monkeypatch.setattr(campaign, "case_key", lambda sc, i, m, s="": real(sc, i, m, s + "another build"))
+    rebuilt = run(p, tmp_path / "rebuilt", cache_dir=tmp / "cache", n_cases=4, options=opts, **QUIET)
+    assert (rebuilt.campaign.ran, rebuilt.campaign.reused) == (4, 0)
+    table = tmp_path / "thrust.csv"
+    table.write_text("0.0, 1.0\n1.0, 2.0\n")
+    raw = {"force": {"csv": "thrust.csv", "label": "top:Tz"}, "also": [str(table), "top:Tz", "nominal", ""]}
+    files = campaign.referenced_files(raw, tmp_path)
+    assert set(files) == {"thrust.csv", str(table)} and files["thrust.csv"] == files[str(table)]
+    table.write_text("0.0, 1.0\n1.0, 30.0\n")                   # (another size: not the same stat)
+    assert campaign.referenced_files(raw, tmp_path)["thrust.csv"] != files["thrust.csv"]
+
+
 def test_damaged_or_foreign_records_run_again(tmp_path, campaign4):
     """A record copied over another case's, one with NaN peaks and one without its scalars
     are not reused: their cases run again and the envelope is the first run's (issue 27:
@@ -604,6 +634,46 @@ def test_cases_the_batch_refuses_are_solved_one_by_one_and_said(tmp_path, campai
         a, b = (campaign.load_summary(o.campaign.records[i]) for o in (first, out))
         assert np.array_equal(a.mx, b.mx) and np.array_equal(a.t_mn, b.t_mn)
     assert _same(out.envelope, first.envelope)
+
+
+def test_a_record_whose_header_declares_too_much_is_damaged(tmp_path, campaign4, monkeypatch):
+    """A record (or captured histories file) whose damaged header declares more than the
+    memory holds (read_record's ResourceError) is a damaged record to run again, not the
+    run's end."""
+    from liftoff.core.errors import ResourceError
+    from liftoff.workflows import campaign
+
+    _, _, first = campaign4
+    path = first.campaign.records[0]
+
+    def huge(*a, **k):
+        raise ResourceError("campaign record: its arrays would take 9e12 bytes")
+
+    monkeypatch.setattr(campaign, "read_record", huge)
+    why = campaign.record_problem(path, "d0000", 0, campaign.record_key(path))
+    assert why is not None and "9e12 bytes" in why
+
+
+def test_a_batch_refused_for_memory_is_solved_one_by_one(tmp_path, campaign4, monkeypatch):
+    """A group whose histories the batch's memory check refuses (its ResourceError: here
+    forced) is solved one by one like any group the batch cannot march, the records those of
+    the one-by-one campaign, and the warning points at a smaller --march-together."""
+    import liftoff.transient as lt
+    from liftoff.core.errors import ResourceError
+    from liftoff.workflows import campaign
+
+    def too_big(problems):
+        raise ResourceError("transient: 2 cases marched together need 9e9 bytes")
+
+    monkeypatch.setattr(lt, "solve_batch", too_big)
+    monkeypatch.setattr(campaign, "_MEMO", {})          # (the fixture's worker memo may hold "warned")
+    tmp0, p, first = campaign4
+    with pytest.warns(UserWarning, match="solved one by one .*a smaller --march-together needs less memory"):
+        out = run(p, tmp_path / "out", cache_dir=tmp0 / "cache", n_cases=4,
+                  options=Options(executor=InlineExecutor(), campaign=tmp_path / "camp", march_together=2), **QUIET)
+    for i in range(4):
+        a, b = (campaign.load_summary(o.campaign.records[i]) for o in (first, out))
+        assert np.array_equal(a.mx, b.mx) and np.array_equal(a.t_mn, b.t_mn)
 
 
 def test_march_together_checked_before_the_model_stages(tmp_path, campaign4):
