@@ -76,6 +76,9 @@ def check_target(out: Path) -> None:
         raise InputError(f"--out {str(out)!r}: a symbolic link to nothing ({os.readlink(out)!r}); give a folder")
     if out.exists() and not out.is_dir():
         raise InputError(f"--out {str(out)!r}: exists and is not a folder")
+    if out.is_dir() and os.path.ismount(out):
+        raise InputError(f"--out {str(out)!r}: a mount point; a run publishes its folder by renaming a folder staged "
+                         "beside it, which cannot cross file systems: give a folder inside it")
     if len(os.fsencode(out.absolute().name)) > NAME_MAX - STAGING_EXTRA:
         raise InputError(f"--out {str(out)!r}: a folder name longer than {NAME_MAX - STAGING_EXTRA} bytes (liftoff "
                          f"stages the run beside it under a name {STAGING_EXTRA} bytes longer; the file system takes "
@@ -138,11 +141,32 @@ def _publish(stage: Path, out: Path) -> None:
     fsync_dir(out.parent)
 
 
+def _listing(out: Path) -> list | None:
+    """What ``out`` holds: (relative name, size, modification and change times) of each entry,
+    None if it does not exist."""
+    if not out.is_dir():
+        return None
+    out_list = []
+    for p in sorted(out.rglob("*")):
+        st = p.lstat()
+        out_list.append((str(p.relative_to(out)), st.st_size, st.st_mtime_ns, st.st_ctime_ns))
+    return out_list
+
+
 @contextmanager
 def staged_output(out, command: str = "") -> Iterator[Path]:
-    """Yield a staging folder for a run's files; on success publish it as ``out``."""
+    """Yield a staging folder for a run's files; on success publish it as ``out``. A symbolic
+    link ``out`` is followed (the folder it names is replaced, the link kept). The folder is
+    checked again before it is replaced when anything in it changed during the run (a file a
+    user put there is never deleted: the run ends with check_target's error instead). The
+    published folder takes the process's umask, as a folder made with mkdir would."""
     out = Path(out)
+    if out.is_symlink() and out.exists():
+        out = Path(os.path.realpath(out))
     check_target(out)
+    before = _listing(out)
+    mask = os.umask(0o022)
+    os.umask(mask)
     parent = out.absolute().parent
     parent.mkdir(parents=True, exist_ok=True)
     if not os.access(parent, os.W_OK):
@@ -154,6 +178,9 @@ def staged_output(out, command: str = "") -> Iterator[Path]:
         if SIGNALLED:               # a SIGTERM whose exception was lost on the way (SIGNALLED)
             raise Terminated()
         write_text(stage / MANIFEST, json.dumps(_manifest(stage, command), indent=1) + "\n")
+        if _listing(out) != before:  # changed meanwhile: replaced only if still new, empty or liftoff's
+            check_target(out)
+        os.chmod(stage, 0o777 & ~mask)                # (mkdtemp made it 0700)
         _publish(stage, out)
     finally:
         if stage.exists():

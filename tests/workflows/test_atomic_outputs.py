@@ -245,3 +245,45 @@ def test_a_sigterm_whose_exception_is_lost_publishes_nothing(tmp_path, monkeypat
     assert went_on == [True]                     # the exception was lost: SIGNALLED stopped it
     assert list(out.iterdir()) == [] and not _staging(tmp_path)
     assert not outdir.SIGNALLED                  # main()'s own: a later run() in this process publishes
+
+
+def test_published_folder_mode_links_mounts_and_files_added_meanwhile(tmp_path, monkeypatch):
+    """The published folder takes the umask (mkdtemp's 0700 kept group members out); a
+    symbolic link --out is followed (its folder replaced, the link kept); a mount point is
+    refused before the run (the staging folder beside it is on another file system); a file
+    put into the output folder during the run is never deleted: the run ends with the
+    foreign-folder error and the folder as the user left it."""
+    import stat
+
+    out = tmp_path / "res"
+    old = os.umask(0o022)
+    try:
+        with staged_output(out, "test") as stage:
+            (stage / "a.txt").write_text("a")
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE(out.stat().st_mode) == 0o755
+    real = tmp_path / "target"
+    with staged_output(real, "test") as stage:
+        (stage / "a.txt").write_text("old")
+    link = tmp_path / "link"
+    link.symlink_to(real)
+    with staged_output(link, "test") as stage:
+        (stage / "a.txt").write_text("new")
+    assert link.is_symlink() and (real / "a.txt").read_text() == "new" and not verify(real)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link", "res", "target"]     # nothing staged left
+    monkeypatch.setattr(os.path, "ismount", lambda p: str(p) == str(real))
+    with pytest.raises(InputError, match="a mount point"):
+        check_target(real)
+    monkeypatch.undo()
+    with pytest.raises(InputError, match="holds 'notes.txt' and no MANIFEST.json"):
+        with staged_output(tmp_path / "fresh", "test") as stage:
+            (stage / "a.txt").write_text("a")
+            (tmp_path / "fresh").mkdir()
+            (tmp_path / "fresh" / "notes.txt").write_text("mine")
+    assert (tmp_path / "fresh" / "notes.txt").read_text() == "mine"
+    with pytest.raises(InputError, match="does not match its MANIFEST.json"):
+        with staged_output(real, "test") as stage:
+            (stage / "a.txt").write_text("newer")
+            (real / "notes.txt").write_text("mine")
+    assert (real / "notes.txt").read_text() == "mine" and (real / "a.txt").read_text() == "new"
