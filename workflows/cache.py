@@ -22,6 +22,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from liftoff.core.errors import ResourceError
 from liftoff.core.records import TEMP_TAG, file_sha256, read_record, sweep_stale, write_record, write_text
 
 from .parallel import SERIAL, on_root
@@ -138,17 +139,33 @@ class StageCache:
         p = self.path(stage, key, suffix)
         if p is not None and not on_root(comm, lambda: self._usable(p.parent)):
             p, self.root = None, None
+        lock, locked = nullcontext(), True
+        if p is not None and comm.rank == 0:
+            lock = _locked(p.with_name(f"{key}.lock"))
+            try:
+                lock.__enter__()
+            except OSError as exc:      # another user's lock file, no inodes left, no flock here
+                warnings.warn(f"stage cache {str(self.root)!r}: cannot lock {key} ({exc.strerror or exc}); "
+                              "running without the cache", stacklevel=2)
+                lock, locked = nullcontext(), False
+        if p is not None and comm.size > 1:
+            locked = comm.bcast(locked if comm.rank == 0 else None)
+        if p is not None and not locked:
+            p, self.root = None, None
         if p is None:
             out = build()
-        else:
-            with _locked(p.with_name(f"{key}.lock")) if comm.rank == 0 else nullcontext():
-                out = self._load_all(p, key, load, label or stage)
-                if out is not None:
-                    self.log.append((stage, label, "hit", time.perf_counter() - t0))
-                    return out
-                out = build()
-                on_root(comm, lambda: self._save(out, p, key, stage, save), share=False)
-                self.root = comm.bcast(self.root if comm.rank == 0 else None)
+            self.log.append((stage, label, "built", time.perf_counter() - t0))
+            return out
+        try:
+            out = self._load_all(p, key, load, label or stage)
+            if out is not None:
+                self.log.append((stage, label, "hit", time.perf_counter() - t0))
+                return out
+            out = build()
+            on_root(comm, lambda: self._save(out, p, key, stage, save), share=False)
+            self.root = comm.bcast(self.root if comm.rank == 0 else None)
+        finally:
+            lock.__exit__(None, None, None)
         self.log.append((stage, label, "built", time.perf_counter() - t0))
         return out
 
@@ -188,11 +205,18 @@ class StageCache:
         if problem is None:
             try:
                 return load(p)
+            except (ResourceError, MemoryError) as exc:   # the machine's memory now, not the entry: kept
+                raise ResourceError(f"stage cache entry {what} ({key}) cannot be read now "
+                                    f"({' '.join(str(exc).split()) or 'out of memory'}); the entry is kept: free "
+                                    "memory and run again") from None
             except Exception as exc:  # noqa: BLE001 - an unreadable product is rebuilt
                 problem = f"cannot be read ({' '.join(str(exc).split())})"
         warnings.warn(f"stage cache entry {what} ({key}) {problem}: rebuilding it", stacklevel=4)
         for f in entry_files(p.parent, key) + [record]:
-            f.unlink(missing_ok=True)
+            try:
+                f.unlink(missing_ok=True)
+            except OSError:             # another user's file: the rebuilt entry is written over it, or not kept
+                pass
         return None
 
     def _save(self, out, p: Path, key: str, stage: str, save: Callable[[Any, Path], Any]) -> None:
@@ -279,6 +303,8 @@ def _entry_problem(folder: Path, key: str, record: Path) -> str | None:
     try:
         rec = json.loads(record.read_text())
     except (OSError, ValueError):
+        return "has no readable record"
+    if not isinstance(rec, dict) or not isinstance(rec.get("files"), dict):
         return "has no readable record"
     if rec.get("format") != ENTRY_FORMAT or rec.get("key") != key:
         return f"is recorded under key {rec.get('key')!r}"

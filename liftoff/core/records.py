@@ -224,7 +224,7 @@ def read_record(path: str | os.PathLike, kind: str, versions=(1,), what: str | N
         raise InputError(f"{what} not found: {str(path)!r}")
     if path.suffix not in SUFFIXES:
         raise InputError(f"{what} {str(path)!r}: unknown extension, use .h5 or .npz")
-    _check_declared_size(path, what, check)
+    _check_declared_size(path, what, check, mapped=mmap and path.suffix == ".npz")
     try:
         if path.suffix == ".npz":
             flat = _read_npz(path, mmap)
@@ -259,6 +259,15 @@ def _npy_header(fh):
     fmt = np.lib.format
     read = {(1, 0): fmt.read_array_header_1_0, (2, 0): fmt.read_array_header_2_0}.get(fmt.read_magic(fh))
     return None if read is None else read(fh)
+
+
+def _stored_members(path: Path) -> set[str]:
+    """The arrays of an .npz stored uncompressed (ZIP_STORED: those :func:`_read_npz` maps)."""
+    import zipfile
+
+    with zipfile.ZipFile(path) as zf:
+        return {i.filename[:-4] for i in zf.infolist()
+                if i.filename.endswith(".npy") and i.compress_type == zipfile.ZIP_STORED}
 
 
 def declared_shapes(path: Path) -> dict[str, tuple[tuple[int, ...], int]]:
@@ -387,11 +396,14 @@ def take_rows(a: np.ndarray, rows: np.ndarray) -> np.ndarray:
     while mm is not None and not isinstance(mm, np.memmap):
         mm = getattr(mm, "base", None)
     if (mm is None or getattr(mm, "liftoff_file_id", None) is None or a.ndim != 2 or not a.flags.c_contiguous
-            or rows.ndim != 1 or rows.dtype.kind not in "iu" or not rows.size or np.any(np.diff(rows) <= 0)
-            or rows[0] < 0 or rows[-1] >= a.shape[0]):
+            or rows.ndim != 1 or rows.dtype.kind not in "iu" or not rows.size
+            or rows.dtype.kind == "u" and int(rows.max()) > np.iinfo(np.int64).max):
+        return a[rows]
+    signed = rows.astype(np.int64)          # (unsigned rows' differences wrap: descending ones looked ascending)
+    if np.any(np.diff(signed) <= 0) or signed[0] < 0 or signed[-1] >= a.shape[0]:
         return a[rows]
     try:
-        return _pread_rows(a, mm, rows.astype(np.int64))
+        return _pread_rows(a, mm, signed)
     except OSError:
         return a[rows]
 
@@ -421,20 +433,25 @@ def _pread_rows(a: np.ndarray, mm: np.memmap, rows: np.ndarray) -> np.ndarray:
     return out
 
 
-def _check_declared_size(path: Path, what: str, check=None) -> None:
+def _check_declared_size(path: Path, what: str, check=None, mapped: bool = False) -> None:
     """ResourceError (one line) when the file's arrays would not fit in memory, and
     ``check(shapes)``'s error (the reader's own shape rules), before any array is read; a
-    file whose headers cannot be read is left to the reader's own error."""
+    file whose headers cannot be read is left to the reader's own error. ``mapped`` (an
+    .npz read with ``mmap``): its stored (uncompressed) arrays of MMAP_MIN_BYTES or more are
+    maps of the file, not memory, and do not count (a warm run on a busy machine refused its
+    cached models and the stage cache deleted them)."""
     from .errors import ResourceError
     from .memory import available_memory
 
     try:
         shapes = declared_shapes(path)
+        stored = _stored_members(path) if mapped else set()
     except Exception:  # not a zip / HDF5 file: read_record says so
         return
     if check is not None:
         check(shapes)
     sizes = {k: float(np.prod(shape, dtype=float)) * item for k, (shape, item) in shapes.items()}
+    sizes = {k: 0.0 if k in stored and v >= MMAP_MIN_BYTES else v for k, v in sizes.items()}
     total, limit = sum(sizes.values()), RECORD_MEMORY_FRACTION * available_memory()
     if total > limit:
         big = max(sizes, key=sizes.get)

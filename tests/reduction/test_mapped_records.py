@@ -142,3 +142,26 @@ def test_rows_of_a_mapped_array_are_read_not_mapped(tmp_path):
     mask = np.zeros(6000, bool)
     mask[rows] = True
     assert np.array_equal(take_rows(mapped["big"], mask), big[mask])
+
+
+def test_unsigned_rows_and_mapped_arrays_under_a_memory_limit(tmp_path, monkeypatch):
+    """take_rows with unsigned rows: descending or beyond the array (whose differences wrap
+    in unsigned arithmetic) are indexed as numpy does (IndexError beyond, the rows in their
+    order), not read from the file past the array. read_record with ``mmap``: the mapped
+    (stored, large) arrays take no memory and do not count against the memory available;
+    the same file read into memory does (ResourceError, one line)."""
+    from liftoff.core import memory
+    from liftoff.core.errors import ResourceError
+    from liftoff.core.records import take_rows
+
+    big = np.random.default_rng(3).standard_normal((6000, 40))       # 1.9 MB: mapped
+    path = write_record(tmp_path / "r.npz", "test-kind", 1, {"big": big}, units="SI")
+    mapped = read_record(path, "test-kind", mmap=True).data["big"]
+    down = np.array([5999, 3], dtype=np.uint64)
+    assert np.array_equal(take_rows(mapped, down), big[[5999, 3]])
+    with pytest.raises(IndexError):
+        take_rows(mapped, np.array([6001, 3], dtype=np.uint64))
+    monkeypatch.setattr(memory, "available_memory", lambda: 1e6)      # 1 MB: half of it allowed
+    assert np.array_equal(read_record(path, "test-kind", mmap=True).data["big"], big)
+    with pytest.raises(ResourceError, match="declare .* GB"):
+        read_record(path, "test-kind")

@@ -119,6 +119,46 @@ def test_an_entry_changed_near_its_stamp_is_checksummed(tmp_path, monkeypatch):
     assert builds == ["ka"] and [f.name for f in calls] == ["ka.npz"]
 
 
+def test_memory_short_lock_refused_and_malformed_records(tmp_path, monkeypatch):
+    """A hit whose product cannot be read for memory now (a ResourceError or MemoryError
+    from its load) is a one-line ResourceError and the entry is kept (it was deleted as
+    damaged and rebuilt); a lock that cannot be taken (another user's lock file, no inodes,
+    no flock) is the warning "running without the cache" and a build; a record that is JSON
+    but no mapping is damage (rebuilt with a warning), not an AttributeError."""
+    from contextlib import contextmanager
+
+    import liftoff.workflows.cache as cache_mod
+    from liftoff.core.errors import ResourceError
+
+    cache, builds = StageCache(tmp_path), []
+    a = np.arange(5.0)
+    _get(cache, "ka", a, builds)
+
+    def short(p):
+        raise ResourceError("arrays declare 9 GB, more than 1 GB of the memory available")
+
+    with pytest.raises(ResourceError, match=r"entry system \(ka\) cannot be read now .* the entry is kept"):
+        cache.get_or_build("system", "ka", ".npz", lambda: a, lambda v, p: save_arrays({"v": v}, p), short)
+    assert (tmp_path / "system" / "ka.npz").is_file() and (tmp_path / "system" / "ka.entry.json").is_file()
+    assert np.array_equal(_get(cache, "ka", a, builds), a) and builds == ["ka"]     # still a hit
+
+    @contextmanager
+    def refused(path):
+        raise PermissionError(13, "Permission denied", str(path))
+        yield
+
+    monkeypatch.setattr(cache_mod, "_locked", refused)
+    with pytest.warns(UserWarning, match="cannot lock kb .*running without the cache"):
+        assert np.array_equal(_get(cache, "kb", a, builds), a)
+    assert cache.root is None and builds == ["ka", "kb"]
+    monkeypatch.undo()
+    cache, builds = StageCache(tmp_path), []
+    (tmp_path / "system" / "ka.entry.json").write_text("[]")
+    with pytest.warns(UserWarning, match="has no readable record: rebuilding it"):
+        assert np.array_equal(_get(cache, "ka", a, builds), a)
+    assert builds == ["ka"]
+
+
 def test_one_build_per_key_under_concurrency(tmp_path):
     builds = []
     threads = [threading.Thread(target=_get, args=(StageCache(tmp_path), "k", np.ones(3), builds)) for _ in range(4)]
