@@ -454,17 +454,35 @@ def run_tasks(executor, tasks: Iterable[CaseTask], on_result: Callable, window: 
     ``on_result`` on each result as it arrives (any order); the first failure cancels the
     rest and is raised."""
     it = iter(tasks)
-    pending = {executor.submit(run_case, t) for t in itertools.islice(it, window)}
+    sent = {}
+    for t in itertools.islice(it, window):
+        sent[executor.submit(run_case, t)] = t
+    pending = set(sent)
     try:
         while pending:
             done, pending = wait(pending, return_when=FIRST_COMPLETED)
-            for fut in done:
-                got = fut.result()
+            failed = None
+            for fut in sorted(done, key=lambda f: sent[f].index):   # the finished ones kept before a failure
+                try:
+                    got = fut.result()
+                except (InputError, ConvergenceError):
+                    raise                   # (named by the worker: solve_generated)
+                except Exception as exc:    # noqa: BLE001 - a lost worker, a library's error: name the cases
+                    failed = failed or (sent.pop(fut), exc)
+                    continue
+                sent.pop(fut)
                 for r in (got if isinstance(got, list) else [got]):     # (cases marched together: a list)
                     on_result(r)
                 nxt = next(it, None)
                 if nxt is not None:
-                    pending.add(executor.submit(run_case, nxt))
+                    f = executor.submit(run_case, nxt)
+                    sent[f] = nxt
+                    pending.add(f)
+            if failed is not None:
+                task, exc = failed
+                names = ", ".join(case_name_of(i) for i in (task.index, *task.together))
+                raise RuntimeError(f"campaign: generated case {names}: {type(exc).__name__}: "
+                                   f"{' '.join(str(exc).split())[:500]}") from exc
     finally:
         for fut in pending:
             fut.cancel()
@@ -698,7 +716,8 @@ def governing_case(sc, env: list[dict], named: bool = False):
                 count[r[f"case_{side}"]] = count.get(r[f"case_{side}"], 0) + 1
     order = [c.name for c in sc.cases] + [case_name_of(i) for i in range(sc.n_generated)] if named else \
         [case_name_of(i) for i in range(sc.n_generated)]
-    best = max((c for c in count if c in set(order)), key=lambda c: (count[c], -order.index(c)), default=None)
+    rank = {c: k for k, c in enumerate(order)}          # (one pass: a million cases' names, not a search each)
+    best = max((c for c in count if c in rank), key=lambda c: (count[c], -rank[c]), default=None)
     if best is None:
         return None
     return best if named else generated_index(sc, best)

@@ -711,3 +711,29 @@ def test_model_products_are_built_once_per_stack(campaign4, monkeypatch):
             a, b = getattr(r1, part), getattr(r2, part)
             assert (a is None and b is None) or np.array_equal(a, b), (r1.name, part)
             assert a is None or a is not b                # each problem holds its own copy
+
+
+def test_a_failed_task_names_its_cases_and_the_finished_ones_are_kept(monkeypatch):
+    """run_tasks: a task that fails with anything but the worker's own one-line errors (a
+    lost worker, a library's error) is raised naming its generated cases (it named none),
+    after the tasks that finished beside it were handed on; a worker's InputError goes as it is."""
+    from types import SimpleNamespace
+
+    from liftoff.core.errors import InputError
+    from liftoff.workflows import campaign
+
+    def fake(task):
+        if task.index == 2:
+            raise ZeroDivisionError("float division by zero")
+        if task.index == 5:
+            raise InputError("case d0005: a key is wrong")
+        return task.index
+
+    monkeypatch.setattr(campaign, "run_case", fake)
+    tasks = [SimpleNamespace(index=i, together=(i + 1,) if i == 2 else ()) for i in (0, 1, 2, 4)]
+    got = []
+    with pytest.raises(RuntimeError, match=r"campaign: generated case d0002, d0003: ZeroDivisionError: float division"):
+        campaign.run_tasks(InlineExecutor(), tasks, got.append, window=4)
+    assert got == [0, 1, 4]
+    with pytest.raises(InputError, match="case d0005: a key is wrong"):
+        campaign.run_tasks(InlineExecutor(), [SimpleNamespace(index=5, together=())], got.append, window=1)
