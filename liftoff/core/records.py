@@ -261,6 +261,16 @@ def _npy_header(fh):
     return None if read is None else read(fh)
 
 
+def zipfile_like(path: Path) -> bool:
+    """Whether ``path`` is a zip archive (an .npz), whatever its members."""
+    import zipfile
+
+    try:
+        return zipfile.is_zipfile(path)
+    except OSError:
+        return False
+
+
 def _stored_members(path: Path) -> set[str]:
     """The arrays of an .npz stored uncompressed (ZIP_STORED: those :func:`_read_npz` maps)."""
     import zipfile
@@ -280,11 +290,13 @@ def declared_shapes(path: Path) -> dict[str, tuple[tuple[int, ...], int]]:
 
         with zipfile.ZipFile(path) as zf:
             for info in zf.infolist():
-                if not info.filename.endswith(".npy"):
+                if not info.filename.endswith(".npy"):      # read as bytes by np.load: counted as such
+                    out[info.filename] = ((int(info.file_size),), 1)
                     continue
                 with zf.open(info) as fh:
                     header = _npy_header(fh)
-                if header is None:
+                if header is None:                      # (a .npy version this reader does not parse)
+                    out[info.filename[:-4]] = ((int(info.file_size),), 1)
                     continue
                 shape, _, dtype = header
                 out[info.filename[:-4]] = (tuple(int(n) for n in shape), int(dtype.itemsize))
@@ -446,7 +458,9 @@ def _check_declared_size(path: Path, what: str, check=None, mapped: bool = False
     try:
         shapes = declared_shapes(path)
         stored = _stored_members(path) if mapped else set()
-    except Exception:  # not a zip / HDF5 file: read_record says so
+    except Exception as exc:  # noqa: BLE001 - not a zip / HDF5 file: read_record says so; an .npz
+        if path.suffix == ".npz" and zipfile_like(path):  # member's header unreadable: said here, before any read
+            raise InputError(f"{what} {str(path)!r} cannot be read: {' '.join(str(exc).split())}") from None
         return
     if check is not None:
         check(shapes)
@@ -532,7 +546,11 @@ def _read_group(group, ds_attrs: dict, prefix: str = "") -> dict:
     import h5py
 
     out = {}
-    for k, v in group.items():
+    for k in group:
+        if isinstance(group.get(k, getlink=True), (h5py.SoftLink, h5py.ExternalLink)):
+            # (a soft link to a parent recursed; an external one reads another file)
+            raise ValueError(f"{prefix}{k} is a soft or external link; a record holds its data itself")
+        v = group[k]
         if isinstance(v, h5py.Group):
             out[k] = _read_group(v, ds_attrs, f"{prefix}{k}/")
         else:

@@ -165,3 +165,34 @@ def test_unsigned_rows_and_mapped_arrays_under_a_memory_limit(tmp_path, monkeypa
     assert np.array_equal(read_record(path, "test-kind", mmap=True).data["big"], big)
     with pytest.raises(ResourceError, match="declare .* GB"):
         read_record(path, "test-kind")
+
+
+def test_what_a_record_declares_is_all_counted_and_links_refused(tmp_path, monkeypatch):
+    """read_record's memory check counts every member of an .npz (one not named .npy, which
+    np.load reads as bytes, by its uncompressed size: a few-kB file may inflate to GBs), an
+    .npz member whose .npy header is unreadable is a one-line InputError before anything is
+    read, and an HDF5 record with a soft or external link is refused (a soft link to its root
+    recursed through the file, an external one reads another file)."""
+    import h5py
+
+    from liftoff.core import memory
+    from liftoff.core.errors import ResourceError
+
+    path = write_record(tmp_path / "r.npz", "test-kind", 1, {"a": np.arange(3.0)}, units="SI")
+    with zipfile.ZipFile(path, "a", zipfile.ZIP_DEFLATED) as zf:
+        zf.writestr("padding", b"\0" * 4_000_000)                 # 4 MB of zeros, a few kB on disk
+    assert path.stat().st_size < 100_000
+    monkeypatch.setattr(memory, "available_memory", lambda: 4e6)   # half of it: 2 MB
+    with pytest.raises(ResourceError, match="'padding' alone"):
+        read_record(path, "test-kind")
+    monkeypatch.undo()
+    bad = write_record(tmp_path / "b.npz", "test-kind", 1, {"a": np.arange(3.0)}, units="SI")
+    with zipfile.ZipFile(bad, "a") as zf:
+        zf.writestr("c.npy", b"not an array header at all")
+    with pytest.raises(InputError, match="b.npz' cannot be read"):
+        read_record(bad, "test-kind")
+    h5 = write_record(tmp_path / "r.h5", "test-kind", 1, {"a": np.arange(3.0)}, units="SI")
+    with h5py.File(h5, "a") as f:
+        f["loop"] = h5py.SoftLink("/")
+    with pytest.raises(InputError, match="loop is a soft or external link"):
+        read_record(h5, "test-kind")
