@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Iterator
 
 from liftoff.core.errors import InputError
-from liftoff.core.records import TEMP_TAG, files_sha256, fsync_dir, sweep_stale, write_text
+from liftoff.core.records import files_sha256, fsync_dir, sweep_stale, temp_prefix, write_text
 
 MANIFEST = "MANIFEST.json"
 FORMAT = "liftoff-run-manifest"
@@ -45,7 +45,7 @@ SIGNALLED: list[int] = []
 
 
 NAME_MAX = 255              # bytes of one file name (Linux, most file systems)
-STAGING_EXTRA = 48          # the staging folder's name: "." + name + TEMP_TAG + pid + "-old-" + random
+STAGING_EXTRA = 48          # the staging folder's name: "." + name + TEMP_TAG + pid + "." + host + "-old-" + random
 
 
 def _check_writable(out: Path) -> None:
@@ -58,7 +58,7 @@ def _check_writable(out: Path) -> None:
     if not anc.is_dir():
         raise InputError(f"--out {str(out)!r}: {str(anc)!r} is not a folder")
     try:
-        probe = tempfile.mkdtemp(prefix=f".liftoff-probe{TEMP_TAG}{os.getpid()}-", dir=anc)
+        probe = tempfile.mkdtemp(prefix=temp_prefix(".liftoff-probe"), dir=anc)
     except OSError as exc:
         raise InputError(f"--out {str(out)!r}: cannot write in {str(anc)!r} "
                          f"({exc.strerror or exc}); give a writable folder") from None
@@ -134,7 +134,7 @@ def _publish(stage: Path, out: Path) -> None:
     elif _exchange(stage, out):
         shutil.rmtree(stage, ignore_errors=True)      # stage now holds the previous set
     else:
-        old = Path(tempfile.mkdtemp(prefix=f".{out.name}{TEMP_TAG}{os.getpid()}-old-", dir=out.parent))
+        old = Path(tempfile.mkdtemp(prefix=f"{temp_prefix('.' + out.name)}old-", dir=out.parent))
         os.rename(out, old / "previous")
         os.rename(stage, out)
         shutil.rmtree(old, ignore_errors=True)
@@ -172,7 +172,7 @@ def staged_output(out, command: str = "") -> Iterator[Path]:
     if not os.access(parent, os.W_OK):
         raise PermissionError(13, "output folder's parent is not writable", str(parent))
     sweep_stale(parent)
-    stage = Path(tempfile.mkdtemp(prefix=f".{out.name}{TEMP_TAG}{os.getpid()}-", dir=parent))
+    stage = Path(tempfile.mkdtemp(prefix=temp_prefix(f".{out.name}"), dir=parent))
     try:
         yield stage
         if SIGNALLED:               # a SIGTERM whose exception was lost on the way (SIGNALLED)

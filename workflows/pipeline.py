@@ -42,7 +42,7 @@ from liftoff.config.model import PAD, ComponentModel, ModelConfig
 from liftoff.config.sections import Cryo
 from liftoff.config.values import Where
 from liftoff.core.labels import named_points, points_labels
-from liftoff.core.records import TEMP_TAG, file_sha256, sweep_stale
+from liftoff.core.records import file_sha256, sweep_stale, temp_prefix
 
 from .cache import StageCache, load_arrays, save_arrays, stage_key
 from .parallel import on_root
@@ -582,7 +582,7 @@ def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, wh
     comps, cbs, ckeys, thermal, comp_keys = {}, {}, {}, {}, {}
     names = list(model.vehicle) + [PAD]
     on_root(cache.comm, lambda: sweep_stale(tempfile.gettempdir()), share=False)   # geometry folders of killed runs
-    with tempfile.TemporaryDirectory(prefix=f"liftoff-geom{TEMP_TAG}{os.getpid()}-") as work:
+    with tempfile.TemporaryDirectory(prefix=temp_prefix("liftoff-geom")) as work:
         bar = tqdm(total=2 * len(names), desc="model stages", unit="stage", disable=not progress or cache.comm.rank != 0,
                    leave=False)
         fe = [n for n in names if is_fe_component(model, n)]

@@ -35,7 +35,7 @@ def atomic_path(path: str | os.PathLike, suffix: str = ".tmp") -> Iterator[Path]
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}{TEMP_TAG}{os.getpid()}-", suffix=suffix)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=temp_prefix(f".{path.name}"), suffix=suffix)
     os.close(fd)
     try:
         yield Path(tmp)
@@ -72,6 +72,32 @@ def fsync_dir(folder) -> None:
         os.close(fd)
 
 
+def _host_id() -> str:
+    """8 hex digits naming this machine and boot and its pid namespace: what makes a pid mean
+    one process (a writer on another node of a shared file system, or in another container,
+    has pids of its own)."""
+    import hashlib
+    import socket
+
+    parts = [socket.gethostname()]
+    for src in ("/proc/sys/kernel/random/boot_id", "/proc/self/ns/pid"):
+        try:
+            parts.append(os.readlink(src) if src.endswith("/pid") else Path(src).read_text().strip())
+        except OSError:
+            pass
+    return hashlib.sha256("|".join(parts).encode()).hexdigest()[:8]
+
+
+HOST_ID = _host_id()
+
+
+def temp_prefix(name: str = "") -> str:
+    """The prefix of a temporary name this process makes beside ``name``:
+    ``<name><TEMP_TAG><pid>.<host>-`` (:func:`sweep_stale` removes it once its writer is gone,
+    on this host only)."""
+    return f"{name}{TEMP_TAG}{os.getpid()}.{HOST_ID}-"
+
+
 def pid_alive(pid: int) -> bool:
     """True if a process with this pid exists (on this machine)."""
     try:
@@ -84,10 +110,14 @@ def pid_alive(pid: int) -> bool:
 
 
 def temp_owner(name: str, tag: str = TEMP_TAG) -> int | None:
-    """The pid in a temporary name ``...<tag><pid>-...``, None if it has none."""
+    """The pid in a temporary name ``...<tag><pid>[.<host>]-...`` made on this host (or named
+    before hosts were: ``<pid>`` alone), None if it has none or was made on another host,
+    whose pids this host cannot check."""
     _, found, rest = name.partition(tag)
-    pid = rest.split("-", 1)[0]
-    return int(pid) if found and pid.isdigit() else None
+    pid, _, host = rest.split("-", 1)[0].partition(".")
+    if not found or not pid.isdigit() or host and host != HOST_ID:
+        return None
+    return int(pid)
 
 
 def sweep_stale(folder, tag: str = TEMP_TAG) -> list[Path]:

@@ -46,3 +46,26 @@ def test_stale_temporaries_of_dead_writers_are_swept(tmp_path):
     stale.write_text("half")
     live.write_text("being written")
     assert sweep_stale(tmp_path) == [stale] and live.exists() and not stale.exists()
+
+
+def test_temporaries_of_another_host_are_never_swept(tmp_path):
+    """Temporary names carry the writer's pid and host (this machine, boot and pid namespace:
+    records.HOST_ID): on a shared file system a writer on another node or in another container
+    has pids this host cannot check, so its files are left, dead-looking pid or not; this
+    host's dead writers' files (and names made before hosts were) are swept as before."""
+    import subprocess
+    import sys
+
+    from liftoff.core.records import HOST_ID, TEMP_TAG, sweep_stale, temp_prefix
+
+    assert temp_prefix(".r.h5") == f".r.h5{TEMP_TAG}{os.getpid()}.{HOST_ID}-" and "-" not in HOST_ID
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
+                          text=True).stdout.strip()
+    other = "0" * 8 if HOST_ID != "0" * 8 else "1" * 8
+    mine = tmp_path / f".r.h5{TEMP_TAG}{dead}.{HOST_ID}-abc.h5"
+    theirs = tmp_path / f".r.h5{TEMP_TAG}{dead}.{other}-abc.h5"
+    staged = tmp_path / f".out{TEMP_TAG}{dead}.{other}-xyz"
+    for f in (mine, theirs):
+        f.write_text("half")
+    staged.mkdir()
+    assert sweep_stale(tmp_path) == [mine] and theirs.exists() and staged.is_dir()
