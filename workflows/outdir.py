@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Iterator
 
 from liftoff.core.errors import InputError
-from liftoff.core.records import files_sha256, fsync_dir, sweep_stale, temp_prefix, write_text
+from liftoff.core.records import current_umask, files_sha256, fsync_dir, sweep_stale, temp_prefix, write_text
 
 MANIFEST = "MANIFEST.json"
 FORMAT = "liftoff-run-manifest"
@@ -165,8 +165,7 @@ def staged_output(out, command: str = "") -> Iterator[Path]:
         out = Path(os.path.realpath(out))
     check_target(out)
     before = _listing(out)
-    mask = os.umask(0o022)
-    os.umask(mask)
+    mask = current_umask()
     parent = out.absolute().parent
     parent.mkdir(parents=True, exist_ok=True)
     if not os.access(parent, os.W_OK):

@@ -69,3 +69,21 @@ def test_temporaries_of_another_host_are_never_swept(tmp_path):
         f.write_text("half")
     staged.mkdir()
     assert sweep_stale(tmp_path) == [mine] and theirs.exists() and staged.is_dir()
+
+
+def test_the_umask_is_read_without_being_set(monkeypatch):
+    """current_umask reads the process's umask (/proc/self/status) without the set-and-restore
+    that gives another thread's new files a umask of 0 meanwhile; the same value either way."""
+    from liftoff.core.records import current_umask
+
+    old = os.umask(0o027)
+    try:
+        calls = []
+        real = os.umask
+        monkeypatch.setattr(os, "umask", lambda m: calls.append(m) or real(m))
+        assert current_umask() == 0o027
+        if os.path.exists("/proc/self/status"):
+            assert calls == []                       # never set
+    finally:
+        monkeypatch.undo()
+        os.umask(old)
