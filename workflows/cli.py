@@ -25,7 +25,7 @@ import warnings
 from pathlib import Path
 from typing import Callable
 
-from .outdir import SIGNALLED, Terminated, check_target, staged_output
+from .outdir import PUBLISHED, SIGNALLED, Terminated, check_target, staged_output
 
 EXIT_OK, EXIT_INTERNAL, EXIT_INPUT, EXIT_CONVERGENCE, EXIT_RESOURCES = 0, 1, 2, 3, 4
 EXIT_SIGINT, EXIT_SIGTERM = 130, 143
@@ -228,10 +228,10 @@ def main(argv: list[str] | None = None) -> int:
         full = exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.ENOMEM)
         return _fail(EXIT_RESOURCES if full else EXIT_INPUT, exc)
     except KeyboardInterrupt:
-        print("liftoff: interrupted (SIGINT), no results written", file=sys.stderr)
+        print(f"liftoff: interrupted (SIGINT), {_written()}", file=sys.stderr)
         return EXIT_SIGINT
     except Terminated:
-        print("liftoff: terminated (SIGTERM), no results written", file=sys.stderr)
+        print(f"liftoff: terminated (SIGTERM), {_written()}", file=sys.stderr)
         return EXIT_SIGTERM
     except ModuleNotFoundError as exc:
         how = OPTIONAL_PACKAGES.get((exc.name or "").split(".")[0])
@@ -242,13 +242,20 @@ def main(argv: list[str] | None = None) -> int:
                                  f"{how}")
     except Exception as exc:  # a bug: still one line, and a way to report it
         if SIGNALLED:         # SIGTERM inside a C extension's import surfaces as "ImportError: initialization failed"
-            print("liftoff: terminated (SIGTERM), no results written", file=sys.stderr)
+            print(f"liftoff: terminated (SIGTERM), {_written()}", file=sys.stderr)
             return EXIT_SIGTERM
         return _fail(EXIT_INTERNAL, f"internal error ({type(exc).__name__}: {exc}); please report it with the "
                                     "command and input that caused it")
     finally:
         signal.signal(signal.SIGTERM, previous)
         SIGNALLED.clear()         # this main()'s own: not a later run()'s in this process
+        PUBLISHED.clear()
+
+
+def _written() -> str:
+    """What a signalled command wrote: nothing, or the folders it had published before."""
+    return ("after its results were written to " + ", ".join(repr(p) for p in PUBLISHED)) if PUBLISHED \
+        else "no results written"
 
 
 def _fail(code: int, exc) -> int:

@@ -141,6 +141,43 @@ def _publish(stage: Path, out: Path) -> None:
     fsync_dir(out.parent)
 
 
+#: the folders published by this process's current command (the command line says so when a
+#: signal comes after its results were in place); cleared by workflows.cli.main
+PUBLISHED: list[str] = []
+
+
+@contextmanager
+def _signals_held():
+    """SIGTERM and SIGINT held while a run publishes its folder: one then could stop the swap
+    half done (the fallback's two renames: no output folder) or land after the new set is in
+    place while the run says no results were written. Their handlers are replaced by one that
+    records them, and a recorded signal is handed to the handler before (or delivered again,
+    for the default action) once the publication is done. Handlers, not a signal mask: a
+    process-directed signal goes to any thread that does not block it (OpenBLAS's, say), and
+    Python runs its handler in the main thread at once."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    got: list[int] = []
+    before = {}
+    for sig in (signal.SIGTERM, signal.SIGINT):
+        before[sig] = signal.signal(sig, lambda signum, frame: got.append(signum))
+    try:
+        yield
+    finally:
+        for sig, handler in before.items():
+            signal.signal(sig, handler)
+        for sig in dict.fromkeys(got):
+            handler = before[sig]
+            if callable(handler):
+                handler(sig, None)               # (the command line's: raises Terminated; Python's: KeyboardInterrupt)
+            elif handler == signal.SIG_DFL:
+                os.kill(os.getpid(), sig)
+
+
 def _listing(out: Path) -> list | None:
     """What ``out`` holds: (relative name, size, modification and change times) of each entry,
     None if it does not exist."""
@@ -176,11 +213,13 @@ def staged_output(out, command: str = "") -> Iterator[Path]:
         yield stage
         if SIGNALLED:               # a SIGTERM whose exception was lost on the way (SIGNALLED)
             raise Terminated()
-        write_text(stage / MANIFEST, json.dumps(_manifest(stage, command), indent=1) + "\n")
-        if _listing(out) != before:  # changed meanwhile: replaced only if still new, empty or liftoff's
-            check_target(out)
-        os.chmod(stage, 0o777 & ~mask)                # (mkdtemp made it 0700)
-        _publish(stage, out)
+        with _signals_held():       # a SIGTERM or SIGINT now is taken after the swap, not in its middle
+            write_text(stage / MANIFEST, json.dumps(_manifest(stage, command), indent=1) + "\n")
+            if _listing(out) != before:  # changed meanwhile: replaced only if still new, empty or liftoff's
+                check_target(out)
+            os.chmod(stage, 0o777 & ~mask)                # (mkdtemp made it 0700)
+            _publish(stage, out)
+            PUBLISHED.append(str(out))
     finally:
         if stage.exists():
             shutil.rmtree(stage, ignore_errors=True)

@@ -287,3 +287,37 @@ def test_published_folder_mode_links_mounts_and_files_added_meanwhile(tmp_path, 
             (stage / "a.txt").write_text("newer")
             (real / "notes.txt").write_text("mine")
     assert (real / "notes.txt").read_text() == "mine" and (real / "a.txt").read_text() == "new"
+
+
+def test_a_sigterm_during_publication_comes_after_it_and_says_so(tmp_path, monkeypatch, capsys):
+    """A SIGTERM that arrives while the run publishes its folder is held until the swap is
+    done (it could stop it half way: the fallback's two renames left no output folder), then
+    taken: exit 143, the new set in place and verified, and the message says where the results
+    were written instead of "no results written"."""
+    import argparse
+
+    from liftoff.workflows import cli, outdir
+
+    out = tmp_path / "out"
+    real = outdir._publish
+
+    def publish_signalled(stage, target):
+        os.kill(os.getpid(), signal.SIGTERM)     # held: the handler does not run inside the swap
+        time.sleep(0.2)
+        real(stage, target)
+
+    monkeypatch.setattr(outdir, "_publish", publish_signalled)
+
+    def command(args):
+        with cli.staged_output(args.out) as stage:
+            (stage / "result.txt").write_text("1\n")
+        return 0
+
+    parser = cli.build_parser()
+    monkeypatch.setattr(cli, "build_parser", lambda: parser)
+    monkeypatch.setattr(parser, "parse_args", lambda argv: argparse.Namespace(out=out, func=command))
+    assert cli.main([]) == 143
+    assert (out / "result.txt").read_text() == "1\n" and not verify(out)
+    err = capsys.readouterr().err
+    assert "terminated (SIGTERM), after its results were written to" in err and str(out) in err
+    assert outdir.PUBLISHED == [] and outdir.SIGNALLED == []
