@@ -327,15 +327,32 @@ def _entry_problem(folder: Path, key: str, record: Path) -> str | None:
 
 @contextmanager
 def _locked(path: Path):
-    """An exclusive advisory lock (fcntl) held while one key is built and saved."""
+    """An exclusive advisory lock (fcntl) held while one key is built and saved. The lock is
+    the file at ``path`` when the lock is taken: a lock file deleted or replaced while another
+    process held it (the cache folder removed by hand) is opened again, so that two runs
+    never hold locks on two different files of one key."""
     import fcntl
 
-    with open(path, "a") as fh:
-        fcntl.flock(fh, fcntl.LOCK_EX)
+    for _ in range(100):
+        fh = open(path, "a")
         try:
-            yield
+            fcntl.flock(fh, fcntl.LOCK_EX)
+            try:
+                same = os.path.samestat(os.fstat(fh.fileno()), os.stat(path))
+            except FileNotFoundError:
+                same = False
+            if not same:                 # deleted or replaced meanwhile: lock the file there now
+                fcntl.flock(fh, fcntl.LOCK_UN)
+                path.parent.mkdir(parents=True, exist_ok=True)
+                continue
+            try:
+                yield
+            finally:
+                fcntl.flock(fh, fcntl.LOCK_UN)
+            return
         finally:
-            fcntl.flock(fh, fcntl.LOCK_UN)
+            fh.close()
+    raise OSError(f"the lock file {str(path)!r} keeps being replaced")
 
 
 @lru_cache(maxsize=1)

@@ -222,3 +222,37 @@ def test_a_components_key_holds_only_the_materials_that_may_apply_to_it():
     both = model({"srb_left_case": deck})
     assert set(component_materials(both, "srb_left")) == {"srb_left_case"}
     assert not component_materials(both, "srb_right")
+
+
+def test_a_lock_file_replaced_while_waited_on_is_locked_anew(tmp_path):
+    """The cache folder removed by hand while a build holds a key's lock: a run waiting on
+    that lock file got it once the holder let go and went on holding a lock on a deleted
+    file, while a third run locked the new file at the path and built the same key at once.
+    Now a waiter whose file was replaced locks the file at the path: the third run waits."""
+    import fcntl
+    import threading
+
+    import liftoff.workflows.cache as cache_mod
+
+    lock = tmp_path / "k.lock"
+    inside, leave = threading.Event(), threading.Event()
+
+    def waiter():
+        with cache_mod._locked(lock):
+            inside.set()
+            leave.wait(10)
+
+    with open(lock, "a") as fh:                      # a first run holds the key
+        fcntl.flock(fh, fcntl.LOCK_EX)
+        t = threading.Thread(target=waiter)
+        t.start()
+        time.sleep(0.2)                              # the waiter waits on this file
+        lock.unlink()
+        lock.write_text("")                          # the folder emptied and a new lock file made meanwhile
+        fcntl.flock(fh, fcntl.LOCK_UN)
+    assert inside.wait(10)
+    with open(lock, "a") as third:                   # a third run: the key is taken
+        with pytest.raises(BlockingIOError):
+            fcntl.flock(third, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    leave.set()
+    t.join(timeout=10)
