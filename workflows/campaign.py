@@ -141,6 +141,7 @@ class CaseSummary:
     support: np.ndarray | None = None      # (n_support_items, N_DIRECTIONS) their support functions
     time: np.ndarray | None = None         # with histories: the case's time points (s); neither is recorded
     histories: dict | None = None          # {item: history} captured for the envelope (CaseTask.capture)
+    note: str = ""                         # what the worker says of it (not recorded): solved one by one, why
 
 
 # ------------------------------------------------------------------ one case
@@ -269,6 +270,10 @@ def solve_together(task: CaseTask) -> list:
                           f"({' '.join(str(exc).split())[:300]}); further such groups of this worker likewise"
                           + ("; a smaller --march-together needs less memory" if isinstance(exc, ResourceError)
                              else ""), stacklevel=2)
+        why = " ".join(str(exc).split())[:300]
+        _MEMO["one_by_one"] = (f"--march-together: cases {', '.join(c.name for c in cases)} solved one by one ({why})"
+                               + ("; a smaller --march-together needs less memory"
+                                  if isinstance(exc, ResourceError) else ""))
         return [(i, *solve_generated(replace(task, index=i, together=()))) for i in indexes]
     wall = (time.perf_counter() - t0) / len(cases)
     return [(i, res, cp, case, wall) for i, res, cp, case in zip(indexes, results, cps, cases)]
@@ -283,11 +288,15 @@ def run_case(task: CaseTask):
 
     trim_heap()                          # the previous case's freed arrays back to the system
     if task.together and not task.columns:
+        _MEMO.pop("one_by_one", None)
         solved, out = solve_together(task), []
+        note = _MEMO.pop("one_by_one", "")
         while solved:                    # each case's result let go once summarised
             i, res, cp, case, wall = solved.pop(0)
             out.append(_summary(replace(task, index=i), res, cp, case, wall))
             del res, cp
+        if out and note:                 # said by the main process too (a remote worker's warning is not seen)
+            out[0].note = note
         return out
     res, cp, case, wall = solve_generated(task)
     if task.columns:
@@ -629,7 +638,12 @@ def run_campaign(sc, ref: ScenarioRef, cache_root: Path, model_key: str, executo
 
     captured = Captured(folder, records)
 
+    said = []
+
     def store(s: CaseSummary) -> None:
+        if s.note and not said:          # once a campaign: the first group the batch refused
+            said.append(s.note)
+            echo(f"  campaign: {s.note}; further such groups likewise")
         captured.arrive(s)
         save_summary(s, records[s.index], record_key(records[s.index]))
         if bar is not None:

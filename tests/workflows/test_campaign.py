@@ -668,9 +668,13 @@ def test_a_batch_refused_for_memory_is_solved_one_by_one(tmp_path, campaign4, mo
     monkeypatch.setattr(lt, "solve_batch", too_big)
     monkeypatch.setattr(campaign, "_MEMO", {})          # (the fixture's worker memo may hold "warned")
     tmp0, p, first = campaign4
+    said = []
     with pytest.warns(UserWarning, match="solved one by one .*a smaller --march-together needs less memory"):
         out = run(p, tmp_path / "out", cache_dir=tmp0 / "cache", n_cases=4,
-                  options=Options(executor=InlineExecutor(), campaign=tmp_path / "camp", march_together=2), **QUIET)
+                  options=Options(executor=InlineExecutor(), campaign=tmp_path / "camp", march_together=2),
+                  **{**QUIET, "echo": lambda *a, **k: said.append(" ".join(map(str, a)))})
+    # said by the run itself too, once (a remote worker's warning is not seen)
+    assert sum("solved one by one" in line and "smaller --march-together" in line for line in said) == 1
     for i in range(4):
         a, b = (campaign.load_summary(o.campaign.records[i]) for o in (first, out))
         assert np.array_equal(a.mx, b.mx) and np.array_equal(a.t_mn, b.t_mn)
