@@ -36,6 +36,7 @@ import numpy as np
 from liftoff.core.errors import InputError
 from liftoff.core.labels import split_label
 
+from .files import file_path
 from .values import Where, boolean, choice, integer, number, string, strings, table
 
 KEYS = {"seed", "n_cases", "from", "variables", "database"}
@@ -287,8 +288,12 @@ def database(where: Where, spec: Any, base: Path) -> Database:
     pats = strings(where / "files", d["files"] if isinstance(d["files"], list) else [d["files"]], nonempty=True)
     files = []
     for i, pat in enumerate(pats):
-        hits = sorted(base.glob(pat)) if any(c in pat for c in "*?[") else [base / pat]
-        hits = [h for h in hits if h.is_file()]
+        try:
+            hits = sorted(base.glob(pat)) if any(c in pat for c in "*?[") else [file_path(where / "files" / i, pat, base)]
+            hits = [h for h in hits if h.is_file()]
+        except (ValueError, NotImplementedError, OSError) as exc:      # (an absolute or malformed pattern)
+            raise (where / "files" / i).error(f"not a usable file pattern {pat[:200]!r}: "
+                                              f"{' '.join(str(exc).split())} (give one relative to the scenario)") from None
         if not hits:
             raise (where / "files" / i).error(f"no file matches {pat!r} (relative to {str(base)!r})")
         files += hits
@@ -334,10 +339,12 @@ def read_forcing(where: Where, path: Path, shown: str | None = None) -> Forcing:
             with h5py.File(path, "r") as f:
                 labels = [s.decode() if isinstance(s, bytes) else str(s) for s in f["labels"][()]]
                 time, values = np.asarray(f["time"][()], float), np.asarray(f["force"][()], float)
-        except (OSError, KeyError) as exc:
+        except (OSError, KeyError, TypeError, ValueError) as exc:     # (a missing, grouped or text dataset)
             raise where.error(f"{shown}: not a forcing file with datasets time, force, labels "
                               f"({' '.join(str(exc).split())})") from None
         out = Forcing(labels, time, values, [f"labels[{j}]" for j in range(len(labels))])
+        if time.ndim != 1:
+            raise where.error(f"{shown}: time has shape {time.shape}, expected one row of times")
         if values.ndim != 2 or values.shape != (time.size, len(labels)) or time.size < 2:
             raise where.error(f"{shown}: force has shape {values.shape}, expected ({time.size}, {len(labels)}) "
                               "with >= 2 times")

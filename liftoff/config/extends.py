@@ -28,7 +28,7 @@ from pathlib import Path
 
 from liftoff.core.errors import InputError
 
-from .files import parse_toml, read_toml
+from .files import file_path, parse_toml, read_toml
 from .values import Where, string
 
 
@@ -112,7 +112,7 @@ def resolve(data: dict, source: str, folder: Path | None, _chain: tuple[str, ...
     else:
         if folder is None:                                   # embedded text: examples only
             check_example(name, w)
-        path = folder / name
+        path = file_path(w, name, folder)
         if not path.is_file():
             hint = f"; examples: {', '.join(EXAMPLES)}" if "/" not in name and not name.endswith(".toml") else ""
             raise w.error(f"no example and no file {name!r} (looked in {folder}{hint})")

@@ -29,6 +29,7 @@ Units SI: m, Hz, Pa, kg/m^3.
 from __future__ import annotations
 
 import dataclasses
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -43,7 +44,8 @@ from liftoff.meshes.stick import StickParams
 
 from . import component_types
 from .params import builder, material
-from .values import Where, array_of_tables, boolean, integer, number, string, strings, table, unique_name
+from .files import file_path
+from .values import Where, array_of_tables, boolean, integer, named, number, string, strings, table, unique_name
 
 SOURCES = ("fe", "stick")
 STICK_VEHICLE = ("core", "srb_left", "srb_right", "orbiter")   # the stick source's components (workflows/stick.py)
@@ -198,7 +200,7 @@ def _nastran(where: Where, spec: Any, base: Path) -> NastranSource:
     paths = {}
     for key in _NASTRAN_FILES:
         if key in n:
-            p = (base / string(where / key, n[key])).resolve()
+            p = file_path(where / key, n[key], base).resolve()
             if not p.is_file():
                 raise (where / key).error(f"file not found: {str(p)!r}")
             paths[key] = str(p)
@@ -209,11 +211,13 @@ def _nastran(where: Where, spec: Any, base: Path) -> NastranSource:
         if stated is not None and not same_units(stated, given):
             raise wu.error(f"{Path(paths[key]).name} states its units as {stated.describe()}, not "
                            f"{given.describe()}")
-    grids = table(where / "grids", n.get("grids", {}), set(n.get("grids", {})))
+    grids = named(where / "grids", n.get("grids", {}))
     names: dict[int, str] = {}
     for gid, name in grids.items():
-        if not str(gid).isdigit():
+        if not re.fullmatch(r"[1-9][0-9]{0,17}", str(gid)):          # (str.isdigit takes superscripts)
             raise (where / "grids").error(f"key {gid!r} is not a grid ID (a positive integer)")
+        if int(gid) in names:
+            raise (where / "grids").error(f"grid {int(gid)} is given twice (as {gid!r})")
         names[int(gid)] = unique_name(where / "grids" / str(gid), name, set(names.values()), "point")
     options = {k: paths.get(k, n.get(k)) for k in ("asm", "pch", "op4", "bulk", "stiffness", "mass", "se")
                if k in n}
@@ -463,7 +467,7 @@ def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig
     if source not in SOURCES:
         raise (where / "source").error(f"unknown model source {source!r} (use {' or '.join(SOURCES)})")
     degree = m.get("degree", 1)
-    if isinstance(degree, bool) or degree not in (1, 2):
+    if isinstance(degree, bool) or not isinstance(degree, int) or degree not in (1, 2):     # (2.0 is no degree)
         raise (where / "degree").error(f"element degree must be 1 or 2, got {degree!r}")
     zeta = number(where / "zeta", m.get("zeta", 0.01), nonneg=True)
     if zeta >= 1:
@@ -474,7 +478,7 @@ def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig
     elif "stick" in m:
         raise (where / "stick").error("[model.stick] is for source = \"stick\"")
     vehicle = _sizes(where / "vehicle", m.get("vehicle", {}), _VEHICLE)
-    comps = table(where / "component", m.get("component", {}), set(m.get("component", {})))
+    comps = named(where / "component", m.get("component", {}))
     names = _vehicle_names(where, comps, source)
     sel = {name: _sizes(where / "component" / name, comps.get(name, {}), _COMP, base) for name in names}
     sel[PAD] = _sizes(where / PAD, m.get(PAD, {}), _COMP, base)
@@ -570,7 +574,8 @@ def _mirrors(where: Where, sel: dict, names: tuple[str, ...], components: dict, 
         for vol, mat in materials.items():
             if vol.startswith(name + "_"):
                 twin = mir.of + vol[len(name):]
-                if materials.get(twin) != mat:
+                other = materials.get(twin)       # (the same E, nu, rho: the names differ by the component's)
+                if other is None or (other.E, other.nu, other.rho) != (mat.E, mat.nu, mat.rho):
                     raise (where / "materials" / vol).error(
                         f"{name!r} mirrors {mir.of!r} and takes its materials: {vol!r} must repeat [model.materials."
                         f"{twin}] or be left out")

@@ -9,11 +9,13 @@ from __future__ import annotations
 import dataclasses
 from typing import Any
 
-from liftoff.core.errors import InputError
+from liftoff.core.errors import InputError, ResourceError
 
-from .values import Where, boolean, number, string, table, vector
+from .values import Where, boolean, integer, number, string, table, vector
 
 MATERIAL_KEYS = ("E", "nu", "rho")
+#: the most a builder's count field takes (stringers, beam elements, stations)
+MAX_COUNT = 1_000_000
 
 
 def _field_value(where: Where, value: Any, default: Any, annotation: str = "") -> Any:
@@ -25,6 +27,8 @@ def _field_value(where: Where, value: Any, default: Any, annotation: str = "") -
         return boolean(where, value)
     if isinstance(default, str) or (default is None and str(annotation).replace(" ", "") == "str|None"):
         return string(where, value)
+    if isinstance(default, int):        # a count (stringers, elements, stations): 2.5 or 1e20 is none
+        return integer(where, value, 0, MAX_COUNT)
     if not isinstance(default, tuple):
         return number(where, value)
     if not isinstance(value, list) or not value:
@@ -60,6 +64,10 @@ def builder(where: Where, cls: type, spec: Any, fixed: dict | None = None, defau
         obj.check()
     except InputError as exc:
         raise where.wrap(exc) from None
+    except ResourceError as exc:        # (a size the input asks for: an input error, at its table)
+        raise where.error(" ".join(str(exc).split())) from None
+    except (ValueError, TypeError) as exc:   # a check that met a value of the wrong shape (an array's length)
+        raise where.error(f"{cls.__name__}: {' '.join(str(exc).split())}") from None
     return obj
 
 

@@ -26,7 +26,7 @@ from liftoff.transient.model import ContactPoint
 
 from .dispersion import Dispersion, case_name, check_case_count, dispersion
 from .extends import merge, read_scenario, resolve
-from .files import parse_toml
+from .files import file_path, parse_toml
 from .model import ModelConfig, model_config, unit_system_at
 from .postprocess import PostProcess, postprocess
 from .sections import (
@@ -312,7 +312,7 @@ def _otms(w: Where, spec: Any, base: Path) -> tuple[InterfaceOTM, ...]:
     for i, o in enumerate(array_of_tables(w, spec, "recovery.otm")):
         o = table(w / i, o, _OTM, required=("name", "file", "point"))
         name = unique_name(w / i / "name", o["name"], names, "OTM")
-        path = (base / string(w / i / "file", o["file"])).resolve()
+        path = file_path(w / i / "file", o["file"], base).resolve()
         if not path.is_file():
             raise (w / i / "file").error(f"file not found: {str(path)!r}")
         parts = {k: string(w / i / k, o[k]) for k in ("disp", "vel", "acc") if k in o}

@@ -108,12 +108,19 @@ def number(where: Where, value: Any, *, positive: bool = False, nonneg: bool = F
     return x
 
 
+#: the largest integer a key takes when it names no bound of its own: counts and iteration
+#: limits reach compiled code as 64-bit integers (10**400 reached numba after the model stages)
+MAX_INTEGER = 2 ** 53
+
+
 def integer(where: Where, value: Any, lo: int = 0, hi: int | None = None) -> int:
-    """``value`` as an int (not a bool) in ``[lo, hi]`` (``hi`` None: no upper bound)."""
+    """``value`` as an int (not a bool) in ``[lo, hi]`` (``hi`` None: MAX_INTEGER)."""
     if isinstance(value, bool) or not isinstance(value, int):
         raise where.error(f"expected an integer, got {type(value).__name__} {value!r}")
-    if value < lo or (hi is not None and value > hi):
-        raise where.error(f"{value} out of range [{lo}, {hi if hi is not None else 'inf'}]")
+    hi = MAX_INTEGER if hi is None else hi
+    if value < lo or value > hi:
+        shown = f"{value:.3g}" if abs(value) > 10 ** 15 else str(value)
+        raise where.error(f"{shown} out of range [{lo}, {hi}]")
     return value
 
 

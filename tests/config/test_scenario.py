@@ -156,6 +156,12 @@ BAD = [
     ("model.component.srb_left.params", {"side": "left", "walls": "solid", "attach": "ring"},
      "model.component.srb_left.params: BoosterParams(srb_left).attach = 'ring' needs walls = 'shell' (got 'solid')"),
     ("model.stick", {"core_wall": 0.01}, "model.stick: [model.stick] is for source = \"stick\""),
+    # review of 2026-12-07: inputs that were tracebacks, or accepted though meaningless
+    ("model.component", [{"type": "shuttle_core"}], "model.component: expected a table, got list"),
+    ("model.degree", 2.0, "model.degree: element degree must be 1 or 2, got 2.0"),
+    ("time.max_iter", 10 ** 30, "time.max_iter: 1e+30 out of range"),
+    ("recovery.otm", [{"name": "p", "file": "a\x00b", "point": "top"}], "recovery.otm[0].file: not a usable file name"),
+    ("recovery.otm", [{"name": "p", "file": "x" * 5000, "point": "top"}], "recovery.otm[0].file: not a usable file name"),
 ]
 
 

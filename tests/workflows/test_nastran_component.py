@@ -67,7 +67,13 @@ def test_bad_nastran_component_is_one_line(tmp_path):
     for nastran, expect in (({"file": "none.pch", "units": "SI"}, "nastran.file: file not found"),
                             ({"units": "SI"}, "missing required key 'file'"),
                             ({"file": "s.toml", "units": "furlong-firkin"}, "nastran.units: unknown unit system"),
-                            ({"file": "s.toml", "units": "SI", "grids": {"x": "a"}}, "is not a grid ID")):
+                            ({"file": "s.toml", "units": "SI", "grids": {"x": "a"}}, "is not a grid ID"),
+                            # (str.isdigit takes a superscript two; int() did not: a ValueError)
+                            ({"file": "s.toml", "units": "SI", "grids": {"\u00b2": "a"}}, "is not a grid ID"),
+                            ({"file": "s.toml", "units": "SI", "grids": {"1": "a", "01": "b"}},
+                             "is not a grid ID|given twice"),
+                            ({"file": "s.toml", "units": "SI", "grids": [{"1": "a"}]}, "grids: expected a table"),
+                            ({"file": "a\x00b", "units": "SI"}, "nastran.file: not a usable file name")):
         (tmp_path / "s.toml").write_text("")
         with pytest.raises(Exception, match=expect) as e:
             _case({**STICK, "component": {"orbiter": {"nastran": nastran}}}, tmp_path)

@@ -25,7 +25,8 @@ from pathlib import Path
 from liftoff.core.records import file_sha256
 
 from ..params import material as read_material
-from ..values import Where, integer, number, string, strings, table, vector
+from ..files import file_path
+from ..values import Where, integer, named, number, string, strings, table, vector
 from . import ComponentType, Context
 
 _KEYS = {"file", "solids", "shells", "points", "masses", "clamped", "liquids", "groups"}
@@ -36,26 +37,26 @@ def read(ctx: Context, where: Where, params: dict):
     from liftoff.meshes.user_geometry import GeometryFileParams
 
     p = table(where, params, _KEYS, ("file",))
-    path = (Path(ctx.base) / string(where / "file", p["file"])).resolve()
+    path = file_path(where / "file", p["file"], Path(ctx.base)).resolve()
     if not path.is_file():
         raise (where / "file").error(f"file not found: {str(path)!r}")
     materials, shells = {}, {}
-    for g, spec in table(where / "solids", p.get("solids", {}), set(p.get("solids", {}))).items():
+    for g, spec in named(where / "solids", p.get("solids", {})).items():
         materials[g], _ = read_material(where / "solids" / g, g, spec)
-    for g, spec in table(where / "shells", p.get("shells", {}), set(p.get("shells", {}))).items():
+    for g, spec in named(where / "shells", p.get("shells", {})).items():
         if g in materials:
             raise (where / "shells" / g).error("is a solid too: a group is one or the other")
         materials[g], m = read_material(where / "shells" / g, g, spec, ("thickness",))
         shells[g] = number(where / "shells" / g / "thickness", m["thickness"], positive=True)
     points = {}
-    for name, spec in table(where / "points", p.get("points", {}), set(p.get("points", {}))).items():
+    for name, spec in named(where / "points", p.get("points", {})).items():
         w = where / "points" / name
         s = table(w, spec, {"group", "at", "tie"}, ("group",))
         points[name] = {"group": string(w / "group", s["group"]),
                         "at": [float(x) for x in vector(w / "at", s["at"], length=3)] if "at" in s else None,
                         "tie": string(w / "tie", s.get("tie", "rigid"))}
     masses = {}
-    for name, spec in table(where / "masses", p.get("masses", {}), set(p.get("masses", {}))).items():
+    for name, spec in named(where / "masses", p.get("masses", {})).items():
         w = where / "masses" / name
         s = table(w, spec, {"point", "mass", "inertia"}, ("point", "mass"))
         inertia = [[0.0] * 3 for _ in range(3)]
@@ -67,7 +68,7 @@ def read(ctx: Context, where: Where, params: dict):
         masses[name] = {"point": string(w / "point", s["point"]), "mass": number(w / "mass", s["mass"], positive=True),
                         "inertia": inertia}
     liquids = {}
-    for g, spec in table(where / "liquids", p.get("liquids", {}), set(p.get("liquids", {}))).items():
+    for g, spec in named(where / "liquids", p.get("liquids", {})).items():
         w = where / "liquids" / g
         s = table(w, spec, _LIQUID, ("density", "wetted", "free_surface"))
         liquids[g] = {"density": number(w / "density", s["density"], positive=True),
@@ -77,7 +78,7 @@ def read(ctx: Context, where: Where, params: dict):
                       **({"center": [float(x) for x in vector(w / "center", s["center"], length=3)]}
                          if "center" in s else {})}
     groups = {}
-    for name, spec in table(where / "groups", p.get("groups", {}), set(p.get("groups", {}))).items():
+    for name, spec in named(where / "groups", p.get("groups", {})).items():
         w = where / "groups" / name
         s = table(w, spec, {"dim", "box"}, ("dim", "box"))
         groups[name] = {"dim": integer(w / "dim", s["dim"], 1, 3),

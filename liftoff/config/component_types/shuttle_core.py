@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from liftoff.core.errors import InputError
 
-from ..params import beam_members, mesh_size_kw
-from ..values import Where, number, string, table
+from ..params import MAX_COUNT, beam_members, mesh_size_kw
+from ..values import Where, integer, number, string, table
 from . import ComponentType, Context
 
 _MEMBERS = {"frame_section", "frame_material", "stringer_section", "stringer_material"}
@@ -38,7 +38,7 @@ def read(ctx: Context, where: Where, params: dict):
     if not isinstance(frames, (list, tuple)):
         raise (where / "frames").error(f"expected a list of heights (m), got {frames!r}")
     beams = {"frames": tuple(number(where / "frames" / i, z) for i, z in enumerate(frames)),
-             "stringers": number(where / "stringers", params.get("stringers", 0), nonneg=True),
+             "stringers": integer(where / "stringers", params.get("stringers", 0), 0, MAX_COUNT),
              "stringer_azimuth": number(where / "stringer_azimuth", params.get("stringer_azimuth", 0.0)), **members}
     size = mesh_size_kw(ctx.mesh_size)
     try:
