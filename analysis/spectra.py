@@ -116,6 +116,8 @@ def fft_amplitude(values: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]
     n = values.shape[0]
     spec = np.abs(np.fft.rfft(values - values.mean(axis=0), axis=0)) * (2.0 / n)
     spec[0] /= 2.0
+    if n % 2 == 0 and n > 1:           # the Nyquist bin, like the mean's, has no mirror image
+        spec[-1] /= 2.0
     return np.fft.rfftfreq(n, h), spec
 
 

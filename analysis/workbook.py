@@ -9,6 +9,7 @@ xlsxwriter writes it, to a temporary name renamed into place (all or nothing).
 from __future__ import annotations
 
 import csv
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -37,11 +38,16 @@ class Sheet:
 
 
 def _cell(text: str):
-    """A CSV cell as Excel takes it: a number where it reads as one, else the text."""
+    """A CSV cell as Excel takes it: a number where it reads as a finite one (a value not
+    computed, "nan" in the CSV, is an empty cell: Excel showed #NUM! and its sums and filters
+    broke), else the text: a name that reads as a number ("1", "inf") stays the name."""
     try:
-        return float(text)
+        x = float(text)
     except ValueError:
         return text
+    if math.isfinite(x):
+        return x
+    return None if text.strip().lower() in ("nan", "-nan", "+nan") else text
 
 
 def read_csv_table(path: Path) -> tuple[list[str], list[str], list[list]]:
@@ -54,7 +60,16 @@ def read_csv_table(path: Path) -> tuple[list[str], list[str], list[list]]:
         columns = next(reader)
     except StopIteration:
         raise InputError(f"{Path(path).name}: no table in the file") from None
-    return notes, columns, [[_cell(c) for c in rec] for rec in reader]
+    text = [_text_column(c) for c in columns]
+    return notes, columns, [[c if j < len(text) and text[j] else _cell(c) for j, c in enumerate(rec)]
+                            for rec in reader]
+
+
+def _text_column(name: str) -> bool:
+    """Whether a table's column holds names, not numbers (a case named "1" stays "1")."""
+    n = name.strip().lower()
+    return n.startswith("case") or n in ("item", "unit", "units", "category", "name", "post", "pair", "contour",
+                                         "interface", "direction", "component", "point", "label")
 
 
 def maxmin_sheets(path: Path) -> list[Sheet]:
@@ -118,8 +133,8 @@ def write_workbook(sheets: list[Sheet], path: Path) -> Path:
                 for j, v in enumerate(row):
                     if isinstance(v, float):
                         ws.write_number(top + 1 + i, j, v, num)
-                    elif v == "":
-                        continue                           # an empty CSV cell stays empty
+                    elif v is None or v == "":
+                        continue                           # an empty CSV cell (or a value not computed) stays empty
                     else:
                         ws.write_string(top + 1 + i, j, str(v))
             ws.freeze_panes(top + 1, 1)

@@ -516,6 +516,9 @@ class TransientProblem:
             raise InputError(f"tol = {self.tol!r} N must be positive")
         if self.accuracy is not None and not (0 < self.accuracy < 1):
             raise InputError(f"accuracy = {self.accuracy!r} must be a fraction of the peak force in (0, 1)")
+        if self.accuracy is not None and not any(len(c.labels_a) for c in self.contacts):
+            raise InputError(f"accuracy = {self.accuracy!r}: it is a bound on the contact forces' estimated error, "
+                             "and the problem has no contacts (nothing would be checked); give h instead")
         if not (math.isfinite(self.mode_samples) and MIN_MODE_SAMPLES <= self.mode_samples <= MAX_MODE_SAMPLES):
             raise InputError(f"mode_samples = {self.mode_samples!r} steps a period of the highest mode must be from "
                              f"{MIN_MODE_SAMPLES:g} (the Nyquist rate: fewer and that mode aliases) to "

@@ -10,6 +10,7 @@ datasets), which netCDF-style readers take as its dimensions.
 from __future__ import annotations
 
 import json
+import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -170,7 +171,8 @@ class TransientResult:
                                 description=it.description, from_acceleration=int(it.from_acceleration))
         data["recovered"] = rec
         return write_record(path, FORMAT, VERSION, data, units="SI (m, kg, s, N, rad)",
-                            attrs={"metadata": json.dumps(self.metadata)}, suffixes=(".h5", ".hdf5"))
+                            attrs={"metadata": json.dumps(_json_safe(self.metadata), allow_nan=False)},
+                            suffixes=(".h5", ".hdf5"))
 
     def _contact_data(self) -> dict:
         dirs = self.contact_directions
@@ -269,3 +271,15 @@ def load_result(path: str | os.PathLike) -> TransientResult:
         release_time=c["release_time"], output_labels=labels, displacement=disp, velocity=vel, acceleration=acc,
         recovered=recovered, recovery_items=items, rigid_body_motion_a=rb["a"], rigid_body_motion_b=rb["b"],
         iterations=d["iterations"], modal=modal, metadata=json.loads(rec.attrs["metadata"]))
+
+
+def _json_safe(x):
+    """``x`` with every non-finite float as null (standard JSON: a stability margin of inf,
+    written as Infinity, broke strict readers of the results file's metadata)."""
+    if isinstance(x, dict):
+        return {k: _json_safe(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_json_safe(v) for v in x]
+    if isinstance(x, float) and not math.isfinite(x):
+        return None
+    return x

@@ -104,3 +104,29 @@ def test_workbook_in_inch_pound_units(tmp_path):
     assert "in-lbf-s units" in _values(book["contents"])[1][0]
     with pytest.raises(InputError, match="unit system 'mks' is not one of SI, in-lbf-s"):
         workbook.from_csv([], tmp_path / "maxmin_envelope.csv", units="mks")
+
+
+def test_values_not_computed_are_empty_and_case_names_stay_names(tmp_path):
+    """A value the run did not compute ("nan" in the CSV: an order statistic for too few cases)
+    is an empty cell, not Excel's #NUM! error that breaks sums and filters; a case named like
+    a number ("1", "inf") stays its name in the case columns; other numbers stay numbers."""
+    (tmp_path / "stats.csv").write_text("item,unit,order_max,case_max,mean\n"
+                                        "post left_1 Tz,N,nan,1,2.5\n"
+                                        "post left_2 Tz,N,-nan,inf,3.0\n")
+    sheets = workbook.from_csv([("statistics", tmp_path / "stats.csv")])
+    path = workbook.write_workbook(sheets, tmp_path / "loads.xlsx")
+    rows = _values(openpyxl.load_workbook(path, read_only=True)["statistics"])
+    assert rows[1] == ["post left_1 Tz", "N", None, "1", 2.5]
+    assert rows[2] == ["post left_2 Tz", "N", None, "inf", 3.0]
+
+
+def test_fft_amplitude_of_a_cosine_at_nyquist_is_its_amplitude():
+    """fft_amplitude: a unit cosine at the Nyquist frequency (an even record) reads 1, as one
+    at any other bin (its bin, like the mean's, has no mirror image: it read 2)."""
+    from liftoff.analysis.spectra import fft_amplitude
+
+    n, h = 64, 1e-3
+    t = np.arange(n) * h
+    for k in (5, n // 2):
+        f, a = fft_amplitude(np.cos(2 * np.pi * k / (n * h) * t), h)
+        assert a[k, 0] == pytest.approx(1.0, rel=1e-12) and f[k] == pytest.approx(k / (n * h))

@@ -97,3 +97,31 @@ def test_chunked_march_is_seamless(monkeypatch, rigid):
     assert np.array_equal(r.contact_state, ref.contact_state)
     assert np.array_equal(r.displacement["a"], ref.displacement["a"])
     assert np.all(np.isfinite(r.separation_time))
+
+
+def test_metadata_is_standard_json_and_accuracy_needs_contacts(tmp_path):
+    """A results file's metadata is standard JSON: non-finite numbers (a stability margin of
+    inf for rigid contacts) are null, not Infinity, which strict readers refuse; an accuracy
+    target on a problem without contacts is refused (nothing would be estimated: it passed
+    with an estimated error of 0)."""
+    import json
+    import math
+
+    import h5py
+
+    from liftoff.core.errors import InputError
+    from liftoff.transient import Forcing, TransientProblem, solve
+    from liftoff.transient.examples import holddown_contacts, toy_pad, toy_vehicle
+
+    p = TransientProblem(toy_vehicle(), toy_pad(), holddown_contacts(4, stiffness=2e9), Forcing(gravity=(0, 0, -9.81)),
+                         t_end=0.02, h=1e-3, progress=False)
+    res = solve(p)
+    res.metadata["stability_margin"] = math.inf
+    res.metadata["nested"] = {"x": [1.0, -math.inf, math.nan]}
+    path = res.save(tmp_path / "r.h5")
+    with h5py.File(path) as f:
+        text = f.attrs["metadata"]
+    meta = json.loads(text, parse_constant=lambda c: (_ for _ in ()).throw(ValueError(c)))
+    assert meta["stability_margin"] is None and meta["nested"] == {"x": [1.0, None, None]}
+    with pytest.raises(InputError, match="accuracy = 0.01: .* no contacts"):
+        TransientProblem(toy_vehicle(), toy_pad(), [], Forcing(), t_end=0.02, accuracy=0.01)
