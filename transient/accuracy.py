@@ -119,7 +119,7 @@ def _solve_estimated(problem: TransientProblem) -> Estimated:
     coarse, fine = _first_pair(problem, check, step, _solve)
     for k in range(MAX_HALVINGS + 1):
         if k:
-            fine = _solve(check, step.halved(), runs=1.5)
+            fine = _solve(check, step.halved(check, "accuracy"), runs=1.5)
         est = _estimate(coarse, fine)
         if problem.accuracy is None or est.relative <= problem.accuracy:
             coarse.metadata["accuracy"] = problem.accuracy
@@ -127,9 +127,15 @@ def _solve_estimated(problem: TransientProblem) -> Estimated:
             return est
         if k == MAX_HALVINGS:
             break
-        coarse, step = fine, step.halved()
+        coarse, step = fine, step.halved(problem, "accuracy")
     raise ConvergenceError(f"accuracy {problem.accuracy:g} not reached after {MAX_HALVINGS} halvings of the step: "
                            f"estimated peak contact-force error {est.relative:.3g} of the peak at h = {step.h:.4g} s")
+
+
+def _half(step, check: TransientProblem):
+    """The h/2 run's step: its own stability margin; set by the accuracy where an accuracy
+    target may make it the result."""
+    return step.halved(check, "accuracy" if check.accuracy is not None else None)
 
 
 def _first_pair(problem: TransientProblem, check: TransientProblem, step, solve_at):
@@ -138,7 +144,7 @@ def _first_pair(problem: TransientProblem, check: TransientProblem, step, solve_
     is interrupted) the other is stopped at its next chunk (``stop``), so no run outlives
     the call; the h run's error is raised first, then the h/2 run's."""
     if not CONCURRENT_PAIR:
-        return solve_at(problem, step, runs=3), solve_at(check, step.halved(), runs=1.5)
+        return solve_at(problem, step, runs=3), solve_at(check, _half(step, check), runs=1.5)
     import threading
 
     from .solver import Cancelled
@@ -148,7 +154,7 @@ def _first_pair(problem: TransientProblem, check: TransientProblem, step, solve_
 
     def fine_run():
         try:
-            box["result"] = solve_at(check, step.halved(), runs=1.5, stop=stop)
+            box["result"] = solve_at(check, _half(step, check), runs=1.5, stop=stop)
         except BaseException as exc:           # noqa: BLE001 - handed to the calling thread
             box["error"] = exc
             stop.set()
@@ -315,7 +321,7 @@ class EstimatesInOrder:
                     # as solve_estimated's h/2 run (runs=1.5: it and its pair's run at h held at
                     # once), plus the problem before's pair, still held by the caller (1.5 more)
                     fine = _solve(replace(p, keep_modal=False, progress=p.progress and k == 0),
-                                  self._steps[k].halved(), runs=3, stop=self._stop, gate=self.gate)
+                                  self._steps[k].halved(p), runs=3, stop=self._stop, gate=self.gate)
             except BaseException as exc:     # noqa: BLE001 - handed to the caller, at get(k)
                 with self._cond:
                     self._error = exc

@@ -222,9 +222,16 @@ class StepChoice:
         t[-1] = self.t_end
         return t
 
-    def halved(self) -> "StepChoice":
-        """The same run in steps of h/2 (twice as many)."""
-        return replace(self, h=0.5 * self.h, n_steps=2 * self.n_steps)
+    def halved(self, problem: TransientProblem | None = None, governed_by: str | None = None) -> "StepChoice":
+        """The same run in steps of h/2 (twice as many); with ``problem``, the coupling's
+        stability margin at h/2 (:func:`coupling_margin`: the results file and the growth
+        guard took the one at h) and ``governed_by`` (the accuracy halvings' "accuracy")."""
+        half = replace(self, h=0.5 * self.h, n_steps=2 * self.n_steps)
+        if problem is not None:
+            omega, zeta, static = _modes(problem)
+            rows = contact_rows(problem.body_a, problem.body_b, problem.contacts)
+            half = replace(half, margin=coupling_margin(rows, omega, zeta, half.h, static))
+        return half if governed_by is None else replace(half, governed_by=governed_by)
 
 
 def _modes(problem: TransientProblem) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -377,3 +377,24 @@ def test_paused_holds_the_second_thread_between_chunks(monkeypatch):
             time.sleep(0.001)
         assert n + 2 <= len(calls) < 40  # marching again, and still marching: stopped by the block's end
     assert all(calls) and _no_ahead_thread()
+
+
+def test_halved_runs_carry_their_own_stability_margin():
+    """The runs at h/2 (the error estimate's check, the accuracy halvings) carry the penalty
+    coupling's stability margin at their own step, not the one at h (the results file
+    recorded the coarse step's margin and "eq. 12" after three halvings); an accuracy
+    halving's result says the step was set by the accuracy."""
+    from liftoff.transient.assembly import contact_rows
+    from liftoff.transient.stepping import _modes, choose_step, coupling_margin
+
+    p = _drop(accuracy=0.01)
+    step = choose_step(p)
+    half = step.halved(p, "accuracy")
+    omega, zeta, static = _modes(p)
+    rows = contact_rows(p.body_a, p.body_b, p.contacts)
+    assert half.h == 0.5 * step.h and half.n_steps == 2 * step.n_steps and half.governed_by == "accuracy"
+    assert half.margin == coupling_margin(rows, omega, zeta, 0.5 * step.h, static) != step.margin
+    r = solve(p)
+    assert r.metadata["halvings"] >= 1                      # (this drop needs at least one)
+    assert r.metadata["step_governed_by"] == "accuracy"
+    assert r.metadata["stability_margin"] == pytest.approx(coupling_margin(rows, omega, zeta, r.h, static))
