@@ -68,7 +68,7 @@ def merge(base: dict, over: dict) -> dict:
         if isinstance(v, dict) and isinstance(out.get(k), dict):
             out[k] = merge(out[k], v)
         elif (isinstance(v, list) and isinstance(out.get(k), list) and v and out[k]
-              and all(isinstance(x, dict) and "name" in x for x in v + out[k])):
+              and all(isinstance(x, dict) and isinstance(x.get("name"), str) for x in v + out[k])):
             merged = {x["name"]: copy.deepcopy(x) for x in out[k]}
             for x in v:
                 merged[x["name"]] = merge(merged.get(x["name"], {}), x)

@@ -80,8 +80,9 @@ def material(where: Where, name: str, spec: Any, extra: tuple[str, ...] = ()):
     from liftoff.meshes.spec import Material
 
     m = table(where, spec, set(MATERIAL_KEYS) | set(extra), MATERIAL_KEYS + tuple(extra))
+    values = [number(where / k, m[k]) for k in MATERIAL_KEYS]       # (their own errors: at their keys, once)
     try:
-        return Material(name, *(number(where / k, m[k]) for k in MATERIAL_KEYS)), m
+        return Material(name, *values), m
     except InputError as exc:
         raise where.wrap(exc) from None
 

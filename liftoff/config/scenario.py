@@ -252,6 +252,9 @@ def _posts(w: Where, posts: Any, wd: Where, defaults: Any) -> list[Post]:
         q = {**d, **p}
         if p.get("rigid") is True and "stiffness" not in p:
             q.pop("stiffness", None)          # a default stiffness is for the elastic posts
+        for own, other in (("normal", "axial"), ("axial", "normal")):
+            if own in p and other not in p:
+                q.pop(other, None)            # a post's own normal (or axial) replaces the defaults' other one
         wp = wp.named(unique_name(wp / "name", q["name"], names, "post"))
         vehicle, pad = string(wp / "vehicle", q["vehicle"]), string(wp / "pad", q["pad"])
         law = contact_law(wp, q, point_labels(vehicle, Post.DIRECTIONS), default_axial="Tz")

@@ -165,6 +165,26 @@ BAD = [
 ]
 
 
+def test_a_posts_own_normal_and_one_line_errors_of_review(base):
+    """A post's own ``normal`` replaces the defaults' ``axial`` (it was refused as giving
+    both); a material's bad value is named once (the key path was repeated); a case's array of
+    named tables with a name that is no string is an error at its key, not a TypeError of the
+    merge."""
+    d = copy.deepcopy(base)
+    d["post"][0]["normal"] = [0.0, 0.0, 1.0]
+    sc = parse_scenario(d, "s.toml")
+    assert sc.cases[0].posts[0].name == "left_1"
+    d = copy.deepcopy(base)
+    d["model"]["materials"]["srb_left_case"]["E"] = True
+    with pytest.raises(InputError) as exc:
+        parse_scenario(d, "bad.toml")
+    assert str(exc.value).count("bad.toml") == 1 and "model.materials.srb_left_case.E: expected a number" in str(exc.value)
+    d = copy.deepcopy(base)
+    d["case"][0]["post"] = [{"name": ["x"]}]
+    with pytest.raises(InputError, match=r"case\[0\]\.post\[0\]"):
+        parse_scenario(d, "bad.toml")
+
+
 @pytest.mark.parametrize("path, value, expect", BAD, ids=[b[0] + ":" + b[2][:20] for b in BAD])
 def test_bad_input_one_line_naming_the_key(base, path, value, expect):
     d = copy.deepcopy(base)
