@@ -142,7 +142,14 @@ def display_points(x: np.ndarray, y: np.ndarray, bins: int = DISPLAY_BINS) -> tu
 def format_changes(rows: list[dict], limit: int = 12) -> str:
     """The force items with the largest percent changes against an earlier run."""
     sel = [r for r in rows if is_force(r)]
-    big = sorted(sel, key=lambda r: -max(abs(np.nan_to_num(r["max_change_pct"])), abs(np.nan_to_num(r["min_change_pct"]))))
+
+    def change(r, side: str) -> float:     # a load from nothing (old 0: no percentage) ranks first, not last
+        pct = r[f"{side}_change_pct"]
+        if np.isfinite(pct):
+            return abs(pct)
+        return np.inf if np.isfinite(r[side]) and r[side] != 0 and r.get(f"{side}_old") == 0 else 0.0
+
+    big = sorted(sel, key=lambda r: -max(change(r, "max"), change(r, "min")))
     w = max([len(r["item"]) for r in big[:limit]] + [10])
     lines = [f"Largest changes against the earlier run ({len(rows)} items compared, compare.csv):",
              f"{'item':<{w}} {'max':>12} {'old':>12} {'%':>8} {'min':>12} {'old':>12} {'%':>8}"]

@@ -623,7 +623,7 @@ def spectra(result, cp, post, out: Path, case: str) -> list[Path]:
         data["fft"] = {"items": np.array([it.name for it in sel], dtype=str), "freq": Dataset(fa, "Hz"),
                        "amplitude": Dataset(A, "units of each item", dims=("freq", "items"))}
         head = f"# liftoff PSD (Welch, {post.psd.segment:g} s segments, Hann) of case {case}; units^2/Hz of each item\n"
-        lines = [",".join(["freq_Hz"] + [f"{it.name} [{it.unit}^2/Hz]" for it in sel])]
+        lines = [",".join(["freq_Hz"] + [f"{it.name} [({it.unit})^2/Hz]" for it in sel])]   # ((m/s^2)^2/Hz, not m/s^2^2/Hz)
         lines += [",".join([f"{x:.6e}" for x in row]) for row in np.column_stack([f, P])]
         paths.append(write_text(out / f"psd_{case}.csv", head + "\n".join(lines) + "\n"))
     if post.srs is not None:

@@ -130,3 +130,19 @@ def test_fft_amplitude_of_a_cosine_at_nyquist_is_its_amplitude():
     for k in (5, n // 2):
         f, a = fft_amplitude(np.cos(2 * np.pi * k / (n * h) * t), h)
         assert a[k, 0] == pytest.approx(1.0, rel=1e-12) and f[k] == pytest.approx(k / (n * h))
+
+
+def test_a_load_from_nothing_leads_the_largest_changes():
+    """format_changes: an item whose earlier peak was 0 (no percentage: NaN) and is now a
+    load ranks first, not last; one 0 before and after stays at the bottom."""
+    from liftoff.analysis.tables import format_changes
+
+    def row(item, mx, old, pct):
+        return {"item": item, "category": "contact_force", "unit": "N", "max": mx, "max_old": old,
+                "max_change_pct": pct, "min": 0.0, "min_old": 0.0, "min_change_pct": float("nan")}
+
+    rows = [row("post a Tz", 1.1e6, 1.0e6, 10.0), row("post b Tz", 5.0e5, 0.0, float("nan")),
+            row("post c Tz", 0.0, 0.0, float("nan"))]
+    text = format_changes(rows)
+    lines = [ln for ln in text.splitlines() if ln.startswith("post ")]
+    assert [ln.split()[1] for ln in lines] == ["b", "a", "c"]
