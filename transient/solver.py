@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import time as _time
+import os
+import threading
 import warnings
 from dataclasses import dataclass
 
@@ -141,6 +143,20 @@ def _static_solve(na, rows, body_terms, P0, t, act):
     return state, f
 
 
+#: catch_warnings swaps the process's one warnings filter list: two threads (the error
+#: estimate's h and h/2 runs) in it at once could leave "ignore" in place for the process
+_WARNINGS_LOCK = threading.Lock()
+
+
+def _new_warnings_lock() -> None:      # a forked child (workflows/beside.py) starts with a free one
+    global _WARNINGS_LOCK
+    _WARNINGS_LOCK = threading.Lock()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_new_warnings_lock)
+
+
 def _pivoted_solve(M: np.ndarray, rhs: np.ndarray, t: float, kmax: float = 0.0) -> np.ndarray:
     """Solve M x = rhs by LU with partial pivoting after equilibrating rows and columns (so
     the test does not depend on units); InputError when a pivot falls below 1e-11 of the
@@ -153,9 +169,9 @@ def _pivoted_solve(M: np.ndarray, rhs: np.ndarray, t: float, kmax: float = 0.0) 
     cs = np.abs(Ms).max(axis=0)
     cs = np.where(cs > 0, 1.0 / np.where(cs > 0, cs, 1.0), 1.0)
     Ms *= cs[None, :]
-    with warnings.catch_warnings():          # an exactly zero pivot is reported below, as an InputError
-        warnings.simplefilter("ignore", sla.LinAlgWarning)
-        lu, piv = sla.lu_factor(Ms, check_finite=False)
+    with _WARNINGS_LOCK, warnings.catch_warnings():   # an exactly zero pivot is reported below, as an InputError
+        warnings.simplefilter("ignore", sla.LinAlgWarning)   # (the lock: the h and h/2 runs' statics at once
+        lu, piv = sla.lu_factor(Ms, check_finite=False)     # could leave the filter set: catch_warnings is global)
     d = np.abs(np.diag(lu))
     if not np.all(np.isfinite(d)) or d.min() <= 1e-11 * d.max():
         raise InputError(f"static equilibrium at t = {t:g} s is singular or too ill-conditioned to solve "
