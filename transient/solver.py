@@ -1,9 +1,9 @@
 """Two-body transient driver: step size (2.5), static initial conditions (2.6), time loop (2.3-2.7)."""
 from __future__ import annotations
 
-import time as _time
 import os
 import threading
+import time as _time
 import warnings
 from dataclasses import dataclass
 
