@@ -229,10 +229,20 @@ def _nastran(where: Where, spec: Any, base: Path) -> NastranSource:
                                      "matrix's name (MAAX by default)")
     if "se" in options:
         options["se"] = integer(where / "se", options["se"], 1)
-    recovery = []
+    recovery, item_names = [], set()
     for i, r in enumerate(array_of_tables(where / "recovery", n.get("recovery", []), "nastran.recovery")):
-        r = table(where / "recovery" / i, r, _NASTRAN_RECOVERY, required=("name",))
-        recovery.append(dict(r))
+        wr = where / "recovery" / i
+        r = dict(table(wr, r, _NASTRAN_RECOVERY, required=("name",)))
+        unique_name(wr / "name", r["name"], item_names, "recovery item")
+        for key in ("disp", "vel", "acc"):          # OUTPUT4 matrix names (they were read only when built)
+            if key in r:
+                string(wr / key, r[key])
+        if not any(k in r for k in ("disp", "vel", "acc")):
+            raise wr.error("give at least one of disp, vel, acc (OUTPUT4 matrix names)")
+        for key in ("rows", "quantity"):             # one name, or one per row
+            if key in r and not isinstance(r[key], str):
+                r[key] = strings(wr / key, r[key], nonempty=True)
+        recovery.append(r)
     return NastranSource(paths["file"], units, names, options, tuple(recovery))
 
 

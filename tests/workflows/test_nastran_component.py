@@ -73,7 +73,15 @@ def test_bad_nastran_component_is_one_line(tmp_path):
                             ({"file": "s.toml", "units": "SI", "grids": {"1": "a", "01": "b"}},
                              "is not a grid ID|given twice"),
                             ({"file": "s.toml", "units": "SI", "grids": [{"1": "a"}]}, "grids: expected a table"),
-                            ({"file": "a\x00b", "units": "SI"}, "nastran.file: not a usable file name")):
+                            ({"file": "a\x00b", "units": "SI"}, "nastran.file: not a usable file name"),
+                            # recovery items: checked when read (disp = 1 was an AttributeError at the build)
+                            ({"file": "s.toml", "units": "SI", "recovery": [{"name": "r", "disp": 1}]},
+                             r"recovery\[0\]\.disp: expected a string"),
+                            ({"file": "s.toml", "units": "SI", "recovery": [{"name": "r"}]},
+                             "give at least one of disp, vel, acc"),
+                            ({"file": "s.toml", "units": "SI", "recovery": [{"name": "r", "acc": "a"},
+                                                                           {"name": "r", "acc": "b"}]},
+                             "duplicate recovery item name 'r'")):
         (tmp_path / "s.toml").write_text("")
         with pytest.raises(Exception, match=expect) as e:
             _case({**STICK, "component": {"orbiter": {"nastran": nastran}}}, tmp_path)
