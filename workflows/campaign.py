@@ -244,12 +244,13 @@ def solve_generated(task: CaseTask, keep_modal: bool | str = False, modal_scratc
         raise type(exc)(msg) from None
 
 
-def solve_together(task: CaseTask) -> list:
-    """[(index, result, CaseProblem, Case, wall s)] of generated cases ``task.index`` and
+def solve_together(task: CaseTask) -> tuple[list, str]:
+    """([(index, result, CaseProblem, Case, wall s)] of generated cases ``task.index`` and
     ``task.together``, marched together (liftoff.transient.solve_batch; each wall the batch's
-    share). Cases the batch cannot march (friction, dashpots, latches, soft release, rigid
-    rows: its scope, which it names) or whose start fails are solved one by one, so that a
-    case's error names that case as solve_generated names it."""
+    share); a note, "" unless they were solved one by one). Cases the batch cannot march
+    (friction, dashpots, latches, soft release, rigid rows: its scope, which it names) or whose
+    start fails are solved one by one, so that a case's error names that case as
+    solve_generated names it, and the note says why."""
     from liftoff.transient import solve_batch
 
     from .loads import build_problem
@@ -262,21 +263,17 @@ def solve_together(task: CaseTask) -> list:
         cps = [build_problem(case, stack, progress=False) for case in cases]
         results = solve_batch([cp.problem for cp in cps])
     except (InputError, ConvergenceError, ResourceError) as exc:     # (its memory: K cases' histories at once)
+        note = (f"--march-together: cases {', '.join(c.name for c in cases)} solved one by one "
+                f"({' '.join(str(exc).split())[:300]})"
+                + ("; a smaller --march-together needs less memory" if isinstance(exc, ResourceError) else ""))
         if not _MEMO.get("warned"):      # once a worker: the cases are right, only not marched together
             _MEMO["warned"] = True
             import warnings
 
-            warnings.warn(f"--march-together: cases {', '.join(c.name for c in cases)} solved one by one "
-                          f"({' '.join(str(exc).split())[:300]}); further such groups of this worker likewise"
-                          + ("; a smaller --march-together needs less memory" if isinstance(exc, ResourceError)
-                             else ""), stacklevel=2)
-        why = " ".join(str(exc).split())[:300]
-        _MEMO["one_by_one"] = (f"--march-together: cases {', '.join(c.name for c in cases)} solved one by one ({why})"
-                               + ("; a smaller --march-together needs less memory"
-                                  if isinstance(exc, ResourceError) else ""))
-        return [(i, *solve_generated(replace(task, index=i, together=()))) for i in indexes]
+            warnings.warn(note + "; further such groups of this worker likewise", stacklevel=2)
+        return [(i, *solve_generated(replace(task, index=i, together=()))) for i in indexes], note
     wall = (time.perf_counter() - t0) / len(cases)
-    return [(i, res, cp, case, wall) for i, res, cp, case in zip(indexes, results, cps, cases)]
+    return [(i, res, cp, case, wall) for i, res, cp, case in zip(indexes, results, cps, cases)], ""
 
 
 def run_case(task: CaseTask):
@@ -288,9 +285,7 @@ def run_case(task: CaseTask):
 
     trim_heap()                          # the previous case's freed arrays back to the system
     if task.together and not task.columns:
-        _MEMO.pop("one_by_one", None)
-        solved, out = solve_together(task), []
-        note = _MEMO.pop("one_by_one", "")
+        (solved, note), out = solve_together(task), []
         while solved:                    # each case's result let go once summarised
             i, res, cp, case, wall = solved.pop(0)
             out.append(_summary(replace(task, index=i), res, cp, case, wall))
