@@ -32,14 +32,13 @@ The kernel's acceleration P - 2 zeta omega v - omega^2 q is then 0 to round-off 
 """
 from __future__ import annotations
 
-import os
-import threading
 from collections import OrderedDict
 from dataclasses import dataclass, fields
 
 import numpy as np
 
 from liftoff.core.errors import InputError
+from liftoff.core.locks import ForkSafeLock
 
 _SERIES_LIMIT = 2.0  # rho*h below which the Taylor series is used (terms <= 2^k/k!)
 
@@ -240,18 +239,7 @@ RECENT_SIZE = 8
 #: would push a body's coefficients out)
 RECENT_MIN_MODES = 32
 _RECENT: OrderedDict = OrderedDict()
-_RECENT_LOCK = threading.Lock()       # the error estimate's halved runs step in a thread of their own
-
-
-def _new_lock_in_child() -> None:
-    """A forked child (workflows/beside.py forks while the halved runs' thread may hold the
-    lock) starts with a lock of its own, never one held by a thread it does not have."""
-    global _RECENT_LOCK
-    _RECENT_LOCK = threading.Lock()
-
-
-if hasattr(os, "register_at_fork"):
-    os.register_at_fork(after_in_child=_new_lock_in_child)
+_RECENT_LOCK = ForkSafeLock()         # the error estimate's halved runs step in a thread of their own
 
 
 def _copied(c: StepCoefficients) -> StepCoefficients:

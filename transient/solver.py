@@ -1,8 +1,6 @@
 """Two-body transient driver: step size (2.5), static initial conditions (2.6), time loop (2.3-2.7)."""
 from __future__ import annotations
 
-import os
-import threading
 import time as _time
 import warnings
 from dataclasses import dataclass
@@ -10,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from liftoff.core.errors import ConvergenceError, InputError
+from liftoff.core.locks import ForkSafeLock
 from liftoff.core.scratch import release_rows, scratch_array
 
 from .assembly import contact_rows, feedback_at, feedback_factors, modal_load
@@ -145,16 +144,7 @@ def _static_solve(na, rows, body_terms, P0, t, act):
 
 #: catch_warnings swaps the process's one warnings filter list: two threads (the error
 #: estimate's h and h/2 runs) in it at once could leave "ignore" in place for the process
-_WARNINGS_LOCK = threading.Lock()
-
-
-def _new_warnings_lock() -> None:      # a forked child (workflows/beside.py) starts with a free one
-    global _WARNINGS_LOCK
-    _WARNINGS_LOCK = threading.Lock()
-
-
-if hasattr(os, "register_at_fork"):
-    os.register_at_fork(after_in_child=_new_warnings_lock)
+_WARNINGS_LOCK = ForkSafeLock()
 
 
 def _pivoted_solve(M: np.ndarray, rhs: np.ndarray, t: float, kmax: float = 0.0) -> np.ndarray:
