@@ -119,7 +119,7 @@ def _solve_estimated(problem: TransientProblem) -> Estimated:
     coarse, fine = _first_pair(problem, check, step, _solve)
     for k in range(MAX_HALVINGS + 1):
         if k:
-            est = fine = None                # (the run before's results let go: only coarse and the next held)
+            est = None                       # (the run before's estimate let go: only coarse and the next held)
             fine = _solve(check, step.halved(check, "accuracy"), runs=1.5)
         est = _estimate(coarse, fine)
         if problem.accuracy is None or est.relative <= problem.accuracy:
