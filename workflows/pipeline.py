@@ -65,8 +65,7 @@ class StackModel:
     pad_all: SystemModes | None = None
     timings: dict = field(default_factory=dict)
     key: str = ""         # what made it (its stages' keys, the modes kept, zeta); "": unknown
-    # memos of this stack's own model (a stack made by dataclasses.replace starts without them)
-    _checks: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    # the memo of this stack's own model (a stack made by dataclasses.replace starts without it)
     _products: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def product(self, key: tuple, build: Callable[[], Any]) -> Any:
@@ -83,13 +82,10 @@ class StackModel:
         labels ``contact_a`` and attach labels ``attach``, and of the pad at ``contact_b``;
         computed once per set of labels."""
         contact_b = [lab for lab in contact_b if lab is not None]     # None: a post on rigid ground
-        key = (tuple(contact_a), tuple(contact_b), tuple(attach))
-        if key not in self._checks:
-            self._checks[key] = (
-                truncation_check(self.vehicle_all or self.vehicle_modes, self.vehicle_modes,
-                                 list(contact_a) + list(attach), contact_a, "vehicle"),
-                truncation_check(self.pad_all or self.pad_modes, self.pad_modes, contact_b, contact_b, "pad"))
-        return self._checks[key]
+        return self.product(("truncation", tuple(contact_a), tuple(contact_b), tuple(attach)), lambda: (
+            truncation_check(self.vehicle_all or self.vehicle_modes, self.vehicle_modes,
+                             list(contact_a) + list(attach), contact_a, "vehicle"),
+            truncation_check(self.pad_all or self.pad_modes, self.pad_modes, contact_b, contact_b, "pad")))
 
 
 def boundary_points(component: Component) -> list[str]:

@@ -451,19 +451,6 @@ TITLES = {"max_twang": "maximum twang", "release": "hold-down release",
           "peak_load": "peak post/attach load change"}
 
 
-def drawing_modules(plots: bool) -> list:
-    """Loaders of the drawing libraries a run's picture children use
-    (:meth:`workflows.beside.Beside.preload`): pyplot on its Agg backend for ``plots`` (the
-    correlated-loads and spectra plots too). (pyvista, for the snapshots, is imported at the
-    run's start already, before dolfinx: workflows.run.run.)"""
-    def pyplot():
-        from liftoff.analysis.plots import _pyplot
-
-        return _pyplot()
-
-    return [pyplot] if plots else []
-
-
 def snapshots(stack, result, cp, out: Path, case: str) -> list[Path]:
     """snapshot_<what>_<case>.png at the steps of :func:`snapshot_times`, from one scene
     (fem.snapshot.snapshot_pngs)."""

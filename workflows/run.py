@@ -348,7 +348,10 @@ def write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, e
     from .beside import Beside, available
 
     beside = Beside(available())
-    beside.preload(*report.drawing_modules(plots))
+    if plots:              # pyplot for the picture children (pyvista is imported at the run's start already)
+        from liftoff.analysis.plots import _pyplot
+
+        beside.preload(_pyplot)
     try:
         return _write_results(sc, prep, out, plots, want_pics, echo, t_start, camp, error_estimate, beside)
     except BaseException:

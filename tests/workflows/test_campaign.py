@@ -701,7 +701,7 @@ def test_model_products_are_built_once_per_stack(campaign4, monkeypatch):
     sc, stack = out.scenario, next(iter(out.stacks.values()))
     stack._products.clear()
     first = build_problem(sc.cases[0], stack, progress=False)
-    assert {k[0] for k in stack._products} == {"interface_force", "cg_motion", "cg_acceleration"}
+    assert {k[0] for k in stack._products} == {"interface_force", "cg_motion", "cg_acceleration", "truncation"}
 
     def built_again(*a, **k):
         raise AssertionError("a model product built again")
