@@ -8,8 +8,10 @@ joints the strut shares with the components it links (each end's six DOFs are th
 ``section``: a liftoff.core.beam.Section or a standard shape's table (``{shape = "tube",
 r_out = ..., t = ...}``, liftoff.core.beam.standard_section); material ``E`` (Pa), ``nu``,
 ``rho`` (kg/m^3); ``elements`` along it; ``vref``: the section's orientation vector (local
-y towards it; default: whichever global axis is most normal to the strut). A pinned end (a
-clevis) is not modelled: both ends take moments. SI units.
+y towards it; default: whichever global axis is most normal to the strut); ``pins``: the
+pin flags of its two ends (Nastran CBAR's PA, PB: digits 4-6, the local rotations released,
+liftoff.core.beam.release), e.g. ``["456", "56"]`` for a pin-ended (clevis) strut, a
+two-force member whose ends pass no moment; default none (both ends take moments). SI units.
 """
 from __future__ import annotations
 
@@ -17,7 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from liftoff.core.beam import Section, assemble_frame, beam_element, standard_section
+from liftoff.core.beam import Section, assemble_frame, beam_element, check_pins, standard_section
 from liftoff.core.elastic import check_elastic
 from liftoff.core.errors import InputError
 
@@ -37,6 +39,7 @@ class Strut:
     rho: float = 7850.0
     elements: int = 4
     vref: tuple = ()
+    pins: tuple = ("", "")
 
     def check(self) -> None:
         o = f"Strut({self.name})"
@@ -51,6 +54,7 @@ class Strut:
         if isinstance(self.elements, bool) or int(self.elements) != self.elements or not self.elements >= 1:
             raise InputError(f"{o}.elements must be a whole number >= 1 (got {self.elements!r})")
         self.section_of()
+        check_pins(tuple(self.pins), f"{o}.pins")
         if len(self.vref) and (np.shape(self.vref) != (3,) or
                                np.linalg.norm(np.cross(b - a, np.asarray(self.vref, float))) == 0):
             raise InputError(f"{o}.vref must be 3 numbers not along the strut (got {list(self.vref)})")
@@ -74,7 +78,9 @@ def strut_component(p: Strut, name: str | None = None) -> tuple[Component, dict]
     d = (b - a) / np.linalg.norm(b - a)
     vref = np.asarray(p.vref, float) if len(p.vref) else np.eye(3)[int(np.argmin(np.abs(d)))]
     sec, G = p.section_of(), p.E / (2 * (1 + p.nu))
-    K, M = assemble_frame(n + 1, ((k, k + 1, *beam_element(X[k], X[k + 1], p.E, G, sec, p.rho, vref))
+    pa, pb = check_pins(tuple(p.pins), f"Strut({name}).pins")
+    K, M = assemble_frame(n + 1, ((k, k + 1, *beam_element(X[k], X[k + 1], p.E, G, sec, p.rho, vref,
+                                                             pins=(pa if k == 0 else "", pb if k == n - 1 else "")))
                                   for k in range(n)))
     return line_component(name, X, names, K, M, np.column_stack([np.arange(n), np.arange(1, n + 1)])), {}
 

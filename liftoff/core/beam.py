@@ -99,12 +99,12 @@ def _rotary_mass(rhoI: float, L: float, phi: float) -> np.ndarray:
 
 
 def beam_element(x1, x2, E: float, G: float, section: Section, rho: float, vref=(0.0, 0.0, 1.0),
-                 rotary: bool = True, nsm: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+                 rotary: bool = True, nsm: float = 0.0, pins: tuple[str, str] = ("", "")) -> tuple[np.ndarray, np.ndarray]:
     """Global 12 x 12 stiffness and consistent mass of a straight beam from ``x1`` to ``x2``
     (module docstring): Timoshenko where the section has shear areas, Euler-Bernoulli
     where it has none; ``rotary``: the bending rotary inertia rho I in the mass; ``nsm``:
     non-structural mass per length (kg/m, Nastran PBEAM's NSM), translational only (no
-    rotary or torsional inertia)."""
+    rotary or torsional inertia); ``pins``: pin flags at node 1 and node 2 (:func:`release`)."""
     x1, x2 = np.asarray(x1, float), np.asarray(x2, float)
     L, lam = _axes(x1, x2, vref)
     s = section
@@ -124,8 +124,51 @@ def beam_element(x1, x2, E: float, G: float, section: Section, rho: float, vref=
     m[np.ix_(xy, xy)] = _translational_mass(mA, L, phi_y) + (_rotary_mass(rho * s.Iz, L, phi_y) if rotary else 0)
     m[np.ix_(xz, xz)] = flip @ (_translational_mass(mA, L, phi_z)
                                 + (_rotary_mass(rho * s.Iy, L, phi_z) if rotary else 0)) @ flip
+    if any(pins):
+        k, m = release(k, m, pins)
     T = np.kron(np.eye(4), lam)
     return T.T @ k @ T, T.T @ m @ T
+
+
+#: pin-flag digits: the element's local rotations at a node (Nastran CBAR/CBEAM PA, PB; the
+#: translations 1-3 are not released here: a released translation is a gap, not a pin)
+PIN_DIGITS = "456"
+
+
+def check_pins(pins, where: str) -> tuple[str, str]:
+    """``pins`` (two strings of digits 4-6, node 1's and node 2's) checked; InputError
+    naming ``where`` otherwise, and for a beam free to spin about its own axis (4 at both
+    ends)."""
+    if not (isinstance(pins, (tuple, list)) and len(pins) == 2 and all(isinstance(f, str) for f in pins)):
+        raise InputError(f"{where}: pin flags are two strings of digits 4-6, node 1's and node 2's (got {pins!r})")
+    for f in pins:
+        if any(c not in PIN_DIGITS for c in f) or len(set(f)) != len(f):
+            raise InputError(f"{where}: pin flag {f!r}: digits 4, 5, 6 (the local rotations x, y, z) each at most once")
+    if "4" in pins[0] and "4" in pins[1]:
+        raise InputError(f"{where}: torsion (4) released at both ends leaves the member free to spin about its "
+                         "axis: release it at one end only (a pin-ended strut: '456' and '56')")
+    return str(pins[0]), str(pins[1])
+
+
+def release(k: np.ndarray, m: np.ndarray, pins: tuple[str, str]) -> tuple[np.ndarray, np.ndarray]:
+    """Local 12 x 12 stiffness and mass with the rotations ``pins`` (digits 4-6 at node 1,
+    node 2: Nastran's pin flags PA, PB) released: those DOFs statically condensed out, T =
+    [I; -K_rr^-1 K_rc] over the connected DOFs c, K_c = T^T K T and M_c = T^T M T (the
+    released rotations follow the element's static shape under its end displacements, as
+    Guyan's reduction within the element), and the released rows and columns zero, so the
+    node's rotation there takes nothing from this element (a pinned end passes no moment
+    about that axis). A pin-ended two-force member: ``("456", "56")``."""
+    r = [6 * n + int(c) - 1 for n, f in enumerate(pins) for c in f]
+    if not r:
+        return k, m
+    c = [i for i in range(12) if i not in r]
+    T = np.zeros((12, len(c)))
+    T[c, np.arange(len(c))] = 1.0
+    T[r] = -np.linalg.solve(k[np.ix_(r, r)], k[np.ix_(r, c)])
+    kc, mc = np.zeros((12, 12)), np.zeros((12, 12))
+    kc[np.ix_(c, c)] = T.T @ k @ T
+    mc[np.ix_(c, c)] = T.T @ m @ T
+    return kc, mc
 
 
 def assemble_frame(n_nodes: int, elements) -> tuple:
