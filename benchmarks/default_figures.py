@@ -42,6 +42,7 @@ CAMPAIGN_BENCH_JSON = FIGURES / "bench_campaign.json"  # benchmarks/bench_campai
 BATCH_BENCH_JSON = FIGURES / "bench_batch.json"    # benchmarks/bench_batch.py --json (machine-dependent)
 MPI_BENCH_JSON = FIGURES / "bench_mpi_components.json"  # benchmarks/bench_mpi_components.py --json (machine-dependent)
 STIFFENERS_JSON = FIGURES / "stiffeners.json"  # benchmarks/stiffener_compare.py
+STRUTS_JSON = FIGURES / "struts.json"          # benchmarks/strut_compare.py
 EXAMPLE_JSONS = {n: FIGURES / f"{n}.json" for n in ("single_stick", "saturn_v")}   # benchmarks/example_figures.py
 DOCS = (ROOT / "README.md", ROOT / "docs" / "workflow.md", ROOT / "docs" / "transient.md")
 #: figures agree when within this relative difference (of the larger of the two or, inside a
@@ -286,7 +287,7 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
                   attach_release: dict | None = None, step: dict | None = None,
                   kernel_floor: dict | None = None, static_modes: dict | None = None,
                   batch_bench: dict | None = None, mpi_bench: dict | None = None,
-                  stiffeners: dict | None = None) -> dict[str, str]:
+                  stiffeners: dict | None = None, struts: dict | None = None) -> dict[str, str]:
     """{block name: markdown} from the figures (and the convergence, twang and mesh studies,
     the workflow benchmark and the launcher examples' figures {name: figures}, if any)."""
     tw, twn = fig["twang"]["nominal"], fig["twang"]
@@ -378,6 +379,8 @@ def render_blocks(fig: dict, conv: dict | None, twang_rows: dict | None = None,
         blocks["bench-mpi"] = render_mpi_bench(mpi_bench)
     if stiffeners and "bare" in stiffeners:
         blocks["stiffeners"] = render_stiffeners(stiffeners)
+    if struts and "joint" in struts:
+        blocks["aft-struts"] = render_aft_struts(struts)
     if examples:
         import runpy
 
@@ -734,6 +737,56 @@ def render_stiffeners(fig: dict) -> str:
     return _variant_table("walls and deck", [(STIFFENER_TITLES[k], v) for k, v in fig.items()], lead, items)
 
 
+
+#: strut_compare.py's variants, as the table heads them
+AFT_STRUT_TITLES = {"joint": "one aft point, Tz Rx Ry released (default)",
+                    "struts": "three pin-ended struts, tube 0.2 m x 20 mm",
+                    "struts_thin": "three pin-ended struts, tube 0.2 m x 10 mm"}
+
+
+def render_aft_struts(fig: dict) -> str:
+    """The default run with each booster's aft attach as the released joint and as its three
+    pin-ended struts (benchmarks/strut_compare.py): the aft attach's force on the booster
+    (the joint's, or the struts' resultant about the joint's point), each strut's peak axial
+    force, and the other attach loads (the left booster's side and the orbiter's)."""
+    base = fig["joint"]["attach_n"]
+    items = [k for k in sorted(base, key=lambda k: (k.split(" on ")[0], k))
+             if "right" not in k and "_aft on srb" not in k and k.endswith(("Tx", "Ty", "Tz"))]
+
+    def change(v):
+        k = max(items, key=lambda k: abs(abs(v["attach_n"].get(k, 0.0)) - abs(base[k])))
+        d = abs(v["attach_n"].get(k, 0.0)) - abs(base[k])
+        return f"{d / 1e6:+.2f} MN ({100 * d / abs(base[k]):+.0f} % of the default's), {k}"
+
+    def aft(v):
+        a = v["aft_attach"]
+        return f"{a['Tx'] / 1e6:.2f}, {a['Ty'] / 1e6:.2f}; {a['Rz'] / 1e6:.2f}"
+
+    def struts(v):
+        s = v["aft_attach"].get("struts")
+        if not s:
+            return "-"
+        return "; ".join(f"{k.rsplit('_', 1)[-1]} {p['tension_n'] / 1e6:.2f} / {p['compression_n'] / 1e6:.2f}"
+                         for k, p in s.items())
+
+    def sec(x):
+        return "-" if x is None else f"{x:.0f}"
+
+    lead = [("FE DOFs; fixed-interface modes: core, booster",
+             lambda v: f"{v['core']['fe_dofs']}, {v['core']['cb_modes']}; {v['booster_fe_dofs']}, "
+                       f"{v['booster_cb_modes']}"),
+            ("FE, CB stage times, cold (s, this machine): core; booster",
+             lambda v: f"{sec(v['core']['fe_s'])}, {sec(v['core']['cb_s'])}; {sec(v['booster_fe_s'])}, "
+                       f"{sec(v['booster_cb_s'])}"),
+            ("vehicle system modes; mass (t)", lambda v: f"{v['vehicle_modes']}; {v['vehicle_mass_t']:.1f}"),
+            ("left booster's aft attach: Tx, Ty (MN); Rz (MN m) (the joint's, or the struts' resultant on the "
+             "booster about the joint's point)", aft),
+            ("left booster's aft struts: peak axial force, tension / compression (MN)", struts),
+            ("largest change of another attach force's peak magnitude from the default's",
+             lambda v: "-" if v is fig["joint"] else change(v))]
+    return _variant_table("aft attach", [(AFT_STRUT_TITLES[k], v) for k, v in fig.items()], lead, items)
+
+
 def render_mesh(study: dict) -> str:
     """The static mesh study: each level's DOFs, post axial loads at t0 and its largest
     changes from the finest level."""
@@ -881,7 +934,8 @@ def studies() -> tuple[dict | None, ...]:
                   json.loads(STATIC_MODES_JSON.read_text()) if STATIC_MODES_JSON.is_file() else None,
                   json.loads(BATCH_BENCH_JSON.read_text()) if BATCH_BENCH_JSON.is_file() else None,
                   json.loads(MPI_BENCH_JSON.read_text()) if MPI_BENCH_JSON.is_file() else None,
-                  json.loads(STIFFENERS_JSON.read_text()) if STIFFENERS_JSON.is_file() else None)
+                  json.loads(STIFFENERS_JSON.read_text()) if STIFFENERS_JSON.is_file() else None,
+                  json.loads(STRUTS_JSON.read_text()) if STRUTS_JSON.is_file() else None)
 
 
 # ------------------------------------------------------------------ comparing

@@ -22,6 +22,8 @@ from liftoff.core.errors import InputError
 from .spec import require_positive
 
 SIDES = ("left", "right")
+#: how a booster's aft attach is modelled (StackLayout.srb_aft_attach)
+AFT_ATTACH = ("point", "struts")
 
 
 @dataclass(frozen=True)
@@ -37,6 +39,9 @@ class StackLayout:
     holddown_azimuths_deg: tuple = (45.0, 135.0, 225.0, 315.0)
     srb_fwd_attach_z: float = 40.5    # ET intertank / SRB forward skirt
     srb_aft_attach_z: float = 13.2    # ET aft ring / SRB aft attach ring
+    srb_aft_attach: str = "point"     # "point": one aft attach point a booster (released joint);
+                                      # "struts": the end points of its three aft struts (below)
+    srb_aft_strut_y: float = 1.0      # "struts": the two sway braces at y = +- this (m)
     orbiter_radius: float = 2.6       # fuselage modelled as a 5.2 m cylinder
     orbiter_axis_y: float = 7.8       # orbiter axis at (0, this)
     orbiter_bottom_z: float = 8.0     # aft bulkhead (SSME gimbal plane)
@@ -56,6 +61,14 @@ class StackLayout:
             raise InputError("StackLayout.srb_skirt_thickness must be < srb_skirt_radius")
         if len(self.holddown_azimuths_deg) < 1:
             raise InputError("StackLayout.holddown_azimuths_deg is empty")
+        if self.srb_aft_attach not in AFT_ATTACH:
+            raise InputError(f"StackLayout.srb_aft_attach must be one of {', '.join(map(repr, AFT_ATTACH))} "
+                             f"(got {self.srb_aft_attach!r})")
+        if self.srb_aft_attach == "struts":
+            a = self.srb_aft_strut_y
+            if isinstance(a, bool) or not np.isfinite(a) or not 0 < a < 0.8 * self.srb_radius:
+                raise InputError(f"StackLayout.srb_aft_strut_y = {a!r} m: the sway braces' offset must be in "
+                                 f"(0, {0.8 * self.srb_radius:g}) m (0.8 x the booster radius)")
 
     def srb_axis(self, side: str) -> np.ndarray:
         if side not in SIDES:
@@ -81,12 +94,59 @@ class StackLayout:
         return out
 
     def srb_attach_points(self, side: str) -> dict[str, np.ndarray]:
-        """Core-booster attach reference points, midway between the two outer walls."""
+        """Core-booster attach reference points, midway between the two outer walls: the
+        forward one and, unless the aft attach is struts (:meth:`srb_aft_strut_points`), the
+        aft one."""
         sgn = -1.0 if side == "left" else 1.0
         xm = sgn * 0.5 * (self.core_radius + self.srb_axis_x - self.srb_radius)
         self.srb_axis(side)
-        return {f"att_srb_{side}_fwd": np.array([xm, 0.0, self.srb_fwd_attach_z]),
-                f"att_srb_{side}_aft": np.array([xm, 0.0, self.srb_aft_attach_z])}
+        out = {f"att_srb_{side}_fwd": np.array([xm, 0.0, self.srb_fwd_attach_z])}
+        if self.srb_aft_attach == "point":
+            out[f"att_srb_{side}_aft"] = np.array([xm, 0.0, self.srb_aft_attach_z])
+        return out
+
+    def srb_aft_strut_points(self, side: str) -> dict[str, dict[str, np.ndarray]]:
+        """With ``srb_aft_attach = "struts"``: the end points of a booster's three aft struts,
+        {"core": {...}, "booster": {...}}, on each wall's outer surface at the aft attach
+        height: ``et_srb_<side>_aft_upper`` / ``_lower`` on the core at y = +- srb_aft_strut_y
+        (upper: towards the orbiter), ``srb_<side>_aft_upper`` / ``_lower`` on the booster at
+        the same y (empty with ``"point"``). The struts: :meth:`srb_aft_struts`."""
+        if self.srb_aft_attach != "struts":
+            return {"core": {}, "booster": {}}
+        sgn = -1.0 if side == "left" else 1.0
+        ax = self.srb_axis(side)
+        z, a = self.srb_aft_attach_z, self.srb_aft_strut_y
+        out: dict[str, dict[str, np.ndarray]] = {"core": {}, "booster": {}}
+        for tag, y in (("upper", a), ("lower", -a)):
+            out["core"][f"et_srb_{side}_aft_{tag}"] = np.array([sgn * math.sqrt(self.core_radius ** 2 - y * y), y, z])
+            out["booster"][f"srb_{side}_aft_{tag}"] = np.array([ax[0] - sgn * math.sqrt(self.srb_radius ** 2 - y * y),
+                                                                y, z])
+        return out
+
+    def srb_aft_struts(self, side: str) -> dict[str, tuple[str, str]]:
+        """With ``srb_aft_attach = "struts"``: a booster's three aft struts in the plane
+        across the axis at the aft attach height, {strut: (core end, booster end)}: the upper
+        and lower sway braces (across the gap at y = +- srb_aft_strut_y) and the diagonal from
+        the core's upper end to the booster's lower end; pin-ended, they carry Tx, Ty and the
+        couple Rz, as the released aft joint does (public: "two lateral sway braces and a
+        diagonal attachment"; their layout here is this model's reading, not a drawing)."""
+        if self.srb_aft_attach != "struts":
+            return {}
+        et, b = f"et_srb_{side}_aft", f"srb_{side}_aft"
+        return {f"{b}_strut_upper": (f"{et}_upper", f"{b}_upper"), f"{b}_strut_lower": (f"{et}_lower", f"{b}_lower"),
+                f"{b}_strut_diagonal": (f"{et}_upper", f"{b}_lower")}
+
+    def named_points(self) -> dict[str, np.ndarray]:
+        """Every named point of the layout (attach points and aft strut ends of both boosters,
+        the orbiter's attach points, the hold-down points), m."""
+        out: dict[str, np.ndarray] = {}
+        for side in SIDES:
+            out.update(self.srb_attach_points(side))
+            for pts in self.srb_aft_strut_points(side).values():
+                out.update(pts)
+            out.update(self.holddown_points(side))
+        out.update(self.orbiter_attach_points())
+        return out
 
     def orbiter_attach_points(self) -> dict[str, np.ndarray]:
         """Core-orbiter attach reference points, midway between the two outer walls."""

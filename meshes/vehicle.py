@@ -73,6 +73,7 @@ def core_stage_params(layout: StackLayout | None = None, mesh_size: float = 0.9,
     patches = {}
     for side in ("left", "right"):
         patches.update(lay.srb_attach_points(side))
+        patches.update(lay.srb_aft_strut_points(side)["core"])
     patches.update(lay.orbiter_attach_points())
     pressure = ullage_pressure if ullage_pressure is not None else \
         ULLAGE_PRESSURE if (walls, liquid) == ("shell", "hydroelastic") else {"lh2": 0.0, "lox": 0.0}
@@ -153,8 +154,9 @@ class BoosterParams:
         return self.layout.holddown_points(self.side)
 
     def attach_points(self) -> dict[str, np.ndarray]:
-        """{name: (x, y, z)}: points tied to a patch of the case wall facing them."""
-        return self.layout.srb_attach_points(self.side)
+        """{name: (x, y, z)}: points tied to a patch of the case wall facing them (the
+        layout's attach points and, with its aft attach as struts, the struts' ends)."""
+        return {**self.layout.srb_attach_points(self.side), **self.layout.srb_aft_strut_points(self.side)["booster"]}
 
     def _check_placement(self, o: str) -> None:
         self.layout.check()

@@ -8,10 +8,18 @@ joints the strut shares with the components it links (each end's six DOFs are th
 ``section``: a liftoff.core.beam.Section or a standard shape's table (``{shape = "tube",
 r_out = ..., t = ...}``, liftoff.core.beam.standard_section); material ``E`` (Pa), ``nu``,
 ``rho`` (kg/m^3); ``elements`` along it; ``vref``: the section's orientation vector (local
-y towards it; default: whichever global axis is most normal to the strut); ``pins``: the
-pin flags of its two ends (Nastran CBAR's PA, PB: digits 4-6, the local rotations released,
-liftoff.core.beam.release), e.g. ``["456", "56"]`` for a pin-ended (clevis) strut, a
-two-force member whose ends pass no moment; default none (both ends take moments). SI units.
+y towards it; default: whichever global axis is most normal to the strut); ``pinned``: a
+pin-ended (clevis) strut, a two-force member whose ends pass no moment (below); default
+False (both ends take moments). SI units.
+
+A pinned strut: its end elements' bending rotations released (Nastran's pin flags 56 at
+both ends, liftoff.core.beam.release: condensed within the element), its torsion left out
+(a straight beam's torsion is uncoupled from its axial and bending DOFs, and a strut
+pinned at both ends carries none: the torsion chain would be free to spin), so its end
+points are three translations each (``point:Tx``, ``Ty``, ``Tz``), and a joint overlays only
+those: the rotations there are the other components' alone. Its nodes between keep their
+translations and the two bending rotations about the strut's local y and z (unlabelled).
+With one element it is a rod, EA/L along its axis, with the rigid bar's inertia across it.
 """
 from __future__ import annotations
 
@@ -19,9 +27,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from liftoff.core.beam import Section, assemble_frame, beam_element, check_pins, standard_section
+from liftoff.core.beam import Section, _axes, assemble_frame, beam_element, standard_section
 from liftoff.core.elastic import check_elastic
 from liftoff.core.errors import InputError
+
+from liftoff.core.labels import TRANSLATIONS
 
 from .component import Component
 from .models import line_component
@@ -39,7 +49,7 @@ class Strut:
     rho: float = 7850.0
     elements: int = 4
     vref: tuple = ()
-    pins: tuple = ("", "")
+    pinned: bool = False
 
     def check(self) -> None:
         o = f"Strut({self.name})"
@@ -54,7 +64,8 @@ class Strut:
         if isinstance(self.elements, bool) or int(self.elements) != self.elements or not self.elements >= 1:
             raise InputError(f"{o}.elements must be a whole number >= 1 (got {self.elements!r})")
         self.section_of()
-        check_pins(tuple(self.pins), f"{o}.pins")
+        if not isinstance(self.pinned, bool):
+            raise InputError(f"{o}.pinned must be true or false (got {self.pinned!r})")
         if len(self.vref) and (np.shape(self.vref) != (3,) or
                                np.linalg.norm(np.cross(b - a, np.asarray(self.vref, float))) == 0):
             raise InputError(f"{o}.vref must be 3 numbers not along the strut (got {list(self.vref)})")
@@ -78,11 +89,43 @@ def strut_component(p: Strut, name: str | None = None) -> tuple[Component, dict]
     d = (b - a) / np.linalg.norm(b - a)
     vref = np.asarray(p.vref, float) if len(p.vref) else np.eye(3)[int(np.argmin(np.abs(d)))]
     sec, G = p.section_of(), p.E / (2 * (1 + p.nu))
-    pa, pb = check_pins(tuple(p.pins), f"Strut({name}).pins")
+    pins = ("56", "56") if p.pinned else ("", "")
     K, M = assemble_frame(n + 1, ((k, k + 1, *beam_element(X[k], X[k + 1], p.E, G, sec, p.rho, vref,
-                                                             pins=(pa if k == 0 else "", pb if k == n - 1 else "")))
+                                                             pins=(pins[0] if k == 0 else "", pins[1] if k == n - 1 else "")))
                                   for k in range(n)))
-    return line_component(name, X, names, K, M, np.column_stack([np.arange(n), np.arange(1, n + 1)])), {}
+    cells = np.column_stack([np.arange(n), np.arange(1, n + 1)])
+    if not p.pinned:
+        return line_component(name, X, names, K, M, cells), {}
+    return _pinned_component(name, X, (na, nb), K, M, cells, _axes(a, b, vref)[1]), {}
+
+
+def _pinned_component(name: str, X: np.ndarray, ends: tuple[str, str], K, M, cells, axes: np.ndarray) -> Component:
+    """The pinned strut (module docstring) from its assembled K, M (6 DOFs a node, end
+    elements' bending rotations released): T maps its kept coordinates (each node's global
+    translations, the inner nodes' rotations about the local y and z ``axes[1:]``) to the
+    6 (n + 1) DOFs, K_r = T^T K T, M_r = T^T M T; the end translations labelled."""
+    import scipy.sparse as sp
+
+    nn = X.shape[0]
+    cols: list[np.ndarray] = []
+    trans: list[int] = []                                               # the translations' columns, node-major
+    for i in range(nn):
+        for d in range(3):
+            e = np.zeros(6 * nn)
+            e[6 * i + d] = 1.0
+            trans.append(len(cols))
+            cols.append(e)
+        if 0 < i < nn - 1:
+            for ax in axes[1:]:
+                e = np.zeros(6 * nn)
+                e[6 * i + 3:6 * i + 6] = ax
+                cols.append(e)
+    T = sp.csr_matrix(np.column_stack(cols))
+    Kr, Mr = (T.T @ A @ T for A in (K, M))
+    fmap = sp.csr_matrix((np.ones(3 * nn), (np.arange(3 * nn), trans)), shape=(3 * nn, T.shape[1]))
+    labels = [f"{pt}:{c}" for pt in ends for c in TRANSLATIONS]
+    return Component(name=name, K=Kr, M=Mr, dof_labels=labels, label_dofs=np.r_[trans[:3], trans[-3:]],
+                     points=ends, point_coords=X[[0, -1]], nodes=X, cells=cells, cell_type="line", field_map=fmap)
 
 
 __all__ = ["Strut", "strut_component"]

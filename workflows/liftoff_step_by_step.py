@@ -43,10 +43,9 @@ def main(argv=None) -> None:
     from liftoff.transient.effects import center_of_gravity, cg_static_report
     from liftoff.workflows.loads import applied_forces, attitude_feedback, contacts, control_table
     from liftoff.workflows.loads import recoveries, softening
-    from liftoff.workflows.pipeline import StackModel, boundary_points, build_component, cb_solver, vehicle_assembly
+    from liftoff.workflows.pipeline import (StackModel, boundary_labels, boundary_points, build_component, cb_solver,
+                                            vehicle_assembly)
     from liftoff.workflows.pipeline import cryo_loads
-
-    from liftoff.core.labels import points_labels
 
     # 1. The scenario: typed and checked (liftoff.config), builder parameters included.
     case = _scenario(args.stick)
@@ -68,7 +67,7 @@ def main(argv=None) -> None:
     solver = cb_solver(model)[0]
     for name, c in comps.items():
         cm = model.components[name]
-        cbs[name] = craig_bampton(c, points_labels(boundary_points(c)), cm.n_modes, cm.f_max, solver=solver,
+        cbs[name] = craig_bampton(c, boundary_labels(c), cm.n_modes, cm.f_max, solver=solver,
                                   residual_vectors=cm.residual_vectors)
         cb = cbs[name]
         top = cb.fixed_freq_hz[cb.n_eigenmodes - 1] if cb.n_eigenmodes else 0.0

@@ -191,7 +191,8 @@ def recoveries(case: Case, stack: StackModel, cryo: dict | None = None) -> tuple
     Point forces applied at the recovery's own point (a joint's shared DOF belongs to no
     one component) and the gravity-softening feedback stay in it. A direction the joint
     releases (``[[model.joint]] release``) passes no force: its rows are zero (the boundary
-    rows there would hold only the modal damping's and the feedback's residual)."""
+    rows there would hold only the modal damping's and the feedback's residual); so are the
+    rows of a DOF the component does not have there (a pinned strut's end rotations)."""
     from liftoff.reduction import cg_acceleration_recovery, interface_force_recovery
 
     body = stack.vehicle
@@ -202,7 +203,8 @@ def recoveries(case: Case, stack: StackModel, cryo: dict | None = None) -> tuple
         point, _, comp = spec.partition("@")
         comp = comp or _attach_component(stack, case.model.joints, point, case.at("recovery.attach"))
         labels = [f"{point}:{c}" for c in COMPONENTS]
-        held = [lab for lab in labels if not stack.vehicle_asm.released_apart(comp, lab)]
+        own = set(stack.cbs[comp].boundary_labels) if comp in stack.cbs else set(labels)
+        held = [lab for lab in labels if lab in own and not stack.vehicle_asm.released_apart(comp, lab)]
         rows = [labels.index(lab) for lab in held]
         D, A = (np.zeros((len(labels), body.n_modes)) for _ in range(2))   # a released direction: no force
         D[rows], A[rows] = stack.product(("interface_force", comp, tuple(held)), lambda: interface_force_recovery(

@@ -93,6 +93,13 @@ def boundary_points(component: Component) -> list[str]:
     return named_points(component.points)
 
 
+def boundary_labels(component: Component) -> list[str]:
+    """The DOF labels of a component's CB boundary, point-major: the six of each named
+    point, less those it does not have (a pinned strut's end rotations)."""
+    have = set(component.dof_labels)
+    return [lab for lab in points_labels(boundary_points(component)) if lab in have]
+
+
 # ------------------------------------------------------------------ components
 def component_materials(model: ModelConfig, name: str) -> dict:
     """The [model.materials] entries that may apply to component ``name``: the builders name
@@ -248,7 +255,7 @@ def _cb_key(model: ModelConfig, name: str, comp: Component, comp_key: str) -> tu
     """(cache key, parameters) of the CB stage of component ``name``."""
     sel = model.components[name]
     solver_code, solver_name = _cb_solver_id(model)
-    params = {"boundary": points_labels(boundary_points(comp)), "n_modes": sel.n_modes, "f_max": sel.f_max,
+    params = {"boundary": boundary_labels(comp), "n_modes": sel.n_modes, "f_max": sel.f_max,
               "solver": solver_name}
     if sel.residual_vectors:            # (only when asked: the keys of models without them unchanged)
         params["residual_vectors"] = True

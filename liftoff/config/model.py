@@ -457,6 +457,9 @@ def _layout(where: Where, spec: Any, source: str) -> StackLayout:
                 raise (where / key).error("a stick-model parameter (StickParams): write it in [model.stick]")
             if key in _OLD_STICK:
                 raise (where / key).error(f"the stick model takes this from {_OLD_STICK[key]}")
+        if spec.get("srb_aft_attach", "point") != "point":
+            raise (where / "srb_aft_attach").error("the stick model joins each booster at one aft point: "
+                                                   "the aft struts need source = \"fe\"")
     return builder(where, StackLayout, spec)
 
 

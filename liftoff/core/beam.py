@@ -135,21 +135,6 @@ def beam_element(x1, x2, E: float, G: float, section: Section, rho: float, vref=
 PIN_DIGITS = "456"
 
 
-def check_pins(pins, where: str) -> tuple[str, str]:
-    """``pins`` (two strings of digits 4-6, node 1's and node 2's) checked; InputError
-    naming ``where`` otherwise, and for a beam free to spin about its own axis (4 at both
-    ends)."""
-    if not (isinstance(pins, (tuple, list)) and len(pins) == 2 and all(isinstance(f, str) for f in pins)):
-        raise InputError(f"{where}: pin flags are two strings of digits 4-6, node 1's and node 2's (got {pins!r})")
-    for f in pins:
-        if any(c not in PIN_DIGITS for c in f) or len(set(f)) != len(f):
-            raise InputError(f"{where}: pin flag {f!r}: digits 4, 5, 6 (the local rotations x, y, z) each at most once")
-    if "4" in pins[0] and "4" in pins[1]:
-        raise InputError(f"{where}: torsion (4) released at both ends leaves the member free to spin about its "
-                         "axis: release it at one end only (a pin-ended strut: '456' and '56')")
-    return str(pins[0]), str(pins[1])
-
-
 def release(k: np.ndarray, m: np.ndarray, pins: tuple[str, str]) -> tuple[np.ndarray, np.ndarray]:
     """Local 12 x 12 stiffness and mass with the rotations ``pins`` (digits 4-6 at node 1,
     node 2: Nastran's pin flags PA, PB) released: those DOFs statically condensed out, T =
@@ -157,7 +142,15 @@ def release(k: np.ndarray, m: np.ndarray, pins: tuple[str, str]) -> tuple[np.nda
     released rotations follow the element's static shape under its end displacements, as
     Guyan's reduction within the element), and the released rows and columns zero, so the
     node's rotation there takes nothing from this element (a pinned end passes no moment
-    about that axis). A pin-ended two-force member: ``("456", "56")``."""
+    about that axis). Torsion (4) may be released at one node only (at both the element
+    would be free to spin about its axis). InputError for other flags."""
+    if not (isinstance(pins, (tuple, list)) and len(pins) == 2 and all(isinstance(f, str) for f in pins)):
+        raise InputError(f"pin flags are two strings of digits 4-6, node 1's and node 2's (got {pins!r})")
+    for f in pins:
+        if any(c not in PIN_DIGITS for c in f) or len(set(f)) != len(f):
+            raise InputError(f"pin flag {f!r}: digits 4, 5, 6 (the local rotations x, y, z) each at most once")
+    if "4" in pins[0] and "4" in pins[1]:
+        raise InputError("pin flags: torsion (4) released at both ends leaves the element free to spin about its axis")
     r = [6 * n + int(c) - 1 for n, f in enumerate(pins) for c in f]
     if not r:
         return k, m

@@ -161,3 +161,67 @@ def test_core_stage_ring_frames_and_stringers(tmp_path):
     assert dry == pytest.approx(26_500.0, rel=CAD_RTOL)
     bare = build_tank(core_stage_params(mesh_size=2.0, walls="shell", liquid="hydroelastic"), tmp_path / "bare")
     assert not bare.beams and t < bare.shells["core_wall"]
+
+
+def test_aft_strut_points_of_the_layout():
+    """``srb_aft_attach = "struts"``: each booster's aft attach point gives way to its three
+    struts' end points, on each wall's outer surface at the aft attach height (the tank's
+    radius about its axis, the booster's about its own, to 1e-12), the sway braces across the
+    gap at y = +-srb_aft_strut_y (upper: the orbiter's side), the diagonal from the tank's
+    upper end to the booster's lower one; the right booster's are the left's mirror images
+    (x -> -x). The default ("point") keeps the one aft point."""
+    from liftoff.core.errors import InputError
+
+    assert "att_srb_left_aft" in StackLayout().srb_attach_points("left")
+    assert StackLayout().srb_aft_struts("left") == {}
+    lay = StackLayout(srb_aft_attach="struts", srb_aft_strut_y=1.2)
+    lay.check()
+    assert set(lay.srb_attach_points("left")) == {"att_srb_left_fwd"}
+    pts = {s: lay.srb_aft_strut_points(s) for s in ("left", "right")}
+    for side, p in pts.items():
+        ax = lay.srb_axis(side)
+        assert set(p["core"]) == {f"et_srb_{side}_aft_upper", f"et_srb_{side}_aft_lower"}
+        for name, x in p["core"].items():
+            assert np.hypot(x[0], x[1]) == pytest.approx(lay.core_radius, rel=1e-12)
+            assert x[2] == lay.srb_aft_attach_z and abs(x[1]) == 1.2 and (x[1] > 0) == name.endswith("upper")
+        for name, x in p["booster"].items():
+            assert np.hypot(x[0] - ax[0], x[1] - ax[1]) == pytest.approx(lay.srb_radius, rel=1e-12)
+            assert abs(x[0]) < abs(ax[0])                              # the tank-facing side
+        struts = lay.srb_aft_struts(side)
+        assert struts[f"srb_{side}_aft_strut_diagonal"] == (f"et_srb_{side}_aft_upper", f"srb_{side}_aft_lower")
+        for a, b in struts.values():
+            assert a in p["core"] and b in p["booster"]
+    for group in ("core", "booster"):
+        for name, x in pts["left"][group].items():
+            np.testing.assert_array_equal(pts["right"][group][name.replace("left", "right")], x * [-1, 1, 1])
+    named = lay.named_points()
+    assert "et_srb_right_aft_lower" in named and "srb_left_hd_1" in named and "att_srb_left_aft" not in named
+    cp = core_stage_params(lay)
+    assert {"et_srb_left_aft_upper", "et_srb_right_aft_lower"} <= set(cp.patches) and "att_srb_left_aft" not in cp.patches
+    b = BoosterParams(side="right", layout=lay).attach_points()
+    assert set(b) == {"att_srb_right_fwd", "srb_right_aft_upper", "srb_right_aft_lower"}
+    for bad, match in (({"srb_aft_attach": "strut"}, "srb_aft_attach must be one of 'point', 'struts'"),
+                       ({"srb_aft_attach": "struts", "srb_aft_strut_y": 1.6}, "srb_aft_strut_y = 1.6 m"),
+                       ({"srb_aft_attach": "struts", "srb_aft_strut_y": float("nan")}, "srb_aft_strut_y")):
+        with pytest.raises(InputError, match=match):
+            StackLayout(**bad).check()
+
+
+def test_booster_meshed_with_aft_strut_patches(tmp_path, msh_groups):
+    """The solid booster meshed with the aft struts' layout: a patch at each strut point on
+    the case's outer surface (radius to 1e-6), within 0.7 m of its point, and no aft attach
+    patch."""
+    from liftoff.meshes import build_booster
+
+    lay = StackLayout(srb_aft_attach="struts")
+    g = build_booster(BoosterParams(side="left", layout=lay, mesh_size=1.0), tmp_path)
+    groups = msh_groups(g)
+    assert (2, "att_srb_left_aft") not in groups
+    ax = lay.srb_axis("left")
+    refs = {p.name: p.ref_point for p in g.patches}
+    for name, x in lay.srb_aft_strut_points("left")["booster"].items():
+        n = groups[(2, name)]["nodes"]
+        assert len(n) >= 6
+        np.testing.assert_allclose(np.hypot(n[:, 0] - ax[0], n[:, 1] - ax[1]), lay.srb_radius, rtol=1e-6)
+        assert np.linalg.norm(n - x, axis=1).max() < 0.7
+        np.testing.assert_array_equal(refs[name], x)

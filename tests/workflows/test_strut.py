@@ -190,51 +190,150 @@ def test_a_pin_ended_strut_passes_no_moment(tmp_path):
     assert pinned_ends > 0.1 * scale                        # the strut still carries its axial force
 
 
-def test_pin_flags_are_the_joint_releases_of_a_strut(tmp_path):
-    """A strut's own pin flags (``pins = ["56", "456"]``, Nastran CBAR's PA, PB: the element
-    releases its end rotations in its own axes) against the joint releases of the test above
-    (the same rotations released in global axes, the aft strut lying along x): the vehicle's
-    first eight free-free frequencies agree. They differ only in where the released rotations'
-    inertia goes (pin flags condense it into the end elements; the joint releases keep the
-    strut's end rotations as DOFs of their own, which the strut's Craig-Bampton cut at 100 Hz
-    then truncates): measured 3e-7 or less, of either sign, 1e-6 allowed. The pinned ends pass no moment (1e-7 of the largest end
-    force, as above). Pin flags also release an oblique strut's bending, which global axes
-    cannot."""
+def test_pinned_strut_against_the_joint_releases_of_a_strut(tmp_path):
+    """``pinned = true`` (the strut's end elements' bending released in its own axes, its
+    torsion left out, its end points three translations each) against the joint releases of
+    the test above (the same strut welded in the element, its end rotations released in
+    global axes at the joints, the aft strut lying along x): the vehicle's first eight
+    free-free frequencies agree. They differ only in the strut's end rotations' and torsion's
+    inertia (the joint releases keep them as DOFs, which the strut's Craig-Bampton cut at 100
+    Hz then truncates): measured 3e-7 or less, 1e-6 allowed. The pinned strut's end forces
+    carry no moment rows at all (its end points have no rotations), and a pinned strut may
+    lie at any angle, which global-axis releases cannot express."""
     pytest.importorskip("petsc4py")
     from liftoff.config import parse_scenario
-    from liftoff.core.labels import COMPONENTS
-    from liftoff.reduction import interface_force_recovery
     from liftoff.workflows.cache import StageCache
     from liftoff.workflows.run import prepare_models
 
     released = _with_booster(tomllib.loads(SCENARIO.read_text()))
     for j in released["model"]["joint"]:
         j["release"] = PIN_AFT.get(j["name"], [])
-    flagged = _with_booster(tomllib.loads(SCENARIO.read_text()))
-    flagged["model"]["component"]["strut_aft"]["params"]["pins"] = ["56", "456"]
+    pinned = _with_booster(tomllib.loads(SCENARIO.read_text()))
+    pinned["model"]["component"]["strut_aft"]["params"]["pinned"] = True
     cache = StageCache(tmp_path / "cache")
     stacks = {}
-    for key, data in (("released", released), ("flagged", flagged)):
+    for key, data in (("released", released), ("pinned", pinned)):
         sc = parse_scenario(data, f"{key}.toml", SCENARIO.parent)
         stacks[key] = next(iter(prepare_models(sc, cache, False, lambda *a, **k: None)[0].values()))
-    got = stacks["flagged"].vehicle.omega[6:14]
+    got = stacks["pinned"].vehicle.omega[6:14]
     ref = stacks["released"].vehicle.omega[6:14]
-    print("pin flags / joint releases - 1:", got / ref - 1)
+    print("pinned / joint releases - 1:", got / ref - 1)
     np.testing.assert_allclose(got, ref, rtol=1e-6)
-    stack = stacks["flagged"]
-    ends = [f"{p}:{c}" for p in PIN_AFT for c in COMPONENTS]
-    D, A = interface_force_recovery(stack.vehicle_asm, stack.vehicle_modes, "strut_aft", ends)
-    F = D - A * stack.vehicle_modes.omega ** 2
-    scale = np.abs(F[:, 6:]).max()
-    moments = [ends.index(f"{p}:{c}") for p, cs in PIN_AFT.items() for c in cs]
-    assert np.abs(F[moments, 6:]).max() <= 1e-7 * scale
+    assert stacks["pinned"].cbs["strut_aft"].boundary_labels == ("s_aft:Tx", "s_aft:Ty", "s_aft:Tz",
+                                                                 "b_aft:Tx", "b_aft:Ty", "b_aft:Tz")
 
 
-def test_strut_pin_flags_checked():
+def test_pinned_strut_is_a_two_force_member():
+    """A pinned strut at an oblique angle, statically reduced to its end translations
+    (Guyan, exact for statics): one stiffness, EA/L along its axis (1e-12), none across it
+    or about it (five zero eigenvalues, 1e-12 of it), so its end forces are equal, opposite
+    and axial whatever its ends do; its mass the bar's, rho A L in each direction (1e-12)."""
+    import scipy.linalg as la
+
+    from liftoff.core.beam import tube
+    from liftoff.reduction.strut import Strut, strut_component
+
+    a, b = np.array([0.3, -0.2, 1.0]), np.array([1.1, 0.7, 1.6])
+    L = np.linalg.norm(b - a)
+    sec = tube(0.1, 0.02)
+    for n in (1, 4):
+        comp, _ = strut_component(Strut("s", {"a": a.tolist(), "b": b.tolist()}, dict(TUBE, r_out=0.1, t=0.02),
+                                        elements=n, pinned=True))
+        assert comp.dof_labels == ("a:Tx", "a:Ty", "a:Tz", "b:Tx", "b:Ty", "b:Tz")
+        K, M = comp.K.toarray(), comp.M.toarray()
+        e = comp.label_dofs
+        i = np.setdiff1d(np.arange(K.shape[0]), e)
+        T = np.eye(K.shape[0])[:, e]
+        if i.size:
+            T[i] = -la.solve(K[np.ix_(i, i)], K[np.ix_(i, e)])
+        Kb = T.T @ K @ T
+        k = 2e11 * sec.A / L
+        w = np.sort(la.eigvalsh(Kb))
+        assert np.abs(w[:5]).max() < 1e-12 * k and w[5] == pytest.approx(2 * k, rel=1e-12)
+        d = (b - a) / L
+        np.testing.assert_allclose(Kb @ np.r_[-d, d] / 2, k * np.r_[-d, d], rtol=1e-12, atol=1e-12 * k)
+        for j in range(3):
+            u = np.zeros(K.shape[0])
+            u[e[[j, j + 3]]] = 1.0
+            if i.size:
+                u[i] = T[i] @ u[e]
+            assert u @ M @ u == pytest.approx(7850.0 * sec.A * L, rel=1e-12)
+
+
+def test_strut_pinned_checked():
     from liftoff.config import parse_scenario
     from liftoff.core.errors import InputError
 
     bad = _with_booster(tomllib.loads(SCENARIO.read_text()))
-    bad["model"]["component"]["strut_aft"]["params"]["pins"] = ["456", "456"]
-    with pytest.raises(InputError, match=r"strut_aft.*pins.*free to spin"):
+    bad["model"]["component"]["strut_aft"]["params"]["pinned"] = "yes"
+    with pytest.raises(InputError, match=r"strut_aft.*pinned"):
         parse_scenario(bad, "s.toml", SCENARIO.parent)
+
+
+def test_the_documented_aft_struts_are_the_comparisons_model():
+    """docs/workflow.md's TOML for the booster's aft struts (the left booster's, and the same
+    with "right"), put into the default scenario without its aft attach joints, parses to
+    the struts, joints and layout that benchmarks/strut_compare.py builds (its "struts"
+    variant): the documented example is the compared model."""
+    import re
+    import runpy
+
+    from liftoff.config import default_text, parse_scenario, parse_toml
+
+    root = Path(__file__).resolve().parents[2]
+    doc = (root / "docs" / "workflow.md").read_text()
+    block = re.search(r"```toml\n(\[model\.vehicle\.params\]\nsrb_aft_attach = \"struts\".*?)```", doc, re.S).group(1)
+    left = tomllib.loads(block)
+    right = tomllib.loads(block.replace("left", "right"))
+    data = parse_toml(default_text(), "default_scenario.toml")
+    model = data["model"]
+    model.setdefault("vehicle", {}).setdefault("params", {}).update(left["model"]["vehicle"]["params"])
+    model["component"].update({**left["model"]["component"], **right["model"]["component"]})
+    model["joint"] = [j for j in model["joint"] if not re.fullmatch(r"att_srb_\w+_aft", j["name"])] \
+        + left["model"]["joint"] + right["model"]["joint"]
+    data["recovery"]["attach"] = [a for a in data["recovery"]["attach"] if not re.fullmatch(r"att_srb_\w+_aft", a)]
+    documented = parse_scenario(data, "documented.toml").cases[0].model
+    bench = runpy.run_path(str(root / "benchmarks" / "strut_compare.py"), run_name="strut_compare")
+    compared = parse_scenario(bench["edit_for"]("struts")(parse_toml(default_text(), "default_scenario.toml")),
+                              "compared.toml").cases[0].model
+    assert documented.layout == compared.layout
+    struts = {n for n, c in compared.components.items() if c.type == "strut"}
+    assert len(struts) == 6 and struts == {n for n, c in documented.components.items() if c.type == "strut"}
+    for n in struts:
+        assert documented.components[n].builder == compared.components[n].builder
+    assert {(j.name, j.components, j.release) for j in documented.joints} == \
+        {(j.name, j.components, j.release) for j in compared.joints}
+
+
+def test_strut_ends_by_layout_names_and_their_errors():
+    """``ends = [name, other]``: two of the layout's points (StackLayout.named_points), their
+    coordinates the layout's; a name the layout has not is one line naming the key and the
+    names it has; the stick source, which joins each booster at one aft point, refuses the
+    aft struts' layout."""
+    import runpy
+
+    from liftoff.config import default_text, parse_scenario, parse_toml
+    from liftoff.core.errors import InputError
+    from liftoff.meshes.layout import StackLayout
+
+    root = Path(__file__).resolve().parents[2]
+    bench = runpy.run_path(str(root / "benchmarks" / "strut_compare.py"), run_name="strut_compare")
+    data = bench["edit_for"]("struts")(parse_toml(default_text(), "default_scenario.toml"))
+    model = parse_scenario(copy.deepcopy(data), "s.toml").cases[0].model
+    named = StackLayout(srb_aft_attach="struts").named_points()
+    ends = model.components["srb_right_aft_strut_diagonal"].builder.ends
+    assert list(ends) == ["et_srb_right_aft_upper", "srb_right_aft_lower"]
+    for n, x in ends.items():
+        np.testing.assert_array_equal(x, named[n])
+    bad = copy.deepcopy(data)
+    bad["model"]["component"]["srb_left_aft_strut_upper"]["params"]["ends"] = ["et_srb_left_aft_uper",
+                                                                                "srb_left_aft_upper"]
+    with pytest.raises(InputError, match=r"srb_left_aft_strut_upper\.params\.ends\[0\]: 'et_srb_left_aft_uper' is "
+                                         r"not a point of the layout .*et_srb_left_aft_upper") as exc:
+        parse_scenario(bad, "s.toml")
+    assert "\n" not in str(exc.value)
+    stick = parse_toml(default_text(), "default_scenario.toml")
+    stick["model"]["source"] = "stick"
+    stick["model"].setdefault("vehicle", {}).setdefault("params", {})["srb_aft_attach"] = "struts"
+    with pytest.raises(InputError, match=r"srb_aft_attach: the stick model joins each booster at one aft point"):
+        parse_scenario(stick, "s.toml")

@@ -1,0 +1,152 @@
+"""The default run with each booster's aft attach as the released joint (the default) and as
+its three aft struts, pin-ended tube beams (issue 26: "the ET-SRB struts ... as beams").
+
+The default joins each booster to the external tank at one aft point, midway between the
+walls, with Tz Rx Ry released: the three aft struts lie in a plane across the axis and carry
+Tx, Ty and the couple Rz only, rigidly. Here they are members: ``[model.vehicle.params]
+srb_aft_attach = "struts"`` puts their end points on the tank's aft attach ring and the
+booster's wall (meshes.layout.StackLayout.srb_aft_strut_points: the two sway braces at y =
++-1 m, across the 0.3 m gap, the diagonal from the tank's upper end to the booster's lower
+one), and three ``type = "strut"`` components per booster join them, each ``pinned = true``
+(a two-force member: its end elements' bending released, as Nastran's pin flags,
+liftoff.core.beam.release; reduction/strut.py). The struts'
+sizes are illustrative, not the Shuttle's drawings: steel tubes of 0.2 m outer diameter,
+20 mm wall (EA 2.3 GN), and half that wall as a second variant, to show how far the loads
+depend on the struts' stiffness. Each strut's axial force is recovered at an end that only it
+and one component share, and the forces on the booster at its two strut points sum to the
+aft attach's (the default's ``att_srb_<side>_aft`` row).
+
+Variants (each a whole run of both named cases without the error estimate, stage cache
+shared: the core's and the boosters' FE and CB stages are rebuilt, their patches moved):
+
+* ``joint``: the default;
+* ``struts``: the pin-ended struts, tube r_out 0.1 m, t 20 mm;
+* ``struts_thin``: the same struts with a 10 mm wall (EA 1.2 GN).
+
+Writes docs/figures/struts.json, rendered into README.md by benchmarks/default_figures.py
+(block ``aft-struts``).
+
+    .venv/bin/python benchmarks/strut_compare.py [--cache DIR] [--json FILE] [--variants ...]
+"""
+from __future__ import annotations
+
+import runpy
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+JSON = ROOT / "docs" / "figures" / "struts.json"
+SIDES = ("left", "right")
+#: variant -> the struts' tube section (None: the released aft joint, the default)
+VARIANTS = {"joint": None, "struts": {"shape": "tube", "r_out": 0.1, "t": 0.02},
+            "struts_thin": {"shape": "tube", "r_out": 0.1, "t": 0.01}}
+
+
+def strut_recoveries(side: str) -> dict[str, str]:
+    """{what: attach recovery spec} of one booster's aft struts: the forces on the booster at
+    its two strut points (their sum is the aft attach's), and the lower and diagonal struts'
+    own end forces at the tank, where each is the only strut (the upper strut's is the force on
+    the booster at its upper point, the only strut there)."""
+    b, et = f"srb_{side}_aft", f"et_srb_{side}_aft"
+    return {"booster_upper": f"{b}_upper@srb_{side}", "booster_lower": f"{b}_lower@srb_{side}",
+            "strut_lower": f"{et}_lower@{b}_strut_lower", "strut_diagonal": f"{et}_upper@{b}_strut_diagonal"}
+
+
+def edit_for(name: str):
+    """The edit of the default scenario's data for variant ``name``."""
+    from liftoff.meshes.layout import StackLayout
+
+    section = VARIANTS[name]
+
+    def edit(d):
+        if section is None:
+            return d
+        model = d["model"]
+        model.setdefault("vehicle", {}).setdefault("params", {})["srb_aft_attach"] = "struts"
+        lay = StackLayout(srb_aft_attach="struts")
+        joints = [j for j in model["joint"] if not j["name"].endswith("_aft") or not j["name"].startswith("att_srb")]
+        for side in SIDES:
+            shared: dict[str, list[str]] = {}
+            for strut, (a, b) in lay.srb_aft_struts(side).items():
+                model["component"][strut] = {"type": "strut", "f_max": 120.0, "params": {
+                    "ends": [a, b], "section": dict(section), "pinned": True}}
+                shared.setdefault(a, ["core"]).append(strut)
+                shared.setdefault(b, [f"srb_{side}"]).append(strut)
+            joints += [{"name": p, "components": comps} for p, comps in shared.items()]
+        model["joint"] = joints
+        rec = d["recovery"]
+        rec["attach"] = [a for a in rec["attach"] if not (a.startswith("att_srb") and a.endswith("_aft"))] + \
+            [spec for side in SIDES for spec in strut_recoveries(side).values()]
+        return d
+
+    return edit
+
+
+def _larger(prev, v: np.ndarray) -> float:
+    """The value of larger magnitude: ``prev`` or the largest of ``v``."""
+    x = float(v[int(np.argmax(np.abs(v)))])
+    return x if prev is None or abs(x) > abs(prev) else prev
+
+
+def aft_attach_figures(out, side: str = "left") -> dict:
+    """The booster's aft attach over both named cases, as the default's released joint
+    carries it: the peak Tx, Ty (N) and Rz (N m, about the joint's point) of the force on
+    the booster there (the joint's rows, or the struts' resultant on the booster, its moment
+    taken about the joint's point); with struts also each strut's peak axial force (N, +
+    tension)."""
+    from liftoff.meshes.layout import StackLayout
+
+    lay = StackLayout(srb_aft_attach="struts")
+    p0 = StackLayout().srb_attach_points(side)[f"att_srb_{side}_aft"]
+    peaks: dict = {}
+    for res, _ in out.results.values():
+        if f"attach_att_srb_{side}_aft" in res.recovered:           # the released joint
+            f = np.asarray(res.recovered[f"attach_att_srb_{side}_aft"])
+            for c, i in (("Tx", 0), ("Ty", 1), ("Rz", 5)):
+                peaks[c] = _larger(peaks.get(c), f[:, i])
+            continue
+        pts = {**lay.srb_aft_strut_points(side)["core"], **lay.srb_aft_strut_points(side)["booster"]}
+        b = f"srb_{side}_aft"
+        axis = {k: pts[e] - pts[s] for k, (s, e) in lay.srb_aft_struts(side).items()}
+        axis = {k: v / np.linalg.norm(v) for k, v in axis.items()}
+        f = {k: np.asarray(res.recovered[f"attach_{spec.split('@')[0]}"]) for k, spec in strut_recoveries(side).items()}
+        # tension positive: the pull of the rest of the vehicle on a strut's end away from its
+        # other end, or the booster's pull towards the strut's tank end (the upper strut's)
+        axial = {f"{b}_strut_upper": -f["booster_upper"][:, :3] @ axis[f"{b}_strut_upper"],
+                 f"{b}_strut_lower": -f["strut_lower"][:, :3] @ axis[f"{b}_strut_lower"],
+                 f"{b}_strut_diagonal": -f["strut_diagonal"][:, :3] @ axis[f"{b}_strut_diagonal"]}
+        for k, h in axial.items():
+            q = peaks.setdefault("struts", {}).setdefault(k, {"tension_n": -np.inf, "compression_n": np.inf})
+            q["tension_n"] = max(q["tension_n"], float(h.max()))
+            q["compression_n"] = min(q["compression_n"], float(h.min()))
+        force = f["booster_upper"][:, :3] + f["booster_lower"][:, :3]
+        moment = sum(np.cross(pts[f"{b}_{tag}"] - p0, f[f"booster_{tag}"][:, :3])[:, 2]
+                     for tag in ("upper", "lower"))                 # (the pinned ends pass no moment)
+        for c, v in (("Tx", force[:, 0]), ("Ty", force[:, 1]), ("Rz", moment)):
+            peaks[c] = _larger(peaks.get(c), v)
+    return peaks
+
+
+def variant_figures(name: str, cache: Path) -> dict:
+    """Figures of the default run with the aft attach as ``name``."""
+    fig = runpy.run_path(str(ROOT / "benchmarks" / "default_figures.py"), run_name="default_figures")
+    out, wall_s = fig["timed_variant"](edit_for(name), cache)
+    summary = fig["variant_summary"](out, wall_s, "srb_left")
+    stack = next(iter(out.stacks.values()))
+    times = {label.split(" (")[0]: s for label, s in out.stage_times if " (built)" in label}
+    summary["core"] = {"fe_dofs": fig["_fe_dofs"](stack.components.get("core")), "cb_modes": stack.cbs["core"].n_modes,
+                       "fe_s": times.get("fe core"), "cb_s": times.get("cb core")}
+    summary["section"] = VARIANTS[name]
+    summary["aft_attach"] = aft_attach_figures(out)
+    return summary
+
+
+def main(argv=None) -> int:
+    fig = runpy.run_path(str(ROOT / "benchmarks" / "default_figures.py"), run_name="default_figures")
+    return fig["compare_main"](argv, __doc__, VARIANTS, variant_figures, JSON, "strut_compare")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
