@@ -739,16 +739,19 @@ def render_stiffeners(fig: dict) -> str:
 
 
 #: strut_compare.py's variants, as the table heads them
-AFT_STRUT_TITLES = {"joint": "one aft point, Tz Rx Ry released (default)",
-                    "struts": "three pin-ended struts, tube 0.2 m x 20 mm",
-                    "struts_thin": "three pin-ended struts, tube 0.2 m x 10 mm"}
+AFT_STRUT_TITLES = {"joint": "aft: one point, Tz Rx Ry released; forward: ball on the wall (default)",
+                    "struts": "aft: three pin-ended struts, tube 0.2 m x 20 mm",
+                    "struts_thin": "aft: three pin-ended struts, tube 0.2 m x 10 mm",
+                    "struts_beam": "aft: the 20 mm struts; forward: ball on the intertank's thrust beam "
+                                   "(aluminium box 0.6 m x 1.0 m x 30 mm)"}
 
 
 def render_aft_struts(fig: dict) -> str:
-    """The default run with each booster's aft attach as the released joint and as its three
-    pin-ended struts (benchmarks/strut_compare.py): the aft attach's force on the booster
-    (the joint's, or the struts' resultant about the joint's point), each strut's peak axial
-    force, and the other attach loads (the left booster's side and the orbiter's)."""
+    """The default run with each booster's attach hardware as the released joints and as
+    beams: the three pin-ended aft struts, and the intertank's thrust beam under the forward
+    balls (benchmarks/strut_compare.py): the aft attach's force on the booster (the joint's,
+    or the struts' resultant about the joint's point), each strut's peak axial force, and
+    the other attach loads (the left booster's side and the orbiter's)."""
     base = fig["joint"]["attach_n"]
     items = [k for k in sorted(base, key=lambda k: (k.split(" on ")[0], k))
              if "right" not in k and "_aft on srb" not in k and k.endswith(("Tx", "Ty", "Tz"))]
@@ -784,7 +787,8 @@ def render_aft_struts(fig: dict) -> str:
             ("left booster's aft struts: peak axial force, tension / compression (MN)", struts),
             ("largest change of another attach force's peak magnitude from the default's",
              lambda v: "-" if v is fig["joint"] else change(v))]
-    return _variant_table("aft attach", [(AFT_STRUT_TITLES[k], v) for k, v in fig.items()], lead, items)
+    return _variant_table("booster attach hardware", [(AFT_STRUT_TITLES[k], v) for k, v in fig.items()], lead,
+                          items)
 
 
 def render_mesh(study: dict) -> str:

@@ -39,9 +39,14 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 JSON = ROOT / "docs" / "figures" / "struts.json"
 SIDES = ("left", "right")
-#: variant -> the struts' tube section (None: the released aft joint, the default)
-VARIANTS = {"joint": None, "struts": {"shape": "tube", "r_out": 0.1, "t": 0.02},
-            "struts_thin": {"shape": "tube", "r_out": 0.1, "t": 0.01}}
+TUBE = {"shape": "tube", "r_out": 0.1, "t": 0.02}
+#: the intertank's thrust beam (span and fittings): an aluminium box, 1 m deep (illustrative)
+BEAM = {"section": {"shape": "box", "b": 0.6, "h": 1.0, "t": 0.03}, "E": 72e9, "nu": 0.33, "rho": 2840.0}
+#: variant -> the aft struts' tube section and the thrust beam (None: the default's joints)
+VARIANTS = {"joint": {"struts": None, "beam": None},
+            "struts": {"struts": TUBE, "beam": None},
+            "struts_thin": {"struts": dict(TUBE, t=0.01), "beam": None},
+            "struts_beam": {"struts": TUBE, "beam": BEAM}}
 
 
 def strut_recoveries(side: str) -> dict[str, str]:
@@ -58,27 +63,41 @@ def edit_for(name: str):
     """The edit of the default scenario's data for variant ``name``."""
     from liftoff.meshes.layout import StackLayout
 
-    section = VARIANTS[name]
+    spec = VARIANTS[name]
 
     def edit(d):
-        if section is None:
-            return d
         model = d["model"]
-        model.setdefault("vehicle", {}).setdefault("params", {})["srb_aft_attach"] = "struts"
-        lay = StackLayout(srb_aft_attach="struts")
-        joints = [j for j in model["joint"] if not j["name"].endswith("_aft") or not j["name"].startswith("att_srb")]
-        for side in SIDES:
-            shared: dict[str, list[str]] = {}
-            for strut, (a, b) in lay.srb_aft_struts(side).items():
-                model["component"][strut] = {"type": "strut", "f_max": 120.0, "params": {
-                    "ends": [a, b], "section": dict(section), "pinned": True}}
-                shared.setdefault(a, ["core"]).append(strut)
-                shared.setdefault(b, [f"srb_{side}"]).append(strut)
-            joints += [{"name": p, "components": comps} for p, comps in shared.items()]
+        params = model.setdefault("vehicle", {}).setdefault("params", {})
+        joints = list(model["joint"])
+        if spec["struts"] is not None:
+            params["srb_aft_attach"] = "struts"
+            lay = StackLayout(srb_aft_attach="struts")
+            joints = [j for j in joints if not (j["name"].startswith("att_srb") and j["name"].endswith("_aft"))]
+            for side in SIDES:
+                shared: dict[str, list[str]] = {}
+                for strut, (a, b) in lay.srb_aft_struts(side).items():
+                    model["component"][strut] = {"type": "strut", "f_max": 120.0, "params": {
+                        "ends": [a, b], "section": dict(spec["struts"]), "pinned": True}}
+                    shared.setdefault(a, ["core"]).append(strut)
+                    shared.setdefault(b, [f"srb_{side}"]).append(strut)
+                joints += [{"name": p, "components": comps} for p, comps in shared.items()]
+            rec = d["recovery"]
+            rec["attach"] = [a for a in rec["attach"] if not (a.startswith("att_srb") and a.endswith("_aft"))] + \
+                [r for side in SIDES for r in strut_recoveries(side).values()]
+        if spec["beam"] is not None:
+            params["srb_fwd_attach"] = "beam"
+            lay = StackLayout(srb_fwd_attach="beam")
+            members = lay.srb_thrust_beam()
+            for member, ends in members.items():
+                model["component"][member] = {"type": "strut", "f_max": 120.0, "params": {
+                    "ends": list(ends), "elements": 2 if member.endswith("fitting") else 8,
+                    **{k: (dict(v) if isinstance(v, dict) else v) for k, v in spec["beam"].items()}}}
+            for j in joints:                  # the ball: the booster and the fitting, no longer the tank
+                if j["name"] in ("att_srb_left_fwd", "att_srb_right_fwd"):
+                    j["components"] = [f"srb_{j['name'].split('_')[2]}_thrust_fitting", j["components"][-1]]
+            for wall in lay.srb_thrust_beam_points():
+                joints.append({"name": wall, "components": ["core"] + [m for m, e in members.items() if wall in e]})
         model["joint"] = joints
-        rec = d["recovery"]
-        rec["attach"] = [a for a in rec["attach"] if not (a.startswith("att_srb") and a.endswith("_aft"))] + \
-            [spec for side in SIDES for spec in strut_recoveries(side).values()]
         return d
 
     return edit
@@ -138,7 +157,7 @@ def variant_figures(name: str, cache: Path) -> dict:
     times = {label.split(" (")[0]: s for label, s in out.stage_times if " (built)" in label}
     summary["core"] = {"fe_dofs": fig["_fe_dofs"](stack.components.get("core")), "cb_modes": stack.cbs["core"].n_modes,
                        "fe_s": times.get("fe core"), "cb_s": times.get("cb core")}
-    summary["section"] = VARIANTS[name]
+    summary["hardware"] = VARIANTS[name]
     summary["aft_attach"] = aft_attach_figures(out)
     return summary
 

@@ -24,6 +24,8 @@ from .spec import require_positive
 SIDES = ("left", "right")
 #: how a booster's aft attach is modelled (StackLayout.srb_aft_attach)
 AFT_ATTACH = ("point", "struts")
+#: where a booster's forward ball sits on the tank (StackLayout.srb_fwd_attach)
+FWD_ATTACH = ("wall", "beam")
 
 
 @dataclass(frozen=True)
@@ -42,6 +44,8 @@ class StackLayout:
     srb_aft_attach: str = "point"     # "point": one aft attach point a booster (released joint);
                                       # "struts": the end points of its three aft struts (below)
     srb_aft_strut_y: float = 1.0      # "struts": the two sway braces at y = +- this (m)
+    srb_fwd_attach: str = "wall"      # "wall": the forward ball's socket on the tank's wall (a
+                                      # released joint); "beam": on the intertank's thrust beam (below)
     orbiter_radius: float = 2.6       # fuselage modelled as a 5.2 m cylinder
     orbiter_axis_y: float = 7.8       # orbiter axis at (0, this)
     orbiter_bottom_z: float = 8.0     # aft bulkhead (SSME gimbal plane)
@@ -64,6 +68,9 @@ class StackLayout:
         if self.srb_aft_attach not in AFT_ATTACH:
             raise InputError(f"StackLayout.srb_aft_attach must be one of {', '.join(map(repr, AFT_ATTACH))} "
                              f"(got {self.srb_aft_attach!r})")
+        if self.srb_fwd_attach not in FWD_ATTACH:
+            raise InputError(f"StackLayout.srb_fwd_attach must be one of {', '.join(map(repr, FWD_ATTACH))} "
+                             f"(got {self.srb_fwd_attach!r})")
         if self.srb_aft_attach == "struts":
             a = self.srb_aft_strut_y
             if isinstance(a, bool) or not np.isfinite(a) or not 0 < a < 0.8 * self.srb_radius:
@@ -136,15 +143,55 @@ class StackLayout:
         return {f"{b}_strut_upper": (f"{et}_upper", f"{b}_upper"), f"{b}_strut_lower": (f"{et}_lower", f"{b}_lower"),
                 f"{b}_strut_diagonal": (f"{et}_upper", f"{b}_lower")}
 
+    def srb_thrust_beam_points(self) -> dict[str, np.ndarray]:
+        """With ``srb_fwd_attach = "beam"``: where the intertank's thrust beam meets the tank's
+        wall, ``et_srb_<side>_fwd`` (on the wall, at the forward attach height, on the x axis;
+        empty with ``"wall"``). The beam: :meth:`srb_thrust_beam`."""
+        if self.srb_fwd_attach != "beam":
+            return {}
+        return {f"et_srb_{side}_fwd": np.array([(-1.0 if side == "left" else 1.0) * self.core_radius, 0.0,
+                                                self.srb_fwd_attach_z]) for side in SIDES}
+
+    def srb_thrust_beam(self) -> dict[str, tuple[str, str]]:
+        """With ``srb_fwd_attach = "beam"``: the intertank's thrust beam, {member: (end,
+        end)}: its span across the intertank between the two wall points
+        (``srb_thrust_beam``) and at each end a fitting from the booster's forward ball
+        (``srb_<side>_thrust_fitting``, from ``att_srb_<side>_fwd``, midway between the walls,
+        to ``et_srb_<side>_fwd``). The booster's forward attach (the ball) is then a joint of
+        the booster and the fitting, not of the tank; the beam's span and fittings are welded
+        to the tank where they meet its wall (public: the SRB forward attach's socket is on the
+        intertank's SRB beam, which spans the intertank between the two boosters' fittings)."""
+        if self.srb_fwd_attach != "beam":
+            return {}
+        return {"srb_left_thrust_fitting": ("att_srb_left_fwd", "et_srb_left_fwd"),
+                "srb_thrust_beam": ("et_srb_left_fwd", "et_srb_right_fwd"),
+                "srb_right_thrust_fitting": ("att_srb_right_fwd", "et_srb_right_fwd")}
+
+    def srb_core_points(self, side: str) -> dict[str, np.ndarray]:
+        """The core's points for booster ``side``: its attach points (the forward one unless
+        on the thrust beam, the aft one unless struts), the aft struts' tank ends and the
+        thrust beam's wall point."""
+        out = {n: x for n, x in self.srb_attach_points(side).items()
+               if not (n.endswith("_fwd") and self.srb_fwd_attach == "beam")}
+        out.update(self.srb_aft_strut_points(side)["core"])
+        out.update({n: x for n, x in self.srb_thrust_beam_points().items() if f"_{side}_" in n})
+        return out
+
+    def srb_booster_points(self, side: str) -> dict[str, np.ndarray]:
+        """Booster ``side``'s points towards the tank: its attach points and its aft struts'
+        ends."""
+        return {**self.srb_attach_points(side), **self.srb_aft_strut_points(side)["booster"]}
+
     def named_points(self) -> dict[str, np.ndarray]:
         """Every named point of the layout (attach points and aft strut ends of both boosters,
-        the orbiter's attach points, the hold-down points), m."""
+        the thrust beam's wall points, the orbiter's attach points, the hold-down points), m."""
         out: dict[str, np.ndarray] = {}
         for side in SIDES:
             out.update(self.srb_attach_points(side))
             for pts in self.srb_aft_strut_points(side).values():
                 out.update(pts)
             out.update(self.holddown_points(side))
+        out.update(self.srb_thrust_beam_points())
         out.update(self.orbiter_attach_points())
         return out
 

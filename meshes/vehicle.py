@@ -72,8 +72,7 @@ def core_stage_params(layout: StackLayout | None = None, mesh_size: float = 0.9,
     lay.check()
     patches = {}
     for side in ("left", "right"):
-        patches.update(lay.srb_attach_points(side))
-        patches.update(lay.srb_aft_strut_points(side)["core"])
+        patches.update(lay.srb_core_points(side))
     patches.update(lay.orbiter_attach_points())
     pressure = ullage_pressure if ullage_pressure is not None else \
         ULLAGE_PRESSURE if (walls, liquid) == ("shell", "hydroelastic") else {"lh2": 0.0, "lox": 0.0}
@@ -156,7 +155,7 @@ class BoosterParams:
     def attach_points(self) -> dict[str, np.ndarray]:
         """{name: (x, y, z)}: points tied to a patch of the case wall facing them (the
         layout's attach points and, with its aft attach as struts, the struts' ends)."""
-        return {**self.layout.srb_attach_points(self.side), **self.layout.srb_aft_strut_points(self.side)["booster"]}
+        return self.layout.srb_booster_points(self.side)
 
     def _check_placement(self, o: str) -> None:
         self.layout.check()

@@ -225,3 +225,31 @@ def test_booster_meshed_with_aft_strut_patches(tmp_path, msh_groups):
         np.testing.assert_allclose(np.hypot(n[:, 0] - ax[0], n[:, 1] - ax[1]), lay.srb_radius, rtol=1e-6)
         assert np.linalg.norm(n - x, axis=1).max() < 0.7
         np.testing.assert_array_equal(refs[name], x)
+
+
+def test_thrust_beam_points_of_the_layout():
+    """``srb_fwd_attach = "beam"``: the forward balls move off the tank's wall onto the
+    intertank's thrust beam: the core's points for each booster lose ``att_srb_<side>_fwd``
+    and gain ``et_srb_<side>_fwd`` on its wall (radius, height, the x axis: exact); the beam
+    is its span between the two wall points and a fitting from each booster's ball, which the
+    booster keeps, to its wall point. The default ("wall") keeps the ball on the wall."""
+    from liftoff.core.errors import InputError
+
+    assert StackLayout().srb_thrust_beam() == {} and "att_srb_left_fwd" in StackLayout().srb_core_points("left")
+    lay = StackLayout(srb_fwd_attach="beam")
+    lay.check()
+    for side, sgn in (("left", -1.0), ("right", 1.0)):
+        core = lay.srb_core_points(side)
+        assert f"att_srb_{side}_fwd" not in core and f"att_srb_{side}_aft" in core
+        np.testing.assert_array_equal(core[f"et_srb_{side}_fwd"], [sgn * lay.core_radius, 0.0, lay.srb_fwd_attach_z])
+        assert f"att_srb_{side}_fwd" in lay.srb_booster_points(side)
+    beam = lay.srb_thrust_beam()
+    assert beam == {"srb_left_thrust_fitting": ("att_srb_left_fwd", "et_srb_left_fwd"),
+                    "srb_thrust_beam": ("et_srb_left_fwd", "et_srb_right_fwd"),
+                    "srb_right_thrust_fitting": ("att_srb_right_fwd", "et_srb_right_fwd")}
+    named = lay.named_points()
+    assert all(e in named for ends in beam.values() for e in ends)
+    cp = core_stage_params(lay)
+    assert "et_srb_left_fwd" in cp.patches and "att_srb_left_fwd" not in cp.patches
+    with pytest.raises(InputError, match="srb_fwd_attach must be one of 'wall', 'beam'"):
+        StackLayout(srb_fwd_attach="ball").check()
