@@ -743,7 +743,8 @@ AFT_STRUT_TITLES = {"joint": "aft: one point, Tz Rx Ry released; forward: ball o
                     "struts": "aft: three pin-ended struts, tube 0.2 m x 20 mm",
                     "struts_thin": "aft: three pin-ended struts, tube 0.2 m x 10 mm",
                     "struts_beam": "aft: the 20 mm struts; forward: ball on the intertank's thrust beam "
-                                   "(aluminium box 0.6 m x 1.0 m x 30 mm)"}
+                                   "(aluminium box 0.6 m x 1.0 m x 30 mm)",
+                    "all": "those, and the orbiter's bipods as six pin-ended struts (tubes as the aft struts)"}
 
 
 def render_aft_struts(fig: dict) -> str:
@@ -772,6 +773,13 @@ def render_aft_struts(fig: dict) -> str:
         return "; ".join(f"{k.rsplit('_', 1)[-1]} {p['tension_n'] / 1e6:.2f} / {p['compression_n'] / 1e6:.2f}"
                          for k, p in s.items())
 
+    def bipods(v):
+        b = v.get("bipods")
+        if not b:
+            return "-"
+        return "; ".join(f"{b[k]['tension_n'] / 1e6:.2f} / {b[k]['compression_n'] / 1e6:.2f}" for k in
+                         ("orbiter_fwd_bipod_left", "orbiter_aft_left_vertical", "orbiter_aft_left_diagonal"))
+
     def sec(x):
         return "-" if x is None else f"{x:.0f}"
 
@@ -785,9 +793,11 @@ def render_aft_struts(fig: dict) -> str:
             ("left booster's aft attach: Tx, Ty (MN); Rz (MN m) (the joint's, or the struts' resultant on the "
              "booster about the joint's point)", aft),
             ("left booster's aft struts: peak axial force, tension / compression (MN)", struts),
+            ("orbiter's bipod struts (forward left, aft left vertical and diagonal): peak axial force, tension / "
+             "compression (MN)", bipods),
             ("largest change of another attach force's peak magnitude from the default's",
              lambda v: "-" if v is fig["joint"] else change(v))]
-    return _variant_table("booster attach hardware", [(AFT_STRUT_TITLES[k], v) for k, v in fig.items()], lead,
+    return _variant_table("attach hardware", [(AFT_STRUT_TITLES[k], v) for k, v in fig.items()], lead,
                           items)
 
 

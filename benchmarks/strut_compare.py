@@ -21,7 +21,13 @@ shared: the core's and the boosters' FE and CB stages are rebuilt, their patches
 
 * ``joint``: the default;
 * ``struts``: the pin-ended struts, tube r_out 0.1 m, t 20 mm;
-* ``struts_thin``: the same struts with a 10 mm wall (EA 1.2 GN).
+* ``struts_thin``: the same struts with a 10 mm wall (EA 1.2 GN);
+* ``struts_beam``: the 20 mm struts, and the forward balls on the intertank's thrust beam
+  (``srb_fwd_attach = "beam"``: an aluminium box 0.6 m x 1.0 m x 30 mm across the
+  intertank, with a fitting out to each ball);
+* ``all``: those, and the orbiter's attach bipods as pin-ended struts (``orbiter_attach =
+  "bipods"``: the forward bipod's two struts splayed across the vehicle, each aft bipod's
+  vertical and diagonal struts, tubes as the aft struts'), every attach as beams.
 
 Writes docs/figures/struts.json, rendered into README.md by benchmarks/default_figures.py
 (block ``aft-struts``).
@@ -43,10 +49,11 @@ TUBE = {"shape": "tube", "r_out": 0.1, "t": 0.02}
 #: the intertank's thrust beam (span and fittings): an aluminium box, 1 m deep (illustrative)
 BEAM = {"section": {"shape": "box", "b": 0.6, "h": 1.0, "t": 0.03}, "E": 72e9, "nu": 0.33, "rho": 2840.0}
 #: variant -> the aft struts' tube section and the thrust beam (None: the default's joints)
-VARIANTS = {"joint": {"struts": None, "beam": None},
-            "struts": {"struts": TUBE, "beam": None},
-            "struts_thin": {"struts": dict(TUBE, t=0.01), "beam": None},
-            "struts_beam": {"struts": TUBE, "beam": BEAM}}
+VARIANTS = {"joint": {"struts": None, "beam": None, "bipods": None},
+            "struts": {"struts": TUBE, "beam": None, "bipods": None},
+            "struts_thin": {"struts": dict(TUBE, t=0.01), "beam": None, "bipods": None},
+            "struts_beam": {"struts": TUBE, "beam": BEAM, "bipods": None},
+            "all": {"struts": TUBE, "beam": BEAM, "bipods": TUBE}}
 
 
 def strut_recoveries(side: str) -> dict[str, str]:
@@ -97,10 +104,42 @@ def edit_for(name: str):
                     j["components"] = [f"srb_{j['name'].split('_')[2]}_thrust_fitting", j["components"][-1]]
             for wall in lay.srb_thrust_beam_points():
                 joints.append({"name": wall, "components": ["core"] + [m for m, e in members.items() if wall in e]})
+        if spec["bipods"] is not None:
+            params["orbiter_attach"] = "bipods"
+            lay = StackLayout(orbiter_attach="bipods")
+            struts = lay.orbiter_bipods()
+            for strut, ends in struts.items():
+                model["component"][strut] = {"type": "strut", "f_max": 120.0, "params": {
+                    "ends": list(ends), "section": dict(spec["bipods"]), "pinned": True}}
+            apexes = {e for _, e in struts.values()}
+            joints = [j for j in joints if j["name"] not in apexes]
+            joints += [{"name": a, "components": [k for k, (_, e) in struts.items() if e == a] + ["orbiter"]}
+                       for a in sorted(apexes)]
+            joints += [{"name": foot, "components": ["core", strut]} for strut, (foot, _) in struts.items()]
+            d["recovery"]["attach"] = list(d["recovery"]["attach"]) + [f"{foot}@{strut}"
+                                                                       for strut, (foot, _) in struts.items()]
         model["joint"] = joints
         return d
 
     return edit
+
+
+def bipod_figures(out) -> dict:
+    """Each orbiter attach strut's peak axial force (N, + tension) over both named cases,
+    from the force on it at its foot (the tank's pull away from the orbiter's end: tension)."""
+    from liftoff.meshes.layout import StackLayout
+
+    lay = StackLayout(orbiter_attach="bipods")
+    pts = {**lay.orbiter_bipod_feet(), **lay.orbiter_attach_points()}
+    peaks: dict = {}
+    for res, _ in out.results.values():
+        for strut, (foot, apex) in lay.orbiter_bipods().items():
+            axis = (pts[apex] - pts[foot]) / np.linalg.norm(pts[apex] - pts[foot])
+            h = -np.asarray(res.recovered[f"attach_{foot}"])[:, :3] @ axis
+            q = peaks.setdefault(strut, {"tension_n": -np.inf, "compression_n": np.inf})
+            q["tension_n"] = max(q["tension_n"], float(h.max()))
+            q["compression_n"] = min(q["compression_n"], float(h.min()))
+    return peaks
 
 
 def _larger(prev, v: np.ndarray) -> float:
@@ -159,6 +198,8 @@ def variant_figures(name: str, cache: Path) -> dict:
                        "fe_s": times.get("fe core"), "cb_s": times.get("cb core")}
     summary["hardware"] = VARIANTS[name]
     summary["aft_attach"] = aft_attach_figures(out)
+    if VARIANTS[name]["bipods"] is not None:
+        summary["bipods"] = bipod_figures(out)
     return summary
 
 

@@ -26,6 +26,8 @@ SIDES = ("left", "right")
 AFT_ATTACH = ("point", "struts")
 #: where a booster's forward ball sits on the tank (StackLayout.srb_fwd_attach)
 FWD_ATTACH = ("wall", "beam")
+#: how the orbiter's attach joints are modelled (StackLayout.orbiter_attach)
+ORBITER_ATTACH = ("point", "bipods")
 
 
 @dataclass(frozen=True)
@@ -52,6 +54,10 @@ class StackLayout:
     orbiter_fwd_attach_z: float = 37.0   # forward bipod
     orbiter_aft_attach_z: float = 13.2   # aft attach (left/right)
     orbiter_aft_attach_x: float = 1.5    # aft attach points at x = -/+ this
+    orbiter_attach: str = "point"        # "point": the tank's side of each orbiter attach a point
+                                         # (released joints); "bipods": the feet of its struts (below)
+    orbiter_fwd_bipod_x: float = 1.0     # "bipods": the forward bipod's feet at x = +- this (m)
+    orbiter_aft_bipod_dz: float = 1.5    # "bipods": each aft diagonal's foot this far above (m)
 
     def check(self) -> None:
         require_positive("StackLayout", **{k: getattr(self, k) for k in (
@@ -71,6 +77,14 @@ class StackLayout:
         if self.srb_fwd_attach not in FWD_ATTACH:
             raise InputError(f"StackLayout.srb_fwd_attach must be one of {', '.join(map(repr, FWD_ATTACH))} "
                              f"(got {self.srb_fwd_attach!r})")
+        if self.orbiter_attach not in ORBITER_ATTACH:
+            raise InputError(f"StackLayout.orbiter_attach must be one of {', '.join(map(repr, ORBITER_ATTACH))} "
+                             f"(got {self.orbiter_attach!r})")
+        if self.orbiter_attach == "bipods":
+            for k, v, hi in (("orbiter_fwd_bipod_x", self.orbiter_fwd_bipod_x, 0.8 * self.orbiter_radius),
+                             ("orbiter_aft_bipod_dz", self.orbiter_aft_bipod_dz, 5.0)):
+                if isinstance(v, bool) or not np.isfinite(v) or not 0 < v < hi:
+                    raise InputError(f"StackLayout.{k} = {v!r} m must be in (0, {hi:g}) m")
         if self.srb_aft_attach == "struts":
             a = self.srb_aft_strut_y
             if isinstance(a, bool) or not np.isfinite(a) or not 0 < a < 0.8 * self.srb_radius:
@@ -182,9 +196,49 @@ class StackLayout:
         ends."""
         return {**self.srb_attach_points(side), **self.srb_aft_strut_points(side)["booster"]}
 
+    def orbiter_bipod_feet(self) -> dict[str, np.ndarray]:
+        """With ``orbiter_attach = "bipods"``: the feet of the orbiter's attach struts on the
+        tank's wall (empty with ``"point"``): the forward bipod's ``et_orb_fwd_left`` /
+        ``_right`` at x = -+orbiter_fwd_bipod_x, the forward attach height; each aft bipod's
+        ``et_orb_aft_<side>_vertical`` at its attach point's x and height and
+        ``et_orb_aft_<side>_diagonal`` orbiter_aft_bipod_dz above it."""
+        if self.orbiter_attach != "bipods":
+            return {}
+        r = self.core_radius
+
+        def foot(x, z):
+            return np.array([x, math.sqrt(r * r - x * x), z])
+
+        xf, xa, dz = self.orbiter_fwd_bipod_x, self.orbiter_aft_attach_x, self.orbiter_aft_bipod_dz
+        zf, za = self.orbiter_fwd_attach_z, self.orbiter_aft_attach_z
+        return {"et_orb_fwd_left": foot(-xf, zf), "et_orb_fwd_right": foot(xf, zf),
+                "et_orb_aft_left_vertical": foot(-xa, za), "et_orb_aft_left_diagonal": foot(-xa, za + dz),
+                "et_orb_aft_right_vertical": foot(xa, za), "et_orb_aft_right_diagonal": foot(xa, za + dz)}
+
+    def orbiter_bipods(self) -> dict[str, tuple[str, str]]:
+        """With ``orbiter_attach = "bipods"``: the orbiter's six attach struts, {strut: (foot
+        on the tank, the orbiter's attach point)}, two a bipod meeting at the orbiter's
+        attach point (its fitting, a ball): the forward pair splayed across the vehicle
+        (forces in the x-y plane), each aft pair a vertical strut across the gap and a
+        diagonal from above, in the plane of the axis and the orbiter's offset (forces in
+        y-z): pin-ended, they carry what the default's released joints carry. Their layout
+        is this model's reading of the hardware (public: "one forward bipod, two aft
+        attachments of a vertical and a diagonal strut"), not a drawing."""
+        if self.orbiter_attach != "bipods":
+            return {}
+        return {"orbiter_fwd_bipod_left": ("et_orb_fwd_left", "att_orb_fwd"),
+                "orbiter_fwd_bipod_right": ("et_orb_fwd_right", "att_orb_fwd"),
+                **{f"orbiter_aft_{side}_{k}": (f"et_orb_aft_{side}_{k}", f"att_orb_aft_{side}")
+                   for side in SIDES for k in ("vertical", "diagonal")}}
+
+    def orbiter_core_points(self) -> dict[str, np.ndarray]:
+        """The core's points for the orbiter: its attach points, or the bipods' feet."""
+        return self.orbiter_bipod_feet() if self.orbiter_attach == "bipods" else self.orbiter_attach_points()
+
     def named_points(self) -> dict[str, np.ndarray]:
         """Every named point of the layout (attach points and aft strut ends of both boosters,
-        the thrust beam's wall points, the orbiter's attach points, the hold-down points), m."""
+        the thrust beam's wall points, the orbiter's attach points and bipod feet, the hold-down
+        points), m."""
         out: dict[str, np.ndarray] = {}
         for side in SIDES:
             out.update(self.srb_attach_points(side))
@@ -193,6 +247,7 @@ class StackLayout:
             out.update(self.holddown_points(side))
         out.update(self.srb_thrust_beam_points())
         out.update(self.orbiter_attach_points())
+        out.update(self.orbiter_bipod_feet())
         return out
 
     def orbiter_attach_points(self) -> dict[str, np.ndarray]:

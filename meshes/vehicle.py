@@ -73,7 +73,7 @@ def core_stage_params(layout: StackLayout | None = None, mesh_size: float = 0.9,
     patches = {}
     for side in ("left", "right"):
         patches.update(lay.srb_core_points(side))
-    patches.update(lay.orbiter_attach_points())
+    patches.update(lay.orbiter_core_points())
     pressure = ullage_pressure if ullage_pressure is not None else \
         ULLAGE_PRESSURE if (walls, liquid) == ("shell", "hydroelastic") else {"lh2": 0.0, "lox": 0.0}
     p = TankParams(

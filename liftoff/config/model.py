@@ -460,6 +460,9 @@ def _layout(where: Where, spec: Any, source: str) -> StackLayout:
         if spec.get("srb_aft_attach", "point") != "point":
             raise (where / "srb_aft_attach").error("the stick model joins each booster at one aft point: "
                                                    "the aft struts need source = \"fe\"")
+        if spec.get("orbiter_attach", "point") != "point":
+            raise (where / "orbiter_attach").error("the stick model joins the orbiter at its attach points: "
+                                                   "the bipods need source = \"fe\"")
         if spec.get("srb_fwd_attach", "wall") != "wall":
             raise (where / "srb_fwd_attach").error("the stick model joins each booster at one forward point: "
                                                    "the thrust beam needs source = \"fe\"")

@@ -253,3 +253,36 @@ def test_thrust_beam_points_of_the_layout():
     assert "et_srb_left_fwd" in cp.patches and "att_srb_left_fwd" not in cp.patches
     with pytest.raises(InputError, match="srb_fwd_attach must be one of 'wall', 'beam'"):
         StackLayout(srb_fwd_attach="ball").check()
+
+
+def test_orbiter_bipod_feet_of_the_layout():
+    """``orbiter_attach = "bipods"``: the tank's orbiter attach points give way to the feet
+    of the orbiter's six attach struts on its wall (radius 1e-12); the orbiter keeps its
+    three attach points, each the apex of a bipod; the forward pair lies in the plane across
+    the axis (x-y), each aft pair in the plane of the axis and the orbiter's offset (y-z,
+    its attach point's x), as the default's released joints carry (Tx Ty forward, Ty Tz
+    aft). The default ("point") keeps the tank's attach points."""
+    from liftoff.core.errors import InputError
+
+    assert StackLayout().orbiter_bipods() == {} and "att_orb_fwd" in StackLayout().orbiter_core_points()
+    lay = StackLayout(orbiter_attach="bipods")
+    lay.check()
+    feet, apex = lay.orbiter_bipod_feet(), lay.orbiter_attach_points()
+    assert set(lay.orbiter_core_points()) == set(feet) and len(feet) == 6
+    for x in feet.values():
+        assert np.hypot(x[0], x[1]) == pytest.approx(lay.core_radius, rel=1e-12)
+    struts = lay.orbiter_bipods()
+    assert len(struts) == 6
+    for name, (foot, top) in struts.items():
+        d = apex[top] - feet[foot]
+        if "fwd" in name:
+            assert d[2] == 0 and d[0] != 0          # across the vehicle
+        else:
+            assert d[0] == 0 and d[1] > 0           # in the y-z plane
+    assert feet["et_orb_aft_left_diagonal"][2] - apex["att_orb_aft_left"][2] == lay.orbiter_aft_bipod_dz
+    assert set(core_stage_params(lay).patches) >= set(feet) and "att_orb_fwd" not in core_stage_params(lay).patches
+    assert set(feet) <= set(lay.named_points())
+    with pytest.raises(InputError, match="orbiter_attach must be one of 'point', 'bipods'"):
+        StackLayout(orbiter_attach="bipod").check()
+    with pytest.raises(InputError, match="orbiter_fwd_bipod_x = 3.0 m must be in"):
+        StackLayout(orbiter_attach="bipods", orbiter_fwd_bipod_x=3.0).check()

@@ -349,3 +349,28 @@ def test_strut_ends_by_layout_names_and_their_errors():
     stick["model"].setdefault("vehicle", {}).setdefault("params", {})["srb_aft_attach"] = "struts"
     with pytest.raises(InputError, match=r"srb_aft_attach: the stick model joins each booster at one aft point"):
         parse_scenario(stick, "s.toml")
+
+
+def test_the_documented_forward_bipod_is_the_comparisons():
+    """docs/workflow.md's TOML for the orbiter's forward bipod: its struts and joints are
+    those benchmarks/strut_compare.py's "all" variant builds (the aft bipods, described in
+    words there, are that variant's too: StackLayout.orbiter_bipods)."""
+    import re
+    import runpy
+
+    from liftoff.config import default_text, parse_scenario, parse_toml
+
+    root = Path(__file__).resolve().parents[2]
+    doc = (root / "docs" / "workflow.md").read_text()
+    block = tomllib.loads(re.search(r"```toml\n(\[model\.vehicle\.params\]\norbiter_attach = \"bipods\".*?)```",
+                                    doc, re.S).group(1))
+    bench = runpy.run_path(str(root / "benchmarks" / "strut_compare.py"), run_name="strut_compare")
+    data = bench["edit_for"]("all")(parse_toml(default_text(), "default_scenario.toml"))
+    assert data["model"]["vehicle"]["params"]["orbiter_attach"] == "bipods"
+    for name, comp in block["model"]["component"].items():
+        assert data["model"]["component"][name] == comp
+    joints = {j["name"]: j for j in data["model"]["joint"]}
+    for j in block["model"]["joint"]:
+        assert joints[j["name"]] == j
+    model = parse_scenario(data, "all.toml").cases[0].model
+    assert sum(c.type == "strut" for c in model.components.values()) == 15
