@@ -763,8 +763,9 @@ def render_aft_struts(fig: dict) -> str:
         return f"{d / 1e6:+.2f} MN ({100 * d / abs(base[k]):+.0f} % of the default's), {k}"
 
     def aft(v):
-        a = v["aft_attach"]
-        return f"{a['Tx'] / 1e6:.2f}, {a['Ty'] / 1e6:.2f}; {a['Rz'] / 1e6:.2f}"
+        a, t0 = v["aft_attach"], v["aft_attach"].get("t0")
+        return f"{a['Tx'] / 1e6:.2f}, {a['Ty'] / 1e6:.2f}; {a['Rz'] / 1e6:.2f}" + (
+            f" (at t0: {t0['Tx'] / 1e6:.2f}, {t0['Ty'] / 1e6:.2f}; {t0['Rz'] / 1e6:.2f})" if t0 else "")
 
     def struts(v):
         s = v["aft_attach"].get("struts")
@@ -790,8 +791,8 @@ def render_aft_struts(fig: dict) -> str:
              lambda v: f"{sec(v['core']['fe_s'])}, {sec(v['core']['cb_s'])}; {sec(v['booster_fe_s'])}, "
                        f"{sec(v['booster_cb_s'])}"),
             ("vehicle system modes; mass (t)", lambda v: f"{v['vehicle_modes']}; {v['vehicle_mass_t']:.1f}"),
-            ("left booster's aft attach: Tx, Ty (MN); Rz (MN m) (the joint's, or the struts' resultant on the "
-             "booster about the joint's point)", aft),
+            ("left booster's aft attach, peak (static at t0): Tx, Ty (MN); Rz (MN m) (the joint's, or the struts' "
+             "resultant on the booster about the joint's point)", aft),
             ("left booster's aft struts: peak axial force, tension / compression (MN)", struts),
             ("orbiter's bipod struts (forward left, aft left vertical and diagonal): peak axial force, tension / "
              "compression (MN)", bipods),

@@ -6,15 +6,17 @@ walls, with Tz Rx Ry released: the three aft struts lie in a plane across the ax
 Tx, Ty and the couple Rz only, rigidly. Here they are members: ``[model.vehicle.params]
 srb_aft_attach = "struts"`` puts their end points on the tank's aft attach ring and the
 booster's wall (meshes.layout.StackLayout.srb_aft_strut_points: the two sway braces at y =
-+-1 m, across the 0.3 m gap, the diagonal from the tank's upper end to the booster's lower
-one), and three ``type = "strut"`` components per booster join them, each ``pinned = true``
++-1 m, 0.72 m long between the walls, the diagonal from the tank's upper end to the
+booster's lower one), and three ``type = "strut"`` components per booster join them, each ``pinned = true``
 (a two-force member: its end elements' bending released, as Nastran's pin flags,
 liftoff.core.beam.release; reduction/strut.py). The struts'
 sizes are illustrative, not the Shuttle's drawings: steel tubes of 0.2 m outer diameter,
 20 mm wall (EA 2.3 GN), and half that wall as a second variant, to show how far the loads
-depend on the struts' stiffness. Each strut's axial force is recovered at an end that only it
-and one component share, and the forces on the booster at its two strut points sum to the
-aft attach's (the default's ``att_srb_<side>_aft`` row).
+depend on the struts' stiffness. Each strut's axial force is the force on it at one end
+(``point@strut``: the lower strut's and the diagonal's at the tank, the upper strut's from the
+force on the booster at its upper point, where it is the only strut), and the forces on the
+booster at its two strut points sum to the aft attach's (the default's
+``att_srb_<side>_aft`` row).
 
 Variants (each a whole run of both named cases without the error estimate, stage cache
 shared: the core's and the boosters' FE and CB stages are rebuilt, their patches moved):
@@ -59,8 +61,8 @@ VARIANTS = {"joint": {"struts": None, "beam": None, "bipods": None},
 def strut_recoveries(side: str) -> dict[str, str]:
     """{what: attach recovery spec} of one booster's aft struts: the forces on the booster at
     its two strut points (their sum is the aft attach's), and the lower and diagonal struts'
-    own end forces at the tank, where each is the only strut (the upper strut's is the force on
-    the booster at its upper point, the only strut there)."""
+    own end forces at the tank (``point@strut``; the upper strut's is the force on the
+    booster at its upper point, where it is the only strut)."""
     b, et = f"srb_{side}_aft", f"et_srb_{side}_aft"
     return {"booster_upper": f"{b}_upper@srb_{side}", "booster_lower": f"{b}_lower@srb_{side}",
             "strut_lower": f"{et}_lower@{b}_strut_lower", "strut_diagonal": f"{et}_upper@{b}_strut_diagonal"}
@@ -151,7 +153,7 @@ def _larger(prev, v: np.ndarray) -> float:
 def aft_attach_figures(out, side: str = "left") -> dict:
     """The booster's aft attach over both named cases, as the default's released joint
     carries it: the peak Tx, Ty (N) and Rz (N m, about the joint's point) of the force on
-    the booster there (the joint's rows, or the struts' resultant on the booster, its moment
+    the booster there, and their static values at t0 (``"t0"``) (the joint's rows, or the struts' resultant on the booster, its moment
     taken about the joint's point); with struts also each strut's peak axial force (N, +
     tension)."""
     from liftoff.meshes.layout import StackLayout
@@ -164,6 +166,7 @@ def aft_attach_figures(out, side: str = "left") -> dict:
             f = np.asarray(res.recovered[f"attach_att_srb_{side}_aft"])
             for c, i in (("Tx", 0), ("Ty", 1), ("Rz", 5)):
                 peaks[c] = _larger(peaks.get(c), f[:, i])
+                peaks.setdefault("t0", {})[c] = float(f[0, i])     # the static state at t0 (the cases' same)
             continue
         pts = {**lay.srb_aft_strut_points(side)["core"], **lay.srb_aft_strut_points(side)["booster"]}
         b = f"srb_{side}_aft"
@@ -184,6 +187,7 @@ def aft_attach_figures(out, side: str = "left") -> dict:
                      for tag in ("upper", "lower"))                 # (the pinned ends pass no moment)
         for c, v in (("Tx", force[:, 0]), ("Ty", force[:, 1]), ("Rz", moment)):
             peaks[c] = _larger(peaks.get(c), v)
+            peaks.setdefault("t0", {})[c] = float(v[0])
     return peaks
 
 

@@ -80,16 +80,19 @@ class StackLayout:
         if self.orbiter_attach not in ORBITER_ATTACH:
             raise InputError(f"StackLayout.orbiter_attach must be one of {', '.join(map(repr, ORBITER_ATTACH))} "
                              f"(got {self.orbiter_attach!r})")
-        if self.orbiter_attach == "bipods":
-            for k, v, hi in (("orbiter_fwd_bipod_x", self.orbiter_fwd_bipod_x, 0.8 * self.orbiter_radius),
+        if self.orbiter_attach == "bipods":             # (the feet lie on the tank's wall)
+            reach = 0.8 * min(self.core_radius, self.orbiter_radius)
+            for k, v, hi in (("orbiter_fwd_bipod_x", self.orbiter_fwd_bipod_x, reach),
+                             ("orbiter_aft_attach_x", self.orbiter_aft_attach_x, reach),
                              ("orbiter_aft_bipod_dz", self.orbiter_aft_bipod_dz, 5.0)):
                 if isinstance(v, bool) or not np.isfinite(v) or not 0 < v < hi:
                     raise InputError(f"StackLayout.{k} = {v!r} m must be in (0, {hi:g}) m")
         if self.srb_aft_attach == "struts":
             a = self.srb_aft_strut_y
-            if isinstance(a, bool) or not np.isfinite(a) or not 0 < a < 0.8 * self.srb_radius:
+            hi = 0.8 * min(self.srb_radius, self.core_radius)
+            if isinstance(a, bool) or not np.isfinite(a) or not 0 < a < hi:
                 raise InputError(f"StackLayout.srb_aft_strut_y = {a!r} m: the sway braces' offset must be in "
-                                 f"(0, {0.8 * self.srb_radius:g}) m (0.8 x the booster radius)")
+                                 f"(0, {hi:g}) m (0.8 x the booster's or the tank's radius)")
 
     def srb_axis(self, side: str) -> np.ndarray:
         if side not in SIDES:

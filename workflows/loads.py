@@ -177,6 +177,26 @@ def _attach_component(stack: StackModel, joints, point: str, where: Where) -> st
     return owners[0]
 
 
+def _held_labels(stack: StackModel, comp: str, point: str, labels: list[str], spec: str, where: Where) -> list[str]:
+    """The labels of ``point`` through which the rest of the vehicle pushes on ``comp`` (an
+    attach recovery's rows; the others are zero): those ``comp`` has, less a direction a
+    release leaves to ``comp`` alone and, where the point is shared, a direction no other
+    component has there (a pinned strut's end brings no rotations: a pin passes no moment).
+    One-line InputError naming ``spec`` when ``comp`` is no vehicle component or has no such
+    point."""
+    asm = stack.vehicle_asm
+    names = [cb.name for cb in asm.components]
+    if comp not in names:
+        raise where.error(f"{spec!r}: no vehicle component {comp!r} (the vehicle's: {', '.join(names)})")
+    own = set(stack.cbs[comp].boundary_labels).intersection(labels)
+    if not own:
+        raise where.error(f"{spec!r}: component {comp!r} has no point {point!r}")
+    held = [lab for lab in labels if lab in own and not asm.released_apart(comp, lab)]
+    others = [set(cb.boundary_labels) for cb in asm.components if cb.name != comp]
+    shared = [lab for lab in held if any(lab in o for o in others)]
+    return shared if shared else held
+
+
 def recoveries(case: Case, stack: StackModel, cryo: dict | None = None) -> tuple[list[Recovery], dict, dict]:
     """Interface forces at attach points, c.g. motion (eq. 23), top/payload/stations motion.
     (The modal coordinates the full-field pictures need are kept by the transient's
@@ -192,7 +212,8 @@ def recoveries(case: Case, stack: StackModel, cryo: dict | None = None) -> tuple
     one component) and the gravity-softening feedback stay in it. A direction the joint
     releases (``[[model.joint]] release``) passes no force: its rows are zero (the boundary
     rows there would hold only the modal damping's and the feedback's residual); so are the
-    rows of a DOF the component does not have there (a pinned strut's end rotations)."""
+    rows of a DOF the component does not have there, and, at a shared point, of a DOF no other
+    component has there (a pinned strut's end rotations: :func:`_held_labels`)."""
     from liftoff.reduction import cg_acceleration_recovery, interface_force_recovery
 
     body = stack.vehicle
@@ -203,8 +224,7 @@ def recoveries(case: Case, stack: StackModel, cryo: dict | None = None) -> tuple
         point, _, comp = spec.partition("@")
         comp = comp or _attach_component(stack, case.model.joints, point, case.at("recovery.attach"))
         labels = [f"{point}:{c}" for c in COMPONENTS]
-        own = set(stack.cbs[comp].boundary_labels) if comp in stack.cbs else set(labels)
-        held = [lab for lab in labels if lab in own and not stack.vehicle_asm.released_apart(comp, lab)]
+        held = _held_labels(stack, comp, point, labels, spec, case.at("recovery.attach"))
         rows = [labels.index(lab) for lab in held]
         D, A = (np.zeros((len(labels), body.n_modes)) for _ in range(2))   # a released direction: no force
         D[rows], A[rows] = stack.product(("interface_force", comp, tuple(held)), lambda: interface_force_recovery(

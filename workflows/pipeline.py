@@ -719,6 +719,13 @@ def _check_joints(model: ModelConfig, cbs: dict, where: Where) -> None:
                     f"named: {named})")
             raise (where / "joint").error(f"joint {j.name!r}: component {c!r} has no point {j.name!r} "
                                           f"(its points: {', '.join(sorted(points[c])) or 'none'})")
+        for c in j.components[1:]:          # a release of a direction the component has not there
+            lacking = [d for d in j.release if f"{j.name}:{d}" not in cbs[c].boundary_labels]
+            if lacking:
+                raise (where / "joint").error(
+                    f"joint {j.name!r}: releases {' '.join(lacking)} of component {c!r}, which has no such DOF at "
+                    f"{j.name!r} (a pinned strut's ends are translations only: it passes no moment there; "
+                    "release nothing for it, or list it first)")
     joined = {(j.name, c) for j in model.joints for c in j.components}
     names = list(model.vehicle)
     for i, a in enumerate(names):

@@ -374,6 +374,64 @@ def shuttle_joints(layout: StackLayout) -> tuple[Joint, ...]:
                         for p in layout.orbiter_attach_points()])
 
 
+#: StackLayout options that move the Shuttle types' interface points, and their defaults
+_LAYOUT_OPTIONS = {"srb_aft_attach": "point", "srb_fwd_attach": "wall", "orbiter_attach": "point"}
+
+
+def _check_layout_joints(where: Where, layout: StackLayout, joints, components: dict) -> None:
+    """Before any meshing: a joint on a Shuttle type (shuttle_core, shuttle_booster or its
+    mirror, shuttle_orbiter) at one of the layout's interface points (those of any of its
+    attach options) that this layout gives that component not, named with the option that
+    moved it (``srb_aft_attach = "struts"`` alone leaves the default's att_srb_<side>_aft
+    joints on points the tank and boosters no longer have)."""
+    import dataclasses as dc
+
+    every = dict(StackLayout().named_points())
+    every.update(dc.replace(layout, srb_aft_attach="struts", srb_fwd_attach="beam",
+                            orbiter_attach="bipods").named_points())
+    core = {p for s in ("left", "right") for p in layout.srb_core_points(s)} | set(layout.orbiter_core_points())
+
+    def points(name: str):
+        c = components.get(name)
+        kind = c.type if c is not None else ""
+        if kind == "shuttle_core":
+            return core
+        if kind == "shuttle_booster":
+            return set(layout.srb_booster_points(c.builder.side))
+        if kind == "shuttle_orbiter":
+            return set(layout.orbiter_attach_points())
+        if c is not None and c.mirror is not None and components.get(c.mirror.of) is not None \
+                and components[c.mirror.of].type == "shuttle_booster":
+            src = c.mirror.of
+            return {p.replace(src, name) for p in layout.srb_booster_points(components[src].builder.side)}
+        return None
+
+    moved = ", ".join(f"{k} = {getattr(layout, k)!r}" for k, v in _LAYOUT_OPTIONS.items() if getattr(layout, k) != v)
+    for i, j in enumerate(joints):
+        if j.name not in every:
+            continue
+        for c in j.components:
+            have = points(c)
+            if have is not None and j.name not in have:
+                raise (where / i).error(f"joint {j.name!r}: component {c!r} has no point {j.name!r} on this "
+                                        f"layout ([model.vehicle.params] {moved or 'defaults'}; its interface "
+                                        f"points: {', '.join(sorted(have))}): docs/workflow.md gives the joints "
+                                        "of each attach option")
+
+
+def _check_pinned_releases(where: Where, joints, components: dict) -> None:
+    """Before any meshing: a joint that releases a rotation of a pinned strut (``type =
+    "strut"``, ``pinned = true``), whose ends have none (reduction.strut), named."""
+    for i, j in enumerate(joints):
+        rot = [d for d in j.release if d.startswith("R")]
+        for c in j.components[1:]:
+            comp = components.get(c)
+            if rot and comp is not None and comp.type == "strut" and getattr(comp.builder, "pinned", False):
+                raise (where / i).error(f"joint {j.name!r} releases {' '.join(rot)} of {c!r}, a pinned strut, whose "
+                                        "ends are translations only (it passes no moment already): release no "
+                                        "rotation for it, or list it first")
+
+
 def _vehicle_names(where: Where, comps: dict, source: str) -> tuple[str, ...]:
     """The vehicle's component names, in the order given (the stick source: the Shuttle's)."""
     wc = where / "component"
@@ -540,6 +598,8 @@ def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig
         joints = shuttle_joints(layout)
     else:
         joints = _joints(where / "joint", m.get("joint", []), names)
+        _check_layout_joints(where / "joint", layout, joints, components)
+        _check_pinned_releases(where / "joint", joints, components)
     s = table(where / "system", m.get("system", {}), _SYSTEM)
     system = SystemModel(**{k: boolean(where / "system" / k, v) if k == "residual_vectors" else
                             integer(where / "system" / k, v, 1) if "n_modes" in k else

@@ -374,3 +374,72 @@ def test_the_documented_forward_bipod_is_the_comparisons():
         assert joints[j["name"]] == j
     model = parse_scenario(data, "all.toml").cases[0].model
     assert sum(c.type == "strut" for c in model.components.values()) == 15
+
+
+def test_attach_recovery_at_a_pinned_strut_and_bad_specs(tmp_path):
+    """An attach recovery on a component at a point it shares only with a pinned strut: the
+    force rows (Tx Ty Tz) as any joint's, the moment rows exactly zero (the strut brings no
+    rotation there: a pin passes no moment; the component's own boundary rows held its modal
+    truncation's residual, 29 N m); a recovery on a component without that point, or on no
+    vehicle component, is one line naming the spec (the first was an all-zero recovery); a
+    joint releasing a pinned strut's rotation is refused on reading, before any stage."""
+    import dataclasses
+
+    pytest.importorskip("petsc4py")
+    from liftoff.config import parse_scenario
+    from liftoff.core.errors import InputError
+    from liftoff.workflows.cache import StageCache
+    from liftoff.workflows.loads import recoveries
+    from liftoff.workflows.run import prepare_models
+
+    data = _with_booster(tomllib.loads(SCENARIO.read_text()))
+    data["model"]["component"]["strut_aft"]["params"]["pinned"] = True
+    data.setdefault("recovery", {})["attach"] = ["b_aft@booster"]
+    sc = parse_scenario(copy.deepcopy(data), "pinned.toml", SCENARIO.parent)
+    stack = next(iter(prepare_models(sc, StageCache(tmp_path / "cache"), False, lambda *a, **k: None)[0].values()))
+    case = sc.cases[0]
+    out, attach, _ = recoveries(case, stack)
+    rec = next(r for r in out if r.name == "attach_b_aft")
+    assert attach["attach_b_aft"] == ("b_aft", "booster")
+    D, A = np.asarray(rec.disp), np.asarray(rec.acc)
+    assert np.all(D[3:] == 0) and np.all(A[3:] == 0) and np.abs(D[:3]).max() > 0
+    for spec, message in (("b_aft@stage1", "'b_aft@stage1': component 'stage1' has no point 'b_aft'"),
+                          ("b_aft@nowhere", "'b_aft@nowhere': no vehicle component 'nowhere'")):
+        bad = dataclasses.replace(case, recovery=dataclasses.replace(case.recovery, attach=(spec,)))
+        with pytest.raises(InputError, match=message):
+            recoveries(bad, stack)
+    for j in data["model"]["joint"]:
+        if j["name"] == "b_aft":
+            j["components"] = ["booster", "strut_aft"]
+            j["release"] = ["Rz"]
+    with pytest.raises(InputError, match=r"joint 'b_aft' releases Rz of 'strut_aft', a pinned strut"):
+        parse_scenario(data, "pinned.toml", SCENARIO.parent)
+
+
+def test_stick_source_refuses_the_attach_options():
+    from liftoff.config import default_text, parse_scenario, parse_toml
+    from liftoff.core.errors import InputError
+
+    for key, value in (("srb_fwd_attach", "beam"), ("orbiter_attach", "bipods")):
+        stick = parse_toml(default_text(), "default_scenario.toml")
+        stick["model"]["source"] = "stick"
+        stick["model"].setdefault("vehicle", {}).setdefault("params", {})[key] = value
+        with pytest.raises(InputError, match=rf"{key}: the stick model joins"):
+            parse_scenario(stick, "s.toml")
+
+
+@pytest.mark.parametrize("key, value, joint", [("srb_aft_attach", "struts", "att_srb_left_aft"),
+                                               ("srb_fwd_attach", "beam", "att_srb_left_fwd"),
+                                               ("orbiter_attach", "bipods", "att_orb_fwd")])
+def test_an_attach_option_alone_is_named_on_reading(key, value, joint):
+    """The layout option without its struts and joints: the default's joint at the moved
+    point is refused on reading (before: after every FE and CB stage), naming the option."""
+    from liftoff.config import default_text, parse_scenario, parse_toml
+    from liftoff.core.errors import InputError
+
+    d = parse_toml(default_text(), "default_scenario.toml")
+    d["model"].setdefault("vehicle", {}).setdefault("params", {})[key] = value
+    with pytest.raises(InputError, match=rf"joint '{joint}': component 'core' has no point '{joint}' on this "
+                                         rf"layout \(\[model.vehicle.params\] {key} = '{value}'") as exc:
+        parse_scenario(d, "s.toml")
+    assert "\n" not in str(exc.value)
