@@ -23,6 +23,9 @@ shared: the core's and the boosters' FE and CB stages are rebuilt, their patches
 
 * ``joint``: the default;
 * ``struts``: the pin-ended struts, tube r_out 0.1 m, t 20 mm;
+* ``struts_fine``: those struts, the boosters meshed 0.7 x as fine (0.42 m instead of the
+  builder's 0.6 m: their new patches' convergence in the mesh, as docs/workflow.md's "mesh
+  x0.7" row does for the default);
 * ``struts_thin``: the same struts with a 10 mm wall (EA 1.2 GN);
 * ``struts_beam``: the 20 mm struts, and the forward balls on the intertank's thrust beam
   (``srb_fwd_attach = "beam"``: an aluminium box 0.6 m x 1.0 m x 30 mm across the
@@ -53,6 +56,7 @@ BEAM = {"section": {"shape": "box", "b": 0.6, "h": 1.0, "t": 0.03}, "E": 72e9, "
 #: variant -> the aft struts' tube section and the thrust beam (None: the default's joints)
 VARIANTS = {"joint": {"struts": None, "beam": None, "bipods": None},
             "struts": {"struts": TUBE, "beam": None, "bipods": None},
+            "struts_fine": {"struts": TUBE, "beam": None, "bipods": None, "booster_mesh": 0.42},
             "struts_thin": {"struts": dict(TUBE, t=0.01), "beam": None, "bipods": None},
             "struts_beam": {"struts": TUBE, "beam": BEAM, "bipods": None},
             "all": {"struts": TUBE, "beam": BEAM, "bipods": TUBE}}
@@ -68,6 +72,11 @@ def strut_recoveries(side: str) -> dict[str, str]:
             "strut_lower": f"{et}_lower@{b}_strut_lower", "strut_diagonal": f"{et}_upper@{b}_strut_diagonal"}
 
 
+def _add_strut(model: dict, name: str, ends, **params) -> None:
+    """A ``type = "strut"`` component ``name`` between the layout's points ``ends``."""
+    model["component"][name] = {"type": "strut", "f_max": 120.0, "params": {"ends": list(ends), **params}}
+
+
 def edit_for(name: str):
     """The edit of the default scenario's data for variant ``name``."""
     from liftoff.meshes.layout import StackLayout
@@ -77,6 +86,8 @@ def edit_for(name: str):
     def edit(d):
         model = d["model"]
         params = model.setdefault("vehicle", {}).setdefault("params", {})
+        if spec.get("booster_mesh"):          # (the right booster mirrors the left one)
+            model["component"]["srb_left"]["mesh_size"] = spec["booster_mesh"]
         joints = list(model["joint"])
         if spec["struts"] is not None:
             params["srb_aft_attach"] = "struts"
@@ -85,8 +96,7 @@ def edit_for(name: str):
             for side in SIDES:
                 shared: dict[str, list[str]] = {}
                 for strut, (a, b) in lay.srb_aft_struts(side).items():
-                    model["component"][strut] = {"type": "strut", "f_max": 120.0, "params": {
-                        "ends": [a, b], "section": dict(spec["struts"]), "pinned": True}}
+                    _add_strut(model, strut, (a, b), section=dict(spec["struts"]), pinned=True)
                     shared.setdefault(a, ["core"]).append(strut)
                     shared.setdefault(b, [f"srb_{side}"]).append(strut)
                 joints += [{"name": p, "components": comps} for p, comps in shared.items()]
@@ -98,9 +108,8 @@ def edit_for(name: str):
             lay = StackLayout(srb_fwd_attach="beam")
             members = lay.srb_thrust_beam()
             for member, ends in members.items():
-                model["component"][member] = {"type": "strut", "f_max": 120.0, "params": {
-                    "ends": list(ends), "elements": 2 if member.endswith("fitting") else 8,
-                    **{k: (dict(v) if isinstance(v, dict) else v) for k, v in spec["beam"].items()}}}
+                _add_strut(model, member, ends, elements=2 if member.endswith("fitting") else 8,
+                           **{k: (dict(v) if isinstance(v, dict) else v) for k, v in spec["beam"].items()})
             for j in joints:                  # the ball: the booster and the fitting, no longer the tank
                 if j["name"] in ("att_srb_left_fwd", "att_srb_right_fwd"):
                     j["components"] = [f"srb_{j['name'].split('_')[2]}_thrust_fitting", j["components"][-1]]
@@ -111,8 +120,7 @@ def edit_for(name: str):
             lay = StackLayout(orbiter_attach="bipods")
             struts = lay.orbiter_bipods()
             for strut, ends in struts.items():
-                model["component"][strut] = {"type": "strut", "f_max": 120.0, "params": {
-                    "ends": list(ends), "section": dict(spec["bipods"]), "pinned": True}}
+                _add_strut(model, strut, ends, section=dict(spec["bipods"]), pinned=True)
             apexes = {e for _, e in struts.values()}
             joints = [j for j in joints if j["name"] not in apexes]
             joints += [{"name": a, "components": [k for k, (_, e) in struts.items() if e == a] + ["orbiter"]}
