@@ -251,7 +251,8 @@ def write_srs(agg: Aggregate, freq: np.ndarray, q: tuple, out: Path) -> Path | N
                              normal_P9990=float(agg.srs_run.bound(agg.k)[iq, k, j]))
                 rows.append(r)
     fields = ["item", "unit", "Q", "freq_Hz", "envelope", "case"] + (["mean", "std", "normal_P9990"] if stats else [])
-    head = ("# liftoff shock response spectra (absolute acceleration, peak) of the items' histories; units of the "
+    head = ("# liftoff shock response spectra (absolute acceleration, peak; oscillators initially steady under each "
+            "history's first value) of the items' histories; units of the "
             f"item; envelope over all cases{'; statistics over the dispersed cases' if stats else ''}\n")
     return write_rows_csv(rows, fields, head, out / "srs.csv")
 

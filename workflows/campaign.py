@@ -170,7 +170,7 @@ def summarize(result, cp, name: str, index: int, post, wall: float = 0.0, check=
         srs_items = tuple(its[j].name for j in sel)
         freq = srs_frequencies(post.srs.f_min, post.srs.f_max, post.srs.n_freq)
         raw = np.column_stack([its[j].history for j in sel]) if sel else None
-        srs_arr = np.stack([srs(raw, result.h, freq, q) for q in post.srs.q]) if sel else None
+        srs_arr = np.stack([srs(raw, result.h, freq, q, ic="steady") for q in post.srs.q]) if sel else None
     cs = result.contact_summary()
     from liftoff.analysis.correlated import case_support
 

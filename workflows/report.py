@@ -619,8 +619,10 @@ def spectra(result, cp, post, out: Path, case: str) -> list[Path]:
         V = np.column_stack([it.history for it in sel])
         data["srs"] = {"items": np.array([it.name for it in sel], dtype=str), "freq": Dataset(freq, "Hz"),
                        "q": Dataset(np.array(post.srs.q), "1"),
-                       "value": Dataset(np.stack([srs(V, h, freq, q) for q in post.srs.q]),
-                                        "units of each item (absolute acceleration)", dims=("q", "freq", "items"))}
+                       "value": Dataset(np.stack([srs(V, h, freq, q, ic="steady") for q in post.srs.q]),
+                                        "units of each item (absolute acceleration)", dims=("q", "freq", "items"),
+                                        initial_conditions="steady under each history's first value (pyyeti.srs "
+                                                           "ic='steady')")}
     paths.insert(0, write_record(out / f"spectra_{case}.h5", "liftoff-spectra", 1, data, units="SI per item",
                                  attrs={"case": case, "h": h}))
     return paths
