@@ -504,7 +504,8 @@ def _solve(problem: TransientProblem, step: StepChoice | None = None, runs: int 
     rows = contact_rows(pa, pb, problem.contacts)
     step = step or choose_step(problem, rows)
     check_memory(problem, step.n_steps, runs, f" of h = {step.h:.3g} s; 0.25/f_h = {step.h_default:.3g} s with the "
-                                              f"contact frequency f_h = {step.f_h:.4g} Hz")
+                                              f"contact frequency f_h = {step.f_h:.4g} Hz",
+                 modal_runs=runs if problem.accuracy is not None else 1)   # (accuracy: the pair keeps both runs')
     init = initial_state(problem)
     f0, active0 = initial_contact_force(pa, pb, rows, fo, init, problem.t0)
     coefs = (step_coefficients(pa.omega, pa.zeta, step.h, problem.static_modes("a")),

@@ -344,12 +344,14 @@ def _stable_below(rows, omega, zeta, h_try: float, h_bad: float, static=None) ->
 
 
 # ----------------------------------------------------------------- run size
-def memory_estimate(problem: TransientProblem, n_steps: int, runs: int = 1) -> dict[str, float]:
+def memory_estimate(problem: TransientProblem, n_steps: int, runs: float = 1, modal_runs: float = 1) -> dict[str, float]:
     """Bytes the transient needs, by item: time histories (n_t x columns, 8 bytes each;
     ``runs`` of them held at once, e.g. 3 for a run with its h/2 error-estimate run), the
-    modal histories of ``keep_modal`` (q, v and acc per mode, or q alone for ``"q"``; one
-    run's: an error estimate's h/2 run keeps none, accuracy.solve_estimated; none in memory
-    with ``modal_scratch`` on disk: liftoff.core.scratch.on_disk), the
+    modal histories of ``keep_modal`` (q, v and acc per mode, or q alone for ``"q"``;
+    ``modal_runs`` of them: one for a run with its error estimate, whose h/2 run keeps none,
+    as many as ``runs`` with an accuracy target, whose finer run keeps them too, as it may
+    become the result: accuracy.solve_estimated; none in memory with ``modal_scratch`` on
+    disk: liftoff.core.scratch.on_disk), the
     active-set cache of the step matrix (64 patterns) and the dense static solve (about
     five (n + n_rigid)^2 arrays)."""
     pa, pb = problem.body_a, problem.body_b
@@ -363,7 +365,7 @@ def memory_estimate(problem: TransientProblem, n_steps: int, runs: int = 1) -> d
     n = pa.n_modes + pb.n_modes
     n2 = 2 * nc if nrig else nc
     return {"histories": 8.0 * n_t * cols * runs,
-            "modal histories (keep_modal)": 8.0 * n_t * (3 if problem.keep_modal is True else 1) * n
+            "modal histories (keep_modal)": 8.0 * n_t * (3 if problem.keep_modal is True else 1) * n * modal_runs
             if problem.keep_modal and not _modal_on_disk(problem) else 0.0,
             "active-set cache": 8.0 * 64 * n2 * n2,
             "dense statics": 8.0 * 5 * (n + nrig) ** 2}
@@ -374,11 +376,12 @@ def _modal_on_disk(problem: TransientProblem) -> bool:
     return problem.modal_scratch is not None and on_disk(problem.modal_scratch)
 
 
-def check_memory(problem: TransientProblem, n_steps: int, runs: int = 1, step: str = "") -> float:
+def check_memory(problem: TransientProblem, n_steps: int, runs: float = 1, step: str = "",
+                 modal_runs: float = 1) -> float:
     """The estimate of :func:`memory_estimate` (bytes); ResourceError beyond the limit
     (``problem.memory_limit`` bytes, None: MEMORY_FRACTION of the memory available);
     ``step``: how the step came about, for the message."""
-    parts = memory_estimate(problem, n_steps, runs)
+    parts = memory_estimate(problem, n_steps, runs, modal_runs)
     total = sum(parts.values())
     limit = problem.memory_limit
     if limit is None:

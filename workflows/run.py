@@ -295,8 +295,9 @@ def _check_run_memory(cases: dict, error_estimate: bool, max_memory: float | Non
     need, extra = 0.0, 0.0
     for pr, steps in cases.values():
         need += sum(memory_estimate(pr, steps, 1).values())
-        if error_estimate or pr.accuracy is not None:
-            extra = max(extra, sum(memory_estimate(pr, steps, 2).values()))
+        if error_estimate or pr.accuracy is not None:     # the h/2 run: its histories and, with an accuracy
+            extra = max(extra, sum(memory_estimate(pr, steps, 2, 2 if pr.accuracy is not None else 0).values()))
+            #                                                    target, its modal histories (twice the steps)
     limit = max_memory if max_memory is not None else MEMORY_FRACTION * available_memory()
     if need + extra > limit:
         raise ResourceError(f"the transients of the {len(cases)} cases need about {(need + extra) / 1e9:.3g} GB of "

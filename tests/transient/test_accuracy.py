@@ -398,3 +398,29 @@ def test_halved_runs_carry_their_own_stability_margin():
     assert r.metadata["halvings"] >= 1                      # (this drop needs at least one)
     assert r.metadata["step_governed_by"] == "accuracy"
     assert r.metadata["stability_margin"] == pytest.approx(coupling_margin(rows, omega, zeta, r.h, static))
+
+
+def test_memory_check_counts_the_accuracy_pairs_modal_histories():
+    """With an accuracy target the finer run keeps its modal histories too (it may become
+    the result), so the pair holds three coarse runs' of them, as of its histories: a limit
+    that fits the histories and one run's modal histories refuses at once (counted once
+    before, the pair ran past its estimate); with room for three runs' it runs. An error
+    estimate alone (no target) keeps one run's modal histories: it runs within that limit."""
+    from dataclasses import replace
+
+    from liftoff.core.errors import ResourceError
+    from liftoff.transient import solve_estimated
+    from liftoff.transient.stepping import choose_step, memory_estimate
+
+    pr = replace(_drop(t_end=0.25), keep_modal=True)
+    n = choose_step(pr).n_steps
+    parts = memory_estimate(pr, n, 1)
+    unit, modal = parts["histories"], parts["modal histories (keep_modal)"]
+    rest = sum(v for k, v in parts.items() if k not in ("histories", "modal histories (keep_modal)"))
+    assert memory_estimate(pr, n, 3, 3)["modal histories (keep_modal)"] == 3 * modal
+    tight = 3.2 * unit + 1.2 * modal + rest           # the histories of the pair, one run's modal
+    solve_estimated(replace(pr, memory_limit=tight))   # no target: the h/2 run keeps no modal histories
+    with pytest.raises(ResourceError, match="modal histories|the transient needs about"):
+        solve_estimated(replace(pr, memory_limit=tight, accuracy=0.5))
+    est = solve_estimated(replace(pr, memory_limit=3.2 * unit + 3.2 * modal + rest, accuracy=0.5))
+    assert est.result.time.size == n + 1
