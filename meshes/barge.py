@@ -25,7 +25,7 @@ z = 0. Units SI (m, kg, Pa).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -59,7 +59,7 @@ class BargeParams:
     wall: float = 0.35
     ballast_mass: float = 900e3        # kg, non-structural on the inner bottom (ballast, outfit)
     saddle_x: tuple = (-12.0, 12.0)    # cradle saddles (cargo interfaces) along x, on the centreline
-    saddle_size: tuple = (2.0, 5.0, 1.5)   # saddle length (x), width (y), height (z)
+    saddle_size: tuple = field(default=(2.0, 5.0, 1.5), metadata={"length": 3})   # length x, width y, height z
     cradle_mass: float = 40e3          # transporter, kg, spread over the saddles' volume
     fender_yz: tuple = ((-4.0, 2.25), (4.0, 2.25))  # bow contact points on the bow plate (y, z)
     fender_patch: float = 1.5          # side of the square bow patches (m)
@@ -305,13 +305,13 @@ class DockParams:
     on its front face (x = face_x - fender depth = the barge's bow)."""
 
     face_x: float = 40.6
-    deck_size: tuple = (12.0, 30.0, 4.5)
+    deck_size: tuple = field(default=(12.0, 30.0, 4.5), metadata={"length": 3})
     deck_top: float = 5.0
-    pile_grid: tuple = (3, 5)
+    pile_grid: tuple = field(default=(3, 5), metadata={"length": 2})
     pile_size: float = 2.4
     pile_wall: float = 0.08
     seabed_z: float = -6.0
-    fender_size: tuple = (0.6, 2.0, 2.0)
+    fender_size: tuple = field(default=(0.6, 2.0, 2.0), metadata={"length": 3})
     fender_yz: tuple = ((-4.0, 2.25), (4.0, 2.25))
     mesh_size: float = 2.0
 

@@ -36,7 +36,7 @@ class PlatformParams:
     posts (kg)."""
 
     name: str = "pad"
-    deck_size: tuple = (40.0, 40.0)
+    deck_size: tuple = field(default=(40.0, 40.0), metadata={"length": 2})
     deck_center_xy: tuple = (0.0, 0.0)
     deck_thickness: float = 7.6
     deck_top_z: float = -2.0

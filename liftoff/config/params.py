@@ -18,11 +18,12 @@ MATERIAL_KEYS = ("E", "nu", "rho")
 MAX_COUNT = 1_000_000
 
 
-def _field_value(where: Where, value: Any, default: Any, annotation: str = "") -> Any:
+def _field_value(where: Where, value: Any, default: Any, annotation: str = "", length: int | None = None) -> Any:
     """A TOML value for a dataclass field, typed after the field's default: true/false, a
     string (also for a default of None where the field's annotation is ``str | None``), an
     array (of numbers, or of points as long as the default's; a coordinate ``*_xy`` as long
-    as the default), else a number."""
+    as the default; ``length`` entries where the field's metadata fixes it, e.g. a deck's
+    (x, y) size), else a number."""
     if isinstance(default, bool):
         return boolean(where, value)
     if isinstance(default, str) or (default is None and str(annotation).replace(" ", "") == "str|None"):
@@ -39,6 +40,8 @@ def _field_value(where: Where, value: Any, default: Any, annotation: str = "") -
     out = tuple(float(x) for x in vector(where, value))
     if where.key.endswith("_xy") and len(out) != len(default):
         raise where.error(f"has {len(out)} entries, expected {len(default)} (x, y in m)")
+    if length is not None and len(out) != length:
+        raise where.error(f"has {len(out)} entries, expected {length}")
     return out
 
 
@@ -49,16 +52,17 @@ def builder(where: Where, cls: type, spec: Any, fixed: dict | None = None, defau
     fixed = fixed or {}
     if not isinstance(spec, dict):
         raise where.error(f"expected a table of {cls.__name__} fields, got {type(spec).__name__}")
-    fields, types = {}, {}
+    fields, types, lengths = {}, {}, {}
     for f in dataclasses.fields(cls):
         default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
         if f.init and f.name not in fixed and not dataclasses.is_dataclass(default):
-            fields[f.name], types[f.name] = default, f.type
+            fields[f.name], types[f.name], lengths[f.name] = default, f.type, f.metadata.get("length")
     unknown = sorted(set(spec) - set(fields))
     if unknown:
         raise where.error(f"unknown key {unknown[0]!r}: not a parameter of {cls.__name__} "
                           f"(parameters: {', '.join(fields)})")
-    kwargs = {**(defaults or {}), **{k: _field_value(where / k, v, fields[k], types[k]) for k, v in spec.items()}}
+    kwargs = {**(defaults or {}), **{k: _field_value(where / k, v, fields[k], types[k], lengths[k])
+                                     for k, v in spec.items()}}
     try:
         obj = cls(**fixed, **kwargs)
         obj.check()

@@ -107,3 +107,20 @@ def test_the_stick_defaults_are_within_the_ranges():
 
     StickParams().check()
     assert parse_scenario(STICK, "d").cases[0].model.components["srb_left"].builder.srb_mass == 590.0e3
+
+
+def test_fixed_length_builder_arrays_are_named_at_their_key():
+    """A builder's array whose length the geometry fixes (a platform deck's (x, y) size, a
+    dock's piles grid and (x, y, z) sizes, a barge's saddle): the wrong length is one line at
+    its key ("too many values to unpack" at the params table before)."""
+    pad = {"type": "platform", "mesh_size": 2.4, "params": {"posts": {"srb_left_hd_1": [-8.0, 1.0, 0.0]}}}
+    for size, n in (([10.0, 12.0, 3.0], 3), ([10.0], 1)):
+        data = merge(DEFAULT, {"model": {"pad": merge(pad, {"params": {"deck_size": size}})}})
+        with pytest.raises(InputError, match=rf"s: model\.pad\.params\.deck_size: has {n} entries, expected 2$"):
+            parse_scenario(data, "s")
+    for part, key, value, n in (("dock", "pile_grid", [3, 5, 2], 2), ("dock", "fender_size", [0.6, 2.0], 3),
+                                ("barge", "saddle_size", [2.0, 5.0], 3)):
+        data = merge(parse_toml(example_text("barge"), "b"), {"model": {part: {"params": {key: value}}}})
+        with pytest.raises(InputError, match=rf"{key}: has {len(value)} entries, expected {n}$") as exc:
+            parse_barge(data, "b")
+        assert "\n" not in str(exc.value)
