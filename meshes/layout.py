@@ -81,7 +81,7 @@ class StackLayout:
             raise InputError(f"StackLayout.orbiter_attach must be one of {', '.join(map(repr, ORBITER_ATTACH))} "
                              f"(got {self.orbiter_attach!r})")
         if self.orbiter_attach == "bipods":             # (the feet lie on the tank's wall)
-            reach = 0.8 * min(self.core_radius, self.orbiter_radius)
+            reach = 0.8 * self.core_radius
             for k, v, hi in (("orbiter_fwd_bipod_x", self.orbiter_fwd_bipod_x, reach),
                              ("orbiter_aft_attach_x", self.orbiter_aft_attach_x, reach),
                              ("orbiter_aft_bipod_dz", self.orbiter_aft_bipod_dz, 5.0)):
@@ -237,6 +237,18 @@ class StackLayout:
     def orbiter_core_points(self) -> dict[str, np.ndarray]:
         """The core's points for the orbiter: its attach points, or the bipods' feet."""
         return self.orbiter_bipod_feet() if self.orbiter_attach == "bipods" else self.orbiter_attach_points()
+
+    def option_point_names(self) -> set[str]:
+        """The names of the points the attach options place or move (either value of each:
+        the attach points, the aft struts' ends, the thrust beam's wall points, the bipods'
+        feet), whatever this layout's options, without their geometry (an option not set may
+        have parameters that place nothing)."""
+        out = {f"att_srb_{s}_{e}" for s in SIDES for e in ("fwd", "aft")}
+        out |= {f"{p}srb_{s}_aft_{t}" for p in ("", "et_") for s in SIDES for t in ("upper", "lower")}
+        out |= {f"et_srb_{s}_fwd" for s in SIDES} | {"att_orb_fwd"} | {f"att_orb_aft_{s}" for s in SIDES}
+        out |= {f"et_orb_fwd_{s}" for s in SIDES} | {f"et_orb_aft_{s}_{k}" for s in SIDES
+                                                    for k in ("vertical", "diagonal")}
+        return out
 
     def named_points(self) -> dict[str, np.ndarray]:
         """Every named point of the layout (attach points and aft strut ends of both boosters,

@@ -193,8 +193,9 @@ def _held_labels(stack: StackModel, comp: str, point: str, labels: list[str], sp
         raise where.error(f"{spec!r}: component {comp!r} has no point {point!r}")
     held = [lab for lab in labels if lab in own and not asm.released_apart(comp, lab)]
     others = [set(cb.boundary_labels) for cb in asm.components if cb.name != comp]
-    shared = [lab for lab in held if any(lab in o for o in others)]
-    return shared if shared else held
+    if not any(lab in o for o in others for lab in labels):       # a point of this component alone
+        return held
+    return [lab for lab in held if any(lab in o for o in others)]
 
 
 def recoveries(case: Case, stack: StackModel, cryo: dict | None = None) -> tuple[list[Recovery], dict, dict]:

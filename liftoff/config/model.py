@@ -380,15 +380,11 @@ _LAYOUT_OPTIONS = {"srb_aft_attach": "point", "srb_fwd_attach": "wall", "orbiter
 
 def _check_layout_joints(where: Where, layout: StackLayout, joints, components: dict) -> None:
     """Before any meshing: a joint on a Shuttle type (shuttle_core, shuttle_booster or its
-    mirror, shuttle_orbiter) at one of the layout's interface points (those of any of its
-    attach options) that this layout gives that component not, named with the option that
-    moved it (``srb_aft_attach = "struts"`` alone leaves the default's att_srb_<side>_aft
+    mirror, shuttle_orbiter) at one of the points the layout's attach options place or move
+    (StackLayout.option_point_names; not the hold-downs or any other point) that this layout
+    gives that component not, named with the option that moved it (``srb_aft_attach = "struts"`` alone leaves the default's att_srb_<side>_aft
     joints on points the tank and boosters no longer have)."""
-    import dataclasses as dc
-
-    every = dict(StackLayout().named_points())
-    every.update(dc.replace(layout, srb_aft_attach="struts", srb_fwd_attach="beam",
-                            orbiter_attach="bipods").named_points())
+    every = layout.option_point_names()         # (names only: an option not set places nothing)
     core = {p for s in ("left", "right") for p in layout.srb_core_points(s)} | set(layout.orbiter_core_points())
 
     def points(name: str):
@@ -426,6 +422,8 @@ def _check_pinned_releases(where: Where, joints, components: dict) -> None:
         rot = [d for d in j.release if d.startswith("R")]
         for c in j.components[1:]:
             comp = components.get(c)
+            if comp is not None and comp.mirror is not None:          # a mirror's is its source's
+                comp = components.get(comp.mirror.of)
             if rot and comp is not None and comp.type == "strut" and getattr(comp.builder, "pinned", False):
                 raise (where / i).error(f"joint {j.name!r} releases {' '.join(rot)} of {c!r}, a pinned strut, whose "
                                         "ends are translations only (it passes no moment already): release no "

@@ -284,5 +284,6 @@ def test_orbiter_bipod_feet_of_the_layout():
     assert set(feet) <= set(lay.named_points())
     with pytest.raises(InputError, match="orbiter_attach must be one of 'point', 'bipods'"):
         StackLayout(orbiter_attach="bipod").check()
-    with pytest.raises(InputError, match="orbiter_fwd_bipod_x = 3.0 m must be in"):
-        StackLayout(orbiter_attach="bipods", orbiter_fwd_bipod_x=3.0).check()
+    with pytest.raises(InputError, match=r"orbiter_fwd_bipod_x = 3.5 m must be in \(0, 3.36\) m"):
+        StackLayout(orbiter_attach="bipods", orbiter_fwd_bipod_x=3.5).check()      # (0.8 x the tank's radius)
+    StackLayout(orbiter_attach="bipods", orbiter_radius=1.8).check()                 # (the orbiter's is no bound)

@@ -1,10 +1,10 @@
 """Stage cache integrity (workflows/cache.py): an entry is used only when its record matches
 its files; damaged or foreign entries are rebuilt with a warning; one key is built once
 under concurrency; an unwritable cache folder is a warning, never a failed run."""
+import json
 import os
 import threading
 import time
-
 from pathlib import Path
 
 import numpy as np
@@ -92,6 +92,11 @@ def test_a_file_rewritten_while_it_is_checksummed_is_never_stamped(tmp_path, mon
     _get(cache, "ka", a, builds)
     time.sleep(0.05)
     entry = tmp_path / "system" / "ka.npz"
+    record = tmp_path / "system" / "ka.entry.json"
+    rec = json.loads(record.read_text())        # unstamped, so that the next hit reads the file (the build's
+    rec.pop("stat", None)                       # own stamp holds when the clock ticked between the file's
+    rec.pop("stat_ns", None)                    # write and the stamp: then no hit read it, 1 run in 3)
+    record.write_text(json.dumps(rec))
     real = cache_mod.file_sha256
 
     def rewrite_after_reading(f):

@@ -403,6 +403,11 @@ def test_attach_recovery_at_a_pinned_strut_and_bad_specs(tmp_path):
     assert attach["attach_b_aft"] == ("b_aft", "booster")
     D, A = np.asarray(rec.disp), np.asarray(rec.acc)
     assert np.all(D[3:] == 0) and np.all(A[3:] == 0) and np.abs(D[:3]).max() > 0
+    from liftoff.reduction import interface_force_recovery
+
+    own = interface_force_recovery(stack.vehicle_asm, stack.vehicle_modes, "booster",   # what those rows held
+                                   [f"b_aft:{c}" for c in ("Rx", "Ry", "Rz")])[0]
+    assert np.abs(own).max() > 0                    # (the residual the zeroing takes out)
     for spec, message in (("b_aft@stage1", "'b_aft@stage1': component 'stage1' has no point 'b_aft'"),
                           ("b_aft@nowhere", "'b_aft@nowhere': no vehicle component 'nowhere'")):
         bad = dataclasses.replace(case, recovery=dataclasses.replace(case.recovery, attach=(spec,)))
@@ -443,3 +448,32 @@ def test_an_attach_option_alone_is_named_on_reading(key, value, joint):
                                          rf"layout \(\[model.vehicle.params\] {key} = '{value}'") as exc:
         parse_scenario(d, "s.toml")
     assert "\n" not in str(exc.value)
+
+
+def test_parse_time_attach_checks_leave_other_points_and_unused_options_alone():
+    """The layout checks on reading look at the points the attach options place or move
+    only: a joint at a booster's hold-down point (a shoe, a brace) parses as before, and an
+    option's parameters that place nothing while it is off (the sway braces' offset, the
+    bipods' spread; a small tank) are not evaluated (a math domain error before); a mirror
+    of a pinned strut is a pinned strut (its rotation release refused on reading)."""
+    from liftoff.config import default_text, parse_scenario, parse_toml
+    from liftoff.core.errors import InputError
+
+    d = parse_toml(default_text(), "d.toml")
+    d["model"]["component"]["hd_shoe"] = {"type": "rigid_mass", "params": {
+        "point": "srb_left_hd_1", "at": [-8.0, 1.0, 0.0], "mass": 100.0}}
+    d["model"]["joint"].append({"name": "srb_left_hd_1", "components": ["srb_left", "hd_shoe"]})
+    parse_scenario(d, "d.toml")
+    for kw in ({"srb_aft_strut_y": 3.0}, {"orbiter_fwd_bipod_x": 5.0}):
+        d = parse_toml(default_text(), "d.toml")
+        d["model"].setdefault("vehicle", {}).setdefault("params", {}).update(kw)
+        parse_scenario(d, "d.toml")
+    data = _with_booster(tomllib.loads(SCENARIO.read_text()))
+    data["model"]["component"]["strut_aft"]["params"]["pinned"] = True
+    data["model"]["component"]["strut_aft2"] = {"mirror": {"of": "strut_aft", "normal": "y"}}
+    for j in data["model"]["joint"]:
+        if j["name"] == "b_aft":
+            j["components"] = ["booster", "strut_aft2"]
+            j["release"] = ["Rx"]
+    with pytest.raises(InputError, match=r"joint 'b_aft' releases Rx of 'strut_aft2', a pinned strut"):
+        parse_scenario(data, "m.toml", SCENARIO.parent)
