@@ -27,10 +27,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from liftoff.core.beam import Section, _axes, assemble_frame, beam_element, standard_section
+from liftoff.core.beam import Section, assemble_frame, beam_element, element_axes, standard_section
 from liftoff.core.elastic import check_elastic
 from liftoff.core.errors import InputError
-
 from liftoff.core.labels import TRANSLATIONS
 
 from .component import Component
@@ -89,14 +88,17 @@ def strut_component(p: Strut, name: str | None = None) -> tuple[Component, dict]
     d = (b - a) / np.linalg.norm(b - a)
     vref = np.asarray(p.vref, float) if len(p.vref) else np.eye(3)[int(np.argmin(np.abs(d)))]
     sec, G = p.section_of(), p.E / (2 * (1 + p.nu))
-    pins = ("56", "56") if p.pinned else ("", "")
-    K, M = assemble_frame(n + 1, ((k, k + 1, *beam_element(X[k], X[k + 1], p.E, G, sec, p.rho, vref,
-                                                             pins=(pins[0] if k == 0 else "", pins[1] if k == n - 1 else "")))
-                                  for k in range(n)))
+    end = "56" if p.pinned else ""              # a pinned strut: its end elements' bending released
+
+    def element(k: int):
+        pins = (end if k == 0 else "", end if k == n - 1 else "")
+        return (k, k + 1, *beam_element(X[k], X[k + 1], p.E, G, sec, p.rho, vref, pins=pins))
+
+    K, M = assemble_frame(n + 1, (element(k) for k in range(n)))
     cells = np.column_stack([np.arange(n), np.arange(1, n + 1)])
     if not p.pinned:
         return line_component(name, X, names, K, M, cells), {}
-    return _pinned_component(name, X, (na, nb), K, M, cells, _axes(a, b, vref)[1]), {}
+    return _pinned_component(name, X, (na, nb), K, M, cells, element_axes(a, b, vref)), {}
 
 
 def _pinned_component(name: str, X: np.ndarray, ends: tuple[str, str], K, M, cells, axes: np.ndarray) -> Component:

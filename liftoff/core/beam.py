@@ -72,6 +72,12 @@ def _axes(x1: np.ndarray, x2: np.ndarray, vref) -> tuple[float, np.ndarray]:
     return L, np.vstack([ex, ey, ez])
 
 
+def element_axes(x1, x2, vref) -> np.ndarray:
+    """The local axes of a beam from ``x1`` to ``x2`` with orientation vector ``vref``: rows
+    x (along it), y, z (module docstring)."""
+    return _axes(np.asarray(x1, float), np.asarray(x2, float), vref)[1]
+
+
 def bending_stiffness(EI: float, L: float, phi: float = 0.0) -> np.ndarray:
     """4 x 4 stiffness of one bending plane (w, theta at both ends), phi = 12 E I / (G A_s L^2)
     (0: Euler-Bernoulli)."""
