@@ -782,6 +782,10 @@ def render_aft_struts(fig: dict) -> str:
         return "; ".join(f"{b[k]['tension_n'] / 1e6:.2f} / {b[k]['compression_n'] / 1e6:.2f}" for k in
                          ("orbiter_fwd_bipod_left", "orbiter_aft_left_vertical", "orbiter_aft_left_diagonal"))
 
+    def beam(v):
+        b = v.get("thrust_beam")
+        return "-" if not b else f"{b['Tx'] / 1e6:.2f}, {b['Tz'] / 1e6:.2f}; {b['Ry'] / 1e6:.2f}"
+
     def sec(x):
         return "-" if x is None else f"{x:.0f}"
 
@@ -797,6 +801,7 @@ def render_aft_struts(fig: dict) -> str:
             ("left booster's aft struts: peak axial force, tension / compression (MN)", struts),
             ("orbiter's bipod struts (forward left, aft left vertical and diagonal): peak axial force, tension / "
              "compression (MN)", bipods),
+            ("thrust beam's span at the left wall: peak axial Tx, shear Tz (MN); bending Ry (MN m)", beam),
             ("largest change of another attach force's peak magnitude from the default's",
              lambda v: "-" if v is fig["joint"] else change(v))]
     return _variant_table("attach hardware", [(AFT_STRUT_TITLES[k], v) for k, v in fig.items()], lead,

@@ -115,6 +115,7 @@ def edit_for(name: str):
                     j["components"] = [f"srb_{j['name'].split('_')[2]}_thrust_fitting", j["components"][-1]]
             for wall in lay.srb_thrust_beam_points():
                 joints.append({"name": wall, "components": ["core"] + [m for m, e in members.items() if wall in e]})
+            d["recovery"]["attach"] = list(d["recovery"]["attach"]) + [BEAM_END]
         if spec["bipods"] is not None:
             params["orbiter_attach"] = "bipods"
             lay = StackLayout(orbiter_attach="bipods")
@@ -132,6 +133,23 @@ def edit_for(name: str):
         return d
 
     return edit
+
+
+#: the thrust beam's loads: the force and moment on its span at the left booster's wall point
+BEAM_END = "et_srb_left_fwd@srb_thrust_beam"
+
+
+def beam_figures(out) -> dict:
+    """The thrust beam's span at its left end over both named cases: the peak of each of the
+    six components of the force and moment on it there (N, N m; global axes: Tx along the
+    beam, Tz the thrust's shear, Ry its bending)."""
+    comps = ("Tx", "Ty", "Tz", "Rx", "Ry", "Rz")
+    peaks: dict = {}
+    for res, _ in out.results.values():
+        f = np.asarray(res.recovered[f"attach_{BEAM_END.split('@')[0]}"])
+        for i, c in enumerate(comps):
+            peaks[c] = _larger(peaks.get(c), f[:, i])
+    return peaks
 
 
 def bipod_figures(out) -> dict:
@@ -212,6 +230,8 @@ def variant_figures(name: str, cache: Path) -> dict:
     summary["aft_attach"] = aft_attach_figures(out)
     if VARIANTS[name]["bipods"] is not None:
         summary["bipods"] = bipod_figures(out)
+    if VARIANTS[name]["beam"] is not None:
+        summary["thrust_beam"] = beam_figures(out)
     return summary
 
 
