@@ -179,9 +179,9 @@ def _larger(prev, v: np.ndarray) -> float:
 def aft_attach_figures(out, side: str = "left") -> dict:
     """The booster's aft attach over both named cases, as the default's released joint
     carries it: the peak Tx, Ty (N) and Rz (N m, about the joint's point) of the force on
-    the booster there, and their static values at t0 (``"t0"``) (the joint's rows, or the struts' resultant on the booster, its moment
-    taken about the joint's point); with struts also each strut's peak axial force (N, +
-    tension)."""
+    the booster there, and their static values at t0 (``"t0"``) (the joint's rows, or the
+    struts' resultant on the booster, its moment taken about the joint's point); with
+    struts also each strut's peak axial force (N, + tension)."""
     from liftoff.meshes.layout import StackLayout
 
     lay = StackLayout(srb_aft_attach="struts")

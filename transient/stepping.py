@@ -344,7 +344,8 @@ def _stable_below(rows, omega, zeta, h_try: float, h_bad: float, static=None) ->
 
 
 # ----------------------------------------------------------------- run size
-def memory_estimate(problem: TransientProblem, n_steps: int, runs: float = 1, modal_runs: float = 1) -> dict[str, float]:
+def memory_estimate(problem: TransientProblem, n_steps: int, runs: float = 1,
+                    modal_runs: float = 1) -> dict[str, float]:
     """Bytes the transient needs, by item: time histories (n_t x columns, 8 bytes each;
     ``runs`` of them held at once, e.g. 3 for a run with its h/2 error-estimate run), the
     modal histories of ``keep_modal`` (q, v and acc per mode, or q alone for ``"q"``;

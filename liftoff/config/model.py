@@ -382,8 +382,9 @@ def _check_layout_joints(where: Where, layout: StackLayout, joints, components: 
     """Before any meshing: a joint on a Shuttle type (shuttle_core, shuttle_booster or its
     mirror, shuttle_orbiter) at one of the points the layout's attach options place or move
     (StackLayout.option_point_names; not the hold-downs or any other point) that this layout
-    gives that component not, named with the option that moved it (``srb_aft_attach = "struts"`` alone leaves the default's att_srb_<side>_aft
-    joints on points the tank and boosters no longer have)."""
+    gives that component not, named with the option that moved it (``srb_aft_attach =
+    "struts"`` alone leaves the default's att_srb_<side>_aft joints on points the tank and
+    boosters no longer have)."""
     every = layout.option_point_names()         # (names only: an option not set places nothing)
     core = {p for s in ("left", "right") for p in layout.srb_core_points(s)} | set(layout.orbiter_core_points())
 

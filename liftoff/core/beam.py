@@ -105,7 +105,8 @@ def _rotary_mass(rhoI: float, L: float, phi: float) -> np.ndarray:
 
 
 def beam_element(x1, x2, E: float, G: float, section: Section, rho: float, vref=(0.0, 0.0, 1.0),
-                 rotary: bool = True, nsm: float = 0.0, pins: tuple[str, str] = ("", "")) -> tuple[np.ndarray, np.ndarray]:
+                 rotary: bool = True, nsm: float = 0.0,
+                 pins: tuple[str, str] = ("", "")) -> tuple[np.ndarray, np.ndarray]:
     """Global 12 x 12 stiffness and consistent mass of a straight beam from ``x1`` to ``x2``
     (module docstring): Timoshenko where the section has shear areas, Euler-Bernoulli
     where it has none; ``rotary``: the bending rotary inertia rho I in the mass; ``nsm``:
