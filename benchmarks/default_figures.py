@@ -665,15 +665,26 @@ def _variant_table(head: str, cols: list, lead: list, attach_items) -> str:
     return "\n".join(rows) + "\n"
 
 
+def _seconds(x) -> str:
+    """A stage time (s) as the comparison tables print it; "-" where not built (a cache hit)."""
+    return "-" if x is None else f"{x:.0f}"
+
+
+def _largest_change(v: dict, base: dict, items) -> str:
+    """The largest change of an attach force's peak magnitude among ``items`` in variant
+    ``v`` from ``base`` (the default's attach_n; the peaks are signed: a small load's may
+    change sign between runs)."""
+    k = max(items, key=lambda k: abs(abs(v["attach_n"].get(k, 0.0)) - abs(base[k])))
+    d = abs(v["attach_n"].get(k, 0.0)) - abs(base[k])
+    return f"{d / 1e6:+.2f} MN ({100 * d / abs(base[k]):+.0f} % of the default's), {k}"
+
+
 def render_booster_grain(fig: dict) -> str:
     """The default run with thickened solid boosters against case + grain boosters at each
     Craig-Bampton cut (benchmarks/booster_grain_compare.py)."""
     cols = [("thickened solid (default)", fig["solid"])] + [
         (f"case + grain, CB to {k} Hz", v) for k, v in fig["grain"].items()] + [
         (f"case + grain, CB to {k} Hz + residual vectors", v) for k, v in fig.get("grain_rv", {}).items()]
-
-    def sec(x):
-        return "-" if x is None else f"{x:.0f}"
 
     def modes(v):
         r = v.get("booster_residual_vectors", 0)
@@ -682,7 +693,7 @@ def render_booster_grain(fig: dict) -> str:
 
     lead = [("booster FE DOFs; fixed-interface modes (below f_max Hz)", modes),
             ("booster FE, CB stage times, cold (s, this machine)",
-             lambda v: f"{sec(v['booster_fe_s'])}, {sec(v['booster_cb_s'])}"),
+             lambda v: f"{_seconds(v['booster_fe_s'])}, {_seconds(v['booster_cb_s'])}"),
             ("vehicle system modes; mass (t)", lambda v: f"{v['vehicle_modes']}; {v['vehicle_mass_t']:.1f}"),
             ("peak resident memory of the run's processes (GB; - : not recorded)",
              lambda v: "-" if v.get("peak_rss_gb") is None else f"{v['peak_rss_gb']:.1f}")]
@@ -717,11 +728,6 @@ def render_stiffeners(fig: dict) -> str:
     base = fig["bare"]["attach_n"]
     items = [k for k in sorted(base, key=lambda k: (k.split(" on ")[0], k)) if k.endswith(("Tx", "Ty", "Tz"))]
 
-    def change(v):
-        k = max(items, key=lambda k: abs(abs(v["attach_n"].get(k, 0.0)) - abs(base[k])))
-        d = abs(v["attach_n"].get(k, 0.0)) - abs(base[k])
-        return f"{d / 1e6:+.2f} MN ({100 * d / abs(base[k]):+.0f} % of the default's), {k}"
-
     def built(v):                      # the components this variant built (the others: cache hits)
         parts = [(c, v["components"][c]) for c in ("core", "orbiter", "pad")]
         return "; ".join(f"{c} {p['fe_s']:.0f}, {p['cb_s']:.0f}" for c, p in parts
@@ -733,7 +739,7 @@ def render_stiffeners(fig: dict) -> str:
             ("FE, CB stage times of the components this run built, cold (s, this machine)", built),
             ("vehicle system modes; mass (t)", lambda v: f"{v['vehicle_modes']}; {v['vehicle_mass_t']:.1f}"),
             ("largest change of an attach force's peak magnitude from the default's",
-             lambda v: "-" if v is fig["bare"] else change(v))]
+             lambda v: "-" if v is fig["bare"] else _largest_change(v, base, items))]
     return _variant_table("walls and deck", [(STIFFENER_TITLES[k], v) for k, v in fig.items()], lead, items)
 
 
@@ -758,11 +764,6 @@ def render_aft_struts(fig: dict) -> str:
     items = [k for k in sorted(base, key=lambda k: (k.split(" on ")[0], k))
              if "right" not in k and "_aft on srb" not in k and k.endswith(("Tx", "Ty", "Tz"))]
 
-    def change(v):
-        k = max(items, key=lambda k: abs(abs(v["attach_n"].get(k, 0.0)) - abs(base[k])))
-        d = abs(v["attach_n"].get(k, 0.0)) - abs(base[k])
-        return f"{d / 1e6:+.2f} MN ({100 * d / abs(base[k]):+.0f} % of the default's), {k}"
-
     def aft(v):
         a, t0 = v["aft_attach"], v["aft_attach"].get("t0")
         return f"{a['Tx'] / 1e6:.2f}, {a['Ty'] / 1e6:.2f}; {a['Rz'] / 1e6:.2f}" + (
@@ -786,15 +787,12 @@ def render_aft_struts(fig: dict) -> str:
         b = v.get("thrust_beam")
         return "-" if not b else f"{b['Tx'] / 1e6:.2f}, {b['Tz'] / 1e6:.2f}; {b['Ry'] / 1e6:.2f}"
 
-    def sec(x):
-        return "-" if x is None else f"{x:.0f}"
-
     lead = [("FE DOFs; fixed-interface modes: core, booster",
              lambda v: f"{v['core']['fe_dofs']}, {v['core']['cb_modes']}; {v['booster_fe_dofs']}, "
                        f"{v['booster_cb_modes']}"),
             ("FE, CB stage times, cold (s, this machine): core; booster",
-             lambda v: f"{sec(v['core']['fe_s'])}, {sec(v['core']['cb_s'])}; {sec(v['booster_fe_s'])}, "
-                       f"{sec(v['booster_cb_s'])}"),
+             lambda v: f"{_seconds(v['core']['fe_s'])}, {_seconds(v['core']['cb_s'])}; "
+                       f"{_seconds(v['booster_fe_s'])}, {_seconds(v['booster_cb_s'])}"),
             ("vehicle system modes; mass (t)", lambda v: f"{v['vehicle_modes']}; {v['vehicle_mass_t']:.1f}"),
             ("left booster's aft attach, peak (static at t0): Tx, Ty (MN); Rz (MN m) (the joint's, or the struts' "
              "resultant on the booster about the joint's point)", aft),
@@ -803,7 +801,7 @@ def render_aft_struts(fig: dict) -> str:
              "compression (MN)", bipods),
             ("thrust beam's span at the left wall: peak axial Tx, shear Tz (MN); bending Ry (MN m)", beam),
             ("largest change of another attach force's peak magnitude from the default's",
-             lambda v: "-" if v is fig["joint"] else change(v))]
+             lambda v: "-" if v is fig["joint"] else _largest_change(v, base, items))]
     return _variant_table("attach hardware", [(AFT_STRUT_TITLES[k], v) for k, v in fig.items()], lead,
                           items)
 
