@@ -164,10 +164,15 @@ def bipod_figures(out) -> dict:
         for strut, (foot, apex) in lay.orbiter_bipods().items():
             axis = (pts[apex] - pts[foot]) / np.linalg.norm(pts[apex] - pts[foot])
             h = -np.asarray(res.recovered[f"attach_{foot}"])[:, :3] @ axis
-            q = peaks.setdefault(strut, {"tension_n": -np.inf, "compression_n": np.inf})
-            q["tension_n"] = max(q["tension_n"], float(h.max()))
-            q["compression_n"] = min(q["compression_n"], float(h.min()))
+            _axial_peaks(peaks, strut, h)
     return peaks
+
+
+def _axial_peaks(peaks: dict, strut: str, axial: np.ndarray) -> None:
+    """``peaks[strut]``'s largest tension and compression (N) with those of ``axial``."""
+    q = peaks.setdefault(strut, {"tension_n": -np.inf, "compression_n": np.inf})
+    q["tension_n"] = max(q["tension_n"], float(axial.max()))
+    q["compression_n"] = min(q["compression_n"], float(axial.min()))
 
 
 def _larger(prev, v: np.ndarray) -> float:
@@ -205,9 +210,7 @@ def aft_attach_figures(out, side: str = "left") -> dict:
                  f"{b}_strut_lower": -f["strut_lower"][:, :3] @ axis[f"{b}_strut_lower"],
                  f"{b}_strut_diagonal": -f["strut_diagonal"][:, :3] @ axis[f"{b}_strut_diagonal"]}
         for k, h in axial.items():
-            q = peaks.setdefault("struts", {}).setdefault(k, {"tension_n": -np.inf, "compression_n": np.inf})
-            q["tension_n"] = max(q["tension_n"], float(h.max()))
-            q["compression_n"] = min(q["compression_n"], float(h.min()))
+            _axial_peaks(peaks.setdefault("struts", {}), k, h)
         force = f["booster_upper"][:, :3] + f["booster_lower"][:, :3]
         moment = sum(np.cross(pts[f"{b}_{tag}"] - p0, f[f"booster_{tag}"][:, :3])[:, 2]
                      for tag in ("upper", "lower"))                 # (the pinned ends pass no moment)
