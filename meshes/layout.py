@@ -13,7 +13,7 @@ reference point, and pad post tops coincide with the booster hold-down points.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -71,15 +71,11 @@ class StackLayout:
             raise InputError("StackLayout.srb_skirt_thickness must be < srb_skirt_radius")
         if len(self.holddown_azimuths_deg) < 1:
             raise InputError("StackLayout.holddown_azimuths_deg is empty")
-        if self.srb_aft_attach not in AFT_ATTACH:
-            raise InputError(f"StackLayout.srb_aft_attach must be one of {', '.join(map(repr, AFT_ATTACH))} "
-                             f"(got {self.srb_aft_attach!r})")
-        if self.srb_fwd_attach not in FWD_ATTACH:
-            raise InputError(f"StackLayout.srb_fwd_attach must be one of {', '.join(map(repr, FWD_ATTACH))} "
-                             f"(got {self.srb_fwd_attach!r})")
-        if self.orbiter_attach not in ORBITER_ATTACH:
-            raise InputError(f"StackLayout.orbiter_attach must be one of {', '.join(map(repr, ORBITER_ATTACH))} "
-                             f"(got {self.orbiter_attach!r})")
+        for k, allowed in (("srb_aft_attach", AFT_ATTACH), ("srb_fwd_attach", FWD_ATTACH),
+                           ("orbiter_attach", ORBITER_ATTACH)):
+            if getattr(self, k) not in allowed:
+                raise InputError(f"StackLayout.{k} must be one of {', '.join(map(repr, allowed))} "
+                                 f"(got {getattr(self, k)!r})")
         if self.orbiter_attach == "bipods":             # (the feet lie on the tank's wall)
             reach = 0.8 * self.core_radius
             for k, v, hi in (("orbiter_fwd_bipod_x", self.orbiter_fwd_bipod_x, reach),
@@ -243,12 +239,11 @@ class StackLayout:
         the attach points, the aft struts' ends, the thrust beam's wall points, the bipods'
         feet), whatever this layout's options, without their geometry (an option not set may
         have parameters that place nothing)."""
-        out = {f"att_srb_{s}_{e}" for s in SIDES for e in ("fwd", "aft")}
-        out |= {f"{p}srb_{s}_aft_{t}" for p in ("", "et_") for s in SIDES for t in ("upper", "lower")}
-        out |= {f"et_srb_{s}_fwd" for s in SIDES} | {"att_orb_fwd"} | {f"att_orb_aft_{s}" for s in SIDES}
-        out |= {f"et_orb_fwd_{s}" for s in SIDES} | {f"et_orb_aft_{s}_{k}" for s in SIDES
-                                                    for k in ("vertical", "diagonal")}
-        return out
+        every = replace(self, srb_aft_attach="struts", srb_fwd_attach="beam", orbiter_attach="bipods")
+        members = [*every.srb_thrust_beam().values(), *every.orbiter_bipods().values(),
+                   *(ends for s in SIDES for ends in every.srb_aft_struts(s).values())]
+        attach = {n for s in SIDES for n in replace(self, srb_aft_attach="point").srb_attach_points(s)}
+        return attach | set(self.orbiter_attach_points()) | {n for ends in members for n in ends}
 
     def named_points(self) -> dict[str, np.ndarray]:
         """Every named point of the layout (attach points and aft strut ends of both boosters,
