@@ -31,6 +31,7 @@ _EXPORTS = {
     "ResourceError": "liftoff.core.errors",
     "solve": ".solver",
     "solve_batch": ".batch",
+    "solve_batch_iter": ".batch",
     "static_equilibrium": ".solver",
     "static_solution": ".solver",
 }

@@ -109,6 +109,38 @@ def contact_rows(body_a: ModalBody, body_b: ModalBody, contacts) -> ContactRows:
                        rforce=np.concatenate([np.zeros(0)] + [t[1] for t in tables]).astype(float), rptr=rptr)
 
 
+def interp_columns(x, xp: np.ndarray, fp: np.ndarray) -> np.ndarray:
+    """``np.interp(x, xp, fp[:, m])`` of every column m of ``fp`` (n_k, n) at once: (x.size, n),
+    or (n,) for a scalar x. numpy's arithmetic (the interval's slope (fp[j+1] - fp[j]) /
+    (xp[j+1] - xp[j]), then slope (x - xp[j]) + fp[j]; fp[j] at a breakpoint, the end values
+    outside [xp[0], xp[-1]], NaN at a NaN x), so the same values bit for bit: one search a
+    point instead of one np.interp call a column (7,000 calls, 15 ms, a default case)."""
+    xp, fp = np.asarray(xp, dtype=float), np.asarray(fp, dtype=float)
+    xs = np.asarray(x, dtype=float)
+    scalar = xs.ndim == 0
+    xs = xs.reshape(-1)
+    if xp.size == 0:
+        raise ValueError("interp_columns: no breakpoints (xp is empty)")
+    if xp.size == 1:
+        out = np.repeat(fp[:1], xs.size, axis=0)
+    else:
+        j = np.clip(np.searchsorted(xp, xs, side="right") - 1, 0, xp.size - 2)   # xp[j] <= x < xp[j+1]
+        lo, hi = fp[j], fp[j + 1]
+        with np.errstate(all="ignore"):      # (a repeated breakpoint or an infinite value: set below, as numpy)
+            slope = (hi - lo) / (xp[j + 1] - xp[j])[:, None]
+            out = slope * (xs - xp[j])[:, None] + lo
+            bad = np.isnan(out)
+            if bad.any():                    # numpy's fallback for infinite values: from the other end
+                out[bad] = (slope * (xs - xp[j + 1])[:, None] + hi)[bad]
+                flat = np.isnan(out) & (lo == hi)
+                out[flat] = lo[flat]
+        out[xs == xp[j]] = lo[xs == xp[j]]   # at a breakpoint: its value
+        out[xs < xp[0]] = fp[0]
+        out[xs >= xp[-1]] = fp[-1]
+        out[np.isnan(xs)] = np.nan
+    return out[0] if scalar else out
+
+
 @dataclass
 class ModalLoad:
     """Modal force of one body: const + piecewise-linear table on a merged time grid."""
@@ -120,7 +152,7 @@ class ModalLoad:
     def at(self, t: float) -> np.ndarray:
         if self.times.size == 0:
             return self.const.copy()
-        return self.const + np.array([np.interp(t, self.times, self.table[:, m]) for m in range(self.const.size)])
+        return self.const + interp_columns(t, self.times, self.table)
 
 
 def modal_load(body: ModalBody, key: str, forcing: Forcing) -> ModalLoad:
@@ -145,8 +177,7 @@ def modal_load(body: ModalBody, key: str, forcing: Forcing) -> ModalLoad:
     for t in tables:  # exact: every table is linear between its own breakpoints, a subset of grid
         table += np.outer(np.interp(grid, t.time, t.value), body.phi[body.dof_index(t.label)])
     for m in modal:
-        for k in range(n):
-            table[:, k] += np.interp(grid, m.time, m.values[:, k])
+        table += interp_columns(grid, m.time, m.values)
     return ModalLoad(const, grid, table)
 
 

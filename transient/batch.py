@@ -54,7 +54,7 @@ from __future__ import annotations
 
 import time as _time
 from dataclasses import dataclass
-from typing import NamedTuple, Sequence
+from typing import Iterator, NamedTuple, Sequence
 
 import numpy as np
 from numba import njit
@@ -746,18 +746,27 @@ def solve_batch(problems: Sequence[TransientProblem], group: int = GROUP) -> lis
     """Solve problems that share both bodies, their contact rows, step and outputs (module
     docstring) by marching them together, ``group`` cases at a time; the results in order,
     each as :func:`transient.solve` gives it (to round-off). One BLAS thread."""
+    return list(solve_batch_iter(problems, group))
+
+
+def solve_batch_iter(problems: Sequence[TransientProblem], group: int = GROUP) -> Iterator[TransientResult]:
+    """:func:`solve_batch`, its results made one at a time as they are taken: every case is
+    marched before this returns (a failure is raised here, as solve_batch raises it), and
+    each result (its histories split per body and item: copies) is made when asked for, so
+    that a caller who lets each go before taking the next holds one result beside the
+    marched histories instead of all of them (a campaign worker: workflows/campaign.py)."""
     from threadpoolctl import threadpool_limits
 
     problems = list(problems)
     if not problems:
-        return []
+        return iter(())
     if int(group) < 1:
         raise InputError(f"batch: group = {group!r} must be at least 1")
     with threadpool_limits(limits=1, user_api="blas"):
         return _solve_batch(problems, int(group))
 
 
-def _solve_batch(problems: list[TransientProblem], group: int) -> list[TransientResult]:
+def _solve_batch(problems: list[TransientProblem], group: int) -> Iterator[TransientResult]:
     started = _time.perf_counter()
     p0 = problems[0]
     pa, pb = p0.body_a, p0.body_b
@@ -788,10 +797,27 @@ def _solve_batch(problems: list[TransientProblem], group: int) -> list[Transient
             cs, st = _group_inputs(members, B, Vb, Ub, sh)
             _march(members, g0, step, sh, cs, st, cache, hist, W, bar)
             cases += members
+            del hist, members, sh, cs, st
     finally:
         if bar is not None:
             bar.close()
-    return [_result(c.problem, c.rows, step, plans, c.hist, int(cache.used[0]), started, c.state) for c in cases]
+    return _results(cases, step, plans, int(cache.used[0]), started)
+
+
+def _results(cases: list[_Case], step, plans, n_patterns: int, started: float) -> Iterator[TransientResult]:
+    """Each marched case's TransientResult in turn; a case is let go once its result is
+    made, so a group's output histories are freed with its last case's (the contact
+    forces, states and iterations stay views of the group's: small). A result's wall time
+    leaves out the time the caller spent between results, as if they were made at once."""
+    away = 0.0
+    while cases:
+        c = cases.pop(0)
+        res = _result(c.problem, c.rows, step, plans, c.hist, n_patterns, started + away, c.state)
+        del c
+        t = _time.perf_counter()
+        yield res
+        away += _time.perf_counter() - t
+        del res
 
 
 def _march(members: list[_Case], g0: int, step, sh: Shared, cs: Cases, st: GroupState, cache, hist: GroupHistory,

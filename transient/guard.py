@@ -35,6 +35,8 @@ import numpy as np
 
 from liftoff.core.errors import ConvergenceError
 
+from .assembly import interp_columns
+
 SAFETY = 100.0  # on the energy: the discrete scheme's energy differs from the exact one by O((omega h)^2)
 
 
@@ -73,8 +75,7 @@ class GrowthGuard:
         self.t0 = t0
         pts = np.unique(np.concatenate([[t0, t_end], self.tk[(self.tk > t0) & (self.tk < t_end)]]))
         if self.tk.size:
-            P = self.const[None, :] + np.column_stack([np.interp(pts, self.tk, self.Pk[:, m])
-                                                       for m in range(self.Pk.shape[1])])
+            P = self.const[None, :] + interp_columns(pts, self.tk, self.Pk)
         else:
             P = np.broadcast_to(self.const, (pts.size, self.const.size))
         with np.errstate(over="ignore", invalid="ignore"):

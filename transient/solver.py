@@ -11,7 +11,7 @@ from liftoff.core.errors import ConvergenceError, InputError
 from liftoff.core.locks import ForkSafeLock
 from liftoff.core.scratch import release_rows, scratch_array
 
-from .assembly import contact_rows, feedback_at, feedback_factors, modal_load
+from .assembly import contact_rows, feedback_at, feedback_factors, interp_columns, modal_load
 from .body import ModalBody
 from .coefficients import StepCoefficients, step_coefficients
 from .contact_laws import initial_slip, initial_soft
@@ -405,7 +405,7 @@ def _modal_inputs(problem: TransientProblem, coefs, loads) -> Modal:
     Pk = np.zeros((tk.size, n))
     for ld, cols in ((load_a, slice(0, na)), (load_b, slice(na, None))):
         if ld.times.size:  # exact: each body's table is linear between its own breakpoints
-            Pk[:, cols] = np.column_stack([np.interp(tk, ld.times, ld.table[:, m]) for m in range(ld.table.shape[1])])
+            Pk[:, cols] = interp_columns(tk, ld.times, ld.table)
     U_a, V_a, since_a, until_a = feedback_factors(pa.n_modes, "a", problem.forcing, problem.t0)
     U_b, V_b, since_b, until_b = feedback_factors(pb.n_modes, "b", problem.forcing, problem.t0)
     ra = U_a.shape[1]

@@ -28,7 +28,7 @@ from concurrent.futures import FIRST_COMPLETED, wait
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
 from pathlib import Path
-from typing import Callable, Iterable
+from typing import Callable, Iterable, Iterator
 
 import numpy as np
 
@@ -244,14 +244,15 @@ def solve_generated(task: CaseTask, keep_modal: bool | str = False, modal_scratc
         raise type(exc)(msg) from None
 
 
-def solve_together(task: CaseTask) -> tuple[list, str]:
-    """([(index, result, CaseProblem, Case, wall s)] of generated cases ``task.index`` and
-    ``task.together``, marched together (liftoff.transient.solve_batch; each wall the batch's
-    share); a note, "" unless they were solved one by one). Cases the batch cannot march
-    (friction, dashpots, latches, soft release, rigid rows: its scope, which it names) or whose
-    start fails are solved one by one, so that a case's error names that case as
-    solve_generated names it, and the note says why."""
-    from liftoff.transient import solve_batch
+def solve_together(task: CaseTask) -> tuple[Iterator, str]:
+    """((index, result, CaseProblem, Case, wall s) of generated cases ``task.index`` and
+    ``task.together``, in turn, marched together (liftoff.transient.solve_batch_iter: every
+    case marched before this returns, each result made as it is taken, so a caller that
+    lets each go holds one; each wall the batch's share); a note, "" unless they were solved
+    one by one). Cases the batch cannot march (friction, dashpots, latches, soft release,
+    rigid rows: its scope, which it names) or whose start fails are solved one by one, so
+    that a case's error names that case as solve_generated names it, and the note says why."""
+    from liftoff.transient import solve_batch_iter
 
     from .loads import build_problem
 
@@ -261,7 +262,7 @@ def solve_together(task: CaseTask) -> tuple[list, str]:
     t0 = time.perf_counter()
     try:
         cps = [build_problem(case, stack, progress=False) for case in cases]
-        results = solve_batch([cp.problem for cp in cps])
+        results = solve_batch_iter([cp.problem for cp in cps])
     except (InputError, ConvergenceError, ResourceError) as exc:     # (its memory: K cases' histories at once)
         note = (f"--march-together: cases {', '.join(c.name for c in cases)} solved one by one "
                 f"({' '.join(str(exc).split())[:300]})"
@@ -271,9 +272,9 @@ def solve_together(task: CaseTask) -> tuple[list, str]:
             import warnings
 
             warnings.warn(note + "; further such groups of this worker likewise", stacklevel=2)
-        return [(i, *solve_generated(replace(task, index=i, together=()))) for i in indexes], note
+        return ((i, *solve_generated(replace(task, index=i, together=()))) for i in indexes), note
     wall = (time.perf_counter() - t0) / len(cases)
-    return [(i, res, cp, case, wall) for i, res, cp, case in zip(indexes, results, cps, cases)], ""
+    return ((i, res, cp, case, wall) for i, res, cp, case in zip(indexes, results, cps, cases)), ""
 
 
 def run_case(task: CaseTask):
@@ -286,8 +287,7 @@ def run_case(task: CaseTask):
     trim_heap()                          # the previous case's freed arrays back to the system
     if task.together and not task.columns:
         (solved, note), out = solve_together(task), []
-        while solved:                    # each case's result let go once summarised
-            i, res, cp, case, wall = solved.pop(0)
+        for i, res, cp, case, wall in solved:   # each case's result made, summarised and let go in turn
             out.append(_summary(replace(task, index=i), res, cp, case, wall))
             del res, cp
         if out and note:                 # said by the main process too (a remote worker's warning is not seen)

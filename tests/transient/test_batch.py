@@ -191,3 +191,46 @@ def test_step_over_the_modes_is_the_matrix_products(K):
     state[3] = F * 2.0
     _pass(ST, state, PhiT, Mq, Mv, R, na, False)     # from the state: F ignored, Pc kept
     assert np.array_equal(Pc, keep)
+
+
+def test_results_taken_one_at_a_time_are_the_list_and_free_the_group():
+    """solve_batch_iter marches every case before it returns (a refusal is raised there, as
+    solve_batch raises it) and makes each result when taken: the same results, bit for bit,
+    as solve_batch's; once every result of a group has been taken and let go, the group's
+    output histories are freed (a weak reference to one of them dies)."""
+    import gc
+    import weakref
+
+    from liftoff.transient import batch as B
+    from liftoff.transient.batch import solve_batch_iter
+
+    vehicle, pad = toy_vehicle(), toy_pad()
+    problems = [_case(k, vehicle, pad) for k in range(3)]
+    listed = solve_batch(problems, group=3)
+    groups = []
+    made = B._group_history
+
+    def spy(*args):
+        h = made(*args)
+        groups.append(weakref.ref(h.Y_a))
+        return h
+
+    B._group_history = spy
+    try:
+        it = solve_batch_iter(problems, group=3)
+    finally:
+        B._group_history = made
+    assert len(groups) == 1 and groups[0]() is not None     # marched, its histories held for the results
+    for k, res in enumerate(it):
+        ref = listed[k]
+        assert np.array_equal(res.contact_force, ref.contact_force)
+        for key in "ab":
+            assert np.array_equal(res.displacement[key], ref.displacement[key])
+            assert np.array_equal(res.acceleration[key], ref.acceleration[key])
+        assert res.metadata["n_steps"] == ref.metadata["n_steps"]
+        del res
+    gc.collect()
+    assert groups[0]() is None                              # every result taken and let go: the group freed
+    bad = [_case(0, vehicle, pad), replace(_case(1, vehicle, pad), t_end=0.5)]
+    with pytest.raises(InputError, match="t_end"):
+        solve_batch_iter(bad)                               # refused at the call, not at the first result

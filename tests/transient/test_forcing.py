@@ -50,3 +50,28 @@ def test_tables_constant_forces_and_hold_against_closed_form():
     # accelerations follow from the equation of motion at the step end
     acc_ref = 5.0 / M * np.cos(W * const.time)
     assert np.abs(const.acceleration["a"][:, 0] - acc_ref).max() < 1e-9 * 5.0 / M
+
+
+def test_interp_columns_is_numpys_interp_bit_for_bit():
+    """transient.assembly.interp_columns (every column of a load table at once, the loads'
+    and the growth guard's tables) against np.interp column by column, the same arithmetic:
+    equal bit for bit, at and between breakpoints, outside them, at repeated breakpoints
+    (a step in a table), with infinite table values and NaN points, for an array and a
+    scalar x."""
+    from liftoff.transient.assembly import interp_columns
+
+    rng = np.random.default_rng(7)
+    for trial in range(200):
+        nk = int(rng.integers(1, 10))
+        xp = np.sort(rng.choice(np.round(rng.uniform(-3.0, 3.0, 20), 1), nk))     # repeats possible
+        fp = rng.normal(size=(nk, 4)) * 10.0 ** float(rng.integers(-3, 4))
+        if trial % 5 == 0:
+            fp[rng.integers(nk), rng.integers(4)] = np.inf
+        x = np.concatenate([rng.uniform(-4.0, 4.0, 25), xp, [np.nan, -np.inf, np.inf]])
+        ref = np.column_stack([np.interp(x, xp, fp[:, m]) for m in range(4)])
+        got = interp_columns(x, xp, fp)
+        assert got.shape == ref.shape
+        assert np.array_equal(got, ref, equal_nan=True), (xp, fp)
+        for xv in x[::7]:
+            one = np.array([np.interp(xv, xp, fp[:, m]) for m in range(4)])
+            assert np.array_equal(interp_columns(xv, xp, fp), one, equal_nan=True)

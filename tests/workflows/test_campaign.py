@@ -562,7 +562,7 @@ def test_the_runs_own_pool_is_closed_before_its_outputs(tmp_path, monkeypatch):
 
 def test_cases_marched_together_give_the_one_by_one_peaks(tmp_path, campaign4, monkeypatch):
     """Options(march_together=3) (--march-together 3): the 4 generated cases as a task of
-    three marched together (liftoff.transient.solve_batch) and one alone. Each case's record
+    three marched together (liftoff.transient.solve_batch_iter) and one alone. Each case's record
     (every item's max and min) equals the one-by-one campaign's to round-off: within 1e-9 of
     the item's largest magnitude over the cases (the batch sums in another order; on this
     model its contact forces land 1e-12 of their peak from a one-by-one solve, docs/transient.md);
@@ -573,13 +573,13 @@ def test_cases_marched_together_give_the_one_by_one_peaks(tmp_path, campaign4, m
     from liftoff.workflows import campaign
 
     marched = []
-    batch = lt.solve_batch
-    monkeypatch.setattr(lt, "solve_batch", lambda problems: marched.append(len(problems)) or batch(problems))
+    batch = lt.solve_batch_iter
+    monkeypatch.setattr(lt, "solve_batch_iter", lambda problems: marched.append(len(problems)) or batch(problems))
     tmp0, p, first = campaign4
     out = run(p, tmp_path / "out", cache_dir=tmp0 / "cache", n_cases=4,
               options=Options(executor=InlineExecutor(), campaign=tmp_path / "camp", march_together=3), **QUIET)
     assert (out.campaign.ran, out.campaign.reused) == (4, 0)
-    assert marched == [3]          # solve_batch, not a step back to one by one; the fourth case alone: solve
+    assert marched == [3]          # marched together, not a step back to one by one; the fourth case alone: solve
     batched = [campaign.load_summary(out.campaign.records[i]) for i in range(4)]
     alone = [campaign.load_summary(first.campaign.records[i]) for i in range(4)]
     scale = np.max([np.maximum(np.abs(s.mx), np.abs(s.mn)) for s in alone], axis=0) + 1e-300
@@ -624,7 +624,7 @@ def test_cases_the_batch_refuses_are_solved_one_by_one_and_said(tmp_path, campai
     def refuse(problems):
         raise InputError("batch: friction, dashpots, latches and soft release are not marched batched")
 
-    monkeypatch.setattr(lt, "solve_batch", refuse)
+    monkeypatch.setattr(lt, "solve_batch_iter", refuse)
     tmp0, p, first = campaign4
     with pytest.warns(UserWarning, match="--march-together: cases d0000, d0001 solved one by one") as got:
         out = run(p, tmp_path / "out", cache_dir=tmp0 / "cache", n_cases=4,
@@ -665,7 +665,7 @@ def test_a_batch_refused_for_memory_is_solved_one_by_one(tmp_path, campaign4, mo
     def too_big(problems):
         raise ResourceError("transient: 2 cases marched together need 9e9 bytes")
 
-    monkeypatch.setattr(lt, "solve_batch", too_big)
+    monkeypatch.setattr(lt, "solve_batch_iter", too_big)
     monkeypatch.setattr(campaign, "_MEMO", {})          # (the fixture's worker memo may hold "warned")
     tmp0, p, first = campaign4
     said = []
