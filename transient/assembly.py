@@ -223,6 +223,10 @@ def feedback_matrix(n: int, key: str, forcing: Forcing, t: float, rate: bool = F
     the displacement part)."""
     M = np.zeros((n, n))
     for fb in forcing.feedback:
-        if fb.body == key and fb.active(t) and (not rate or fb.rate_matrix is not None):
-            M += fb.rate_matrix if rate else fb.matrix
+        if fb.body == key and fb.active(t):
+            disp, vel = fb.dense()
+            if not rate:
+                M += disp
+            elif vel is not None:
+                M += vel
     return M

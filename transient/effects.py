@@ -117,8 +117,9 @@ def attitude_hold(body: ModalBody, gimbal_labels, bandwidth_hz: float, damping: 
     acceleration about the c.g. is alpha = -(w^2 theta + 2 zeta w theta_dot), w = 2 pi
     ``bandwidth_hz``, zeta = ``damping``; the moment I_cg alpha is applied by the gimbal
     forces F = G (I_cg alpha) (G of :func:`control_gimbal_matrix`: -G M cancels M, so G M
-    applies it), i.e. the modal force Phi_g^T F. Returned as a ModalFeedback (matrix on q,
-    rate_matrix on v, held over each step, on from ``since``): the rigid vehicle's pitch,
+    applies it), i.e. the modal force Phi_g^T F. Returned as a ModalFeedback in rank-3
+    factored form (U (-w^2 R) on q, U (-2 zeta w R) on v, held over each step, on from
+    ``since``; no n x n matrix): the rigid vehicle's pitch,
     yaw and roll then follow theta'' + 2 zeta w theta' + w^2 theta = 0."""
     from .model import ModalFeedback
 
@@ -130,9 +131,7 @@ def attitude_hold(body: ModalBody, gimbal_labels, bandwidth_hz: float, damping: 
     G = control_gimbal_matrix(body, gimbal_labels, cg)
     U = body.rows(gimbal_labels).T @ G @ I_cg               # B = U R: modal force of alpha = theta (rad/s^2 per rad)
     w = 2 * np.pi * bandwidth_hz
-    B = U @ R
-    return ModalFeedback("a", -w * w * B, rate_matrix=-2 * damping * w * B, since=since,
-                         factors=(U, -w * w * R, -2 * damping * w * R))      # rank 3: no SVD of n x n
+    return ModalFeedback("a", since=since, factors=(U, -w * w * R, -2 * damping * w * R))  # rank 3: no n x n
 
 
 # ---------------------------------------------------------------- gravity softening

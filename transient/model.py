@@ -318,10 +318,13 @@ class ModalFeedback:
     (U, V)`` (n x r, r x n, ``matrix = U @ V``) give the displacement part in rank-factored
     form, so that the solver never factors an n x n matrix (KSOF has rank 3, eq. 27);
     ``(U, V, W)`` the rate part too (``rate_matrix = U @ W``: a control law's P and D terms
-    through the same actuators); without them the solver finds factors by an SVD (cubic in n)."""
+    through the same actuators); without them the solver finds factors by an SVD (cubic in n).
+    Given its factors, a feedback needs no n x n matrix at all (``matrix`` and ``rate_matrix``
+    None: the solver uses the factors alone, and :meth:`dense` forms the matrices for who
+    wants them): the default's attitude hold and softening held 46 MB of them a case."""
 
     body: str
-    matrix: np.ndarray
+    matrix: np.ndarray | None = None
     until: float = INF
     rate_matrix: np.ndarray | None = None
     since: float = -INF
@@ -330,9 +333,16 @@ class ModalFeedback:
     def __post_init__(self) -> None:
         who = f"modal feedback on body {self.body!r}"
         _body_key(who, self.body)
-        self.matrix = _finite(f"{who}: matrix", self.matrix)
-        if self.matrix.ndim != 2 or self.matrix.shape[0] != self.matrix.shape[1]:
-            raise InputError(f"{who}: matrix has shape {self.matrix.shape}, expected (n_modes, n_modes)")
+        if self.matrix is None:
+            if self.factors is None:
+                raise InputError(f"{who}: give its matrix or its factors (U, V)")
+            if self.rate_matrix is not None:
+                raise InputError(f"{who}: a rate_matrix without its matrix; give the rate part as a factor W "
+                                 "(factors = (U, V, W)) or both matrices")
+        else:
+            self.matrix = _finite(f"{who}: matrix", self.matrix)
+            if self.matrix.ndim != 2 or self.matrix.shape[0] != self.matrix.shape[1]:
+                raise InputError(f"{who}: matrix has shape {self.matrix.shape}, expected (n_modes, n_modes)")
         if self.rate_matrix is not None:
             self.rate_matrix = _finite(f"{who}: rate_matrix", self.rate_matrix)
             if self.rate_matrix.shape != self.matrix.shape:
@@ -344,18 +354,34 @@ class ModalFeedback:
             if len(self.factors) not in (2, 3):
                 raise InputError(f"{who}: factors are (U, V) or (U, V, W), got {len(self.factors)} arrays")
             U, V, *W = (_finite(f"{who}: factors", x) for x in self.factors)
-            n = self.matrix.shape[0]
-            for part, A, name in ((V, self.matrix, "matrix"), *((w, self.rate_matrix, "rate_matrix") for w in W)):
+            n = U.shape[0] if self.matrix is None else self.matrix.shape[0]
+            alone = self.matrix is None         # factors alone: nothing to check them against (False)
+            disp, rate = (False, False) if alone else (self.matrix, self.rate_matrix)
+            for part, A, name in ((V, disp, "matrix"), *((w, rate, "rate_matrix") for w in W)):
                 if A is None:
                     raise InputError(f"{who}: a rate factor W without a rate_matrix")
                 if U.ndim != 2 or part.ndim != 2 or U.shape[0] != n or part.shape != (U.shape[1], n):
                     raise InputError(f"{who}: factors of shapes {U.shape}, {part.shape}, expected (n, r), (r, n) "
                                      f"with n = {n}")
+                if A is False:
+                    continue
                 x = np.cos(np.arange(n) + 0.5)      # one product checks U V = matrix (O(n^2), not O(n^3))
                 y, z = A @ x, U @ (part @ x)
                 if not np.allclose(y, z, rtol=1e-9, atol=1e-12 * max(float(np.abs(y).max(initial=0.0)), 1e-300)):
                     raise InputError(f"{who}: factors differ from the {name}")
             self.factors = (U, V, *W)
+
+    @property
+    def n_modes(self) -> int:
+        """The modes of the body it acts on (the matrices' size)."""
+        return int(self.matrix.shape[0] if self.matrix is not None else self.factors[0].shape[0])
+
+    def dense(self) -> tuple[np.ndarray, np.ndarray | None]:
+        """(matrix, rate_matrix or None), formed from the factors where not given (n x n each)."""
+        if self.matrix is not None:
+            return self.matrix, self.rate_matrix
+        U, V, *W = self.factors
+        return U @ V, (U @ W[0] if W else None)
 
     def active(self, t: float) -> bool:
         return self.since <= t < self.until
@@ -585,8 +611,9 @@ class TransientProblem:
                                  f"body has {self.body(m.body).n_modes} modes")
         for fb in f.feedback:
             n = self.body(fb.body).n_modes
-            if fb.matrix.shape != (n, n):
-                raise InputError(f"modal feedback on body {fb.body!r}: matrix {fb.matrix.shape}, expected ({n}, {n})")
+            if fb.n_modes != n:
+                raise InputError(f"modal feedback on body {fb.body!r}: its matrix is {fb.n_modes} x {fb.n_modes}, "
+                                 f"the body has {n} modes")
         rnames = set()
         for r in self.recoveries:
             if r.name in rnames:

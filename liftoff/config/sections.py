@@ -287,7 +287,7 @@ class Softening:
     def feedback(self, body, accel) -> ModalFeedback:
         """KSOF of eq. 27 for ``body`` under gravity ``accel`` as a held modal feedback (eq. 26)."""
         U, V = softening_factors(body, accel, boundary_labels=None if self.labels is None else list(self.labels))
-        return ModalFeedback("a", U @ V, until=self.until, factors=(U, V))
+        return ModalFeedback("a", until=self.until, factors=(U, V))        # rank 3: no n x n matrix
 
 
 def softening(where: Where, spec: Any) -> Softening:

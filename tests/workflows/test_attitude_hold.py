@@ -61,8 +61,6 @@ def test_attitude_hold_comes_factored_and_equals_its_svd():
     solver never takes the SVD of an n x 2n matrix (0.8 s a call with the default's 1,182
     modes). Reference: the same law without factors, factored by the solver's SVD; the
     forces U (V [q; v]) agree to round-off (1e-12 of their size)."""
-    from dataclasses import replace
-
     from liftoff.core.errors import InputError
     from liftoff.transient import ModalFeedback
     from liftoff.transient.assembly import feedback_factors
@@ -70,16 +68,24 @@ def test_attitude_hold_comes_factored_and_equals_its_svd():
     body = rigid_vehicle()
     hold = attitude_hold(body, GIMBALS, 0.5, 0.7)
     assert hold.factors is not None and len(hold.factors) == 3 and hold.factors[0].shape[1] == 3
-    plain = replace(hold, factors=None)
+    assert hold.matrix is None and hold.rate_matrix is None      # the factors alone: no n x n matrices held
+    matrix, rate = hold.dense()
+    plain = ModalFeedback("a", matrix, rate_matrix=rate, since=hold.since)
     x = np.random.default_rng(1).standard_normal(12)
     forces = []
     for fb in (hold, plain):
         U, V, _, _ = feedback_factors(6, "a", Forcing(feedback=[fb]), 0.0)
         forces.append(U @ (V @ x))
     assert np.allclose(forces[0], forces[1], rtol=0, atol=1e-12 * np.abs(forces[1]).max())
-    assert np.allclose(forces[0], hold.matrix @ x[:6] + hold.rate_matrix @ x[6:], rtol=1e-12)
+    assert np.allclose(forces[0], matrix @ x[:6] + rate @ x[6:], rtol=1e-12)
     U, V, W = hold.factors
     with pytest.raises(InputError, match="factors differ from the rate_matrix"):
-        ModalFeedback("a", hold.matrix, rate_matrix=hold.rate_matrix, factors=(U, V, 2 * W))
+        ModalFeedback("a", matrix, rate_matrix=rate, factors=(U, V, 2 * W))
     with pytest.raises(InputError, match="a rate factor W without a rate_matrix"):
-        ModalFeedback("a", hold.matrix, factors=(U, V, W))
+        ModalFeedback("a", matrix, factors=(U, V, W))
+    with pytest.raises(InputError, match="give its matrix or its factors"):
+        ModalFeedback("a")
+    with pytest.raises(InputError, match="a rate_matrix without its matrix"):
+        ModalFeedback("a", rate_matrix=rate, factors=(U, V))
+    with pytest.raises(InputError, match=r"factors of shapes \(6, 3\), \(2, 6\)"):
+        ModalFeedback("a", factors=(U, V[:2]))
