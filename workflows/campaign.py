@@ -91,6 +91,16 @@ class RunningEnvelope:
         mx, mn = self.taken(s)
         return mx | mn
 
+    @staticmethod
+    def joined(env: RunningEnvelope | None, s: CaseSummary) -> RunningEnvelope:
+        """``env`` (None: no case yet) with case ``s`` arrived: each value it takes (:meth:`taken`)."""
+        if env is None:
+            at = np.full(len(s.mx), s.index, dtype=np.int64)
+            return RunningEnvelope(np.array(s.mx, dtype=float), at, np.array(s.mn, dtype=float), at.copy())
+        mx, mn = env.taken(s)
+        return RunningEnvelope(np.where(mx, s.mx, env.mx), np.where(mx, s.index, env.mx_case),
+                               np.where(mn, s.mn, env.mn), np.where(mn, s.index, env.mn_case))
+
 
 @dataclass(frozen=True)
 class CaseTask:
@@ -287,9 +297,14 @@ def run_case(task: CaseTask):
     trim_heap()                          # the previous case's freed arrays back to the system
     if task.together and not task.columns:
         (solved, note), out = solve_together(task), []
+        env = task.envelope
         for i, res, cp, case, wall in solved:   # each case's result made, summarised and let go in turn
-            out.append(_summary(replace(task, index=i), res, cp, case, wall))
+            out.append(_summary(replace(task, index=i, envelope=env), res, cp, case, wall))
             del res, cp
+            if task.capture and np.shape(env.mx if env is not None else out[-1].mx) == np.shape(out[-1].mx):
+                # the next case of the task captures only where it reaches this one too: a case that
+                # sets a final envelope value beats every case before it, these included (Captured)
+                env = RunningEnvelope.joined(env, out[-1])
         if out and note:                 # said by the main process too (a remote worker's warning is not seen)
             out[0].note = note
         return out

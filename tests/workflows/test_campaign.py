@@ -465,13 +465,64 @@ def test_envelope_histories_captured_while_running_equal_a_rerun(tmp_path, campa
     assert c.keys() == a.keys() and all(np.array_equal(a[k], c[k]) for k in a)
 
 
+def test_cases_marched_together_capture_against_each_other(tmp_path, campaign4):
+    """With --march-together a task's later case is sent the running envelope joined with
+    the task's earlier cases (RunningEnvelope.joined: each value a case takes, as Captured
+    keeps them): the first case of a first task captures every item, each later one only
+    the items where it reaches the cases before it, so a worker holds fewer captured
+    histories; the campaign's envelope histories from the captured files equal the re-run
+    of the envelope-setting cases (one by one) to round-off, none run again: within 1e-9 of
+    each history's peak, the tolerance of the batch's peaks against one-by-one solves (the
+    batch sums in another order: test_cases_marched_together_give_the_one_by_one_peaks)."""
+    from dataclasses import asdict
+
+    from liftoff.analysis.aggregate import Aggregate
+    from liftoff.workflows import campaign
+    from liftoff.workflows.cache import stage_key
+
+    tmp, _, out = campaign4
+    sc = out.scenario
+    mkey = stage_key("model", asdict(sc.generated_case(0).model))
+    ref = campaign.ScenarioRef.of(sc)
+    task = campaign.CaseTask(ref, 0, str(tmp / "cache"), mkey, (), True, None, (1, 2, 3))
+    got = campaign.run_case(task)
+    assert [s.index for s in got] == [0, 1, 2, 3] and set(got[0].histories) == set(got[0].items)
+    env = None
+    for s in got:
+        want = np.ones(len(s.items), bool) if env is None else env.reached(s)
+        assert sorted(s.histories or {}) == sorted(np.array(s.items)[want]), s.name
+        env = campaign.RunningEnvelope.joined(env, s)
+    assert sum(len(s.histories or {}) for s in got) < 4 * len(got[0].items)      # fewer than every item each
+    ex = _Recording()
+    camp = campaign.run_campaign(sc, ref, tmp / "cache", mkey, ex, tmp_path / "c", progress=False,
+                                 echo=lambda *a: None, together=4)
+    assert [(t.index, t.together) for t in ex.tasks] == [(0, (1, 2, 3))]
+    agg = Aggregate(sc.n_generated)
+    for i in range(sc.n_generated):
+        agg.add(campaign.load_summary(camp.records[i]), generated=True)
+    env_rows = agg.envelope_rows()
+    setters = campaign.envelope_setters(sc, env_rows)
+    rerun = campaign.write_envelope_histories(env_rows, setters, ref, str(tmp / "cache"), mkey, InlineExecutor(),
+                                              tmp_path / "rerun.h5")
+    captured = campaign.write_envelope_histories(env_rows, setters, ref, str(tmp / "cache"), mkey, _Refusing(),
+                                                 tmp_path / "captured.h5", camp.captured)
+    a, b = _h5_tree(rerun), _h5_tree(captured)
+    assert a.keys() == b.keys()
+    for k in a:
+        if np.asarray(a[k]).dtype.kind in "fc":
+            scale = float(np.max(np.abs(a[k]), initial=0.0)) + 1e-300
+            assert np.all(np.abs(np.asarray(a[k]) - np.asarray(b[k])) <= 1e-9 * scale), k
+        else:
+            assert np.array_equal(a[k], b[k]), k
+
+
 def test_captured_keeps_only_the_cases_holding_the_running_envelope(tmp_path):
     """campaign.Captured's bookkeeping: a case's file holds the items where it holds the
     running envelope on arrival (beyond it, or equal and earlier in case order, as the
     Aggregate's envelope); it is deleted once another case takes all of them; a case that
     holds none writes nothing; a task's RunningEnvelope asks for the same items; load gives
     the histories exactly and refuses another case's file."""
-    from liftoff.workflows.campaign import CaseSummary, Captured
+    from liftoff.workflows.campaign import CaseSummary, Captured, RunningEnvelope
 
     recs = {i: tmp_path / "cases" / f"d{i:04d}-k{i}.npz" for i in range(5)}
     cap = Captured(tmp_path, recs)
@@ -498,6 +549,12 @@ def test_captured_keeps_only_the_cases_holding_the_running_envelope(tmp_path):
     assert np.array_equal(tm, t) and np.array_equal(h["a"], 2 * t) and cap.load(1, ["b"]) is None
     cap.arrive(case(3, [3, 5], [-1, -2]))  # beyond everything: the others' files go
     assert files() == ["d0003-k3.npz"]
+    joined = None                          # a task's own joining (RunningEnvelope.joined): the same envelope
+    for c in (case(0, [1, 1], [0, 0]), case(2, [2, 1], [0, -1]), case(1, [2, 0], [5, 5]), case(3, [3, 5], [-1, -2])):
+        joined = RunningEnvelope.joined(joined, c)
+    e = cap.running()
+    for a, b in ((joined.mx, e.mx), (joined.mx_case, e.mx_case), (joined.mn, e.mn), (joined.mn_case, e.mn_case)):
+        assert np.array_equal(a, b)
     cap.arrive(case(4, [0, 0], [0, 0]))    # holds nothing: nothing written
     assert files() == ["d0003-k3.npz"]
     tm, h = cap.load(3, ["a", "b"])
