@@ -141,8 +141,9 @@ def coupled(problem) -> tuple[np.ndarray, np.ndarray]:
     D = np.hstack([rows.Phi_a, -rows.Phi_b])
     K = np.diag(np.concatenate([a.omega ** 2, b.omega ** 2])) + D.T @ (D / rows.compliance[:, None])
     for fb in problem.forcing.feedback:   # the gravity softening (eq. 27), on before ignition
-        if fb.active(0.0) and fb.rate_matrix is None:
-            K[:na, :na] -= fb.matrix
+        matrix, rate = fb.dense()         # (a control law has a rate part: not a stiffness)
+        if fb.active(0.0) and rate is None:
+            K[:na, :na] -= matrix
     return K, D
 
 

@@ -109,6 +109,10 @@ def contact_rows(body_a: ModalBody, body_b: ModalBody, contacts) -> ContactRows:
                        rforce=np.concatenate([np.zeros(0)] + [t[1] for t in tables]).astype(float), rptr=rptr)
 
 
+#: values (points x columns) interp_columns forms at once
+INTERP_BLOCK = 1 << 20
+
+
 def interp_columns(x, xp: np.ndarray, fp: np.ndarray) -> np.ndarray:
     """``np.interp(x, xp, fp[:, m])`` of every column m of ``fp`` (n_k, n) at once: (x.size, n),
     or (n,) for a scalar x. numpy's arithmetic (the interval's slope (fp[j+1] - fp[j]) /
@@ -124,21 +128,30 @@ def interp_columns(x, xp: np.ndarray, fp: np.ndarray) -> np.ndarray:
     if xp.size == 1:
         out = np.repeat(fp[:1], xs.size, axis=0)
     else:
-        j = np.clip(np.searchsorted(xp, xs, side="right") - 1, 0, xp.size - 2)   # xp[j] <= x < xp[j+1]
-        lo, hi = fp[j], fp[j + 1]
-        with np.errstate(all="ignore"):      # (a repeated breakpoint or an infinite value: set below, as numpy)
-            slope = (hi - lo) / (xp[j + 1] - xp[j])[:, None]
-            out = slope * (xs - xp[j])[:, None] + lo
-            bad = np.isnan(out)
-            if bad.any():                    # numpy's fallback for infinite values: from the other end
-                out[bad] = (slope * (xs - xp[j + 1])[:, None] + hi)[bad]
-                flat = np.isnan(out) & (lo == hi)
-                out[flat] = lo[flat]
-        out[xs == xp[j]] = lo[xs == xp[j]]   # at a breakpoint: its value
-        out[xs < xp[0]] = fp[0]
-        out[xs >= xp[-1]] = fp[-1]
-        out[np.isnan(xs)] = np.nan
+        out = np.empty((xs.size, fp.shape[1]))
+        rows = max(1, INTERP_BLOCK // max(fp.shape[1], 1))
+        for r0 in range(0, xs.size, rows):   # a block of points at a time: a few temporaries of its size
+            out[r0:r0 + rows] = _interp_block(xs[r0:r0 + rows], xp, fp)
     return out[0] if scalar else out
+
+
+def _interp_block(xs: np.ndarray, xp: np.ndarray, fp: np.ndarray) -> np.ndarray:
+    """:func:`interp_columns` at the points ``xs`` (1-D), two or more breakpoints."""
+    j = np.clip(np.searchsorted(xp, xs, side="right") - 1, 0, xp.size - 2)   # xp[j] <= x < xp[j+1]
+    lo, hi = fp[j], fp[j + 1]
+    with np.errstate(all="ignore"):          # (a repeated breakpoint or an infinite value: set below, as numpy)
+        slope = (hi - lo) / (xp[j + 1] - xp[j])[:, None]
+        out = slope * (xs - xp[j])[:, None] + lo
+        bad = np.isnan(out)
+        if bad.any():                        # numpy's fallback for infinite values: from the other end
+            out[bad] = (slope * (xs - xp[j + 1])[:, None] + hi)[bad]
+            flat = np.isnan(out) & (lo == hi)
+            out[flat] = lo[flat]
+    out[xs == xp[j]] = lo[xs == xp[j]]       # at a breakpoint: its value
+    out[xs < xp[0]] = fp[0]
+    out[xs >= xp[-1]] = fp[-1]
+    out[np.isnan(xs)] = np.nan
+    return out
 
 
 @dataclass

@@ -94,9 +94,9 @@ class RunningEnvelope:
     @staticmethod
     def joined(env: RunningEnvelope | None, s: CaseSummary) -> RunningEnvelope:
         """``env`` (None: no case yet) with case ``s`` arrived: each value it takes (:meth:`taken`)."""
-        if env is None:
-            at = np.full(len(s.mx), s.index, dtype=np.int64)
-            return RunningEnvelope(np.array(s.mx, dtype=float), at, np.array(s.mn, dtype=float), at.copy())
+        if env is None:                 # as Captured's: below and above every value, after every case
+            n, last = len(s.mx), np.iinfo(np.int64).max
+            env = RunningEnvelope(np.full(n, -np.inf), np.full(n, last), np.full(n, np.inf), np.full(n, last))
         mx, mn = env.taken(s)
         return RunningEnvelope(np.where(mx, s.mx, env.mx), np.where(mx, s.index, env.mx_case),
                                np.where(mn, s.mn, env.mn), np.where(mn, s.index, env.mn_case))
@@ -284,7 +284,15 @@ def solve_together(task: CaseTask) -> tuple[Iterator, str]:
             warnings.warn(note + "; further such groups of this worker likewise", stacklevel=2)
         return ((i, *solve_generated(replace(task, index=i, together=()))) for i in indexes), note
     wall = (time.perf_counter() - t0) / len(cases)
-    return ((i, res, cp, case, wall) for i, res, cp, case in zip(indexes, results, cps, cases)), ""
+    return _in_turn(list(indexes), results, cps, cases, wall), ""
+
+
+def _in_turn(indexes: list, results: Iterator, cps: list, cases: list, wall: float) -> Iterator:
+    """solve_together's (index, result, CaseProblem, Case, wall) tuples, each item taken off
+    its list as it is handed over and nothing kept here between them, so that a case the
+    caller lets go is freed before the next result is made."""
+    while indexes:
+        yield indexes.pop(0), next(results), cps.pop(0), cases.pop(0), wall
 
 
 def run_case(task: CaseTask):

@@ -3,6 +3,7 @@ their end values outside), constant forces; all integrated exactly by the step (
 import math
 
 import numpy as np
+import pytest
 
 from liftoff.transient import (ContactPoint, Forcing, ModalForce, PointForce, TabulatedForce, TransientProblem, ground,
                        solve)
@@ -52,13 +53,18 @@ def test_tables_constant_forces_and_hold_against_closed_form():
     assert np.abs(const.acceleration["a"][:, 0] - acc_ref).max() < 1e-9 * 5.0 / M
 
 
-def test_interp_columns_is_numpys_interp_bit_for_bit():
+@pytest.mark.parametrize("block", [None, 9])
+def test_interp_columns_is_numpys_interp_bit_for_bit(block, monkeypatch):
     """transient.assembly.interp_columns (every column of a load table at once, the loads'
     and the growth guard's tables) against np.interp column by column, the same arithmetic:
     equal bit for bit, at and between breakpoints, outside them, at repeated breakpoints
     (a step in a table), with infinite table values and NaN points, for an array and a
-    scalar x."""
+    scalar x; also a few values at a time (``block``: the blocks' seams)."""
+    from liftoff.transient import assembly
     from liftoff.transient.assembly import interp_columns
+
+    if block is not None:
+        monkeypatch.setattr(assembly, "INTERP_BLOCK", block)
 
     rng = np.random.default_rng(7)
     for trial in range(200):
