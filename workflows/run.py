@@ -331,6 +331,10 @@ def _run_generated(sc, prep: Prepared, cache: StageCache, executor, how: str, ou
 
     folder = Path(opt.campaign) if opt.campaign else out.absolute().parent / f"{out.name}.campaign"
     campaign.prime(sc, str(cache.root), prep.gen_model, prep.stacks[prep.gen_model])
+    from .beside import trim_heap
+
+    trim_heap()      # the checks' freed arrays (the statics' dense solves) back to the system: 0.1 GB of the
+    #                  command's while its workers run the cases (the campaign's peak), 2026-12-07
     echo(f"  running generated cases on {how}")
     camp = campaign.run_campaign(sc, campaign.ScenarioRef.of(sc), cache.root, prep.gen_model, executor, folder,
                                  progress=progress, echo=echo, together=opt.march_together,
