@@ -22,12 +22,11 @@ from liftoff.core.errors import InputError
 from .spec import require_positive
 
 SIDES = ("left", "right")
-#: how a booster's aft attach is modelled (StackLayout.srb_aft_attach)
-AFT_ATTACH = ("point", "struts")
-#: where a booster's forward ball sits on the tank (StackLayout.srb_fwd_attach)
-FWD_ATTACH = ("wall", "beam")
-#: how the orbiter's attach joints are modelled (StackLayout.orbiter_attach)
-ORBITER_ATTACH = ("point", "bipods")
+#: the attach options (StackLayout fields) and their values, each field's default first: how a
+#: booster's aft attach is modelled, where its forward ball sits on the tank, how the orbiter's
+#: attach joints are modelled
+ATTACH_OPTIONS = {"srb_aft_attach": ("point", "struts"), "srb_fwd_attach": ("wall", "beam"),
+                  "orbiter_attach": ("point", "bipods")}
 
 
 @dataclass(frozen=True)
@@ -71,8 +70,7 @@ class StackLayout:
             raise InputError("StackLayout.srb_skirt_thickness must be < srb_skirt_radius")
         if len(self.holddown_azimuths_deg) < 1:
             raise InputError("StackLayout.holddown_azimuths_deg is empty")
-        for k, allowed in (("srb_aft_attach", AFT_ATTACH), ("srb_fwd_attach", FWD_ATTACH),
-                           ("orbiter_attach", ORBITER_ATTACH)):
+        for k, allowed in ATTACH_OPTIONS.items():
             if getattr(self, k) not in allowed:
                 raise InputError(f"StackLayout.{k} must be one of {', '.join(map(repr, allowed))} "
                                  f"(got {getattr(self, k)!r})")

@@ -37,7 +37,7 @@ from typing import Any
 from liftoff.core.errors import InputError
 from liftoff.core.labels import COMPONENTS
 from liftoff.core.units import G0
-from liftoff.meshes.layout import StackLayout
+from liftoff.meshes.layout import ATTACH_OPTIONS, StackLayout
 from liftoff.meshes.pad import PadParams
 from liftoff.meshes.spec import Material
 from liftoff.meshes.stick import StickParams
@@ -374,8 +374,13 @@ def shuttle_joints(layout: StackLayout) -> tuple[Joint, ...]:
                         for p in layout.orbiter_attach_points()])
 
 
-#: StackLayout options that move the Shuttle types' interface points, and their defaults
-_LAYOUT_OPTIONS = {"srb_aft_attach": "point", "srb_fwd_attach": "wall", "orbiter_attach": "point"}
+#: what the stick source, which joins each component at one point, says of an attach option set
+_STICK_REFUSES = {"srb_aft_attach": "the stick model joins each booster at one aft point: the aft struts need "
+                                    "source = \"fe\"",
+                  "orbiter_attach": "the stick model joins the orbiter at its attach points: the bipods need "
+                                    "source = \"fe\"",
+                  "srb_fwd_attach": "the stick model joins each booster at one forward point: the thrust beam "
+                                    "needs source = \"fe\""}
 
 
 def _check_layout_joints(where: Where, layout: StackLayout, joints, components: dict) -> None:
@@ -403,7 +408,7 @@ def _check_layout_joints(where: Where, layout: StackLayout, joints, components: 
             return {p.replace(src, name) for p in layout.srb_booster_points(components[src].builder.side)}
         return None
 
-    moved = ", ".join(f"{k} = {getattr(layout, k)!r}" for k, v in _LAYOUT_OPTIONS.items() if getattr(layout, k) != v)
+    moved = ", ".join(f"{k} = {getattr(layout, k)!r}" for k, v in ATTACH_OPTIONS.items() if getattr(layout, k) != v[0])
     for i, j in enumerate(joints):
         if j.name not in every:
             continue
@@ -514,15 +519,9 @@ def _layout(where: Where, spec: Any, source: str) -> StackLayout:
                 raise (where / key).error("a stick-model parameter (StickParams): write it in [model.stick]")
             if key in _OLD_STICK:
                 raise (where / key).error(f"the stick model takes this from {_OLD_STICK[key]}")
-        if spec.get("srb_aft_attach", "point") != "point":
-            raise (where / "srb_aft_attach").error("the stick model joins each booster at one aft point: "
-                                                   "the aft struts need source = \"fe\"")
-        if spec.get("orbiter_attach", "point") != "point":
-            raise (where / "orbiter_attach").error("the stick model joins the orbiter at its attach points: "
-                                                   "the bipods need source = \"fe\"")
-        if spec.get("srb_fwd_attach", "wall") != "wall":
-            raise (where / "srb_fwd_attach").error("the stick model joins each booster at one forward point: "
-                                                   "the thrust beam needs source = \"fe\"")
+        for key, message in _STICK_REFUSES.items():
+            if spec.get(key, ATTACH_OPTIONS[key][0]) != ATTACH_OPTIONS[key][0]:
+                raise (where / key).error(message)
     return builder(where, StackLayout, spec)
 
 

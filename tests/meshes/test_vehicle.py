@@ -163,6 +163,20 @@ def test_core_stage_ring_frames_and_stringers(tmp_path):
     assert not bare.beams and t < bare.shells["core_wall"]
 
 
+def test_attach_options_list_each_default_first():
+    """meshes.layout.ATTACH_OPTIONS (the values each attach option takes; the config checks
+    read its first as the default) against StackLayout's own field defaults; any other value
+    refused, named."""
+    from liftoff.core.errors import InputError
+    from liftoff.meshes.layout import ATTACH_OPTIONS
+
+    layout = StackLayout()
+    for key, values in ATTACH_OPTIONS.items():
+        assert getattr(layout, key) == values[0]
+        with pytest.raises(InputError, match=f"StackLayout.{key} must be one of"):
+            StackLayout(**{key: "glue"}).check()
+
+
 def test_aft_strut_points_of_the_layout():
     """``srb_aft_attach = "struts"``: each booster's aft attach point gives way to its three
     struts' end points, on each wall's outer surface at the aft attach height (the tank's
