@@ -38,6 +38,14 @@ def _with_booster(data: dict) -> dict:
     return d
 
 
+def _b_aft_releasing(data: dict, strut: str, dof: str) -> dict:
+    """``data`` (changed) with joint b_aft joining the booster to ``strut``, releasing ``dof``."""
+    for j in data["model"]["joint"]:
+        if j["name"] == "b_aft":
+            j["components"], j["release"] = ["booster", strut], [dof]
+    return data
+
+
 def test_struts_join_components_as_their_full_matrices_do(tmp_path):
     pytest.importorskip("petsc4py")
     from liftoff.config import parse_scenario
@@ -413,12 +421,8 @@ def test_attach_recovery_at_a_pinned_strut_and_bad_specs(tmp_path):
         bad = dataclasses.replace(case, recovery=dataclasses.replace(case.recovery, attach=(spec,)))
         with pytest.raises(InputError, match=message):
             recoveries(bad, stack)
-    for j in data["model"]["joint"]:
-        if j["name"] == "b_aft":
-            j["components"] = ["booster", "strut_aft"]
-            j["release"] = ["Rz"]
     with pytest.raises(InputError, match=r"joint 'b_aft' releases Rz of 'strut_aft', a pinned strut"):
-        parse_scenario(data, "pinned.toml", SCENARIO.parent)
+        parse_scenario(_b_aft_releasing(data, "strut_aft", "Rz"), "pinned.toml", SCENARIO.parent)
 
 
 def test_stick_source_refuses_the_attach_options():
@@ -471,9 +475,5 @@ def test_parse_time_attach_checks_leave_other_points_and_unused_options_alone():
     data = _with_booster(tomllib.loads(SCENARIO.read_text()))
     data["model"]["component"]["strut_aft"]["params"]["pinned"] = True
     data["model"]["component"]["strut_aft2"] = {"mirror": {"of": "strut_aft", "normal": "y"}}
-    for j in data["model"]["joint"]:
-        if j["name"] == "b_aft":
-            j["components"] = ["booster", "strut_aft2"]
-            j["release"] = ["Rx"]
     with pytest.raises(InputError, match=r"joint 'b_aft' releases Rx of 'strut_aft2', a pinned strut"):
-        parse_scenario(data, "m.toml", SCENARIO.parent)
+        parse_scenario(_b_aft_releasing(data, "strut_aft2", "Rx"), "m.toml", SCENARIO.parent)
