@@ -354,16 +354,15 @@ class ModalFeedback:
             if len(self.factors) not in (2, 3):
                 raise InputError(f"{who}: factors are (U, V) or (U, V, W), got {len(self.factors)} arrays")
             U, V, *W = (_finite(f"{who}: factors", x) for x in self.factors)
-            n = U.shape[0] if self.matrix is None else self.matrix.shape[0]
-            alone = self.matrix is None         # factors alone: nothing to check them against (False)
-            disp, rate = (False, False) if alone else (self.matrix, self.rate_matrix)
-            for part, A, name in ((V, disp, "matrix"), *((w, rate, "rate_matrix") for w in W)):
-                if A is None:
+            alone = self.matrix is None         # factors alone: nothing to check them against
+            n = U.shape[0] if alone else self.matrix.shape[0]
+            for part, A, name in ((V, self.matrix, "matrix"), *((w, self.rate_matrix, "rate_matrix") for w in W)):
+                if A is None and not alone:
                     raise InputError(f"{who}: a rate factor W without a rate_matrix")
                 if U.ndim != 2 or part.ndim != 2 or U.shape[0] != n or part.shape != (U.shape[1], n):
                     raise InputError(f"{who}: factors of shapes {U.shape}, {part.shape}, expected (n, r), (r, n) "
                                      f"with n = {n}")
-                if A is False:
+                if alone:
                     continue
                 x = np.cos(np.arange(n) + 0.5)      # one product checks U V = matrix (O(n^2), not O(n^3))
                 y, z = A @ x, U @ (part @ x)

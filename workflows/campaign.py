@@ -174,13 +174,10 @@ def summarize(result, cp, name: str, index: int, post, wall: float = 0.0, check=
     vmin = np.array([it.values[i] for it, i in zip(its, imin)], dtype=float)
     srs_items, srs_arr = (), None
     if post.srs is not None:
-        from liftoff.analysis.spectra import srs, srs_frequencies
-
         sel = [j for j, it in enumerate(its) if it.category in post.srs.categories]
         srs_items = tuple(its[j].name for j in sel)
-        freq = srs_frequencies(post.srs.f_min, post.srs.f_max, post.srs.n_freq)
-        raw = np.column_stack([its[j].history for j in sel]) if sel else None
-        srs_arr = np.stack([srs(raw, result.h, freq, q, ic="steady") for q in post.srs.q]) if sel else None
+        if sel:
+            srs_arr = report.srs_of(np.column_stack([its[j].history for j in sel]), result.h, post.srs)[1]
     cs = result.contact_summary()
     from liftoff.analysis.correlated import case_support
 

@@ -588,12 +588,23 @@ def stage_time_lines(stage_times: list, wall: float) -> list[str]:
 
 
 # ------------------------------------------------------------------ spectra, comparisons
+def srs_of(values: np.ndarray, h: float, settings) -> tuple[np.ndarray, np.ndarray]:
+    """(frequencies (Hz), SRS (n_q, n_freq, k)) of the columns of ``values`` (sampled every
+    ``h`` s) per [postprocess.srs] ``settings``: absolute acceleration, each oscillator steady
+    under its history's first value (analysis.spectra.srs, ic="steady"); what a case's
+    spectra file and the campaign's envelope (its summaries) hold."""
+    from liftoff.analysis.spectra import srs, srs_frequencies
+
+    freq = srs_frequencies(settings.f_min, settings.f_max, settings.n_freq)
+    return freq, np.stack([srs(values, h, freq, q, ic="steady") for q in settings.q])
+
+
 def spectra(result, cp, post, out: Path, case: str) -> list[Path]:
     """spectra_<case>.h5 (PSD, FFT amplitude and SRS of the selected items) and
     psd_<case>.csv, per [postprocess.psd] / [postprocess.srs]; nothing when neither is set."""
     from liftoff.core.records import Dataset, write_record
 
-    from liftoff.analysis.spectra import fft_amplitude, psd, srs, srs_frequencies
+    from liftoff.analysis.spectra import fft_amplitude, psd
 
     if post.psd is None and post.srs is None:
         return []
@@ -615,12 +626,10 @@ def spectra(result, cp, post, out: Path, case: str) -> list[Path]:
         paths.append(write_text(out / f"psd_{case}.csv", head + "\n".join(lines) + "\n"))
     if post.srs is not None:
         sel = [it for it in its if it.category in post.srs.categories]
-        freq = srs_frequencies(post.srs.f_min, post.srs.f_max, post.srs.n_freq)
-        V = np.column_stack([it.history for it in sel])
+        freq, S = srs_of(np.column_stack([it.history for it in sel]), h, post.srs)
         data["srs"] = {"items": np.array([it.name for it in sel], dtype=str), "freq": Dataset(freq, "Hz"),
                        "q": Dataset(np.array(post.srs.q), "1"),
-                       "value": Dataset(np.stack([srs(V, h, freq, q, ic="steady") for q in post.srs.q]),
-                                        "units of each item (absolute acceleration)", dims=("q", "freq", "items"),
+                       "value": Dataset(S, "units of each item (absolute acceleration)", dims=("q", "freq", "items"),
                                         initial_conditions="steady under each history's first value (pyyeti.srs "
                                                            "ic='steady')")}
     paths.insert(0, write_record(out / f"spectra_{case}.h5", "liftoff-spectra", 1, data, units="SI per item",
