@@ -57,6 +57,21 @@ def items(result, attach: dict, heads: dict | None = None, band_hz: float = 0.0)
     return out
 
 
+def item_categories(problem) -> set[str]:
+    """The categories of the items :func:`items` makes of the result of ``problem`` (a
+    TransientProblem, duck-typed: its contacts, recoveries and body a's output points),
+    known before it is solved, so that a selection by category ([postprocess.srs] /
+    [postprocess.psd]) can be checked before any case runs. The tank items (``heads``)
+    are not counted: no selection by category reaches them."""
+    cats = {"contact_force"} if any(len(c.labels_a) for c in problem.contacts) else set()
+    for r in problem.recoveries:
+        if r.category != "modal":
+            cats.add("cg_load_factor" if r.category == CG_ACCELERATION else r.category)
+    if problem.outputs.get("a"):
+        cats |= {"displacement", "acceleration"}
+    return cats
+
+
 #: recovery category of a vehicle component's net c.g. acceleration (reduction.cg_acceleration_recovery,
 #: workflows/loads.recoveries): the reports turn it into the net c.g. load factor (:func:`load_factor_items`)
 CG_ACCELERATION = "cg_acceleration"

@@ -588,20 +588,29 @@ def stage_time_lines(stage_times: list, wall: float) -> list[str]:
 
 
 # ------------------------------------------------------------------ spectra, comparisons
+def srs_freq(settings) -> np.ndarray:
+    """The SRS frequencies (Hz) of [postprocess.srs] ``settings``."""
+    from liftoff.analysis.spectra import srs_frequencies
+
+    return srs_frequencies(settings.f_min, settings.f_max, settings.n_freq)
+
+
 def srs_of(values: np.ndarray, h: float, settings) -> tuple[np.ndarray, np.ndarray]:
     """(frequencies (Hz), SRS (n_q, n_freq, k)) of the columns of ``values`` (sampled every
     ``h`` s) per [postprocess.srs] ``settings``: absolute acceleration, each oscillator steady
     under its history's first value (analysis.spectra.srs, ic="steady"); what a case's
     spectra file and the campaign's envelope (its summaries) hold."""
-    from liftoff.analysis.spectra import srs, srs_frequencies
+    from liftoff.analysis.spectra import srs
 
-    freq = srs_frequencies(settings.f_min, settings.f_max, settings.n_freq)
+    freq = srs_freq(settings)
     return freq, np.stack([srs(values, h, freq, q, ic="steady") for q in settings.q])
 
 
-def spectra(result, cp, post, out: Path, case: str) -> list[Path]:
+def spectra(result, cp, post, out: Path, case: str, srs: tuple | None = None) -> list[Path]:
     """spectra_<case>.h5 (PSD, FFT amplitude and SRS of the selected items) and
-    psd_<case>.csv, per [postprocess.psd] / [postprocess.srs]; nothing when neither is set."""
+    psd_<case>.csv, per [postprocess.psd] / [postprocess.srs]; nothing when neither is set.
+    ``srs``: (item names, SRS) of the case already computed by :func:`srs_of` (its summary's,
+    workflows.campaign.summarize), used where its items are the selection's."""
     from liftoff.core.records import Dataset, write_record
 
     from liftoff.analysis.spectra import fft_amplitude, psd
@@ -626,7 +635,10 @@ def spectra(result, cp, post, out: Path, case: str) -> list[Path]:
         paths.append(write_text(out / f"psd_{case}.csv", head + "\n".join(lines) + "\n"))
     if post.srs is not None:
         sel = [it for it in its if it.category in post.srs.categories]
-        freq, S = srs_of(np.column_stack([it.history for it in sel]), h, post.srs)
+        if srs is not None and srs[1] is not None and list(srs[0]) == [it.name for it in sel]:
+            freq, S = srs_freq(post.srs), srs[1]
+        else:
+            freq, S = srs_of(np.column_stack([it.history for it in sel]), h, post.srs)
         data["srs"] = {"items": np.array([it.name for it in sel], dtype=str), "freq": Dataset(freq, "Hz"),
                        "q": Dataset(np.array(post.srs.q), "1"),
                        "value": Dataset(S, "units of each item (absolute acceleration)", dims=("q", "freq", "items"),

@@ -243,6 +243,7 @@ def prepare(sc, cache: StageCache, progress: bool, echo, error_estimate: bool = 
             static_equilibrium(pr.body_a, pr.body_b, pr.contacts, pr.forcing, pr.t0)
         except InputError as exc:
             raise case.at().wrap(exc) from None
+        _check_selections(sc, case.name, pr)
         memory[case.name] = (pr, steps)
         problems[case.name] = (cp, mkey)
         stage_times.append((f"loads [{case.name}]", time.perf_counter() - t0))
@@ -265,6 +266,7 @@ def prepare(sc, cache: StageCache, progress: bool, echo, error_estimate: bool = 
                 raise InputError(f"{sc.path}: case d{i:04d}: its [model] differs from the first generated case's")
         cp = build_problem(first, stacks[gen_model], progress=False)
         pr = cp.problem
+        _check_selections(sc, first.name, pr)
         try:
             _case_steps(pr)
             static_equilibrium(pr.body_a, pr.body_b, pr.contacts, pr.forcing, pr.t0)
@@ -272,6 +274,21 @@ def prepare(sc, cache: StageCache, progress: bool, echo, error_estimate: bool = 
             raise first.at().wrap(exc) from None
         stage_times.append((f"generated cases checked ({sc.n_generated})", time.perf_counter() - t0))
     return Prepared(stacks, problems, stage_times, gen_model)
+
+
+def _check_selections(sc, name: str, problem) -> None:
+    """[postprocess.srs] / [postprocess.psd] must select at least one history of each case
+    (analysis.histories.item_categories), checked before any case runs."""
+    from liftoff.analysis.histories import item_categories
+
+    cats = None
+    for key, spec in (("srs", sc.post.srs), ("psd", sc.post.psd)):
+        if spec is None:
+            continue
+        cats = item_categories(problem) if cats is None else cats
+        if not set(spec.categories) & cats:
+            raise InputError(f"{sc.path}: [postprocess.{key}] categories = {list(spec.categories)} select no history "
+                             f"of case {name!r} (its categories: {', '.join(sorted(cats)) or 'none'})")
 
 
 def _case_steps(problem) -> int:
@@ -505,8 +522,11 @@ def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, sta
     t0 = time.perf_counter()
     res.metadata["truncation"] = [c.as_dict() for c in cp.truncation]
     files = []
+    srs = None
     if not generated:                   # a generated case's summary comes from its record
-        agg.add(summarize(res, cp, name, -1, sc.post, check=half), generated=False)
+        summary = summarize(res, cp, name, -1, sc.post, check=half)
+        agg.add(summary, generated=False)
+        srs = (summary.srs_items, summary.srs)      # its SRS, not computed again for the spectra file
     band = sc.post.acceleration_band_hz
     rows = report.case_maxmin(res, cp, name, band)
     if half is not None:
@@ -524,7 +544,7 @@ def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, sta
         files += results_and_pictures()
     if not keep_modal:      # (a forked child keeps its own copy until it has written them)
         res.modal = {}
-    files += report.spectra(res, cp, sc.post, out, name)
+    files += report.spectra(res, cp, sc.post, out, name, srs)
     stage_times.append((f"reports [{name}]", time.perf_counter() - t0))
     return res, files
 
@@ -572,10 +592,8 @@ def _loads_tables(sc, agg, out: Path, echo, camp, plots: bool = False) -> list:
     echo("Max/min envelope over cases (posts: force on vehicle, Tz > 0 compression; full table in "
          "maxmin_envelope.csv):")
     echo(report.format_table(env, select=report.is_force, limit=40))
-    from liftoff.analysis.spectra import srs_frequencies
-
     s = sc.post.srs
-    freq = srs_frequencies(s.f_min, s.f_max, s.n_freq) if s is not None else None
+    freq = report.srs_freq(s) if s is not None else None
     if agg.n >= 2:
         files += aggregate.write_statistics(agg, out, freq, s.q if s is not None else None)
         f = aggregate.write_contours(agg, out)

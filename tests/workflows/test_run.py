@@ -456,7 +456,11 @@ def test_step_by_step_script_is_what_run_does(tmp_path, capsys):
      2, "s.toml: case 'b': time step h = 0.01 s exceeds the stability limit"),
     ({"time": {"t_end": 8.0, "h": 1e-8}}, 4, "GB of histories but the limit is"),
     ({"model": {**STICK, "mesh_size": 0.001}}, 4, "stick component 'core': element length 0.001 m gives 4.69e+04 beams"),
-], ids=["case-2-point", "case-2-unstable-h", "memory", "stick-elements"])
+    ({"recovery": {**tomllib.loads(default_text())["recovery"], "attach": []},
+      "postprocess": {"srs": {"categories": ["interface_force"]}}},
+     2, "s.toml: [postprocess.srs] categories = ['interface_force'] select no history of case 'nominal' "
+        "(its categories: acceleration, cg_load_factor, cg_motion, contact_force, displacement)"),
+], ids=["case-2-point", "case-2-unstable-h", "memory", "stick-elements", "srs-selects-nothing"])
 def test_run_refuses_before_any_output(tmp_path, capsys, over, code, expect):
     """A bad case 2, an unstable step, a run too large for memory or a model too fine for the
     element limit: one line naming file, case and key, the right exit status, and nothing in
@@ -473,6 +477,31 @@ def test_run_refuses_before_any_output(tmp_path, capsys, over, code, expect):
     err = [ln for ln in capsys.readouterr().err.strip().splitlines() if not ln.startswith("liftoff: warning: ")]
     assert len(err) == 1 and expect in err[0], err
     assert not out.exists() or not any(out.iterdir())
+
+
+def test_item_categories_are_those_of_the_solved_items():
+    """The categories a case's items will have, known from its problem before it is solved
+    (analysis.histories.item_categories: what the up-front [postprocess.srs]/[postprocess.psd]
+    check reads), are those of the items made of its result; with the attach recoveries left
+    out, interface_force is not among them."""
+    from liftoff.analysis.histories import item_categories, items
+    from liftoff.config import parse_scenario
+    from liftoff.transient import solve
+    from liftoff.workflows.cache import StageCache
+    from liftoff.workflows.loads import build_problem
+    from liftoff.workflows.pipeline import build_stack
+
+    d = tomllib.loads(default_text())
+    d["model"] = STICK
+    for attach in (d["recovery"]["attach"], []):
+        d["recovery"]["attach"] = attach
+        sc = parse_scenario(d, "s.toml")
+        case = sc.cases[0]
+        cp = build_problem(case, build_stack(case.model, StageCache(None), progress=False), progress=False)
+        pr = replace(cp.problem, t_end=cp.problem.t0 + 0.05, progress=False)
+        made = {it.category for it in items(solve(pr), cp.attach)}
+        assert item_categories(pr) == made
+        assert ("interface_force" in made) == bool(attach)
 
 
 def test_a_database_column_on_no_dof_names_its_file(tmp_path, capsys):
