@@ -45,6 +45,10 @@ class Aggregate:
         self.t_mx, self.t_mn = np.zeros(n), np.zeros(n)
         self.c_mx, self.c_mn = [""] * n, [""] * n
         self.e_mx, self.e_mn = np.full(n, np.nan), np.full(n, np.nan)     # estimated errors of the envelope
+        # the envelope of the named (not generated) cases alone, and its cases: a design basis
+        # below a named case's load would be below a load the run computed (write_design)
+        self.named_mx, self.named_mn = np.full(n, -np.inf), np.full(n, np.inf)
+        self.named_c_mx, self.named_c_mn = [""] * n, [""] * n
         self.run_mx, self.run_mn = Running(n), Running(n)
         self.top_mx, self.top_mn = Largest(n, self.r), Largest(n, self.r)
         self.srs_items = s.srs_items
@@ -87,6 +91,12 @@ class Aggregate:
             self.srs_case[better] = s.name
         if self.support_env is not None:
             np.maximum(self.support_env, s.support, out=self.support_env)
+        if not generated:
+            for mine, cases, vals, up in ((self.named_mx, self.named_c_mx, s.mx, s.mx > self.named_mx),
+                                          (self.named_mn, self.named_c_mn, s.mn, s.mn < self.named_mn)):
+                mine[up] = vals[up]
+                for j in np.flatnonzero(up):
+                    cases[j] = s.name
         if generated:
             k = len(self.case_names)
             self.case_names.append(s.name)
@@ -257,24 +267,43 @@ def write_srs(agg: Aggregate, freq: np.ndarray, q: tuple, out: Path) -> Path | N
     return write_rows_csv(rows, fields, head, out / "srs.csv")
 
 
+def design_basis(agg: Aggregate) -> tuple[np.ndarray, np.ndarray, list[str], list[str]]:
+    """(max, min, basis of each max, basis of each min) per item: over >= 2 dispersed cases
+    the P99/90 normal bound, or the named cases' envelope where it lies beyond it (a named
+    case, e.g. an off-nominal one, is not of the dispersed population, and a design load below
+    a load the run computed would be wrong without a word); else the envelope over every case."""
+    if agg.n < 2:
+        return agg.mx.copy(), agg.mn.copy(), ["envelope"] * len(agg.items), ["envelope"] * len(agg.items)
+    st = agg.statistics()
+    mx, mn = np.array(st["normal_max"], dtype=float), np.array(st["normal_min"], dtype=float)
+    b_mx, b_mn = ["P99/90 normal"] * mx.size, ["P99/90 normal"] * mn.size
+    for j in np.flatnonzero(agg.named_mx > mx):
+        mx[j], b_mx[j] = agg.named_mx[j], f"case {agg.named_c_mx[j]}"
+    for j in np.flatnonzero(agg.named_mn < mn):
+        mn[j], b_mn[j] = agg.named_mn[j], f"case {agg.named_c_mn[j]}"
+    return mx, mn, b_mx, b_mn
+
+
 def write_design(agg: Aggregate, factors: dict, out: Path) -> Path | None:
     """design_loads.csv: per item of a category with an uncertainty factor, the basis
-    (P99/90 normal bound over >= 2 dispersed cases, else the envelope) times the factor."""
+    (:func:`design_basis`: P99/90 normal bound over >= 2 dispersed cases or a named case's load
+    beyond it, else the envelope) times the factor; which basis each side took."""
     if not factors:
         return None
-    st = agg.statistics() if agg.n >= 2 else None
+    mx, mn, b_mx, b_mn = design_basis(agg)
     rows = []
     for j, (it, u, cat) in enumerate(zip(agg.items, agg.units, agg.categories)):
         if cat not in factors:
             continue
-        mx, mn = (st["normal_max"][j], st["normal_min"][j]) if st else (agg.mx[j], agg.mn[j])
         f = factors[cat]
-        rows.append({"item": it, "unit": u, "category": cat, "basis": "P99/90 normal" if st else "envelope",
-                     "max": float(mx), "min": float(mn), "factor": float(f), "design_max": float(f * mx),
-                     "design_min": float(f * mn)})
-    head = "# liftoff design loads: basis x uncertainty factor of the item's category; SI units (column 'unit')\n"
-    return write_rows_csv(rows, ("item", "unit", "category", "basis", "max", "min", "factor", "design_max", "design_min"),
-                head, out / "design_loads.csv")
+        rows.append({"item": it, "unit": u, "category": cat, "basis_max": b_mx[j], "basis_min": b_mn[j],
+                     "max": float(mx[j]), "min": float(mn[j]), "factor": float(f), "design_max": float(f * mx[j]),
+                     "design_min": float(f * mn[j])})
+    head = ("# liftoff design loads: basis x uncertainty factor of the item's category; basis: the P99/90 normal bound "
+            "over the dispersed cases, or a named case's load where it lies beyond it (basis_max, basis_min name it), "
+            "or the envelope over every case with fewer than 2 dispersed cases; SI units (column 'unit')\n")
+    return write_rows_csv(rows, ("item", "unit", "category", "basis_max", "basis_min", "max", "min", "factor",
+                                 "design_max", "design_min"), head, out / "design_loads.csv")
 
 
 def read_maxmin(path: Path) -> dict[str, dict]:

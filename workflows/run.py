@@ -611,6 +611,13 @@ def _loads_tables(sc, agg, out: Path, echo, camp, plots: bool = False) -> list:
         files += [f] if f else []
     f = aggregate.write_design(agg, sc.post.uncertainty, out)
     files += [f] if f else []
+    if f and agg.n >= 2:
+        _, _, b_mx, b_mn = aggregate.design_basis(agg)
+        rows = [j for j, cat in enumerate(agg.categories) if cat in sc.post.uncertainty]
+        raised = sum((b_mx[j] != "P99/90 normal") + (b_mn[j] != "P99/90 normal") for j in rows)
+        echo(f"  design loads: the P99/90 normal bound over {agg.n} dispersed cases, except {raised} of "
+             f"{2 * len(rows)} max/min values where a named case's load lies beyond it and is the basis "
+             "(design_loads.csv basis_max, basis_min)")
     compare = camp.options.compare if camp else None
     if compare is not None:
         path, rows = aggregate.write_compare(env, aggregate.read_maxmin(Path(compare)), out)

@@ -106,6 +106,65 @@ def test_campaign_outputs(campaign4):
         assert env.attrs["units"] and g["srs_items"].shape[0] < f["items"].shape[0]
 
 
+def _summary(name, mx, mn):
+    from types import SimpleNamespace
+
+    n = len(mx)
+    return SimpleNamespace(name=name, items=tuple(f"i{j}" for j in range(n)), units=("N",) * n,
+                           categories=("contact_force",) * n, mx=np.array(mx, float), mn=np.array(mn, float),
+                           t_mx=np.zeros(n), t_mn=np.zeros(n), err_mx=None, err_mn=None, srs_items=(), srs=None,
+                           support_items=(), support=None)
+
+
+def test_design_basis_is_the_p99_90_bound_or_a_named_case_beyond_it():
+    """design_loads.csv's basis (analysis.aggregate.design_basis): over the dispersed cases
+    the P99/90 normal bound mean +- k std (batch formulas), except where a named case's load
+    lies beyond it: a design load below a load the run computed would be wrong without a word.
+    Item 0: the named case 'off' beyond the bound on both sides; item 1: inside it."""
+    from liftoff.analysis.aggregate import Aggregate, design_basis
+    from liftoff.analysis.stats import k_factor
+
+    gen_mx = np.array([[1.0, 2.0], [1.2, 2.2], [0.9, 1.9], [1.1, 2.1]])
+    gen_mn = -gen_mx
+    agg = Aggregate(4)
+    agg.add(_summary("nominal", [1.0, 2.0], [-1.0, -2.0]), generated=False)
+    agg.add(_summary("off", [50.0, 2.0], [-50.0, -2.0]), generated=False)
+    for i in range(4):
+        agg.add(_summary(f"d{i}", gen_mx[i], gen_mn[i]), generated=True)
+    k = k_factor(0.99, 0.90, 4)
+    bound_mx = gen_mx.mean(axis=0) + k * gen_mx.std(axis=0, ddof=1)
+    bound_mn = gen_mn.mean(axis=0) - k * gen_mn.std(axis=0, ddof=1)
+    assert bound_mx[0] < 50.0 and bound_mx[1] > 2.0          # the case the test is about
+    mx, mn, b_mx, b_mn = design_basis(agg)
+    assert mx[0] == 50.0 and mn[0] == -50.0 and b_mx[0] == b_mn[0] == "case off"
+    np.testing.assert_allclose([mx[1], mn[1]], [bound_mx[1], bound_mn[1]], rtol=1e-12)
+    assert b_mx[1] == b_mn[1] == "P99/90 normal"
+    one = Aggregate(1)                                        # fewer than 2 dispersed cases: the envelope
+    one.add(_summary("off", [50.0, 2.0], [-50.0, -2.0]), generated=False)
+    one.add(_summary("d0", [60.0, 1.0], [-1.0, -1.0]), generated=True)
+    mx, mn, b_mx, b_mn = design_basis(one)
+    assert list(mx) == [60.0, 2.0] and list(mn) == [-50.0, -2.0] and set(b_mx + b_mn) == {"envelope"}
+
+
+def test_design_loads_file_is_its_basis_times_the_factor(campaign4):
+    """design_loads.csv of the campaign: each row the basis of design_basis times its
+    category's uncertainty factor, the basis named per side."""
+    from liftoff.analysis.aggregate import design_basis
+
+    tmp, _, out = campaign4
+    agg, factors = out.aggregate, out.scenario.post.uncertainty
+    mx, mn, b_mx, b_mn = design_basis(agg)
+    rows = list(csv.DictReader(ln for ln in (tmp / "out" / "design_loads.csv").read_text().splitlines()
+                               if not ln.startswith("#")))
+    want = [j for j, c in enumerate(agg.categories) if c in factors]
+    assert [r["item"] for r in rows] == [agg.items[j] for j in want] and rows
+    for r, j in zip(rows, want):
+        f = factors[agg.categories[j]]
+        assert (r["basis_max"], r["basis_min"]) == (b_mx[j], b_mn[j])
+        np.testing.assert_allclose([float(r["design_max"]), float(r["design_min"])], [f * mx[j], f * mn[j]],
+                                   rtol=1e-6)            # the CSV's 7 significant digits
+
+
 def test_correlated_contours_over_the_campaign(campaign4):
     """correlated_statistics.csv (analysis.correlated, aggregate.write_contours): each pair's
     support functions, computed here from every case solved one by one, give the envelope
