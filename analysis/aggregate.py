@@ -46,7 +46,7 @@ class Aggregate:
         self.c_mx, self.c_mn = [""] * n, [""] * n
         self.e_mx, self.e_mn = np.full(n, np.nan), np.full(n, np.nan)     # estimated errors of the envelope
         # the envelope of the named (not generated) cases alone, and its cases: a design basis
-        # below a named case's load would be below a load the run computed (write_design)
+        # below a named case's load would leave out a load the run computed (write_design)
         self.named_mx, self.named_mn = np.full(n, -np.inf), np.full(n, np.inf)
         self.named_c_mx, self.named_c_mn = [""] * n, [""] * n
         self.run_mx, self.run_mn = Running(n), Running(n)
@@ -271,7 +271,8 @@ def design_basis(agg: Aggregate) -> tuple[np.ndarray, np.ndarray, list[str], lis
     """(max, min, basis of each max, basis of each min) per item: over >= 2 dispersed cases
     the P99/90 normal bound, or the named cases' envelope where it lies beyond it (a named
     case, e.g. an off-nominal one, is not of the dispersed population, and a design load below
-    a load the run computed would be wrong without a word); else the envelope over every case."""
+    a named case's load would be wrong without a word; a dispersed case may lie beyond the
+    bound, about 1 % of them by its definition); else the envelope over every case."""
     if agg.n < 2:
         return agg.mx.copy(), agg.mn.copy(), ["envelope"] * len(agg.items), ["envelope"] * len(agg.items)
     st = agg.statistics()

@@ -32,6 +32,11 @@ from .executors import die_with_parent
 #: environment variable: "0" draws every picture inline (one process), as before issue 28
 ENV = "LIFTOFF_BESIDE"
 
+#: children drawing at once at most: a submission beyond waits for the oldest (a warm default
+#: run has up to 8: three per named case, the correlated loads and the spectra; a scenario of
+#: many named cases would otherwise fork three drawing processes a case on two cores)
+LIVE_LIMIT = 8
+
 
 def available() -> bool:
     """Whether this process may fork its pictures off (serial, Linux, not switched off)."""
@@ -69,7 +74,7 @@ class Beside:
 
     def __init__(self, forked: bool):
         self.forked = forked
-        self._jobs: list[tuple[str, int, int, float]] = []     # (name, pid, read fd, start)
+        self._jobs: list[list] = []     # [name, pid, read fd, start, outcome (None until collected)]
         self._inline: list[Path] = []
         self.seconds: dict[str, float] = {}
         #: a context held while forking: another thread of this process that may be in compiled
@@ -95,6 +100,9 @@ class Beside:
                 self._preloads.pop(0)()
             except Exception:  # noqa: BLE001 - the child imports it again and reports its error
                 pass
+        live = [job for job in self._jobs if job[4] is None]
+        while len(live) >= LIVE_LIMIT:
+            self._collect(live.pop(0))
         sys.stdout.flush()
         sys.stderr.flush()
         trim_heap()
@@ -120,31 +128,42 @@ class Beside:
             finally:
                 os._exit(status)
         os.close(w)
-        self._jobs.append((name, pid, r, t0))
+        self._jobs.append([name, pid, r, t0, None])
+
+    def _collect(self, job: list) -> None:
+        """Read a child's message, reap it and keep its outcome in ``job``: its files, or the
+        error naming it."""
+        name, pid, r, t0, _ = job
+        chunks = []
+        while True:
+            chunk = os.read(r, 1 << 16)
+            if not chunk:
+                break
+            chunks.append(chunk)
+        os.close(r)
+        _, status = os.waitpid(pid, 0)
+        self.seconds[name] = time.perf_counter() - t0
+        try:
+            msg = json.loads(b"".join(chunks) or b"{}")
+        except ValueError:
+            msg = {}
+        if "files" in msg and os.WEXITSTATUS(status) == 0 and os.WIFEXITED(status):
+            job[4] = [Path(p) for p in msg["files"]]
+        else:
+            why = msg.get("error") or f"the drawing process ended with status {status}"
+            job[4] = (InputError if msg.get("input") else RuntimeError)(f"{name}: {why}")
 
     def wait(self) -> list[Path]:
-        """Every job's files; the first failed job's error, naming it (an InputError stays
-        one; the others are still waited for, so none outlives the run)."""
+        """Every job's files, in submission order; the first failed job's error, naming it (an
+        InputError stays one; the others are still waited for, so none outlives the run)."""
         files, error = list(self._inline), None
-        for name, pid, r, t0 in self._jobs:
-            chunks = []
-            while True:
-                chunk = os.read(r, 1 << 16)
-                if not chunk:
-                    break
-                chunks.append(chunk)
-            os.close(r)
-            _, status = os.waitpid(pid, 0)
-            self.seconds[name] = time.perf_counter() - t0
-            try:
-                msg = json.loads(b"".join(chunks) or b"{}")
-            except ValueError:
-                msg = {}
-            if "files" in msg and os.WEXITSTATUS(status) == 0 and os.WIFEXITED(status):
-                files += [Path(p) for p in msg["files"]]
-            elif error is None:
-                why = msg.get("error") or f"the drawing process ended with status {status}"
-                error = (InputError if msg.get("input") else RuntimeError)(f"{name}: {why}")
+        for job in self._jobs:
+            if job[4] is None:
+                self._collect(job)
+            if isinstance(job[4], BaseException):
+                error = error or job[4]
+            else:
+                files += job[4]
         self._jobs = []
         if error is not None:
             raise error
@@ -152,7 +171,9 @@ class Beside:
 
     def kill(self) -> None:
         """Stop every child still drawing (the run failed)."""
-        for _, pid, r, _ in self._jobs:
+        for _, pid, r, _, outcome in self._jobs:
+            if outcome is not None:             # collected: reaped, its pipe closed
+                continue
             try:
                 os.kill(pid, signal.SIGKILL)
                 os.waitpid(pid, 0)

@@ -280,6 +280,7 @@ def _check_selections(sc, name: str, problem) -> None:
     """[postprocess.srs] / [postprocess.psd] must select at least one history of each case
     (analysis.histories.item_categories), checked before any case runs."""
     from liftoff.analysis.histories import item_categories
+    from liftoff.config.postprocess import CATEGORIES
 
     cats = None
     for key, spec in (("srs", sc.post.srs), ("psd", sc.post.psd)):
@@ -287,8 +288,9 @@ def _check_selections(sc, name: str, problem) -> None:
             continue
         cats = item_categories(problem) if cats is None else cats
         if not set(spec.categories) & cats:
+            has = sorted(cats & set(CATEGORIES))         # those a selection may name
             raise InputError(f"{sc.path}: [postprocess.{key}] categories = {list(spec.categories)} select no history "
-                             f"of case {name!r} (its categories: {', '.join(sorted(cats)) or 'none'})")
+                             f"of case {name!r} (it has: {', '.join(has) or 'none'})")
 
 
 def _case_steps(problem) -> int:
@@ -611,13 +613,6 @@ def _loads_tables(sc, agg, out: Path, echo, camp, plots: bool = False) -> list:
         files += [f] if f else []
     f = aggregate.write_design(agg, sc.post.uncertainty, out)
     files += [f] if f else []
-    if f and agg.n >= 2:
-        _, _, b_mx, b_mn = aggregate.design_basis(agg)
-        rows = [j for j, cat in enumerate(agg.categories) if cat in sc.post.uncertainty]
-        raised = sum((b_mx[j] != "P99/90 normal") + (b_mn[j] != "P99/90 normal") for j in rows)
-        echo(f"  design loads: the P99/90 normal bound over {agg.n} dispersed cases, except {raised} of "
-             f"{2 * len(rows)} max/min values where a named case's load lies beyond it and is the basis "
-             "(design_loads.csv basis_max, basis_min)")
     compare = camp.options.compare if camp else None
     if compare is not None:
         path, rows = aggregate.write_compare(env, aggregate.read_maxmin(Path(compare)), out)
@@ -670,6 +665,15 @@ def _campaign_text(sc, camp_run, agg) -> str:
         lines.append(f"    statistics over {agg.n} cases: P99/90 k = {agg.k:.4f}; order statistic: "
                      + (f"{agg.r}-th largest" if agg.r else "none (fewer than 230 cases)")
                      + " (statistics.csv)")
+        rows = [j for j, cat in enumerate(agg.categories) if cat in sc.post.uncertainty]
+        if rows:
+            from liftoff.analysis.aggregate import design_basis
+
+            _, _, b_mx, b_mn = design_basis(agg)
+            raised = sum((b_mx[j] != "P99/90 normal") + (b_mn[j] != "P99/90 normal") for j in rows)
+            lines.append(f"    design loads: the P99/90 normal bound, except {raised} of {2 * len(rows)} max/min "
+                         "values where a named case's load lies beyond it and is the basis (design_loads.csv "
+                         "basis_max, basis_min)")
     return "\n".join(lines)
 
 

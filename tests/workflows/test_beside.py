@@ -35,6 +35,36 @@ def test_jobs_return_their_files_in_order(tmp_path, forked):
     assert (tmp_path / "c.txt").read_text() == "c" and set(b.seconds) == {"one", "two"}
 
 
+def test_at_most_live_limit_children_draw_at_once(tmp_path, monkeypatch):
+    """A submission beyond LIVE_LIMIT children drawing waits for the oldest: with a limit of
+    2, five jobs (each recording the children alive while it runs, by their marker files)
+    never run three at once, and their files still come back in submission order, the failed
+    one's error after every child was waited for."""
+    from liftoff.workflows import beside
+
+    monkeypatch.setattr(beside, "LIVE_LIMIT", 2)
+
+    def job(k):
+        mark = tmp_path / f"running{k}"
+        mark.write_text("")
+        time.sleep(0.3)
+        alive = len(list(tmp_path.glob("running*")))
+        mark.unlink()
+        if k == 3:
+            raise InputError("job 3 is wrong")
+        return _write(tmp_path / f"out{k}.txt", str(alive))
+
+    b = Beside(True)
+    for k in range(5):
+        b.submit(f"job {k}", lambda k=k: job(k))
+        assert sum(j[4] is None for j in b._jobs) <= 2
+    with pytest.raises(InputError, match=r"^job 3: job 3 is wrong$"):
+        b.wait()
+    assert [int((tmp_path / f"out{k}.txt").read_text()) <= 2 for k in (0, 1, 2, 4)] == [True] * 4
+    b.submit("again", lambda: _write(tmp_path / "z.txt", "z"))
+    assert b.wait() == [tmp_path / "z.txt"]
+
+
 def test_errors_come_back_naming_the_job(tmp_path):
     def bad_input():
         raise InputError("a key is wrong")

@@ -163,6 +163,9 @@ def test_design_loads_file_is_its_basis_times_the_factor(campaign4):
         assert (r["basis_max"], r["basis_min"]) == (b_mx[j], b_mn[j])
         np.testing.assert_allclose([float(r["design_max"]), float(r["design_min"])], [f * mx[j], f * mn[j]],
                                    rtol=1e-6)            # the CSV's 7 significant digits
+    raised = sum((b_mx[j] != "P99/90 normal") + (b_mn[j] != "P99/90 normal") for j in want)
+    assert (f"design loads: the P99/90 normal bound, except {raised} of {2 * len(want)} max/min values"
+            in (tmp / "out" / "summary.txt").read_text())
 
 
 def test_correlated_contours_over_the_campaign(campaign4):

@@ -459,7 +459,7 @@ def test_step_by_step_script_is_what_run_does(tmp_path, capsys):
     ({"recovery": {**tomllib.loads(default_text())["recovery"], "attach": []},
       "postprocess": {"srs": {"categories": ["interface_force"]}}},
      2, "s.toml: [postprocess.srs] categories = ['interface_force'] select no history of case 'nominal' "
-        "(its categories: acceleration, cg_load_factor, cg_motion, contact_force, displacement)"),
+        "(it has: acceleration, cg_motion, contact_force, displacement)"),
 ], ids=["case-2-point", "case-2-unstable-h", "memory", "stick-elements", "srs-selects-nothing"])
 def test_run_refuses_before_any_output(tmp_path, capsys, over, code, expect):
     """A bad case 2, an unstable step, a run too large for memory or a model too fine for the
