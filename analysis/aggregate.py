@@ -285,6 +285,14 @@ def design_basis(agg: Aggregate) -> tuple[np.ndarray, np.ndarray, list[str], lis
     return mx, mn, b_mx, b_mn
 
 
+def factored_outward(mx: float, mn: float, f: float) -> tuple[float, float]:
+    """The range [mn, mx] widened by the uncertainty factor f >= 1: max + (f - 1)|max| and
+    min - (f - 1)|min|. Where max > 0 and min < 0 it is f x each; a bound on the other side of
+    zero (a compression-only item's max < 0, a shear that never reverses: its min > 0) moves
+    toward zero, not away: f x max would then move it inside the computed range."""
+    return float(mx + (f - 1.0) * abs(mx)), float(mn - (f - 1.0) * abs(mn))
+
+
 def write_design(agg: Aggregate, factors: dict, out: Path) -> Path | None:
     """design_loads.csv: per item of a category with an uncertainty factor, the basis
     (:func:`design_basis`: P99/90 normal bound over >= 2 dispersed cases or a named case's load
@@ -297,10 +305,13 @@ def write_design(agg: Aggregate, factors: dict, out: Path) -> Path | None:
         if cat not in factors:
             continue
         f = factors[cat]
+        d_mx, d_mn = factored_outward(mx[j], mn[j], f)
         rows.append({"item": it, "unit": u, "category": cat, "basis_max": b_mx[j], "basis_min": b_mn[j],
-                     "max": float(mx[j]), "min": float(mn[j]), "factor": float(f), "design_max": float(f * mx[j]),
-                     "design_min": float(f * mn[j])})
-    head = ("# liftoff design loads: basis x uncertainty factor of the item's category; basis: the P99/90 normal bound "
+                     "max": float(mx[j]), "min": float(mn[j]), "factor": float(f), "design_max": d_mx,
+                     "design_min": d_mn})
+    head = ("# liftoff design loads: the basis widened outward by the uncertainty factor f of the item's category "
+            "(design_max = max + (f - 1) |max|, design_min = min - (f - 1) |min|: f x the bound where it lies on its "
+            "own side of zero, so the design range always holds the basis); basis: the P99/90 normal bound "
             "over the dispersed cases, or a named case's load where it lies beyond it (basis_max, basis_min name it), "
             "or the envelope over every case with fewer than 2 dispersed cases; SI units (column 'unit')\n")
     return write_rows_csv(rows, ("item", "unit", "category", "basis_max", "basis_min", "max", "min", "factor",

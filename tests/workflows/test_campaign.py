@@ -146,6 +146,19 @@ def test_design_basis_is_the_p99_90_bound_or_a_named_case_beyond_it():
     assert list(mx) == [60.0, 2.0] and list(mn) == [-50.0, -2.0] and set(b_mx + b_mn) == {"envelope"}
 
 
+def test_uncertainty_factor_widens_the_range_outward():
+    """The design range holds its basis: f x each bound where it lies on its own side of zero
+    (max > 0, min < 0); a compression-only item (max < 0) or a shear that never reverses
+    (min > 0) has that bound moved toward zero by (f - 1) of its size, not f x it (which put
+    the max of a compression-only attach Tz at -2.25 MN, inside its computed -1.80 MN)."""
+    from liftoff.analysis.aggregate import factored_outward
+
+    assert factored_outward(2.0, -4.0, 1.25) == (2.5, -5.0)
+    assert factored_outward(-1.8e6, -4.0e6, 1.25) == (-1.35e6, -5.0e6)
+    assert factored_outward(8.0, 2.0, 1.5) == (12.0, 1.0)
+    assert factored_outward(0.0, 0.0, 1.25) == (0.0, 0.0)
+
+
 def test_design_loads_file_is_its_basis_times_the_factor(campaign4):
     """design_loads.csv of the campaign: each row the basis of design_basis times its
     category's uncertainty factor, the basis named per side."""
@@ -161,8 +174,10 @@ def test_design_loads_file_is_its_basis_times_the_factor(campaign4):
     for r, j in zip(rows, want):
         f = factors[agg.categories[j]]
         assert (r["basis_max"], r["basis_min"]) == (b_mx[j], b_mn[j])
-        np.testing.assert_allclose([float(r["design_max"]), float(r["design_min"])], [f * mx[j], f * mn[j]],
+        np.testing.assert_allclose([float(r["design_max"]), float(r["design_min"])],
+                                   [mx[j] + (f - 1) * abs(mx[j]), mn[j] - (f - 1) * abs(mn[j])],
                                    rtol=1e-6)            # the CSV's 7 significant digits
+        assert float(r["design_max"]) >= float(r["max"]) and float(r["design_min"]) <= float(r["min"])
     raised = sum((b_mx[j] != "P99/90 normal") + (b_mn[j] != "P99/90 normal") for j in want)
     assert (f"design loads: the P99/90 normal bound, except {raised} of {2 * len(want)} max/min values"
             in (tmp / "out" / "summary.txt").read_text())
