@@ -246,7 +246,7 @@ def solve_generated(task: CaseTask, keep_modal: bool | str = False, modal_scratc
         cp = build_problem(case, stack, progress=False, keep_modal=keep_modal)
         problem = cp.problem if modal_scratch is None else replace(cp.problem, modal_scratch=str(modal_scratch))
         return solve(problem), cp, case, time.perf_counter() - t0
-    except (InputError, ConvergenceError) as exc:
+    except (InputError, ConvergenceError, ResourceError) as exc:
         msg = str(exc) if case.name in str(exc) else f"{sc.path}: case {case.name}: {exc}"
         raise type(exc)(msg) from None
 
@@ -489,8 +489,13 @@ def run_tasks(executor, tasks: Iterable[CaseTask], on_result: Callable, window: 
             for fut in sorted(done, key=lambda f: sent[f].index):   # the finished ones kept before a failure
                 try:
                     got = fut.result()
-                except (InputError, ConvergenceError):
-                    raise                   # (named by the worker: solve_generated)
+                except (InputError, ConvergenceError, ResourceError):
+                    raise                   # (named by the worker: solve_generated; exit 2, 3, 4)
+                except MemoryError:         # a worker out of memory: the run's resource error, the cases named
+                    task = sent[fut]
+                    names = ", ".join(case_name_of(i) for i in (task.index, *task.together))
+                    raise ResourceError(f"campaign: generated case {names}: out of memory in its worker; use "
+                                        "fewer workers, steps, outputs or modes") from None
                 except Exception as exc:    # noqa: BLE001 - a lost worker, a library's error: name the cases
                     failed = failed or (sent.pop(fut), exc)
                     continue

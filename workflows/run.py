@@ -729,6 +729,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="run on N MPI processes: launches `mpirun -n N liftoff run ...` (the same as "
                         "starting it under mpirun yourself); the FE stages are distributed over them")
     p.set_defaults(func=_cli)
+    _PARSER[:] = [p]
 
 
 def _cli(args: argparse.Namespace) -> int:
@@ -763,10 +764,23 @@ def _cli(args: argparse.Namespace) -> int:
 
 
 def _child_args(args: argparse.Namespace) -> list[str]:
-    argv = ["run"] + ([str(args.scenario)] if args.scenario is not None else []) + ["--out", str(args.out)]
-    argv += ["--cache", str(args.cache)] if args.cache is not None else []
-    return argv + [flag for flag, on in (("--no-cache", args.no_cache), ("--no-snapshots", args.no_snapshots),
-                                         ("--no-plots", args.no_plots), ("--no-progress", args.no_progress)) if on]
+    """The command line of the ranks `--ranks N` launches: every option of ``args`` that is
+    not its default, from the parser's own table (a new option goes through without a line
+    here), less --ranks itself."""
+    argv = ["run"] + ([str(args.scenario)] if args.scenario is not None else [])
+    for action in _PARSER[0]._actions:
+        if not action.option_strings or action.dest in ("help", "ranks"):
+            continue
+        value = getattr(args, action.dest, action.default)
+        if value is None or value == action.default:
+            continue
+        flag = action.option_strings[0]
+        argv += [flag] if isinstance(action, argparse._StoreTrueAction) else [flag, str(value)]
+    return argv
+
+
+#: the `liftoff run` parser (add_parser), whose options :func:`_child_args` passes on
+_PARSER: list = []
 
 
 #: the most --ranks per CPU (oversubscribed FE stages only wait on one another beyond a few)

@@ -854,7 +854,8 @@ def test_model_products_are_built_once_per_stack(campaign4, monkeypatch):
 def test_a_failed_task_names_its_cases_and_the_finished_ones_are_kept(monkeypatch):
     """run_tasks: a task that fails with anything but the worker's own one-line errors (a
     lost worker, a library's error) is raised naming its generated cases (it named none),
-    after the tasks that finished beside it were handed on; a worker's InputError goes as it is."""
+    after the tasks that finished beside it were handed on; a worker's InputError or
+    ResourceError goes as it is, a MemoryError as a ResourceError naming its cases."""
     from types import SimpleNamespace
 
     from liftoff.core.errors import InputError
@@ -875,3 +876,17 @@ def test_a_failed_task_names_its_cases_and_the_finished_ones_are_kept(monkeypatc
     assert got == [0, 1, 4]
     with pytest.raises(InputError, match="case d0005: a key is wrong"):
         campaign.run_tasks(InlineExecutor(), [SimpleNamespace(index=5, together=())], got.append, window=1)
+    # a worker's ResourceError goes as it is (exit status 4, not 1 as an internal error), and
+    # a worker out of memory becomes one, naming its cases
+    from liftoff.core.errors import ResourceError
+
+    def short(task):
+        if task.index == 6:
+            raise ResourceError("case d0006: the transient needs 30 GB of histories")
+        raise MemoryError()
+
+    monkeypatch.setattr(campaign, "run_case", short)
+    with pytest.raises(ResourceError, match="case d0006: the transient needs 30 GB"):
+        campaign.run_tasks(InlineExecutor(), [SimpleNamespace(index=6, together=())], got.append, window=1)
+    with pytest.raises(ResourceError, match=r"campaign: generated case d0007, d0008: out of memory in its worker"):
+        campaign.run_tasks(InlineExecutor(), [SimpleNamespace(index=7, together=(8,))], got.append, window=1)

@@ -504,6 +504,27 @@ def test_item_categories_are_those_of_the_solved_items():
         assert ("interface_force" in made) == bool(attach)
 
 
+def test_ranks_pass_every_option_to_the_ranks():
+    """`liftoff run --ranks N` relaunches itself under mpirun: the ranks' command line
+    (workflows.run._child_args) parses back to the same options, less --ranks (it dropped
+    --cases, --campaign, --compare, --march-together, --no-error-estimate, --max-memory and
+    --workers: the ranks ran another campaign, with exit status 0)."""
+    from liftoff.workflows.cli import build_parser
+    from liftoff.workflows.run import _child_args
+
+    argv = ["run", "s.toml", "--out", "o", "--ranks", "2", "--cases", "50", "--campaign", "c", "--compare", "old",
+            "--march-together", "4", "--no-error-estimate", "--max-memory", "3", "--workers", "0", "--fields",
+            "--keep-histories", "--no-plots", "--cache", "k", "--dask", "local"]
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    child = _child_args(args)
+    assert "--ranks" not in child
+    again = vars(parser.parse_args(child))
+    assert {k: v for k, v in again.items() if k != "ranks"} == {k: v for k, v in vars(args).items() if k != "ranks"}
+    plain = parser.parse_args(["run", "--out", "o", "--ranks", "2"])
+    assert _child_args(plain) == ["run", "--out", "o"]
+
+
 def test_a_database_column_on_no_dof_names_its_file(tmp_path, capsys):
     """Issue 27: a database file's column naming a DOF the vehicle lacks was blamed on a
     generated ``force[6]`` that is in no file, and the second file's only when case d0001 ran.
