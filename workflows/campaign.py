@@ -119,6 +119,9 @@ class CaseTask:
     #: further generated cases marched together with ``index`` (liftoff.transient.solve_batch): the
     #: worker sends back a list of summaries, ``index``'s first
     together: tuple[int, ...] = ()
+    #: the model's StackModel.key as the campaign saw it (its input files' contents too; "": not
+    #: checked): a worker's kept stack of another key is built again (_worker_state)
+    stack_key: str = ""
 
 
 @dataclass
@@ -209,15 +212,30 @@ def _worker_state(task: CaseTask):
     from .cache import StageCache
     from .pipeline import build_stack
 
-    key = (task.scenario.digest, task.scenario.n_cases, task.cache, task.model_key)
-    if _MEMO.get("key") != key:
+    key = _memo_key(task.scenario, task.cache, task.model_key)
+    if _MEMO.get("key") != key or (task.stack_key and _MEMO["stack"].key != task.stack_key):
+        # (a long-lived worker, a remote Dask one: the scenario's text and [model] are not all
+        # that made its stack; its folder, whose files the scenario reads, and the contents of the
+        # model's input files, in the stack's key, are checked too)
         _MEMO.clear()
         sc = task.scenario.load()
         case0 = sc.generated_case(task.index)
         stack = build_stack(case0.model, StageCache(Path(task.cache)), progress=False,
                             where=Where(case0.source, "model"), workers=1)     # (a pool's worker already)
+        if task.stack_key and stack.key != task.stack_key:
+            raise InputError(f"{sc.path}: case {case0.name}: the model's input files changed while the campaign ran "
+                             "(its stack differs from the one the campaign started with); run it again")
         _MEMO.update(key=key, scenario=sc, stack=stack)
     return _MEMO["scenario"], _MEMO["stack"]
+
+
+def _memo_key(ref: ScenarioRef, cache: str, model_key: str) -> tuple:
+    """What a worker's kept (scenario, stack) was made from: the scenario's text, case count,
+    name and folder, the contents of the files it names (:func:`referenced_files`: a profile's
+    CSV edited between two campaigns on the same long-lived worker), the cache and the [model]
+    parameters."""
+    files = tuple(sorted(referenced_files(ref.data, Path(ref.base)).items()))
+    return ref.digest, ref.n_cases, ref.source, ref.base, files, str(cache), model_key
 
 
 def _generated_case(sc, index: int, model_key: str):
@@ -671,8 +689,8 @@ def run_campaign(sc, ref: ScenarioRef, cache_root: Path, model_key: str, executo
 
     # (a generator: each task takes the running envelope when it is sent)
     k = int(together)
-    tasks = (CaseTask(ref, todo[j], str(cache_root), model_key, (), True, captured.running(), tuple(todo[j + 1:j + k]))
-             for j in range(0, len(todo), k))
+    tasks = (CaseTask(ref, todo[j], str(cache_root), model_key, (), True, captured.running(), tuple(todo[j + 1:j + k]),
+                      stack_key) for j in range(0, len(todo), k))
     try:                                 # (marched tasks: one running and one waiting a worker, as each holds k cases)
         workers = max(1, getattr(executor, "_max_workers", 2) or 2)
         run_tasks(executor, tasks, store, window or (4 if k == 1 else 2) * workers)
@@ -686,9 +704,8 @@ def run_campaign(sc, ref: ScenarioRef, cache_root: Path, model_key: str, executo
 def prime(sc, cache_root: str, model_key: str, stack) -> None:
     """Give this process's worker state the scenario and the stack it already holds (the
     main process runs cases too: the governing case, an in-process executor)."""
-    ref = ScenarioRef.of(sc)
     _MEMO.clear()
-    _MEMO.update(key=(ref.digest, ref.n_cases, str(cache_root), model_key), scenario=sc, stack=stack)
+    _MEMO.update(key=_memo_key(ScenarioRef.of(sc), cache_root, model_key), scenario=sc, stack=stack)
 
 
 def generated_index(sc, name: str) -> int | None:

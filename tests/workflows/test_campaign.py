@@ -238,6 +238,52 @@ def test_tasks_carry_no_model(campaign4):
     assert len(pickle.dumps(t)) < 30_000 < len(pickle.dumps(stack.vehicle))
 
 
+def test_a_worker_builds_its_stack_again_when_what_made_it_changed(tmp_path, monkeypatch):
+    """A worker keeps the last (scenario, stack) it built (a long-lived Dask worker keeps it
+    across campaigns). It builds them again for a scenario in another folder (whose CSV files
+    it reads), for a file the scenario names whose contents changed, and for a task whose
+    stack key (the model's input files' contents) is not its stack's; a stack still of another
+    key once built again means the inputs changed while the campaign ran: refused, named."""
+    from types import SimpleNamespace
+
+    from liftoff.core.errors import InputError
+    from liftoff.workflows import campaign, pipeline
+
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    (tmp_path / "a" / "thrust.csv").write_text("time,value\n0,1\n")
+    (tmp_path / "b" / "thrust.csv").write_text("time,value\n0,1\n")
+    built = []
+    keys = {"now": "K1"}
+
+    def build_stack(model, cache, **kw):
+        built.append(model)
+        return SimpleNamespace(key=keys["now"])
+
+    monkeypatch.setattr(pipeline, "build_stack", build_stack)
+    monkeypatch.setattr(campaign.ScenarioRef, "load", lambda self: SimpleNamespace(
+        path=self.source, generated_case=lambda i: SimpleNamespace(model=self.base, source=self.source,
+                                                                   name=f"d{i:04d}")))
+    campaign._MEMO.clear()
+    data = {"profiles": {"thrust": {"file": "thrust.csv"}}}
+    ref = lambda base: campaign.ScenarioRef(data, "s.toml", str(tmp_path / base), 4, "digest")  # noqa: E731
+    task = lambda base, key="": campaign.CaseTask(ref(base), 1, "/cache", "mkey", stack_key=key)  # noqa: E731
+    campaign._worker_state(task("a"))
+    campaign._worker_state(task("a", "K1"))
+    assert len(built) == 1                                   # kept
+    campaign._worker_state(task("b"))
+    assert built[-1] == str(tmp_path / "b") and len(built) == 2         # another folder
+    (tmp_path / "b" / "thrust.csv").write_text("time,value\n0,2.0\n")
+    campaign._worker_state(task("b"))
+    assert len(built) == 3                                   # a named file's contents changed
+    keys["now"] = "K2"
+    campaign._worker_state(task("b", "K2"))
+    assert len(built) == 4                                   # the model's input files changed
+    with pytest.raises(InputError, match=r"s.toml: case d0001: the model's input files changed while the campaign"):
+        campaign._worker_state(task("b", "K3"))
+    campaign._MEMO.clear()
+
+
 def test_restart_skips_done_cases(campaign4):
     """A second run reuses every record; more cases run only the new ones; a changed
     scenario (seed) runs them all again; the envelope equals the first run's."""
