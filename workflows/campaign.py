@@ -731,7 +731,7 @@ def feed_records(sc, camp: CampaignRun, agg, path: Path) -> Path:
             s = load_summary(camp.records[i])
             agg.add(s, generated=True)
             _, info = sc.generated_raw(i)
-            row = {"index": i, "name": s.name, **info, "h": s.h, "n_steps": s.n_steps,
+            row = {"index": i, "name": s.name, **info, "h": s.h, "n_steps": s.n_steps,      # (CASE_COLUMNS)
                    "first_separation": float(np.nanmin(s.separation)) if s.separation.size else float("nan"),
                    "last_separation": float(np.nanmax(s.separation)) if s.separation.size else float("nan"),
                    "max_recontacts": int(s.recontacts.max(initial=0)),

@@ -211,7 +211,16 @@ class Variable:
         return float(np.clip(self.mean + self.std * ndtri(a + u * (b - a)), self.low, self.high))
 
 
+#: the columns of a campaign's cases.csv beside the draws (workflows.campaign.feed_records): a
+#: shared variable's column is its name, so none may take one of these
+CASE_COLUMNS = ("index", "name", "database", "h", "n_steps", "first_separation", "last_separation",
+                "max_recontacts", "peak_post_compression", "wall_s")
+
+
 def variable(where: Where, name: str, spec: Any) -> Variable:
+    if name in CASE_COLUMNS:
+        raise where.error(f"the name {name!r} is a column of cases.csv (the case's {name}); name the variable "
+                          "otherwise")
     v = table(where, spec, VARIABLE_KEYS, required=("targets", "distribution"))
     dist = choice(where / "distribution", v["distribution"], DISTRIBUTIONS)
     targets = v["targets"] if isinstance(v["targets"], list) else [v["targets"]]

@@ -126,6 +126,10 @@ def test_database_cases(tmp_path):
     (lambda d: d["variables"]["srb_thrust"].update(color="red"), "srb_thrust: unknown key 'color'"),
     (lambda d: d.update(**{"from": "windy"}), "dispersion.from: no [[case]] named 'windy'"),
     (lambda d: d.update(database={"files": "nothing_*.csv"}), "dispersion.database.files[0]: no file matches"),
+    # a shared variable's cases.csv column is its name: it overwrote the case's index, name or step
+    (lambda d: d["variables"].update(h=d["variables"].pop("srb_thrust")),
+     "dispersion.variables.h: the name 'h' is a column of cases.csv (the case's h); name the variable otherwise"),
+    (lambda d: d["variables"].update(name=d["variables"].pop("srb_thrust")), "variables.name: the name 'name' is"),
 ])
 def test_bad_dispersions_name_the_key(change, msg):
     d = tomllib.loads(default_text())
