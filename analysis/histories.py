@@ -57,6 +57,30 @@ def items(result, attach: dict, heads: dict | None = None, band_hz: float = 0.0)
     return out
 
 
+#: the span at each end of a record, in periods of the band's cutoff (2 / f_c s), where a
+#: filtered history's zero-phase filter (spectra.lowpass) carries its end transient: a sine
+#: ending anywhere in its period came out up to 5-30 % high there (35 Hz in a 40 Hz band)
+EDGE_PERIODS = 2.0
+
+
+def edge_extremes(time: np.ndarray, its: list[Item], band_hz: float) -> list[tuple[str, str, float]]:
+    """(item, 'max' | 'min', t) of each band-limited item (``raw`` kept: :func:`items` with
+    ``band_hz`` > 0) whose max or min lies within EDGE_PERIODS / ``band_hz`` s of either end of
+    the record, where the filter's end transient may have made or raised it."""
+    if not band_hz > 0 or time.size < 2:
+        return []
+    edge = EDGE_PERIODS / band_hz
+    near = lambda k: time[k] - time[0] < edge or time[-1] - time[k] < edge  # noqa: E731
+    out = []
+    for it in its:
+        if it.raw is None:
+            continue
+        for side, k in (("max", int(np.argmax(it.values))), ("min", int(np.argmin(it.values)))):
+            if near(k):
+                out.append((it.name, side, float(time[k])))
+    return out
+
+
 def item_categories(problem) -> set[str]:
     """The categories of the items :func:`items` makes of the result of ``problem`` (a
     TransientProblem, duck-typed: its contacts, recoveries and body a's output points),

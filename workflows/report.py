@@ -16,8 +16,8 @@ import numpy as np
 from liftoff.transient.effects import center_of_gravity
 
 # the histories, tables and plots live in analysis/ (issue 24); the run's callers find them here too
-from liftoff.analysis.histories import (CG_ACCELERATION, _translations, interface_histories, items,  # noqa: F401
-                                        liquid_heads, load_factor_items, twang)
+from liftoff.analysis.histories import (CG_ACCELERATION, EDGE_PERIODS, _translations, edge_extremes,  # noqa: F401
+                                        interface_histories, items, liquid_heads, load_factor_items, twang)
 from liftoff.analysis.plots import _plot_correlated, plot_contours, plot_spectra, plots  # noqa: F401
 from liftoff.analysis.tables import (Item, display_points, envelope, format_changes, format_table,  # noqa: F401
                                      is_force, maxmin, write_csv)
@@ -488,12 +488,15 @@ def band_lines(band: float, cbs: dict, f_max: dict | None = None) -> list[str]:
             for name, cb in cbs.items() if 0 < cb.n_eigenmodes < cb.n_dof - len(cb.boundary_labels)}
     if not band > 0:
         return [head + "unfiltered" + tail]
+    # (the band is the filter's -6 dB point, not the edge of what it passes whole)
+    filtered = (f"low-pass filtered to {band:g} Hz (zero phase, -6 dB there: {100 * lowpass_gain(0.8 * band, band):.0f} % "
+                f"passed at {0.8 * band:g} Hz, 50 % at {band:g} Hz)")
     if not cuts:
-        return [head + f"low-pass filtered to {band:g} Hz" + tail]
+        return [head + filtered + tail]
     name = min(cuts, key=cuts.get)
     leak = lowpass_gain(cuts[name], band)
-    lines = [head + f"low-pass filtered to {band:g} Hz, which passes {100 * leak:.2g} % at {cuts[name]:.1f} Hz, the "
-             f"lowest component cut ({name!r})" + tail]
+    lines = [head + filtered + f", which passes {100 * leak:.2g} % at {cuts[name]:.1f} Hz, the lowest component cut "
+             f"({name!r})" + tail]
     if leak > BAND_LEAK_WARNING:
         lines.append(f"  WARNING: the acceleration band passes {100 * leak:.2g} % at {cuts[name]:.1f} Hz, where "
                      f"component {name!r} is cut: modes the reduction left out would enter those peaks; lower "
@@ -529,6 +532,14 @@ def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[di
         else:
             lines.append("    step: not checked (no second run at h/2: --no-error-estimate); the peaks carry no error "
                          "estimate")
+        band = scenario.post.acceleration_band_hz
+        edge = edge_extremes(res.time, items(res, cp.attach, liquid_heads(cp), band), band)
+        if edge:
+            name, side, t = edge[0]
+            lines.append(f"    WARNING: {len(edge)} band-limited max/min values lie within {EDGE_PERIODS / band:.3g} s of "
+                         f"an end of the record (first: {name} {side} at t = {t:.4g} s), where the zero-phase {band:g} "
+                         "Hz filter's end transient may have made or raised them (by up to tens of percent); run the "
+                         "case longer ([time] t_end), or read its unfiltered histories")
         tw = twang(res, cp)
         if tw is not None:
             lines.append(f"    {tw.line()}")

@@ -82,6 +82,8 @@ def test_band_check_warns_when_the_band_reaches_a_component_cut():
     ok = report.band_lines(40.0, cbs)
     leak = 1 / (1 + (59.0 / 40.0) ** (2 * LOWPASS_ORDER))
     assert len(ok) == 1 and f"passes {100 * leak:.2g} % at 59.0 Hz" in ok[0] and "'core'" in ok[0]
+    # the band is the -6 dB point: 1 / (1 + 0.8^16) = 0.973 passed at 32 Hz, one half at 40 Hz
+    assert "(zero phase, -6 dB there: 97 % passed at 32 Hz, 50 % at 40 Hz)" in ok[0]
     wide = report.band_lines(55.0, cbs)
     assert len(wide) == 2 and "WARNING" in wide[1] and "'core'" in wide[1]
     assert "unfiltered" in report.band_lines(0.0, cbs)[0]
@@ -91,6 +93,34 @@ def test_band_check_warns_when_the_band_reaches_a_component_cut():
     # residual vectors (above the cut, reduction.craig_bampton) do not move it: still 59 Hz, still a warning
     with_rv = report.band_lines(55.0, {**cbs, "core": cb(4, [10.0, 59.0, 900.0, 1500.0], 100, r=2)})
     assert len(with_rv) == 2 and "at 59.0 Hz" in with_rv[1] and "'core'" in with_rv[1]
+
+
+def test_filtered_peaks_at_an_end_of_the_record_are_named():
+    """The zero-phase filter (analysis.spectra.lowpass) carries an end transient: a 35 Hz sine
+    on a static level, ending mid-period, filtered to 40 Hz, comes out above its steady
+    filtered amplitude (the reference: |H|^2 at 35 Hz) within EDGE_PERIODS / f_c of the end.
+    analysis.histories.edge_extremes names a band-limited item whose max or min lies there,
+    not one whose extremes lie inside the record, nor an unfiltered one."""
+    from liftoff.analysis.histories import EDGE_PERIODS, edge_extremes
+    from liftoff.analysis.spectra import lowpass, lowpass_gain
+    from liftoff.analysis.tables import Item
+
+    h, f, band = 1e-3, 35.0, 40.0
+    t = np.arange(0.0, 3.0 + 0.3 / f, h)
+    x = 5.0 + np.sin(2 * np.pi * f * t)
+    y = lowpass(x, h, band)
+    gain = lowpass_gain(f, band)
+    inside = np.abs(t - t[-1]) > EDGE_PERIODS / band
+    # steady, inside the record: the gain, within 1 % (the end transient's tail beyond the span)
+    assert abs(y[inside][t[inside] > 0.5].max() - 5.0 - gain) < 1e-2 * gain
+    assert y.max() - 5.0 > 1.05 * gain and t[np.argmax(y)] > t[-1] - EDGE_PERIODS / band   # raised at the end
+    hump = 5.0 + np.exp(-((t - 1.5) / 0.2) ** 2)                                   # its peak mid-record
+    its = [Item("acc end", "m/s^2", y, "acceleration", raw=x),
+           Item("acc mid", "m/s^2", lowpass(hump, h, band), "acceleration", raw=hump),
+           Item("post end", "N", x, "contact_force")]                               # unfiltered: not checked
+    got = edge_extremes(t, its, band)
+    assert [(n, side) for n, side, _ in got] == [("acc end", "max")] and got[0][2] == t[np.argmax(y)]
+    assert edge_extremes(t, its, 0.0) == []
 
 
 def test_display_points_keep_every_peak_where_it_is():
