@@ -191,7 +191,7 @@ def write_statistics(agg: Aggregate, out: Path, freq=None, q=None) -> list[Path]
                        "q": Dataset(qv, "1 (quality factor Q)" if q is not None else "index"),
                        "freq_Hz": Dataset(fv, "Hz" if freq is not None else "index"),
                        **{k: Dataset(v, unit, dims=dims, description=d) for k, v, d in (
-                           ("envelope", agg.srs_env, "SRS envelope over every case (absolute acceleration)"),
+                           ("envelope", agg.srs_env, "SRS envelope over every case (absolute-acceleration SRS in each item's units: its history the oscillators' base input)"),
                            ("mean", agg.srs_run.mean, "mean over the dispersed cases"),
                            ("std", agg.srs_run.std, "standard deviation over the dispersed cases"),
                            ("normal", agg.srs_run.bound(agg.k), "normal P/C bound, mean + k std"))}}

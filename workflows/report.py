@@ -652,7 +652,7 @@ def spectra(result, cp, post, out: Path, case: str, srs: tuple | None = None) ->
             freq, S = srs_of(np.column_stack([it.history for it in sel]), h, post.srs)
         data["srs"] = {"items": np.array([it.name for it in sel], dtype=str), "freq": Dataset(freq, "Hz"),
                        "q": Dataset(np.array(post.srs.q), "1"),
-                       "value": Dataset(S, "units of each item (absolute acceleration)", dims=("q", "freq", "items"),
+                       "value": Dataset(S, "units of each item (the absolute-acceleration SRS: each history the oscillators' base input)", dims=("q", "freq", "items"),
                                         initial_conditions="steady under each history's first value (pyyeti.srs "
                                                            "ic='steady')")}
     paths.insert(0, write_record(out / f"spectra_{case}.h5", "liftoff-spectra", 1, data, units="SI per item",
