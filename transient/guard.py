@@ -51,6 +51,7 @@ class GrowthGuard:
         self.comp = rows.compliance
         self.pen = rows.compliance > 0
         self.w2 = np.asarray(modal.w2, dtype=float)
+        self.elastic = self.w2 != 0.0            # (a rigid mode's 0 x an overflowed q^2 would be NaN)
         self.x0 = float(np.linalg.norm(state.q))
         self.y0 = math.sqrt(2.0 * self._energy(state))
         U, V = modal.U, modal.V
@@ -64,7 +65,9 @@ class GrowthGuard:
     def _energy(self, state) -> float:
         """Energy of a kernel state (module docstring)."""
         act = np.asarray(state.active, dtype=bool) & self.pen
-        e = 0.5 * float(state.v @ state.v) + 0.5 * float(np.sum(self.w2 * state.q ** 2))
+        q = np.asarray(state.q)
+        with np.errstate(over="ignore", invalid="ignore"):
+            e = 0.5 * float(state.v @ state.v) + 0.5 * float(np.sum(self.w2[self.elastic] * q[self.elastic] ** 2))
         if act.any():
             e += 0.5 * float(np.sum(state.f[act] ** 2 * self.comp[act]))
         return e
@@ -96,6 +99,11 @@ class GrowthGuard:
     def check(self, t: float, state, forces: np.ndarray, times: np.ndarray) -> None:
         """ConvergenceError when the energy of ``state`` (at time t, the chunk's end) or a
         penalty force of the chunk (``forces`` at ``times``, rows x contact rows) exceeds its bound."""
+        bad = ~np.isfinite(forces)
+        if bad.any():                               # any row, rigid ones too: nothing bounds a NaN
+            i, j = np.argwhere(bad)[0]
+            raise ConvergenceError(f"the solution diverged: a contact force is {forces[i, j]} at t = {times[i]:.6g} s "
+                                   "(transient/guard.py); reduce h")
         eb = self.energy_bound(t)
         if not math.isfinite(eb):
             return
@@ -112,7 +120,7 @@ class GrowthGuard:
                                        "the initial state and the applied loads can give the bodies "
                                        "(transient/guard.py); reduce h")
         e = self._energy(state)
-        if e > allowed:
+        if not e <= allowed:                        # (NaN: diverged past any float)
             raise ConvergenceError(f"the solution diverged: its energy {e:.3g} J at t = {t:.6g} s exceeds "
                                    f"{allowed:.3g} J, {SAFETY:g} x the most the initial state and the applied "
                                    "loads can give it (transient/guard.py); reduce h")

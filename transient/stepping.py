@@ -352,7 +352,8 @@ def memory_estimate(problem: TransientProblem, n_steps: int, runs: float = 1,
     ``modal_runs`` of them: one for a run with its error estimate, whose h/2 run keeps none,
     as many as ``runs`` with an accuracy target, whose finer run keeps them too, as it may
     become the result: accuracy.solve_estimated; none in memory with ``modal_scratch`` on
-    disk: liftoff.core.scratch.on_disk), the
+    disk: liftoff.core.scratch.on_disk), the copies of the output and recovery histories made
+    as a run ends, the
     active-set cache of the step matrix (64 patterns) and the dense static solve (about
     five (n + n_rigid)^2 arrays)."""
     pa, pb = problem.body_a, problem.body_b
@@ -360,12 +361,20 @@ def memory_estimate(problem: TransientProblem, n_steps: int, runs: float = 1,
     nc = sum(c.n_dirs for c in problem.contacts)
     nrig = sum(c.n_dirs for c in problem.contacts if c.rigid)
     cols = nc + 1 + 0.125 * len(problem.contacts) + 0.5  # forces, time, state (int8), iterations (int32)
+    out_cols = 0.0                   # output and recovery columns: the result's copies of the kernel's (split)
     for key, body in (("a", pa), ("b", pb)):
-        cols += 3 * len(problem.outputs.get(key, ())) + (6 if body.n_modes else 0)
-    cols += sum(len(r.labels) for r in problem.recoveries)
+        out_cols += 3 * len(problem.outputs.get(key, ())) + (6 if body.n_modes else 0)
+    out_cols += sum(len(r.labels) for r in problem.recoveries)
+    cols += out_cols
     n = pa.n_modes + pb.n_modes
     n2 = 2 * nc if nrig else nc
     return {"histories": 8.0 * n_t * cols * runs,
+            # the result's output and recovery histories are copied out of the kernel's arrays while
+            # those are held (solver.OutputPlan.split), once, as a run ends: the largest copy is the
+            # h/2 run's, twice this run's steps where ``runs`` counts a pair at h (3), this run's
+            # own otherwise (a toy run of 300 recovery columns peaked at 116 MB against 52 MB
+            # counted without it)
+            "output copies": 8.0 * n_t * out_cols * (2.0 if runs >= 3 else 1.0),
             "modal histories (keep_modal)": 8.0 * n_t * (3 if problem.keep_modal is True else 1) * n * modal_runs
             if problem.keep_modal and not _modal_on_disk(problem) else 0.0,
             "active-set cache": 8.0 * 64 * n2 * n2,

@@ -83,7 +83,8 @@ def test_memory_of_the_run_and_its_h2_check_is_counted_once_before_both():
     pr = _drop(t_end=0.25)
     n = choose_step(pr).n_steps
     unit = memory_estimate(pr, n, 1)["histories"]
-    rest = sum(v for k, v in memory_estimate(pr, n, 1).items() if k != "histories")
+    # the rest as the pair counts it (its output copies: the h/2 run's, twice one run's)
+    rest = sum(v for k, v in memory_estimate(pr, n, 3).items() if k != "histories")
     est = solve_estimated(replace(pr, memory_limit=4.0 * unit + rest))          # 3 units needed: runs
     assert est.check.time.size == 2 * n + 1
     with pytest.raises(ResourceError, match="the transient needs about"):
@@ -416,7 +417,8 @@ def test_memory_check_counts_the_accuracy_pairs_modal_histories():
     n = choose_step(pr).n_steps
     parts = memory_estimate(pr, n, 1)
     unit, modal = parts["histories"], parts["modal histories (keep_modal)"]
-    rest = sum(v for k, v in parts.items() if k not in ("histories", "modal histories (keep_modal)"))
+    rest = sum(v for k, v in memory_estimate(pr, n, 3, 3).items()
+               if k not in ("histories", "modal histories (keep_modal)"))      # (the pair's output copies)
     assert memory_estimate(pr, n, 3, 3)["modal histories (keep_modal)"] == 3 * modal
     tight = 3.2 * unit + 1.2 * modal + rest           # the histories of the pair, one run's modal
     solve_estimated(replace(pr, memory_limit=tight))   # no target: the h/2 run keeps no modal histories

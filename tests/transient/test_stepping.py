@@ -150,6 +150,9 @@ def test_memory_estimate_matches_the_arrays_of_a_run():
     est = memory_estimate(p, n_t - 1)
     # byte counts: integers below 2^53, exact in floats but for the 0.125 and 0.5 fractions' sums
     assert math.isclose(est["histories"] + est["modal histories (keep_modal)"], actual, rel_tol=1e-12)
+    # the result's output columns are copies of the kernel's, made while those are held: counted once more
+    copies = sum(a.nbytes for a in (r.displacement["a"], r.velocity["a"], r.acceleration["a"], r.rigid_body_motion_a))
+    assert math.isclose(est["output copies"], copies, rel_tol=1e-12)
 
 
 def test_keep_modal_q_is_one_column_a_mode_and_the_error_check_keeps_none():
@@ -189,3 +192,37 @@ def test_the_step_records_the_rule_that_set_it(monkeypatch):
     monkeypatch.setattr(stepping, "coupling_margin", lambda *args: next(margins))
     step = choose_step(_block(t_end=1.2))
     assert step.stability_halvings == 2 and step.governed_by == "eq. 12" and step.n_steps == 4 * n_stable
+
+
+def test_growth_guard_stops_a_run_whose_energy_or_forces_are_not_finite():
+    """transient/guard.py: a run diverged past any float has a rigid-body mode's q^2 = inf,
+    whose 0 x inf in the strain energy was NaN, and NaN > bound is False: the guard let a
+    result with modal displacements of 1e232 through. Now a non-finite energy, or a
+    non-finite force in any row (rigid rows too, which no energy bounds), stops the run;
+    a finite state within the bound still passes."""
+    from types import SimpleNamespace
+
+    from liftoff.core.errors import ConvergenceError
+    from liftoff.transient.guard import GrowthGuard
+
+    modal = SimpleNamespace(w2=np.array([0.0, 4.0e4]), U=np.zeros((2, 0)), V=np.zeros((0, 2)), until=np.zeros(0),
+                            const=np.array([1.0, 0.0]), tk=np.zeros(0), Pk=np.zeros((0, 2)))
+    rows = SimpleNamespace(compliance=np.array([0.0, 1e-9]))        # a rigid row and a penalty row
+
+    def state(q, v):
+        return SimpleNamespace(q=np.array(q, float), v=np.array(v, float), f=np.zeros(2),
+                               active=np.array([True, True]))
+
+    g = GrowthGuard(rows, modal, state([0.0, 0.0], [0.0, 0.0]), 1e-4, float("inf"))
+    g.start(0.0, 1.0)
+    times, ok_forces = np.array([0.5]), np.zeros((1, 2))
+    g.check(0.5, state([0.1, 1e-3], [0.5, 0.0]), ok_forces, times)             # within the bound
+    with np.errstate(over="ignore"):
+        huge = state([1e200, 1e-3], [0.0, 0.0])                                 # q^2 = inf on the rigid mode
+    g.check(0.5, huge, ok_forces, times)       # a rigid mode's displacement is no energy: q = 1e200 alone passes
+    with pytest.raises(ConvergenceError, match="the solution diverged: its energy"):
+        g.check(0.5, state([1e200, 1e200], [0.0, 0.0]), ok_forces, times)       # elastic q^2 = inf
+    with pytest.raises(ConvergenceError, match="the solution diverged: its energy"):
+        g.check(0.5, state([0.0, 0.0], [np.nan, 0.0]), ok_forces, times)        # NaN energy
+    with pytest.raises(ConvergenceError, match=r"a contact force is nan at t = 0.5 s"):
+        g.check(0.5, state([0.0, 0.0], [0.0, 0.0]), np.array([[np.nan, 0.0]]), times)   # a rigid row's NaN
