@@ -36,6 +36,12 @@ class Assembly:
     points: tuple[str, ...]
     point_coords: np.ndarray
     released: frozenset = frozenset()     # (component, label) pairs kept apart (module docstring)
+    #: (n_dof, 6), (6, 6) about the origin: the rigid-body inertia loads M RB and the rigid-body mass
+    #: RB^T M RB of the components' own physical rigid-body field (reduction.system.rigid_inertia), where
+    #: the boundary's geometric RB is not that field's image: a grounded component, clamped inside its
+    #: interior, whose constraint modes do not carry its interior rigidly (None: the boundary's is)
+    inertia: np.ndarray | None = None
+    rigid_mass: np.ndarray | None = None
 
     def system_label(self, component: str, label: str) -> str:
         """The system label of ``component``'s boundary DOF ``label`` (its own where released)."""

@@ -31,7 +31,7 @@ from liftoff.core.labels import TRANSLATIONS
 from liftoff.core.rigid import rb_rows
 
 from .assembly import label_transform
-from .system import SystemModes, system_rb
+from .system import SystemModes, rigid_inertia
 
 
 def _held(omega: np.ndarray, rows: np.ndarray, u: np.ndarray):
@@ -130,10 +130,10 @@ def modal_mass_table(modes: SystemModes, contact_labels, body: str) -> ModalMass
     its ground's rigid translation; free-free held at ``contact_labels`` (module docstring)."""
     asm = modes.assembly
     nt = len(TRANSLATIONS)
-    if not modes.n_rigid:
-        rb = system_rb(asm)[:, :nt]
-        L = modes.phi.T @ (asm.M @ rb)
-        total = np.diag(rb.T @ asm.M @ rb).copy()
+    if not modes.n_rigid:                   # (the ground's rigid field: reduction.system.rigid_inertia)
+        inertia, rigid_mass = rigid_inertia(asm)
+        L = modes.phi.T @ inertia[:, :nt]
+        total = np.diag(rigid_mass)[:nt].copy()
         m_eff = L ** 2
         return ModalMassTable(body, "grounded", modes.freq_hz.copy(), m_eff, total, total - m_eff.sum(axis=0))
     contact = list(dict.fromkeys(contact_labels))

@@ -52,13 +52,19 @@ class SystemModes:
 
     def to_body(self, labels=None, ref_point=(0.0, 0.0, 0.0), zeta=0.0, name: str | None = None) -> ModalBody:
         """The transient core's modal body: phi rows at ``labels`` (default: every boundary
-        DOF), participation Phi^T M RB about ref_point (eq. 14), rigid_body_mass RB^T M RB,
+        DOF), participation Phi^T M RB about ref_point (eq. 14), rigid_body_mass RB^T M RB
+        (:func:`rigid_inertia`: a grounded component's own rigid-body field),
         all labelled points. A scalar ``zeta`` applies to the elastic modes (rigid modes get
         0); an array gives one ratio per mode."""
         a = self.assembly
         labels = a.boundary_labels if labels is None else tuple(labels)
         rows = label_transform(a, labels) @ self.phi
-        rb = system_rb(a, ref_point)
+        if a.inertia is None:               # (the expressions of before: the free-free vehicle's bits unchanged)
+            rb = system_rb(a, ref_point)
+            participation, rigid_mass = self.phi.T @ a.M @ rb, rb.T @ a.M @ rb
+        else:
+            inertia, rigid_mass = rigid_inertia(a, ref_point)
+            participation = self.phi.T @ inertia
         zeta = np.asarray(zeta, dtype=float)
         if zeta.ndim == 0:
             z = np.full(self.n_modes, float(zeta))
@@ -68,8 +74,25 @@ class SystemModes:
         else:
             raise InputError(f"zeta has shape {zeta.shape}: give a scalar or one ratio per mode ({self.n_modes})")
         return ModalBody(name=name or a.name, omega=self.omega, zeta=z, dof_labels=labels, phi=rows,
-                         participation=self.phi.T @ a.M @ rb, ref_point=np.asarray(ref_point, float),
-                         points=a.points, point_coords=a.point_coords, rigid_body_mass=rb.T @ a.M @ rb)
+                         participation=participation, ref_point=np.asarray(ref_point, float),
+                         points=a.points, point_coords=a.point_coords, rigid_body_mass=rigid_mass)
+
+
+def rigid_inertia(assembly: Assembly, ref_point=(0.0, 0.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
+    """(M RB (n_dof, 6), RB^T M RB (6, 6)) about ``ref_point``: the rigid-body inertia loads of
+    the system DOFs (gravity, eq. 14) and the rigid-body mass. For free components the
+    geometric RB of the boundary (:func:`system_rb`) is the image of the components' rigid
+    motion (their constraint modes carry the interior along rigidly); a grounded component,
+    clamped inside its interior, has no such image: its loads are the physical field's,
+    T^T M r, held by the assembly (``Assembly.inertia`` about the origin, moved here:
+    r_ref = r_0 X with t_0 = t + ref x theta)."""
+    if assembly.inertia is None:
+        rb = system_rb(assembly, ref_point)
+        return assembly.M @ rb, rb.T @ assembly.M @ rb
+    X = np.eye(6)
+    a = np.asarray(ref_point, dtype=float)
+    X[:3, 3:] = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])   # a x theta
+    return assembly.inertia @ X, X.T @ assembly.rigid_mass @ X
 
 
 def system_rb(assembly: Assembly, ref_point=(0.0, 0.0, 0.0)) -> np.ndarray:

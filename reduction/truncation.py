@@ -40,7 +40,7 @@ from liftoff.core.rigid import rb_rows
 
 from .assembly import label_transform
 from .modal_mass import held_effective_mass
-from .system import MASSLESS_TOL, SystemModes, system_rb
+from .system import MASSLESS_TOL, SystemModes, rigid_inertia
 
 #: a residual direction whose share of a loaded DOF's static flexibility is below this is
 #: round-off (what the kept modes already carry, computed twice): not a vector. The check's
@@ -91,7 +91,7 @@ def load_vectors(full: SystemModes) -> np.ndarray:
     asm = full.assembly
     unit = np.zeros((asm.n_dof, len(asm.boundary_labels)))
     unit[asm.n_modal + np.arange(len(asm.boundary_labels)), np.arange(len(asm.boundary_labels))] = 1.0
-    return np.hstack([unit, asm.M @ system_rb(asm)])
+    return np.hstack([unit, rigid_inertia(asm)[0]])
 
 
 # ------------------------------------------------------------------ the cut
@@ -156,7 +156,7 @@ def effective_mass(modes: SystemModes, contact_labels) -> np.ndarray:
     under its rigid-body (gravity) load, sum (Phi^T M RB)^2 (eq. 14)."""
     asm = modes.assembly
     if not modes.n_rigid:
-        L = modes.phi.T @ (asm.M @ system_rb(asm)[:, : len(TRANSLATIONS)])
+        L = modes.phi.T @ rigid_inertia(asm)[0][:, : len(TRANSLATIONS)]
         return np.einsum("ij,ij->j", L, L)
     contact = list(dict.fromkeys(contact_labels))
     if not contact:

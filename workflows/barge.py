@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 from liftoff.reduction import Assembly, SystemModes, assemble, keep_modes, truncation_check
+from liftoff.reduction.checks import with_own_inertia
 from liftoff.transient import ContactPoint, Forcing, InitialState, ModalBody, Recovery, TransientProblem
 from liftoff.transient.effects import center_of_gravity
 
@@ -93,7 +94,7 @@ def build_models(model: BargeModel, cache, progress: bool = True) -> BargeModels
     bmodes = keep_modes(ball, model.f_max, residual=model.residual_vectors)
     _, cg = center_of_gravity(bmodes.to_body(zeta=model.zeta, name="barge"))
     barge = bmodes.to_body(ref_point=cg, zeta=model.zeta, name="barge")
-    dasm = assemble([cbs["dock"]], "dock")
+    dasm = with_own_inertia(assemble([cbs["dock"]], "dock"), "dock", comps["dock"], cbs["dock"])   # grounded
     dall = modes_stage(dasm, 0, [keys["dock"]], cache, "dock")
     dmodes = keep_modes(dall, model.dock_f_max, residual=model.residual_vectors)
     dock = dmodes.to_body(zeta=model.zeta, name="dock")

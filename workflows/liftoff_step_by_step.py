@@ -39,6 +39,7 @@ def main(argv=None) -> None:
     if not args.stick:
         import pyvista  # noqa: F401  (before dolfinx, FENICSX-NOTES.md)
     from liftoff.reduction import assemble, craig_bampton, keep_modes, system_modes
+    from liftoff.reduction.checks import with_own_inertia
     from liftoff.transient import Forcing, PointForce, TabulatedForce, estimate_step, solve
     from liftoff.transient.effects import center_of_gravity, cg_static_report
     from liftoff.workflows.loads import applied_forces, attitude_feedback, contacts, control_table
@@ -84,7 +85,7 @@ def main(argv=None) -> None:
     vmodes = keep_modes(vall, sysp.f_max, sysp.n_modes, sysp.residual_vectors)
     _, cg = center_of_gravity(vmodes.to_body(name="vehicle"))
     vehicle = vmodes.to_body(ref_point=cg, zeta=model.zeta, name="vehicle")
-    pasm = assemble([cbs["pad"]], "pad")
+    pasm = with_own_inertia(assemble([cbs["pad"]], "pad"), "pad", comps.get("pad"), cbs["pad"])   # (its gravity)
     pall = system_modes(pasm, n_rigid=0)
     pmodes = keep_modes(pall, sysp.pad_f_max, sysp.pad_n_modes, sysp.residual_vectors)
     pad = pmodes.to_body(zeta=model.zeta, name="pad")

@@ -34,6 +34,7 @@ from liftoff.reduction import (
     system_modes,
     truncation_check,
 )
+from liftoff.reduction.checks import with_own_inertia
 from liftoff.transient.body import ModalBody
 from liftoff.transient.effects import center_of_gravity
 from threadpoolctl import threadpool_limits
@@ -645,7 +646,8 @@ def build_stack(model: ModelConfig, cache: StageCache, progress: bool = True, wh
     t1 = time.perf_counter()
     _check_materials(model, thermal, where or Where("scenario", "model"))
     _check_joints(model, cbs, where or Where("scenario", "model"))
-    vasm, vmodes, vehicle, pasm, pmodes, pad, unit, vall, pall = _bodies(model, cbs, ckeys, thermal, cache)
+    vasm, vmodes, vehicle, pasm, pmodes, pad, unit, vall, pall = _bodies(model, cbs, ckeys, thermal, cache,
+                                                                         comps.get(PAD))
     t2 = time.perf_counter()
     comps = {n: comps[n] for n in names if n in comps}     # the model's order, whichever stages were cached
     cbs = {n: cbs[n] for n in names}                        # (and whichever came last: the mirrors)
@@ -674,10 +676,12 @@ def _system_args(model: ModelConfig, vasm: Assembly, ckeys: dict) -> dict[str, t
 
 
 @threadpool_limits.wrap(limits=1, user_api="blas")   # the same arithmetic in any process (campaign workers)
-def _bodies(model: ModelConfig, cbs: dict, ckeys: dict, thermal: dict, cache: StageCache):
+def _bodies(model: ModelConfig, cbs: dict, ckeys: dict, thermal: dict, cache: StageCache, pad_fe=None):
     """Assemblies, system modes (all of them cached; those kept with their residual vectors,
     reduction/truncation.py) and the two modal bodies; the unit thermal loads reduced to
-    each component's boundary."""
+    each component's boundary. ``pad_fe``: the pad's FE component, whose own rigid-body field
+    gives the grounded pad's gravity loads and mass (reduction.checks.with_own_inertia; None, a
+    pad without one: the boundary's geometric RB)."""
     names = list(model.vehicle) + [PAD]
     sysp = model.system
     vasm = vehicle_assembly(model, cbs)
@@ -689,6 +693,7 @@ def _bodies(model: ModelConfig, cbs: dict, ckeys: dict, thermal: dict, cache: St
     _, cg = center_of_gravity(body0)
     vehicle = vmodes.to_body(ref_point=cg, zeta=model.zeta, name="vehicle")
     pasm = assemble([cbs[PAD]], "pad")
+    pasm = with_own_inertia(pasm, PAD, pad_fe, cbs[PAD])      # grounded: its own rigid-body field's loads
     n_rigid, keys, params = args["pad"]
     pall = modes_stage(pasm, n_rigid, keys, cache, "pad", params)
     pmodes = keep_modes(pall, sysp.pad_f_max, sysp.pad_n_modes, sysp.residual_vectors)

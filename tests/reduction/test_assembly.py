@@ -186,6 +186,44 @@ def pad_component():
     return grounded, six_labels(f"n{n}") + six_labels(f"n{3 * n}")
 
 
+def test_grounded_pad_weight_is_its_own_not_its_posts():
+    """A grounded pad, clamped at its foundation inside its interior: its gravity load and
+    mass are those of its own rigid-body field r (reduction.checks.with_own_inertia), not of
+    the posts' rigid motion, whose constraint modes die out at the clamp. Reference: the FE
+    model itself. The sag of the posts under the pad's own weight, K u = M r g, and its mass
+    r^T M r, to round-off with every mode kept; the boundary's geometric RB (before) gave the
+    mass the posts see, about two thirds, and a sag 14 % short."""
+    from liftoff.reduction.checks import full_rb, with_own_inertia
+    from liftoff.reduction.modal_mass import modal_mass_table
+    from liftoff.reduction.system import rigid_inertia
+
+    pad, posts = pad_component()
+    cb = craig_bampton(pad, posts, n_modes=pad.n_dof - len(posts))
+    g = np.array([0.0, 0.0, -9.80665])
+    r, _ = full_rb(pad, cb, np.zeros(3))
+    exact = sla.solve(pad.K.toarray(), pad.M @ r[:, :3] @ g)[[pad.label_dofs[pad.dof_labels.index(p)] for p in posts]]
+    mass = np.diag(r.T @ pad.M @ r)[:3]
+    sags = {}
+    for how, asm in (("own", with_own_inertia(assemble([cb], "pad"), "pad", pad, cb)), ("posts", assemble([cb], "pad"))):
+        modes = system_modes(asm, n_rigid=0)
+        body = modes.to_body(labels=posts, name="pad")
+        sags[how] = body.phi @ ((body.participation[:, :3] @ g) / body.omega ** 2)      # static: q = P / omega^2
+        table = modal_mass_table(modes, [], "pad")
+        if how == "own":
+            scale = np.abs(exact).max()
+            assert np.abs(sags[how] - exact).max() < 1e-9 * scale
+            np.testing.assert_allclose(np.diag(body.rigid_body_mass)[:3], mass, rtol=1e-12)
+            np.testing.assert_allclose(table.total_mass, mass, rtol=1e-12)
+            np.testing.assert_allclose(table.effective_mass.sum(axis=0), mass, rtol=1e-9)   # every mode kept
+            # about another point: the same loads moved rigidly (r_ref = r_0 X)
+            F1, M1 = rigid_inertia(asm, (1.0, 0.5, -2.0))
+            r1, _ = full_rb(pad, cb, np.array([1.0, 0.5, -2.0]))
+            np.testing.assert_allclose(M1, r1.T @ pad.M @ r1, rtol=1e-10, atol=1e-10 * mass.max())
+            np.testing.assert_allclose(F1, asm.scatter("pad", cb.generalized_load(pad.M @ r1)), atol=1e-10 * np.abs(F1).max())
+    tz = [k for k, lab in enumerate(posts) if lab.endswith(":Tz")]
+    assert np.all(np.abs(sags["posts"][tz] / exact[tz] - 1) > 0.1)                     # the test can tell: 14 % short
+
+
 def test_grounded_pad_body():
     pad, posts = pad_component()
     f_full = hz(sla.eigh(pad.K.toarray(), pad.M.toarray(), eigvals_only=True))

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from liftoff.reduction import label_transform, system_rb
+from liftoff.reduction.system import rigid_inertia
 from liftoff.transient import load_result, static_equilibrium
 from liftoff.workflows.cache import StageCache
 from liftoff.workflows.cli import main
@@ -50,7 +51,8 @@ def physical_static(stack, cp) -> tuple[np.ndarray, float]:
             d[va.boundary_dof(la)], d[nv + pa.boundary_dof(lb)] = 1.0, -1.0
             K += k * np.outer(d, d)
     g = np.asarray(pr.forcing.gravity, float)
-    F = np.concatenate([va.M @ system_rb(va)[:, :3] @ g, pa.M @ system_rb(pa)[:, :3] @ g])
+    # (the grounded pad's gravity: its own rigid-body field's loads, reduction.system.rigid_inertia)
+    F = np.concatenate([va.M @ system_rb(va)[:, :3] @ g, rigid_inertia(pa)[0][:, :3] @ g])
     for p in pr.forcing.constant:
         F[va.boundary_dof(p.label)] += p.value
     for tb in pr.forcing.tables:
