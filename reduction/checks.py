@@ -95,10 +95,13 @@ def full_rb(component: Component, cb: CBModel, ref) -> tuple[np.ndarray, str]:
 
 
 def cb_check(cb: CBModel, component: Component | None = None, ref_point=None,
-             n_freefree: int = 12) -> CBCheck:
+             n_freefree: int = 12, own_mass: np.ndarray | None = None) -> CBCheck:
     """Check report of a CB model. ``ref_point`` (m) defaults to the first boundary point;
     with ``component`` (the FE model it came from) FE mass properties and free-free
-    frequencies are compared."""
+    frequencies are compared. ``own_mass``: a grounded component's own rigid-body mass
+    (6 x 6 about ``ref_point``: Assembly.rigid_mass moved, reduction.system.rigid_inertia),
+    whose boundary is no rigid-body support: its rigid-body check does not apply, and M_B is
+    the mass its boundary carries with the clamp held, not its own."""
     nq = cb.n_modes
     ref = cb.point_coord(cb.boundary_points[0]) if ref_point is None else np.asarray(ref_point, float)
     s: dict = {"name": cb.name, "n_modes": nq, "n_residual": cb.n_residual, "n_boundary": cb.n_boundary,
@@ -116,10 +119,13 @@ def cb_check(cb: CBModel, component: Component | None = None, ref_point=None,
     rb = rb_rows(cb.boundary_labels, cb.points, cb.point_coords, ref)
     res = _rb_residual(cb.K_B, rb, k_scale)
     s["rb_residual"] = res.tolist()
-    s["rb_ok"] = bool(res.max() < RB_TOL)
+    s["grounded"] = own_mass is not None
+    s["rb_ok"] = None if own_mass is not None else bool(res.max() < RB_TOL)
     m6 = rb.T @ cb.M_B @ rb
     s["rigid_body_mass"] = m6.tolist()
     s["mass_properties_cb"] = cg_mass(m6, ref).as_dict()
+    if own_mass is not None:
+        s["mass_properties_own"] = cg_mass(np.asarray(own_mass, float), ref).as_dict()
     # modal effective mass of the fixed-interface modes (unit modal mass): (C_M RB)^2
     L = cb.C_M @ rb
     eff = L**2
@@ -167,9 +173,12 @@ def _report(s: dict) -> str:
            f"  definiteness  M min/max eig {s['M_min_eig_rel']:.2e} ({m_def})"
            f"   K_B min eig / scale {s['K_B_min_eig_rel']:.1e}, {s['K_B_n_zero_eig']} zero"
            f" ({'PSD' if s['K_positive_semidefinite'] else 'NOT PSD'})",
-           f"  rigid body    |K_B RB| / (k_scale |RB|) max {max(s['rb_residual']):.1e} about "
-           f"{s['ref_point']} m -> {'OK' if s['rb_ok'] else 'FAIL (not free-free or non-geometric)'}"]
-    for tag, key in (("CB (M_B)", "mass_properties_cb"), ("FE (full M)", "mass_properties_fe")):
+           f"  rigid body    |K_B RB| / (k_scale |RB|) max {max(s['rb_residual']):.1e} about {s['ref_point']} m -> "
+           + ("not applicable: grounded (clamped inside its interior), its boundary is no rigid-body support; "
+              "M_B's mass below is what the boundary carries with the clamp held, 'own' the component's"
+              if s.get("grounded") else 'OK' if s['rb_ok'] else 'FAIL (not free-free or non-geometric)')]
+    for tag, key in (("CB (M_B)", "mass_properties_cb"), ("own (r^T M r)", "mass_properties_own"),
+                     ("FE (full M)", "mass_properties_fe")):
         if key in s:
             mp = s[key]
             cg = ", ".join(f"{c:.6g}" for c in mp["cg"])

@@ -193,7 +193,12 @@ def write_cb_checks(stack, cp, out: Path) -> list[Path]:
         if cb.n_boundary == 0:           # rigid ground (type = "rigid_ground"): nothing moves, nothing to check
             skipped.append(f"Craig-Bampton check: {name}: no boundary DOFs ({cb.n_modes} modes), not checked")
             continue
-        checks.append(cb_check(cb))
+        own = None
+        if name not in {c.name for c in stack.vehicle_asm.components} and stack.pad_asm.rigid_mass is not None:
+            from liftoff.reduction.system import rigid_inertia      # the grounded pad: its own mass
+
+            own = rigid_inertia(stack.pad_asm, cb.point_coord(cb.boundary_points[0]))[1]
+        checks.append(cb_check(cb, own_mass=own))
     text = "\n\n".join([c.text for c in checks] + skipped)
     return [write_text(out / "cb_checks.txt", text + "\n"),
             write_text(out / "cb_checks.json", json.dumps({"units": "SI (kg, m, kg m^2, Hz)",

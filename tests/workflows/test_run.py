@@ -374,7 +374,13 @@ def _check_modal_deliverables(out, stack):
     assert all(checks[n]["rb_ok"] for n in vehicle)
     mass = sum(checks[n]["mass_properties_cb"]["mass"] for n in vehicle)
     assert mass == pytest.approx(stack.vehicle.rigid_body_mass[0, 0], rel=1e-9)
-    assert "Craig-Bampton check: core" in (out / "cb_checks.txt").read_text()
+    # the grounded pad: no rigid-body check (its boundary is no support), its own mass beside M_B's
+    pad = checks["pad"]
+    assert pad["grounded"] and pad["rb_ok"] is None
+    assert pad["mass_properties_own"]["mass"] == pytest.approx(stack.pad.rigid_body_mass[2, 2], rel=1e-12)
+    assert pad["mass_properties_own"]["mass"] > 1.2 * pad["mass_properties_cb"]["mass"]
+    text = (out / "cb_checks.txt").read_text()
+    assert "Craig-Bampton check: core" in text and "not applicable: grounded" in text and "FAIL" not in text
     mesh = meshio.read(out / "modes_vehicle.vtu")
     assert mesh.points.shape[0] == sum(stack.components[n].nodes.shape[0] for n in vehicle)
     names = sorted(mesh.point_data)
