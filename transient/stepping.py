@@ -275,12 +275,25 @@ def _check_resolution(t0: float, t_end: float, h: float, f_h: float | None = Non
                      "(SI units: N/m, rad/s) or give a shorter run")
 
 
+def _contact_frequency(problem: TransientProblem, rows) -> float | None:
+    """0.0 where the contact model has no frequency at all (no elastic mode and no penalty
+    row: rigid rows on rigid-body modes), else None (estimate_step's own error stands)."""
+    pa, pb = problem.body_a, problem.body_b
+    elastic = np.any(pa.omega > 0) or np.any(pb.omega > 0)
+    return 0.0 if not elastic and not np.any(rows.compliance > 0) else None
+
+
 def choose_step(problem: TransientProblem, rows=None) -> StepChoice:
     """The step of ``problem`` by the rules of the module docstring. Warns when a given h is
     larger than 0.25/f_h (eq. 12) or does not divide the run; InputError when it exceeds
     the stability limit of the penalty coupling or the resolution of the time axis."""
     rows = rows if rows is not None else contact_rows(problem.body_a, problem.body_b, problem.contacts)
-    f_h, h_default = estimate_step(problem.body_a, problem.body_b, problem.contacts, problem.static_above_hz)
+    try:
+        f_h, h_default = estimate_step(problem.body_a, problem.body_b, problem.contacts, problem.static_above_hz)
+    except InputError:
+        if problem.h is None or _contact_frequency(problem, rows) != 0.0:
+            raise
+        f_h, h_default = 0.0, math.inf       # rigid rows on rigid-body modes alone: no frequency, h given (any is exact)
     f_s = highest_frequency(problem.body_a, problem.body_b, problem.static_above_hz)
     t0, t_end = float(problem.t0), float(problem.t_end)
     span = t_end - t0

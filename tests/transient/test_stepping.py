@@ -226,3 +226,23 @@ def test_growth_guard_stops_a_run_whose_energy_or_forces_are_not_finite():
         g.check(0.5, state([0.0, 0.0], [np.nan, 0.0]), ok_forces, times)        # NaN energy
     with pytest.raises(ConvergenceError, match=r"a contact force is nan at t = 0.5 s"):
         g.check(0.5, state([0.0, 0.0], [0.0, 0.0]), np.array([[np.nan, 0.0]]), times)   # a rigid row's NaN
+
+
+def test_a_given_step_runs_where_the_contact_model_has_no_frequency():
+    """A rigid body held by a rigid row has no contact frequency (eq. 12 gives no step): the
+    automatic step is refused, naming h; a given h was refused the same way, though any h is
+    exact there. Given, it runs: the row carries the weight, m g = 9.81 N on a 1 kg rod."""
+    from dataclasses import replace
+
+    from liftoff.core.errors import InputError
+    from liftoff.transient import ContactPoint, Forcing, TransientProblem, solve
+    from liftoff.transient.body import ground
+    from liftoff.transient.examples import free_free_rod
+
+    rod = free_free_rod(1.0, 1e9, 1000.0, 1e-3, 1, name="r")            # its rigid mode alone, 1 kg
+    c = [ContactPoint("c", ["end0:Tz"], [None], rigid=True)]
+    p = TransientProblem(rod, ground(), c, Forcing(gravity=(0.0, 0.0, -9.81)), t_end=0.1, progress=False)
+    with pytest.raises(InputError, match="give h explicitly"):
+        solve(p)
+    r = solve(replace(p, h=1e-3))
+    assert r.time.size == 101 and np.allclose(r.contact_force[:, 0], 9.81, rtol=1e-12)
