@@ -25,8 +25,8 @@ _GUIDE = {
 # "Scenarios".
 #
 # [model]
-# source = "stick"              # beams instead of FE: a fresh [model] (the example's FE keys are dropped)
 # degree = 1                    # P1 solids: faster, not mesh-converged (docs/workflow.md, "Convergence")
+#   (or source = "stick": beams instead of FE, a fresh [model] without the FE keys such as degree)
 #
 # [model.component.core]
 # mesh_size = 0.85              # m

@@ -70,6 +70,10 @@ def merge(base: dict, over: dict) -> dict:
         elif (isinstance(v, list) and isinstance(out.get(k), list) and v and out[k]
               and all(isinstance(x, dict) and isinstance(x.get("name"), str) for x in v + out[k])):
             merged = {x["name"]: copy.deepcopy(x) for x in out[k]}
+            names = [x["name"] for x in v]
+            twice = next((n for n in names if names.count(n) > 1), None)
+            if twice is not None:           # (merged by name, the first would vanish into the second)
+                raise InputError(f"{k}: two entries named {twice!r}; each entry of a list merged by name needs its own")
             for x in v:
                 merged[x["name"]] = merge(merged.get(x["name"], {}), x)
             out[k] = list(merged.values())
@@ -129,7 +133,10 @@ def resolve(data: dict, source: str, folder: Path | None, _chain: tuple[str, ...
     if isinstance(own.get("model"), dict) and "source" in own["model"] \
             and own["model"]["source"] != _model_source(base):
         base = {k: v for k, v in base.items() if k != "model"}     # another model source: its own [model]
-    return merge(_drop_retyped(base, own), own)
+    try:
+        return merge(_drop_retyped(base, own), own)
+    except InputError as exc:                # (a list's entries merged by name: the file that has them)
+        raise InputError(f"{source}: {exc}") from None
 
 
 def _type_of(table) -> str | None:

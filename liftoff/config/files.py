@@ -70,6 +70,14 @@ def read_toml(path: str | Path) -> dict:
     return parse_toml(raw, path.name)
 
 
+def _is_number(cell: str) -> bool:
+    try:
+        float(cell)
+        return True
+    except ValueError:
+        return False
+
+
 def read_csv_table(path: Path, where: Where, columns: int | None = None) -> np.ndarray:
     """A numeric CSV table (comma separated, optional one-line header, '#' comments) as an
     array (rows, columns) of finite numbers; ``columns``: the required column count."""
@@ -90,7 +98,9 @@ def read_csv_table(path: Path, where: Where, columns: int | None = None) -> np.n
         try:
             row = [float(c) for c in text.split(",")]
         except ValueError:
-            if header_allowed:  # the first non-comment line may be a header
+            # the first non-comment line may be a header: one without a number in it (a data row
+            # with a typo, '0.0, 0.0O', was taken for one and the table started a row late)
+            if header_allowed and not any(_is_number(c) for c in text.split(",")):
                 header_allowed = False
                 continue
             raise where.error(f"{path.name} line {lineno}: not a number in {text!r}") from None

@@ -329,7 +329,8 @@ def _fe_builders(where: Where, ctx: dict, sel: dict[str, dict], size: dict[str, 
             t = component_types.get(kind, "pad" if name == PAD else "vehicle")
         except InputError as exc:
             raise (w / "type").wrap(exc) from None
-        out[name] = t.read(component_types.Context(name, size[name], **ctx), w / "params", sel[name]["params"])
+        out[name] = t.read(component_types.Context(name, size[name], **ctx, mesh_size_given="mesh_size" in sel[name]),
+                           w / "params", sel[name]["params"])
     return out
 
 
@@ -563,6 +564,12 @@ def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig
     walls = string(where / "walls", m.get("walls", "solid"))
     if walls not in WALLS:
         raise (where / "walls").error(f"must be one of {', '.join(WALLS)}, got {walls!r}")
+    if source == "stick" and "degree" in m:
+        raise (where / "degree").error("[model] degree is for source = \"fe\" (the stick model has beams); "
+                                       "it would be silently ignored")
+    if source == "stick" and "mesh_size" in sel[PAD]:
+        raise (where / PAD / "mesh_size").error("the stick source's pad is not meshed (a lumped model): "
+                                                "it would be silently ignored")
     if source == "stick" and "walls" in m:
         raise (where / "walls").error("[model] walls is for source = \"fe\" (the stick model has beams)")
     liquid = string(where / "liquid", m.get("liquid", "smeared"))
@@ -605,8 +612,8 @@ def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig
     max_elements = integer(where / "max_elements", m.get("max_elements", MAX_ELEMENTS[source]), 1)
     hydroelastic = any(getattr(c.builder, "liquid", "") == "hydroelastic" for c in components.values())
     _check_residual_vectors(where, components)
-    if convective == "slosh" and not hydroelastic:
-        raise (where / "convective").error('"slosh" needs a hydroelastic liquid, and no component has one '
+    if convective is not None and not hydroelastic:      # (any of its values: each is a hydroelastic liquid's)
+        raise (where / "convective").error(f'"{convective}" needs a hydroelastic liquid, and no component has one '
                                            '([model] liquid = "hydroelastic" or a component\'s own liquid); '
                                            "it would be silently ignored")
     if "slosh_gravity" in m and (convective or "slosh") != "slosh":

@@ -79,6 +79,10 @@ def postprocess(where: Where, spec: Any) -> PostProcess:
     p = table(where, spec, KEYS)
     uf = table(where / "uncertainty", p.get("uncertainty", {}), set(CATEGORIES))
     unc = {k: number(where / "uncertainty" / k, v, positive=True) for k, v in uf.items()}
+    for k, f in unc.items():          # (it widens the design range: analysis.aggregate.factored_outward)
+        if not f >= 1.0:
+            raise (where / "uncertainty" / k).error(f"an uncertainty factor is at least 1, got {f:g} (it widens the "
+                                                    "design range; 1.25 is 25 % on the loads)")
     srs = None
     if "srs" in p:
         w = where / "srs"

@@ -302,7 +302,13 @@ def _forces(w: Where, forces: Any, base: Path) -> list[Force]:
 
 def _recovery(w: Where, spec: Any, base: Path) -> RecoveryPoints:
     r = table(w, spec, _RECOVERY)
-    return RecoveryPoints(strings(w / "attach", r.get("attach", [])), strings(w / "stations", r.get("stations", [])),
+    attach = strings(w / "attach", r.get("attach", []))
+    points = [a.partition("@")[0] for a in attach]       # each recovered as attach_<point> (workflows/loads.py)
+    for k, p in enumerate(points):
+        if p in points[:k]:
+            raise (w / "attach" / k).error(f"{attach[k]!r}: a second entry at point {p!r} ({attach[points.index(p)]!r} "
+                                           "is the first); one interface force a point, on the component named")
+    return RecoveryPoints(attach, strings(w / "stations", r.get("stations", [])),
                           string(w / "top", r["top"]) if "top" in r else None,
                           string(w / "payload", r["payload"]) if "payload" in r else None,
                           _otms(w / "otm", r.get("otm", []), base))
@@ -394,7 +400,10 @@ def parse_scenario(data: dict, source: str = "scenario", base: Path | str = ".",
         c = table(wc, c, _CASE, required=("name",))
         name = checked_case_name(wc / "name", c["name"], names)
         over = {k: v for k, v in c.items() if k != "name"}
-        merged = merge(common, over)
+        try:
+            merged = merge(common, over)
+        except InputError as exc:            # (a case's list entries merged by name: named twice)
+            raise wc.error(str(exc)) from None
         cases.append(_case(wc, merged, name, base))
         cases[-1].from_case_table = True
         _check_profiles_used(wc, over.get("profiles"), _used_profiles(merged))

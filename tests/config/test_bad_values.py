@@ -124,3 +124,82 @@ def test_fixed_length_builder_arrays_are_named_at_their_key():
         with pytest.raises(InputError, match=rf"{key}: has {len(value)} entries, expected {n}$") as exc:
             parse_barge(data, "b")
         assert "\n" not in str(exc.value)
+
+
+@pytest.mark.parametrize("over, match", [
+    # an uncertainty factor widens the design range (analysis.aggregate.factored_outward): 0.25 for 1.25 cut it 4x
+    ({"postprocess": {"uncertainty": {"interface_force": 0.25}}},
+     r"s: postprocess\.uncertainty\.interface_force: an uncertainty factor is at least 1, got 0\.25"),
+    # both sides of a joint: recovered as attach_<point> twice, refused only after the model stages
+    ({"recovery": {"attach": ["att_orb_fwd@core", "att_orb_fwd@orbiter"]}},
+     r"s: recovery\.attach\[1\]: 'att_orb_fwd@orbiter': a second entry at point 'att_orb_fwd'"),
+    # a convective model without a hydroelastic liquid did nothing, silently
+    ({"model": {"liquid": "smeared", "convective": "free"}},
+     r"s: model\.convective: \"free\" needs a hydroelastic liquid"),
+    # two entries of one name in a case: merged into one, the first lost
+    ({"case": [{"name": "hot", "post": [{"name": "x", "vehicle": "srb_left_hd_1"},
+                                        {"name": "x", "vehicle": "srb_left_hd_2"}]}]},
+     r"s: case\[2\]: post: two entries named 'x'"),
+])
+def test_values_a_run_would_ignore_or_misuse(over, match):
+    """Found by a review (2026-12-07): each passed and did something else than asked."""
+    with pytest.raises(InputError, match=match) as exc:
+        parse_scenario(merge(DEFAULT, over), "s")
+    assert "\n" not in str(exc.value)
+
+
+@pytest.mark.parametrize("over, key", [({"degree": 2}, r"model\.degree"),
+                                       ({"pad": {"f_max": 100.0, "mesh_size": 1.0}}, r"model\.pad\.mesh_size")])
+def test_stick_keys_it_would_ignore(over, key):
+    """The stick source has beams and a lumped pad: [model] degree and the pad's mesh_size
+    did nothing there, silently."""
+    from ..workflows.test_run import STICK
+
+    data = {k: v for k, v in DEFAULT.items() if k != "model"}
+    data["model"] = {**STICK, **over}            # (the stick model replaces the default's [model], as extends does)
+    with pytest.raises(InputError, match=rf"s: {key}: .*it would be silently ignored"):
+        parse_scenario(data, "s")
+
+
+def test_a_child_scenario_naming_an_entry_twice_is_refused(tmp_path):
+    """extends merges lists of named entries by name: two [[post]] named alike in the child
+    became one (the first one's values lost); refused, naming the file."""
+    from liftoff.config import load_scenario
+
+    p = tmp_path / "child.toml"
+    p.write_text('extends = "shuttle"\n[[post]]\nname = "extra"\nvehicle = "srb_left_hd_1"\npad = "pad_post_left_1"\n'
+                 '[[post]]\nname = "extra"\nvehicle = "srb_left_hd_2"\npad = "pad_post_left_2"\n')
+    with pytest.raises(InputError, match=r"child\.toml: post: two entries named 'extra'"):
+        load_scenario(p)
+
+
+def test_a_csv_header_is_a_line_without_numbers(tmp_path):
+    """The optional header of a CSV table is a first line with no number in it: a first data
+    row with a typo ('0.0O') was taken for a header and the table started a row late."""
+    import numpy as np
+
+    from liftoff.config.files import read_csv_table
+    from liftoff.config.values import Where
+
+    w = Where("s", "profiles.thrust")
+    (tmp_path / "a.csv").write_text("time,value\n0.0,0.0\n1.0,0.5\n")
+    np.testing.assert_array_equal(read_csv_table(tmp_path / "a.csv", w), [[0.0, 0.0], [1.0, 0.5]])
+    (tmp_path / "b.csv").write_text("0.0, 0.0O\n1.0, 0.5\n2.0, 1.0\n")
+    with pytest.raises(InputError, match=r"b\.csv line 1: not a number in '0\.0, 0\.0O'"):
+        read_csv_table(tmp_path / "b.csv", w)
+
+
+def test_a_meshless_type_ignores_an_inherited_mesh_size():
+    """[model] mesh_size applies to every component; a rigid mass or rigid ground has no mesh,
+    and refused it as if it were its own ('remove the component's mesh_size', which it did
+    not have). Its own is still refused."""
+    from liftoff.config.component_types import Context, get
+    from liftoff.config.values import Where
+    from liftoff.meshes.layout import StackLayout
+
+    params = {"point": "p", "at": [0.0, 0.0, 1.0], "mass": 10.0}
+    w = Where("s", "model.component.ballast.params")
+    rigid = get("rigid_mass", "vehicle")
+    assert rigid.read(Context("ballast", 1.0, StackLayout(), mesh_size_given=False), w, params).mass == 10.0
+    with pytest.raises(InputError, match="a rigid mass has no mesh"):
+        rigid.read(Context("ballast", 1.0, StackLayout()), w, params)

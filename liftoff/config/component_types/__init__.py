@@ -46,6 +46,9 @@ class Context:
     liquid: str = "smeared"
     base: Path = Path(".")
     extra: dict = field(default_factory=dict)
+    #: whether ``mesh_size`` is the component's own (its table's), not [model]'s or [model.vehicle]'s:
+    #: a type without a mesh refuses its own and ignores an inherited one
+    mesh_size_given: bool = True
 
 
 @dataclass(frozen=True)

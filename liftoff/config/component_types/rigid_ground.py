@@ -11,7 +11,7 @@ from . import ComponentType, Context
 def read(ctx: Context, where: Where, params: dict):
     from liftoff.reduction.models import RigidGround
 
-    if ctx.mesh_size is not None:
+    if ctx.mesh_size is not None and ctx.mesh_size_given:     # (an inherited [model] mesh_size: nothing to mesh)
         raise where.error("rigid ground has no mesh: remove the pad's mesh_size")
     p = table(where, params, {"points"}, ("points",))
     g = RigidGround(named(where / "points", p["points"], xyz))

@@ -14,7 +14,7 @@ from . import ComponentType, Context
 def read(ctx: Context, where: Where, params: dict):
     from liftoff.reduction.models import RigidMass
 
-    if ctx.mesh_size is not None:
+    if ctx.mesh_size is not None and ctx.mesh_size_given:     # (an inherited [model] mesh_size: nothing to mesh)
         raise where.error("a rigid mass has no mesh: remove the component's mesh_size")
     return builder(where, RigidMass, params)
 
