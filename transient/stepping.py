@@ -331,8 +331,13 @@ def choose_step(problem: TransientProblem, rows=None) -> StepChoice:
                          f"{STABILITY / f_h:.4g} s for rigid bodies, f_h = {f_h:.4g} Hz): the run would diverge; "
                          f"give h below {h_ok:.4g} s or h = \"auto\"")
     if h > h_default * (1 + 1e-9) and rows.n:     # without contacts every h is exact
+        # (the stability test above proves no more than that no mode alternates in sign step to step:
+        # with damping a complex pair can leave the unit circle at a step it passes, and rigid rows
+        # have no test; a review found both above 0.25/f_h, never at the automatic step)
         warnings.warn(f"time step h = {h:.4g} s is larger than 0.25/f_h = {h_default:.4g} s (f_h = {f_h:.4g} Hz, "
-                      "eq. 12): the contact force may be under-resolved", stacklevel=4)
+                      "eq. 12): the contact force may be under-resolved, and stability above it is not proven "
+                      "(damped or rigid contact rows can diverge where the penalty test passes): check the peaks "
+                      "against a run at h = \"auto\"", stacklevel=4)
     if abs(h - h_req) > 1e-9 * h_req:
         warnings.warn(f"time step h = {h_req:.6g} s does not divide the run ({span:.6g} s): using {n} equal steps "
                       f"of {h:.6g} s so that the last one ends at t_end = {t_end:.6g} s", stacklevel=4)
