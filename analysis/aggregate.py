@@ -97,7 +97,7 @@ class Aggregate:
                 mine[up] = vals[up]
                 for j in np.flatnonzero(up):
                     cases[j] = s.name
-        if generated:
+        else:
             k = len(self.case_names)
             self.case_names.append(s.name)
             self.run_mx.add(s.mx)

@@ -275,12 +275,11 @@ def _check_resolution(t0: float, t_end: float, h: float, f_h: float | None = Non
                      "(SI units: N/m, rad/s) or give a shorter run")
 
 
-def _contact_frequency(problem: TransientProblem, rows) -> float | None:
-    """0.0 where the contact model has no frequency at all (no elastic mode and no penalty
-    row: rigid rows on rigid-body modes), else None (estimate_step's own error stands)."""
-    pa, pb = problem.body_a, problem.body_b
-    elastic = np.any(pa.omega > 0) or np.any(pb.omega > 0)
-    return 0.0 if not elastic and not np.any(rows.compliance > 0) else None
+def _no_contact_frequency(problem: TransientProblem, rows) -> bool:
+    """Whether the contact model has no frequency at all: no elastic mode and no penalty row
+    (rigid rows on rigid-body modes)."""
+    elastic = np.any(problem.body_a.omega > 0) or np.any(problem.body_b.omega > 0)
+    return not elastic and not np.any(rows.compliance > 0)
 
 
 def choose_step(problem: TransientProblem, rows=None) -> StepChoice:
@@ -291,7 +290,7 @@ def choose_step(problem: TransientProblem, rows=None) -> StepChoice:
     try:
         f_h, h_default = estimate_step(problem.body_a, problem.body_b, problem.contacts, problem.static_above_hz)
     except InputError:
-        if problem.h is None or _contact_frequency(problem, rows) != 0.0:
+        if problem.h is None or not _no_contact_frequency(problem, rows):
             raise
         f_h, h_default = 0.0, math.inf       # rigid rows on rigid-body modes alone: no frequency, h given (any is exact)
     f_s = highest_frequency(problem.body_a, problem.body_b, problem.static_above_hz)

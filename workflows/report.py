@@ -538,7 +538,7 @@ def summary(scenario, stack, results: dict, stage_times: list, rows_env: list[di
             lines.append("    step: not checked (no second run at h/2: --no-error-estimate); the peaks carry no error "
                          "estimate")
         band = scenario.post.acceleration_band_hz
-        edge = edge_extremes(res.time, items(res, cp.attach, liquid_heads(cp), band), band)
+        edge = res.metadata.get("band_edge_extremes", [])      # (workflows.run._full_case: edge_extremes)
         if edge:
             name, side, t = edge[0]
             lines.append(f"    WARNING: {len(edge)} band-limited max/min values lie within {EDGE_PERIODS / band:.3g} s of "

@@ -524,13 +524,16 @@ def _full_case(sc, stack, cp, name: str, out: Path, plots: bool, pics: bool, sta
     t0 = time.perf_counter()
     res.metadata["truncation"] = [c.as_dict() for c in cp.truncation]
     files = []
+    band = sc.post.acceleration_band_hz
+    its = report.items(res, cp.attach, report.liquid_heads(cp), band)    # made once: summary, max/min, ends
+    # the band-limited peaks at an end of the record, where the filter's end transient is (summary.txt warns)
+    res.metadata["band_edge_extremes"] = [list(e) for e in report.edge_extremes(res.time, its, band)]
     srs = None
     if not generated:                   # a generated case's summary comes from its record
-        summary = summarize(res, cp, name, -1, sc.post, check=half)
+        summary = summarize(res, cp, name, -1, sc.post, check=half, its=its)
         agg.add(summary, generated=False)
         srs = (summary.srs_items, summary.srs)      # its SRS, not computed again for the spectra file
-    band = sc.post.acceleration_band_hz
-    rows = report.case_maxmin(res, cp, name, band)
+    rows = report.maxmin(res.time, its, name)       # (report.case_maxmin's, on the items above)
     if half is not None:
         report.with_errors(rows, report.case_maxmin(half, cp, name, band))
     files.append(report.write_csv(rows, out / f"maxmin_{name}.csv"))
