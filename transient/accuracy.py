@@ -144,8 +144,9 @@ def _first_pair(problem: TransientProblem, check: TransientProblem, step, solve_
     progress) on a second thread while this one marches at h. If either fails (or this one
     is interrupted) the other is stopped at its next chunk (``stop``), so no run outlives
     the call; the h run's error is raised first, then the h/2 run's."""
+    half = _half(step, check)      # its stability checked before either run (stepping.StepChoice.halved)
     if not CONCURRENT_PAIR:
-        return solve_at(problem, step, runs=3), solve_at(check, _half(step, check), runs=1.5)
+        return solve_at(problem, step, runs=3), solve_at(check, half, runs=1.5)
     import threading
 
     from .solver import Cancelled
@@ -155,7 +156,7 @@ def _first_pair(problem: TransientProblem, check: TransientProblem, step, solve_
 
     def fine_run():
         try:
-            box["result"] = solve_at(check, _half(step, check), runs=1.5, stop=stop)
+            box["result"] = solve_at(check, half, runs=1.5, stop=stop)
         except BaseException as exc:           # noqa: BLE001 - handed to the calling thread
             box["error"] = exc
             stop.set()
@@ -267,6 +268,7 @@ class EstimatesInOrder:
         self._taken: set[int] = set()
         self._error: BaseException | None = None     # the h/2 run that failed (the thread then ends)
         self._steps: dict[int, object] = {}
+        self._halves: dict[int, object] = {}   # each problem's h/2 step, checked before any run
         self._thread = None
         self._limits = None
         self.gate = PauseGate()
@@ -285,6 +287,7 @@ class EstimatesInOrder:
                     if p.accuracy is not None:
                         raise ValueError(f"problem {k} has an accuracy: solve it with solve_estimated")
                     self._steps[k] = choose_step(p, contact_rows(p.body_a, p.body_b, p.contacts))
+                    self._halves[k] = self._steps[k].halved(p)
             self._thread = threading.Thread(target=self._fine_runs, name="liftoff-h/2-ahead", daemon=True)
             self._thread.start()
         except BaseException:
@@ -322,7 +325,7 @@ class EstimatesInOrder:
                     # as solve_estimated's h/2 run (runs=1.5: it and its pair's run at h held at
                     # once), plus the problem before's pair, still held by the caller (1.5 more)
                     fine = _solve(replace(p, keep_modal=False, progress=p.progress and k == 0),
-                                  self._steps[k].halved(p), runs=3, stop=self._stop, gate=self.gate)
+                                  self._halves[k], runs=3, stop=self._stop, gate=self.gate)
             except BaseException as exc:     # noqa: BLE001 - handed to the caller, at get(k)
                 with self._cond:
                     self._error = exc

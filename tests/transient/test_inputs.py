@@ -100,13 +100,14 @@ def test_a_step_beyond_the_penalty_stability_limit_is_refused():
 
 
 def test_growth_guard_stops_a_diverging_run(monkeypatch):
-    """The second line of defence (transient/guard.py): with the up-front stability check
+    """The second line of defence (transient/guard.py): with the up-front stability checks
     switched off, the run at omega h = 5 grows geometrically (by ~3.7 a step: 300 steps stay
     finite, the non-finite check alone would pass them) and the energy bound stops it (a
     ConvergenceError, not a result); the bounded run at omega h = 3.4 passes the guard."""
     from liftoff.transient import stepping
 
     monkeypatch.setattr(stepping, "coupling_margin", lambda *args: 0.0)
+    monkeypatch.setattr(stepping, "check_step_map", lambda *args: 1.0)    # the step map's check too
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         with pytest.raises(ConvergenceError, match=r"the solution diverged: .* at t = "):

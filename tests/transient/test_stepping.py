@@ -100,7 +100,7 @@ def test_stability_limit_against_the_solver_itself(monkeypatch):
     """vehicle_on_pad: the criterion puts the limit at 0.80 x 0.551/f_h (the bodies' stiffness
     lowers it from the rigid-body value). With the up-front check off, the solver stays
     bounded at 0.98 x the limit (peak post force as at the default step, +-2 %) and diverges
-    at 1.05 x the limit (the growth guard stops it)."""
+    at 1.05 x the limit (the growth guard stops it). The step map's radius agrees."""
     from liftoff.transient import stepping
 
     sc = load_twobody(EXAMPLES / "vehicle_on_pad" / "scenario.toml", progress=False)
@@ -113,8 +113,14 @@ def test_stability_limit_against_the_solver_itself(monkeypatch):
     print(f"\nf_h {f_h:.1f} Hz, rigid-body limit {rigid:.4g} s, criterion {limit:.4g} s ({limit / rigid:.3f})")
     assert coupling_margin(rows, om, ze, rigid) < -1 < coupling_margin(rows, om, ze, h0)
     assert 0.75 < limit / rigid < 0.85
+    # the step map's spectral radius (transient/step_map.py) agrees: no penalty row is damped
+    # here, where the margin's criterion is exact (1e-9: round-off of the map's eigenvalues)
+    from liftoff.transient.step_map import spectral_radius
+
+    assert spectral_radius(rows, om, ze, 0.98 * limit) <= 1 + 1e-9 < 1.01 < spectral_radius(rows, om, ze, 1.05 * limit)
     peak = np.abs(solve(p).contact_force).max()
     monkeypatch.setattr(stepping, "coupling_margin", lambda *args: 0.0)
+    monkeypatch.setattr(stepping, "check_step_map", lambda *args: 1.0)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         p.h = 0.98 * limit

@@ -1,0 +1,203 @@
+"""The contact-coupled step map (transient/step_map.py) and the check of a given step
+above 0.25/f_h (stepping.check_step_map), against a closed form (Newmark's linear-
+acceleration scheme), against the kernel itself (the map predicts each step of a bolted
+run), and against runs that diverge without the check."""
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+from liftoff.transient import ContactPoint, Forcing, InputError, TransientProblem, ground, solve
+from liftoff.transient import step_map as sm
+from liftoff.transient import stepping
+from liftoff.transient.assembly import contact_rows
+from liftoff.transient.examples import free_free_rod
+
+
+def _modes(p):
+    return (np.concatenate([p.body_a.omega, p.body_b.omega]), np.concatenate([p.body_a.zeta, p.body_b.zeta]),
+            np.concatenate([p.static_modes("a"), p.static_modes("b")]))
+
+
+def _bolted_mass(h):
+    """A rigid 1 kg mass on a 1e6 N/m penalty bolt to ground (omega = 1e3 rad/s)."""
+    mass = free_free_rod(1.0, 1e9, 1000.0, 1e-3, 1, name="m")
+    return TransientProblem(mass, ground(), [ContactPoint("bolt", ["end0:Tz"], [None], 1e6)],
+                            Forcing(gravity=(0, 0, -9.81)), t_end=300 * h, h=h, initial="zero", progress=False)
+
+
+def _rod(h, rigid=True, zeta=0.0, damping=0.0, n_steps=400, both_ends=False):
+    """A 10 m steel rod (6 axial modes, 0-7954 rad/s) bolted at end0 to ground: rigidly, or by
+    a 1e8 N/m penalty spring with ``damping`` (N s/m); ``both_ends``: also a rigid bolt at end1."""
+    rod = free_free_rod(10.0, 2e11, 7800.0, 1e-2, 6, zeta=zeta, name="r")
+    c = [ContactPoint("bolt", ["end0:Tz"], [None], 1e8, rigid=rigid, damping=0.0 if rigid else damping)]
+    if both_ends:
+        c.append(ContactPoint("top", ["end1:Tz"], [None], rigid=True))
+    return TransientProblem(rod, ground(), c, Forcing(gravity=(0, 0, -9.81)), t_end=n_steps * h, h=h,
+                            initial="zero", progress=False)
+
+
+@pytest.mark.parametrize("wh", [0.5, 2.0, 3.4, 3.5, 5.0, 20.0])
+def test_rigid_mass_on_a_penalty_bolt_is_newmarks_linear_acceleration_scheme(wh):
+    """A rigid mass under a force linear over the step, integrated exactly, is Newmark's
+    beta = 1/6, gamma = 1/2 scheme: lambda^2 - 2 A lambda + 1 = 0 with
+    A = 1 - (wh)^2 / (2 (1 + (wh)^2/6)); |lambda| = 1 for wh <= 2 sqrt(3), else |A| + sqrt(A^2 - 1).
+    1e-12: the map's 3 x 3 entries are formed from coefficients summed to machine precision."""
+    p = _bolted_mass(wh / 1e3)
+    om, ze, st = _modes(p)
+    A = 1 - wh ** 2 / (2 * (1 + wh ** 2 / 6))
+    expected = 1.0 if abs(A) <= 1 else abs(A) + math.sqrt(A * A - 1)
+    rows = contact_rows(p.body_a, p.body_b, p.contacts)
+    assert sm.step_map(rows, om, ze, wh / 1e3, st).shape == (3, 3)     # q, v of the mass and the bolt's force
+    assert sm.spectral_radius(rows, om, ze, wh / 1e3, st) == pytest.approx(expected, rel=1e-12)
+
+
+def test_the_map_predicts_every_step_of_a_bolted_run():
+    """Second method: the kernel's own steps. Under a constant load the differences of
+    successive states obey dx_{k+1} = M dx_k exactly (the load cancels), with every row
+    coupled (bolted). The rod has a penalty bolt with a dashpot at one end and a rigid bolt
+    at the other (the rigid rows' start values g included), modes damped 2 %, h above
+    0.25/f_h. Tolerance 1e-9 of the largest difference: round-off of 400 steps' products."""
+    h = 3e-4
+    p = _rod(h, rigid=False, zeta=0.02, damping=2e5, both_ends=True)
+    p.keep_modal = True
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        r = solve(p)
+    rows = contact_rows(p.body_a, p.body_b, p.contacts)
+    om, ze, st = _modes(p)
+    M = sm.step_map(rows, om, ze, r.h, st)
+    keep = sm.coupled_modes(rows, st)
+    pen = rows.compliance > 0
+    X = np.hstack([r.modal["q_a"][:, keep], r.modal["v_a"][:, keep], r.contact_force[:, pen]])
+    dX = np.diff(X, axis=0)[1:]        # from step 1 on (step 0's start force is the initial state's)
+    pred = dX[:-1] @ M.T
+    scale = np.abs(dX).max(axis=0)
+    assert np.abs(pred - dX[1:]).max(axis=0) / scale == pytest.approx(0.0, abs=1e-9)
+    assert M.shape == (2 * 6 + 1, 2 * 6 + 1)
+
+
+def test_rigid_rows_on_a_flexible_rod_unstable_step_is_refused_before_the_run():
+    """The review's case: a rod bolted rigidly (no penalty row, so coupling_margin has nothing
+    to test). At h = 8e-4 s the map's radius is 1.146; without the check the run diverges
+    (the growth guard stops it at 1e41 J); with it the step is refused before the run, naming
+    the radius. At 6e-4 s (also above 0.25/f_h) the map is stable (radius 1 to round-off:
+    the rod's rigid translation is held) and the run is bounded."""
+    p = _rod(8e-4)
+    rows = contact_rows(p.body_a, p.body_b, p.contacts)
+    om, ze, st = _modes(p)
+    assert sm.spectral_radius(rows, om, ze, 8e-4, st) > 1.1
+    assert stepping.coupling_margin(rows, om, ze, 8e-4, st) == math.inf        # the old test saw nothing
+    with pytest.raises(InputError, match=r"h = 0.0008 s is unstable with these contacts: .*\(every row coupled\) has spectral radius 1.14") as exc:
+        solve(p)
+    assert "\n" not in str(exc.value)
+    stable = _rod(6e-4)
+    with pytest.warns(UserWarning, match=r"larger than 0.25/f_h .* stable by the contact-coupled step map"):
+        res = solve(stable)
+    assert np.abs(res.contact_force).max() < 2 * 7800 * 10 * 1e-2 * 9.81      # twice the rod's weight
+
+
+def test_without_the_check_that_step_diverges(monkeypatch):
+    """What the check prevents: the same rod at 8e-4 s with the check switched off grows until
+    the growth guard stops it (a ConvergenceError), at the map's predicted rate."""
+    from liftoff.transient import ConvergenceError
+
+    monkeypatch.setattr(stepping, "check_step_map", lambda *args: 1.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(ConvergenceError, match="diverged"):
+            solve(_rod(8e-4))
+
+
+def test_a_dashpot_on_an_undersampled_rod_is_refused():
+    """A penalty bolt with a dashpot (tau = 2e-3 s) on an undamped rod at h = 1e-2 s: the
+    penalty test passes (coupling_margin > -1, it ignores damping) but a complex pair of the
+    map lies at |lambda| = 1.04 (a mode at omega h near an odd multiple of pi, dashpot-coupled):
+    refused. The growth over the run decides, not the radius alone: at 2e-3 s (also above
+    0.25/f_h = 1.3e-3 s) the radius is 1 + 4.1e-6 (modes aliased to omega h = 2 pi + 0.08 and
+    4 pi + 0.16), a growth of 1.002 over 400 steps, well inside step_map.GROWTH_TOLERANCE:
+    the run goes on."""
+    p = _rod(1e-2, rigid=False, damping=2e5)
+    rows = contact_rows(p.body_a, p.body_b, p.contacts)
+    om, ze, st = _modes(p)
+    assert stepping.coupling_margin(rows, om, ze, 1e-2, st) > -1
+    assert sm.spectral_radius(rows, om, ze, 1e-2, st) == pytest.approx(1.0402, abs=1e-4)
+    with pytest.raises(InputError, match=r"spectral radius 1.040.* over the run's 400 steps"):
+        solve(p)
+    rho = sm.spectral_radius(rows, om, ze, 2e-3, st)
+    assert 1 < rho < 1 + 1e-5 and rho ** 400 < sm.GROWTH_TOLERANCE
+    with pytest.warns(UserWarning, match="stable by the contact-coupled step map"):
+        solve(_rod(2e-3, rigid=False, damping=2e5))
+
+
+def test_a_map_too_large_to_check_is_said(monkeypatch):
+    """Above step_map.DENSE_LIMIT states a step above 0.25/f_h is refused, saying why and
+    what to give instead, rather than run unchecked."""
+    monkeypatch.setattr(sm, "DENSE_LIMIT", 10)
+    with pytest.raises(InputError, match=r"this model's map has 12 states \(more than 10 cannot be checked here\): "
+                                         r"give h at most 0.25/f_h"):
+        solve(_rod(6e-4))
+
+
+def test_the_automatic_step_needs_no_map_check():
+    """The check runs for steps above 0.25/f_h only; the automatic step of these rods is
+    held below it and is stable by the map too (radius <= 1 + 1e-9: round-off)."""
+    for p in (_rod(1e-3), _rod(1e-3, rigid=False, zeta=0.0, damping=2e5), _rod(1e-3, both_ends=True)):
+        p.h = None
+        step = stepping.choose_step(p)
+        assert step.h <= step.h_default * (1 + 1e-9)
+        rows = contact_rows(p.body_a, p.body_b, p.contacts)
+        om, ze, st = _modes(p)
+        assert sm.spectral_radius(rows, om, ze, step.h, st) <= 1 + 1e-9
+
+
+def test_the_h2_run_of_a_stable_step_is_checked_before_either_run(monkeypatch):
+    """Stability is not monotone in h: the rigidly bolted rod is stable at 2.34e-3 s (radius 1)
+    but at its h/2, 1.17e-3 s, a mode lies in an unstable window (radius 1.26). The error
+    estimate's h/2 run is refused before either run starts (no call of the solver)."""
+    from liftoff.transient import accuracy, solver
+
+    p = _rod(2.34e-3)
+    rows = contact_rows(p.body_a, p.body_b, p.contacts)
+    om, ze, st = _modes(p)
+    assert sm.spectral_radius(rows, om, ze, 2.34e-3, st) == pytest.approx(1.0, abs=1e-9)
+    assert sm.spectral_radius(rows, om, ze, 1.17e-3, st) > 1.2
+    runs = []
+    real = solver._solve
+    monkeypatch.setattr(solver, "_solve", lambda *a, **k: runs.append(1) or real(*a, **k))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(InputError, match=r"h = 0.00117 s is unstable with these contacts"):
+            accuracy.solve_estimated(p)
+    assert runs == []
+
+
+def test_the_released_set_is_checked_too(monkeypatch):
+    """Where contact points have lateral rows, the normal rows alone (the posts after
+    release, in contact) are a second active set: with rigid or damped rows a subset can be
+    less stable than the whole (interlacing holds for undamped penalty rows only). On the
+    vehicle on its pad (4 posts x 3 rows), a radius above 1 for the normal rows alone is
+    refused, naming that set; the real map there is stable at 1.2 x 0.25/f_h: radius <= 1 + 1e-7,
+    the round-off of the vehicle's rigid-body modes that the normal rows leave free (lateral
+    translation, yaw: lambda = 1 in Jordan blocks, split by about sqrt(eps |M|); 6e-9 here)."""
+    from dataclasses import replace
+    from pathlib import Path
+
+    from liftoff.config import load_twobody
+
+    p = load_twobody(Path(__file__).resolve().parents[2] / "examples" / "vehicle_on_pad" / "scenario.toml",
+                     progress=False).problem
+    rows = contact_rows(p.body_a, p.body_b, p.contacts)
+    sets = sm.coupled_sets(rows)
+    assert set(sets) == {"bolted", "released"} and sets["released"].sum() == np.sum(rows.axial) < rows.n
+    om, ze, st = _modes(p)
+    step = stepping.choose_step(replace(p, h=None))
+    h = 1.2 * step.h_default
+    assert max(sm.spectral_radius(sm.rows_subset(rows, m), om, ze, h, st) for m in sets.values()) <= 1 + 1e-7
+    real = sm.spectral_radius
+    monkeypatch.setattr(sm, "spectral_radius", lambda r, *a: 1.5 if r.n < rows.n else real(r, *a))
+    with pytest.raises(InputError, match=r"\(the normal rows alone coupled, as after release\) has spectral radius 1.5"):
+        stepping.check_step_map(rows, om, ze, h, st, 100, step.f_h, step.h_default)
