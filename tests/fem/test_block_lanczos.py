@@ -206,15 +206,25 @@ def test_an_exhausted_krylov_space_grows_on(keep):
     """K with 8 distinct eigenvalues of multiplicity 40 (B = 2 I): the Krylov space of a block
     of 4 has at most 32 dimensions, so from the 9th block on what is left after the Gram-Schmidt
     passes is round-off, which the Cholesky QR normalises into new directions (with and
-    without the basis' B-image). Closed form: 40 pairs at 0.5 and 10 at 1.0, B-orthonormal
-    (tolerances as above)."""
+    without the basis' B-image). The basis grows on past 32, and every pair returned is an
+    exact eigenpair (closed form: lambda in {0.5, 1.0, 1.5, ...}, B-orthonormal, residual
+    ||K x - lambda B x|| below 1e-10 of ||K x||; tolerances as above).
+
+    Which copies of a multiple eigenvalue it finds depends on the round-off (a Krylov solver
+    cannot tell a missing copy from a converged pair): on the machine that added this test all
+    40 at 0.5 and 10 at 1.0, on another (2026-12-07) 28 and 22. That the pairs are the lowest
+    is not this function's to prove: the CB solver counts them by Sylvester's inertia and
+    refuses a miss (tests/fem/test_petsc_cb.py, test_a_mode_missed_by_the_eigensolver_is_an_error_with_n_modes
+    and the band's near-multiple check)."""
     n, want = 320, 50
     k = np.repeat(np.arange(1.0, 9.0), 40)
     lam, X, info = block_lanczos(lambda Y: Y / k[:, None], lambda Y: 2.0 * Y, n, n, 0, want, block=4,
                                  keep_mass_image=keep)
     assert info["dimension"] > 32 and info["mass_image"] is keep
-    assert np.max(np.abs(lam - np.r_[np.full(40, 0.5), np.full(10, 1.0)])) < 1e-11
+    assert np.max(np.abs(lam - np.round(2.0 * lam) / 2.0)) < 1e-11 and lam.min() == pytest.approx(0.5, abs=1e-11)
     assert np.max(np.abs(2.0 * X.T @ X - np.eye(want))) < 1e-12
+    R = k[:, None] * X - 2.0 * lam[None, :] * X
+    assert np.max(np.linalg.norm(R, axis=0) / np.linalg.norm(k[:, None] * X, axis=0)) < 1e-10
 
 
 @pytest.mark.parametrize("keep", [True, False])
