@@ -22,8 +22,11 @@ scenario key otherwise):
 than ``mesh_size`` (m; a ``.geo`` may set its own sizes when it is None); a ``.msh`` is
 taken as it is. The solids of a STEP/BREP assembly are fragmented against each other
 (``occ.removeAllDuplicates``) so that touching parts share their faces and nodes. Group
-volumes and areas are measured on the mesh. Units SI; the file's
-lengths are metres.
+volumes and areas are measured on the mesh. Every solid must lie in a volume group with a
+role and every surface that bounds no solid in a shell group (an entity outside the groups
+would be left out of the mesh without a word). Units SI; the file's lengths are metres: a
+STEP file is read in metres whatever unit it declares (OpenCASCADE converts it,
+``Geometry.OCCTargetUnit``); a BREP file carries no unit and is taken as metres.
 """
 from __future__ import annotations
 
@@ -105,6 +108,9 @@ def _physical(gmsh) -> dict[str, tuple[int, int]]:
 
 def _open(gmsh, p: GeometryFileParams) -> None:
     path = Path(p.file)
+    # OpenCASCADE converts a STEP file's lengths to this unit (default: millimetres, so that a
+    # file declaring metres was read 1000 times too large); also for a .geo's Merge of one
+    gmsh.option.setString("Geometry.OCCTargetUnit", "M")
     try:
         if path.suffix.lower() in CAD_FILES:
             _occ.occ.importShapes(str(path))
@@ -159,6 +165,45 @@ def _check_roles(p: GeometryFileParams, groups: dict[str, tuple[int, int]]) -> N
                              f"(or make it a liquid in {o}.liquids.{g})")
 
 
+def _check_assigned(gmsh, p: GeometryFileParams, groups: dict[str, tuple[int, int]]) -> None:
+    """Every solid of the file lies in a volume group with a role, and every surface that
+    bounds no solid in a shell group: gmsh writes only the elements of physical groups, so
+    an entity outside them would be left out of the model without a word (its mass and
+    stiffness with it). In a .msh file, the entities that have elements."""
+    f, o = Path(p.file).name, p.origin
+    msh = Path(p.file).suffix.lower() == ".msh"
+
+    def members(dim: int, names) -> set:
+        return {t for n in names if n in groups and groups[n][0] == dim
+                for t in gmsh.model.getEntitiesForPhysicalGroup(dim, groups[n][1])}
+
+    def meshed(dim: int, tag: int) -> bool:
+        return not msh or any(len(t) for t in gmsh.model.mesh.getElements(dim, tag)[1])
+
+    def where(dim: int, tag: int) -> str:
+        b = gmsh.model.getBoundingBox(dim, tag)
+        return f"bounding box [{', '.join(f'{v:.6g}' for v in b)}] m"
+
+    solids = members(3, list(p.materials) + list(p.liquids))
+    bounding = set()
+    for dim, tag in gmsh.model.getEntities(3):
+        if not meshed(dim, tag):
+            continue
+        bounding |= {t for _, t in gmsh.model.getBoundary([(3, tag)], combined=False, oriented=False)}
+        if tag not in solids:
+            raise InputError(f"{f}: volume {tag} ({where(3, tag)}) is in no volume group with a role, so it would be "
+                             f"left out of the model: add it to a group given a material in {o}.solids (or a liquid)"
+                             + (f", or cover it with a box in {o}.groups" if not msh and not Path(p.file).suffix.lower()
+                                == ".geo" else ""))
+    shells = members(2, [g for g in p.materials if g in p.shells])
+    for dim, tag in gmsh.model.getEntities(2):
+        if tag in bounding or tag in shells or not meshed(dim, tag):
+            continue
+        raise InputError(f"{f}: surface {tag} ({where(2, tag)}) bounds no solid and is in no shell group, so it would "
+                         f"be left out of the model: add it to a surface group given a material and a thickness in "
+                         f"{o}.shells")
+
+
 def _mesh_measures(gmsh, groups: dict[str, tuple[int, int]]) -> tuple[dict, dict, dict]:
     """(volume of each volume group, area of each surface group, centroid of each surface
     or curve group), from the mesh's linear elements (m^3, m^2, m)."""
@@ -211,6 +256,7 @@ def build_user_geometry(p: GeometryFileParams, out_dir) -> Geometry:
         _make_groups(gmsh, p)
         groups = _physical(gmsh)
         _check_roles(p, groups)
+        _check_assigned(gmsh, p, groups)
         if path.suffix.lower() != ".msh":
             if path.suffix.lower() in CAD_FILES:
                 _occ.check_element_count(p.mesh_size)

@@ -75,6 +75,11 @@ def test_geo_file_gives_the_builders_component(reference, tmp_path):
 
 
 def test_step_file_gives_the_builders_component(reference, tmp_path):
+    """The .geo exported to STEP as CAD writes it (millimetres, declared) and read back in
+    metres: mass and centre within 5e-3, the five lowest frequencies within 2e-2. The STEP
+    route meshes its own tetrahedra (1117 nodes against the .geo's 1121 at this coarse
+    mesh_size): the differences are those of two P1 meshes, 0.9 % and 1.4 % on the first
+    frequency over two machines' meshers, not of the units (a unit error is 1e3 in length)."""
     import gmsh
 
     from liftoff.meshes.spec import Material
@@ -84,6 +89,7 @@ def test_step_file_gives_the_builders_component(reference, tmp_path):
     gmsh.initialize([], False)
     try:
         gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.option.setString("Geometry.OCCTargetUnit", "M")   # the model in m, the file in mm as CAD writes it
         gmsh.open(str(GEO))
         gmsh.write(str(step))
     finally:
@@ -98,7 +104,7 @@ def test_step_file_gives_the_builders_component(reference, tmp_path):
     m, cg, f = _figures(geo)
     assert m == pytest.approx(m0, rel=5e-3)
     assert np.allclose(cg, cg0, atol=5e-3 * 40.0)
-    assert np.allclose(f, f0, rtol=1e-2), (f, f0)
+    assert np.allclose(f, f0, rtol=2e-2), (f, f0)
 
 
 @pytest.mark.parametrize("change, expect", [
@@ -130,3 +136,67 @@ def test_a_volume_group_without_a_role_is_refused(tmp_path):
     with pytest.raises(InputError, match=r"two\.geo: volume group 'ballast' has no role: give it a material in "
                                          r"s\.toml: model\.component\.cargo\.params\.solids\.ballast"):
         build_user_geometry(_params(geo, Material("wall", 1e9, 0.3, 1000.0)), tmp_path)
+
+
+@pytest.mark.parametrize("declared, volume", [("SI_UNIT($,.METRE.)", 3.0), ("SI_UNIT(.MILLI.,.METRE.)", 3e-9)])
+def test_a_step_file_is_read_in_the_unit_it_declares(tmp_path, declared, volume):
+    """Two boxes (2 x 1 x 1 and 1 x 1 x 1) written with the numbers 0..3 and the length unit
+    declared as metres or millimetres: read in metres, 3 m^3 or 3e-9 m^3 (OpenCASCADE's
+    default converted a file in metres to millimetres, 1e9 times the volume; issue: review of
+    2026-12-07). Measured on the mesh of the groups (exact for boxes: 1e-9)."""
+    import gmsh
+
+    from liftoff.meshes.spec import Material
+    from liftoff.meshes.user_geometry import GeometryFileParams, build_user_geometry
+
+    raw = tmp_path / "raw.step"
+    gmsh.initialize([], False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.option.setString("Geometry.OCCTargetUnit", "MM")     # the numbers as given, declared mm
+        gmsh.model.occ.addBox(0, 0, 0, 2, 1, 1)
+        gmsh.model.occ.addBox(2, 0, 0, 1, 1, 1)
+        gmsh.model.occ.synchronize()
+        gmsh.write(str(raw))
+    finally:
+        gmsh.finalize()
+    text = raw.read_text()
+    assert "SI_UNIT(.MILLI.,.METRE.)" in text
+    step = tmp_path / "boxes.step"
+    step.write_text(text.replace("SI_UNIT(.MILLI.,.METRE.)", declared))
+    size = 0.5 if volume > 1 else 0.5e-3
+    big = 1e4
+    p = GeometryFileParams("boxes", str(step), file_sha256(step), size, {"v": Material("al", 7e10, 0.3, 2700.0)},
+                           groups={"v": {"dim": 3, "box": [-big, -big, -big, big, big, big]}}, origin="s.toml: boxes")
+    (tmp_path / "out").mkdir()
+    geo = build_user_geometry(p, tmp_path / "out")
+    assert geo.group_volumes["v"] == pytest.approx(volume, rel=1e-9)
+
+
+def test_a_solid_in_no_group_is_refused_not_left_out(tmp_path):
+    """gmsh writes only the elements of physical groups: a STEP solid outside every group box
+    was left out of the model without a word (its mass with it). Refused, naming the volume
+    and where it is."""
+    import gmsh
+
+    from liftoff.meshes.spec import Material
+    from liftoff.meshes.user_geometry import GeometryFileParams, build_user_geometry
+
+    step = tmp_path / "boxes.step"
+    gmsh.initialize([], False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.option.setString("Geometry.OCCTargetUnit", "M")
+        gmsh.model.occ.addBox(0, 0, 0, 2, 1, 1)
+        gmsh.model.occ.addBox(2, 0, 0, 1, 1, 1)
+        gmsh.model.occ.synchronize()
+        gmsh.write(str(step))
+    finally:
+        gmsh.finalize()
+    p = GeometryFileParams("boxes", str(step), file_sha256(step), 0.5, {"v": Material("al", 7e10, 0.3, 2700.0)},
+                           groups={"v": {"dim": 3, "box": [-0.1, -0.1, -0.1, 2.1, 1.1, 1.1]}}, origin="s.toml: boxes")
+    (tmp_path / "out").mkdir()
+    with pytest.raises(InputError, match=r"boxes.step: volume \d+ \(bounding box \[2, .*3, 1, 1\] m\) is in no "
+                                         r"volume group with a role, so it would be left out of the model") as exc:
+        build_user_geometry(p, tmp_path / "out")
+    assert "\n" not in str(exc.value)
