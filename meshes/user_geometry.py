@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from liftoff.core.errors import InputError, ResourceError
-from liftoff.core.records import atomic_path, file_sha256
+from liftoff.core.records import atomic_path, geometry_sha256
 
 from . import _occ
 from .spec import Geometry, Liquid, Material, Patch, PointMass
@@ -52,8 +52,9 @@ TIES = ("rigid", "interpolate")
 class GeometryFileParams:
     """A user geometry file and the roles of its groups (SI; see the module docstring).
     ``origin``: the scenario key of these parameters, for messages; ``file_sha256``: the
-    file's hash when the scenario was read (the stage cache's key; a file changed since
-    is refused)."""
+    file's hash when the scenario was read, with those a .geo merges or includes
+    (liftoff.core.records.geometry_sha256: the stage cache's key; a file changed since is
+    refused)."""
 
     name: str
     file: str
@@ -247,7 +248,7 @@ def build_user_geometry(p: GeometryFileParams, out_dir) -> Geometry:
         raise InputError(f"build_user_geometry expects GeometryFileParams, got {type(p).__name__}")
     p.check()
     path = Path(p.file)
-    if p.file_sha256 and file_sha256(path) != p.file_sha256:
+    if p.file_sha256 and geometry_sha256(path) != p.file_sha256:
         raise InputError(f"{path}: the file changed after the scenario was read; run again")
     out_dir = Path(out_dir)
     gmsh = _occ.gmsh

@@ -602,6 +602,11 @@ def load_cb(path, mmap: bool = False) -> CBModel:
     return cb
 
 
+#: the largest |A - A^T| of a CB model's M or K, relative to its largest entry (the round-off of
+#: a congruence P^T A P is about 1e-15 of it; an input file's printed digits more)
+SYMMETRY_TOL = 1e-8
+
+
 def validate_cb(cb: CBModel, where: str = "") -> None:
     """Shapes and labels of a CB model (e.g. one from outside this project)."""
     who = f"CB model {cb.name!r}" + (f" ({where})" if where else "")
@@ -621,6 +626,15 @@ def validate_cb(cb: CBModel, where: str = "") -> None:
     for nm in ("M", "K", "fixed_omega", "point_coords", "label_transform"):
         if not np.all(np.isfinite(getattr(cb, nm))):
             raise InputError(f"{who}: {nm} contains NaN or inf")
+    for nm in ("M", "K"):             # the eigensolvers read one triangle: an unsymmetric matrix is ambiguous
+        A = np.asarray(getattr(cb, nm))
+        big = float(np.abs(A).max()) if A.size else 0.0
+        skew = float(np.abs(A - A.T).max()) if A.size else 0.0
+        if skew > SYMMETRY_TOL * big:
+            i, j = np.unravel_index(int(np.argmax(np.abs(A - A.T))), A.shape)
+            raise InputError(f"{who}: {nm} is not symmetric: |{nm} - {nm}^T| reaches {skew:.3g} at "
+                             f"({i}, {j}), {skew / big:.2g} of its largest entry (more than {SYMMETRY_TOL:g}); "
+                             "a mass or stiffness matrix must be symmetric")
     names = [it.name for it in cb.recovery]
     for it in cb.recovery:
         if names.count(it.name) > 1:

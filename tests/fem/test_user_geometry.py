@@ -200,3 +200,27 @@ def test_a_solid_in_no_group_is_refused_not_left_out(tmp_path):
                                          r"volume group with a role, so it would be left out of the model") as exc:
         build_user_geometry(p, tmp_path / "out")
     assert "\n" not in str(exc.value)
+
+
+def test_a_geo_file_is_keyed_with_the_files_it_merges(tmp_path):
+    """The stage key of a .geo covers the files its Merge / Include statements read: editing
+    a merged file changes it (a mesh built from the old one was reused). A .geo reading no
+    file keeps its own hash; a path that is not a plain string, or a missing file, is said."""
+    from liftoff.core.records import file_sha256, geometry_sha256
+
+    (tmp_path / "dims.geo").write_text("L = 2;\n")
+    top = tmp_path / "part.geo"
+    top.write_text('// Include "old.geo";\nInclude "dims.geo";\nPoint(1) = {0, 0, 0};\n')
+    first = geometry_sha256(top)
+    assert first != file_sha256(top)
+    (tmp_path / "dims.geo").write_text("L = 3;\n")
+    assert geometry_sha256(top) != first
+    alone = tmp_path / "alone.geo"
+    alone.write_text("Point(1) = {0, 0, 0};\n")
+    assert geometry_sha256(alone) == file_sha256(alone)
+    (tmp_path / "dyn.geo").write_text('Merge StrCat("a", ".step");\n')
+    with pytest.raises(ValueError, match="not a plain"):
+        geometry_sha256(tmp_path / "dyn.geo")
+    (tmp_path / "gone.geo").write_text('Merge "missing.step";\n')
+    with pytest.raises(ValueError, match="names a file that does not exist"):
+        geometry_sha256(tmp_path / "gone.geo")

@@ -545,3 +545,23 @@ def test_op4_round_trip(tmp_path):
     with pytest.raises(InputError, match="finite"):
         write_op4(tmp_path / "y.op4", {"BAD": np.array([[np.nan]])})
     assert not (tmp_path / "y.op4").exists()
+
+
+def test_an_unsymmetric_stiffness_is_refused(tmp_path):
+    """A corrupt or unsymmetric OP4 (one K entry changed in one triangle, 1.6e-4 of K's largest)
+    was accepted: the eigensolvers read one triangle, and the system frequencies moved by up to
+    4.2 % between K and K^T (a review, 2026-12-07). Refused by validate_cb (SYMMETRY_TOL 1e-8:
+    the real file's K and M are symmetric to round-off), naming the matrix and the entry."""
+    from liftoff.reduction.nastran import read_op4, write_op4
+
+    for ext in (".asm", ".pch"):
+        shutil.copy(DATA / f"outboard{ext}", tmp_path / f"outboard{ext}")
+    mats = read_op4(DATA / "outboard.op4")
+    K = mats["kxx"]
+    assert np.abs(K - K.T).max() <= 1e-12 * np.abs(K).max()
+    K = K.copy()
+    K[30, 31] += 0.3 * abs(K[31, 31])
+    write_op4(tmp_path / "outboard.op4", {k.upper(): (K if k == "kxx" else v) for k, v in mats.items()})
+    with pytest.raises(InputError, match=r"K is not symmetric: \|K - K\^T\| reaches .* of its largest entry") as exc:
+        from_extseout(tmp_path / "outboard.op4", name="ob", units=MM)
+    assert "\n" not in str(exc.value)

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from liftoff.core.records import file_sha256
+from liftoff.core.records import geometry_sha256
 
 from ..params import material as read_material
 from ..files import file_path
@@ -83,8 +83,12 @@ def read(ctx: Context, where: Where, params: dict):
         s = table(w, spec, {"dim", "box"}, ("dim", "box"))
         groups[name] = {"dim": integer(w / "dim", s["dim"], 1, 3),
                         "box": [float(x) for x in vector(w / "box", s["box"], length=6)]}
+    try:        # the file and, for a .geo, those it merges or includes: the stage cache's key
+        digest = geometry_sha256(path)
+    except ValueError as exc:
+        raise (where / "file").error(str(exc)) from None
     params = GeometryFileParams(
-        name=ctx.name, file=str(path), file_sha256=file_sha256(path), mesh_size=ctx.mesh_size,
+        name=ctx.name, file=str(path), file_sha256=digest, mesh_size=ctx.mesh_size,
         materials=materials, shells=shells, points=points, masses=masses,
         clamped=strings(where / "clamped", p.get("clamped", [])), liquids=liquids, groups=groups,
         origin=f"{where.source}: {where.key}")
