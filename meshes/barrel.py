@@ -148,7 +148,9 @@ def build_barrel(p: BarrelParams, out_dir) -> Geometry:
         for joints, axis, r, z in ((p.joints_bottom, p.bottom_point, p.radius_bottom, p.z_bottom),
                                    (p.joints_top, p.top_point, p.radius_top, p.z_top)):
             for n, a in joints.items():
-                _occ.add_physical(1, n, arcs_at(z, r, float(a), 0.5 * p.arc_deg))
+                # the ring is split at both ends' breaks, so a joint's arc may be in pieces: every piece
+                # inside its +-arc_deg (whose ends are breaks of this ring) is its, by the piece's middle
+                _occ.add_physical(1, n, arcs_at(z, r, float(a), p.arc_deg))
             for n in axis:
                 _occ.add_physical(1, n, arcs_at(z, r))
         refs = p.points()

@@ -49,6 +49,50 @@ def test_conical_barrel_area_mass_and_joints(tmp_path):
     assert np.allclose(ref["up_2"], [-3.3 * math.cos(math.pi / 4), -3.3 * math.sin(math.pi / 4), 65.285])
 
 
+def _arc_span(path: str, group: str) -> tuple[float, float, float]:
+    """(lowest azimuth, highest azimuth (deg, -180..180), length (m)) of a curve group's mesh."""
+    import gmsh
+
+    gmsh.initialize([], False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.open(path)
+        tag = next(t for d, t in gmsh.model.getPhysicalGroups(1) if gmsh.model.getPhysicalName(1, t) == group)
+        az, length = [], 0.0
+        for ent in gmsh.model.getEntitiesForPhysicalGroup(1, tag):
+            _, xyz, _ = gmsh.model.mesh.getNodes(1, ent, includeBoundary=True)
+            xyz = np.asarray(xyz).reshape(-1, 3)
+            az += [math.degrees(math.atan2(y, x)) for x, y, _ in xyz]
+            for et, nodes in zip(*gmsh.model.mesh.getElements(1, ent)[::2]):
+                for seg in np.asarray(nodes).reshape(-1, 2):
+                    a, b = (np.array(gmsh.model.mesh.getNode(int(n))[0]) for n in seg)
+                    length += float(np.linalg.norm(b - a))
+        return min(az), max(az), length
+    finally:
+        gmsh.finalize()
+
+
+@pytest.mark.parametrize("bottom, top", [({"bp": 0.0}, {"jt": 10.0}), ({"a": 0.0}, {"jt": 10.0})])
+def test_a_joint_arc_split_by_the_other_ends_breaks_is_tied_whole(tmp_path, bottom, top):
+    """Both rings are split at both ends' break azimuths: a joint at 10 deg (+-15) meets the
+    other end's breaks at 0 deg (an axis-tied ring's quarters) or at -15 and 15 deg (a joint at
+    0), and only the piece whose middle lay within half the arc of the joint was tied (25 of
+    its 30 deg; a review, 2026-12-07). Every piece inside +-arc_deg is: -5 to 25 deg, a
+    length of r pi/6 within the chords' shortfall ((h/r)^2/24 = 2.0e-3 for h = 0.4 m on r = 1.83 m)."""
+    from liftoff.meshes.barrel import BarrelParams, build_barrel
+
+    axis = "bp" in bottom
+    p = BarrelParams("b", z_top=2.0, mesh_size=0.4, joints_top=top,
+                     **({"bottom_point": bottom} if axis else {"joints_bottom": bottom}))
+    geo = build_barrel(p, tmp_path)
+    lo, hi, length = _arc_span(geo.msh_path, "jt")
+    assert lo == pytest.approx(-5.0, abs=1e-6) and hi == pytest.approx(25.0, abs=1e-6)
+    assert length == pytest.approx(1.83 * math.pi / 6, rel=3e-3)
+    if not axis:
+        lo, hi, _ = _arc_span(geo.msh_path, "a")
+        assert lo == pytest.approx(-15.0, abs=1e-6) and hi == pytest.approx(15.0, abs=1e-6)
+
+
 def test_barrel_axis_point_carries_its_mass(tmp_path):
     from liftoff.meshes.barrel import BarrelParams, build_barrel
 
