@@ -145,9 +145,24 @@ def _eigen(A: sp.csr_matrix, B: sp.csr_matrix, want: int, sigma: float, what: st
         Bp.destroy()
 
 
+#: sloshing modes whose frequencies agree within this fraction are one group (a round tank's
+#: equal pairs, split by the mesh by about 1e-4; its distinct lateral modes differ by 70 % and more)
+PAIR_TOL = 1e-2
+
+
+def _whole_groups(idx: np.ndarray, lam: np.ndarray, n: int) -> np.ndarray:
+    """The first ``n`` of the modes ``idx`` (ascending lambda), and those after them with the
+    frequency of the last: a round tank's lateral modes come in equal pairs that the eigensolver
+    returns turned by any angle, so one member alone sloshes in an arbitrary direction."""
+    k = min(n, idx.size)
+    while 0 < k < idx.size and abs(np.sqrt(lam[idx[k]] / lam[idx[k - 1]]) - 1.0) <= PAIR_TOL:
+        k += 1
+    return idx[:k]
+
+
 def slosh_modes(op, gravity: float = G0, n_modes: int = 6, lateral_only: bool = True, groups=None) -> dict:
     """The ``n_modes`` lowest sloshing modes of each liquid of ``op`` (a fem.liquid.LiquidOperator
-    built with a free surface) in a rigid tank under ``gravity`` (m/s^2, g_eff): {liquid group:
+    built with a free surface; rounded up to whole groups of equal frequency, :func:`_whole_groups`) in a rigid tank under ``gravity`` (m/s^2, g_eff): {liquid group:
     LiquidSlosh}. Modes without lateral force (axisymmetric, n >= 2 waves of an axisymmetric
     tank: slosh mass below LATERAL_MASS of the liquid's) are left out when ``lateral_only``;
     ``LiquidSlosh.mass_kept`` says how much of the liquid the kept modes and m_0 carry;
@@ -179,7 +194,7 @@ def slosh_modes(op, gravity: float = G0, n_modes: int = 6, lateral_only: bool = 
         GR = op.G @ R                                          # (n_p, 5): G r over the kept DOFs (eq. 4)
         g_rows = np.vstack([GR[k], fs.Gf[f] @ R])              # (k + f, 5): over both blocks
         sigma = -1e-3 / np.sqrt(area)                         # below lambda_1 ~ xi / R, off the null mode
-        want = int(n_modes) + n_null + (int(n_modes) + 4 if lateral_only else 0)
+        want = int(n_modes) + n_null + 2 + (int(n_modes) + 4 if lateral_only else 0)   # 2: room for a partner
         while True:                 # axisymmetric and higher-wave modes lie between the lateral ones
             want = min(want, f.size - 2)
             lam, X = _eigen(A, B, want, sigma, f"liquid {g!r}")
@@ -193,11 +208,13 @@ def slosh_modes(op, gravity: float = G0, n_modes: int = 6, lateral_only: bool = 
             Fxy = np.hypot(beta[:, 0], beta[:, 1])
             mass_n = Fxy ** 2 / lam
             keep = mass_n > LATERAL_MASS * rho * op.volumes[g] if lateral_only else np.ones(lam.size, bool)
-            if keep.sum() >= n_modes or want >= f.size - 2:
+            idx = np.flatnonzero(keep)
+            # the last mode asked for below the highest computed: an equal partner of it is computed too
+            if (idx.size >= n_modes and idx[int(n_modes) - 1] < lam.size - 1) or want >= f.size - 2:
                 break
-            want *= 2
+            want = 2 * want if idx.size < n_modes else want + 2
         modes = []
-        for j in np.flatnonzero(keep)[: int(n_modes)]:
+        for j in _whole_groups(np.flatnonzero(keep), lam, int(n_modes)):
             d = beta[j, :2] / Fxy[j] if Fxy[j] > 0 else np.array([1.0, 0.0])
             height = (d[0] * beta[j, 4] - d[1] * beta[j, 3]) / Fxy[j] if Fxy[j] > 0 else np.nan
             eta = np.abs(X[k.size:, j]).max() / (rho * gravity)     # eta = p / (rho g_eff) on the surface (eq. 1)
