@@ -253,6 +253,29 @@ def _union(tm, names, name: str, what: str) -> np.ndarray:
     return np.unique(np.concatenate([_facets(tm, n, name, what) for n in names] + [np.zeros(0, np.int32)]))
 
 
+def _check_each_region_fixed(H: sp.csr_matrix, fixed: np.ndarray, tm, Q, name: str) -> None:
+    """Every connected region of the liquid holds some pressure at p = 0. The check over all
+    liquids together let a region without a free surface of its own through (one liquid's
+    free_surface naming a face of another, a compartment full to the top): its Laplacian is
+    singular only up to round-off, which MUMPS factored, and its added mass came out at
+    5e17 kg instead of 1000 kg (a review, 2026-12-07). InputError naming the region's liquid
+    volume groups."""
+    from scipy.sparse.csgraph import connected_components
+
+    n_regions, region = connected_components(H, directed=False)
+    held = np.zeros(n_regions, bool)
+    held[region[fixed]] = True
+    if held.all():
+        return
+    r = int(np.flatnonzero(~held)[0])
+    cells_dofs = Q.dofmap.list.array.reshape(-1, Q.dofmap.dof_layout.num_dofs)
+    groups = sorted(g for g, gid in tm.volume_ids.items()
+                    if np.any(region[cells_dofs[tm.cell_tags.find(gid)]] == r))
+    raise InputError(f"liquid {name!r}: the liquid region of volume group(s) {', '.join(groups) or '?'} has no "
+                     f"free surface (p = 0) of its own, so its pressure is undetermined: give it a free_surface "
+                     f"group on its own boundary (a compartment full to the top has none: leave ullage)")
+
+
 def liquid_operator(tm, name: str, density, wetted, free_surface=None, dirichlet: np.ndarray | None = None,
                     degree: int = 1, coupling_degree: int = 1, points: dict | None = None) -> LiquidOperator:
     """Assemble and factor the liquid of ``tm`` (a fem.mesh.TaggedMesh of tetrahedra;
@@ -289,6 +312,7 @@ def liquid_operator(tm, name: str, density, wetted, free_surface=None, dirichlet
     if fixed.size == 0:
         raise InputError(f"liquid {name!r} has no free surface (p = 0): its free surface "
                          f"{free_surface!r} has no faces")
+    _check_each_region_fixed(H, fixed, tm, Q, name)
     keep = np.setdiff1d(np.arange(H.shape[0]), fixed)
     ds = ufl.Measure("ds", domain=mesh, subdomain_data=dolfinx_meshtags(mesh, wet))(1)
     Vc = fem.VectorFunctionSpace(mesh, ("CG", coupling_degree))
@@ -568,7 +592,13 @@ def geometry_liquid_operator(tm, geometry, degree: int = 1, coupling_degree: int
     """The liquids of a ``meshes.spec.Geometry`` as one operator (uncoupled), each with its
     density scaled to carry the CAD volume's mass (:func:`_cad_ratio`)."""
     liquids = geometry.liquids
-    points = {n: xyz for liq in liquids.values() for n, xyz in liq.points.items()}
+    points, owner = {}, {}
+    for g, liq in liquids.items():
+        for n, xyz in liq.points.items():
+            if n in points:         # one name, one pressure history: a second would replace the first
+                raise InputError(f"geometry {geometry.name!r}: pressure point {n!r} is named in liquids "
+                                 f"{owner[n]!r} and {g!r}: give each liquid's points their own names")
+            points[n], owner[n] = xyz, g
     density = {g: liq.density * _cad_ratio(tm, geometry, g) for g, liq in liquids.items()}
     return liquid_operator(tm, f"{geometry.name} liquids", density,
                            [liq.wetted for liq in liquids.values()], [liq.free_surface for liq in liquids.values()],

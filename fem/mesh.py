@@ -76,6 +76,10 @@ def _elements(gmsh, dim: int, tag: int) -> tuple[int | None, np.ndarray]:
     return etype, (np.vstack(out) if out else np.zeros((0, width), dtype=np.int64))
 
 
+#: the gmsh element type read per dimension: 4-node tetrahedra, 3-node triangles (docs/fem.md "Limits")
+LINEAR_CELL = {3: 4, 2: 2}
+
+
 def _cell_groups(gmsh, path: str, groups: list, what: str):
     """(gmsh type, cells, group index per cell) of the named groups [(dim, tag, name)],
     each element in one group only."""
@@ -87,6 +91,10 @@ def _cell_groups(gmsh, path: str, groups: list, what: str):
                                  f"{name!r}; a cell needs one material")
             seen[ent] = name
         et, c = _elements(gmsh, dim, tag)
+        if et is not None and et != LINEAR_CELL.get(dim, et):
+            raise InputError(f"mesh {path!r}: {what} group {name!r} has {gmsh.model.mesh.getElementProperties(et)[0]} "
+                             f"elements (gmsh type {et}); only {'4-node tetrahedra' if dim == 3 else '3-node triangles'} "
+                             "are read (mesh it first order: gmsh -order 1)")
         if et is not None:
             if cell_type is not None and et != cell_type:
                 raise InputError(f"mesh {path!r}: mixed {what} element types {cell_type} and {et}")

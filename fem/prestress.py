@@ -37,7 +37,11 @@ def _cavity_measure(part, liq, group: str):
     import ufl
 
     tags = part.tagged.surface_tags.get(liq.cavity)
-    if tags is None:
+    # a mesh with solids and shells lists every surface name in each part, with no cells in the
+    # part it does not touch: a cavity of solid faces is "present but empty" in the shell part,
+    # and its pressure load came out zero (no prestress, no error)
+    comm = part.tagged.mesh.comm
+    if tags is None or not comm.allreduce(bool(np.any(tags.values == 1)), op=MPI.LOR):
         raise InputError(f"liquid {group!r}: ullage_pressure {liq.ullage_pressure:g} Pa needs a shell wall; "
                          f"its cavity {liq.cavity!r} is not a shell surface (solid walls take no pressure prestress)")
     return ufl.Measure("dx", domain=part.tagged.mesh, subdomain_data=tags)(1)

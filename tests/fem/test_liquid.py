@@ -483,3 +483,73 @@ def test_slosh_modes_are_refused_not_ignored(tank_model):
     with pytest.raises(InputError, match="slosh_modes = 2 needs the slosh pendulums") as e:
         build_model(g2)
     assert "'tank_lox_liquid'" in str(e.value) and "\n" not in str(e.value)
+
+
+def test_a_liquid_region_without_its_own_free_surface_is_refused(tmp_path):
+    """Two separate boxes of liquid, only A's top a free surface: B's pressure is undetermined
+    (its Laplacian singular up to round-off, which MUMPS factored) and its added mass came out
+    at 5e17 kg against its 1000 kg (a review, 2026-12-07). Refused, naming B; with both tops
+    free each box's vertical added mass is its liquid's mass (a rigid box moving up carries
+    all of it: 1000 kg, to the P1 solve's round-off)."""
+    from liftoff.fem.liquid import liquid_operator, rigid_translation
+    from liftoff.fem.mesh import read_mesh_parts
+
+    from .gmsh_cases import gmsh_file
+
+    path = tmp_path / "two.msh"
+    with gmsh_file("two", path, h=0.25) as model:
+        occ = model.occ
+        boxes = {"A": occ.addBox(0, 0, 0, 1, 1, 1), "B": occ.addBox(2, 0, 0, 1, 1, 1)}
+        occ.synchronize()
+        for k, v in boxes.items():
+            model.setPhysicalName(3, model.addPhysicalGroup(3, [v]), f"liq{k}")
+            faces = [t for _, t in model.getBoundary([(3, v)], oriented=False)]
+            top = [f for f in faces if abs(occ.getCenterOfMass(2, f)[2] - 1.0) < 1e-9]
+            model.setPhysicalName(2, model.addPhysicalGroup(2, [f for f in faces if f not in top]), f"wet{k}")
+            model.setPhysicalName(2, model.addPhysicalGroup(2, top), f"top{k}")
+    _, _, tm = read_mesh_parts(str(path), MPI.COMM_SELF, (), liquids=("liqA", "liqB"))
+    with pytest.raises(InputError, match=r"liquid 't': the liquid region of volume group\(s\) liqB has no free "
+                                         r"surface \(p = 0\) of its own") as exc:
+        liquid_operator(tm, "t", 1000.0, ["wetA", "wetB"], ["topA"])
+    assert "\n" not in str(exc.value)
+    op = liquid_operator(tm, "t", 1000.0, ["wetA", "wetB"], ["topA", "topB"])
+    try:
+        inB = op.c_coords[:, 0] > 1.5
+        for sel in (~inB, inB):
+            r = rigid_translation(op, (0, 0, 1)) * sel
+            assert op.project(r, coupled=False)[0, 0] == pytest.approx(1000.0, rel=1e-9)
+    finally:
+        op.destroy()
+
+
+def test_one_pressure_point_name_in_two_liquids_is_refused():
+    """Pressure points are gathered by name over a geometry's liquids: a name in two of them
+    kept only the second (its history at the other tank's place, the first's missing).
+    Refused before anything is built, naming both liquids."""
+    from types import SimpleNamespace
+
+    from liftoff.fem.liquid import geometry_liquid_operator
+    from liftoff.meshes.spec import Liquid
+
+    geo = SimpleNamespace(name="tanks", liquids={
+        "lox": Liquid(1141.0, "lox_wet", "lox_top", points={"bottom": (0.0, 0.0, 0.0)}),
+        "lh2": Liquid(71.0, "lh2_wet", "lh2_top", points={"bottom": (0.0, 0.0, 10.0)})})
+    with pytest.raises(InputError, match=r"pressure point 'bottom' is named in liquids 'lox' and 'lh2'"):
+        geometry_liquid_operator(None, geo)
+
+
+def test_second_order_tetrahedra_are_refused_as_docs_fem_says(tmp_path):
+    """docs/fem.md's Limits: other 3-D element types than 4-node tetrahedra raise an
+    InputError. Nothing checked it: a second-order mesh was read with curved cells, which the
+    facet code takes as flat. Refused, naming the group and the element type."""
+    from liftoff.fem.mesh import read_mesh_parts
+
+    path = tmp_path / "box2.msh"
+    with gmsh_file("box2", path, h=0.5) as model:
+        v = model.occ.addBox(0, 0, 0, 1, 1, 1)
+        model.occ.synchronize()
+        model.setPhysicalName(3, model.addPhysicalGroup(3, [v]), "liquid")
+        gmsh.option.setNumber("Mesh.ElementOrder", 2)
+    with pytest.raises(InputError, match=r"group 'liquid' has Tetrahedron 10 elements \(gmsh type 11\); only "
+                                         r"4-node tetrahedra are read"):
+        read_mesh_parts(str(path), MPI.COMM_SELF, (), liquids=("liquid",))

@@ -85,3 +85,22 @@ def test_bad_pressures(tmp_path):
         Liquid(1000.0, "w", "f", None, ullage_pressure=1.0)
     with pytest.raises(InputError, match=r"ullage_pressure must be a gauge pressure"):
         _params(float("nan")).check()
+
+
+def test_a_cavity_present_but_empty_in_the_shell_part_is_refused():
+    """With solids and shells in one mesh every surface name is listed in each part, with no
+    facets in the part it does not touch: a cavity of solid faces was 'present but empty' in
+    the shell part, and its ullage pressure gave a zero load and no prestress, without a word
+    (a review, 2026-12-07). Refused as a cavity that is not a shell surface."""
+    from types import SimpleNamespace
+
+    from mpi4py import MPI
+
+    from liftoff.core.errors import InputError
+    from liftoff.fem.prestress import _cavity_measure
+    from liftoff.meshes.spec import Liquid
+
+    empty = SimpleNamespace(values=np.zeros(0, np.int32), indices=np.zeros(0, np.int32))
+    part = SimpleNamespace(tagged=SimpleNamespace(surface_tags={"c": empty}, mesh=SimpleNamespace(comm=MPI.COMM_SELF)))
+    with pytest.raises(InputError, match=r"its cavity 'c' is not a shell surface"):
+        _cavity_measure(part, Liquid(1000.0, "w", "f", "c", ullage_pressure=2e5), "lox")
