@@ -91,6 +91,58 @@ def beam_matrices(x: np.ndarray, elements: np.ndarray, element_group: np.ndarray
                                        for el in _group_elements(x, elements[element_group == g], grp, names[g])))
 
 
+def _axis_offsets(x: np.ndarray, el: np.ndarray, grp, what: str) -> np.ndarray:
+    """(n, 3) the offset of one BeamGroup's axis from each node (module docstring: offset plus
+    radial_offset e_r, at the nodes ``el`` uses)."""
+    e = np.broadcast_to(np.asarray(grp.offset, float), x.shape).copy()
+    if grp.radial_offset != 0.0:
+        used = np.unique(el)
+        e[used] += grp.radial_offset * _radial(x[used], grp, what)
+    return e
+
+
+def _offset_link(ea: np.ndarray, eb: np.ndarray) -> np.ndarray:
+    """B (12 x 12): axis DOFs from node DOFs, u_axis = u_node + theta x e at each end."""
+    B = np.eye(12)
+    B[0:3, 3:6], B[6:9, 9:12] = -skew(ea), -skew(eb)
+    return B
+
+
+def thermal_forces(part: "BeamPart", strain_by_group: dict) -> np.ndarray:
+    """(6 n,) the part's nodal forces of a free axial thermal strain eps per beam group
+    (``strain_by_group``: {group index into part.fields: eps}): each element's axis carries
+    f = E A eps (-x_hat at its first end, +x_hat at its second), carried to the nodes by the
+    offset links' B^T (module docstring), so that the free expansion u = eps s along the
+    axis is stress-free (K u = f). A member's own bending from a through-depth gradient is
+    not modelled (uniform temperature)."""
+    lines = part.tagged
+    x, el, grp_of = part.xyz, part.elements, _element_groups(part)
+    f = np.zeros(6 * x.shape[0])
+    for g, eps in strain_by_group.items():
+        grp, name = part.fields[g], lines.names[g]
+        mine = el[grp_of == g]
+        if mine.size == 0 or eps == 0.0:
+            continue
+        e = _axis_offsets(x, mine, grp, f"beam curve {name!r}")
+        N = grp.material.E * grp.section.A * float(eps)
+        for a, b in mine:
+            d = (x[b] + e[b]) - (x[a] + e[a])
+            xh = d / np.linalg.norm(d)
+            fa = np.zeros(12)
+            fa[0:3], fa[6:9] = -N * xh, N * xh
+            fn = _offset_link(e[a], e[b]).T @ fa
+            f[6 * a:6 * a + 6] += fn[:6]
+            f[6 * b:6 * b + 6] += fn[6:]
+    return f
+
+
+def _element_groups(part: "BeamPart") -> np.ndarray:
+    """(m,) the group index of each element of the part (lines split at their midpoints
+    keep their line's group: split_at_midpoints appends a-m then m-b for every line)."""
+    g = np.asarray(part.tagged.group)
+    return g if part.elements.shape[0] == g.size else np.concatenate([g, g])
+
+
 def _group_elements(x: np.ndarray, el: np.ndarray, grp, name: str):
     """(a, b, k, m) of the beam elements ``el`` (k, 2) of one BeamGroup, in global axes,
     the axis offsets carried to the nodes (module docstring)."""
@@ -99,10 +151,7 @@ def _group_elements(x: np.ndarray, el: np.ndarray, grp, name: str):
     what = f"beam curve {name!r}"
     mat, sec = grp.material, grp.section
     G = mat.E / (2 * (1 + mat.nu))
-    e = np.broadcast_to(np.asarray(grp.offset, float), x.shape).copy()
-    if grp.radial_offset != 0.0:
-        used = np.unique(el)
-        e[used] += grp.radial_offset * _radial(x[used], grp, what)
+    e = _axis_offsets(x, el, grp, what)
     if isinstance(grp.vref, str):             # "radial" or "tangential", at each element's midpoint
         vref = _radial(0.5 * (x[el[:, 0]] + x[el[:, 1]]), grp, what)
         if grp.vref == "tangential":
@@ -112,8 +161,7 @@ def _group_elements(x: np.ndarray, el: np.ndarray, grp, name: str):
     for (a, b), v in zip(el, vref):
         k, m = beam_element(x[a] + e[a], x[b] + e[b], mat.E, G, sec, mat.rho, v, grp.rotary, grp.nsm)
         if e[a].any() or e[b].any():
-            B = np.eye(12)
-            B[0:3, 3:6], B[6:9, 9:12] = -skew(e[a]), -skew(e[b])
+            B = _offset_link(e[a], e[b])
             k, m = B.T @ k @ B, B.T @ m @ B
         yield a, b, k, m
 

@@ -50,26 +50,38 @@ def point_load(model: FEModel, point: str, force=(0.0, 0.0, 0.0), moment=(0.0, 0
 
 def thermal_load(model: FEModel, volumes, delta_T: float, alpha) -> np.ndarray:
     """Equivalent nodal forces (n_dof,) of a uniform free thermal strain alpha * delta_T in
-    the named volume groups or shell surfaces (the cryogenic preload: delta_T < 0 shrinks;
-    on a shell the strain is in-plane and uniform through the thickness).
+    the named volume groups, shell surfaces or beam groups (the cryogenic preload: delta_T <
+    0 shrinks; on a shell the strain is in-plane and uniform through the thickness, on a
+    beam axial). A shell wall's members (the beam groups whose BeamGroup.wall is it: its
+    frames and stringers) take its strain with it: they are at its temperature, and a wall
+    shrinking under members that do not held them back by the whole mismatch.
 
     ``alpha``: expansion coefficient (1/K), one number or {group: alpha}; ``delta_T`` in K.
     """
     from . import shell
+    from .beam import thermal_forces
 
     volumes = [volumes] if isinstance(volumes, str) else list(volumes)
-    groups = {g: p for p in model.parts for g in p.tagged.volume_ids}
+    groups = {g: p for p in model.parts if p.kind != "beam" for g in p.tagged.volume_ids}
+    beams = {nm: (p, k) for p in model.parts if p.kind == "beam" for k, nm in enumerate(p.tagged.names)}
     strains: dict = {}
+    members: dict = {}          # beam part -> {group index: strain}
     for v in volumes:
-        if v not in groups:
+        if v not in groups and v not in beams:
             raise InputError(f"thermal_load: volume {v!r} is not in model {model.name!r} "
-                             f"(has: {', '.join(sorted(groups))})")
+                             f"(has: {', '.join(sorted(groups) + sorted(beams))})")
         a = alpha[v] if isinstance(alpha, dict) else alpha
         if not np.isfinite(a) or not np.isfinite(delta_T):
             raise InputError(f"thermal_load: alpha {a!r} or delta_T {delta_T!r} of {v!r} is not finite")
-        part = groups[v]
-        strains.setdefault(part.kind, (part, {}))[1][part.tagged.volume_ids[v]] = float(a) * float(delta_T)
-    if not strains:
+        eps = float(a) * float(delta_T)
+        if v in groups:
+            part = groups[v]
+            strains.setdefault(part.kind, (part, {}))[1][part.tagged.volume_ids[v]] = eps
+        on = [nm for nm, (bp, k) in beams.items() if nm == v or bp.fields[k].wall == v]
+        for nm in on:
+            bp, k = beams[nm]
+            members.setdefault(id(bp), (bp, {}))[1][k] = eps
+    if not strains and not members:
         raise InputError("thermal_load: no volume given")
     f = np.zeros(model.n_dof)
     for kind, (part, by_id) in strains.items():
@@ -79,6 +91,11 @@ def thermal_load(model: FEModel, volumes, delta_T: float, alpha) -> np.ndarray:
         else:
             form = shell.thermal_load_form(part.V, part.fields, part.tagged.cell_tags, by_id)
         f += pb.gather_vec(pb.mult_transpose(part.T, pb.assemble_vector(form)))
+    for part, by_group in members.values():
+        fb = part.T.createVecLeft()
+        if fb.getLocalSize():          # rank 0 holds every beam DOF (fem.beam)
+            fb.setArray(thermal_forces(part, by_group))
+        f += pb.gather_vec(pb.mult_transpose(part.T, fb))
     return f
 
 

@@ -165,7 +165,7 @@ def stringer_edges(p, wall_faces: list[int], radius: float) -> list[int]:
 
 
 def wall_beams(p, wall_faces: list[int], radius: float, wall_thickness: float,
-               wall_mass: float | None, owner: str) -> tuple[dict, dict, float | None]:
+               wall_mass: float | None, owner: str, wall: str) -> tuple[dict, dict, float | None]:
     """A wall's ring frames (``p.frames``, ``p.frame_section``, ``p.frame_material``) and
     stringers (``p.stringers``, ``p.stringer_azimuth``, ``p.stringer_section``,
     ``p.stringer_material``) as beams on the wall's inner face (``p`` a TankParams or an
@@ -173,7 +173,8 @@ def wall_beams(p, wall_faces: list[int], radius: float, wall_thickness: float,
     group ``<name>_frames``, its edges at the stringers' azimuths ``<name>_stringers``, each a
     BeamGroup of its section with the axis offset inward from the mid-surface by half the
     geometric ``wall_thickness`` and the section's base to centroid distance, local z
-    radial (frames: y along the axis; stringers: y tangential). Returns ({group: BeamGroup},
+    radial (frames: y along the axis; stringers: y tangential), on the shell group ``wall``
+    (BeamGroup.wall: its thermal strain is theirs). Returns ({group: BeamGroup},
     {group: length of the members' centroid lines, m}, the wall's own share of ``wall_mass``
     (the members' mass taken off it; None stays None))."""
     from liftoff.core.beam import standard_section
@@ -193,7 +194,7 @@ def wall_beams(p, wall_faces: list[int], radius: float, wall_thickness: float,
         section, base = standard_section(spec, f"{owner}.{kind[:-1]}_section")
         mat = mat or p.material
         offset = -(0.5 * wall_thickness + base)
-        beams[group] = BeamGroup(mat, section, vref=vref, radial_offset=offset, axis_point=axis)
+        beams[group] = BeamGroup(mat, section, vref=vref, radial_offset=offset, axis_point=axis, wall=wall)
         lengths[group] = length * (radius + offset) / radius if kind == "frames" else length
         members_mass += mat.rho * section.A * lengths[group]
     if wall_mass is None or not beams:
@@ -273,7 +274,7 @@ def build_shell_tank(p: TankParams, out_dir: Path) -> Geometry:
         _occ.add_physical(2, wall, wall_faces)
         areas = _occ.physical_measures(2)
         volumes = {g: _occ.group_volume(v) for g, v in liquids.items()}
-        beams, lengths, wall_mass = wall_beams(p, wall_faces, rm, t, p.dry_mass, f"TankParams({p.name})")
+        beams, lengths, wall_mass = wall_beams(p, wall_faces, rm, t, p.dry_mass, f"TankParams({p.name})", wall)
         mat, ts = shell_section(p.material, areas[wall], wall_mass, p.shell_thickness, t)
         n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size, shell_curvature_elements(rm, p.mesh_size))
     geo = Geometry(p.name, str(out_dir / f"{p.name}.msh"), {wall: mat}, patches, [], smeared, [],
@@ -440,7 +441,7 @@ def build_shell_orbiter(p, out_dir: Path) -> Geometry:
         m_wing = p.structure_mass * volume / sum(orbiter_part_volumes(p))         # the solid variant's density
         if m_wing >= p.structure_mass:
             raise InputError(f"OrbiterParams: the wing slab ({volume:.1f} m^3) weighs the whole structure_mass")
-        beams, lengths, m_skin = wall_beams(p, faces[skin], rm, t, p.structure_mass - m_wing, "OrbiterParams")
+        beams, lengths, m_skin = wall_beams(p, faces[skin], rm, t, p.structure_mass - m_wing, "OrbiterParams", skin)
         n_nodes = _occ.mesh_and_write(out_dir / f"{p.name}.msh", p.mesh_size, shell_curvature_elements(rm, p.mesh_size))
     skin_mat, ts = shell_section(AL2219, areas[skin], m_skin, p.skin_shell_thickness, t)
     mats = {skin: skin_mat, wing_g: equivalent(AL2219, m_wing, volume, "Al2219-equivalent-wing")}

@@ -335,7 +335,9 @@ class BeamGroup:
     (Nastran's WA/WB): a global vector ``offset`` (m) plus ``radial_offset`` (m, away from
     that axis; a frame inside a wall has a negative one). ``rotary``: the sections' bending
     rotary inertia in the consistent mass; ``nsm``: non-structural mass per length (kg/m,
-    translational only: equipment or a deck carried by a girder)."""
+    translational only: equipment or a deck carried by a girder). ``wall``: the shell group the
+    members lie on (a wall's frames and stringers, meshes.shells.wall_beams): a thermal strain
+    of that wall is theirs too (fem.static.thermal_load, the cryo preload)."""
 
     material: Material
     section: object
@@ -346,6 +348,7 @@ class BeamGroup:
     axis_direction: tuple = (0.0, 0.0, 1.0)
     rotary: bool = True
     nsm: float = 0.0
+    wall: str | None = None
 
     def __post_init__(self) -> None:
         from liftoff.core.beam import Section
@@ -371,6 +374,8 @@ class BeamGroup:
         self.nsm = float(self.nsm)
         if not (math.isfinite(self.nsm) and self.nsm >= 0):
             raise InputError(f"beam group: nsm must be >= 0 kg/m (got {self.nsm!r})")
+        if self.wall is not None:
+            _check_name("beam group: wall", self.wall)
 
     def to_dict(self) -> dict:
         m, s = self.material, self.section
@@ -379,7 +384,7 @@ class BeamGroup:
                 "vref": self.vref if isinstance(self.vref, str) else list(self.vref),
                 "offset": list(self.offset), "radial_offset": self.radial_offset,
                 "axis_point": list(self.axis_point), "axis_direction": list(self.axis_direction),
-                "rotary": self.rotary, "nsm": self.nsm}
+                "rotary": self.rotary, "nsm": self.nsm, **({"wall": self.wall} if self.wall is not None else {})}
 
 
 def _vector(what: str, v, nonzero: bool = False) -> tuple:

@@ -536,3 +536,47 @@ def _lines_of(geo) -> np.ndarray:
 
     b = read_beam_lines(geo.msh_path, tuple(geo.beams), MPI.COMM_SELF)
     return b.x
+
+
+@pytest.mark.parametrize("offset", [(0.0, 0.0, 0.0), (0.0, 0.3, -0.2)])
+def test_a_thermal_strain_of_a_beam_is_its_free_expansion(tmp_path, offset):
+    """A cantilever (8 m, 8 elements), its axis offset from its nodes or not, under a uniform
+    axial thermal strain eps: the free expansion, tip moving eps L along the axis, with no
+    rotation and no transverse motion (the thermal load of fem.beam.thermal_forces is K of
+    that field: stress-free). 1e-9: round-off of the chain."""
+    from liftoff.fem import static_solve, thermal_load
+
+    L, eps = 8.0, -4.6e-3
+    msh = _polyline(tmp_path / "bar.msh", [(0, 0, 0), (L, 0, 0)], {"bar": [0]}, h=L / 8, point_groups={"root": [0]})
+    model = build_model(Geometry("bar", msh, {}, clamped=["root"],
+                                 beams={"bar": BeamGroup(STEEL, tube(0.1, 0.01, STEEL.nu), vref=(0, 0, 1), offset=offset)}))
+    x = static_solve(model, thermal_load(model, ["bar"], -200.0, eps / -200.0))
+    d = model.node_dofs((L, 0, 0))
+    assert x[d][0] == pytest.approx(eps * L, rel=1e-9)
+    assert np.abs(x[d][1:]).max() < 1e-9 * abs(eps * L)
+
+
+def test_a_wall_and_its_stringers_shrink_together_stress_free(tmp_path):
+    """A tube wall with eight stringers (BeamGroup.wall = "wall", on the mid-surface), free:
+    the wall's thermal strain is the stringers' too, and the homogeneous shrinkage
+    u = eps (x - x0), no rotation, is then stress-free: K u = f to round-off (1e-9 of f).
+    Without the members' share (the load before 2026-12-07: the wall alone shrank) the
+    residual is the stringers' restraint, E A eps at their ends: 0.73 of the largest load here
+    (1.9e-14 with them), which the review found as a frame hoop stress near E alpha dT."""
+    from liftoff.fem import thermal_load
+
+    R, L, t = 1.0, 4.0, 0.004
+    msh = _stringer_tube(tmp_path / "s.msh", 8, R, L, 0.5)
+    sec = rectangle(0.02, 0.1, STEEL.nu)
+    model = build_model(Geometry("s", msh, {"wall": STEEL}, shells={"wall": t},
+                                 beams={"stringers": BeamGroup(STEEL, sec, vref="tangential", wall="wall")}))
+    eps = 2.3e-5 * -200.0
+    f = thermal_load(model, ["wall"], -200.0, 2.3e-5)
+    K, _ = model.matrices()
+    u = np.zeros(model.n_dof)
+    tr = model.dof_comp < 3
+    u[tr] = eps * model.dof_coords[tr, model.dof_comp[tr]]
+    r = K @ u - f
+    assert np.abs(r).max() < 1e-9 * np.abs(f).max()
+    beams_only = thermal_load(model, ["stringers"], -200.0, 2.3e-5)
+    assert np.abs(K @ u - (f - beams_only)).max() > 0.1 * np.abs(f).max()
