@@ -109,30 +109,30 @@ def _offset_link(ea: np.ndarray, eb: np.ndarray) -> np.ndarray:
 
 
 def thermal_forces(part: "BeamPart", strain_by_group: dict) -> np.ndarray:
-    """(6 n,) the part's nodal forces of a free axial thermal strain eps per beam group
-    (``strain_by_group``: {group index into part.fields: eps}): each element's axis carries
-    f = E A eps (-x_hat at its first end, +x_hat at its second), carried to the nodes by the
-    offset links' B^T (module docstring), so that the free expansion u = eps s along the
-    axis is stress-free (K u = f). A member's own bending from a through-depth gradient is
-    not modelled (uniform temperature)."""
+    """(6 n,) the part's nodal forces of a uniform free thermal strain eps per beam group
+    (``strain_by_group``: {group index into part.fields: eps}): f = k u_free for each
+    element, k its stiffness at the nodes (offset links included) and u_free the
+    homogeneous expansion of its nodes, eps (x - x_a), no rotation. By construction that
+    field is stress-free (K u = f), for a member alone and for a member with the wall it lies
+    on (whose own thermal load is that of the same field): the rigid offset links do not
+    expand, so an offset axis is loaded by what it stretches in it (a frame inside a wall of
+    radius r, offset e: N = E A eps r/(r + e), and the small bending of a polygon of offset
+    chords). For a straight member whose axis is parallel to its nodes' line it is E A eps
+    along the axis. A member's own bending from a through-depth gradient is not modelled
+    (uniform temperature)."""
     lines = part.tagged
     x, el, grp_of = part.xyz, part.elements, _element_groups(part)
     f = np.zeros(6 * x.shape[0])
     for g, eps in strain_by_group.items():
-        grp, name = part.fields[g], lines.names[g]
         mine = el[grp_of == g]
         if mine.size == 0 or eps == 0.0:
             continue
-        e = _axis_offsets(x, mine, grp, f"beam curve {name!r}")
-        N = grp.material.E * grp.section.A * float(eps)
-        for a, b in mine:
-            d = (x[b] + e[b]) - (x[a] + e[a])
-            xh = d / np.linalg.norm(d)
-            fa = np.zeros(12)
-            fa[0:3], fa[6:9] = -N * xh, N * xh
-            fn = _offset_link(e[a], e[b]).T @ fa
-            f[6 * a:6 * a + 6] += fn[:6]
-            f[6 * b:6 * b + 6] += fn[6:]
+        for a, b, k, _ in _group_elements(x, mine, part.fields[g], lines.names[g]):
+            u = np.zeros(12)
+            u[6:9] = float(eps) * (x[b] - x[a])
+            fe = k @ u
+            f[6 * a:6 * a + 6] += fe[:6]
+            f[6 * b:6 * b + 6] += fe[6:]
     return f
 
 

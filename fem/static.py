@@ -54,7 +54,8 @@ def thermal_load(model: FEModel, volumes, delta_T: float, alpha) -> np.ndarray:
     0 shrinks; on a shell the strain is in-plane and uniform through the thickness, on a
     beam axial). A shell wall's members (the beam groups whose BeamGroup.wall is it: its
     frames and stringers) take its strain with it: they are at its temperature, and a wall
-    shrinking under members that do not held them back by the whole mismatch.
+    shrinking under members that do not held them back by the whole mismatch; a member
+    named in ``volumes`` itself takes its own entry's alpha instead (whatever the order).
 
     ``alpha``: expansion coefficient (1/K), one number or {group: alpha}; ``delta_T`` in K.
     """
@@ -77,10 +78,9 @@ def thermal_load(model: FEModel, volumes, delta_T: float, alpha) -> np.ndarray:
         if v in groups:
             part = groups[v]
             strains.setdefault(part.kind, (part, {}))[1][part.tagged.volume_ids[v]] = eps
-        on = [nm for nm, (bp, k) in beams.items() if nm == v or bp.fields[k].wall == v]
-        for nm in on:
-            bp, k = beams[nm]
-            members.setdefault(id(bp), (bp, {}))[1][k] = eps
+        for nm, (bp, k) in beams.items():
+            if nm == v or (bp.fields[k].wall == v and nm not in volumes):   # a member named itself: its own alpha
+                members.setdefault(id(bp), (bp, {}))[1][k] = eps
     if not strains and not members:
         raise InputError("thermal_load: no volume given")
     f = np.zeros(model.n_dof)
