@@ -23,8 +23,8 @@ than ``mesh_size`` (m; a ``.geo`` may set its own sizes when it is None); a ``.m
 taken as it is. The solids of a STEP/BREP assembly are fragmented against each other
 (``occ.removeAllDuplicates``) so that touching parts share their faces and nodes. Group
 volumes and areas are measured on the mesh. Every solid must lie in a volume group with a
-role and every surface that bounds no solid in a shell group (an entity outside the groups
-would be left out of the mesh without a word). Units SI; the file's lengths are metres: a
+role, and every surface that bounds no solid (nor is embedded in one) in some group (an
+entity outside the groups would be left out of the mesh without a word). Units SI; the file's lengths are metres: a
 STEP file is read in metres whatever unit it declares (OpenCASCADE converts it,
 ``Geometry.OCCTargetUnit``); a BREP file carries no unit and is taken as metres.
 """
@@ -42,6 +42,8 @@ from liftoff.core.records import atomic_path, geometry_sha256
 from . import _occ
 from .spec import Geometry, Liquid, Material, Patch, PointMass
 
+#: m: a CAD component smaller than this is taken for a unit error (a launch-vehicle part is not)
+SMALLEST_CAD = 0.01
 #: file suffixes read, by how
 GMSH_FILES = (".geo", ".msh")
 CAD_FILES = (".step", ".stp", ".brep")
@@ -123,6 +125,14 @@ def _open(gmsh, p: GeometryFileParams) -> None:
         raise InputError(f"{path}: gmsh cannot read it ({' '.join(str(exc).split())})") from None
     if not gmsh.model.getEntities():
         raise InputError(f"{path}: no geometry in the file")
+    if path.suffix.lower() in CAD_FILES:
+        box = np.asarray(gmsh.model.getBoundingBox(-1, -1), float)
+        size = float(np.max(box[3:] - box[:3]))
+        if size < SMALLEST_CAD:
+            raise InputError(f"{path}: the geometry spans {size:.3g} m, in metres read from the unit the file "
+                             f"declares: a file whose numbers are metres but is declared in mm (gmsh writes such "
+                             f"files unless Geometry.OCCTargetUnit = \"M\") comes out 1000 times small; "
+                             f"export it with its true unit")
 
 
 def _make_groups(gmsh, p: GeometryFileParams) -> None:
@@ -167,10 +177,12 @@ def _check_roles(p: GeometryFileParams, groups: dict[str, tuple[int, int]]) -> N
 
 
 def _check_assigned(gmsh, p: GeometryFileParams, groups: dict[str, tuple[int, int]]) -> None:
-    """Every solid of the file lies in a volume group with a role, and every surface that
-    bounds no solid in a shell group: gmsh writes only the elements of physical groups, so
-    an entity outside them would be left out of the model without a word (its mass and
-    stiffness with it). In a .msh file, the entities that have elements."""
+    """Every solid of the file lies in a volume group with a role, and every surface in some
+    physical group, on the boundary of a solid or embedded in one: gmsh writes only the
+    elements of physical groups, so an entity outside them would be left out of the model
+    without a word (its mass and stiffness with it). In a .msh file, the entities that have
+    elements, and a surface counts as a solid's when its nodes are nodes of volume elements
+    (an MSH 2 file has no topology)."""
     f, o = Path(p.file).name, p.origin
     msh = Path(p.file).suffix.lower() == ".msh"
 
@@ -178,30 +190,39 @@ def _check_assigned(gmsh, p: GeometryFileParams, groups: dict[str, tuple[int, in
         return {t for n in names if n in groups and groups[n][0] == dim
                 for t in gmsh.model.getEntitiesForPhysicalGroup(dim, groups[n][1])}
 
-    def meshed(dim: int, tag: int) -> bool:
-        return not msh or any(len(t) for t in gmsh.model.mesh.getElements(dim, tag)[1])
+    def nodes(dim: int, tag: int) -> np.ndarray:
+        return np.unique(np.concatenate([np.asarray(n, np.int64) for n in gmsh.model.mesh.getElements(dim, tag)[2]]
+                                        + [np.zeros(0, np.int64)]))
 
     def where(dim: int, tag: int) -> str:
         b = gmsh.model.getBoundingBox(dim, tag)
         return f"bounding box [{', '.join(f'{v:.6g}' for v in b)}] m"
 
     solids = members(3, list(p.materials) + list(p.liquids))
-    bounding = set()
-    for dim, tag in gmsh.model.getEntities(3):
-        if not meshed(dim, tag):
-            continue
-        bounding |= {t for _, t in gmsh.model.getBoundary([(3, tag)], combined=False, oriented=False)}
+    volumes = [t for _, t in gmsh.model.getEntities(3) if not msh or nodes(3, t).size]
+    for tag in volumes:
         if tag not in solids:
             raise InputError(f"{f}: volume {tag} ({where(3, tag)}) is in no volume group with a role, so it would be "
                              f"left out of the model: add it to a group given a material in {o}.solids (or a liquid)"
-                             + (f", or cover it with a box in {o}.groups" if not msh and not Path(p.file).suffix.lower()
-                                == ".geo" else ""))
-    shells = members(2, [g for g in p.materials if g in p.shells])
-    for dim, tag in gmsh.model.getEntities(2):
-        if tag in bounding or tag in shells or not meshed(dim, tag):
+                             + (f", or cover it with a box in {o}.groups" if Path(p.file).suffix.lower() in CAD_FILES
+                                else ""))
+    grouped = members(2, [n for n, (d, _) in groups.items() if d == 2])
+    if msh:
+        solid_nodes = np.unique(np.concatenate([nodes(3, t) for t in volumes] + [np.zeros(0, np.int64)]))
+    else:
+        solid_faces = {t for v in volumes for _, t in gmsh.model.getBoundary([(3, v)], combined=False, oriented=False)}
+        solid_faces |= {t for v in volumes for d, t in gmsh.model.mesh.getEmbedded(3, v) if d == 2}
+    for _, tag in gmsh.model.getEntities(2):
+        if tag in grouped:
             continue
-        raise InputError(f"{f}: surface {tag} ({where(2, tag)}) bounds no solid and is in no shell group, so it would "
-                         f"be left out of the model: add it to a surface group given a material and a thickness in "
+        if msh:
+            own = nodes(2, tag)
+            if own.size == 0 or np.all(np.isin(own, solid_nodes)):
+                continue
+        elif tag in solid_faces:
+            continue
+        raise InputError(f"{f}: surface {tag} ({where(2, tag)}) is in no group and bounds no solid, so it would be "
+                         f"left out of the model: add it to a surface group given a material and a thickness in "
                          f"{o}.shells")
 
 
@@ -248,7 +269,11 @@ def build_user_geometry(p: GeometryFileParams, out_dir) -> Geometry:
         raise InputError(f"build_user_geometry expects GeometryFileParams, got {type(p).__name__}")
     p.check()
     path = Path(p.file)
-    if p.file_sha256 and geometry_sha256(path) != p.file_sha256:
+    try:
+        digest = geometry_sha256(path) if p.file_sha256 else ""
+    except ValueError as exc:       # a merged or included file gone since the scenario was read
+        raise InputError(f"{p.origin}.file: {exc}") from None
+    if p.file_sha256 and digest != p.file_sha256:
         raise InputError(f"{path}: the file changed after the scenario was read; run again")
     out_dir = Path(out_dir)
     gmsh = _occ.gmsh

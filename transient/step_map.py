@@ -102,14 +102,41 @@ def step_map(rows, omega: np.ndarray, zeta: np.ndarray, h: float, static=None) -
     return M
 
 
-def coupled_sets(rows) -> dict:
-    """The active sets checked, by name: every row ("bolted") and, where some rows are
-    lateral, the normal rows alone ("released": the posts after release, in contact)."""
-    sets = {"bolted": np.ones(rows.n, dtype=bool)}
-    axial = np.asarray(rows.axial, dtype=bool)
-    if axial.any() and not axial.all():
-        sets["released"] = axial.copy()
-    return sets
+def coupled_sets(rows, contacts, t0: float, t_end: float, h: float) -> list:
+    """The active sets a run from t0 to t_end passes through, by the contacts' release
+    schedule: [(name, row mask, steps)]. Between consecutive release times in the run a
+    contact still bolted couples all its rows, a released one its normal row (in contact),
+    with its tangent rows where it has friction (sticking) and all its rows where it has a
+    latch (it may be captured); ``steps``: the steps of the run in that set (phases with the
+    same set added). Sets with some released rows open, and friction slipping, are not
+    among them."""
+    contacts = list(contacts)
+    rel = np.array([float(c.release_time) for c in contacts])
+    cuts = sorted({float(r) for r in rel if t0 < r < t_end})
+    edges = [float(t0)] + cuts + [float(t_end)]
+    out: dict = {}
+    for ts, te in zip(edges[:-1], edges[1:]):
+        if not te > ts:
+            continue
+        mid = 0.5 * (ts + te)
+        keep = np.zeros(rows.n, dtype=bool)
+        for ci, c in enumerate(contacts):
+            on = np.asarray(rows.contact) == ci
+            if mid < rel[ci] or c.latch_force is not None:
+                keep |= on
+            else:
+                keep |= on & (np.asarray(rows.axial, dtype=bool) | (c.friction > 0))
+        if not keep.any():
+            continue
+        name = "bolted" if all(mid < r for r in rel) else ("released" if all(mid >= r for r in rel) else
+                                                            f"from t = {ts:.6g} s")
+        key = keep.tobytes()
+        steps = int(math.ceil((te - ts) / h - 1e-9))
+        if key in out:
+            out[key] = (out[key][0], keep, out[key][2] + steps)
+        else:
+            out[key] = (name, keep, steps)
+    return list(out.values())
 
 
 def rows_subset(rows, mask: np.ndarray) -> SimpleNamespace:

@@ -19,9 +19,9 @@ Rules (documented in docs/transient.md, "Step size"):
   -1 (:func:`coupling_margin`); a given h beyond that limit is refused, an automatic one
   is halved until stable;
 * a given h above 0.25/f_h is also checked through the spectral radius of the
-  contact-coupled step map, every row coupled (:func:`check_step_map`,
-  transient/step_map.py; and the normal rows alone): damped pairs and rigid rows, which the
-  margin does not cover, and the h/2 runs of such a step; refused when a mode of the map grows by more than
+  contact-coupled step map in the active sets of the release schedule (:func:`check_step_map`,
+  transient/step_map.py): damped pairs and rigid rows, which the margin does not cover,
+  and the h/2 runs of such a step; refused when a mode of the map grows by more than
   step_map.GROWTH_TOLERANCE over the run, or when the map is too large to be checked;
 * the time axis must resolve the step: the spacing of floats at max(|t0|, |t_end|) must
   be below 1e-6 h;
@@ -237,7 +237,7 @@ class StepChoice:
             rows = contact_rows(problem.body_a, problem.body_b, problem.contacts)
             half = replace(half, margin=coupling_margin(rows, omega, zeta, half.h, static))
             if half.h > half.h_default * (1 + 1e-9) and rows.n:    # a given step's halving: as choose_step
-                check_step_map(rows, omega, zeta, half.h, static, half.n_steps, half.f_h, half.h_default)
+                check_step_map(problem, rows, omega, zeta, half.h, static, half.f_h, half.h_default)
         return half if governed_by is None else replace(half, governed_by=governed_by)
 
 
@@ -340,23 +340,25 @@ def choose_step(problem: TransientProblem, rows=None) -> StepChoice:
         # the penalty test above proves no more than that no mode alternates in sign step to step:
         # with damping a complex pair can leave the unit circle at a step it passes, and rigid rows
         # have no such test; the step map's spectral radius covers both (transient/step_map.py)
-        radius = check_step_map(rows, omega, zeta, h, static, n, f_h, h_default)
+        radius = check_step_map(problem, rows, omega, zeta, h, static, f_h, h_default)
         warnings.warn(f"time step h = {h:.4g} s is larger than 0.25/f_h = {h_default:.4g} s (f_h = {f_h:.4g} Hz, "
-                      f"eq. 12): the contact force may be under-resolved (the step is stable by the contact-coupled "
-                      f"step map, spectral radius {radius:.6f}, with every row coupled and with the normal rows "
-                      "alone): check the peaks against a run at h = \"auto\"", stacklevel=4)
+                      f"eq. 12): the contact force may be under-resolved (the contact coupling is stable by its step "
+                      f"map in the release schedule's active sets, spectral radius {radius:.6f}; feedback loads, "
+                      "eq. 26, are not in the map): check the peaks against a run at h = \"auto\"", stacklevel=4)
     if abs(h - h_req) > 1e-9 * h_req:
         warnings.warn(f"time step h = {h_req:.6g} s does not divide the run ({span:.6g} s): using {n} equal steps "
                       f"of {h:.6g} s so that the last one ends at t_end = {t_end:.6g} s", stacklevel=4)
     return StepChoice(h, f_h, h_default, n, t0, t_end, f_s, h_req, margin, problem.mode_samples)
 
 
-def check_step_map(rows, omega, zeta, h: float, static, n_steps: int, f_h: float, h_default: float) -> float:
+def check_step_map(problem: TransientProblem, rows, omega, zeta, h: float, static, f_h: float,
+                   h_default: float) -> float:
     """The largest spectral radius of the contact-coupled step map at h (transient/step_map.py)
-    over the active sets of step_map.coupled_sets (every row coupled, and the normal rows
-    alone); InputError when a mode of it grows by more than step_map.GROWTH_TOLERANCE over
-    the run's ``n_steps``, or when the map is too large (step_map.DENSE_LIMIT states) to be
-    checked. For steps above 0.25/f_h only (eq. 12): the automatic step is held to it."""
+    over the active sets the run passes through (step_map.coupled_sets: by the contacts'
+    release schedule); InputError when a mode of a set grows by more than
+    step_map.GROWTH_TOLERANCE over the steps the run spends in it, or when the map is too
+    large (step_map.DENSE_LIMIT states) to be checked. For steps above 0.25/f_h only
+    (eq. 12): the automatic step is held to it."""
     from .step_map import DENSE_LIMIT, GROWTH_TOLERANCE, coupled_sets, map_size, rows_subset, spectral_radius
 
     size = map_size(rows, static)
@@ -366,14 +368,15 @@ def check_step_map(rows, omega, zeta, h: float, static, n_steps: int, f_h: float
                          f"is checked through the step map's eigenvalues, and this model's map has {size} states "
                          f"(more than {DENSE_LIMIT} cannot be checked here): {keep}")
     worst = 0.0
-    for name, mask in coupled_sets(rows).items():
+    for name, mask, steps in coupled_sets(rows, problem.contacts, float(problem.t0), float(problem.t_end), h):
         radius = spectral_radius(rows_subset(rows, mask), omega, zeta, h, static)
-        growth = radius ** n_steps if radius > 1.0 else 1.0
+        growth = radius ** steps if radius > 1.0 else 1.0
         if not growth <= GROWTH_TOLERANCE:
-            which = "every row coupled" if name == "bolted" else "the normal rows alone coupled, as after release"
+            which = {"bolted": "every contact bolted", "released": "every contact released, in contact"}.get(
+                name, f"the contacts as they are {name}")
             raise InputError(f"time step h = {h:.4g} s is unstable with these contacts: the contact-coupled step map "
                              f"({which}) has spectral radius {radius:.6g}, a growth of {growth:.3g} over the "
-                             f"run's {n_steps} steps; {keep}")
+                             f"{steps} steps the run spends so; {keep}")
         worst = max(worst, radius)
     return worst
 

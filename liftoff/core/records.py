@@ -166,9 +166,29 @@ def file_sha256(path) -> str:
     return h.hexdigest()
 
 
-#: a .geo statement that reads another file: Merge / Include "path"; ShapeFromFile("path")
-_GEO_READS = r'\b(Merge|Include|ShapeFromFile)\b'
-_GEO_LITERAL = r'\b(?:Merge|Include)\s*"([^"]*)"\s*;|\bShapeFromFile\s*\(\s*"([^"]*)"\s*\)'
+#: a .geo statement that reads another file: Merge / MergeWithBoundingBox / Include "path";
+#: ShapeFromFile("path"); matched on the text with comments removed and string literals masked
+_GEO_READS = r'\b(Merge|MergeWithBoundingBox|Include|ShapeFromFile)\b'
+_GEO_LITERAL = (r'\b(?:Merge|MergeWithBoundingBox|Include)\s*"#(\d+)"\s*;'
+                r'|\bShapeFromFile\s*\(\s*"#(\d+)"\s*\)')
+_GEO_TOKENS = r'("(?:[^"\\\n]|\\.)*")|(//[^\n]*|/\*.*?\*/)'
+
+
+def _geo_masked(text: str) -> tuple[str, list]:
+    """(the .geo text with comments removed and each string literal replaced by "#k", the
+    literals' contents): a keyword inside a string, or // inside a quoted path, is then not
+    taken for what it is not."""
+    import re
+
+    strings: list = []
+
+    def sub(m):
+        if m.group(1) is not None:
+            strings.append(m.group(1)[1:-1])
+            return f'"#{len(strings) - 1}"'
+        return " "
+
+    return re.sub(_GEO_TOKENS, sub, text, flags=re.S), strings
 
 
 def geometry_sha256(path) -> str:
@@ -193,13 +213,13 @@ def geometry_sha256(path) -> str:
         if key in seen or p.suffix.lower() != ".geo":
             return
         seen.add(key)
-        text = re.sub(r"//[^\n]*|/\*.*?\*/", "", p.read_text(errors="replace"), flags=re.S)
+        text, strings = _geo_masked(p.read_text(errors="replace"))
         literal = list(re.finditer(_GEO_LITERAL, text))
         if len(re.findall(_GEO_READS, text)) != len(literal):
             raise ValueError(f"{p}: a Merge, Include or ShapeFromFile statement whose file is not a plain \"string\": "
                              "write the path literally, so that a change of that file is seen")
         for m in literal:
-            dep = p.parent / (m.group(1) if m.group(1) is not None else m.group(2))
+            dep = p.parent / strings[int(m.group(1) if m.group(1) is not None else m.group(2))]
             if not dep.is_file():
                 raise ValueError(f"{p}: {m.group(0).strip()} names a file that does not exist: {dep}")
             parts.append(dep.name)

@@ -138,12 +138,14 @@ def test_a_volume_group_without_a_role_is_refused(tmp_path):
         build_user_geometry(_params(geo, Material("wall", 1e9, 0.3, 1000.0)), tmp_path)
 
 
-@pytest.mark.parametrize("declared, volume", [("SI_UNIT($,.METRE.)", 3.0), ("SI_UNIT(.MILLI.,.METRE.)", 3e-9)])
-def test_a_step_file_is_read_in_the_unit_it_declares(tmp_path, declared, volume):
+@pytest.mark.parametrize("declared", ["SI_UNIT($,.METRE.)", "SI_UNIT(.MILLI.,.METRE.)"])
+def test_a_step_file_is_read_in_the_unit_it_declares(tmp_path, declared):
     """Two boxes (2 x 1 x 1 and 1 x 1 x 1) written with the numbers 0..3 and the length unit
-    declared as metres or millimetres: read in metres, 3 m^3 or 3e-9 m^3 (OpenCASCADE's
-    default converted a file in metres to millimetres, 1e9 times the volume; issue: review of
-    2026-12-07). Measured on the mesh of the groups (exact for boxes: 1e-9)."""
+    declared as metres or millimetres. Declared in metres: 3 m^3 (OpenCASCADE's default had
+    converted it to millimetres, 1e9 times the volume; a review, 2026-12-07). Declared in mm
+    (as gmsh writes metre numbers unless told otherwise): 3 mm across, refused as a unit error
+    rather than read 1000 times small (meshes.user_geometry.SMALLEST_CAD, 1 cm). Measured on
+    the mesh of the group (exact for boxes: 1e-9)."""
     import gmsh
 
     from liftoff.meshes.spec import Material
@@ -164,13 +166,16 @@ def test_a_step_file_is_read_in_the_unit_it_declares(tmp_path, declared, volume)
     assert "SI_UNIT(.MILLI.,.METRE.)" in text
     step = tmp_path / "boxes.step"
     step.write_text(text.replace("SI_UNIT(.MILLI.,.METRE.)", declared))
-    size = 0.5 if volume > 1 else 0.5e-3
     big = 1e4
-    p = GeometryFileParams("boxes", str(step), file_sha256(step), size, {"v": Material("al", 7e10, 0.3, 2700.0)},
+    p = GeometryFileParams("boxes", str(step), file_sha256(step), 0.5, {"v": Material("al", 7e10, 0.3, 2700.0)},
                            groups={"v": {"dim": 3, "box": [-big, -big, -big, big, big, big]}}, origin="s.toml: boxes")
     (tmp_path / "out").mkdir()
+    if "MILLI" in declared:
+        with pytest.raises(InputError, match=r"boxes.step: the geometry spans 0.003 m, in metres read from the unit"):
+            build_user_geometry(p, tmp_path / "out")
+        return
     geo = build_user_geometry(p, tmp_path / "out")
-    assert geo.group_volumes["v"] == pytest.approx(volume, rel=1e-9)
+    assert geo.group_volumes["v"] == pytest.approx(3.0, rel=1e-9)
 
 
 def test_a_solid_in_no_group_is_refused_not_left_out(tmp_path):
@@ -224,3 +229,61 @@ def test_a_geo_file_is_keyed_with_the_files_it_merges(tmp_path):
     (tmp_path / "gone.geo").write_text('Merge "missing.step";\n')
     with pytest.raises(ValueError, match="names a file that does not exist"):
         geometry_sha256(tmp_path / "gone.geo")
+    # a keyword inside a string is not a statement; // inside a quoted path is not a comment;
+    # MergeWithBoundingBox reads a file too
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "part.step").write_text("one")
+    odd = tmp_path / "odd.geo"
+    odd.write_text('Printf("Include %g", 1);\nMergeWithBoundingBox "sub//part.step"; // Merge "x";\n')
+    first = geometry_sha256(odd)
+    (tmp_path / "sub" / "part.step").write_text("two")
+    assert geometry_sha256(odd) != first
+
+
+@pytest.mark.parametrize("version", [2.2, 4.1])
+def test_a_msh_file_of_either_version_with_a_surface_group_builds(tmp_path, version):
+    """An MSH 2 file has no topology (gmsh gives its volumes no boundary): a grouped surface
+    (here a point's tie patch) is not refused as left out (a review of the check's first
+    version, which refused MSH 2.2 files that built before)."""
+    import gmsh
+
+    from liftoff.meshes.spec import Material
+    from liftoff.meshes.user_geometry import GeometryFileParams, build_user_geometry
+
+    path = tmp_path / f"b{version}.msh"
+    gmsh.initialize([], False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("b")
+        gmsh.model.occ.addBox(0, 0, 0, 1, 1, 1)
+        gmsh.model.occ.synchronize()
+        gmsh.model.setPhysicalName(3, gmsh.model.addPhysicalGroup(3, [1]), "body")
+        gmsh.model.setPhysicalName(2, gmsh.model.addPhysicalGroup(2, [6]), "top")
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.5)
+        gmsh.model.mesh.generate(3)
+        gmsh.option.setNumber("Mesh.MshFileVersion", version)
+        gmsh.write(str(path))
+    finally:
+        gmsh.finalize()
+    p = GeometryFileParams("b", str(path), file_sha256(path), None, {"body": Material("al", 7e10, 0.3, 2700.0)},
+                           points={"top": {"group": "top", "at": None, "tie": "rigid"}}, origin="s.toml: b")
+    (tmp_path / "out").mkdir()
+    geo = build_user_geometry(p, tmp_path / "out")
+    assert geo.group_volumes["body"] == pytest.approx(1.0, rel=1e-9)
+
+
+def test_a_surface_embedded_in_a_solid_is_not_refused(tmp_path):
+    """A .geo surface embedded in a volume (Surface In Volume) is not on its boundary, and
+    needs no group: its triangles are faces of the solid's tetrahedra."""
+    from liftoff.meshes.spec import Material
+    from liftoff.meshes.user_geometry import GeometryFileParams, build_user_geometry
+
+    geo_file = tmp_path / "emb.geo"
+    geo_file.write_text('SetFactory("OpenCASCADE");\nBox(1) = {0, 0, 0, 1, 1, 1};\n'
+                        'Rectangle(7) = {0.2, 0.2, 0.5, 0.6, 0.6};\nSurface{7} In Volume{1};\n'
+                        'Physical Volume("body") = {1};\n')
+    p = GeometryFileParams("emb", str(geo_file), file_sha256(geo_file), 0.25,
+                           {"body": Material("al", 7e10, 0.3, 2700.0)}, origin="s.toml: emb")
+    (tmp_path / "out").mkdir()
+    geo = build_user_geometry(p, tmp_path / "out")
+    assert geo.group_volumes["body"] == pytest.approx(1.0, rel=1e-9)
