@@ -134,7 +134,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--g-eff", type=float, default=None, metavar="G",
                    help="apparent axial acceleration, m/s^2 [the scenario's [model] slosh_gravity: "
                         "9.80665, on the pad]")
-    p.add_argument("--modes", type=int, default=4, metavar="N", help="lateral modes per liquid [4]")
+    p.add_argument("--modes", type=int, default=4, metavar="N", help="lateral modes per liquid, rounded up to whole pairs of equal frequency [4]")
     p.add_argument("--csv", type=Path, default=None, metavar="FILE",
                    help="write the spring-mass / pendulum table here (SI units)")
     p.set_defaults(func=_run)
