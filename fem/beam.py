@@ -159,6 +159,13 @@ def _group_elements(x: np.ndarray, el: np.ndarray, grp, name: str):
     else:
         vref = np.broadcast_to(np.asarray(grp.vref, float), (el.shape[0], 3))
     for (a, b), v in zip(el, vref):
+        d = (x[b] + e[b]) - (x[a] + e[a])
+        if np.linalg.norm(np.cross(d, v)) < 1e-8 * np.linalg.norm(d) * np.linalg.norm(v):
+            raise InputError(f"{what}: its orientation vref ({grp.vref if isinstance(grp.vref, str) else list(v)}) "
+                             f"lies along the element from {np.round(x[a] + e[a], 4).tolist()} to "
+                             f"{np.round(x[b] + e[b], 4).tolist()} m, so it sets no plane: give a vref off the "
+                             "member's axis ('tangential' is for members along the axis, 'radial' for members "
+                             "across it)")
         k, m = beam_element(x[a] + e[a], x[b] + e[b], mat.E, G, sec, mat.rho, v, grp.rotary, grp.nsm)
         if e[a].any() or e[b].any():
             B = _offset_link(e[a], e[b])

@@ -65,7 +65,9 @@ def _axes(x1: np.ndarray, x2: np.ndarray, vref) -> tuple[float, np.ndarray]:
     ex = d / L
     v = np.asarray(vref, float)
     if np.linalg.norm(np.cross(ex, v)) < 1e-8 * max(np.linalg.norm(v), 1e-300):
-        v = np.array([0.0, 1.0, 0.0])          # the default vref along the beam: take y
+        # the default vref along the beam: take y, or for a beam along y the global axis least
+        # along it (y there gave z = x cross y = 0 and NaN matrices)
+        v = np.array([0.0, 1.0, 0.0]) if abs(ex[1]) < 0.9 else np.eye(3)[int(np.argmin(np.abs(ex)))]
     ez = np.cross(ex, v)
     ez /= np.linalg.norm(ez)
     ey = np.cross(ez, ex)
@@ -229,6 +231,9 @@ def i_section(h: float, b: float, tw: float, tf: float) -> Section:
     for nm, v in (("h", h), ("b", b), ("tw", tw), ("tf", tf)):
         if not v > 0:
             raise InputError(f"I section: {nm} must be > 0 (got {v!r})")
+    if not (tw < b and tf < h):     # h is flange centre to centre: flanges thicker than it overlap
+        raise InputError(f"I section: the web tw = {tw!r} m must be thinner than the flanges are wide (b = {b!r} m) "
+                         f"and the flanges tf = {tf!r} m thinner than the depth h = {h!r} m")
     A = 2 * b * tf + h * tw
     return Section(A, tw * h ** 3 / 12 + 2 * b * tf * (h / 2) ** 2, 2 * tf * b ** 3 / 12,
                    (2 * b * tf ** 3 + h * tw ** 3) / 3, 5 / 6 * 2 * b * tf, h * tw)
@@ -244,6 +249,8 @@ def t_section(h: float, b: float, tw: float, tf: float) -> tuple[Section, float]
     for nm, v in (("h", h), ("b", b), ("tw", tw), ("tf", tf)):
         if not v > 0:
             raise InputError(f"T section: {nm} must be > 0 (got {v!r})")
+    if not tw <= b:
+        raise InputError(f"T section: the web tw = {tw!r} m must be no wider than the flange b = {b!r} m")
     a_web, a_fl = h * tw, b * tf
     A = a_web + a_fl
     zc = (a_web * h / 2 + a_fl * (h + tf / 2)) / A
@@ -263,6 +270,9 @@ def hat_section(h: float, b: float, c: float, t: float) -> tuple[Section, float]
     for nm, v in (("h", h), ("b", b), ("c", c), ("t", t)):
         if not v > 0:
             raise InputError(f"hat section: {nm} must be > 0 (got {v!r})")
+    if not t < min(h, b):           # a wall thicker than what it spans is no thin-walled hat
+        raise InputError(f"hat section: the wall t = {t!r} m must be thinner than the hat's height h = {h!r} m "
+                         f"and crown b = {b!r} m")
     A = t * (b + 2 * h + 2 * c)
     zc = (b * t * h + 2 * h * t * h / 2) / A
     Iy = b * t * (h - zc) ** 2 + 2 * (t * h ** 3 / 12 + h * t * (h / 2 - zc) ** 2) + 2 * c * t * zc ** 2

@@ -606,3 +606,19 @@ def test_offset_ring_frames_shrink_with_their_wall_stress_free(tmp_path):
     f1 = thermal_load(model, ["frames", "skin"], -200.0, a)
     f2 = thermal_load(model, ["skin", "frames"], -200.0, a)
     assert np.array_equal(f1, f2) and not np.allclose(f1, f)
+
+
+def test_a_vref_along_the_member_is_refused_and_the_default_never_nan():
+    """A user's vref along a member sets no plane: refused, naming the group (a review,
+    2026-12-07: 'tangential' on a ring put every chord on the fallback, and a member along y
+    with vref along y gave NaN matrices). liftoff.core.beam's own fallback for its default
+    vref along the beam now picks an axis off it, so a beam along y is finite."""
+    from liftoff.core.beam import beam_element
+    from liftoff.fem.beam import _group_elements
+
+    k, m = beam_element((0, 0, 0), (0, 2, 0), 2e11, 8e10, tube(0.1, 0.01, 0.3), 7850.0, (0.0, -3.0, 0.0))
+    assert np.all(np.isfinite(k)) and np.all(np.isfinite(m))
+    x = np.array([[0.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    grp = BeamGroup(STEEL, tube(0.1, 0.01, STEEL.nu), vref=(0.0, 1.0, 0.0))
+    with pytest.raises(InputError, match=r"beam curve 'spoke': its orientation vref \(\[0.0, 1.0, 0.0\]\) lies along"):
+        list(_group_elements(x, np.array([[0, 1]]), grp, "spoke"))

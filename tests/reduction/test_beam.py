@@ -201,6 +201,16 @@ def test_t_and_hat_sections_against_integration():
     assert sec.Iy == pytest.approx(Iy, rel=5e-3) and sec.Iz == pytest.approx(Iz, rel=5e-3)
     with pytest.raises(InputError, match="hat section: t must be > 0"):
         hat_section(h, b, c, 0.0)
+    # impossible thin-wall dimensions (a review, 2026-12-07: a web wider than the flanges gave
+    # Iz 77 times low, overlapping flanges an area beyond the bounding box)
+    from liftoff.core.beam import i_section
+
+    with pytest.raises(InputError, match="hat section: the wall t = 0.02 m must be thinner"):
+        hat_section(0.01, b, c, 0.02)
+    with pytest.raises(InputError, match="I section: the web tw = 0.1 m must be thinner than the flanges are wide"):
+        i_section(0.2, 0.05, 0.1, 0.01)
+    with pytest.raises(InputError, match="I section: .* flanges tf = 0.04 m thinner than the depth h = 0.02 m"):
+        i_section(0.02, 0.1, 0.005, 0.04)
 
 
 def test_standard_sections_by_name():
