@@ -245,7 +245,7 @@ def build_girder_platform(p: PlatformParams, out_dir: Path) -> Geometry:
             _occ.add_physical(0, name, [_occ.point_at((x, y, zb), 1e-6)])
             clamped.append(name)
         n_nodes = _occ.mesh_and_write(out_dir / f"{n}.msh", p.mesh_size)
-    girder, _ = standard_section(p.girder_section, f"PlatformParams({n}).girder_section")
+    girder, _ = standard_section(p.girder_section, f"PlatformParams({n}).girder_section", STEEL.nu)
     post = rectangle(p.post_size, p.post_size, STEEL.nu)
     girder_length = lengths.get(f"{n}_girders_x", 0.0) + lengths.get(f"{n}_girders_y", 0.0)
     steel = STEEL.rho * (post.A * lengths[f"{n}_posts"] + girder.A * girder_length)

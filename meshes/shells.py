@@ -191,8 +191,8 @@ def wall_beams(p, wall_faces: list[int], radius: float, wall_thickness: float,
         group = f"{p.name}_{kind}"
         _occ.add_physical(1, group, edges())
         length = _occ.physical_measures(1)[group]
-        section, base = standard_section(spec, f"{owner}.{kind[:-1]}_section")
         mat = mat or p.material
+        section, base = standard_section(spec, f"{owner}.{kind[:-1]}_section", mat.nu)
         offset = -(0.5 * wall_thickness + base)
         beams[group] = BeamGroup(mat, section, vref=vref, radial_offset=offset, axis_point=axis, wall=wall)
         lengths[group] = length * (radius + offset) / radius if kind == "frames" else length

@@ -73,7 +73,7 @@ class Strut:
         """The section: a Section as given, or a standard shape's (its table)."""
         if isinstance(self.section, Section):
             return self.section
-        return standard_section(self.section, f"Strut({self.name}).section")[0]
+        return standard_section(self.section, f"Strut({self.name}).section", self.nu)[0]
 
 
 def strut_component(p: Strut, name: str | None = None) -> tuple[Component, dict]:

@@ -309,12 +309,14 @@ SHAPES = {
 }
 
 
-def standard_section(spec: dict, where: str = "section") -> tuple[Section, float]:
+def standard_section(spec: dict, where: str = "section", nu: float | None = None) -> tuple[Section, float]:
     """(Section, distance from the base to the centroid, m) of ``spec`` = {"shape": one of
     :data:`SHAPES`, the shape function's dimensions (m)}: e.g. {"shape": "t", "h": 0.15,
     "b": 0.06, "tw": 0.004, "tf": 0.006}. Base: the flat face the member sits on (the web's
     foot of a T or I frame, the feet of a hat stringer, a side of a rectangle or tube).
-    InputError naming ``where`` and the culprit on an unknown shape or a wrong dimension."""
+    InputError naming ``where`` and the culprit on an unknown shape or a wrong dimension.
+    ``nu``: the member's material's Poisson ratio, for the shapes whose shear coefficient
+    takes one (Cowper's: tube, rectangle) unless the table gives its own (-1 < nu < 0.5)."""
     import inspect
 
     if not isinstance(spec, dict) or "shape" not in spec:
@@ -333,6 +335,10 @@ def standard_section(spec: dict, where: str = "section") -> tuple[Section, float
     for k, v in dims.items():
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v):
             raise InputError(f"{where}.{k}: expected a number (got {v!r})")
+    if "nu" in dims and not -1.0 < dims["nu"] < 0.5:
+        raise InputError(f"{where}.nu: Poisson's ratio must lie in (-1, 0.5) (got {dims['nu']!r})")
+    if "nu" in params and "nu" not in dims and nu is not None:
+        dims["nu"] = float(nu)
     out = make(**dims)
     return (out[0] if isinstance(out, tuple) else out), float(base(dims, out))
 

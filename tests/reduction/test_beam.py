@@ -236,6 +236,14 @@ def test_standard_sections_by_name():
         standard_section({"shape": "i", "h": 0.2, "b": 0.1, "tw": 0.005, "d": 1.0}, "frame")
     with pytest.raises(InputError, match=r"frame.h: expected a number"):
         standard_section({"shape": "rectangle", "b": 0.1, "h": "deep"}, "frame")
+    # Cowper's coefficient takes the member's material's nu unless the table gives one; a
+    # table's own nu is checked (a review: nu = 7 gave a shear coefficient beyond a tube's)
+    tb = {"shape": "tube", "r_out": 0.1, "t": 0.005}
+    assert standard_section(tb, "strut", 0.34)[0].Az == pytest.approx(tube(0.1, 0.005, 0.34).Az, rel=1e-15)
+    assert standard_section({**tb, "nu": 0.25}, "strut", 0.34)[0].Az == pytest.approx(tube(0.1, 0.005, 0.25).Az,
+                                                                                      rel=1e-15)
+    with pytest.raises(InputError, match=r"strut.nu: Poisson's ratio must lie in \(-1, 0.5\) \(got 7.0\)"):
+        standard_section({**tb, "nu": 7.0}, "strut")
 
 
 def test_box_section_against_integration_and_bredt():
