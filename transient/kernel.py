@@ -129,6 +129,7 @@ class State(NamedTuple):
     sep: np.ndarray     # (ncon,) m, separation of the normal row at the last step end
     tyield: np.ndarray  # (ncon,) s, first yield (NaN: never)
     tdrawn: np.ndarray  # (ncon,) s, drawn out (NaN: never)
+    opened: np.ndarray  # (ncon,) bool, released and open at a step end since: a latch may capture it
 
 
 class Cache(NamedTuple):
@@ -1067,11 +1068,15 @@ def _laws_after_step(contact, state, fn, bolted, opening, tb):
                 pin[a] = False
                 yld[a] = False
                 active[a] = s < 0.0
+    opened = state.opened
     for c in range(latch.size):
         if latched[c] or bolted[c] or not latch[c] < np.inf:
             continue
         a = axcol[c]
-        if active[a] and not opening[a] and nsign[a] * fn[a] >= latch[c]:
+        if not active[a]:
+            opened[c] = True    # capture is an event: the point closes again after it has been open
+            continue
+        if opened[c] and not opening[a] and nsign[a] * fn[a] >= latch[c]:
             latched[c] = True
             for j in range(nc):
                 if dcontact[j] == c and not axial[j]:

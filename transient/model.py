@@ -77,9 +77,11 @@ class ContactPoint:
       anchored where sticking began) or slip with ``|f_t| = mu N``.
     * ``damping``: a dashpot (N s/m per direction) in parallel with K_C while coupled;
       a closed normal carries ``max(0, K_C d + c d')`` and only while it penetrates.
-    * ``latch_force``: a capture latch: once the released point is closed with a normal
-      compression >= latch_force (N; 0: on first contact), it is bolted from the end of
-      that step on, laterals anchored where they were (docking capture).
+    * ``latch_force``: a capture latch: once the released point, having been open at a step
+      end since its release (or at t0), is closed again with a normal compression >=
+      latch_force (N; 0: on first contact), it is bolted from the end of that step on,
+      laterals anchored where they were (docking capture). A point released while still in
+      contact is not captured until it has separated.
     * ``release_force = (travel, force)``: a soft (controlled) release, e.g. tapered pins
       drawn through dies (m, N; travel strictly increasing from 0, forces >= 0, at least
       two points, F(s) linear between them). Let s = gap + normal_sign n . (x_a - x_b) be

@@ -462,10 +462,13 @@ def _start(problem: TransientProblem, rows, contact: Contact, init: InitialState
     e0 = contact.Phi @ q0
     anchor, slip, sdir = initial_slip(rows, f0, e0, active0, bolted0)   # contact_laws.py
     soft = initial_soft(rows, f0, e0, bolted0)
+    # a point released and open at t0 may be captured on closing; one closed at t0 after it opens
+    opened = np.array([not bolted0[c] and not active0[rows.axial_column[c]] for c in range(len(rows.names))],
+                      dtype=np.bool_)
     return State(q0, np.concatenate([v_a, v_b]), f0.copy(), active0.copy(),
                  contact.Phi.T @ pen0, np.concatenate([loads[0].at(t0), loads[1].at(t0)]),
                  np.zeros(1, dtype=np.int64), anchor, np.zeros(len(rows.names), dtype=np.bool_), slip, sdir,
-                 *soft)
+                 *soft, opened)
 
 
 def _new_cache(n2: int, cap: int = 64) -> Cache:

@@ -329,3 +329,36 @@ def test_friction_cone_through_lift_off_and_landing():
     assert np.all(F[r.contact_state == 2] == 0.0)
     slipping = closed & (T >= mu * N * (1 - 1e-6)) & (N > 0)
     assert slipping.any() and (closed & ~slipping).any()        # both stick and slip happened
+
+
+def test_a_latch_does_not_capture_a_post_released_in_contact():
+    """Capture is an event: a hold-down with a recapture latch, released while it still
+    carries the vehicle's weight, was latched at the end of the first released step and
+    bolted for good (the vehicle never lifted off, the posts pulling 64 kN; a review,
+    2026-12-07). Now it must have been open first: under 1.4 g of thrust the vehicle lifts
+    off exactly as without a latch (same separation times, no tension), and nothing is
+    captured before it separates."""
+    import dataclasses
+
+    from liftoff.transient import TabulatedForce
+    from liftoff.transient.examples import holddown_contacts, toy_pad, toy_vehicle
+
+    thrust = 1.4 * 50e3 * 9.81
+
+    def run(latch):
+        cs = [dataclasses.replace(c, latch_force=latch) for c in holddown_contacts(4, stiffness=2e9, release_time=0.05)]
+        p = TransientProblem(toy_vehicle(), toy_pad(), cs,
+                             Forcing(tables=[TabulatedForce("a", "top:Tz", [0, 0.2, 0.5], [0, thrust, thrust])],
+                                     gravity=(0, 0, -9.81)), t_end=0.5, h=2e-4, progress=False)
+        return solve(p)
+
+    free, latched = run(None), run(5e4)
+    assert np.all(np.isfinite(free.separation_time))
+    assert np.array_equal(latched.separation_time, free.separation_time)
+    from liftoff.transient.assembly import contact_rows
+
+    axial = contact_rows(toy_vehicle(), toy_pad(), holddown_contacts(4)).axial
+    after = latched.time > 0.05
+    assert latched.contact_force[after][:, axial].min() >= 0.0             # compression only once released
+    captured = latched.metadata.get("capture_time") or {}
+    assert all(t is None or t > min(free.separation_time) for t in captured.values())
