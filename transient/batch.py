@@ -766,6 +766,28 @@ def solve_batch_iter(problems: Sequence[TransientProblem], group: int = GROUP) -
         return _solve_batch(problems, int(group))
 
 
+def _check_schedules(problems: list[TransientProblem], rows_k: list, step) -> None:
+    """A given step above 0.25/f_h is checked through the contact-coupled step map in the
+    active sets of each case's release schedule (stepping.check_step_map), not problem 0's
+    alone: release times may differ between the cases, and with them the sets a run passes
+    through and its steps in each. Once per distinct schedule; InputError naming the case."""
+    if step.h_requested is None or not step.h > step.h_default * (1 + 1e-9) or not rows_k[0].n:
+        return
+    from .stepping import _modes, check_step_map
+
+    seen = {tuple(float(c.release_time) for c in problems[0].contacts)}
+    for k, (p, rows) in enumerate(zip(problems, rows_k)):
+        key = tuple(float(c.release_time) for c in p.contacts)
+        if key in seen:
+            continue
+        seen.add(key)
+        omega, zeta, static = _modes(p)
+        try:
+            check_step_map(p, rows, omega, zeta, step.h, static, step.f_h, step.h_default)
+        except InputError as exc:
+            raise InputError(f"batch problem {k}: {exc}") from None
+
+
 def _solve_batch(problems: list[TransientProblem], group: int) -> Iterator[TransientResult]:
     started = _time.perf_counter()
     p0 = problems[0]
@@ -774,6 +796,7 @@ def _solve_batch(problems: list[TransientProblem], group: int) -> Iterator[Trans
     _check_shared(problems, rows_k)
     rows = rows_k[0]
     step = choose_step(p0, rows)
+    _check_schedules(problems, rows_k, step)
     check_memory(p0, step.n_steps, len(problems), f" for {len(problems)} cases marched together")
     coefs = (step_coefficients(pa.omega, pa.zeta, step.h, p0.static_modes("a")),
              step_coefficients(pb.omega, pb.zeta, step.h, p0.static_modes("b")))

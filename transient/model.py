@@ -105,9 +105,13 @@ class ContactPoint:
       - drawn out (s >= travel[-1] at a step end): for good, an ordinary released point
         (compression-only, recontact allowed).
 
-      The point's state is CLOSED while its pin carries it (yielding included), so its
-      separation_time is the time it is drawn out; the result's metadata["soft_release"]
-      gives each point's first yield and drawn-out times.
+      The point's state is CLOSED while its pin carries it (yielding included) and OPEN
+      while the pin is slack or after it is drawn out, so its separation_time is the first
+      step end at which neither pin nor post carries it: the time it is drawn out, or
+      earlier where a yielded pin goes slack (a mass stopped in the dies that falls back
+      onto the post separates there and recontacts). The result's
+      metadata["soft_release"] gives each point's first yield and drawn-out times (None:
+      never drawn out), which say which.
 
       Not with rigid=True, friction, a latch or damping on the normal (refused).
       Bolted before release_time as any post.

@@ -227,3 +227,28 @@ def test_a_set_the_run_never_reaches_does_not_refuse_it():
     F = np.abs(r.contact_force[:, rows.axial])
     late = F[-200:].max()
     assert np.isfinite(late) and late < 2 * F[:200].max()
+
+
+def test_a_batch_checks_each_cases_release_schedule(monkeypatch):
+    """Cases marched together share the step, chosen for problem 0, but their release times
+    may differ, and with them the active sets the step map is checked in (a review: a case
+    that transient.solve refuses was marched). Case 0 never releases; case 1 releases
+    mid-run, through a set (the normal rows alone) made unstable here: refused naming it."""
+    from liftoff.transient.batch import solve_batch
+    from liftoff.transient.examples import holddown_contacts, toy_pad, toy_vehicle
+
+    a, b = toy_vehicle(), toy_pad()
+    f_h, h0 = stepping.estimate_step(a, b, holddown_contacts())
+    h = 1.2 * h0
+
+    def case(release):
+        return TransientProblem(a, b, holddown_contacts(release_time=release), Forcing(gravity=(0, 0, -9.81)),
+                                t_end=200 * h, h=h, initial="zero", progress=False)
+
+    n_all = contact_rows(a, b, holddown_contacts()).n
+    real = sm.spectral_radius
+    monkeypatch.setattr(sm, "spectral_radius", lambda r, *x: 1.5 if r.n < n_all else real(r, *x))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(InputError, match=r"batch problem 1: time step .* \(every contact released, in contact\)"):
+            solve_batch([case(math.inf), case(100 * h)])
