@@ -556,6 +556,19 @@ def test_a_thermal_strain_of_a_beam_is_its_free_expansion(tmp_path, offset):
     assert np.abs(x[d][1:]).max() < 1e-9 * abs(eps * L)
 
 
+def _cryo_shrinkage(model, wall: str):
+    """(f, K, u): the thermal load of ``wall`` at alpha 2.3e-5 /K, dT -200 K, the model's K and
+    the homogeneous shrinkage u = eps x of its nodes (translations; no rotation)."""
+    from liftoff.fem import thermal_load
+
+    f = thermal_load(model, [wall], -200.0, 2.3e-5)
+    K, _ = model.matrices()
+    u = np.zeros(model.n_dof)
+    tr = model.dof_comp < 3
+    u[tr] = 2.3e-5 * -200.0 * model.dof_coords[tr, model.dof_comp[tr]]
+    return f, K, u
+
+
 def test_a_wall_and_its_stringers_shrink_together_stress_free(tmp_path):
     """A tube wall with eight stringers (BeamGroup.wall = "wall", on the mid-surface), free:
     the wall's thermal strain is the stringers' too, and the homogeneous shrinkage
@@ -570,14 +583,8 @@ def test_a_wall_and_its_stringers_shrink_together_stress_free(tmp_path):
     sec = rectangle(0.02, 0.1, STEEL.nu)
     model = build_model(Geometry("s", msh, {"wall": STEEL}, shells={"wall": t},
                                  beams={"stringers": BeamGroup(STEEL, sec, vref="tangential", wall="wall")}))
-    eps = 2.3e-5 * -200.0
-    f = thermal_load(model, ["wall"], -200.0, 2.3e-5)
-    K, _ = model.matrices()
-    u = np.zeros(model.n_dof)
-    tr = model.dof_comp < 3
-    u[tr] = eps * model.dof_coords[tr, model.dof_comp[tr]]
-    r = K @ u - f
-    assert np.abs(r).max() < 1e-9 * np.abs(f).max()
+    f, K, u = _cryo_shrinkage(model, "wall")
+    assert np.abs(K @ u - f).max() < 1e-9 * np.abs(f).max()
     beams_only = thermal_load(model, ["stringers"], -200.0, 2.3e-5)
     assert np.abs(K @ u - (f - beams_only)).max() > 0.1 * np.abs(f).max()
 
@@ -594,12 +601,7 @@ def test_offset_ring_frames_shrink_with_their_wall_stress_free(tmp_path):
     model = build_model(Geometry("rings", msh, {"skin": STEEL}, shells={"skin": T},
                                  beams={"frames": BeamGroup(STEEL, rectangle(TW, D, STEEL.nu), radial_offset=-D / 2,
                                                             wall="skin")}))
-    eps = 2.3e-5 * -200.0
-    f = thermal_load(model, ["skin"], -200.0, 2.3e-5)
-    K, _ = model.matrices()
-    u = np.zeros(model.n_dof)
-    tr = model.dof_comp < 3
-    u[tr] = eps * model.dof_coords[tr, model.dof_comp[tr]]
+    f, K, u = _cryo_shrinkage(model, "skin")
     assert np.abs(K @ u - f).max() < 1e-9 * np.abs(f).max()
     # a member named itself takes its own alpha, whatever the order of the names
     a = {"skin": 2.3e-5, "frames": 1.0e-5}

@@ -138,6 +138,24 @@ def test_a_volume_group_without_a_role_is_refused(tmp_path):
         build_user_geometry(_params(geo, Material("wall", 1e9, 0.3, 1000.0)), tmp_path)
 
 
+def _two_boxes_step(path, unit: str):
+    """A STEP file of two boxes, 2 x 1 x 1 and 1 x 1 x 1 side by side along x, written by gmsh
+    with Geometry.OCCTargetUnit = ``unit`` (its numbers' unit; gmsh declares mm)."""
+    import gmsh
+
+    gmsh.initialize([], False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.option.setString("Geometry.OCCTargetUnit", unit)
+        gmsh.model.occ.addBox(0, 0, 0, 2, 1, 1)
+        gmsh.model.occ.addBox(2, 0, 0, 1, 1, 1)
+        gmsh.model.occ.synchronize()
+        gmsh.write(str(path))
+    finally:
+        gmsh.finalize()
+    return path
+
+
 @pytest.mark.parametrize("declared", ["SI_UNIT($,.METRE.)", "SI_UNIT(.MILLI.,.METRE.)"])
 def test_a_step_file_is_read_in_the_unit_it_declares(tmp_path, declared):
     """Two boxes (2 x 1 x 1 and 1 x 1 x 1) written with the numbers 0..3 and the length unit
@@ -146,22 +164,10 @@ def test_a_step_file_is_read_in_the_unit_it_declares(tmp_path, declared):
     (as gmsh writes metre numbers unless told otherwise): 3 mm across, refused as a unit error
     rather than read 1000 times small (meshes.user_geometry.SMALLEST_CAD, 1 cm). Measured on
     the mesh of the group (exact for boxes: 1e-9)."""
-    import gmsh
-
     from liftoff.meshes.spec import Material
     from liftoff.meshes.user_geometry import GeometryFileParams, build_user_geometry
 
-    raw = tmp_path / "raw.step"
-    gmsh.initialize([], False)
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.option.setString("Geometry.OCCTargetUnit", "MM")     # the numbers as given, declared mm
-        gmsh.model.occ.addBox(0, 0, 0, 2, 1, 1)
-        gmsh.model.occ.addBox(2, 0, 0, 1, 1, 1)
-        gmsh.model.occ.synchronize()
-        gmsh.write(str(raw))
-    finally:
-        gmsh.finalize()
+    raw = _two_boxes_step(tmp_path / "raw.step", "MM")     # the numbers as given, declared mm
     text = raw.read_text()
     assert "SI_UNIT(.MILLI.,.METRE.)" in text
     step = tmp_path / "boxes.step"
@@ -182,22 +188,10 @@ def test_a_solid_in_no_group_is_refused_not_left_out(tmp_path):
     """gmsh writes only the elements of physical groups: a STEP solid outside every group box
     was left out of the model without a word (its mass with it). Refused, naming the volume
     and where it is."""
-    import gmsh
-
     from liftoff.meshes.spec import Material
     from liftoff.meshes.user_geometry import GeometryFileParams, build_user_geometry
 
-    step = tmp_path / "boxes.step"
-    gmsh.initialize([], False)
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.option.setString("Geometry.OCCTargetUnit", "M")
-        gmsh.model.occ.addBox(0, 0, 0, 2, 1, 1)
-        gmsh.model.occ.addBox(2, 0, 0, 1, 1, 1)
-        gmsh.model.occ.synchronize()
-        gmsh.write(str(step))
-    finally:
-        gmsh.finalize()
+    step = _two_boxes_step(tmp_path / "boxes.step", "M")
     p = GeometryFileParams("boxes", str(step), file_sha256(step), 0.5, {"v": Material("al", 7e10, 0.3, 2700.0)},
                            groups={"v": {"dim": 3, "box": [-0.1, -0.1, -0.1, 2.1, 1.1, 1.1]}}, origin="s.toml: boxes")
     (tmp_path / "out").mkdir()
