@@ -1,6 +1,7 @@
 """The contact-coupled step map and its spectral radius: the stability of a step h.
 
-With every contact row coupled and no load, one step of the kernel (eq. 9-10, the
+With a set of contact rows coupled (:func:`step_map` takes them as given; the sets a run
+passes through: :func:`coupled_sets`) and no load, one step of the kernel (eq. 9-10, the
 direct contact solve of section 2.3, transient/kernel.py) is a linear map of the state
 x = (q, v, f_P) -- the modal displacements and velocities of both bodies and the penalty
 rows' end-of-step forces, which the next step starts from:
@@ -58,7 +59,7 @@ def map_size(rows, static=None) -> int:
 
 
 def step_map(rows, omega: np.ndarray, zeta: np.ndarray, h: float, static=None) -> np.ndarray:
-    """The linear step map M (x1 = M x0) of the module docstring, every row coupled, over the
+    """The linear step map M (x1 = M x0) of the module docstring, every row of ``rows`` coupled, over the
     state x = (q_d, v_d, f_P): the coupled dynamic modes (:func:`coupled_modes`) and the
     penalty rows. ``omega``, ``zeta``, ``static``: both bodies' modes, a's first."""
     omega, zeta = np.asarray(omega, dtype=float), np.asarray(zeta, dtype=float)
