@@ -124,13 +124,15 @@ def test_truncation_check_sees_the_cut(frame):
     assert cut.f_cut == pytest.approx(full_modes.freq_hz[n - 1]) and cut.n_residual == 0 and cut.n_kept == n
     rv = truncation_check(full_modes, keep_modes(full_modes, n_modes=n), labels + contact, contact, "frame")
     print("cut:", cut.line(), "\nwith residual vectors:", rv.line())
-    assert rv.flex_error < 1e-8 and rv.n_residual > 0
-    # residual vectors restore statics, not the dynamic (effective) mass of the cut modes
-    assert rv.worst_mass >= cut.worst_mass
+    # residual vectors restore the static flexibility (static_error ~ 0), but the check counts
+    # the eigenmodes only: the cut is the same cut, and still not converged (a review: counting
+    # them passed cuts whose loads were 6.6 % off)
+    assert rv.static_error < 1e-8 and rv.n_residual > 0
+    assert rv.flex_error == cut.flex_error and rv.mass_kept == cut.mass_kept and not rv.ok
     d = rv.as_dict()
     assert d["n_residual"] == rv.n_residual and d["f_cut_hz"] == rv.f_cut and d["ok"] == rv.ok
-    if not rv.ok:
-        assert "effective mass" in rv.warning() and "residual vectors" not in rv.warning()
+    assert d["flexibility_shortfall_with_residual_vectors"] == rv.static_error
+    assert "residual vectors" in rv.line() and "with the residual vectors" in rv.line()
 
 
 def test_held_effective_mass_equals_the_physical_held_model(frame):
