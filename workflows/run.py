@@ -747,7 +747,8 @@ def _cli(args: argparse.Namespace) -> int:
     if args.example == "barge" or scenario_kind(args.scenario) == "barge":   # kind = "barge": workflows/barge.py
         from .barge import run as run_barge
 
-        run_barge(args.scenario, args.out, **kw)
+        _barge_options(args)
+        run_barge(args.scenario, args.out, plots=not args.no_plots, **kw)
         return 0
     if args.ranks is not None:
         if args.ranks < 1:
@@ -764,6 +765,23 @@ def _cli(args: argparse.Namespace) -> int:
     run(args.scenario, args.out, n_cases=args.cases, options=opt, error_estimate=not args.no_error_estimate,
         max_memory=None if args.max_memory is None else args.max_memory * 1e9, plots=not args.no_plots, **kw)
     return 0
+
+
+#: the `liftoff run` options a barge scenario takes (workflows/barge.py); the others are the lift-off run's
+BARGE_OPTIONS = ("out", "cache", "no_cache", "no_snapshots", "no_plots", "no_progress", "example")
+
+
+def _barge_options(args: argparse.Namespace) -> None:
+    """InputError naming the first lift-off-only option given with a barge scenario (they were
+    dropped without a word: --compare wrote nothing, --max-memory set no limit, --ranks ran
+    serial, and the run exited 0)."""
+    for action in _PARSER[0]._actions:
+        if not action.option_strings or action.dest == "help" or action.dest in BARGE_OPTIONS:
+            continue
+        value = getattr(args, action.dest, action.default)
+        if value is not None and value != action.default:
+            raise InputError(f"liftoff run: {action.option_strings[0]} is an option of the lift-off run; a barge "
+                             f"scenario takes {', '.join('--' + o.replace('_', '-') for o in BARGE_OPTIONS)}")
 
 
 def _child_args(args: argparse.Namespace) -> list[str]:

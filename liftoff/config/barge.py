@@ -150,8 +150,11 @@ def barge_model(where: Where, spec: Any) -> BargeModel:
 def _fender(where: Where, spec: Any) -> Fender:
     f = table(where, spec, _FENDER, required=("stiffness",))
     k = number(where / "stiffness", f["stiffness"], positive=True)
-    return Fender(k, number(where / "lateral_stiffness", f.get("lateral_stiffness", k), positive=True),
-                  number(where / "friction", f.get("friction", 0.0), nonneg=True),
+    mu = number(where / "friction", f.get("friction", 0.0), nonneg=True)
+    if "lateral_stiffness" in f and mu == 0.0:   # a released contact's laterals are free without friction
+        raise (where / "lateral_stiffness").error("acts only as the stick spring of the fender's friction; with "
+                                                  "friction = 0 the laterals are free: give friction > 0 or drop it")
+    return Fender(k, number(where / "lateral_stiffness", f.get("lateral_stiffness", k), positive=True), mu,
                   number(where / "damping", f.get("damping", 0.0), nonneg=True))
 
 
@@ -165,7 +168,7 @@ def _case(w: Where, d: dict, name: str, base: Path) -> BargeCase:
         raise w.error("missing required table [fender] (stiffness of the rubber fenders, N/m)")
     return BargeCase(
         name, w.source, barge_model(w / "model", d.get("model", {})),
-        velocity=number(w / "impact" / "velocity", imp["velocity"]),
+        velocity=number(w / "impact" / "velocity", imp["velocity"], nonneg=True),   # towards the dock; 0: at rest
         gap=number(w / "impact" / "gap", imp.get("gap", 0.0), nonneg=True),
         fender=_fender(w / "fender", d["fender"]), forces=forces,
         time=time_span(w / "time", d.get("time", {})),

@@ -166,3 +166,39 @@ def test_example_and_file_conflict(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and "not both" in err[0]
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("edit, option, expect", [
+    ("", ["--compare", "x"], "--compare is an option of the lift-off run; a barge scenario takes --out"),
+    ("", ["--max-memory", "1"], "--max-memory is an option of the lift-off run"),
+    ("[fender]\nstiffness = 1.0e8\n", None, "fender.lateral_stiffness: acts only as the stick spring"),
+    ("[impact]\nvelocity = 0.3\n", None, "impact.velocity"),
+])
+def test_what_a_barge_run_would_ignore_is_refused(tmp_path, capsys, edit, option, expect):
+    """Refused in one line before anything runs (a review, 2026-12-07): lift-off-only options
+    given with a barge scenario (they were dropped, exit 0), a fender's lateral stiffness
+    without friction (a released contact's laterals are free: it did nothing), a velocity
+    away from the dock (folded into |v| by the estimates)."""
+    text = SCENARIO
+    if "lateral" in expect:
+        text = text.replace(edit, edit + "lateral_stiffness = 1.0e7\n")
+    elif "velocity" in expect:
+        text = text.replace(edit, "[impact]\nvelocity = -0.3\n")
+    path = tmp_path / "b.toml"
+    path.write_text(text)
+    code = main(["run", str(path), "--out", str(tmp_path / "o"), "--no-progress"] + (option or []))
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and expect in err[0], err
+    assert not (tmp_path / "o").exists()
+
+
+def test_the_contact_duration_is_the_first_contacts():
+    """duration_fe is one contact's: a barge pushed back on (the wave case) touched twice and
+    the first-to-last time, 1.726 s, was reported against a 0.31 s contact."""
+    from liftoff.workflows.barge import _first_contact
+
+    t = np.arange(10.0)
+    F = np.array([0, 1, 2, 1, 0, 0, 3, 2, 0, 0.0])
+    on = _first_contact(t, F)
+    assert on[0] == 1.0 and on[-1] == 3.0
+    assert _first_contact(t, np.zeros(10)).size == 0
