@@ -119,12 +119,12 @@ def _component_key(model: ModelConfig, comp: ComponentModel) -> dict:
     if comp.mirror is not None:
         return {"name": comp.name, "mirror": asdict(comp.mirror),
                 "source": _component_key(model, model.components[comp.mirror.of])}
-    liquid = {}                         # what a hydroelastic liquid's model depends on
-    if getattr(comp.builder, "liquid", "") == "hydroelastic":
+    liquid = {}                         # what a hydroelastic liquid's model depends on (a tank's, or a user file's)
+    if getattr(comp.builder, "liquid", "") == "hydroelastic" or getattr(comp.builder, "liquids", None):
         liquid = {"convective": model.convective,
                   **({"slosh_gravity": model.slosh_gravity} if model.convective == "slosh" else {})}
-    return {"source": model.source, "name": comp.name, "mesh_size": comp.mesh_size, "degree": model.degree,
-            "builder": {type(comp.builder).__name__: asdict(comp.builder)},
+    return {"source": model.source, "name": comp.name, "type": comp.type, "mesh_size": comp.mesh_size,
+            "degree": model.degree, "builder": {type(comp.builder).__name__: asdict(comp.builder)},
             "materials": {vol: asdict(m) for vol, m in component_materials(model, comp.name).items()}, **liquid}
 
 
@@ -173,9 +173,10 @@ def is_fe_component(model: ModelConfig, name: str) -> bool:
 def component_key(model: ModelConfig, name: str) -> str:
     """The cache key of the component stage of ``name``."""
     code = (("liftoff.workflows.stick", "liftoff.meshes", "liftoff.reduction", "liftoff.core") if model.source == "stick"
-            else ("liftoff.meshes", "liftoff.fem", "liftoff.reduction.component", "liftoff.reduction.liquid",
-                  "liftoff.reduction.beam_stick", "liftoff.workflows.fe_source",
-                  "liftoff.core"))
+            else ("liftoff.meshes", "liftoff.fem", "liftoff.reduction", "liftoff.workflows.fe_source", "liftoff.core"))
+    t = component_types_of(model.components[name])
+    if t is not None:       # a type's own builder, a plug-in's outside these packages too
+        code += tuple(sorted({f.split(":")[0] for f in (t.build, t.matrices, t.model) if f}))
     return stage_key("component", _component_key(model, model.components[name]), code)
 
 
@@ -312,7 +313,8 @@ def nastran_stage(model: ModelConfig, name: str, cache: StageCache) -> tuple[CBM
 
     sel = model.components[name]
     src = sel.nastran
-    params = {"files": {f: file_sha256(f) for f in src.files()}, "units": src.units, "grids": src.grid_names,
+    params = {"name": name, "files": {f: file_sha256(f) for f in src.files()}, "units": src.units,
+              "grids": src.grid_names,
               "options": src.options, "recovery": list(src.recovery), "n_modes": sel.n_modes, "f_max": sel.f_max}
     key = stage_key("nastran", params, ("liftoff.reduction", "liftoff.core"))
 

@@ -95,8 +95,20 @@ class NastranSource:
     recovery: tuple = ()
 
     def files(self) -> list[str]:
-        """Every file the import reads that the scenario names (for the cache key)."""
-        return [self.file] + [v for k, v in sorted(self.options.items()) if k in _NASTRAN_FILES]
+        """Every file the import reads (for the cache key): those the scenario names and those
+        the readers take from beside ``file`` by default (an .op4's .asm, and its .pch where
+        there is one; an .op2's .op4), which a key of the named ones alone missed: an edited
+        .asm or a .pch added beside the .op4 reused the old model."""
+        named = [self.file] + [v for k, v in sorted(self.options.items()) if k in _NASTRAN_FILES]
+        main, implied = Path(self.file), []
+        if main.suffix.lower() == ".op4":
+            if "asm" not in self.options:
+                implied.append(main.with_suffix(".asm"))
+            if "pch" not in self.options and main.with_suffix(".pch").is_file():
+                implied.append(main.with_suffix(".pch"))
+        elif main.suffix.lower() == ".op2" and "op4" not in self.options:
+            implied.append(main.with_suffix(".op4"))
+        return named + [str(f) for f in implied if f.is_file()]
 
 
 @dataclass(frozen=True)

@@ -261,3 +261,39 @@ def test_a_lock_file_replaced_while_waited_on_is_locked_anew(tmp_path):
             fcntl.flock(third, fcntl.LOCK_EX | fcntl.LOCK_NB)
     leave.set()
     t.join(timeout=10)
+
+
+def test_stage_keys_cover_what_the_stages_read(tmp_path):
+    """A review of the keys (2026-12-07): a Nastran .op4's .asm and .pch, read from beside it
+    by default, were not hashed (an edited .asm reused the old model); a user geometry's
+    liquids did not put convective / slosh_gravity in the key; the component type was not in
+    it (a plug-in type reusing a built-in's parameters reused its mesh)."""
+    import shutil
+    from dataclasses import dataclass, field
+    from types import SimpleNamespace
+
+    from liftoff.config.model import NastranSource
+    from liftoff.workflows.pipeline import _component_key
+
+    data = Path(__file__).resolve().parents[1] / "data" / "nastran"
+    for ext in (".op4", ".asm"):
+        shutil.copy(data / f"inboard{ext}", tmp_path / f"inboard{ext}")
+    src = NastranSource(str(tmp_path / "inboard.op4"), "in-lbf-s", {}, {})
+    assert [Path(f).name for f in src.files()] == ["inboard.op4", "inboard.asm"]
+    shutil.copy(data / "inboard.pch", tmp_path / "inboard.pch")       # a .pch appearing changes the list
+    assert [Path(f).name for f in src.files()] == ["inboard.op4", "inboard.asm", "inboard.pch"]
+
+    @dataclass
+    class Params:
+        liquids: dict = field(default_factory=dict)
+
+    def key(convective, type_="geometry", liquids=None):
+        comp = SimpleNamespace(mirror=None, name="c", type=type_, mesh_size=1.0,
+                               builder=Params({"fuel": {"density": 800.0}} if liquids is None else liquids))
+        model = SimpleNamespace(components={"c": comp}, materials={}, convective=convective, slosh_gravity=9.8,
+                                source="fe", degree=1)
+        return _component_key(model, comp)
+
+    assert key("wall") != key("free") != key("slosh")
+    assert key("wall", liquids={}) == key("free", liquids={})            # no liquid: nothing to change
+    assert key("wall", "geometry") != key("wall", "my_plugin_type")
