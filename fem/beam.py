@@ -156,11 +156,11 @@ def _group_elements(x: np.ndarray, el: np.ndarray, grp, name: str):
         vref = _radial(0.5 * (x[el[:, 0]] + x[el[:, 1]]), grp, what)
         if grp.vref == "tangential":
             vref = np.cross(np.asarray(grp.axis_direction, float), vref)
-    else:
-        vref = np.broadcast_to(np.asarray(grp.vref, float), (el.shape[0], 3))
+    else:                                     # None: global z, or an axis off the member where it lies along z
+        vref = np.broadcast_to(np.asarray((0.0, 0.0, 1.0) if grp.vref is None else grp.vref, float), (el.shape[0], 3))
     for (a, b), v in zip(el, vref):
         d = (x[b] + e[b]) - (x[a] + e[a])
-        if np.linalg.norm(np.cross(d, v)) < 1e-8 * np.linalg.norm(d) * np.linalg.norm(v):
+        if grp.vref is not None and np.linalg.norm(np.cross(d, v)) < 1e-8 * np.linalg.norm(d) * np.linalg.norm(v):
             raise InputError(f"{what}: its orientation vref ({grp.vref if isinstance(grp.vref, str) else list(v)}) "
                              f"lies along the element from {np.round(x[a] + e[a], 4).tolist()} to "
                              f"{np.round(x[b] + e[b], 4).tolist()} m, so it sets no plane: give a vref off the "

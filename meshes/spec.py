@@ -328,7 +328,8 @@ class BeamGroup:
     """Beams on a physical curve group (fem.beam): ``material`` (E, nu, rho), ``section``
     (liftoff.core.beam.Section: A, Iy, Iz, J, shear areas; m^2, m^4), the orientation
     vector ``vref`` (global 3-vector, Nastran CBEAM's v: local y towards it, z = x cross
-    vref), ``"radial"`` (the direction away from the axis through ``axis_point`` along
+    vref; a given one along a member is refused; None, the default: global z, or for a
+    member along z an axis off it, liftoff.core.beam), ``"radial"`` (the direction away from the axis through ``axis_point`` along
     ``axis_direction``, at each element: local y radial) or ``"tangential"`` (axis_direction
     x radial: local y tangential, so a stringer along the axis has local z radial, its web's
     depth), and the offset of the beam's axis from its nodes
@@ -341,7 +342,7 @@ class BeamGroup:
 
     material: Material
     section: object
-    vref: object = (0.0, 0.0, 1.0)
+    vref: object = None
     offset: tuple = (0.0, 0.0, 0.0)
     radial_offset: float = 0.0
     axis_point: tuple = (0.0, 0.0, 0.0)
@@ -362,7 +363,7 @@ class BeamGroup:
         if isinstance(self.vref, str):
             if self.vref not in ("radial", "tangential"):
                 raise InputError(f"beam group: vref must be a 3-vector, 'radial' or 'tangential' (got {self.vref!r})")
-        else:
+        elif self.vref is not None:
             self.vref = _vector("beam group: vref", self.vref, nonzero=True)
         self.offset = _vector("beam group: offset", self.offset)
         self.axis_point = _vector("beam group: axis_point", self.axis_point)
@@ -381,7 +382,7 @@ class BeamGroup:
         m, s = self.material, self.section
         return {"material": {"name": m.name, "E": m.E, "nu": m.nu, "rho": m.rho},
                 "section": {k: getattr(s, k) for k in ("A", "Iy", "Iz", "J", "Ay", "Az")},
-                "vref": self.vref if isinstance(self.vref, str) else list(self.vref),
+                "vref": self.vref if isinstance(self.vref, str) or self.vref is None else list(self.vref),
                 "offset": list(self.offset), "radial_offset": self.radial_offset,
                 "axis_point": list(self.axis_point), "axis_direction": list(self.axis_direction),
                 "rotary": self.rotary, "nsm": self.nsm, **({"wall": self.wall} if self.wall is not None else {})}

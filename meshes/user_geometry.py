@@ -23,8 +23,8 @@ than ``mesh_size`` (m; a ``.geo`` may set its own sizes when it is None); a ``.m
 taken as it is. The solids of a STEP/BREP assembly are fragmented against each other
 (``occ.removeAllDuplicates``) so that touching parts share their faces and nodes. Group
 volumes and areas are measured on the mesh. Every solid must lie in a volume group with a
-role, and every surface that bounds no solid (nor is embedded in one) in some group (an
-entity outside the groups would be left out of the mesh without a word). Units SI; the file's lengths are metres: a
+role, and every surface that bounds no solid (nor is embedded in one) in a shell group (an
+entity outside them would be left out of the model without a word). Units SI; the file's lengths are metres: a
 STEP file is read in metres whatever unit it declares (OpenCASCADE converts it,
 ``Geometry.OCCTargetUnit``); a BREP file carries no unit and is taken as metres.
 """
@@ -177,8 +177,8 @@ def _check_roles(p: GeometryFileParams, groups: dict[str, tuple[int, int]]) -> N
 
 
 def _check_assigned(gmsh, p: GeometryFileParams, groups: dict[str, tuple[int, int]]) -> None:
-    """Every solid of the file lies in a volume group with a role, and every surface in some
-    physical group, on the boundary of a solid or embedded in one: gmsh writes only the
+    """Every solid of the file lies in a volume group with a role, and every surface in a
+    shell group, on the boundary of a solid or embedded in one: gmsh writes only the
     elements of physical groups, so an entity outside them would be left out of the model
     without a word (its mass and stiffness with it). In a .msh file, the entities that have
     elements, and a surface counts as a solid's when its nodes are nodes of volume elements
@@ -206,7 +206,7 @@ def _check_assigned(gmsh, p: GeometryFileParams, groups: dict[str, tuple[int, in
                              f"left out of the model: add it to a group given a material in {o}.solids (or a liquid)"
                              + (f", or cover it with a box in {o}.groups" if Path(p.file).suffix.lower() in CAD_FILES
                                 else ""))
-    grouped = members(2, [n for n, (d, _) in groups.items() if d == 2])
+    grouped = members(2, [g for g in p.materials if g in p.shells])      # shells; a point's group alone is not one
     if msh:
         solid_nodes = np.unique(np.concatenate([nodes(3, t) for t in volumes] + [np.zeros(0, np.int64)]))
     else:
@@ -221,7 +221,7 @@ def _check_assigned(gmsh, p: GeometryFileParams, groups: dict[str, tuple[int, in
                 continue
         elif tag in solid_faces:
             continue
-        raise InputError(f"{f}: surface {tag} ({where(2, tag)}) is in no group and bounds no solid, so it would be "
+        raise InputError(f"{f}: surface {tag} ({where(2, tag)}) is in no shell group and bounds no solid, so it would be "
                          f"left out of the model: add it to a surface group given a material and a thickness in "
                          f"{o}.shells")
 

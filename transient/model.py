@@ -80,8 +80,9 @@ class ContactPoint:
     * ``latch_force``: a capture latch: once the released point, having been open at a step
       end since its release (or at t0), is closed again with a normal compression >=
       latch_force (N; 0: on first contact), it is bolted from the end of that step on,
-      laterals anchored where they were (docking capture). A point released while still in
-      contact is not captured until it has separated.
+      laterals anchored where they were (docking capture). A point released while at rest in
+      contact (a post under the vehicle's weight) is not captured until it has separated; one
+      closing at t0 (a docking begun in contact) counts as open.
     * ``release_force = (travel, force)``: a soft (controlled) release, e.g. tapered pins
       drawn through dies (m, N; travel strictly increasing from 0, forces >= 0, at least
       two points, F(s) linear between them). Let s = gap + normal_sign n . (x_a - x_b) be

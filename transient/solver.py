@@ -462,9 +462,11 @@ def _start(problem: TransientProblem, rows, contact: Contact, init: InitialState
     e0 = contact.Phi @ q0
     anchor, slip, sdir = initial_slip(rows, f0, e0, active0, bolted0)   # contact_laws.py
     soft = initial_soft(rows, f0, e0, bolted0)
-    # a point released and open at t0 may be captured on closing; one closed at t0 after it opens
-    opened = np.array([not bolted0[c] and not active0[rows.axial_column[c]] for c in range(len(rows.names))],
-                      dtype=np.bool_)
+    # a point released and open at t0, or closing (a docking begun in contact), may be captured;
+    # one at rest in contact (a post released under the vehicle's weight) only after it opens
+    ed0 = contact.Phi @ np.concatenate([v_a, v_b])
+    opened = np.array([not bolted0[c] and (not active0[a] or rows.sign[a] * ed0[a] < 0.0)
+                       for c, a in enumerate(rows.axial_column)], dtype=np.bool_)
     return State(q0, np.concatenate([v_a, v_b]), f0.copy(), active0.copy(),
                  contact.Phi.T @ pen0, np.concatenate([loads[0].at(t0), loads[1].at(t0)]),
                  np.zeros(1, dtype=np.int64), anchor, np.zeros(len(rows.names), dtype=np.bool_), slip, sdir,

@@ -135,7 +135,7 @@ def series_spring(models: BargeModels, case: BargeCase) -> dict:
     k_d = 1.0 / (1.0 / k_f + 1.0 / k_q)
     k_eff = 1.0 / (1.0 / k_b + 1.0 / k_d)
     m = models.barge.mass
-    v0 = abs(case.velocity)
+    v0 = max(case.velocity, 0.0)        # towards the dock; moving away, the estimates are of no impact
     return {"mass": m, "k_barge": k_b, "k_quay": k_q, "k_fenders": k_f, "k_dock": k_d, "k_eff": k_eff,
             "F_series": v0 * np.sqrt(m * k_eff), "F_barge_limit": v0 * np.sqrt(m * k_b),
             "F_dock_limit": v0 * np.sqrt(m * k_d), "duration": np.pi * np.sqrt(m / k_eff)}

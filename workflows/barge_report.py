@@ -183,12 +183,15 @@ def sweep_csv(rows: list[dict], out: Path) -> Path:
 
 # ------------------------------------------------------------------ deformed-shape frames
 def frame_steps(result, n: int) -> np.ndarray:
-    """``n`` step indices spread over the contact (first contact to separation)."""
+    """``n`` step indices spread over the first contact (first contact to its separation; a
+    barge pushed back on touches again later, which the frames leave out)."""
     F = fender_force(result)
     on = np.flatnonzero(F > 0)
     if not on.size or n < 1:
         return np.zeros(0, dtype=int)
-    return np.unique(np.linspace(on[0], on[-1], n).round().astype(int))
+    gaps = np.flatnonzero(np.diff(on) > 1)
+    last = on[gaps[0]] if gaps.size else on[-1]
+    return np.unique(np.linspace(on[0], last, n).round().astype(int))
 
 
 def _fields(models, result, i: int) -> list:

@@ -158,6 +158,16 @@ def _fender(where: Where, spec: Any) -> Fender:
                   number(where / "damping", f.get("damping", 0.0), nonneg=True))
 
 
+def _velocity(where: Where, value, forces) -> float:
+    """The barge's velocity towards the dock (m/s); away from it (< 0) only where forces push
+    it back (without them nothing would ever touch)."""
+    v = number(where, value)
+    if v < 0 and not forces:
+        raise where.error(f"{v:g} m/s is away from the dock and no [[force]] pushes the barge back: it would never "
+                          "touch (give the velocity towards the dock, >= 0)")
+    return v
+
+
 def _case(w: Where, d: dict, name: str, base: Path) -> BargeCase:
     table(w, d, _TOP | {"name"})
     imp = table(w / "impact", d.get("impact", {}), _IMPACT, required=("velocity",))
@@ -168,7 +178,7 @@ def _case(w: Where, d: dict, name: str, base: Path) -> BargeCase:
         raise w.error("missing required table [fender] (stiffness of the rubber fenders, N/m)")
     return BargeCase(
         name, w.source, barge_model(w / "model", d.get("model", {})),
-        velocity=number(w / "impact" / "velocity", imp["velocity"], nonneg=True),   # towards the dock; 0: at rest
+        velocity=_velocity(w / "impact" / "velocity", imp["velocity"], forces),
         gap=number(w / "impact" / "gap", imp.get("gap", 0.0), nonneg=True),
         fender=_fender(w / "fender", d["fender"]), forces=forces,
         time=time_span(w / "time", d.get("time", {})),

@@ -624,3 +624,13 @@ def test_a_vref_along_the_member_is_refused_and_the_default_never_nan():
     grp = BeamGroup(STEEL, tube(0.1, 0.01, STEEL.nu), vref=(0.0, 1.0, 0.0))
     with pytest.raises(InputError, match=r"beam curve 'spoke': its orientation vref \(\[0.0, 1.0, 0.0\]\) lies along"):
         list(_group_elements(x, np.array([[0, 1]]), grp, "spoke"))
+
+
+def test_a_default_vref_builds_a_vertical_member(tmp_path):
+    """A BeamGroup without a vref on a member along z (a leg, a post) builds, on the core's
+    axis off the member (the refusal is for a vref given along it; a review: the default
+    (0, 0, 1) was refused there)."""
+    msh = _polyline(tmp_path / "leg.msh", [(0, 0, 0), (0, 0, 2)], {"legs": [0]}, h=0.5, point_groups={"foot": [0]})
+    model = build_model(Geometry("leg", msh, {}, clamped=["foot"], beams={"legs": BeamGroup(STEEL, tube(0.1, 0.01, 0.3))}))
+    K, M = model.matrices()
+    assert np.all(np.isfinite(K.data)) and np.all(np.isfinite(M.data))

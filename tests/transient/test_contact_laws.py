@@ -362,3 +362,22 @@ def test_a_latch_does_not_capture_a_post_released_in_contact():
     assert latched.contact_force[after][:, axial].min() >= 0.0             # compression only once released
     captured = latched.metadata.get("capture_time") or {}
     assert all(t is None or t > min(free.separation_time) for t in captured.values())
+
+
+def test_a_docking_begun_in_contact_and_closing_is_captured():
+    """A latch's 'has been open' rule must not stop a capture in progress: the head-on pair
+    starting 10 um penetrated and still closing at 1 m/s is captured at once, as before the
+    rule (a review: it rebounded); at rest in contact it is not (the released-post case)."""
+    a, b = mass1d("a", M1), mass1d("b", M2)
+
+    def run(v):
+        c = ContactPoint("c", ["a:Tx"], ["b:Tx"], K, normal_sign=-1.0, gap=0.0, release_time=-math.inf,
+                         latch_force=0.0)
+        init = InitialState([math.sqrt(M1) * 1e-5], [math.sqrt(M1) * v], [0.0], [0.0])
+        p = TransientProblem(a, b, [c], Forcing(), t_end=4 * math.pi / W, h=math.pi / W / 400, initial=init,
+                             outputs={"a": ["a:Tx"], "b": ["b:Tx"]}, progress=False)
+        return solve(p).metadata.get("capture_time")
+
+    closing = run(1.0)["c"]
+    assert closing is not None and closing < 1e-4
+    assert run(0.0)["c"] is None

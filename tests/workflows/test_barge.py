@@ -172,7 +172,7 @@ def test_example_and_file_conflict(tmp_path, capsys):
     ("", ["--compare", "x"], "--compare is an option of the lift-off run; a barge scenario takes --out"),
     ("", ["--max-memory", "1"], "--max-memory is an option of the lift-off run"),
     ("[fender]\nstiffness = 1.0e8\n", None, "fender.lateral_stiffness: acts only as the stick spring"),
-    ("[impact]\nvelocity = 0.3\n", None, "impact.velocity"),
+    ("[impact]\nvelocity = 0.3\n", None, "impact.velocity: -0.3 m/s is away from the dock and no [[force]]"),
 ])
 def test_what_a_barge_run_would_ignore_is_refused(tmp_path, capsys, edit, option, expect):
     """Refused in one line before anything runs (a review, 2026-12-07): lift-off-only options
