@@ -252,3 +252,19 @@ def test_a_batch_checks_each_cases_release_schedule(monkeypatch):
         warnings.simplefilter("ignore")
         with pytest.raises(InputError, match=r"batch problem 1: time step .* \(every contact released, in contact\)"):
             solve_batch([case(math.inf), case(100 * h)])
+
+
+def test_the_radius_is_computed_once_for_cases_that_share_it(monkeypatch):
+    """A campaign's cases share bodies, rows and step: the map's eigenvalues (about 5 s on the
+    default) are computed once, and again for anything that differs (here the step)."""
+    p = _rod(6e-4)
+    rows = contact_rows(p.body_a, p.body_b, p.contacts)
+    om, ze, st = _modes(p)
+    calls = []
+    real = np.linalg.eigvals
+    monkeypatch.setattr(np.linalg, "eigvals", lambda M: calls.append(1) or real(M))
+    monkeypatch.setattr(sm, "_RADII", {})
+    r1 = sm.spectral_radius(rows, om, ze, 6e-4, st)
+    assert sm.spectral_radius(rows, om, ze, 6e-4, st) == r1 and len(calls) == 1
+    sm.spectral_radius(rows, om, ze, 5e-4, st)
+    assert len(calls) == 2
