@@ -17,7 +17,7 @@ import scipy.linalg as sla
 from liftoff.transient.body import ModalBody
 
 from liftoff.core.errors import InputError
-from liftoff.core.rigid import rb_rows
+from liftoff.core.rigid import rb_rows, shift_rb
 
 from .assembly import Assembly, label_transform
 
@@ -89,9 +89,7 @@ def rigid_inertia(assembly: Assembly, ref_point=(0.0, 0.0, 0.0)) -> tuple[np.nda
     if assembly.inertia is None:
         rb = system_rb(assembly, ref_point)
         return assembly.M @ rb, rb.T @ assembly.M @ rb
-    X = np.eye(6)
-    a = np.asarray(ref_point, dtype=float)
-    X[:3, 3:] = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])   # a x theta
+    X = shift_rb(ref_point)                 # t_0 = t + ref x theta
     return assembly.inertia @ X, X.T @ assembly.rigid_mass @ X
 
 
