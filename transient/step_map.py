@@ -34,6 +34,8 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from liftoff.core.records import content_sha256
+
 from .coefficients import step_coefficients
 
 #: the largest map (states) whose eigenvalues are computed (about 40 s on 2 cores)
@@ -153,23 +155,11 @@ _RADII: dict = {}
 _RADII_KEPT = 32
 
 
-def _digest(rows, omega, zeta, h: float, static) -> str:
-    import hashlib
-
-    d = hashlib.sha256(repr(float(h)).encode())
-    tau = np.zeros(rows.n) if rows.tau is None else rows.tau
-    for a in (rows.Phi_a, rows.Phi_b, rows.compliance, tau, omega, zeta,
-              np.zeros(0) if static is None else np.asarray(static, dtype=float)):
-        a = np.ascontiguousarray(a, dtype=float)
-        d.update(repr(a.shape).encode())
-        d.update(a.tobytes())
-    return d.hexdigest()
-
-
 def spectral_radius(rows, omega: np.ndarray, zeta: np.ndarray, h: float, static=None) -> float:
     """max |lambda| of :func:`step_map` (1 for a map with no state: nothing is coupled); kept
     by the digest of its inputs, so that cases sharing bodies, rows and step compute it once."""
-    key = _digest(rows, omega, zeta, h, static)
+    key = content_sha256((repr(float(h)), rows.Phi_a, rows.Phi_b, rows.compliance,
+                          np.zeros(rows.n) if rows.tau is None else rows.tau, omega, zeta, static))
     if key in _RADII:
         return _RADII[key]
     M = step_map(rows, omega, zeta, h, static)

@@ -23,7 +23,8 @@ from typing import Any, Callable
 import numpy as np
 
 from liftoff.core.errors import ResourceError
-from liftoff.core.records import TEMP_TAG, file_sha256, read_record, sweep_stale, write_record, write_text
+from liftoff.core.records import (TEMP_TAG, content_sha256, file_sha256, read_record, sweep_stale,  # noqa: F401
+                                  write_record, write_text)
 
 from .parallel import SERIAL, on_root
 
@@ -76,22 +77,6 @@ def stage_key(stage: str, params: dict, code: tuple[str, ...] = (), inputs: tupl
                           "code": code_version(*code) if code else "",
                           "libraries": library_versions() if code else {}}, sort_keys=True)
     return hashlib.sha256(payload.encode()).hexdigest()[:24]
-
-
-def content_sha256(parts) -> str:
-    """SHA-256 of a sequence of arrays (each by its shape and float64 bytes), strings and
-    None: what a key holds of inputs too large for its parameters (an output's matrices)."""
-    h = hashlib.sha256()
-    for x in parts:
-        if x is None:
-            h.update(b"none")
-        elif isinstance(x, str):
-            h.update(x.encode())
-        else:
-            a = np.ascontiguousarray(x, dtype=float)
-            h.update(repr(a.shape).encode())
-            h.update(a.tobytes())
-    return h.hexdigest()
 
 
 ENTRY_FORMAT = "liftoff-cache-entry"

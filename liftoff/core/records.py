@@ -231,6 +231,24 @@ def geometry_sha256(path) -> str:
     return hashlib.sha256("\n".join(parts).encode()).hexdigest()
 
 
+def content_sha256(parts) -> str:
+    """SHA-256 of a sequence of arrays (each by its shape and float64 bytes), strings and
+    None: what a key holds of inputs too large for its parameters (an output's matrices)."""
+    import hashlib
+
+    h = hashlib.sha256()
+    for x in parts:
+        if x is None:
+            h.update(b"none")
+        elif isinstance(x, str):
+            h.update(x.encode())
+        else:
+            a = np.ascontiguousarray(x, dtype=float)
+            h.update(repr(a.shape).encode())
+            h.update(a.tobytes())
+    return h.hexdigest()
+
+
 def files_sha256(paths) -> list[str]:
     """:func:`file_sha256` of each path, in order, on a few threads (hashlib releases the GIL
     on large blocks: a default run's 2.1 GB of outputs in 0.85 s instead of 2.2 s on two
