@@ -45,10 +45,11 @@ from .model import Part
 @dataclass
 class BeamPart(Part):
     """The beam part: ``elements`` (m, 2) its 2-node elements as part nodes (every rank),
-    ``xyz`` (n, 3) its nodes (m, every rank)."""
+    ``xyz`` (n, 3) its nodes (m, every rank), ``element_group`` each element's group."""
 
     elements: np.ndarray = None
     xyz: np.ndarray = None
+    element_group: np.ndarray = None     # (m,) each element's group index into ``fields``
 
     def global_dofs(self, local: np.ndarray) -> np.ndarray:
         """Rank 0 owns every beam DOF: local = global there (other ranks have none)."""
@@ -121,7 +122,7 @@ def thermal_forces(part: "BeamPart", strain_by_group: dict) -> np.ndarray:
     along the axis. A member's own bending from a through-depth gradient is not modelled
     (uniform temperature)."""
     lines = part.tagged
-    x, el, grp_of = part.xyz, part.elements, _element_groups(part)
+    x, el, grp_of = part.xyz, part.elements, part.element_group
     f = np.zeros(6 * x.shape[0])
     for g, eps in strain_by_group.items():
         mine = el[grp_of == g]
@@ -134,13 +135,6 @@ def thermal_forces(part: "BeamPart", strain_by_group: dict) -> np.ndarray:
             f[6 * a:6 * a + 6] += fe[:6]
             f[6 * b:6 * b + 6] += fe[6:]
     return f
-
-
-def _element_groups(part: "BeamPart") -> np.ndarray:
-    """(m,) the group index of each element of the part (lines split at their midpoints
-    keep their line's group: split_at_midpoints appends a-m then m-b for every line)."""
-    g = np.asarray(part.tagged.group)
-    return g if part.elements.shape[0] == g.size else np.concatenate([g, g])
 
 
 def _group_elements(x: np.ndarray, el: np.ndarray, grp, name: str):
@@ -201,4 +195,4 @@ def beam_part(geometry, comm: MPI.Comm, midpoints: bool) -> BeamPart:
     comp = np.tile(np.arange(6), n) if own else np.zeros(0, np.int64)
     return BeamPart("beam", lines, None, groups, coords, comp, n_own,
                     pb.csr_matrix(comm, n_own, n_own, 6 * n, K), pb.csr_matrix(comm, n_own, n_own, 6 * n, M),
-                    elements=el, xyz=x)
+                    elements=el, xyz=x, element_group=grp)
