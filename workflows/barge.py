@@ -220,23 +220,12 @@ def impedance(models: BargeModels, case: BargeCase) -> float:
     return float(np.sqrt(hull_axial_stiffness(p) * models.barge.mass / p.length))
 
 
-def _first_contact(time: np.ndarray, F: np.ndarray) -> np.ndarray:
-    """The times of the first contact's steps: from the first F > 0 to the last before F is 0
-    again (a barge pushed back on, or rebounding, touches again later: the duration of eq.
-    series_spring is one contact's, not first to last)."""
-    idx = np.flatnonzero(F > 0)
-    if idx.size == 0:
-        return time[:0]
-    gaps = np.flatnonzero(np.diff(idx) > 1)
-    return time[idx[0]: (idx[gaps[0]] if gaps.size else idx[-1]) + 1]
-
-
 def sweep_row(case: BargeCase, result, bp: BargeProblem) -> dict:
     """One row of the impact sweep: the dock's stiffness, FE peak force and duration, the estimate."""
-    from .barge_report import fender_force
+    from .barge_report import fender_force, first_contact_steps
 
     F = fender_force(result)
-    on = _first_contact(result.time, F)
+    on = result.time[first_contact_steps(F)]
     est = bp.estimate
     cargo = max(float(np.linalg.norm(result.recovered[r][:, :3], axis=1).max()) for r in bp.interface)
     lab = result.output_labels["a"]

@@ -182,16 +182,22 @@ def sweep_csv(rows: list[dict], out: Path) -> Path:
 
 
 # ------------------------------------------------------------------ deformed-shape frames
+def first_contact_steps(F: np.ndarray) -> np.ndarray:
+    """The steps of the first contact of fender force history ``F``: from the first F > 0 to
+    the last before F is 0 again (a barge pushed back on, or rebounding, touches again later:
+    the series-spring duration and the frames are one contact's, not first to last)."""
+    idx = np.flatnonzero(F > 0)
+    gaps = np.flatnonzero(np.diff(idx) > 1)
+    return idx[: gaps[0] + 1] if gaps.size else idx
+
+
 def frame_steps(result, n: int) -> np.ndarray:
     """``n`` step indices spread over the first contact (first contact to its separation; a
     barge pushed back on touches again later, which the frames leave out)."""
-    F = fender_force(result)
-    on = np.flatnonzero(F > 0)
+    on = first_contact_steps(fender_force(result))
     if not on.size or n < 1:
         return np.zeros(0, dtype=int)
-    gaps = np.flatnonzero(np.diff(on) > 1)
-    last = on[gaps[0]] if gaps.size else on[-1]
-    return np.unique(np.linspace(on[0], last, n).round().astype(int))
+    return np.unique(np.linspace(on[0], on[-1], n).round().astype(int))
 
 
 def _fields(models, result, i: int) -> list:

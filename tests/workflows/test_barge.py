@@ -195,10 +195,10 @@ def test_what_a_barge_run_would_ignore_is_refused(tmp_path, capsys, edit, option
 def test_the_contact_duration_is_the_first_contacts():
     """duration_fe is one contact's: a barge pushed back on (the wave case) touched twice and
     the first-to-last time, 1.726 s, was reported against a 0.31 s contact."""
-    from liftoff.workflows.barge import _first_contact
+    from liftoff.workflows.barge_report import first_contact_steps
 
     t = np.arange(10.0)
     F = np.array([0, 1, 2, 1, 0, 0, 3, 2, 0, 0.0])
-    on = _first_contact(t, F)
+    on = t[first_contact_steps(F)]
     assert on[0] == 1.0 and on[-1] == 3.0
-    assert _first_contact(t, np.zeros(10)).size == 0
+    assert t[first_contact_steps(np.zeros(10))].size == 0
