@@ -771,30 +771,31 @@ def _cli(args: argparse.Namespace) -> int:
 BARGE_OPTIONS = ("out", "cache", "no_cache", "no_snapshots", "no_plots", "no_progress", "example")
 
 
+def _given_options(args: argparse.Namespace, skip: tuple = ()):
+    """(action, value) of each option of ``args`` that is not its default, from the parser's
+    own table (a new option is seen without a line here), less help and ``skip`` (dests)."""
+    for action in _PARSER[0]._actions:
+        if not action.option_strings or action.dest == "help" or action.dest in skip:
+            continue
+        value = getattr(args, action.dest, action.default)
+        if value is not None and value != action.default:
+            yield action, value
+
+
 def _barge_options(args: argparse.Namespace) -> None:
     """InputError naming the first lift-off-only option given with a barge scenario (they were
     dropped without a word: --compare wrote nothing, --max-memory set no limit, --ranks ran
     serial, and the run exited 0)."""
-    for action in _PARSER[0]._actions:
-        if not action.option_strings or action.dest == "help" or action.dest in BARGE_OPTIONS:
-            continue
-        value = getattr(args, action.dest, action.default)
-        if value is not None and value != action.default:
-            raise InputError(f"liftoff run: {action.option_strings[0]} is an option of the lift-off run; a barge "
-                             f"scenario takes {', '.join('--' + o.replace('_', '-') for o in BARGE_OPTIONS)}")
+    for action, _ in _given_options(args, BARGE_OPTIONS):
+        raise InputError(f"liftoff run: {action.option_strings[0]} is an option of the lift-off run; a barge "
+                         f"scenario takes {', '.join('--' + o.replace('_', '-') for o in BARGE_OPTIONS)}")
 
 
 def _child_args(args: argparse.Namespace) -> list[str]:
     """The command line of the ranks `--ranks N` launches: every option of ``args`` that is
-    not its default, from the parser's own table (a new option goes through without a line
-    here), less --ranks itself."""
+    not its default (:func:`_given_options`), less --ranks itself."""
     argv = ["run"] + ([str(args.scenario)] if args.scenario is not None else [])
-    for action in _PARSER[0]._actions:
-        if not action.option_strings or action.dest in ("help", "ranks"):
-            continue
-        value = getattr(args, action.dest, action.default)
-        if value is None or value == action.default:
-            continue
+    for action, value in _given_options(args, ("ranks",)):
         flag = action.option_strings[0]
         argv += [flag] if isinstance(action, argparse._StoreTrueAction) else [flag, str(value)]
     return argv
