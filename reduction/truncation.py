@@ -235,7 +235,6 @@ def truncation_check(full: SystemModes, kept: SystemModes, labels, contact_label
     asm = full.assembly
     labels = list(dict.fromkeys(labels))
     flex = flex or StaticFlexibility(full)
-    full_residual = kept.n_residual
     L = label_transform(asm, labels)
     g = np.einsum("ij,ji->i", L, flex.solve(L.T)) if labels else np.zeros(0)
     # the eigenmodes only: residual vectors built from unit loads at the boundary DOFs make the
@@ -252,18 +251,16 @@ def truncation_check(full: SystemModes, kept: SystemModes, labels, contact_label
         return np.where(ok, (g - gk) / np.where(ok, g, 1.0), 0.0)
 
     static = float(np.abs(shortfall(kept)).max(initial=0.0)) if labels else 0.0    # residual vectors included
-    if kept.n_residual:
-        kept = SystemModes(asm, kept.omega[:n_eig], kept.phi[:, :n_eig], kept.n_rigid, n_residual=0,
-                           n_space=kept.n_space)
-    short = shortfall(kept) if labels else np.zeros(0)
+    eig = (SystemModes(asm, kept.omega[:n_eig], kept.phi[:, :n_eig], kept.n_rigid, n_residual=0, n_space=kept.n_space)
+           if kept.n_residual else kept)
+    short = shortfall(eig) if labels else np.zeros(0)
     j = int(np.argmax(np.abs(short))) if short.size else 0
     whole = effective_mass(full, contact_labels)
-    part = whole if kept is full else effective_mass(kept, contact_labels)     # every mode kept: the same
+    part = whole if eig is full else effective_mass(eig, contact_labels)       # every mode kept: the same
     held = whole > 1e-9 * max(float(whole.max(initial=0.0)), 1e-300)
     mass = tuple(float(p / w) if h else np.nan for p, w, h in zip(part, whole, held))
     cut = n_eig < full.n_modes
-    return TruncationCheck(body=body or asm.name, n_kept=n_eig, n_residual=full_residual,
-                           n_space=full.n_modes,
-                           f_cut=float(kept.freq_hz[:n_eig].max()) if cut else None,
+    return TruncationCheck(body=body or asm.name, n_kept=n_eig, n_residual=kept.n_residual,
+                           n_space=full.n_modes, f_cut=float(eig.freq_hz.max()) if cut else None,
                            n_checked=len(labels), flex_error=float(abs(short[j])) if short.size else 0.0,
                            flex_label=labels[j] if labels else "-", mass_kept=mass, static_error=static)
