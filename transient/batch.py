@@ -771,9 +771,10 @@ def _check_schedules(problems: list[TransientProblem], rows_k: list, step) -> No
     active sets of each case's release schedule (stepping.check_step_map), not problem 0's
     alone: release times may differ between the cases, and with them the sets a run passes
     through and its steps in each. Once per distinct schedule; InputError naming the case."""
-    if step.h_requested is None or not step.h > step.h_default * (1 + 1e-9) or not rows_k[0].n:
+    from .stepping import _modes, above_eq12, check_step_map
+
+    if step.h_requested is None or not above_eq12(step.h, step.h_default, rows_k[0]):
         return
-    from .stepping import _modes, check_step_map
 
     seen = {tuple(float(c.release_time) for c in problems[0].contacts)}
     for k, (p, rows) in enumerate(zip(problems, rows_k)):

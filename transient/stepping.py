@@ -236,7 +236,7 @@ class StepChoice:
             omega, zeta, static = _modes(problem)
             rows = contact_rows(problem.body_a, problem.body_b, problem.contacts)
             half = replace(half, margin=coupling_margin(rows, omega, zeta, half.h, static))
-            if half.h > half.h_default * (1 + 1e-9) and rows.n:    # a given step's halving: as choose_step
+            if above_eq12(half.h, half.h_default, rows):    # a given step's halving: as choose_step
                 check_step_map(problem, rows, omega, zeta, half.h, static, half.f_h, half.h_default)
         return half if governed_by is None else replace(half, governed_by=governed_by)
 
@@ -336,7 +336,7 @@ def choose_step(problem: TransientProblem, rows=None) -> StepChoice:
                          f"about {h_ok:.4g} s for these bodies and contact stiffnesses ({STABILITY:.3f}/f_h = "
                          f"{STABILITY / f_h:.4g} s for rigid bodies, f_h = {f_h:.4g} Hz): the run would diverge; "
                          f"give h below {h_ok:.4g} s or h = \"auto\"")
-    if h > h_default * (1 + 1e-9) and rows.n:     # without contacts every h is exact
+    if above_eq12(h, h_default, rows):
         # the penalty test above proves no more than that no mode alternates in sign step to step:
         # with damping a complex pair can leave the unit circle at a step it passes, and rigid rows
         # have no such test; the step map's spectral radius covers both (transient/step_map.py)
@@ -349,6 +349,12 @@ def choose_step(problem: TransientProblem, rows=None) -> StepChoice:
         warnings.warn(f"time step h = {h_req:.6g} s does not divide the run ({span:.6g} s): using {n} equal steps "
                       f"of {h:.6g} s so that the last one ends at t_end = {t_end:.6g} s", stacklevel=4)
     return StepChoice(h, f_h, h_default, n, t0, t_end, f_s, h_req, margin, problem.mode_samples)
+
+
+def above_eq12(h: float, h_default: float, rows) -> bool:
+    """Whether a step is above 0.25/f_h (eq. 12, to 1e-9) with contact rows (without them
+    every h is exact): warned of, and checked by the step map (:func:`check_step_map`)."""
+    return h > h_default * (1 + 1e-9) and rows.n > 0
 
 
 def check_step_map(problem: TransientProblem, rows, omega, zeta, h: float, static, f_h: float,
