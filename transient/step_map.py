@@ -45,6 +45,11 @@ DENSE_LIMIT = 6000
 GROWTH_TOLERANCE = 1.1
 
 
+def _tau(rows) -> np.ndarray:
+    """The rows' dashpot time constants c/K_C (s; 0 where none: ContactRows.tau may be None)."""
+    return np.zeros(rows.n) if rows.tau is None else np.asarray(rows.tau, dtype=float)
+
+
 def coupled_modes(rows, static=None) -> np.ndarray:
     """Boolean mask over both bodies' modes (a's first) of those in the step map: modes with
     a non-zero entry in a contact row, less the residual-flexibility ones (``static``)."""
@@ -70,7 +75,7 @@ def step_map(rows, omega: np.ndarray, zeta: np.ndarray, h: float, static=None) -
     Phi = np.hstack([rows.Phi_a, -rows.Phi_b])
     pen = rows.compliance > 0
     rig = ~pen
-    tau = np.zeros(rows.n) if rows.tau is None else np.asarray(rows.tau, dtype=float)
+    tau = _tau(rows)
     PP, PR = Phi[pen], Phi[rig]
     nP, nR, n = int(pen.sum()), int(rig.sum()), omega.size
     # the loads of the unknowns y = (f1_P, f1_R, g) on the modes: end values (Bc, Bcd), start (Ac, Acd)
@@ -144,7 +149,7 @@ def coupled_sets(rows, contacts, t0: float, t_end: float, h: float) -> list:
 
 def rows_subset(rows, mask: np.ndarray) -> SimpleNamespace:
     """The rows ``mask`` of ``rows`` (what :func:`step_map` reads of them)."""
-    tau = np.zeros(rows.n) if rows.tau is None else np.asarray(rows.tau, dtype=float)
+    tau = _tau(rows)
     return SimpleNamespace(Phi_a=rows.Phi_a[mask], Phi_b=rows.Phi_b[mask], compliance=rows.compliance[mask],
                            tau=tau[mask], n=int(np.sum(mask)))
 
@@ -159,7 +164,7 @@ def spectral_radius(rows, omega: np.ndarray, zeta: np.ndarray, h: float, static=
     """max |lambda| of :func:`step_map` (1 for a map with no state: nothing is coupled); kept
     by the digest of its inputs, so that cases sharing bodies, rows and step compute it once."""
     key = content_sha256((repr(float(h)), rows.Phi_a, rows.Phi_b, rows.compliance,
-                          np.zeros(rows.n) if rows.tau is None else rows.tau, omega, zeta, static))
+                          _tau(rows), omega, zeta, static))
     if key in _RADII:
         return _RADII[key]
     M = step_map(rows, omega, zeta, h, static)
