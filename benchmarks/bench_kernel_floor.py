@@ -4,7 +4,7 @@ hand-written numba loop doing only the per-step arithmetic of the same problem.
     .venv/bin/python benchmarks/bench_kernel_floor.py [--modes 300 3300] [--repeat 3]
 
 Problem: benchmarks/bench_transient.py's (8 hold-down points x 3 directions = 24 contact
-rows, h = 1e-4 s) with n vehicle + 100 pad modes, bolted throughout (one active set, as
+rows, h = 1e-4 s, or eq. 12's step where shorter) with n vehicle + 100 pad modes, bolted throughout (one active set, as
 most of a lift-off's steps).
 
 The floor, per step, for n modes, nc contact rows and k recovered output rows (k counted
