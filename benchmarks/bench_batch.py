@@ -3,6 +3,7 @@ by one (liftoff.transient.solve): issue 28's batched-marching target.
 
     .venv/bin/python benchmarks/bench_batch.py [--modes 3000 300] [--cases 64] [--repeat 3]
                                                [--default-cases 8] [--json docs/figures/bench_batch.json]
+                                               [--append]
 
 The problem is benchmarks/bench_transient.py's (8 hold-down points x 3 directions = 24
 penalty contact rows, gravity, a thrust ramp; bolted throughout, as the issue's
@@ -23,6 +24,12 @@ against one by one, relative to each history's peak; beside it the one-by-one so
 spread when the same case is summed in another order (its vehicle's elastic modes in
 reverse order: tests/transient/test_batch.py's reference). A bolted stack's contact
 forces are K_C times small differences of large modal displacements, so neither is zero.
+
+The speed-up depends on the CPU (2026-12-07: 3.27x on the machine of the first measurement,
+1.0x on an AMD EPYC with AVX2, znver3, where the one-by-one step was 2.1x and the batched
+case-step 6.8x slower than there). The group's pass over the modes is vectorised across its
+8 cases (one 512-bit register, or two 256-bit ones); the JSON records the CPU numba compiled
+for (LLVM's name) and its vector width; ``--append`` adds a further machine's measurement beside the first.
 """
 from __future__ import annotations
 
@@ -41,7 +48,7 @@ import liftoff  # noqa: F401 - before numpy: it picks the OpenBLAS kernels (lift
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_transient import problem  # noqa: E402
+from bench_transient import host_cpu, problem  # noqa: E402
 
 from liftoff.transient import TabulatedForce, solve, solve_batch  # noqa: E402
 from liftoff.transient.batch import GROUP  # noqa: E402
@@ -109,6 +116,9 @@ def main(argv=None) -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--check", type=int, default=4, help="cases solved one by one (their time scaled to --cases)")
     ap.add_argument("--json", type=Path, default=None, help="also write the figures here")
+    ap.add_argument("--append", action="store_true",
+                    help="keep the --json file's measurement and add this one as another machine's (under 'others', "
+                         "replacing one of the same CPU): the speed-up depends on the CPU's vector width")
     ap.add_argument("--default-cases", type=int, default=8, metavar="N",
                     help="also the default scenario's first N generated cases, whole solves (0: not)")
     ap.add_argument("--cache", type=Path, default=Path(__file__).resolve().parent.parent / "out" / ".liftoff-cache",
@@ -154,13 +164,19 @@ def main(argv=None) -> None:
     if args.json is not None:
         from liftoff.core.records import write_text
 
-        write_text(args.json, json.dumps({
+        this = {
             "date": datetime.date.today().isoformat(), "cpus": os.cpu_count(), "machine": platform.machine(),
+            **host_cpu(),
             "load_average_end": os.getloadavg()[0], "repeat": args.repeat, "vehicle_modes": nv, "pad_modes": npd,
             "contact_rows": 24, "cases": K, "group": GROUP, "batched_us": per_b, "one_by_one_us": per_1,
             "batched_all_us": tb, "one_by_one_all_us": to, "contact_force_diff": dF, "output_diff": dY,
             "reordered_contact_force_diff": sF, "reordered_output_diff": sY,
-            **({"default": dflt} if dflt else {})}, indent=1) + "\n")
+            **({"default": dflt} if dflt else {})}
+        if args.append:
+            kept = json.loads(args.json.read_text())
+            kept["others"] = [o for o in kept.get("others", []) if o.get("cpu") != this["cpu"]] + [this]
+            this = kept
+        write_text(args.json, json.dumps(this, indent=1) + "\n")
 
 
 if __name__ == "__main__":

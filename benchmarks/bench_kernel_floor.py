@@ -40,7 +40,7 @@ import numpy as np
 from numba import njit
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_transient import N_PAD, problem  # noqa: E402
+from bench_transient import N_PAD, host_cpu, problem  # noqa: E402
 
 from liftoff.transient import solve  # noqa: E402
 
@@ -154,6 +154,9 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--json", type=Path, help="write the figures (docs/figures/bench_kernel_floor.json), which "
                     "benchmarks/default_figures.py renders into the README")
+    ap.add_argument("--append", action="store_true",
+                    help="keep the --json file's measurement and add this one as another machine's (under 'others', "
+                         "replacing one of the same CPU): the ratio depends on the CPU")
     args = ap.parse_args()
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"bench_kernel_floor: {platform.machine()}, {os.cpu_count()} cores, load average {load:.1f}, "
@@ -174,9 +177,14 @@ def main() -> None:
         from liftoff.core.openblas import describe
 
         blas = describe()
-        write_text(args.json, json.dumps({"date": datetime.date.today().isoformat(), "cpus": os.cpu_count(),
-                                          "load_average_end": os.getloadavg()[0] if hasattr(os, "getloadavg") else None, "repeat": args.repeat,
-                                          "blas_kernels": blas["kernels"], "rows": rows}, indent=1) + "\n")
+        this = {"date": datetime.date.today().isoformat(), "cpus": os.cpu_count(), **host_cpu(),
+                "load_average_end": os.getloadavg()[0] if hasattr(os, "getloadavg") else None, "repeat": args.repeat,
+                "blas_kernels": blas["kernels"], "rows": rows}
+        if args.append:
+            kept = json.loads(args.json.read_text())
+            kept["others"] = [o for o in kept.get("others", []) if o.get("cpu") != this["cpu"]] + [this]
+            this = kept
+        write_text(args.json, json.dumps(this, indent=1) + "\n")
         print(f"  wrote {args.json}")
 
 

@@ -92,6 +92,18 @@ def pad(rng: np.random.Generator, n_modes: int = N_PAD) -> ModalBody:
                      points=tuple(points), point_coords=coords)
 
 
+def host_cpu() -> dict:
+    """The CPU the kernels were compiled for (numba's target, LLVM's name for it) and the width
+    of its widest double-precision vectors: a group of 8 cases fills one 512-bit register, two
+    256-bit ones, which the speed of the batch and of the kernel depend on (bench_batch.py, bench_kernel_floor.py)."""
+    import llvmlite.binding as ll
+
+    ll.initialize(); ll.initialize_native_target()
+    features = ll.get_host_cpu_features()
+    bits = 512 if features.get("avx512f") else 256 if features.get("avx") else 128
+    return {"cpu": ll.get_host_cpu_name(), "vector_bits": bits}
+
+
 def problem(n_steps: int, progress: bool = False, n_veh: int = N_VEH, n_pad: int = N_PAD,
             release: float | None = 0.5) -> TransientProblem:
     """The benchmark's problem; ``n_veh``, ``n_pad`` modes; the bolts released at ``release``

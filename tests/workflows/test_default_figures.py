@@ -316,6 +316,30 @@ def test_kernel_floor_block_shows_the_benchmark_file(figures):
     assert "| 3,000 + 100 | 24 | 15 | 90.0 | 80.0 | 1.12 |" in text and "Haswell" in text and ": met" in text
     b["rows"] = [dict(row, liftoff_us=100.0)]
     assert "**not met** (largest ratio 1.25)" in figures.render_kernel_floor(b)
+    other = dict(b, date="2026-01-02", cpu="znver3", vector_bits=256, rows=[row])    # another machine: its own verdict
+    text = figures.render_kernel_floor(dict(b, others=[other]))
+    assert "On another 2-core machine (2026-01-02, CPU znver3 (256-bit vectors)" in text
+    assert "**not met** (largest ratio 1.25 on the first machine); met (largest ratio 1.12 on znver3)." in text
+
+
+def test_batch_block_judges_each_machine(figures):
+    """The batch benchmark (benchmarks/bench_batch.py --json, further machines by --append) is
+    rendered, each machine's speed-up judged against issue 28's 3x on its own: the speed-up
+    depends on the CPU (3.27x on one machine, 1.0x on an AVX2 one, 2026-12-07)."""
+    run = {"date": "2026-01-01", "cpus": 2, "load_average_end": 0.5, "repeat": 3, "vehicle_modes": 3000,
+           "pad_modes": 300, "contact_rows": 24, "cases": 64, "group": 8, "batched_us": 10.0, "one_by_one_us": 33.0,
+           "contact_force_diff": 1e-7, "reordered_contact_force_diff": 2e-7}
+    text = figures.render_batch_bench(run)
+    assert "| 3,000 + 300 | 24 | 64 (8) | 10.0 | 33.0 | 3.30 |" in text and ": met (3.30x at the issue's size)." in text
+    assert "CPU" not in text                    # one machine, its CPU not recorded: nothing said
+    other = dict(run, date="2026-01-02", cpu="znver3", vector_bits=256, batched_us=68.0, one_by_one_us=69.0,
+                 default={"cases": 8, "group": 8, "vehicle_modes": 1384, "pad_modes": 78, "contact_rows": 24,
+                          "steps": 30000, "batched_s": 1.8, "one_by_one_s": 1.2, "contact_force_diff": 1e-11})
+    text = figures.render_batch_bench(dict(run, others=[other]))
+    assert "On another 2-core machine (2026-01-02, CPU znver3 (256-bit vectors)" in text
+    assert "met (3.30x at the issue's size on the first machine); **not met** (1.01x at the issue's size on znver3)" \
+        in text
+    assert "| 60.0 | 40.0 | 0.67 |" in text and "takes 1.20 s of transient alone there" in text   # the faster: one by one
 
 
 def test_static_modes_study_is_of_the_current_default(figures):
