@@ -24,6 +24,7 @@ import numpy as np
 from liftoff.core.errors import InputError
 from liftoff.core.records import Dataset, write_record, write_text
 
+from . import interface_loads
 from .stats import P99_90, Largest, Running, k_factor, order_rank
 
 
@@ -37,6 +38,10 @@ class Aggregate:
         self.r = order_rank(p, c, n_stat)
         self.items: tuple | None = None
         self.case_names: list[str] = []                 # generated cases fed, in order (index -> name)
+        #: time-consistent interface loads (analysis.interface_loads): the envelope over every case
+        #: fed that carries them (each summary's rows), and the names of the cases that did not
+        self.consistent: list[dict] = []
+        self.consistent_missing: list[str] = []
 
     def _init(self, s) -> None:
         self.items, self.units, self.categories = s.items, s.units, s.categories
@@ -75,6 +80,11 @@ class Aggregate:
         if s.items != self.items or s.srs_items != self.srs_items or s.support_items != self.support_items \
                 or np.shape(s.support) != np.shape(self.support_env):        # np.shape(None): ()
             raise InputError(f"case {s.name}: its recovery items differ from those of the first case")
+        if getattr(s, "consistent", None) is not None:
+            self.consistent = interface_loads.envelope([self.consistent, interface_loads.from_arrays(s.consistent,
+                                                                                                      s.name)])
+        else:
+            self.consistent_missing.append(s.name)
         up = s.mx > self.mx
         self.mx[up], self.t_mx[up] = s.mx[up], s.t_mx[up]
         self.e_mx[up] = s.err_mx[up] if s.err_mx is not None else np.nan

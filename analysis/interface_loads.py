@@ -78,6 +78,37 @@ def envelope(per_case: Iterable[list[dict]]) -> list[dict]:
     return list(best.values())
 
 
+def to_arrays(rows: list[dict]) -> dict[str, np.ndarray]:
+    """One case's :func:`time_consistent` rows as plain arrays (what a campaign record holds:
+    a few hundred numbers a case; the case's name is kept beside them): interface, peak,
+    extreme, labels and units (comma-joined) as strings, component, time, and the values
+    (n_rows, widest interface), NaN-padded."""
+    width = max((len(r["labels"]) for r in rows), default=0)
+    values = np.full((len(rows), width), np.nan)
+    for k, r in enumerate(rows):
+        values[k, :len(r["values"])] = r["values"]
+    return {"interface": np.array([r["interface"] for r in rows], dtype=str),
+            "peak": np.array([r["peak"] for r in rows], dtype=str),
+            "extreme": np.array([r["extreme"] for r in rows], dtype=str),
+            "labels": np.array([",".join(r["labels"]) for r in rows], dtype=str),
+            "units": np.array([",".join(r["units"]) for r in rows], dtype=str),
+            "component": np.array([r["component"] for r in rows], dtype=np.int64),
+            "time": np.array([r["time"] for r in rows], dtype=float), "values": values}
+
+
+def from_arrays(arrays: dict, case: str) -> list[dict]:
+    """The rows of :func:`to_arrays` again, from case ``case``."""
+    rows = []
+    for k in range(len(arrays["time"])):
+        labels = tuple(str(arrays["labels"][k]).split(","))
+        rows.append({"interface": str(arrays["interface"][k]), "peak": str(arrays["peak"][k]),
+                     "component": int(arrays["component"][k]), "extreme": str(arrays["extreme"][k]), "case": case,
+                     "time": float(arrays["time"][k]), "labels": labels,
+                     "units": tuple(str(arrays["units"][k]).split(",")),
+                     "values": np.asarray(arrays["values"][k, :len(labels)], dtype=float).copy()})
+    return rows
+
+
 CSV_HEADER = ("# liftoff time-consistent interface loads: for each interface (attach point, force on the named "
               "component) and each component's max and min over the run (column 'peak'), the time (s) and every "
               "component of the interface at that time step (N for T*, N m for R*; units in the column names); "

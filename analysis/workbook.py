@@ -95,7 +95,10 @@ def from_csv(tables: list[tuple[str, Path]], maxmin: Path | None = None, title: 
     for name, path in tables:
         notes, columns, rows = read_csv_table(path)
         sheets.append(Sheet(name, columns, rows, notes))
-    what = [s.notes[0] if s.notes else "" for s in sheets]
+    # each table's first note, and the cases it covers where a later note says ("cases: ...": the
+    # time-consistent interface loads of a campaign cover other cases than the max/min envelope)
+    what = ["; ".join([s.notes[0], *(n for n in s.notes[1:] if n.startswith("cases:"))]) if s.notes else ""
+            for s in sheets]
     if units == "SI":
         say = "SI units throughout (each sheet says which)"
     else:

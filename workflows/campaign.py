@@ -152,6 +152,8 @@ class CaseSummary:
     err_mn: np.ndarray | None = None
     support_items: tuple[str, ...] = ()   # "<interface>|<pair>" of the correlated loads (analysis.correlated)
     support: np.ndarray | None = None      # (n_support_items, N_DIRECTIONS) their support functions
+    #: the time-consistent interface loads (analysis.interface_loads.to_arrays of time_consistent's rows)
+    consistent: dict | None = None
     time: np.ndarray | None = None         # with histories: the case's time points (s); neither is recorded
     histories: dict | None = None          # {item: history} captured for the envelope (CaseTask.capture)
     note: str = ""                         # what the worker says of it (not recorded): solved one by one, why
@@ -184,7 +186,11 @@ def summarize(result, cp, name: str, index: int, post, wall: float = 0.0, check=
     cs = result.contact_summary()
     from liftoff.analysis.correlated import case_support
 
-    support_items, support = case_support(report.interface_histories(result, cp.attach))
+    from liftoff.analysis import interface_loads as il
+
+    interfaces = report.interface_histories(result, cp.attach)
+    support_items, support = case_support(interfaces)
+    consistent = il.time_consistent(t, interfaces, name)
     return CaseSummary(
         name, index, tuple(it.name for it in its), tuple(it.unit for it in its), tuple(it.category for it in its),
         vmax, t[imax].copy(), vmin, t[imin].copy(), srs_items, srs_arr,
@@ -192,7 +198,8 @@ def summarize(result, cp, name: str, index: int, post, wall: float = 0.0, check=
                                                  for c in cs]),
         np.array([c["recontacts"] for c in cs], dtype=np.int64), np.array([c["peak_compression"] for c in cs]),
         int(t.size - 1), float(result.h), float(wall), *_errors(its, report.items(check, cp.attach, report.liquid_heads(cp), band), error_estimate)
-        if check is not None else (None, None), support_items=support_items, support=support if support_items else None)
+        if check is not None else (None, None), support_items=support_items, support=support if support_items else None,
+        consistent=il.to_arrays(consistent) if consistent else None)
 
 
 def _errors(its, its_half, estimate) -> tuple[np.ndarray, np.ndarray]:
@@ -439,10 +446,14 @@ def save_summary(s: CaseSummary, path: Path, key: str) -> Path:
         data["srs"] = s.srs
     if s.support is not None:
         data.update(support_items=np.array(s.support_items, dtype=str), support=s.support)
+    if s.consistent is not None:
+        data.update({CONSISTENT + k: v for k, v in s.consistent.items()})
     return write_record(path, RECORD_FORMAT, RECORD_VERSION, data, units="SI per item (column units); s",
                         attrs={"name": s.name, "metadata": json.dumps({"key": key})}, suffixes=(".npz",))
 
 
+#: a record's arrays of the time-consistent interface loads: this prefix, then to_arrays' keys
+CONSISTENT = "consistent_"
 _RECORD_ARRAYS = ("mx", "t_mx", "mn", "t_mn", "separation", "recontacts", "compression", "items", "units",
                   "categories", "posts", "srs_items", "scalars")
 
@@ -465,7 +476,8 @@ def _summary_of(rec, path: Path) -> CaseSummary:
                        d.get("srs"), tup(d["posts"]), d["separation"], d["recontacts"], d["compression"],
                        int(n_steps), float(h), float(wall),
                        **({"support_items": tup(d["support_items"]), "support": d["support"]}
-                          if "support" in d and "support_items" in d else {}))
+                          if "support" in d and "support_items" in d else {}),
+                       consistent={k[len(CONSISTENT):]: d[k] for k in d if k.startswith(CONSISTENT)} or None)
 
 
 def record_problem(path: Path, name: str, index: int, key: str) -> str | None:

@@ -75,6 +75,10 @@ class RunContext:
     partial: str = ""
     units: str = "SI"
     beside: Any = None
+    #: a campaign's time-consistent interface loads over every case (rows, the cases they cover
+    #: in words), from the cases' summaries: the envelope table is written from them, not from
+    #: ``results`` (which hold the named cases and the governing one); None: from ``results``
+    consistent: tuple | None = None
 
 
 OUTPUTS: dict[str, Output] = {}
@@ -203,7 +207,8 @@ def _register_builtin() -> None:
     register_output("interface_loads", "case", "interface_loads_<case>.csv")(
         lambda res, cp, out, case: report.write_interface_loads({case: (res, cp)}, out, case))
     register_output("interface_loads_envelope", "run", "interface_loads_envelope.csv")(
-        lambda ctx: report.write_interface_loads(ctx.results, ctx.out, "envelope", ctx.partial))
+        lambda ctx: report.write_interface_loads(ctx.results, ctx.out, "envelope",
+                                                 "" if ctx.consistent is not None else ctx.partial, ctx.consistent))
     register_output("correlated_loads", "run", "correlated_loads.csv/.png")(
         lambda ctx: report.write_correlated(ctx.results, ctx.out, ctx.plots, ctx.partial, ctx.beside))
     register_output("spectra_plots", "run", "srs.png, psd_<case>.png", beside=True)(report.plot_spectra)

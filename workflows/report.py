@@ -32,17 +32,23 @@ def case_maxmin(result, cp, case: str, band_hz: float) -> list[dict]:
     return maxmin(result.time, items(result, cp.attach, liquid_heads(cp), band_hz), case)
 
 
-def write_interface_loads(results: dict, out: Path, name: str, note: str = "") -> list[Path]:
+def write_interface_loads(results: dict, out: Path, name: str, note: str = "", consistent=None) -> list[Path]:
     """``interface_loads_<name>.csv``: the time-consistent interface loads (analysis/
     interface_loads.py) of one case (``results`` {case: (result, case problem)} with one
     entry) or, over several, their envelope; nothing when the model has no attach points.
-    The file's second comment line names the cases it covers (and ``note``)."""
+    ``consistent``: (rows, cases) of an envelope already made (a campaign's over every case,
+    from their summaries: analysis.aggregate.Aggregate.consistent), written instead. The
+    file's second comment line names the cases it covers (and ``note``)."""
     from liftoff.analysis import interface_loads as il
 
-    per_case = [il.time_consistent(res.time, interface_histories(res, cp.attach), case)
-                for case, (res, cp) in results.items()]
-    rows = il.envelope(per_case) if len(per_case) > 1 else (per_case[0] if per_case else [])
-    cover = f"cases: {', '.join(results)}" + (f"; {note}" if note else "")
+    if consistent is not None:
+        rows, cases = consistent
+    else:
+        per_case = [il.time_consistent(res.time, interface_histories(res, cp.attach), case)
+                    for case, (res, cp) in results.items()]
+        rows = il.envelope(per_case) if len(per_case) > 1 else (per_case[0] if per_case else [])
+        cases = ", ".join(results)
+    cover = f"cases: {cases}" + (f"; {note}" if note else "")
     return [il.write_csv(rows, out / f"interface_loads_{name}.csv", cover)] if rows else []
 
 

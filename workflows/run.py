@@ -433,9 +433,16 @@ def _write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, 
         stage_times.append(("contributions (3 transients per named case)", time.perf_counter() - t0))
     partial = ("the generated cases other than the governing one are not in this table (their histories are not "
                "kept; see envelope_histories.h5)") if camp_run is not None else ""
+    consistent = None
+    if camp_run is not None and not agg.consistent_missing:      # every case's summary carries its rows
+        from .campaign import generated_index
+
+        named = [n for n in results if generated_index(sc, n) is None]
+        consistent = (agg.consistent, ", ".join(named) + f" and the {sc.n_generated} generated cases (each case's "
+                      "time-consistent rows kept in its summary)")
     t0 = time.perf_counter()
-    files += outputs.write("run", outputs.RunContext(results, out, plots, sc.title, partial, sc.post.units, beside),
-                           beside=beside)
+    files += outputs.write("run", outputs.RunContext(results, out, plots, sc.title, partial, sc.post.units, beside,
+                                                     consistent), beside=beside)
     stage_times.append(("interface, correlated loads, workbook", time.perf_counter() - t0))
     files += _fields(sc, prep, results, agg, out, opt, stage_times, beside)
     t0 = time.perf_counter()

@@ -52,6 +52,7 @@ def test_workbook_holds_the_csv_tables_cell_for_cell(tmp_path):
     assert [r[:2] for r in contents[4:]] == [["max-min posts", 1], ["max-min attach", 1], ["max-min load factors", 1],
                                            ["max-min accelerations", 1], ["max-min other", 1],
                                            ["time-consistent loads", 1]]
+    assert contents[-1][2].endswith("; cases: nominal, no-control")     # the cases a table covers, said there too
 
 
 def test_bad_sheets_are_refused(tmp_path):
