@@ -398,6 +398,9 @@ def _write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, 
     scratch = None if keep_q else out       # modal displacements dropped once written: kept on disk meanwhile
     pairs = [_full_problem(prep.problems[c.name][0], scratch)
              if _estimated_ahead(prep.problems[c.name][0], error_estimate) else None for c in sc.cases]
+    model_note = _model_files_note(sc, prep)
+    if model_note:
+        echo("  note: " + model_note)
     with EstimatesInOrder(pairs) as ahead, _forks_wait_for(beside, ahead):
         for k, case in enumerate(sc.cases):
             cp, mkey = prep.problems[case.name]
@@ -454,6 +457,8 @@ def _write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, 
     env = agg.envelope_rows()
     first = next(iter(prep.stacks.values()))
     text = report.summary(sc, first, results, stage_times, env, time.perf_counter() - t_start)
+    if model_note:
+        text += "\n  note: " + model_note
     if camp_run is not None:
         text += "\n" + _campaign_text(sc, camp_run, agg)
     files.append(write_text(out / "summary.txt", text + "\n"))
@@ -469,6 +474,29 @@ def _forks_wait_for(beside, ahead):
         yield
     finally:
         beside.quiet = before
+
+
+#: the run's files of the "model" stage (workflows/outputs.py) and Table 1, written once
+MODEL_FILES = "modes_vehicle.*, modal_mass_*.csv, recovery_vehicle.op4 and its index, cb_checks.*, table1.*"
+
+
+def _model_files_note(sc, prep: Prepared) -> str:
+    """"" when every named case shares the first one's model files (outputs.model_identity:
+    its stack, recoveries and contacts), else a sentence naming the cases that do not: their
+    own are not written (a case with other gravity has other constant columns in its recovery
+    matrices; another [model], other modes)."""
+    ids = {c.name: outputs.model_identity(prep.stacks[prep.problems[c.name][1]], prep.problems[c.name][0])
+           for c in sc.cases}
+    if not ids:
+        return ""
+    first = sc.cases[0].name
+    other = [n for n, i in ids.items() if i != ids[first]]
+    if not other:
+        return ""
+    return (f"the run's model files ({MODEL_FILES}) are of case {first}'s model, recoveries and contacts; "
+            f"case{'s' if len(other) > 1 else ''} {', '.join(other)} differ{'' if len(other) > 1 else 's'} in them "
+            "(another [model], gravity, cryo or [recovery]): their own are not written (run such a case from a "
+            "scenario of its own)")
 
 
 def _table1(stack, cp, case, out: Path, echo, stage_times: list, beside=None, cache=None):

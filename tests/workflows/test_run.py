@@ -672,3 +672,26 @@ def test_fe_stage_builds_on_one_blas_thread(monkeypatch, tmp_path):
     with threadpool_limits(limits=2, user_api="blas"):
         assert pipeline.build_component(model, model.components["core"], tmp_path) == ("c", {})
     assert seen == [{1}]
+
+
+def test_a_case_with_other_model_files_is_named(tmp_path):
+    """The run's model files (modes, modal mass, recovery OP4, CB checks, Table 1) are written
+    once, of the first named case. A named case whose gravity changes its recovery matrices'
+    constant columns (or whose model or recoveries differ) does not share them: summary.txt
+    and the console say so, naming it (a review: a user combining results_moon.h5 with the
+    OP4 got the first case's gravity column, 6x too large). Cases that share them: no note."""
+    from liftoff.config import load_scenario
+    from liftoff.workflows.cache import StageCache
+    from liftoff.workflows.run import _model_files_note, prepare
+
+    def note_of(path):
+        sc = load_scenario(path)
+        return _model_files_note(sc, prepare(sc, StageCache(tmp_path / "cache"), False, lambda *a, **k: None,
+                                             error_estimate=False))
+
+    p = _scenario(tmp_path, STICK, t_end=1.0, cases=[{"name": "nominal"}, {"name": "no-control",
+                                                                             "control": {"enabled": False}},
+                                                     {"name": "moon", "gravity": {"accel": [0.0, 0.0, -1.62]}}])
+    note = note_of(p)
+    assert "case moon differs" in note and "no-control" not in note and "of case nominal's model" in note
+    assert note_of(_scenario(tmp_path, STICK, t_end=1.0, name="s2.toml")) == ""
