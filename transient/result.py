@@ -229,7 +229,9 @@ class TransientResult:
         modal = [(mk, unit) for mk, unit in (("q", "sqrt(kg) m"), ("v", "sqrt(kg) m/s"), ("acc", "sqrt(kg) m/s^2"))
                  if f"{mk}_{key}" in self.modal]
         if modal:
-            g["mode"] = Dataset(np.arange(self.modal[f"{modal[0][0]}_{key}"].shape[1]), "1")
+            # numbered from 1, as modes_vehicle.h5/.csv and the mode-shape VTU number them (a review: 0 here
+            # put xarray's .sel(mode=6) on the first elastic mode, the modes file's mode 6 a rigid one)
+            g["mode"] = Dataset(np.arange(1, self.modal[f"{modal[0][0]}_{key}"].shape[1] + 1), "1")
             for mk, unit in modal:
                 g[f"modal_{mk}"] = Dataset(self.modal[f"{mk}_{key}"], unit, dims=("/time", "mode"))
         return g

@@ -92,7 +92,8 @@ def write_mode_shapes_vtu(stack, cp, out: Path, n_modes: int = MODE_SHAPE_FIELDS
     """``modes_vehicle.vtu``: the vehicle's first ``n_modes`` elastic system modes as nodal
     vector fields ``mode_<k>_<f>Hz`` (m per unit modal coordinate, unit modal mass) over
     every FE component of the vehicle (cell data ``part``: 0, 1, ... in the order of the
-    vehicle's components, as the summary lists them), recovered through each
+    stack's FE components, :func:`fe_parts`, the default's core, srb_left, srb_right, orbiter;
+    not the order of the summary's stage list), recovered through each
     component's CB model (reduction.field_displacement); nothing without FE components."""
     from liftoff.fem.output import write_vtu
     from liftoff.reduction import field_displacement

@@ -650,7 +650,8 @@ def spectra(result, cp, post, out: Path, case: str, srs: tuple | None = None) ->
                        "value": Dataset(P, "units^2/Hz of each item", dims=("freq", "items")),
                        "item_units": Dataset(np.array([it.unit for it in sel], dtype=str), "1", dims=("items",))}
         data["fft"] = {"items": np.array([it.name for it in sel], dtype=str), "freq": Dataset(fa, "Hz"),
-                       "amplitude": Dataset(A, "units of each item", dims=("freq", "items"))}
+                       "amplitude": Dataset(A, "units of each item", dims=("freq", "items")),
+                       "item_units": Dataset(np.array([it.unit for it in sel], dtype=str), "1", dims=("items",))}
         head = f"# liftoff PSD (Welch, {post.psd.segment:g} s segments, Hann) of case {case}; units^2/Hz of each item\n"
         lines = [",".join(["freq_Hz"] + [f"{it.name} [({it.unit})^2/Hz]" for it in sel])]   # ((m/s^2)^2/Hz, not m/s^2^2/Hz)
         lines += [",".join([f"{x:.6e}" for x in row]) for row in np.column_stack([f, P])]
@@ -665,7 +666,8 @@ def spectra(result, cp, post, out: Path, case: str, srs: tuple | None = None) ->
                        "q": Dataset(np.array(post.srs.q), "1"),
                        "value": Dataset(S, "units of each item (the absolute-acceleration SRS: each history the oscillators' base input)", dims=("q", "freq", "items"),
                                         initial_conditions="steady under each history's first value (pyyeti.srs "
-                                                           "ic='steady')")}
+                                                           "ic='steady')"),
+                       "item_units": Dataset(np.array([it.unit for it in sel], dtype=str), "1", dims=("items",))}
     paths.insert(0, write_record(out / f"spectra_{case}.h5", "liftoff-spectra", 1, data, units="SI per item",
                                  attrs={"case": case, "h": h}))
     return paths

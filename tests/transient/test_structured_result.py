@@ -89,6 +89,7 @@ def test_dimension_scales(run, tmp_path):
         assert scale("body_a/displacement", 1) == "/body_a/output_labels"
         assert scale("body_a/rigid_body_motion", 1) == "/body_a/rigid_body_components"
         assert scale("body_b/modal_q", 1) == "/body_b/mode"
+        assert f["body_b/mode"][0] == 1 and f["body_b/mode"][-1] == f["body_b/modal_q"].shape[1]   # as modes_vehicle.h5
         assert scale("recovered/post_1_load", 1) == "/recovered/post_1_load_columns"
         assert [s.decode() for s in f["recovered/post_1_load_columns"][()]] == ["Fz", "Mx"]
         assert [s.decode() for s in f["contact/direction/component"][()]] == ["Tz", "Tx", "Ty"] * 3

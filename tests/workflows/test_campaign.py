@@ -555,6 +555,12 @@ def test_every_hdf5_file_of_a_campaign_opens_in_xarray(campaign4):
             except Exception as e:                      # noqa: BLE001
                 bad.append(f"{f.name} as a tree: {type(e).__name__}: {e}")
     assert not bad, "\n".join(bad)
+    # each spectrum group carries its items' units itself ("units of each item": the SRS and FFT
+    # groups had none, the PSD's alone did)
+    with h5py.File(tmp / "out" / "spectra_nominal.h5", "r") as h:
+        for g in ("psd", "fft", "srs"):
+            if g in h:
+                assert h[g]["item_units"].shape == h[g]["items"].shape, g
 
 
 class _Recording(InlineExecutor):
