@@ -237,8 +237,9 @@ def sweep_row(case: BargeCase, result, bp: BargeProblem) -> dict:
 
 
 def run(scenario=None, out: Path | str = "out/barge", cache_dir=None, progress: bool = True, plots: bool = True,
-        snapshots: bool = True, echo=print):
-    """Run a barge scenario (path, parsed BargeScenario, or None for the embedded example)."""
+        snapshots: bool = True, echo=print, command: str | None = None):
+    """Run a barge scenario (path, parsed BargeScenario, or None for the embedded example);
+    ``command``: the command line MANIFEST.json records (default ``liftoff run <scenario>``)."""
     from liftoff.config.barge import BargeScenario, load_barge
 
     from .cache import StageCache, default_cache_dir, stage_key
@@ -261,7 +262,7 @@ def run(scenario=None, out: Path | str = "out/barge", cache_dir=None, progress: 
             stage_times += [(f"{s} {lab} ({how})", secs) for s, lab, how, secs in cache.log[n0:]]
             stage_times.append(("model stages total", time.perf_counter() - t0))
         problems[case.name] = (build_problem(case, models[mkey], progress), mkey)
-    with staged_output(out, command=f"liftoff run {sc.path}") as stage:
+    with staged_output(out, command=command or f"liftoff run {sc.path}") as stage:
         files, text = _write(sc, models, problems, stage, plots, pics, stage_times, echo, t_start)
     echo(f"  outputs in {out}/ ({len(files)} files); cache {cache.root}")
     return {"out": out, "files": [out / Path(f).relative_to(stage) for f in files], "summary": text}

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import shlex
 import sys
 import time
 import warnings
@@ -119,7 +120,7 @@ def _transient(args: argparse.Namespace) -> None:
         est = solve_estimated(problem)
         result = est.result
     wall = time.perf_counter() - started
-    with staged_output(args.out, command=f"liftoff transient {args.scenario}") as stage:
+    with staged_output(args.out, command=getattr(args, "command_line", f"liftoff transient {args.scenario}")) as stage:
         result.save(stage / RESULTS_NAME)
     print(summary(scenario, result, args.out / RESULTS_NAME, wall, est))
     return EXIT_OK
@@ -214,6 +215,9 @@ def main(argv: list[str] | None = None) -> int:
     from liftoff.core.errors import ConvergenceError, InputError, ResourceError
 
     args = build_parser().parse_args(argv)
+    # the command as given, for each published folder's MANIFEST.json (it said `liftoff run <scenario>`
+    # whatever the options, so a campaign's manifest read as the two-case run's)
+    args.command_line = shlex.join(["liftoff", *(sys.argv[1:] if argv is None else argv)])
     warnings.showwarning = _show_warning
     previous = signal.signal(signal.SIGTERM, _on_sigterm)
     try:

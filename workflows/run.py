@@ -9,6 +9,7 @@ Outputs are listed in docs/workflow.md.
 from __future__ import annotations
 
 import argparse
+import shlex
 import tempfile
 import time
 from contextlib import ExitStack, contextmanager
@@ -76,7 +77,7 @@ class Options:
 def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None | bool = None,
         progress: bool = True, plots: bool = True, snapshots: bool = True, echo=print,
         n_cases: int | None = None, options: Options | None = None, error_estimate: bool = True,
-        max_memory: float | None = None) -> RunOutput:
+        max_memory: float | None = None, command: str | None = None) -> RunOutput:
     """Run a scenario (path, parsed Scenario, or None for the default) into ``out``.
 
     ``cache_dir``: None -> default (``$LIFTOFF_CACHE`` or DIR/../.liftoff-cache),
@@ -87,7 +88,9 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
     (workflows/outdir.py), so a failed run leaves ``out`` as it was. ``error_estimate``:
     every named case runs again at h/2 (transient/accuracy.py) so that each max/min carries
     an estimated error; ``max_memory`` (bytes) overrides the memory limit of the histories (and
-    of what the run keeps per generated case, checked before any case is generated).
+    of what the run keeps per generated case, checked before any case is generated);
+    ``command``: the command line MANIFEST.json records (the command line's own; from Python
+    ``liftoff run <scenario>`` and the options given, :func:`_api_command`).
 
     Under ``mpirun -n N`` every rank calls this: the model stages are built by all ranks
     together (workflows/parallel.py), the cases and every file by rank 0, which returns the
@@ -137,11 +140,13 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
         models = prepare_models(sc, cache, progress, echo)      # model stages: every rank (SPMD FE stages)
         return root_only(comm, lambda: _cases_and_files(        # the cases' problems and checks: rank 0
             sc, prepare(sc, cache, progress, echo, error_estimate, max_memory, models), cache, opt, out, plots,
-            want_pics, progress, echo, t_start, error_estimate))
+            want_pics, progress, echo, t_start, error_estimate,
+            command or _api_command(sc, n_cases, opt, error_estimate, plots, max_memory)))
 
 
 def _cases_and_files(sc, prep: Prepared, cache: StageCache, opt: Options, out: Path, plots: bool,
-                     want_pics: bool, progress: bool, echo, t_start: float, error_estimate: bool) -> RunOutput:
+                     want_pics: bool, progress: bool, echo, t_start: float, error_estimate: bool,
+                     command: str) -> RunOutput:
     """Rank 0: the generated cases on their executor, then every output, staged into ``out``."""
     from .executors import OnDemand
 
@@ -153,13 +158,33 @@ def _cases_and_files(sc, prep: Prepared, cache: StageCache, opt: Options, out: P
             # named cases and the reports: closed now, opened again only if the end re-runs a case
             pool.close()
             executor = pool.enter_context(OnDemand(lambda: _executor(opt, sc.n_generated), opt.workers))
-        with staged_output(out, command=f"liftoff run {sc.path}") as stage:
+        with staged_output(out, command=command) as stage:
             output = write_results(sc, prep, stage, plots, want_pics, echo, t_start,
                                    _Campaign(camp, executor, cache, opt), error_estimate)
     output.out = out
     output.files = [out / Path(f).relative_to(stage) for f in output.files]
     echo(f"  outputs in {out}/ ({len(output.files)} files); cache {cache.root}")
     return output
+
+
+def _api_command(sc, n_cases, opt: Options, error_estimate: bool, plots: bool, max_memory) -> str:
+    """The command line equivalent of a run called from Python, as far as its options go (for
+    MANIFEST.json): the scenario, the generated cases and the options that change the outputs."""
+    parts = ["liftoff", "run", str(sc.path)]
+    if n_cases:
+        parts += ["--cases", str(n_cases)]
+    for flag, value in (("--campaign", opt.campaign), ("--compare", opt.compare), ("--contributions", opt.contributions),
+                        ("--fields", opt.fields), ("--keep-histories", opt.keep_histories),
+                        ("--march-together", opt.march_together if (opt.march_together or 0) > 1 else None)):
+        if value:
+            parts += [flag] if value is True else [flag, str(value)]
+    if not error_estimate:
+        parts.append("--no-error-estimate")
+    if not plots:
+        parts.append("--no-plots")
+    if max_memory is not None:
+        parts += ["--max-memory", f"{max_memory / 1e9:g}"]
+    return shlex.join(parts) + " (called from Python)"
 
 
 def _fields_wanted(sc, opt: Options) -> bool:
@@ -783,7 +808,7 @@ def _cli(args: argparse.Namespace) -> int:
         from .barge import run as run_barge
 
         _barge_options(args)
-        run_barge(args.scenario, args.out, plots=not args.no_plots, **kw)
+        run_barge(args.scenario, args.out, plots=not args.no_plots, command=getattr(args, "command_line", None), **kw)
         return 0
     if args.ranks is not None:
         if args.ranks < 1:
@@ -798,7 +823,8 @@ def _cli(args: argparse.Namespace) -> int:
     if args.cases is not None and args.cases < 0:
         raise InputError(f"--cases {args.cases}: must be 0 or more")
     run(args.scenario, args.out, n_cases=args.cases, options=opt, error_estimate=not args.no_error_estimate,
-        max_memory=None if args.max_memory is None else args.max_memory * 1e9, plots=not args.no_plots, **kw)
+        max_memory=None if args.max_memory is None else args.max_memory * 1e9, plots=not args.no_plots,
+        command=getattr(args, "command_line", None), **kw)
     return 0
 
 

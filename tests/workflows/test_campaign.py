@@ -79,6 +79,10 @@ def test_campaign_outputs(campaign4):
         assert (d / name).is_file(), name
     gov = [f.name for f in d.glob("results_d*.h5")]
     assert len(gov) == 1                                    # only the governing generated case in full
+    # its step line says why it has no estimate (it blamed --no-error-estimate, not given)
+    block = out.summary.split(f"case {gov[0][8:-3]!r}:")[1]
+    assert block.split("\n")[1:4] and "a generated case is solved without a second run at h/2" in block
+    assert "--no-error-estimate" not in out.summary
     rows = (d / "cases.csv").read_text().splitlines()
     assert rows[1].startswith("index,name,srb_ignition_delay[engine[srb_left].start]") and len(rows) == 6
     # each envelope value set by a generated case: that case's history, at its time, is the value
@@ -473,6 +477,16 @@ def test_cli_campaign(tmp_path, campaign4, capsys):
                  "--no-snapshots", "--cases", "2", "--workers", "0", "--campaign", str(tmp / "out.campaign")]) == 0
     text = capsys.readouterr().out
     assert "campaign: 2 generated cases (0 run, 2 reused" in text
+    # the manifest records the command as given, its options too (it said `liftoff run <scenario>`)
+    import json
+    import shlex
+
+    cmd = shlex.split(json.loads((tmp_path / "c" / "MANIFEST.json").read_text())["command"])
+    assert cmd[:3] == ["liftoff", "run", str(p)] and cmd[cmd.index("--cases") + 1] == "2" and "--no-snapshots" in cmd
+    # from Python: the scenario and the options that change the outputs
+    _, _, out4 = campaign4
+    man = json.loads((tmp / "out" / "MANIFEST.json").read_text())["command"]
+    assert "--cases 4" in man and man.endswith("(called from Python)") and out4.campaign is not None
     assert main(["run", str(p), "--out", str(tmp_path / "d"), "--no-cache", "--cases", "-1"]) == 2
     assert "--cases -1: must be 0 or more" in capsys.readouterr().err
 

@@ -171,3 +171,21 @@ def test_slosh_summary_finds_each_liquids_first_slosh_mode_and_peak_force():
     assert out["lh2"]["mode"] == 1 and out["lh2"]["hz"] == 0.34 and out["lh2"]["peak_n"] == 7.0e2
     assert out["lox"]["peak_item"] == "core_slosh_force lox:1"
     assert out["lox"]["peak_wave_m"] == 0.03 and out["lh2"]["peak_wave_m"] is None
+
+
+def test_largest_loads_promise_estimates_only_where_their_lines_carry_them():
+    """summary.txt's "largest loads": each line on its larger side; the heading says estimates
+    only as far as the lines shown carry one (a review: a campaign's post compression peaks of a
+    generated case, no estimate, under a heading promising them, tripped by the tension side's
+    estimate of a named case)."""
+    def row(item, mx, mn, mx_err, mn_err, case_max="d0001", case_min="nominal"):
+        return {"item": item, "unit": "N", "category": "contact_force", "max": mx, "t_max": 1.0, "case_max": case_max,
+                "min": mn, "t_min": 2.0, "case_min": case_min, "max_err": mx_err, "min_err": mn_err}
+
+    lines = report.largest_load_lines([row("post a Tz", 7e6, -0.0, float("nan"), 0.0)])
+    assert "no step-error estimate" in lines[0] and "est. error" not in lines[1]
+    lines = report.largest_load_lines([row("post a Tz", 7e6, -0.0, 5.0, 0.0), row("post b Tz", 6e6, 0.0, None, 1.0)])
+    assert "est. error where the case had a run at h/2" in lines[0]
+    assert "(est. error 5e-06 MN)" in lines[1] and "est. error" not in lines[2]
+    lines = report.largest_load_lines([row("post a Tz", 7e6, -0.0, 5.0, None, case_max="nominal")])
+    assert "est. error: Richardson from a run at h/2" in lines[0]
