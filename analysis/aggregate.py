@@ -178,8 +178,10 @@ def write_statistics(agg: Aggregate, out: Path, freq=None, q=None) -> list[Path]
             for j, (it, u, cat) in enumerate(zip(agg.items, agg.units, agg.categories))]
     head = (f"# liftoff statistics over {agg.n} dispersed cases; SI units (column 'unit'); "
             f"P{agg.p * 100:g}/{agg.c * 100:g}: normal bound mean +- k std with k = {agg.k:.6g} (one-sided "
-            f"tolerance factor), order statistic = the {agg.r}-th largest maximum / smallest minimum "
-            f"({'none: too few cases' if agg.r == 0 else 'distribution-free'})\n")
+            "tolerance factor), order statistic = " + (
+                f"the {agg.r}-th largest maximum / smallest minimum (distribution-free)" if agg.r else
+                f"none (too few cases for a distribution-free P{agg.p * 100:g}/{agg.c * 100:g} bound; its columns NaN)")
+            + "\n")
     paths = [write_rows_csv(rows, STAT_FIELDS, head, out / "statistics.csv")]
     data = {"items": np.array(agg.items, dtype=str),
             "units": Dataset(np.array(agg.units, dtype=str), "1", dims=("items",)),
@@ -248,7 +250,9 @@ def write_contours(agg: Aggregate, out: Path) -> Path | None:
             "per attach point (force on the named component) and pair, the polygon {p : n_k . p <= h_k} of the "
             f"support functions h_k = max over time of n_k . (x, y / {MOMENT_ARM:g} m) in {N_DIRECTIONS} directions; "
             f"contour = envelope (max over every case), normal (P{agg.p * 100:g}/{agg.c * 100:g} bound mean + k std, "
-            f"k = {agg.k:.6g}) or order (the {agg.r}-th largest over the dispersed cases); each direction's bound "
+            f"k = {agg.k:.6g}) or order (" + (f"the {agg.r}-th largest over the dispersed cases" if agg.r else
+                                              "none: too few cases for a distribution-free bound")
+            + "); each direction's bound "
             "holds alone, not jointly; vertices counter-clockwise; units in x_unit, y_unit\n")
     return write_rows_csv(rows, CONTOUR_FIELDS, head, out / "correlated_statistics.csv")
 

@@ -224,7 +224,10 @@ class Twang:
             v = float(np.hypot(*ign))
             out += (f"; at hold-down release (t = {self.t_ign:.2f} s) {v:.3f} m"
                     + (f" = {100 * v / peak:.0f} % of the peak" if peak > 0 else ""))
-        return out + f"; relative to the c.g.: peak {float(np.hypot(*self.rel_cg[k])):.3f} m at t = {self.time[k]:.2f} s"
+        # (eq. 23's measure is from the undeformed stack, not from t0 as the pad frame's: the preloads'
+        # static lean at t0 is in it, and said)
+        return out + (f"; relative to the c.g. (eq. 23, from the undeformed stack, {float(np.hypot(*self.rel_cg[0])):.3f}"
+                      f" m at t0): peak {float(np.hypot(*self.rel_cg[k])):.3f} m at t = {self.time[k]:.2f} s")
 
 
 def twang(result, cp) -> Twang | None:

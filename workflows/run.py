@@ -476,7 +476,8 @@ def _write_results(sc, prep: Prepared, out: Path, plots: bool, want_pics: bool, 
     t0 = time.perf_counter()
     files += beside.wait()
     for name, secs in beside.seconds.items():
-        stage_times.append((name + (" (beside the run)" if beside.forked else ""), secs))
+        # (inline, a job's time is already in the stage that ran it: shown, marked, not to be added again)
+        stage_times.append((name + (" (beside the run)" if beside.forked else " (inline: within a stage above)"), secs))
     if beside.forked:
         stage_times.append(("waiting for the pictures", time.perf_counter() - t0))
     env = agg.envelope_rows()

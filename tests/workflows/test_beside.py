@@ -133,6 +133,9 @@ def test_a_run_writes_the_same_files_forked_and_inline(tmp_path, monkeypatch):
     names = {m: sorted(p.name for p in o.out.iterdir()) for m, o in outs.items()}
     assert names["1"] == names["0"] and "results_nominal.h5" in names["1"] and any(n.endswith(".png") for n in names["1"])
     assert any("(beside the run)" in s for s, _ in outs["1"].stage_times)
+    # inline, a job's time is inside the stage that ran it: marked so, not to be summed again
+    inline = [s for s, _ in outs["0"].stage_times if "(inline: within a stage above)" in s]
+    assert inline and not any("(beside the run)" in s for s, _ in outs["0"].stage_times)
     for n in names["1"]:
         a, b = outs["1"].out / n, outs["0"].out / n
         if n.startswith("results_"):

@@ -83,6 +83,8 @@ def test_campaign_outputs(campaign4):
     block = out.summary.split(f"case {gov[0][8:-3]!r}:")[1]
     assert block.split("\n")[1:4] and "a generated case is solved without a second run at h/2" in block
     assert "--no-error-estimate" not in out.summary
+    head = (d / "statistics.csv").read_text().splitlines()[0]          # 4 cases: no order statistic, said so
+    assert "order statistic = none (too few cases" in head and "0-th" not in head
     rows = (d / "cases.csv").read_text().splitlines()
     assert rows[1].startswith("index,name,srb_ignition_delay[engine[srb_left].start]") and len(rows) == 6
     # each envelope value set by a generated case: that case's history, at its time, is the value
@@ -263,6 +265,7 @@ def test_correlated_contours_over_the_campaign(campaign4):
     np.testing.assert_allclose(st["normal"], gen.mean(axis=0) + k_factor(0.99, 0.90, 4) * gen.std(axis=0, ddof=1),
                                rtol=1e-10, atol=1e-10 * scale)
     assert np.all(np.isnan(st["order"]))            # 4 cases: too few for a P99/90 order statistic
+    assert "order (none: too few cases" in (tmp / "out" / "correlated_statistics.csv").read_text().splitlines()[0]
     rows = list(csv.DictReader(ln for ln in (tmp / "out" / "correlated_statistics.csv").read_text().splitlines()
                                if not ln.startswith("#")))
     assert {r["contour"] for r in rows} == {"envelope", "normal"}
