@@ -25,9 +25,9 @@ spread when the same case is summed in another order (its vehicle's elastic mode
 reverse order: tests/transient/test_batch.py's reference). A bolted stack's contact
 forces are K_C times small differences of large modal displacements, so neither is zero.
 
-The speed-up depends on the CPU (2026-12-07: 3.27x on the machine of the first measurement,
-1.0x on an AMD EPYC with AVX2, znver3, where the one-by-one step was 2.1x and the batched
-case-step 6.8x slower than there). The group's pass over the modes is vectorised across its
+The speed-up depends on the CPU (README "Cases marched together" renders each machine's
+measurement from docs/figures/bench_batch.json: on an AMD EPYC with AVX2, znver3, far less
+than on the first machine). The group's pass over the modes is vectorised across its
 8 cases (one 512-bit register, or two 256-bit ones); the JSON records the CPU numba compiled
 for (LLVM's name) and its vector width; ``--append`` adds a further machine's measurement beside the first.
 """
@@ -172,7 +172,7 @@ def main(argv=None) -> None:
             "batched_all_us": tb, "one_by_one_all_us": to, "contact_force_diff": dF, "output_diff": dY,
             "reordered_contact_force_diff": sF, "reordered_output_diff": sY,
             **({"default": dflt} if dflt else {})}
-        if args.append:
+        if args.append and args.json.is_file():        # (no file yet: this one is the first machine's)
             kept = json.loads(args.json.read_text())
             kept["others"] = [o for o in kept.get("others", []) if o.get("cpu") != this["cpu"]] + [this]
             this = kept

@@ -180,7 +180,7 @@ def main() -> None:
         this = {"date": datetime.date.today().isoformat(), "cpus": os.cpu_count(), **host_cpu(),
                 "load_average_end": os.getloadavg()[0] if hasattr(os, "getloadavg") else None, "repeat": args.repeat,
                 "blas_kernels": blas["kernels"], "rows": rows}
-        if args.append:
+        if args.append and args.json.is_file():        # (no file yet: this one is the first machine's)
             kept = json.loads(args.json.read_text())
             kept["others"] = [o for o in kept.get("others", []) if o.get("cpu") != this["cpu"]] + [this]
             this = kept

@@ -21,7 +21,9 @@ from liftoff.core.labels import COMPONENTS, split_label
 from liftoff.core.records import Dataset, read_record, write_record
 
 FORMAT = "liftoff-transient-result"
-VERSION = 2  # 2: contact directions and recovery items as data, dimension scales
+VERSION = 3  # 2: contact directions and recovery items as data, dimension scales; 3: body_?/mode from 1
+#: the versions load_result reads (a version 2 file reads the same; only its mode numbers start at 0)
+READS = (2, 3)
 STATE_NAMES = ("bolted", "closed", "open")
 COLUMNS = "_columns"  # recovered/<name>_columns: the column labels of recovered/<name>
 _KINDS = {"disp": ("m", "rad"), "vel": ("m/s", "rad/s"), "acc": ("m/s^2", "rad/s^2"), "force": ("N", "N m")}
@@ -238,8 +240,8 @@ class TransientResult:
 
 
 def load_result(path: str | os.PathLike) -> TransientResult:
-    """Read a file written by :meth:`TransientResult.save` (format version 2)."""
-    rec = read_record(path, FORMAT, (VERSION,), what="result file")
+    """Read a file written by :meth:`TransientResult.save` (format version 3, or 2: its modes numbered from 0)."""
+    rec = read_record(path, FORMAT, READS, what="result file")
     d, attrs = rec.data, rec.dataset_attrs
     c = d["contact"]
     cd = c["direction"]

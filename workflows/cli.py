@@ -217,7 +217,9 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     # the command as given, for each published folder's MANIFEST.json (it said `liftoff run <scenario>`
     # whatever the options, so a campaign's manifest read as the two-case run's)
-    args.command_line = shlex.join(["liftoff", *(sys.argv[1:] if argv is None else argv)])
+    # (ranks launched by `--ranks N` are handed the command as given: LIFTOFF_COMMAND, run.launch)
+    args.command_line = os.environ.pop("LIFTOFF_COMMAND", "") or \
+        shlex.join(["liftoff", *map(str, sys.argv[1:] if argv is None else argv)])
     warnings.showwarning = _show_warning
     previous = signal.signal(signal.SIGTERM, _on_sigterm)
     try:

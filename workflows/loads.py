@@ -365,6 +365,20 @@ def table1(stack: StackModel, cp: CaseProblem, case: Case):
     return rep
 
 
+def table1_inputs(cp: CaseProblem) -> list:
+    """What :func:`table1` takes from a case besides its stack: the contacts as the static
+    (bolted) state sees them (not their release times or laws), the cryo preload, gravity and
+    the softening (its factors or matrix, else the labels its default is built from)."""
+    from .cache import content_sha256
+
+    soft = cp.softening
+    arrays = () if soft is None else tuple(a for a in (*(soft.factors or ()), soft.matrix) if a is not None)
+    return [[repr((c.name, list(c.labels_a), list(c.labels_b), c.stiffness, c.axial, c.normal_sign, c.gap, c.rigid,
+                   c.normal)) for c in cp.problem.contacts],
+            sorted(cp.cryo.items()), repr(tuple(cp.gravity_only.gravity) if cp.gravity_only is not None else None),
+            content_sha256(arrays) if arrays else repr(cp.case.softening.labels)]
+
+
 def stack_mass_summary(stack: StackModel) -> str:
     from liftoff.transient.effects import rigid_mass
 

@@ -126,18 +126,21 @@ def write(stage: str, *args, beside=None, cache=None) -> list[Path]:
 
 
 def model_identity(stack, cp) -> str:
-    """What the ``"model"`` outputs of a run are made from, as a digest: the stack's key and,
-    for each such output with ``cache_on``, what else its files depend on (a case's recoveries,
-    with their gravity constant column; its contacts). Two named cases of one digest share the
+    """What the ``"model"`` outputs of a run and its Table 1 are made from, as a digest: the
+    stack's key, for each such output with ``cache_on`` what else its files depend on (a case's
+    recoveries, with their gravity constant column; its contact labels), and Table 1's inputs
+    (loads.table1_inputs: post stiffness, cryo, gravity, softening). Two named cases of one digest share the
     run's model files; they are written once, of the first case (workflows/run.py says which
     cases differ)."""
     from .cache import content_sha256
 
+    from .loads import table1_inputs
+
     inputs = {o.name: o.cache_on(stack, cp) for o in OUTPUTS.values() if o.stage == "model" and o.cache_on}
+    inputs["table1"] = table1_inputs(cp)          # (written beside them, workflows/run.py _table1)
     return content_sha256([repr(getattr(stack, "key", id(stack))), repr(sorted(inputs.items()))])
 
 
-CACHE_STAGE = "outputs"
 CACHE_STAGE = "outputs"
 
 

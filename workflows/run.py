@@ -141,7 +141,7 @@ def run(scenario=None, out: Path | str = "out/run", cache_dir: Path | str | None
         return root_only(comm, lambda: _cases_and_files(        # the cases' problems and checks: rank 0
             sc, prepare(sc, cache, progress, echo, error_estimate, max_memory, models), cache, opt, out, plots,
             want_pics, progress, echo, t_start, error_estimate,
-            command or _api_command(sc, n_cases, opt, error_estimate, plots, max_memory)))
+            command or _api_command(sc, n_cases, opt, error_estimate, plots, max_memory, snapshots)))
 
 
 def _cases_and_files(sc, prep: Prepared, cache: StageCache, opt: Options, out: Path, plots: bool,
@@ -167,10 +167,12 @@ def _cases_and_files(sc, prep: Prepared, cache: StageCache, opt: Options, out: P
     return output
 
 
-def _api_command(sc, n_cases, opt: Options, error_estimate: bool, plots: bool, max_memory) -> str:
+def _api_command(sc, n_cases, opt: Options, error_estimate: bool, plots: bool, max_memory,
+                 snapshots: bool = True) -> str:
     """The command line equivalent of a run called from Python, as far as its options go (for
     MANIFEST.json): the scenario, the generated cases and the options that change the outputs."""
-    parts = ["liftoff", "run", str(sc.path)]
+    embedded = str(sc.path).startswith("<")           # the embedded default: `liftoff run` alone
+    parts = ["liftoff", "run"] + ([] if embedded else [str(sc.path)])
     if n_cases:
         parts += ["--cases", str(n_cases)]
     for flag, value in (("--campaign", opt.campaign), ("--compare", opt.compare), ("--contributions", opt.contributions),
@@ -182,6 +184,8 @@ def _api_command(sc, n_cases, opt: Options, error_estimate: bool, plots: bool, m
         parts.append("--no-error-estimate")
     if not plots:
         parts.append("--no-plots")
+    if not snapshots:
+        parts.append("--no-snapshots")
     if max_memory is not None:
         parts += ["--max-memory", f"{max_memory / 1e9:g}"]
     return shlex.join(parts) + " (called from Python)"
@@ -817,7 +821,7 @@ def _cli(args: argparse.Namespace) -> int:
         if launched_size() > 1 and args.ranks != launched_size():
             raise InputError(f"--ranks {args.ranks} inside `mpirun -n {launched_size()}`: give one of the two")
         if args.ranks > 1 and launched_size() == 1:
-            return launch(args.ranks, _child_args(args))
+            return launch(args.ranks, _child_args(args), getattr(args, "command_line", ""))
     opt = Options(workers=args.workers, dask=args.dask, mpi=args.mpi, campaign=args.campaign,
                   keep_histories=args.keep_histories, fields=args.fields, compare=args.compare,
                   contributions=args.contributions, modal_results=False, march_together=args.march_together)
@@ -871,10 +875,11 @@ _PARSER: list = []
 MAX_RANKS_PER_CPU = 4
 
 
-def launch(ranks: int, argv: list[str]) -> int:
+def launch(ranks: int, argv: list[str], command: str = "") -> int:
     """``mpirun --quiet -n ranks python -m liftoff.workflows.cli ARGV``; returns its exit
     status. Every rank reports an error (it may be its own); the copies of an error line
-    are printed once."""
+    are printed once. ``command``: the command line as the user gave it, which the ranks'
+    MANIFEST.json records (environment LIFTOFF_COMMAND)."""
     import os
     import shutil
     import subprocess
@@ -896,6 +901,8 @@ def launch(ranks: int, argv: list[str]) -> int:
     from .parallel import mpirun_env
 
     env = mpirun_env(os.environ)
+    if command:
+        env["LIFTOFF_COMMAND"] = command
 
     # mpirun (and through it every rank) is stopped when this process ends, however it ends:
     # SIGTERM here, or a kill of this process (issue 27: ranks survived and replaced the output)

@@ -1,5 +1,5 @@
 """Structured results: contact directions and recovery items carried as data (in memory and in
-the HDF5 file, format version 2), HDF5 dimension scales on the time-major datasets, and the
+the HDF5 file, format version 3), HDF5 dimension scales on the time-major datasets, and the
 readers (contact_summary, the lift-off report's items) using that data instead of names.
 
 References are the problem definitions themselves (the ContactPoint and Recovery objects the
@@ -95,7 +95,7 @@ def test_dimension_scales(run, tmp_path):
         assert [s.decode() for s in f["contact/direction/component"][()]] == ["Tz", "Tx", "Ty"] * 3
         assert list(f["recovered/post_1_load"].attrs["column_units"]) == ["N", "N m"]
         assert f["recovered/post_1_load"].attrs["category"] == "interface_force"
-        assert f.attrs["version"] == 2
+        assert f.attrs["version"] == 3
 
 
 def test_ground_direction_and_normal_sign(tmp_path):
@@ -116,6 +116,9 @@ def test_ground_direction_and_normal_sign(tmp_path):
     assert s["peak_tension"] == 0.0
     back = load_result(r.save(tmp_path / "stop.h5"))
     assert back.contact_directions == d and back.contact_summary()[0]["axial_column"] == 1
+    with h5py.File(tmp_path / "stop.h5", "r+") as f:     # a version-2 file (modes from 0) still reads
+        f.attrs["version"] = 2
+    assert load_result(tmp_path / "stop.h5").contact_directions == d
 
 
 def test_version_1_and_bad_names_are_one_line_errors(tmp_path):
@@ -123,7 +126,7 @@ def test_version_1_and_bad_names_are_one_line_errors(tmp_path):
     with h5py.File(old, "w") as f:
         f.attrs["format"] = "liftoff-transient-result"
         f.attrs["version"] = 1
-    with pytest.raises(InputError, match=r"version 1 is not supported \(this liftoff reads version 2\)"):
+    with pytest.raises(InputError, match=r"version 1 is not supported \(this liftoff reads version 2, 3\)"):
         load_result(old)
     rows = np.ones((1, 3))
     with pytest.raises(InputError, match="not end in '_columns'"):

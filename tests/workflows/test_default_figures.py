@@ -325,7 +325,7 @@ def test_kernel_floor_block_shows_the_benchmark_file(figures):
 def test_batch_block_judges_each_machine(figures):
     """The batch benchmark (benchmarks/bench_batch.py --json, further machines by --append) is
     rendered, each machine's speed-up judged against issue 28's 3x on its own: the speed-up
-    depends on the CPU (3.27x on one machine, 1.0x on an AVX2 one, 2026-12-07)."""
+    depends on the CPU (docs/figures/bench_batch.json holds two machines')."""
     run = {"date": "2026-01-01", "cpus": 2, "load_average_end": 0.5, "repeat": 3, "vehicle_modes": 3000,
            "pad_modes": 300, "contact_rows": 24, "cases": 64, "group": 8, "batched_us": 10.0, "one_by_one_us": 33.0,
            "contact_force_diff": 1e-7, "reordered_contact_force_diff": 2e-7}

@@ -693,7 +693,26 @@ def test_a_case_with_other_model_files_is_named(tmp_path):
 
     p = _scenario(tmp_path, STICK, t_end=1.0, cases=[{"name": "nominal"}, {"name": "no-control",
                                                                              "control": {"enabled": False}},
-                                                     {"name": "moon", "gravity": {"accel": [0.0, 0.0, -1.62]}}])
-    note = note_of(p)
-    assert "case moon differs" in note and "no-control" not in note and "of case nominal's model" in note
+                                                     {"name": "moon", "gravity": {"accel": [0.0, 0.0, -1.62]}},
+                                                     {"name": "stiff",
+                                                      "post_defaults": {"stiffness": [2.0e10, 2.0e10, 5.0e10]}},
+                                                     {"name": "late", "post_defaults": {"release_time": 6.7}}])
+    note = note_of(p)        # (stiffer posts: another Table 1; a later release: the same files)
+    assert "cases moon, stiff differ" in note and "no-control" not in note and "late" not in note
+    assert "of case nominal's model" in note
     assert note_of(_scenario(tmp_path, STICK, t_end=1.0, name="s2.toml")) == ""
+
+
+def test_python_runs_manifest_a_command_that_runs():
+    """From Python, MANIFEST.json's command is `liftoff run` with the options given (the
+    embedded default's `<default ...>` name is no path: left out)."""
+    import shlex
+
+    from liftoff.config import load_scenario
+    from liftoff.workflows.run import Options, _api_command
+
+    cmd = _api_command(load_scenario(None), 3, Options(march_together=8), False, True, 2e9, snapshots=False)
+    assert cmd.endswith(" (called from Python)")
+    assert shlex.split(cmd[:-len(" (called from Python)")]) == [
+        "liftoff", "run", "--cases", "3", "--march-together", "8", "--no-error-estimate", "--no-snapshots",
+        "--max-memory", "2"]
