@@ -341,7 +341,8 @@ def read_maxmin(path: Path) -> dict[str, dict]:
         raise InputError(f"--compare {str(path)!r}: no such max/min table")
     try:
         lines = [ln for ln in path.read_text(encoding="utf-8").splitlines() if ln and not ln.startswith("#")]
-        rows = {r["item"]: {"max": float(r["max"]), "min": float(r["min"]), "unit": r.get("unit", "")}
+        rows = {r["item"]: {"max": float(r["max"]), "min": float(r["min"]), "unit": r.get("unit", ""),
+                            "case_max": r.get("case_max") or "", "case_min": r.get("case_min") or ""}
                 for r in csv.DictReader(lines)}
     except UnicodeDecodeError:
         raise InputError(f"--compare {str(path)!r}: not a text file (a liftoff max/min CSV is)") from None
@@ -359,16 +360,40 @@ def pct_change(new: float, old: float) -> float:
     return (new - old) / abs(old) * 100.0 if old != 0 else (0.0 if new == 0 else float("nan"))
 
 
+def cases_of(rows) -> list[str]:
+    """The cases named in max/min rows' case_max and case_min columns, in order of appearance
+    (the cases that set an envelope's values)."""
+    return list(dict.fromkeys(c for r in rows for c in (r.get("case_max"), r.get("case_min")) if c))
+
+
 def write_compare(rows_new: list[dict], old: dict, out: Path) -> tuple[Path, list[dict]]:
-    """compare.csv: max and min of every item against an earlier run's, with % change."""
+    """compare.csv: max and min of every item against an earlier run's, with % change and the
+    case of each side; an item in one run only has a row too (its other side empty, status
+    'only in this run' or 'only in the earlier run': a load path removed or added is not a
+    missing row). The header names the cases that set each side's values."""
     rows = []
+    nan = float("nan")
     for r in rows_new:
         o = old.get(r["item"])
-        if o is None:
-            continue
+        status = "both" if o is not None else "only in this run"
+        o = o or {"max": nan, "min": nan, "case_max": "", "case_min": ""}
         rows.append({"item": r["item"], "unit": r["unit"], "max": r["max"], "max_old": o["max"],
                      "max_change_pct": pct_change(r["max"], o["max"]), "min": r["min"], "min_old": o["min"],
-                     "min_change_pct": pct_change(r["min"], o["min"]), "category": r.get("category", "")})
-    fields = ("item", "unit", "max", "max_old", "max_change_pct", "min", "min_old", "min_change_pct")
-    head = "# liftoff comparison with an earlier run's max/min; change = (new - old) / |old| x 100 %\n"
+                     "min_change_pct": pct_change(r["min"], o["min"]), "case_max": r.get("case_max", ""),
+                     "case_max_old": o.get("case_max", ""), "case_min": r.get("case_min", ""),
+                     "case_min_old": o.get("case_min", ""), "status": status, "category": r.get("category", "")})
+    have = {r["item"] for r in rows_new}
+    for item, o in old.items():
+        if item not in have:
+            rows.append({"item": item, "unit": o.get("unit", ""), "max": nan, "max_old": o["max"],
+                         "max_change_pct": nan, "min": nan, "min_old": o["min"], "min_change_pct": nan,
+                         "case_max": "", "case_max_old": o.get("case_max", ""), "case_min": "",
+                         "case_min_old": o.get("case_min", ""), "status": "only in the earlier run", "category": ""})
+    fields = ("item", "unit", "max", "max_old", "max_change_pct", "min", "min_old", "min_change_pct", "case_max",
+              "case_max_old", "case_min", "case_min_old", "status")
+    new_cases, old_cases = cases_of(rows_new), cases_of(old.values())
+    head = ("# liftoff comparison with an earlier run's max/min; change = (new - old) / |old| x 100 %; status: both, "
+            "only in this run, only in the earlier run (its other side empty)\n"
+            f"# cases setting this run's values: {', '.join(new_cases) or 'not recorded'}; the earlier run's: "
+            f"{', '.join(old_cases) or 'not recorded'} (an envelope over other cases differs by them too)\n")
     return write_rows_csv(rows, fields, head, out / "compare.csv"), rows

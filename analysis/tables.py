@@ -141,7 +141,9 @@ def display_points(x: np.ndarray, y: np.ndarray, bins: int = DISPLAY_BINS) -> tu
 
 def format_changes(rows: list[dict], limit: int = 12) -> str:
     """The force items with the largest percent changes against an earlier run."""
-    sel = [r for r in rows if is_force(r)]
+    sel = [r for r in rows if is_force(r) and r.get("status", "both") == "both"]
+    only_old = sum(r.get("status") == "only in the earlier run" for r in rows)
+    only_new = sum(r.get("status") == "only in this run" for r in rows)
 
     def change(r, side: str) -> float:     # a load from nothing (old 0: no percentage) ranks first, not last
         pct = r[f"{side}_change_pct"]
@@ -151,7 +153,9 @@ def format_changes(rows: list[dict], limit: int = 12) -> str:
 
     big = sorted(sel, key=lambda r: -max(change(r, "max"), change(r, "min")))
     w = max([len(r["item"]) for r in big[:limit]] + [10])
-    lines = [f"Largest changes against the earlier run ({len(rows)} items compared, compare.csv):",
+    alone = (f"; {only_old} only in the earlier run, {only_new} only in this one" if only_old or only_new else "")
+    lines = [f"Largest changes against the earlier run ({len(rows) - only_old - only_new} items compared{alone}, "
+             "compare.csv):",
              f"{'item':<{w}} {'max':>12} {'old':>12} {'%':>8} {'min':>12} {'old':>12} {'%':>8}"]
     for r in big[:limit]:
         lines.append(f"{r['item']:<{w}} {r['max']:12.4e} {r['max_old']:12.4e} {r['max_change_pct']:8.2f} "

@@ -45,6 +45,17 @@ def check(sc, opt, n_generated: int):
     if missing:
         raise InputError(f"--contributions {path}: it has no case {missing[0]!r} (its cases: "
                          f"{', '.join(sorted(have))}); the split pairs the cases by name")
+    # the split rebuilds the earlier run from its named cases: an envelope some of whose values other
+    # cases set (an earlier campaign's generated cases) would put their whole excess into 'other' as if
+    # code or files had changed (a review: 100 % of a peak, nothing changed)
+    from liftoff.analysis.aggregate import cases_of, read_maxmin
+
+    beyond = [c for c in cases_of(read_maxmin(Path(opt.compare)).values()) if c not in have]
+    if beyond:
+        raise InputError(f"--contributions {path}: the earlier envelope ({opt.compare}) has values set by case"
+                         f"{'s' if len(beyond) > 1 else ''} {', '.join(beyond[:5])}{' ...' if len(beyond) > 5 else ''}"
+                         ", not a named case of that scenario (a campaign's generated cases?); the split rebuilds "
+                         "the named cases only: compare against a run of them alone")
     return old
 
 
@@ -110,7 +121,8 @@ def write(sc, old_sc, prep, cache, results: dict, old_rows: dict, out: Path, ech
             "forcing (the new cases on the earlier model), modes (the new model, earlier damping) and damping "
             "(the new run); other + forcing + modes + damping = change = new - old (17 digits: to round-off); one at a "
             "time in that "
-            f"order (an interaction goes to the later part); SI units (column unit); {time.perf_counter() - t0:.1f} s\n")
+            f"order (an interaction goes to the later part); SI units (column unit); {time.perf_counter() - t0:.1f} s; "
+            "items in one of the runs only are not split (compare.csv lists them, status)\n")
     path = write_rows_csv(rows, FIELDS, head, out / "contributions.csv", digits=17)    # the parts add up in the file
     big = sorted((r for r in rows if r["change"] != 0), key=lambda r: -abs(r["change"]) / max(abs(r["old"]), 1e-300))
     if big:

@@ -135,3 +135,46 @@ def test_a_split_that_cannot_be_made_leaves_the_run_and_warns(earlier, monkeypat
     err = capsys.readouterr().err
     assert "liftoff: warning: --contributions: no split written (the new case 'nominal' cannot run" in err
     assert (tmp / "same" / "compare.csv").is_file() and not (tmp / "same" / "contributions.csv").exists()
+
+
+def test_an_earlier_envelope_of_other_cases_is_refused(earlier, tmp_path):
+    """--contributions rebuilds the earlier run from its named cases: an earlier envelope set
+    partly by other cases (a campaign's generated ones) is refused before any stage, naming
+    them (a review: their whole excess went into 'other', 100 % of a peak with nothing
+    changed)."""
+    from liftoff.workflows.cli import main
+
+    tmp, old = earlier
+    lines = (tmp / "old" / "maxmin_envelope.csv").read_text().splitlines()
+    head = [ln for ln in lines if ln.startswith("#")]
+    body = [ln for ln in lines if not ln.startswith("#")]
+    cols = body[0].split(",")
+    k = cols.index("case_max")
+    first = body[1].split(",")
+    first[k] = "d0001"                           # one value set by a generated case
+    (tmp_path / "env.csv").write_text("\n".join(head + [body[0], ",".join(first)] + body[2:]) + "\n")
+    new = _write(tmp / "same2.toml", _base())
+    assert main(["run", str(new), "--out", str(tmp_path / "x"), "--cache", str(tmp / "c"), "--no-progress",
+                 "--no-snapshots", "--no-plots", "--no-error-estimate", "--compare", str(tmp_path / "env.csv"),
+                 "--contributions", str(old)]) == 2
+    assert not (tmp_path / "x").exists()
+
+
+def test_compare_lists_items_in_one_run_only(tmp_path):
+    """compare.csv has a row for an item in one run only (its other side empty, a status), and
+    the console count says how many (a review: a removed attach point's six rows vanished)."""
+    from liftoff.analysis import aggregate
+    from liftoff.analysis.tables import format_changes
+
+    new = [{"item": "A", "unit": "N", "max": 2.0, "min": -1.0, "category": "contact_force", "case_max": "nominal",
+            "case_min": "nominal"},
+           {"item": "NEW", "unit": "N", "max": 9e6, "min": 0.0, "category": "contact_force", "case_max": "nominal",
+            "case_min": "nominal"}]
+    old = {"A": {"max": 1.0, "min": -1.0, "unit": "N", "case_max": "nominal", "case_min": "d0003"},
+           "GONE": {"max": 5e6, "min": 0.0, "unit": "N", "case_max": "nominal", "case_min": "nominal"}}
+    path, rows = aggregate.write_compare(new, old, tmp_path)
+    status = {r["item"]: r["status"] for r in rows}
+    assert status == {"A": "both", "NEW": "only in this run", "GONE": "only in the earlier run"}
+    text = path.read_text()
+    assert "cases setting this run's values: nominal; the earlier run's: nominal, d0003" in text
+    assert "1 items compared; 1 only in the earlier run, 1 only in this one" in format_changes(rows)
