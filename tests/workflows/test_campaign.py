@@ -1005,3 +1005,20 @@ def test_a_failed_task_names_its_cases_and_the_finished_ones_are_kept(monkeypatc
         campaign.run_tasks(InlineExecutor(), [SimpleNamespace(index=6, together=())], got.append, window=1)
     with pytest.raises(ResourceError, match=r"campaign: generated case d0007, d0008: out of memory in its worker"):
         campaign.run_tasks(InlineExecutor(), [SimpleNamespace(index=7, together=(8,))], got.append, window=1)
+
+
+def test_results_groups_take_the_root_time_as_a_datatree(campaign4):
+    """README: a results file opened as an xarray DataTree gives each group the root's time
+    as its coordinate, so a group's histories select by time in seconds."""
+    xr = pytest.importorskip("xarray")
+    pytest.importorskip("h5netcdf")
+    if not hasattr(xr, "open_datatree"):
+        pytest.skip("xarray without open_datatree")
+    tmp, _, _ = campaign4
+    with xr.open_datatree(tmp / "out" / "results_nominal.h5", engine="h5netcdf") as tree:
+        rec = tree["recovered"].to_dataset()
+        t = rec["time"].values
+        assert t.size > 10 and np.all(np.diff(t) > 0)
+        k = t.size // 2
+        at = rec.sel(time=t[k])
+        assert float(at["cg_motion"][0]) == float(rec["cg_motion"][k, 0])
