@@ -283,6 +283,11 @@ def _engines(w: Where, engines: Any, profiles: dict) -> list[Engine]:
                 raise we.error("missing thrust table: give time + thrust (N) or profile + scale")
             t, v = tabulated(we, e, Path("."), vkey="thrust")
         v = v * number(we / "scale", e.get("scale", 1.0))
+        if v[0] != 0.0:     # (a table is held at its first value before it begins: thrust before the start)
+            raise (we / ("profile" if "profile" in e else "thrust")).error(
+                f"the thrust table begins at {v[0]:.6g} N (t = {t[0]:g} s): an engine gives no thrust before its "
+                "start, but a table holds its first value before it begins, so this engine would push from t0; "
+                "begin the table at 0 N (a step: time [0, 0.001, ...] with thrust [0, F, ...])")
         out.append(Engine(name, string(we / "mount", e["mount"]), d / np.linalg.norm(d), t, v,
                           number(we / "start", e.get("start", 0.0))))
     return out

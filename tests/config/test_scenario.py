@@ -400,3 +400,16 @@ def test_report_units_option(base):
     with pytest.raises(InputError, match=r"postprocess\.units: must be one of 'SI', 'in-lbf-s'") as e:
         parse_scenario(d, "s.toml")
     assert "\n" not in str(e.value)
+
+
+def test_an_engine_table_must_begin_at_zero_thrust(base):
+    """A thrust table is held at its first value before it begins, so one beginning at F > 0
+    pushed from t0, not from the engine's start (a review: 100 kN on a 15 t stack from t = 0
+    with start = 0.4 s). Refused, naming the engine; a table from 0 N parses."""
+    d = copy.deepcopy(base)
+    d["engine"] = [{"name": "e1", "mount": "ssme_1_gimbal", "time": [0.0, 1.0], "thrust": [1.0e5, 1.0e5],
+                    "start": 0.4}]
+    with pytest.raises(InputError, match=r"engine\[0\].*thrust: the thrust table begins at 100000 N"):
+        parse_scenario(d, "bad.toml")
+    d["engine"][0].update(time=[0.0, 0.001, 1.0], thrust=[0.0, 1.0e5, 1.0e5])
+    assert parse_scenario(d, "ok.toml").cases[0].engines[0].thrust[0] == 0.0
