@@ -116,7 +116,9 @@ class BeamStick:
         return self.rho * np.array([s.A for s in self.sections()])
 
     def mass(self) -> float:
-        """Total mass (kg): the segments' and the lumped masses (the links' are not counted)."""
+        """The segments' and the lumped masses (kg), without the links to off-axis points, which
+        the model has too (LINK's line density times each link's length: a user's stick with
+        three points 2 m off its axis weighs 3 t more than this)."""
         return float(self.line_density() @ np.diff(np.asarray(self.stations, float))
                      + sum(float(np.asarray(m).reshape(-1)[0]) for m in self.masses.values()))
 

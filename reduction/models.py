@@ -199,7 +199,8 @@ class RigidMass:
                              f"moments {np.round(w, 6).tolist()}: each >= 0 and none above the sum of the other two)")
 
     def tensor(self) -> np.ndarray:
-        """The 3 x 3 inertia tensor about the c.g. (kg m^2)."""
+        """The 3 x 3 inertia tensor about the c.g. (kg m^2); the given products Ixy, Ixz, Iyz are
+        its off-diagonal entries (-integral of x y dm: a Nastran CONM2's I21, I31, I32 negated)."""
         I = np.asarray(self.inertia, float).reshape(-1)
         xx, yy, zz = I[:3]
         xy, xz, yz = I[3:] if I.size == 6 else (0.0, 0.0, 0.0)

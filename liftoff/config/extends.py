@@ -62,7 +62,9 @@ MAX_DEPTH = 8
 
 
 def merge(base: dict, over: dict) -> dict:
-    """Deep merge ``over`` into a copy of ``base`` (tables by key, named tables by name)."""
+    """Deep merge ``over`` into a copy of ``base`` (tables by key, arrays of named tables by
+    name at any depth: an entry of a new name is added, one of a base's name merged into it,
+    and ``{name = "x", remove = true}`` takes the base's entry x out)."""
     out = copy.deepcopy(base)
     for k, v in over.items():
         if isinstance(v, dict) and isinstance(out.get(k), dict):
@@ -75,6 +77,13 @@ def merge(base: dict, over: dict) -> dict:
             if twice is not None:           # (merged by name, the first would vanish into the second)
                 raise InputError(f"{k}: two entries named {twice!r}; each entry of a list merged by name needs its own")
             for x in v:
+                if x.get("remove") is True:      # the base's entry of that name taken out (nothing else may be given)
+                    if set(x) != {"name", "remove"}:
+                        raise InputError(f"{k}: entry {x['name']!r}: remove = true takes nothing but the name")
+                    if merged.pop(x["name"], None) is None:
+                        raise InputError(f"{k}: remove = true for {x['name']!r}, which the scenario extended has not "
+                                         f"(its entries: {', '.join(merged) or 'none'})")
+                    continue
                 merged[x["name"]] = merge(merged.get(x["name"], {}), x)
             out[k] = list(merged.values())
         else:

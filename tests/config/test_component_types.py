@@ -113,11 +113,12 @@ def test_tank_stage_frames_and_stringers_from_toml():
     section named by its key."""
     d = tomllib.loads(default_text())
     d["model"]["component"]["spare"] = {"type": "tank_stage", "params": {
-        "walls": "shell", "frames": [4.0, 5.0], "frame_section": {"shape": "i", "h": 0.2, "b": 0.1, "tw": 0.005,
+        "walls": "shell", "radius": 4.2, "wall_thickness": 0.15, "frames": [4.0, 5.0], "frame_section": {"shape": "i", "h": 0.2, "b": 0.1, "tw": 0.005,
                                                                    "tf": 0.008},
         "frame_material": {"E": 70e9, "nu": 0.33, "rho": 2700.0},
         "stringers": 12, "stringer_section": {"shape": "hat", "h": 0.05, "b": 0.04, "c": 0.02, "t": 0.003},
-        "compartments": [{"name": "lox", "cyl_length": 4.6}], "patches": {"foot": [0.0, 0.0, 0.0]}}}
+        "compartments": [{"name": "lox", "cyl_length": 4.6, "liquid_density": 1141.0}],
+        "patches": {"foot": [0.0, 0.0, 0.0]}}}
     d["model"]["joint"].append({"name": "spare_1", "components": ["core", "spare"]})
     b = parse_scenario(d, "s.toml").cases[0].model.components["spare"].builder
     assert b.frames == (4.0, 5.0) and b.frame_section["shape"] == "i" and b.frame_material.rho == 2700.0
@@ -220,3 +221,31 @@ def test_a_mirror_may_repeat_its_sources_materials():
     d["model"]["materials"]["srb_right_case"]["E"] *= 1.5
     with pytest.raises(InputError, match=r"model\.materials\.srb_right_case: .*must repeat"):
         parse_scenario(d, "s.toml")
+
+
+def test_a_tank_stage_takes_no_shuttle_default():
+    """A tank stage's size, its compartments' length and propellant density must be given (the
+    defaults were the Shuttle external tank's: a compartment without liquid_density got LOX,
+    16 times LH2's mass), and without dry_mass its wall weighs what its material makes it (the
+    default 5,500 kg rescaled a user's density and E by 26 % without a word; a review)."""
+    d = tomllib.loads(default_text())
+    params = {"radius": 1.5, "wall_thickness": 0.05, "material": {"E": 70e9, "nu": 0.33, "rho": 2700.0},
+              "compartments": [{"name": "lh2", "cyl_length": 10.0, "liquid_density": 70.85}],
+              "patches": {"foot": [0.0, 0.0, 0.0]}}
+    d["model"]["component"]["spare"] = {"type": "tank_stage", "params": params}
+    d["model"]["joint"].append({"name": "spare_1", "components": ["core", "spare"]})
+    b = parse_scenario(d, "s.toml").cases[0].model.components["spare"].builder
+    assert b.dry_mass is None and b.material.rho == 2700.0 and b.compartments[0].liquid_density == 70.85
+    for path, key in ((params, "radius"), (params, "wall_thickness"), (params["compartments"][0], "liquid_density"),
+                      (params["compartments"][0], "cyl_length")):
+        bad = copy.deepcopy(d)
+        target = bad["model"]["component"]["spare"]["params"]
+        target = target if path is params else target["compartments"][0]
+        del target[key]
+        with pytest.raises(InputError, match=rf"spare\.params\..*{key}: missing"):
+            parse_scenario(bad, "s.toml")
+    two = copy.deepcopy(d)
+    two["model"]["component"]["spare"]["params"]["compartments"].append(
+        {"name": "lox", "cyl_length": 2.0, "liquid_density": 1141.0})
+    with pytest.raises(InputError, match=r"spare\.params\.intertank_length: missing"):
+        parse_scenario(two, "s.toml")

@@ -159,3 +159,23 @@ def test_the_documented_example_parses(tmp_path):
     sc = load_scenario(_write(tmp_path / "doc.toml", block))
     assert sc.cases[0].model.source == "stick"
     assert next(e for e in sc.cases[0].engines if e.name == "ssme_1").start == 0.30
+
+
+def test_an_entry_of_the_base_is_removed_by_name(tmp_path):
+    """Arrays of named tables merge by name at any depth (a stage's compartments too: a user's
+    own were added to the example's, doubling its propellant; a review), and
+    `{name = "x", remove = true}` takes the base's entry x out: an example's engine, or a
+    stage's compartments replaced by removing the base's and giving one's own."""
+    f = _write(tmp_path / "s.toml", 'extends = "shuttle"\n[[engine]]\nname = "ssme_3"\nremove = true\n')
+    sc = load_scenario(f)
+    assert len(sc.cases[0].engines) == 4 and "ssme_3" not in {e.name for e in sc.cases[0].engines}
+    base = {"stage": {"compartments": [{"name": "rp1", "cyl_length": 10.0}, {"name": "lox", "cyl_length": 12.0}]}}
+    over = {"stage": {"compartments": [{"name": "rp1", "remove": True}, {"name": "lox", "remove": True},
+                                       {"name": "fuel", "cyl_length": 8.0}]}}
+    assert merge(base, over)["stage"]["compartments"] == [{"name": "fuel", "cyl_length": 8.0}]
+    assert [c["name"] for c in merge(base, {"stage": {"compartments": [{"name": "fuel", "cyl_length": 8.0}]}})[
+        "stage"]["compartments"]] == ["rp1", "lox", "fuel"]          # (without remove: added, as documented)
+    with pytest.raises(InputError, match="remove = true for 'x', which the scenario extended has not"):
+        merge(base, {"stage": {"compartments": [{"name": "x", "remove": True}]}})
+    with pytest.raises(InputError, match="remove = true takes nothing but the name"):
+        merge(base, {"stage": {"compartments": [{"name": "rp1", "remove": True, "cyl_length": 3.0}]}})

@@ -95,10 +95,17 @@ def test_the_scenario_type_reads_it():
     t = get("solid_motor", "vehicle")
     ctx = Context(name="booster_a", mesh_size=1.0, layout=StackLayout())
     w = Where("s.toml", "model") / "component" / "booster_a" / "params"
-    p = t.read(ctx, w, {"axis_xy": [5.0, 0.0], "holddown": {"hd_1": [7.45, 0.0, 0.0]},
+    given = {"case_radius": 1.855, "length": 45.46, "case_mass": 75e3, "skirt_mass": 5e3, "propellant_mass": 499e3,
+             "nozzle_mass": 11e3}
+    p = t.read(ctx, w, {**given, "axis_xy": [5.0, 0.0], "holddown": {"hd_1": [7.45, 0.0, 0.0]},
                         "points": {"att_fwd": [3.0, 0.0, 30.0]}})
     assert p.name == "booster_a" and p.mesh_size == 1.0 and p.attach_points()["att_fwd"].tolist() == [3.0, 0.0, 30.0]
     with pytest.raises(InputError, match="unknown key 'side'"):
-        t.read(ctx, w, {"side": "left", "holddown": {"hd_1": [2.45, 0.0, 0.0]}})
+        t.read(ctx, w, {**given, "side": "left", "holddown": {"hd_1": [2.45, 0.0, 0.0]}})
     with pytest.raises(InputError, match=r"s.toml: model.component.booster_a.params: .*points.x: z = 90 m"):
-        t.read(ctx, w, {"holddown": {"hd_1": [2.45, 0.0, 0.0]}, "points": {"x": [3.0, 0.0, 90.0]}})
+        t.read(ctx, w, {**given, "holddown": {"hd_1": [2.45, 0.0, 0.0]}, "points": {"x": [3.0, 0.0, 90.0]}})
+    # its size and masses must be given (the defaults were the Shuttle booster's: a 12 m motor took
+    # 499 t of propellant without a word; a review)
+    for key in given:
+        with pytest.raises(InputError, match=rf"booster_a\.params\.{key}: missing"):
+            t.read(ctx, w, {**{k: v for k, v in given.items() if k != key}, "holddown": {"hd_1": [7.45, 0.0, 0.0]}})

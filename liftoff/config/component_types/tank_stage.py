@@ -5,7 +5,11 @@ walls solid or shell, liquids smeared or hydroelastic), with its named points as
 dome apex (an engine mount, a payload adapter), any other a patch on the cylindrical wall
 (an attach fitting, a hold-down point). Compartments bottom to top as
 ``[[model.component.<name>.params.compartments]]`` (meshes.tank.Compartment fields), the wall
-material as ``material = {E, nu, rho}`` (default Al 2219). walls and liquid default to
+material as ``material = {E, nu, rho}`` (default Al 2219). ``radius``, ``wall_thickness``
+(and ``intertank_length`` with two compartments or more) and each compartment's
+``cyl_length`` and ``liquid_density`` are required (TankParams' defaults are the Shuttle
+external tank's); ``dry_mass`` (kg), if given, sets the wall's density (E scaled with it),
+else the material's density makes the mass. walls and liquid default to
 [model]'s; the volume groups are named after the component (``<name>_wall``, ...). Shell
 walls may carry ring frames and stringers as beams (fem.beam): ``frames = [z, ...]`` (m, on
 the cylindrical wall), ``frame_section = {shape = "t", h = ..., b = ..., tw = ..., tf =
@@ -18,6 +22,13 @@ from ..params import beam_members, builder, mesh_size_kw
 from ..params import material as read_material
 from ..values import Where, array_of_tables, named, xyz
 from . import ComponentType, Context
+
+#: what a tank stage must give (meshes.tank.TankParams' defaults are the Shuttle external tank's: a
+#: user's stage took them without a word)
+REQUIRED = {"radius": "the tank's outer radius (m)", "wall_thickness": "the wall thickness (m)",
+            "intertank_length": "the intertank skirt's length between compartments (m)"}
+REQUIRED_COMPARTMENT = {"cyl_length": "the compartment's cylinder length (m)",
+                        "liquid_density": "the propellant's density (kg/m^3; Compartment's default is LOX's)"}
 
 
 def read(ctx: Context, where: Where, params: dict):
@@ -32,17 +43,27 @@ def read(ctx: Context, where: Where, params: dict):
                                           nonempty=True)):
         if "name" not in c:
             raise (where / "compartments" / i / "name").error("missing: the compartment's name (lox, lh2, rp1, ...)")
+        for key, what in REQUIRED_COMPARTMENT.items():
+            if isinstance(c, dict) and key not in c:
+                raise (where / "compartments" / i / key).error(f"missing: {what}")
         comps.append(builder(where / "compartments" / i, Compartment, c))
     names = [c.name for c in comps]
     if len(set(names)) != len(names):
         raise (where / "compartments").error(f"compartment names repeat: {names}")
+    need = dict(REQUIRED) if len(comps) > 1 else {k: v for k, v in REQUIRED.items() if k != "intertank_length"}
+    for key, what in need.items():
+        if key not in params:
+            raise (where / key).error(f"missing: {what}")
     patches = named(where / "patches", params.get("patches", {}), xyz)
     material = AL2219 if "material" not in params else \
         read_material(where / "material", f"{ctx.name}-wall", params["material"])[0]
     members = beam_members(where, params, ctx.name, ("frame", "stringer"))
     rest = {k: v for k, v in params.items() if k not in own}
     size = mesh_size_kw(ctx.mesh_size)
-    fixed = {"name": ctx.name, "compartments": tuple(comps), "patches": patches, "material": material, **members}
+    fixed = {"name": ctx.name, "compartments": tuple(comps), "patches": patches, "material": material, **members,
+             # not given: the wall weighs what its material's density makes it (TankParams' default, 5.5 t,
+             # is the Shuttle LOX tank's, and rescaled a user's density and E to it without a word)
+             **({} if "dry_mass" in params else {"dry_mass": None})}
     return builder(where, TankParams, rest, fixed, {**size, "walls": ctx.walls, "liquid": ctx.liquid})
 
 
