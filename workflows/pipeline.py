@@ -739,6 +739,15 @@ def _check_joints(model: ModelConfig, cbs: dict, where: Where) -> None:
         for b in names[i + 1:]:
             for p in sorted(points[a] & points[b]):
                 if (p, a) not in joined or (p, b) not in joined:
+                    ca, cb = model.components.get(a), model.components.get(b)
+                    mirror = next(((m, s) for m, s, c in ((b, a, cb), (a, b, ca))
+                                   if c is not None and c.mirror is not None and c.mirror.of == s), None)
+                    if mirror is not None:       # (the joint hint would weld a mirror to its source)
+                        m, s = mirror
+                        raise (where / "joint").error(
+                            f"component {m!r}, the mirror of {s!r}, kept {s!r}'s point name {p!r}: a mirror renames "
+                            f"its source's points by putting its own name for the source's in them ({s}_x -> {m}_x), "
+                            f"and {p!r} has no {s!r} in it; put {s!r} in the name of that point of {s!r}")
                     raise (where / "joint").error(
                         f"components {a!r} and {b!r} both have a point {p!r}, which is no joint of both: declare "
                         f"it ([[model.joint]] name = {p!r}, components = [{a!r}, {b!r}]) or rename one of them")

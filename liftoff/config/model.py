@@ -634,6 +634,10 @@ def model_config(where: Where, spec: Any, base: Path | str = ".") -> ModelConfig
     if "slosh_gravity" in m and not hydroelastic:
         raise (where / "slosh_gravity").error("needs a hydroelastic liquid, and no component has one; "
                                               "it would be silently ignored")
+    if m.get("liquid") == "hydroelastic" and not hydroelastic:      # (a review: accepted and ignored)
+        raise (where / "liquid").error('"hydroelastic", but no component takes [model]\'s liquid (none holds a '
+                                       "propellant whose liquid it models: a tank stage or the Shuttle core); it would "
+                                       "be silently ignored")
     # the default: the liquids' slosh modes where there are hydroelastic liquids (issue 25)
     convective = convective or ("slosh" if hydroelastic else "wall")
     return ModelConfig(source, degree, zeta, layout, components, materials, system, max_elements,

@@ -249,3 +249,16 @@ def test_a_tank_stage_takes_no_shuttle_default():
         {"name": "lox", "cyl_length": 2.0, "liquid_density": 1141.0})
     with pytest.raises(InputError, match=r"spare\.params\.intertank_length: missing"):
         parse_scenario(two, "s.toml")
+
+
+def test_a_hydroelastic_liquid_without_a_liquid_component_is_refused():
+    """[model] liquid = "hydroelastic" on a model none of whose components holds a liquid (a
+    stick of beams) did nothing, silently (a review; convective and slosh_gravity were
+    refused so already)."""
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "data" / "beam_stick" / "scenario.toml"
+    d = tomllib.loads(path.read_text())
+    d["model"]["liquid"] = "hydroelastic"
+    with pytest.raises(InputError, match=r"model\.liquid: \"hydroelastic\", but no component takes"):
+        parse_scenario(d, "s.toml", path.parent)

@@ -91,3 +91,22 @@ def test_a_post_joins_one_place_of_both_bodies(tmp_path):
     with pytest.raises(InputError, match=r"post\[2\] 'r1'.*'b_right_hd_1' at \[2.2, 0.6, 0.0\] m and pad point "
                                          r"'pad_r2' at \[3.8, -0.6, 0.0\] m are 2 m apart"):
         _run(p, tmp_path)
+
+
+def test_a_mirror_that_keeps_a_source_point_name_says_to_rename_it(tmp_path):
+    """A source point whose name lacks the source's name keeps it in the mirror, so both
+    components have it: the error says so and how to rename it, not 'declare a joint', which
+    would weld the mirror to its source (a review)."""
+    pytest.importorskip("petsc4py")
+    from liftoff.config import Where, load_scenario
+    from liftoff.core.errors import InputError
+    from liftoff.workflows.cache import StageCache
+    from liftoff.workflows.pipeline import build_stack
+
+    p = tmp_path / "s.toml"
+    p.write_text((DATA / "scenario.toml").read_text().replace("b_left_hd_2 = [-3.8, -0.6, 0.0]",
+                                                              "b_left_hd_2 = [-3.8, -0.6, 0.0]\nhd_x = [-3.0, 0.9, 0.0]"))
+    sc = load_scenario(p)
+    with pytest.raises(InputError, match=r"component 'b_right', the mirror of 'b_left', kept 'b_left''s point name "
+                                         r"'hd_x'.*put 'b_left' in the name"):
+        build_stack(sc.cases[0].model, StageCache(tmp_path / "cache"), progress=False, where=Where(p.name, "model"))
