@@ -262,3 +262,23 @@ def test_a_hydroelastic_liquid_without_a_liquid_component_is_refused():
     d["model"]["liquid"] = "hydroelastic"
     with pytest.raises(InputError, match=r"model\.liquid: \"hydroelastic\", but no component takes"):
         parse_scenario(d, "s.toml", path.parent)
+
+
+def test_an_axis_point_far_from_its_dome_apex_is_warned_of():
+    """A tank stage's point on the axis is tied by a rigid arm to the nearer dome apex,
+    whatever its distance: beyond the tank's radius a warning names it (a review: z = 12 m on
+    a tank whose top apex is at 5.5 m went through)."""
+    d = tomllib.loads(default_text())
+    params = {"radius": 1.5, "wall_thickness": 0.05,
+              "compartments": [{"name": "lox", "cyl_length": 3.0, "liquid_density": 1141.0}],
+              "patches": {"foot": [0.0, 0.0, 0.0], "mount": [0.0, 0.0, -1.0]}}
+    d["model"]["component"]["spare"] = {"type": "tank_stage", "params": params}
+    d["model"]["joint"].append({"name": "spare_1", "components": ["core", "spare"]})
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        parse_scenario(copy.deepcopy(d), "s.toml")          # a gimbal 1 m below the apex: no warning
+    params["patches"]["top"] = [0.0, 0.0, 12.0]
+    with pytest.warns(UserWarning, match=r"patches\.top: on the axis .* m from the nearer dome apex"):
+        parse_scenario(d, "s.toml")

@@ -64,7 +64,35 @@ def read(ctx: Context, where: Where, params: dict):
              # not given: the wall weighs what its material's density makes it (TankParams' default, 5.5 t,
              # is the Shuttle LOX tank's, and rescaled a user's density and E to it without a word)
              **({} if "dry_mass" in params else {"dry_mass": None})}
-    return builder(where, TankParams, rest, fixed, {**size, "walls": ctx.walls, "liquid": ctx.liquid})
+    p = builder(where, TankParams, rest, fixed, {**size, "walls": ctx.walls, "liquid": ctx.liquid})
+    _warn_far_axis_points(where, p)
+    return p
+
+
+def _warn_far_axis_points(where: Where, p) -> None:
+    """Warn of a point on the axis farther than the tank's radius from the nearer dome apex: it
+    is tied to the apex's disk patch by a rigid arm of that length, as a gimbal or an adapter
+    below or above the dome is, but a z typed wrong gives one too, silently (a review: a point at
+    12 m on a tank whose top apex is at 5.5 m)."""
+    import warnings
+
+    import numpy as np
+
+    from liftoff.meshes.tank import tank_height
+
+    z_lo = float(p.z_bottom)
+    z_hi = z_lo + tank_height(p)
+    for name, ref in p.patches.items():
+        ref = np.asarray(ref, float)
+        if np.hypot(*(ref[:2] - np.asarray(p.axis_xy, float))) >= 1e-6:
+            continue
+        z = float(ref[2])
+        apex = z_hi if z >= 0.5 * (z_lo + z_hi) else z_lo
+        if abs(z - apex) > p.radius:
+            msg = (f"on the axis {abs(z - apex):.3g} m from the nearer dome apex (z = {apex:.4g} m), more than the "
+                   "tank's radius: a rigid arm of that length ties it to the apex; if it is no gimbal or adapter "
+                   "offset, check its z")
+            warnings.warn(str((where / "patches" / name).error(msg)), stacklevel=2)
 
 
 TYPE = ComponentType("tank_stage", read, "liftoff.meshes.tank:build_tank", "vehicle",
