@@ -64,6 +64,15 @@ def table(where: Where, value: Any, allowed: set[str], required: tuple[str, ...]
     return value
 
 
+def require(where: Where, value: dict, required: dict[str, str]) -> None:
+    """InputError at the first key of ``required`` (key -> what it is) missing from ``value``:
+    a type's parameters whose dataclass defaults are another vehicle's, which a user's own
+    component must therefore give."""
+    for key, what in required.items():
+        if key not in value:
+            raise (where / key).error(f"missing: {what}")
+
+
 def named(where: Where, value: Any, read: Callable[[Where, Any], Any] | None = None) -> dict:
     """A table of any names (points, joints, masses), each value read by ``read(where /
     name, value)`` (None: as given)."""

@@ -11,7 +11,7 @@ a word. walls default to [model]'s."""
 from __future__ import annotations
 
 from ..params import builder, mesh_size_kw
-from ..values import Where, named, xyz
+from ..values import Where, named, require, xyz
 from . import ComponentType, Context
 
 #: what a solid motor must give (SolidMotorParams' defaults are the Shuttle booster's)
@@ -25,9 +25,7 @@ def read(ctx: Context, where: Where, params: dict):
 
     if not isinstance(params, dict):
         raise where.error("expected a table of SolidMotorParams fields")
-    for key, what in REQUIRED.items():
-        if key not in params:
-            raise (where / key).error(f"missing: {what}")
+    require(where, params, REQUIRED)
     own = {"holddown", "points"}
     fixed = {"motor": ctx.name, "side": "left", "holddown": named(where / "holddown", params.get("holddown", {}), xyz),
              "points": named(where / "points", params.get("points", {}), xyz)}

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from ..params import beam_members, builder, mesh_size_kw
 from ..params import material as read_material
-from ..values import Where, array_of_tables, named, xyz
+from ..values import Where, array_of_tables, named, require, xyz
 from . import ComponentType, Context
 
 #: what a tank stage must give (meshes.tank.TankParams' defaults are the Shuttle external tank's: a
@@ -43,17 +43,14 @@ def read(ctx: Context, where: Where, params: dict):
                                           nonempty=True)):
         if "name" not in c:
             raise (where / "compartments" / i / "name").error("missing: the compartment's name (lox, lh2, rp1, ...)")
-        for key, what in REQUIRED_COMPARTMENT.items():
-            if isinstance(c, dict) and key not in c:
-                raise (where / "compartments" / i / key).error(f"missing: {what}")
+        if isinstance(c, dict):
+            require(where / "compartments" / i, c, REQUIRED_COMPARTMENT)
         comps.append(builder(where / "compartments" / i, Compartment, c))
     names = [c.name for c in comps]
     if len(set(names)) != len(names):
         raise (where / "compartments").error(f"compartment names repeat: {names}")
-    need = dict(REQUIRED) if len(comps) > 1 else {k: v for k, v in REQUIRED.items() if k != "intertank_length"}
-    for key, what in need.items():
-        if key not in params:
-            raise (where / key).error(f"missing: {what}")
+    require(where, params, REQUIRED if len(comps) > 1 else
+            {k: v for k, v in REQUIRED.items() if k != "intertank_length"})
     patches = named(where / "patches", params.get("patches", {}), xyz)
     material = AL2219 if "material" not in params else \
         read_material(where / "material", f"{ctx.name}-wall", params["material"])[0]
