@@ -371,24 +371,21 @@ def write_compare(rows_new: list[dict], old: dict, out: Path) -> tuple[Path, lis
     case of each side; an item in one run only has a row too (its other side empty, status
     'only in this run' or 'only in the earlier run': a load path removed or added is not a
     missing row). The header names the cases that set each side's values."""
-    rows = []
     nan = float("nan")
-    for r in rows_new:
-        o = old.get(r["item"])
-        status = "both" if o is not None else "only in this run"
-        o = o or {"max": nan, "min": nan, "case_max": "", "case_min": ""}
-        rows.append({"item": r["item"], "unit": r["unit"], "max": r["max"], "max_old": o["max"],
-                     "max_change_pct": pct_change(r["max"], o["max"]), "min": r["min"], "min_old": o["min"],
-                     "min_change_pct": pct_change(r["min"], o["min"]), "case_max": r.get("case_max", ""),
-                     "case_max_old": o.get("case_max", ""), "case_min": r.get("case_min", ""),
-                     "case_min_old": o.get("case_min", ""), "status": status, "category": r.get("category", "")})
-    have = {r["item"] for r in rows_new}
-    for item, o in old.items():
-        if item not in have:
-            rows.append({"item": item, "unit": o.get("unit", ""), "max": nan, "max_old": o["max"],
-                         "max_change_pct": nan, "min": nan, "min_old": o["min"], "min_change_pct": nan,
-                         "case_max": "", "case_max_old": o.get("case_max", ""), "case_min": "",
-                         "case_min_old": o.get("case_min", ""), "status": "only in the earlier run", "category": ""})
+    absent = {"max": nan, "min": nan}                 # the side of an item in one run only
+    new = {r["item"]: r for r in rows_new}
+    rows = []
+    for item in [*new, *(i for i in old if i not in new)]:
+        n, o = new.get(item), old.get(item)
+        status = "both" if n is not None and o is not None else "only in this run" if o is None else \
+            "only in the earlier run"
+        unit = (n if n is not None else o).get("unit", "")
+        n, o = n or absent, o or absent
+        rows.append({"item": item, "unit": unit, "max": n["max"], "max_old": o["max"],
+                     "max_change_pct": pct_change(n["max"], o["max"]), "min": n["min"], "min_old": o["min"],
+                     "min_change_pct": pct_change(n["min"], o["min"]), "case_max": n.get("case_max", ""),
+                     "case_max_old": o.get("case_max", ""), "case_min": n.get("case_min", ""),
+                     "case_min_old": o.get("case_min", ""), "status": status, "category": n.get("category", "")})
     fields = ("item", "unit", "max", "max_old", "max_change_pct", "min", "min_old", "min_change_pct", "case_max",
               "case_max_old", "case_min", "case_min_old", "status")
     new_cases, old_cases = cases_of(rows_new), cases_of(old.values())
