@@ -442,6 +442,17 @@ def render_cb_bench(b: dict) -> str:
 KERNEL_TARGET_RATIO = 1.2
 
 
+def _machine(runs: list[dict], k: int) -> tuple[str, str]:
+    """(the opening of measurement ``k``'s heading, "On this 2-core machine (date, CPU ..., ",
+    and the suffix naming it in a verdict) of a benchmark file's ``runs``: the first and each
+    further machine's (``others``, --append), the CPU said where there are several."""
+    r = runs[k]
+    cpu = (f"CPU {r['cpu']} ({r['vector_bits']}-bit vectors), " if r.get("cpu") else
+           ("CPU not recorded, " if len(runs) > 1 else ""))
+    where = "" if len(runs) == 1 else (" on the first machine" if k == 0 else f" on {r.get('cpu', 'the next')}")
+    return f"On {'this' if k == 0 else 'another'} {r['cpus']}-core machine ({r['date']}, {cpu}", where
+
+
 def render_kernel_floor(b: dict) -> str:
     """The transient kernel against a hand-written loop of the same per-step arithmetic
     (benchmarks/bench_kernel_floor.py --json), judged against issue 28's target; a
@@ -450,10 +461,8 @@ def render_kernel_floor(b: dict) -> str:
     rows, verdicts = [], []
     for k, r in enumerate(runs):
         ratios = [x["liftoff_us"] / x["floor_us"] for x in r["rows"]]
-        cpu = (f"CPU {r['cpu']} ({r['vector_bits']}-bit vectors), " if r.get("cpu") else
-               ("CPU not recorded, " if len(runs) > 1 else ""))
-        rows += [f"On {'this' if k == 0 else 'another'} {r['cpus']}-core machine ({r['date']}, {cpu}"
-                 f"`benchmarks/bench_kernel_floor.py --repeat {r['repeat']}`, "
+        machine, where = _machine(runs, k)
+        rows += [f"{machine}`benchmarks/bench_kernel_floor.py --repeat {r['repeat']}`, "
                  f"BLAS kernels {r.get('blas_kernels') or 'unknown'}, load average "
                  f"{r['load_average_end'] or float('nan'):.1f} at the end; each time the best of the repeats, liftoff's "
                  "and the floor's taken in turns):", "",
@@ -463,7 +472,6 @@ def render_kernel_floor(b: dict) -> str:
             rows.append(f"| {x['vehicle_modes']:,} + {x['pad_modes']} | {x['contact_rows']} | {x['outputs']} | "
                         f"{x['liftoff_us']:.1f} | {x['floor_us']:.1f} | {q:.2f} |")
         rows.append("")
-        where = "" if len(runs) == 1 else (" on the first machine" if k == 0 else f" on {r.get('cpu', 'the next')}")
         verdicts.append(("met" if all(q <= KERNEL_TARGET_RATIO for q in ratios) else "**not met**")
                         + f" (largest ratio {max(ratios):.2f}{where})")
     rows.append(f"Issue 28's target, liftoff within {KERNEL_TARGET_RATIO}x of the floor: " + "; ".join(verdicts) + ".")
@@ -483,12 +491,10 @@ def render_batch_bench(b: dict) -> str:
     parts, verdicts = [], []
     for k, r in enumerate(runs):
         ratio = r["one_by_one_us"] / r["batched_us"]
-        cpu = (f"CPU {r['cpu']} ({r['vector_bits']}-bit vectors), " if r.get("cpu") else
-               ("CPU not recorded, " if len(runs) > 1 else ""))
+        machine, where = _machine(runs, k)
         d = r.get("default")
         parts += [
-            f"On {'this' if k == 0 else 'another'} {r['cpus']}-core machine ({r['date']}, {cpu}"
-            f"`benchmarks/bench_batch.py --repeat {r['repeat']}`, load average {r['load_average_end']:.1f} at the end; "
+            f"{machine}`benchmarks/bench_batch.py --repeat {r['repeat']}`, load average {r['load_average_end']:.1f} at the end; "
             "each time the least of the repeats, the slope of the wall time over 500 and 2,500 steps):", "",
             "| modes (vehicle + pad) | contact rows | cases (group) | batched (us a case-step) | one by one (us a step) "
             "| speed-up | contact forces, batched vs one by one; one by one, modes reordered (of the peak) |",
@@ -503,7 +509,6 @@ def render_batch_bench(b: dict) -> str:
                 f"{d['batched_s'] / d['steps'] * 1e6:.1f} | {d['one_by_one_s'] / d['steps'] * 1e6:.1f} | "
                 f"{d['one_by_one_s'] / d['batched_s']:.2f} | {d['contact_force_diff']:.1e}; - |")
         parts.append("")
-        where = "" if len(runs) == 1 else (" on the first machine" if k == 0 else f" on {r.get('cpu', 'the next')}")
         verdicts.append(("met" if ratio >= BATCH_TARGET else "**not met**") + f" ({ratio:.2f}x at the issue's size{where})")
         if d:
             best = min(d["batched_s"], d["one_by_one_s"])
