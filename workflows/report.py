@@ -645,6 +645,13 @@ def srs_of(values: np.ndarray, h: float, settings) -> tuple[np.ndarray, np.ndarr
     return freq, np.stack([srs(values, h, freq, q, ic="steady") for q in settings.q])
 
 
+def _item_units(sel) -> "Dataset":
+    """The units of the items ``sel`` on a spectra group's ``items`` axis."""
+    from liftoff.core.records import Dataset
+
+    return Dataset(np.array([it.unit for it in sel], dtype=str), "1", dims=("items",))
+
+
 def spectra(result, cp, post, out: Path, case: str, srs: tuple | None = None) -> list[Path]:
     """spectra_<case>.h5 (PSD, FFT amplitude and SRS of the selected items) and
     psd_<case>.csv, per [postprocess.psd] / [postprocess.srs]; nothing when neither is set.
@@ -665,10 +672,10 @@ def spectra(result, cp, post, out: Path, case: str, srs: tuple | None = None) ->
         fa, A = fft_amplitude(V, h)
         data["psd"] = {"items": np.array([it.name for it in sel], dtype=str), "freq": Dataset(f, "Hz"),
                        "value": Dataset(P, "units^2/Hz of each item", dims=("freq", "items")),
-                       "item_units": Dataset(np.array([it.unit for it in sel], dtype=str), "1", dims=("items",))}
+                       "item_units": _item_units(sel)}
         data["fft"] = {"items": np.array([it.name for it in sel], dtype=str), "freq": Dataset(fa, "Hz"),
                        "amplitude": Dataset(A, "units of each item", dims=("freq", "items")),
-                       "item_units": Dataset(np.array([it.unit for it in sel], dtype=str), "1", dims=("items",))}
+                       "item_units": _item_units(sel)}
         head = f"# liftoff PSD (Welch, {post.psd.segment:g} s segments, Hann) of case {case}; units^2/Hz of each item\n"
         lines = [",".join(["freq_Hz"] + [f"{it.name} [({it.unit})^2/Hz]" for it in sel])]   # ((m/s^2)^2/Hz, not m/s^2^2/Hz)
         lines += [",".join([f"{x:.6e}" for x in row]) for row in np.column_stack([f, P])]
@@ -684,7 +691,7 @@ def spectra(result, cp, post, out: Path, case: str, srs: tuple | None = None) ->
                        "value": Dataset(S, "units of each item (the absolute-acceleration SRS: each history the oscillators' base input)", dims=("q", "freq", "items"),
                                         initial_conditions="steady under each history's first value (pyyeti.srs "
                                                            "ic='steady')"),
-                       "item_units": Dataset(np.array([it.unit for it in sel], dtype=str), "1", dims=("items",))}
+                       "item_units": _item_units(sel)}
     paths.insert(0, write_record(out / f"spectra_{case}.h5", "liftoff-spectra", 1, data, units="SI per item",
                                  attrs={"case": case, "h": h}))
     return paths
