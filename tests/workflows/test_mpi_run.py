@@ -55,7 +55,7 @@ def _liftoff(*args, mpirun=False, timeout=600, **extra_env):
 def test_two_ranks_give_the_serial_run(tmp_path, capsys):
     p = _scenario(tmp_path, MODEL, t_end=7.5, cases=[{"name": "nominal"}])
     assert main(["run", str(p), "--out", str(tmp_path / "serial"), "--cache", str(tmp_path / "c1"),
-                 "--no-progress", "--no-snapshots"]) == 0
+                 "--no-progress", "--no-snapshots", "--no-plots"]) == 0     # (the results compared; 9 s of plots)
     capsys.readouterr()
     res = _liftoff("run", p, "--out", tmp_path / "two", "--cache", tmp_path / "c2", "--no-progress",
                    "--ranks", "2")
@@ -84,7 +84,7 @@ def test_two_ranks_give_the_serial_run(tmp_path, capsys):
     shutil.rmtree(tmp_path / "c2" / "cb")
     shutil.rmtree(tmp_path / "c2" / "system")
     res = _liftoff("run", p, "--out", tmp_path / "again", "--cache", tmp_path / "c2", "--no-progress",
-                   "--no-snapshots", mpirun=True, LIFTOFF_MPI_COMPONENTS="distributed")
+                   "--no-snapshots", "--no-plots", mpirun=True, LIFTOFF_MPI_COMPONENTS="distributed")
     assert res.returncode == 0, res.stderr[-3000:]
     assert "fe core (hit)" in res.stdout and "cb core (built)" in res.stdout and "(rank 1)" not in res.stdout
     c = load_result(tmp_path / "again" / "results_nominal.h5")
