@@ -213,7 +213,11 @@ def _modes8(ST, Xq, Xv, Pc, F, PhiT, Mq, Mv, Y, E, RqT, RvT, Oq, Ov, from_f):
     at a time); written so, the SLP vectorizer packs each line into vector instructions. Per mode and case the same arithmetic in the same order as the rolled
     loop, so the same bits (tests/transient/test_batch.py); the four-mode blocks took the pass
     at 3,300 modes and 24 rows from 97-103 to 62-64 us on this machine (2026-12-07: the products
-    with F and E had been bound by their loads and stores)."""
+    with F and E had been bound by their loads and stores). The three blocks are inlined into
+    this loop (numba's ``inline="always"``): called, each call passed its arrays' structures
+    and saved the vector registers, and on an AMD EPYC (znver3, 256-bit vectors) the pass at
+    3,300 modes, 24 rows, 4 load columns and 2 output rows took 370 us against 180 us inlined
+    (2026-12-08; benchmarks/bench_batch.py's speed-up there went from 1.32 to 2.09)."""
     n = PhiT.shape[0]
     kq, kv = RqT.shape[1], RvT.shape[1]
     n4 = n - n % 4
@@ -234,7 +238,7 @@ def _modes8(ST, Xq, Xv, Pc, F, PhiT, Mq, Mv, Y, E, RqT, RvT, Oq, Ov, from_f):
                       Oq, Ov, from_f)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _contact_load8x4(PhiT, F, Pc, i):
     """Pc[i:i + 4] = PhiT[i:i + 4] F for eight cases: each F row loaded once for four modes;
     per mode the sum over the rows in the order of :func:`_modes_rolled`."""
@@ -268,7 +272,7 @@ def _contact_load8x4(PhiT, F, Pc, i):
     p[0] = d0; p[1] = d1; p[2] = d2; p[3] = d3; p[4] = d4; p[5] = d5; p[6] = d6; p[7] = d7
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _add_rows8x4(RT, X, E, i):
     """E += RT[i:i + 4]^T X[i:i + 4] for eight cases (rows RT transposed: the contact rows on X_q,
     or a body's output rows on X_q or X_v): each E row loaded and stored once for four modes,
@@ -300,7 +304,7 @@ def _add_rows8x4(RT, X, E, i):
         e[0] = e0; e[1] = e1; e[2] = e2; e[3] = e3; e[4] = e4; e[5] = e5; e[6] = e6; e[7] = e7
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _sweep8(ST, Xq, Xv, Pc, Mq, Mv, Y, i):
     """Mode i's load terms a = Mq[i] Y, b = Mv[i] Y and its free state X <- F X_q + G X_v + D Pc
     + L (eq. 9-10 in sweep form) for eight cases, Pc[i] as it stands (a mode of :func:`_modes8`)."""
