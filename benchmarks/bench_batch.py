@@ -26,7 +26,7 @@ reverse order: tests/transient/test_batch.py's reference). A bolted stack's cont
 forces are K_C times small differences of large modal displacements, so neither is zero.
 
 The speed-up depends on the CPU (README "Cases marched together" renders each machine's
-measurement from docs/figures/bench_batch.json: on an AMD EPYC with AVX2, znver3, far less
+measurement from docs/figures/bench_batch.json: on an AMD EPYC with AVX2, znver3, less
 than on the first machine). The group's pass over the modes is vectorised across its
 8 cases (one 512-bit register, or two 256-bit ones); the JSON records the CPU numba compiled
 for (LLVM's name) and its vector width; ``--append`` adds a further machine's measurement beside the first.

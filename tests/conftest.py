@@ -13,19 +13,21 @@ except ImportError:  # pragma: no cover - pyvista is installed by `make test`
     pass
 
 
-# The longest test files first (seconds, serial, on this 2-core machine, 2026-11-27; the
-# default figures' file without its recomputation, marker "figures", 2026-11-28), so
+# The longest test files first (seconds, setup and calls summed, in `make test` of a clean
+# clone on a 2-core AMD EPYC, 2026-12-08: 1,507 s over both workers, 777 s of wall time), so
 # that `make test`'s two pytest-xdist workers (--dist loadfile --no-loadscope-reorder)
 # start them at once and finish together: longest-processing-time-first scheduling. The
 # order changes no result (every file's tests stay in their order, on one worker); a file
-# missing here runs after these, in collection order.
+# missing here runs after these, in collection order. (The default figures' file, whose
+# recomputation is `make check-figures`, 15 s here.)
 LONGEST_FILES = {
-    "workflows/test_default_figures.py": 20, "workflows/test_run.py": 125, "workflows/test_examples_liftoff.py": 115,
-    "workflows/test_mpi_run.py": 105, "cli/test_fuzz.py": 95, "workflows/test_campaign.py": 90,
-    "cli/test_attacks_round2.py": 80, "workflows/test_hydro_run.py": 72, "workflows/test_slosh_cli.py": 40,
-    "fem/test_slosh.py": 35, "fem/test_beam_model.py": 35, "workflows/test_atomic_outputs.py": 30,
-    "fem/test_default_components.py": 25, "workflows/test_beside.py": 22, "cli/test_kill.py": 22,
-    "fem/test_case_grain.py": 20, "workflows/test_truncation_run.py": 19, "fem/test_mpi.py": 18,
+    "workflows/test_run.py": 188, "workflows/test_examples_liftoff.py": 163, "workflows/test_campaign.py": 155,
+    "workflows/test_mpi_run.py": 116, "workflows/test_hydro_run.py": 73, "cli/test_fuzz.py": 59,
+    "fem/test_slosh.py": 52, "fem/test_beam_model.py": 46, "fem/test_mpi.py": 39,
+    "fem/test_default_components.py": 38, "workflows/test_slosh_cli.py": 30, "workflows/test_beside.py": 29,
+    "meshes/test_vehicle.py": 27, "cli/test_kill.py": 27, "workflows/test_atomic_outputs.py": 25,
+    "fem/test_snapshot.py": 24, "fem/test_case_grain.py": 24, "fem/test_petsc_cb.py": 22,
+    "workflows/test_truncation_run.py": 19, "fem/test_shell_core.py": 18, "workflows/test_default_figures.py": 15,
 }
 
 

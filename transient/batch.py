@@ -217,7 +217,7 @@ def _modes8(ST, Xq, Xv, Pc, F, PhiT, Mq, Mv, Y, E, RqT, RvT, Oq, Ov, from_f):
     this loop (numba's ``inline="always"``): called, each call passed its arrays' structures
     and saved the vector registers, and on an AMD EPYC (znver3, 256-bit vectors) the pass at
     3,300 modes, 24 rows, 4 load columns and 2 output rows took 370 us against 180 us inlined
-    (2026-12-08; benchmarks/bench_batch.py's speed-up there went from 1.32 to 2.09)."""
+    (2026-12-08; benchmarks/bench_batch.py's speed-up there went from 1.32 to 2.09 and 2.73 in two runs)."""
     n = PhiT.shape[0]
     kq, kv = RqT.shape[1], RvT.shape[1]
     n4 = n - n % 4

@@ -313,7 +313,7 @@ def test_cli_bad_liquid_one_line(tmp_path, capsys):
 
 @pytest.mark.fem
 @pytest.mark.skipif(not HAVE_FE, reason="needs dolfinx and gmsh")
-def test_cb_stages_on_a_pool_give_the_sequential_stack(tmp_path):
+def test_cb_stages_on_a_pool_give_the_sequential_stack(tmp_path, monkeypatch):
     """The FE and Craig-Bampton stages run by a pool of two processes, each component's two
     stages on one (pipeline.reduce_concurrently), give the stack of the sequential run: the
     same FE matrices, the same fixed-interface and system frequencies (the same block
@@ -324,9 +324,13 @@ def test_cb_stages_on_a_pool_give_the_sequential_stack(tmp_path):
     import shutil
 
     from liftoff.config import load_scenario
+    from liftoff.workflows import pipeline
     from liftoff.workflows.cache import StageCache
     from liftoff.workflows.pipeline import build_stack, component_stage, is_fe_component
 
+    pool_logs, reduce = [], pipeline.reduce_concurrently     # each pool's logs, by component (a worker that
+    monkeypatch.setattr(pipeline, "reduce_concurrently",     # fails is left to the sequential stages: not in them)
+                        lambda *a, **k: pool_logs.append(reduce(*a, **k)) or pool_logs[-1])
     model = load_scenario(_scenario(tmp_path, COARSE_FE, cases=[{"name": "nominal"}])).cases[0].model
     seq = build_stack(model, StageCache(tmp_path / "a"), progress=False, workers=1)
     fe = [n for n in seq.cbs if is_fe_component(model, n)]
@@ -335,6 +339,9 @@ def test_cb_stages_on_a_pool_give_the_sequential_stack(tmp_path):
     # builds, in place of the loads; the same FE matrices and frequencies as the sequential build
     cache = StageCache(tmp_path / "b")
     con = build_stack(model, cache, progress=False, workers=2)
+    logs = pool_logs[-1]
+    assert set(logs) == set(fe)                              # every component built by a worker, its two stages
+    assert all([(e[0], e[2]) for e in logs[n]] == [("fe", "built"), ("cb", "built")] for n in fe), logs
     assert sorted((e[0], e[1]) for e in cache.log if e[0] in ("fe", "cb") and e[2] == "built") == sorted(
         (st, n) for n in fe for st in ("fe", "cb")), cache.log
     for name in fe:
@@ -353,6 +360,9 @@ def test_cb_stages_on_a_pool_give_the_sequential_stack(tmp_path):
     build_stack(model, part, progress=False, workers=2)
     built = [(e[0], e[1]) for e in part.log if e[0] in ("fe", "cb") and e[2] == "built"]
     assert sorted(built) == sorted(("cb", n) for n in fe)
+    logs = pool_logs[-1]
+    assert set(logs) == set(fe) and all([(e[0], e[2]) for e in logs[n]] == [("fe", "hit"), ("cb", "built")]
+                                        for n in fe), logs
     f_seq, f_con = seq.vehicle_modes.freq_hz[6:], con.vehicle_modes.freq_hz[6:]
     assert np.allclose(f_con, f_seq, rtol=1e-9), np.max(np.abs(f_con / f_seq - 1))
 
