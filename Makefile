@@ -32,7 +32,7 @@ $(STAMP): pyproject.toml constraints.txt
 	@$(PY) -m pip install -q --disable-pip-version-check --no-deps -e .
 	@$(PY) -m pip install -q --disable-pip-version-check -c constraints.txt --no-deps pyyeti
 	@$(PY) -c "import numpy, dolfinx, numba, h5py, pyvista, distributed, imageio; assert numpy.__version__.startswith('1.24'), numpy.__version__"
-	@# the transient kernel into numba's cache, its three paths on two cores (2026-11-27: 24 s and 46 s; the batch 20 s),
+	@# the transient kernel into numba's cache, its three paths on two cores (2026-11-27: 24 s and 46 s; the batch 20 s; 2026-12-08, an AMD EPYC: 25, 53 and 41 s),
 	@# so that the first run does not compile it (transient/warm.py)
 	@$(PY) -m liftoff.transient.warm reference batch & p=$$!; $(PY) -m liftoff.transient.warm laws || { wait $$p; exit 1; }; wait $$p
 	@touch $(STAMP)

@@ -213,21 +213,21 @@ def _modes8(ST, Xq, Xv, Pc, F, PhiT, Mq, Mv, Y, E, RqT, RvT, Oq, Ov, from_f):
     at a time); written so, the SLP vectorizer packs each line into vector instructions. Per mode and case the same arithmetic in the same order as the rolled
     loop, so the same bits (tests/transient/test_batch.py); the four-mode blocks took the pass
     at 3,300 modes and 24 rows from 97-103 to 62-64 us on this machine (2026-12-07: the products
-    with F and E had been bound by their loads and stores). The three blocks are inlined into
-    this loop (numba's ``inline="always"``): called, each call passed its arrays' structures
-    and saved the vector registers, and on an AMD EPYC (znver3, 256-bit vectors) the pass at
-    3,300 modes, 24 rows, 4 load columns and 2 output rows took 370 us against 180 us inlined
-    (2026-12-08; benchmarks/bench_batch.py's speed-up there went from 1.32 to 2.09 and 2.73 in two runs)."""
+    with F and E had been bound by their loads and stores). The sweep is inlined into this
+    loop (numba's ``inline="always"``, one copy in a loop over the four modes): called four
+    times a block, each call passing its arrays' structures and saving the vector registers,
+    it cost a quarter of the pass on an AMD EPYC (znver3, 256-bit vectors): at 3,300 modes,
+    24 rows, 4 load columns and 2 output rows 257 us called against 191 us inlined (2026-12-08).
+    Inlining the other two blocks as well took it to 173 us, but numba then compiled this
+    function in 127 s instead of 16 s (4 s with no block inlined): ``make setup`` compiles it."""
     n = PhiT.shape[0]
     kq, kv = RqT.shape[1], RvT.shape[1]
     n4 = n - n % 4
     for i in range(0, n4, 4):
         if from_f:
             _contact_load8x4(PhiT, F, Pc, i)
-        _sweep8(ST, Xq, Xv, Pc, Mq, Mv, Y, i)
-        _sweep8(ST, Xq, Xv, Pc, Mq, Mv, Y, i + 1)
-        _sweep8(ST, Xq, Xv, Pc, Mq, Mv, Y, i + 2)
-        _sweep8(ST, Xq, Xv, Pc, Mq, Mv, Y, i + 3)
+        for d in range(4):
+            _sweep8(ST, Xq, Xv, Pc, Mq, Mv, Y, i + d)
         _add_rows8x4(PhiT, Xq, E, i)
         if kq:
             _add_rows8x4(RqT, Xq, Oq, i)
@@ -238,7 +238,7 @@ def _modes8(ST, Xq, Xv, Pc, F, PhiT, Mq, Mv, Y, E, RqT, RvT, Oq, Ov, from_f):
                       Oq, Ov, from_f)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _contact_load8x4(PhiT, F, Pc, i):
     """Pc[i:i + 4] = PhiT[i:i + 4] F for eight cases: each F row loaded once for four modes;
     per mode the sum over the rows in the order of :func:`_modes_rolled`."""
@@ -272,7 +272,7 @@ def _contact_load8x4(PhiT, F, Pc, i):
     p[0] = d0; p[1] = d1; p[2] = d2; p[3] = d3; p[4] = d4; p[5] = d5; p[6] = d6; p[7] = d7
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _add_rows8x4(RT, X, E, i):
     """E += RT[i:i + 4]^T X[i:i + 4] for eight cases (rows RT transposed: the contact rows on X_q,
     or a body's output rows on X_q or X_v): each E row loaded and stored once for four modes,
